@@ -1,0 +1,17 @@
+/*
+ * canola/canola.h -- the whole public API of the canola core in one include.
+ * See each header for its manual; README.md for the picture.
+ */
+#ifndef CANOLA_CANOLA_H
+#define CANOLA_CANOLA_H
+
+#include "canola/config.h"
+#include "canola/errctl.h"
+#include "canola/nmt.h"
+#include "canola/node.h"
+#include "canola/od.h"
+#include "canola/types.h"
+
+#define CANOLA_VERSION "0.1.0"
+
+#endif /* CANOLA_CANOLA_H */

@@ -1,0 +1,52 @@
+/*
+ * canola/config.h -- compile-time sizes of the core, with their defaults.
+ *
+ * Every bound in the core is one of these numbers, so the worst-case RAM of a
+ * node is computable from them (see docs/porting.md). Override any of them
+ * with -D, or collect them in a header named by -DCO_CONFIG_FILE="file.h";
+ * the folder configs/ holds the combinations CI builds. Function signatures
+ * never change with the configuration; struct sizes do, so the library and
+ * the application must be built with the same values.
+ */
+#ifndef CANOLA_CONFIG_H
+#define CANOLA_CONFIG_H
+
+#ifdef CO_CONFIG_FILE
+#include CO_CONFIG_FILE
+#endif
+
+/** Frames that wait while the driver reports busy (priority-ordered). 1..255. */
+#ifndef CO_TX_QUEUE_LEN
+#define CO_TX_QUEUE_LEN 8
+#endif
+
+/** Heartbeat consumer entries (0x1016 sub1..N) a node can monitor. 0..127. */
+#ifndef CO_HB_CONSUMERS_MAX
+#define CO_HB_CONSUMERS_MAX 8
+#endif
+
+/** Remote nodes a master can node-guard at once. 0..127. */
+#ifndef CO_GUARD_WATCH_MAX
+#define CO_GUARD_WATCH_MAX 4
+#endif
+
+/** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
+ *  heartbeat consumer and guarded node, and room for the other services. */
+#ifndef CO_RX_ROUTES_MAX
+#define CO_RX_ROUTES_MAX (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX)
+#endif
+
+#if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
+#error "CO_TX_QUEUE_LEN must be 1..255"
+#endif
+#if CO_HB_CONSUMERS_MAX < 0 || CO_HB_CONSUMERS_MAX > 127
+#error "CO_HB_CONSUMERS_MAX must be 0..127"
+#endif
+#if CO_GUARD_WATCH_MAX < 0 || CO_GUARD_WATCH_MAX > 127
+#error "CO_GUARD_WATCH_MAX must be 0..127"
+#endif
+#if CO_RX_ROUTES_MAX < 2 || CO_RX_ROUTES_MAX > 255
+#error "CO_RX_ROUTES_MAX must be 2..255"
+#endif
+
+#endif /* CANOLA_CONFIG_H */

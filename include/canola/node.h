@@ -1,0 +1,200 @@
+/*
+ * canola/node.h -- a CANopen node: the object that owns every service of one
+ * device (or master) and the only entry points the driver and the clock use.
+ *
+ * Data flows one way. The driver hands each received frame to
+ * co_node_ingest(); the node finds the frame's COB-ID in its receive routes (a
+ * sorted table rebuilt whenever a COB-ID object changes; O(log routes), no scan
+ * over services), checks that the NMT state allows the service, and the
+ * service updates its state and the object dictionary. Frames to send go out
+ * through the driver's tx callback; when it reports CO_ERR_BUSY they wait in a
+ * bounded queue (CO_TX_QUEUE_LEN) ordered by priority (lowest COB-ID first,
+ * first-in first-out among equal IDs) and leave on the next co_node_poll().
+ * Time moves only when the caller says so: co_node_poll(node, now_us) runs what
+ * is due and returns the absolute time at which it next needs to run.
+ *
+ * A driver port does three things:
+ *   1. call co_node_ingest() for every received frame,
+ *   2. call co_node_poll() at the time it last returned (a timer), and again
+ *      as soon as the CAN controller can take a frame after tx said busy,
+ *   3. implement tx(); co_node_accepts() tells it which IDs to let through its
+ *      hardware filter (on_routes_changed says when that set changed).
+ *
+ * Threading: none inside. All calls on one node must be serialised by the
+ * caller (one task, or one lock). Callbacks run inside the call that caused
+ * them and may call co_node_* functions except co_node_ingest/co_node_poll.
+ * Memory: all state lives in co_node_t, which the caller owns; no allocation.
+ */
+#ifndef CANOLA_NODE_H
+#define CANOLA_NODE_H
+
+#include "canola/config.h"
+#include "canola/errctl.h"
+#include "canola/nmt.h"
+#include "canola/od.h"
+#include "canola/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Node-ID of a node not configured yet (LSS assigns one later). */
+#define CO_NODE_ID_UNCONFIGURED 0xFFu
+
+/** The CAN driver as the core sees it. */
+typedef struct co_driver {
+    /** Send one frame now. Return CO_OK when the controller took it, CO_ERR_BUSY when it
+     *  has no room (the node keeps the frame and retries on the next poll); any other
+     *  error drops the frame and counts it in stats.tx_dropped. */
+    co_err_t (*tx)(void *ctx, const co_frame_t *frame);
+    /** Optional: the set of received COB-IDs changed (reprogram hardware filters). */
+    void (*on_routes_changed)(void *ctx);
+    void *ctx;
+} co_driver_t;
+
+/** What the node reports about itself (besides bus events, which are counters). */
+typedef enum co_node_error {
+    CO_NODE_ERR_TX_OVERFLOW = 1, /**< the tx queue was full: a frame was lost */
+    CO_NODE_ERR_TX_DRIVER,       /**< the driver refused a frame with an error */
+} co_node_error_t;
+
+typedef struct co_node_config {
+    uint8_t node_id; /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
+    co_od_t od;      /**< the object dictionary; its entries must outlive the node */
+    co_driver_t driver;
+    bool self_start;       /**< enter OPERATIONAL by itself after boot-up */
+    uint16_t boot_time_ms; /**< report consumed nodes not heard this long after reset
+                                communication (CO_EC_NOT_BOOTED); 0 = off */
+    void *user;            /**< first argument of every callback below */
+    /** Optional callbacks. */
+    void (*on_state)(void *user, co_nmt_state_t state);
+    void (*on_reset)(void *user, co_reset_t what);
+    void (*on_errctl)(void *user, const co_ec_event_t *event);
+    void (*on_error)(void *user, co_node_error_t error);
+} co_node_config_t;
+
+/** Counters, never reset by the node. */
+typedef struct co_node_stats {
+    uint32_t rx_frames;    /**< frames passed to co_node_ingest */
+    uint32_t rx_unrouted;  /**< no service listens to that COB-ID */
+    uint32_t rx_gated;     /**< the NMT state does not allow the service */
+    uint32_t rx_malformed; /**< wrong length or form for the service: ignored */
+    uint32_t tx_frames;    /**< frames the driver took */
+    uint32_t tx_queued;    /**< frames that had to wait for the driver */
+    uint32_t tx_overflow;  /**< frames lost because the queue was full */
+    uint32_t tx_dropped;   /**< frames the driver refused with an error */
+} co_node_stats_t;
+
+/** One receive route: COB-ID key -> service and slot. Internal. */
+typedef struct co_route {
+    uint32_t key; /**< id, with bit 31 set for 29-bit ids */
+    uint8_t kind;
+    uint8_t slot;
+} co_route_t;
+
+/** The node. Fields are internal; read them through the functions below. */
+struct co_node {
+    co_node_config_t cfg;
+    uint64_t now_us;      /**< time of the latest ingest/poll */
+    uint64_t next_due_us; /**< earliest deadline of any service */
+    uint8_t node_id;
+    uint8_t nmt_state;
+    bool started;
+
+    /* Receive routes, sorted by key. */
+    co_route_t routes[CO_RX_ROUTES_MAX];
+    uint8_t route_count;
+
+    /* Transmit queue, sorted by COB-ID (ties in arrival order). */
+    co_frame_t txq[CO_TX_QUEUE_LEN];
+    uint8_t txq_count;
+
+    /* Heartbeat producer (0x1017). */
+    const co_od_entry_t *hb_period; /**< 0x1017 or NULL */
+    uint64_t hb_next_us;
+
+    /* Heartbeat consumer (0x1016). */
+    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX > 0 ? CO_HB_CONSUMERS_MAX : 1];
+    uint8_t hb_consumer_count; /**< sub-indices of 0x1016 bound (<= CO_HB_CONSUMERS_MAX) */
+    uint64_t boot_deadline_us; /**< CO_EC_NOT_BOOTED check, CO_TIME_NEVER when done */
+
+    /* Node guarding, slave side (0x100C, 0x100D) and master side. */
+    const co_od_entry_t *guard_time;
+    const co_od_entry_t *life_factor;
+    uint64_t life_deadline_us;
+    uint8_t guard_toggle;
+    bool life_guarding; /**< monitoring started by a first RTR */
+    bool life_lost;
+    co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
+
+    const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
+
+    co_node_stats_t stats;
+};
+
+/** Prepare a node: check the config and the object dictionary (co_od_validate), bind the
+ *  communication objects it finds. Sends nothing. Returns CO_ERR_ARG for a NULL argument,
+ *  a missing tx or a node-ID outside 1..127 and not 0xFF, CO_ERR_CONFIG for a bad OD or
+ *  more 0x1016 entries than CO_HB_CONSUMERS_MAX. O(OD entries). */
+co_err_t co_node_init(co_node_t *node, const co_node_config_t *config);
+
+/** Power on at `now_us`: reset application, reset communication, boot-up frame,
+ *  pre-operational (operational with self_start). An unconfigured node (0xFF) stops
+ *  after reset communication and stays INITIALISING. Returns CO_ERR_STATE if already
+ *  started. */
+co_err_t co_node_start(co_node_t *node, uint64_t now_us);
+
+/** Feed one received frame. Frames nobody listens to, frames a state forbids and
+ *  malformed frames are counted and ignored. O(log routes) + the service's cost. */
+void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame);
+
+/** Run what is due at `now_us` and retry queued frames. Returns the absolute time of the
+ *  next deadline (CO_TIME_NEVER if none). With nothing due: O(1), a few instructions. */
+uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
+
+/** True when the node listens to this frame's COB-ID (a perfect acceptance filter). */
+bool co_node_accepts(const co_node_t *node, const co_frame_t *frame);
+
+/** Number of receive routes and the i-th routed COB-ID (bit 31 set for 29-bit), for
+ *  drivers that program hardware filters. */
+uint32_t co_node_route_count(const co_node_t *node);
+uint32_t co_node_route_id(const co_node_t *node, uint32_t i);
+
+/** This node's node-ID (CO_NODE_ID_UNCONFIGURED if none). */
+uint8_t co_node_id(const co_node_t *node);
+
+/** Counters. */
+const co_node_stats_t *co_node_stats(const co_node_t *node);
+
+/** Queue a frame for sending (or send it now when the queue is empty and the driver
+ *  free). Never blocks. Returns CO_ERR_FULL when the queue was full (the frame is lost
+ *  and counted), CO_OK otherwise. Services use this; so may applications. */
+co_err_t co_node_send(co_node_t *node, const co_frame_t *frame);
+
+/* ---- Object dictionary access through the node, so that writes take effect on the
+ * services (a new 0x1017 period at once, 0x1016 entries rebuilt, ...). */
+
+/** Write a wire value as the network would (access rights, length, limits, hooks,
+ *  service checks). Returns CO_ABORT_NONE or the CiA abort code. */
+co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                             uint32_t len);
+
+/** Read a wire value as the network would: up to `cap` bytes into `buf`, `*len` = bytes
+ *  copied. Returns CO_ABORT_NONE or the CiA abort code (CO_ABORT_LEN_HIGH when the value
+ *  does not fit into `cap`). */
+co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                            uint32_t cap, uint32_t *len);
+
+/** Application write of an unsigned/signed integer value (no access rights: the
+ *  application may set read-only objects such as the error register). Limits, hooks and
+ *  service checks apply. Returns CO_ABORT_NONE or the abort code. */
+co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64_t value);
+
+/** Application read of an integer entry. Returns CO_ERR_NOT_FOUND / CO_ERR_ARG (not an
+ *  integer type) or CO_OK. */
+co_err_t co_node_get_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t *value);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CANOLA_NODE_H */

@@ -1,0 +1,210 @@
+/*
+ * canola/od.h -- the object dictionary: a sorted, constant table of entries.
+ *
+ * Purpose: every value a CANopen device exposes lives in one table of entries
+ * addressed by (index, sub-index). The table itself is const (it can live in
+ * flash); each entry points at the RAM that holds its value and at a const
+ * default (its power-on value). Look-up is a binary search: O(log n).
+ *
+ * Values are stored in native form (uint16_t, float, ...); reads and writes
+ * through this API speak wire form: little-endian bytes, as SDO and PDO carry
+ * them. Storage width per type: BOOLEAN/INTEGER8/UNSIGNED8 -> 1 byte,
+ * 16-bit -> 2, INTEGER24/UNSIGNED24/32-bit/REAL32 -> 4 (int32_t, uint32_t, float),
+ * 40/48/56/64-bit and REAL64 -> 8; TIME_OF_DAY/TIME_DIFFERENCE -> 6 raw bytes;
+ * VISIBLE_STRING/OCTET_STRING/UNICODE_STRING -> `size` bytes of buffer;
+ * DOMAIN -> a co_od_domain_t (buffer + current length) or no storage at all
+ * when hooks stream it. `size` is the length on the wire (for strings and
+ * domains: the capacity).
+ *
+ * Hooks let the application compute a value on read, validate or veto a write
+ * with an abort code, stream large values (DOMAIN, long strings) in pieces, and
+ * be told after a write. They run in the caller's context (whoever called
+ * co_node_ingest() / the access function); they must not block.
+ *
+ * Threading: none inside. One OD belongs to one node; guard it with the node.
+ * Memory: 24..32 bytes of const data per entry plus the values themselves.
+ */
+#ifndef CANOLA_OD_H
+#define CANOLA_OD_H
+
+#include "canola/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
+typedef enum co_type {
+    CO_TYPE_BOOLEAN = 0x01,
+    CO_TYPE_INTEGER8 = 0x02,
+    CO_TYPE_INTEGER16 = 0x03,
+    CO_TYPE_INTEGER32 = 0x04,
+    CO_TYPE_UNSIGNED8 = 0x05,
+    CO_TYPE_UNSIGNED16 = 0x06,
+    CO_TYPE_UNSIGNED32 = 0x07,
+    CO_TYPE_REAL32 = 0x08,
+    CO_TYPE_VISIBLE_STRING = 0x09,
+    CO_TYPE_OCTET_STRING = 0x0A,
+    CO_TYPE_UNICODE_STRING = 0x0B,
+    CO_TYPE_TIME_OF_DAY = 0x0C,
+    CO_TYPE_TIME_DIFFERENCE = 0x0D,
+    CO_TYPE_DOMAIN = 0x0F,
+    CO_TYPE_INTEGER24 = 0x10,
+    CO_TYPE_REAL64 = 0x11,
+    CO_TYPE_INTEGER40 = 0x12,
+    CO_TYPE_INTEGER48 = 0x13,
+    CO_TYPE_INTEGER56 = 0x14,
+    CO_TYPE_INTEGER64 = 0x15,
+    CO_TYPE_UNSIGNED24 = 0x16,
+    CO_TYPE_UNSIGNED40 = 0x18,
+    CO_TYPE_UNSIGNED48 = 0x19,
+    CO_TYPE_UNSIGNED56 = 0x1A,
+    CO_TYPE_UNSIGNED64 = 0x1B,
+} co_type_t;
+
+/* ---- Entry attributes (co_od_entry_t.attr). */
+#define CO_OD_READ 0x01u   /**< readable from the network */
+#define CO_OD_WRITE 0x02u  /**< writable from the network */
+#define CO_OD_CONST 0x04u  /**< value never changes (EDS `const`) */
+#define CO_OD_TPDO 0x08u   /**< may be mapped into a TPDO */
+#define CO_OD_RPDO 0x10u   /**< may be mapped into an RPDO */
+#define CO_OD_NODEID 0x20u /**< power-on value is the default plus the node-ID ($NODEID) */
+
+/* The EDS AccessType values. rwr/rww only say which PDO direction suits the entry. */
+#define CO_OD_RO CO_OD_READ
+#define CO_OD_WO CO_OD_WRITE
+#define CO_OD_RW (CO_OD_READ | CO_OD_WRITE)
+#define CO_OD_RWR (CO_OD_READ | CO_OD_WRITE)
+#define CO_OD_RWW (CO_OD_READ | CO_OD_WRITE)
+#define CO_OD_CO (CO_OD_READ | CO_OD_CONST)
+
+/** Returned as `total` by a read hook that does not know the size in advance. */
+#define CO_OD_SIZE_UNKNOWN UINT32_MAX
+
+/** A numeric limit; which member counts follows the entry's type (signed, unsigned, real). */
+typedef union co_od_num {
+    int64_t i;
+    uint64_t u;
+    double f;
+} co_od_num_t;
+
+/** Inclusive limits of a numeric entry: below low -> 0x06090032, above high -> 0x06090031. */
+typedef struct co_od_limits {
+    co_od_num_t low;
+    co_od_num_t high;
+} co_od_limits_t;
+
+/** Storage of a DOMAIN entry that keeps its data in RAM. */
+typedef struct co_od_domain {
+    uint8_t *data;
+    uint32_t len; /**< current length in bytes; capacity is the entry's `size` */
+} co_od_domain_t;
+
+typedef struct co_od_entry co_od_entry_t;
+
+/**
+ * Application hooks of one entry; any member may be NULL. `ctx` is co_od_t.hook_ctx.
+ * Hooks returning co_abort_t return CO_ABORT_NONE to go on or an abort code to fail.
+ */
+typedef struct co_od_hooks {
+    /** Produce the value instead of reading storage: copy up to `cap` bytes of the wire
+     *  value from `offset` into `buf`, set `*n` to the bytes copied and `*total` to the
+     *  whole size (or CO_OD_SIZE_UNKNOWN). Called once per piece. */
+    co_abort_t (*read)(void *ctx, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                       uint32_t cap, uint32_t *n, uint32_t *total);
+    /** Validate or veto a whole new value (wire bytes) before it is stored. */
+    co_abort_t (*check)(void *ctx, const co_od_entry_t *entry, const uint8_t *data, uint32_t len);
+    /** Take the value instead of storage, in pieces: `offset` of this piece, `total` the
+     *  announced size or CO_OD_SIZE_UNKNOWN, `last` true on the final piece. */
+    co_abort_t (*write)(void *ctx, const co_od_entry_t *entry, uint32_t offset,
+                        const uint8_t *data, uint32_t n, uint32_t total, bool last);
+    /** Told after a new value was stored. */
+    void (*written)(void *ctx, const co_od_entry_t *entry);
+} co_od_hooks_t;
+
+/** One (index, sub-index) of the dictionary. Tables are sorted by index, then sub-index. */
+struct co_od_entry {
+    uint16_t index;
+    uint8_t sub;
+    uint8_t type;  /**< co_type_t */
+    uint8_t attr;  /**< CO_OD_* attributes */
+    uint32_t size; /**< bytes on the wire; capacity for strings and domains */
+    void *value;   /**< native storage, or NULL when hooks produce/take the value */
+    const void *dflt;             /**< power-on value (same form as value), or NULL: reset leaves it */
+    const co_od_limits_t *limits; /**< numeric limits, or NULL */
+    const co_od_hooks_t *hooks;   /**< application hooks, or NULL */
+};
+
+/** An object dictionary: the entry table and the context its hooks receive. */
+typedef struct co_od {
+    const co_od_entry_t *entries;
+    uint32_t count;
+    void *hook_ctx;
+} co_od_t;
+
+/** Check the table: sorted and unique, sizes fitting their types, storage where no hook
+ *  replaces it. Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's
+ *  position when `bad` is not NULL). O(n). */
+co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
+
+/** Find an entry. On failure returns NULL and sets `*abort` (when not NULL) to
+ *  CO_ABORT_NO_OBJECT (index unknown) or CO_ABORT_NO_SUB (index known, sub-index not).
+ *  O(log n). */
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort);
+
+/** Size of a type's value on the wire, or 0 for types of variable length. */
+uint32_t co_type_size(co_type_t type);
+
+/** Current length of an entry's value on the wire (strings: up to the terminator;
+ *  domains: their length; hook-read entries: `size`). */
+uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry);
+
+/** Network access rule: CO_ABORT_WRITE_ONLY / CO_ABORT_READ_ONLY when the entry may not be
+ *  read / written from the network, else CO_ABORT_NONE. */
+co_abort_t co_od_access(const co_od_entry_t *entry, bool write);
+
+/** Read a piece of the wire value: up to `cap` bytes from `offset` into `buf`; `*n` gets
+ *  the bytes copied, `*total` (may be NULL) the whole length. Access rights are not checked
+ *  (see co_od_access). Returns an abort code. */
+co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset,
+                      uint8_t *buf, uint32_t cap, uint32_t *n, uint32_t *total);
+
+/** Check a whole new wire value without storing it: length against the type (0x06070012
+ *  too long / 0x06070013 too short), BOOLEAN 0/1 (0x06090030), limits (0x06090031/32),
+ *  then the entry's check hook. Access rights are not checked. */
+co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
+                       uint32_t len);
+
+/** Store a whole wire value that co_od_check() accepted (or hand it to the write hook).
+ *  Does not call the written hook. */
+co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
+                       uint32_t len);
+
+/** co_od_check + co_od_store + written hook: a complete local write. */
+co_abort_t co_od_write(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
+                       uint32_t len);
+
+/** Hand one piece of a streamed value to the entry's write hook (CO_ABORT_UNSUPPORTED
+ *  when it has none). The written hook runs after the last piece. */
+co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset,
+                             const uint8_t *data, uint32_t n, uint32_t total, bool last);
+
+/** Copy power-on values into every entry with index in [first, last] that has a default
+ *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
+ *  O(entries in range). */
+void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
+
+/* ---- Native access for the application and the services (no access rules, no hooks,
+ * no limits: the caller owns the values). Return CO_ERR_NOT_FOUND when the entry is
+ * missing, CO_ERR_ARG when its type does not have that width. */
+co_err_t co_od_get_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t *value);
+co_err_t co_od_set_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t value);
+
+/** Native unsigned value of a numeric entry's storage (signed types sign-extended to 64
+ *  bits and returned as their two's-complement bit pattern). */
+uint64_t co_od_entry_uint(const co_od_entry_t *entry);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CANOLA_OD_H */

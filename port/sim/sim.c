@@ -1,0 +1,530 @@
+/*
+ * port/sim/sim.c -- the simulated CAN bus; see canola/sim.h.
+ *
+ * The run loop visits the instants at which something happens (a node deadline, a frame
+ * leaving the wire, a frame becoming ready) and at each one does everything due before
+ * moving on, so a simulation is a pure function of its inputs and the seed.
+ *
+ * Time in the timing model: a bit lasts 1/bitrate s, which is not a whole number of
+ * microseconds at every bitrate (1.25 us at 800 kbit/s). The bus therefore keeps the exact
+ * end of the latest frame as microseconds plus a remainder in 1/bitrate us; back-to-back
+ * frames start at the exact end of the previous one and long runs do not drift. The rest of
+ * the world sees whole microseconds: a frame reaches the receivers at its end rounded up.
+ */
+#include "canola/sim.h"
+
+#include <inttypes.h>
+#include <stdio.h>
+#include <string.h>
+
+_Static_assert(CO_SIM_PORTS_MAX <= 256, "port indices are stored in 8 bits");
+
+#define STORM_EVENTS 1000000u /* events at one instant before a run gives up */
+#define DEFAULT_MAILBOXES 3u
+#define CRC15_POLY 0x4599u
+/* After the CRC: CRC delimiter, ACK slot, ACK delimiter, EOF (7), interframe space (3). */
+#define TAIL_BITS (1u + 1u + 1u + 7u + 3u)
+
+/* ---- Frame length on the wire. */
+
+/* A bit stream being measured: CRC over what is fed with `in_crc`, stuff bits counted. */
+typedef struct wire {
+    uint32_t bits;  /* bits so far, stuff bits included */
+    uint16_t crc;
+    uint8_t level;  /* level of the latest bit on the wire */
+    uint8_t run;    /* bits of that level in a row (a stuff bit starts a new run) */
+} wire_t;
+
+/* Feed the `n` low bits of `value`, most significant first. */
+static void wire_put(wire_t *w, uint32_t value, unsigned n, bool in_crc)
+{
+    while (n-- > 0) {
+        uint8_t bit = (uint8_t)((value >> n) & 1u);
+        if (in_crc) {
+            bool feedback = (bit ^ (w->crc >> 14)) & 1u;
+            w->crc = (uint16_t)((w->crc << 1) & 0x7FFFu);
+            if (feedback) {
+                w->crc = (uint16_t)(w->crc ^ CRC15_POLY);
+            }
+        }
+        w->run = (uint8_t)((w->run > 0 && bit == w->level) ? w->run + 1 : 1);
+        w->level = bit;
+        w->bits++;
+        if (w->run == 5) { /* five equal bits: the transmitter inserts the opposite level */
+            w->bits++;
+            w->level ^= 1u;
+            w->run = 1;
+        }
+    }
+}
+
+uint32_t co_sim_frame_bits(const co_frame_t *frame)
+{
+    wire_t w = {0};
+    uint32_t rtr = (frame->flags & CO_FRAME_RTR) ? 1u : 0u;
+    uint8_t len = frame->len > 8 ? 8 : frame->len;
+
+    wire_put(&w, 0, 1, true); /* SOF */
+    if (frame->flags & CO_FRAME_EXT) {
+        wire_put(&w, (frame->id >> 18) & 0x7FFu, 11, true); /* base ID */
+        wire_put(&w, 3u, 2, true);                          /* SRR, IDE: recessive */
+        wire_put(&w, frame->id & 0x3FFFFu, 18, true);       /* ID extension */
+        wire_put(&w, rtr << 2, 3, true);                    /* RTR, r1, r0 */
+    } else {
+        wire_put(&w, frame->id & 0x7FFu, 11, true);
+        wire_put(&w, rtr << 2, 3, true); /* RTR, IDE, r0 */
+    }
+    wire_put(&w, len, 4, true); /* DLC */
+    for (uint8_t i = 0; !rtr && i < len; i++) {
+        wire_put(&w, frame->data[i], 8, true);
+    }
+    wire_put(&w, w.crc, 15, false); /* the CRC sequence is stuffed too */
+    return w.bits + TAIL_BITS;
+}
+
+/* The arbitration field as a number, first bit most significant: the lowest value wins (0 is
+ * dominant). A standard frame's IDE (0) beats the SRR/IDE (1 1) of an extended frame with the
+ * same base ID; a data frame beats a remote frame with the same ID. */
+static uint32_t arbitration_key(const co_frame_t *f)
+{
+    uint32_t rtr = (f->flags & CO_FRAME_RTR) ? 1u : 0u;
+    if (f->flags & CO_FRAME_EXT) {
+        return ((f->id >> 18) & 0x7FFu) << 21 | 3u << 19 | (f->id & 0x3FFFFu) << 1 | rtr;
+    }
+    return (f->id & 0x7FFu) << 21 | rtr << 20;
+}
+
+/* Send order, robust to the sequence number wrapping. */
+static bool seq_before(uint32_t a, uint32_t b) { return (int32_t)(a - b) < 0; }
+
+/* ---- Exact time of the timing model: us + rem / bitrate microseconds, rem < bitrate. */
+
+typedef struct exact {
+    uint64_t us;
+    uint32_t rem;
+} exact_t;
+
+static exact_t exact_add_bits(exact_t t, uint32_t bits, uint32_t bitrate)
+{
+    uint64_t total = t.rem + (uint64_t)bits * 1000000u;
+    t.us += total / bitrate;
+    t.rem = (uint32_t)(total % bitrate);
+    return t;
+}
+
+static uint64_t exact_ceil(exact_t t) { return t.us + (t.rem > 0); }
+
+/* floor(bits * 10^6 / bitrate) without overflowing for any realistic bit count. */
+static uint64_t bits_to_us(uint64_t bits, uint32_t bitrate)
+{
+    return bits / bitrate * 1000000u + bits % bitrate * 1000000u / bitrate;
+}
+
+/* ---- Fault injection: splitmix64, whose state is the bus's `rng`. */
+
+static uint64_t rng_next(co_sim_bus_t *bus)
+{
+    uint64_t z = (bus->rng += 0x9E3779B97F4A7C15u);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9u;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBu;
+    return z ^ (z >> 31);
+}
+
+/* True with probability p. Draws nothing when p is 0, so an unused fault leaves the
+ * sequence of the others alone. */
+static bool rng_chance(co_sim_bus_t *bus, double p)
+{
+    return p > 0.0 && (double)(rng_next(bus) >> 11) * 0x1p-53 < p;
+}
+
+static double clamp_p(double p) { return p > 0.0 ? (p < 1.0 ? p : 1.0) : 0.0; }
+
+static bool fault_drops(co_sim_bus_t *bus)
+{
+    bus->sent_count++;
+    bool nth = bus->drop_nth != 0 && bus->sent_count == bus->drop_nth;
+    bool random = rng_chance(bus, bus->drop_p);
+    return nth || random;
+}
+
+/* Flip one data bit: an error that CAN's CRC would have missed. */
+static void fault_corrupt(co_sim_bus_t *bus, co_frame_t *f)
+{
+    if ((f->flags & CO_FRAME_RTR) || f->len == 0 || !rng_chance(bus, bus->corrupt_p)) {
+        return;
+    }
+    uint32_t bit = (uint32_t)(rng_next(bus) % (f->len * 8u));
+    f->data[bit / 8] = (uint8_t)(f->data[bit / 8] ^ (1u << (bit % 8)));
+    bus->stats.corrupted++;
+}
+
+/* ---- Bus and ports. */
+
+co_err_t co_sim_bus_init(co_sim_bus_t *bus, uint32_t bitrate)
+{
+    if (!bus || (bitrate != 0 && (bitrate < 10000 || bitrate > 1000000))) {
+        return CO_ERR_ARG;
+    }
+    memset(bus, 0, sizeof *bus);
+    bus->bitrate = bitrate;
+    strcpy(bus->name, "sim0");
+    return CO_OK;
+}
+
+/* Attaching resets the port: set `mailboxes` afterwards. */
+static co_err_t attach(co_sim_bus_t *bus, co_sim_port_t *port)
+{
+    if (!bus || !port) {
+        return CO_ERR_ARG;
+    }
+    if (bus->port_count >= CO_SIM_PORTS_MAX) {
+        return CO_ERR_FULL;
+    }
+    memset(port, 0, sizeof *port);
+    port->bus = bus;
+    port->mailboxes = DEFAULT_MAILBOXES;
+    port->index = (uint8_t)bus->port_count;
+    bus->ports[bus->port_count++] = port;
+    return CO_OK;
+}
+
+co_err_t co_sim_port_attach(co_sim_bus_t *bus, co_sim_port_t *port) { return attach(bus, port); }
+
+co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx,
+                                void *ctx)
+{
+    co_err_t err = attach(bus, port);
+    if (err == CO_OK) {
+        port->rx = rx;
+        port->rx_ctx = ctx;
+    }
+    return err;
+}
+
+static co_err_t port_tx(void *ctx, const co_frame_t *frame) { return co_sim_send(ctx, frame); }
+
+co_driver_t co_sim_port_driver(co_sim_port_t *port)
+{
+    co_driver_t d = {.tx = port_tx, .on_routes_changed = NULL, .ctx = port};
+    return d;
+}
+
+void co_sim_port_bind(co_sim_port_t *port, co_node_t *node)
+{
+    port->node = node;
+    port->node_due_us = 0; /* unknown: poll at the next instant the bus runs */
+}
+
+co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
+{
+    if (!port || !port->bus || !frame || frame->len > 8 ||
+        frame->id > ((frame->flags & CO_FRAME_EXT) ? CO_ID_EXT_MAX : CO_ID_STD_MAX)) {
+        return CO_ERR_ARG;
+    }
+    co_sim_bus_t *bus = port->bus;
+    if (port->bus_off) {
+        return CO_OK; /* a bus-off controller takes the frame and sends nothing */
+    }
+    if (port->in_flight >= port->mailboxes) {
+        bus->stats.refused++;
+        return CO_ERR_BUSY;
+    }
+    if (bus->pending_count >= CO_SIM_PENDING_MAX) {
+        bus->stats.overflow++;
+        return CO_ERR_BUSY;
+    }
+    co_sim_pending_t *p = &bus->pending[bus->pending_count++];
+    p->frame = *frame;
+    p->ready_us = bus->now_us + bus->delay_us;
+    p->seq = bus->seq++;
+    p->port = port->index;
+    port->in_flight++;
+    return CO_OK;
+}
+
+/* Order does not matter in the pending list (selection scans it): fill the hole with the
+ * last entry. */
+static co_sim_pending_t pending_take(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    bus->pending[i] = bus->pending[--bus->pending_count];
+    return p;
+}
+
+void co_sim_set_bus_off(co_sim_port_t *port, bool bus_off)
+{
+    port->bus_off = bus_off;
+    co_sim_bus_t *bus = port->bus;
+    if (!bus_off || !bus) {
+        return;
+    }
+    /* A controller going bus-off abandons what waits in its mailboxes; a frame already on
+     * the wire finishes. */
+    for (uint32_t i = bus->pending_count; i-- > 0;) {
+        if (bus->pending[i].port == port->index) {
+            (void)pending_take(bus, i);
+            port->in_flight--;
+        }
+    }
+}
+
+/* ---- Delivery. */
+
+static void trace_frame(const co_sim_bus_t *bus, uint64_t t, const co_frame_t *f)
+{
+    if (bus->trace) {
+        char line[96];
+        bus->trace(bus->trace_ctx, co_sim_format(line, sizeof line, t, bus->name, f));
+    }
+}
+
+static void receive(co_sim_port_t *port, uint64_t t, const co_frame_t *f)
+{
+    if (port->bus_off) {
+        return;
+    }
+    if (port->node) {
+        if (co_node_accepts(port->node, f)) { /* the controller's acceptance filter */
+            co_node_ingest(port->node, t, f);
+            port->node_due_us = co_node_poll(port->node, t);
+        }
+    } else if (port->rx) {
+        port->rx(port->rx_ctx, t, f);
+    }
+}
+
+/* A frame has left the wire at `t`: apply the faults, hand it to every other port, free
+ * the sender's mailbox and let its node send what it queued meanwhile. */
+static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
+{
+    co_frame_t frame = p->frame;
+    bus->stats.frames++;
+    bus->stats.bits += co_sim_frame_bits(&frame);
+    if (bus->bitrate) {
+        bus->stats.busy_us = bits_to_us(bus->stats.bits, bus->bitrate);
+    }
+    if (fault_drops(bus)) {
+        bus->stats.dropped++;
+    } else {
+        fault_corrupt(bus, &frame);
+        trace_frame(bus, t, &frame);
+        for (uint32_t i = 0; i < bus->port_count; i++) {
+            if (i != p->port) {
+                receive(bus->ports[i], t, &frame);
+            }
+        }
+    }
+    co_sim_port_t *sender = bus->ports[p->port];
+    sender->in_flight--;
+    if (sender->node) {
+        sender->node_due_us = co_node_poll(sender->node, t);
+    }
+}
+
+/* Index of the next frame to complete at `t`, or -1: in instant mode the oldest ready
+ * frame; in the timing model the frame on the wire once its end has come. */
+static int32_t next_completion(const co_sim_bus_t *bus, uint64_t t)
+{
+    if (bus->bitrate) {
+        exact_t end = {bus->idle_at_us, bus->idle_rem};
+        return (bus->transmitting && exact_ceil(end) <= t) ? 0 : -1;
+    }
+    int32_t best = -1;
+    for (uint32_t i = 0; i < bus->pending_count; i++) {
+        const co_sim_pending_t *p = &bus->pending[i];
+        if (p->ready_us <= t && (best < 0 || seq_before(p->seq, bus->pending[best].seq))) {
+            best = (int32_t)i;
+        }
+    }
+    return best;
+}
+
+static co_sim_pending_t take_completion(co_sim_bus_t *bus, int32_t i)
+{
+    if (bus->bitrate) {
+        bus->transmitting = false;
+        return bus->on_bus;
+    }
+    return pending_take(bus, (uint32_t)i);
+}
+
+static uint64_t first_ready(const co_sim_bus_t *bus)
+{
+    uint64_t first = CO_TIME_NEVER;
+    for (uint32_t i = 0; i < bus->pending_count; i++) {
+        first = bus->pending[i].ready_us < first ? bus->pending[i].ready_us : first;
+    }
+    return first;
+}
+
+/* Timing model: when the bus falls idle (or was idle when a frame became ready), the frames
+ * ready by then arbitrate; the winner occupies the wire for its length. Called once all
+ * else at `t` is done, so every frame ready at `t` takes part. */
+static void start_transmission(co_sim_bus_t *bus, uint64_t t)
+{
+    if (bus->transmitting || bus->pending_count == 0) {
+        return;
+    }
+    exact_t start = {bus->idle_at_us, bus->idle_rem};
+    uint64_t first = first_ready(bus);
+    if (first > start.us || (first == start.us && start.rem == 0)) {
+        start = (exact_t){first, 0}; /* the bus was idle: the frame starts when ready */
+    }
+    if (exact_ceil(start) > t) {
+        return;
+    }
+    uint32_t best = 0;
+    uint32_t best_key = UINT32_MAX;
+    bool found = false;
+    for (uint32_t i = 0; i < bus->pending_count; i++) {
+        const co_sim_pending_t *p = &bus->pending[i];
+        uint32_t key = arbitration_key(&p->frame);
+        if (p->ready_us > start.us) {
+            continue; /* not ready when arbitration began */
+        }
+        if (!found || key < best_key ||
+            (key == best_key && seq_before(p->seq, bus->pending[best].seq))) {
+            best = i;
+            best_key = key;
+            found = true;
+        }
+    }
+    bus->on_bus = pending_take(bus, best);
+    bus->transmitting = true;
+    exact_t end = exact_add_bits(start, co_sim_frame_bits(&bus->on_bus.frame), bus->bitrate);
+    bus->idle_at_us = end.us;
+    bus->idle_rem = end.rem;
+}
+
+/* Do everything due at `t`: completions, then node deadlines, again until quiet; then
+ * arbitration. Counts events against the storm guard. */
+static co_err_t run_instant(co_sim_bus_t *bus, uint64_t t)
+{
+    uint32_t events = 0;
+    bool busy;
+    do {
+        busy = false;
+        for (int32_t i; (i = next_completion(bus, t)) >= 0;) {
+            if (++events > STORM_EVENTS) {
+                return CO_ERR_STATE;
+            }
+            co_sim_pending_t p = take_completion(bus, i);
+            complete(bus, t, &p);
+            busy = true;
+        }
+        for (uint32_t i = 0; i < bus->port_count; i++) {
+            co_sim_port_t *port = bus->ports[i];
+            if (port->node && port->node_due_us <= t) {
+                if (++events > STORM_EVENTS) {
+                    return CO_ERR_STATE;
+                }
+                port->node_due_us = co_node_poll(port->node, t);
+                busy = true;
+            }
+        }
+    } while (busy);
+    if (bus->bitrate) {
+        start_transmission(bus, t);
+    }
+    return CO_OK;
+}
+
+/* The next instant at which something happens, CO_TIME_NEVER if none. */
+static uint64_t next_event(const co_sim_bus_t *bus)
+{
+    uint64_t next = CO_TIME_NEVER;
+    for (uint32_t i = 0; i < bus->port_count; i++) {
+        const co_sim_port_t *port = bus->ports[i];
+        if (port->node && port->node_due_us < next) {
+            next = port->node_due_us;
+        }
+    }
+    exact_t idle = {bus->idle_at_us, bus->idle_rem};
+    uint64_t frames = first_ready(bus);
+    if (bus->transmitting) {
+        frames = exact_ceil(idle);
+    } else if (bus->bitrate && frames != CO_TIME_NEVER && frames < exact_ceil(idle)) {
+        frames = exact_ceil(idle); /* ready, but the bus is still in use */
+    }
+    return frames < next ? frames : next;
+}
+
+co_err_t co_sim_run_until(co_sim_bus_t *bus, uint64_t until_us)
+{
+    if (!bus) {
+        return CO_ERR_ARG;
+    }
+    if (until_us < bus->now_us) {
+        return CO_OK; /* time never goes back */
+    }
+    /* The application may have called its nodes since the last run (new deadlines, frames
+     * queued): poll each once at the start. */
+    for (uint32_t i = 0; i < bus->port_count; i++) {
+        if (bus->ports[i]->node && bus->ports[i]->node_due_us > bus->now_us) {
+            bus->ports[i]->node_due_us = bus->now_us;
+        }
+    }
+    for (uint64_t t = bus->now_us;;) {
+        bus->now_us = t; /* frames sent while handling `t` leave at `t` */
+        co_err_t err = run_instant(bus, t);
+        if (err != CO_OK) {
+            return err;
+        }
+        t = next_event(bus);
+        if (t == CO_TIME_NEVER || t > until_us) {
+            break;
+        }
+    }
+    bus->now_us = until_us;
+    return CO_OK;
+}
+
+/* ---- Settings. */
+
+void co_sim_seed(co_sim_bus_t *bus, uint64_t seed) { bus->rng = seed; }
+
+void co_sim_drop_nth(co_sim_bus_t *bus, uint64_t n)
+{
+    bus->drop_nth = n;
+    bus->sent_count = 0;
+}
+
+void co_sim_drop_probability(co_sim_bus_t *bus, double p) { bus->drop_p = clamp_p(p); }
+void co_sim_corrupt_probability(co_sim_bus_t *bus, double p) { bus->corrupt_p = clamp_p(p); }
+void co_sim_delay(co_sim_bus_t *bus, uint64_t delay_us) { bus->delay_us = delay_us; }
+
+void co_sim_set_trace(co_sim_bus_t *bus, co_sim_trace_fn fn, void *ctx)
+{
+    bus->trace = fn;
+    bus->trace_ctx = ctx;
+}
+
+/* ---- Output. */
+
+char *co_sim_format(char *buf, size_t cap, uint64_t t_us, const char *ifname,
+                    const co_frame_t *frame)
+{
+    char payload[20] = "R";
+    uint8_t len = frame->len > 8 ? 8 : frame->len;
+    if (frame->flags & CO_FRAME_RTR) {
+        if (len) {
+            snprintf(payload, sizeof payload, "R%u", (unsigned)len);
+        }
+    } else {
+        payload[0] = '\0';
+        for (uint8_t i = 0; i < len; i++) {
+            snprintf(payload + 2 * i, 3, "%02X", (unsigned)frame->data[i]);
+        }
+    }
+    snprintf(buf, cap, "(%" PRIu64 ".%06" PRIu64 ") %s %0*" PRIX32 "#%s", t_us / 1000000u,
+             t_us % 1000000u, ifname ? ifname : "", (frame->flags & CO_FRAME_EXT) ? 8 : 3,
+             frame->id, payload);
+    return buf;
+}
+
+const co_sim_stats_t *co_sim_stats(const co_sim_bus_t *bus) { return &bus->stats; }
+
+double co_sim_load(const co_sim_bus_t *bus)
+{
+    return bus->now_us ? (double)bus->stats.busy_us / (double)bus->now_us : 0.0;
+}

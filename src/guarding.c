@@ -1,0 +1,186 @@
+/*
+ * guarding.c -- node guarding: the node's answers to guarding RTRs and its life
+ * guarding (0x100C x 0x100D), and the master's watch of guarded nodes.
+ */
+#include "internal.h"
+
+#define GUARD_COB_BASE 0x700u
+
+/* ---- slave side */
+
+static uint64_t life_time_us(const co_node_t *node)
+{
+    uint64_t guard_ms = co_entry_uint(node->guard_time);
+    uint64_t factor = co_entry_uint(node->life_factor);
+    return co_ms_to_us((uint32_t)(guard_ms * factor));
+}
+
+void co_guard_reset_comm(co_node_t *node)
+{
+    node->guard_toggle = 0; /* the first answer after reset communication has toggle 0 */
+    node->life_guarding = false;
+    node->life_lost = false;
+    node->life_deadline_us = CO_TIME_NEVER;
+}
+
+void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
+{
+    if (!(frame->flags & CO_FRAME_RTR)) {
+        node->stats.rx_malformed++; /* a data frame on our own error-control ID */
+        return;
+    }
+    if (co_entry_uint(node->hb_period) != 0) {
+        return; /* heartbeat and guarding are exclusive: the heartbeat is in use */
+    }
+    co_frame_t reply = {.id = GUARD_COB_BASE + node->node_id,
+                        .len = 1,
+                        .data = {(uint8_t)((node->guard_toggle << 7) | node->nmt_state)}};
+    node->guard_toggle ^= 1u;
+    co_node_send(node, &reply);
+
+    uint64_t life_us = life_time_us(node);
+    node->life_guarding = life_us != 0;
+    node->life_deadline_us = life_us ? node->now_us + life_us : CO_TIME_NEVER;
+    co_node_schedule(node, node->life_deadline_us);
+    if (node->life_lost) {
+        node->life_lost = false;
+        co_node_ec_event(node, CO_EC_LIFE_GUARD_RESUMED, node->node_id, node->nmt_state,
+                         node->nmt_state);
+    }
+}
+
+void co_guard_written(co_node_t *node)
+{
+    if (!node->life_guarding || node->life_lost) {
+        return;
+    }
+    uint64_t life_us = life_time_us(node);
+    node->life_guarding = life_us != 0;
+    node->life_deadline_us = life_us ? node->now_us + life_us : CO_TIME_NEVER;
+    co_node_schedule(node, node->life_deadline_us);
+}
+
+static uint64_t life_poll(co_node_t *node, uint64_t now_us)
+{
+    if (!node->life_guarding || node->life_lost) {
+        return CO_TIME_NEVER;
+    }
+    if (now_us < node->life_deadline_us) {
+        return node->life_deadline_us;
+    }
+    node->life_lost = true;
+    node->life_deadline_us = CO_TIME_NEVER;
+    co_node_ec_event(node, CO_EC_LIFE_GUARD, node->node_id, node->nmt_state, node->nmt_state);
+    co_node_comm_error(node);
+    return CO_TIME_NEVER;
+}
+
+/* ---- master side */
+
+static uint64_t watch_life_us(const co_guard_watch_t *w)
+{
+    return co_ms_to_us((uint32_t)w->guard_ms * w->factor);
+}
+
+co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)
+{
+    if (node_id < 1 || node_id > 127 || (guard_ms != 0 && factor == 0)) {
+        return CO_ERR_ARG;
+    }
+    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
+        const co_hb_consumer_t *c = &node->hb_consumers[i];
+        if (guard_ms != 0 && c->watch != CO_HB_WATCH_UNUSED && c->node_id == node_id) {
+            return CO_ERR_STATE;
+        }
+    }
+    co_guard_watch_t *slot = NULL;
+    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+        co_guard_watch_t *w = &node->guard_watch[i];
+        if (w->guard_ms != 0 && w->node_id == node_id) {
+            slot = w;
+            break;
+        }
+        if (w->guard_ms == 0 && slot == NULL) {
+            slot = w;
+        }
+    }
+    if (slot == NULL) {
+        return guard_ms ? CO_ERR_FULL : CO_OK;
+    }
+    *slot = (co_guard_watch_t){.node_id = node_id,
+                               .guard_ms = guard_ms,
+                               .factor = factor,
+                               .state = CO_STATE_NONE,
+                               .toggle = CO_STATE_NONE,
+                               .next_rtr_us = node->now_us,
+                               .life_deadline_us = node->now_us};
+    if (guard_ms != 0) {
+        slot->life_deadline_us = node->now_us + watch_life_us(slot);
+        co_node_schedule(node, node->now_us);
+    }
+    co_routes_rebuild(node);
+    return CO_OK;
+}
+
+void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame)
+{
+    if (frame->flags & CO_FRAME_RTR) {
+        return; /* our own request, as another master would see it */
+    }
+    if (frame->len != 1) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    co_guard_watch_t *w = &node->guard_watch[slot];
+    uint8_t toggle = (uint8_t)(frame->data[0] >> 7);
+    uint8_t state = frame->data[0] & 0x7Fu;
+    uint8_t previous = w->state;
+    if (state == CO_NMT_INITIALISING) { /* boot-up: the node's toggle starts over */
+        w->state = state;
+        w->toggle = CO_STATE_NONE;
+        co_node_ec_event(node, CO_EC_BOOT, w->node_id, state, previous);
+        return;
+    }
+    if (w->toggle != CO_STATE_NONE && toggle != w->toggle) {
+        w->toggle = (uint8_t)(toggle ^ 1u); /* resynchronise, but the reply does not count */
+        co_node_ec_event(node, CO_EC_GUARD_TOGGLE, w->node_id, state, previous);
+        return;
+    }
+    w->toggle = (uint8_t)(toggle ^ 1u);
+    w->state = state;
+    w->life_deadline_us = node->now_us + watch_life_us(w);
+    co_node_schedule(node, w->life_deadline_us);
+    if (w->lost) {
+        w->lost = false;
+        co_node_ec_event(node, CO_EC_GUARD_RESUMED, w->node_id, state, previous);
+    } else if (previous == CO_STATE_NONE) {
+        co_node_ec_event(node, CO_EC_STARTED, w->node_id, state, previous);
+    } else if (state != previous) {
+        co_node_ec_event(node, CO_EC_STATE_CHANGED, w->node_id, state, previous);
+    }
+}
+
+static uint64_t watch_poll(co_node_t *node, co_guard_watch_t *w, uint64_t now_us)
+{
+    if (now_us >= w->next_rtr_us) {
+        co_frame_t rtr = {.id = GUARD_COB_BASE + w->node_id, .flags = CO_FRAME_RTR, .len = 1};
+        co_node_send(node, &rtr);
+        w->next_rtr_us = now_us + co_ms_to_us(w->guard_ms);
+    }
+    if (!w->lost && now_us >= w->life_deadline_us) {
+        w->lost = true;
+        co_node_ec_event(node, CO_EC_GUARD_TIMEOUT, w->node_id, w->state, w->state);
+    }
+    return w->lost ? w->next_rtr_us : co_min_u64(w->next_rtr_us, w->life_deadline_us);
+}
+
+uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
+{
+    uint64_t next = life_poll(node, now_us);
+    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+        if (node->guard_watch[i].guard_ms != 0) {
+            next = co_min_u64(next, watch_poll(node, &node->guard_watch[i], now_us));
+        }
+    }
+    return next;
+}

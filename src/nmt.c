@@ -1,0 +1,150 @@
+/*
+ * nmt.c -- the NMT state machine of a node, and NMT commands as a master.
+ */
+#include "internal.h"
+
+bool co_nmt_allows(co_nmt_state_t state, co_service_t service)
+{
+    uint16_t allowed;
+    switch (state) {
+    case CO_NMT_INITIALISING:
+        allowed = CO_SVC_BOOTUP | CO_SVC_LSS;
+        break;
+    case CO_NMT_PRE_OPERATIONAL:
+        allowed = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
+                  CO_SVC_EMCY | CO_SVC_LSS;
+        break;
+    case CO_NMT_OPERATIONAL:
+        allowed = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
+                  CO_SVC_EMCY | CO_SVC_PDO | CO_SVC_LSS;
+        break;
+    case CO_NMT_STOPPED:
+        allowed = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
+        break;
+    default:
+        allowed = CO_SVC_LSS;
+        break;
+    }
+    return (allowed & (uint16_t)service) != 0;
+}
+
+const char *co_nmt_state_name(uint8_t state)
+{
+    switch (state) {
+    case CO_NMT_INITIALISING:
+        return "initialising";
+    case CO_NMT_STOPPED:
+        return "stopped";
+    case CO_NMT_OPERATIONAL:
+        return "operational";
+    case CO_NMT_PRE_OPERATIONAL:
+        return "pre-operational";
+    default:
+        return "unknown";
+    }
+}
+
+co_nmt_state_t co_nmt_state(const co_node_t *node) { return (co_nmt_state_t)node->nmt_state; }
+
+static void enter(co_node_t *node, co_nmt_state_t state)
+{
+    if (node->nmt_state == (uint8_t)state) {
+        return;
+    }
+    node->nmt_state = (uint8_t)state;
+    if (node->cfg.on_state) {
+        node->cfg.on_state(node->cfg.user, state);
+    }
+}
+
+static void send_bootup(co_node_t *node)
+{
+    co_frame_t boot = {.id = 0x700u + node->node_id, .len = 1, .data = {0x00}};
+    co_node_send(node, &boot);
+}
+
+/* Initialisation as CiA 301 orders it: reset application (optional), reset
+ * communication, boot-up once, pre-operational (or operational when self-starting). */
+void co_nmt_reset(co_node_t *node, bool application)
+{
+    enter(node, CO_NMT_INITIALISING);
+    if (application) {
+        co_od_reset(&node->cfg.od, 0x2000, 0x9FFF, node->node_id);
+        if (node->cfg.on_reset) {
+            node->cfg.on_reset(node->cfg.user, CO_RESET_APPLICATION);
+        }
+    }
+    co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, node->node_id);
+    co_hb_reset_comm(node);
+    co_guard_reset_comm(node);
+    co_routes_rebuild(node);
+    if (node->cfg.on_reset) {
+        node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);
+    }
+    if (node->node_id == CO_NODE_ID_UNCONFIGURED) {
+        return; /* waits in initialisation until LSS gives it a node-ID */
+    }
+    send_bootup(node);
+    enter(node, node->cfg.self_start ? CO_NMT_OPERATIONAL : CO_NMT_PRE_OPERATIONAL);
+    co_hb_state_entered(node);
+}
+
+co_err_t co_nmt_apply(co_node_t *node, co_nmt_cmd_t cmd)
+{
+    if (!node->started || node->nmt_state == CO_NMT_INITIALISING) {
+        return CO_ERR_STATE;
+    }
+    switch (cmd) {
+    case CO_NMT_CMD_START:
+        enter(node, CO_NMT_OPERATIONAL);
+        return CO_OK;
+    case CO_NMT_CMD_STOP:
+        enter(node, CO_NMT_STOPPED);
+        return CO_OK;
+    case CO_NMT_CMD_ENTER_PRE_OPERATIONAL:
+        enter(node, CO_NMT_PRE_OPERATIONAL);
+        return CO_OK;
+    case CO_NMT_CMD_RESET_NODE:
+        co_nmt_reset(node, true);
+        return CO_OK;
+    case CO_NMT_CMD_RESET_COMMUNICATION:
+        co_nmt_reset(node, false);
+        return CO_OK;
+    }
+    return CO_ERR_ARG;
+}
+
+void co_nmt_ingest(co_node_t *node, const co_frame_t *frame)
+{
+    if (frame->len != 2 || (frame->flags & CO_FRAME_RTR)) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    uint8_t target = frame->data[1];
+    if (target != 0 && target != node->node_id) {
+        return;
+    }
+    if (co_nmt_apply(node, (co_nmt_cmd_t)frame->data[0]) == CO_ERR_ARG) {
+        node->stats.rx_malformed++;
+    }
+}
+
+static bool known_command(co_nmt_cmd_t cmd)
+{
+    return cmd == CO_NMT_CMD_START || cmd == CO_NMT_CMD_STOP ||
+           cmd == CO_NMT_CMD_ENTER_PRE_OPERATIONAL || cmd == CO_NMT_CMD_RESET_NODE ||
+           cmd == CO_NMT_CMD_RESET_COMMUNICATION;
+}
+
+co_err_t co_nmt_send(co_node_t *node, co_nmt_cmd_t cmd, uint8_t target)
+{
+    if (!known_command(cmd) || target > 127) {
+        return CO_ERR_ARG;
+    }
+    co_frame_t frame = {.id = 0x000, .len = 2, .data = {(uint8_t)cmd, target}};
+    co_node_send(node, &frame);
+    if (target == 0 || target == node->node_id) {
+        (void)co_nmt_apply(node, cmd);
+    }
+    return CO_OK;
+}

@@ -1,0 +1,262 @@
+/*
+ * node.c -- the node: lifecycle, frame dispatch, the poll loop, and object
+ * dictionary access that lets writes take effect on the services.
+ */
+#include <string.h>
+
+#include "internal.h"
+
+/* ---- lifecycle */
+
+co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
+{
+    if (node == NULL || config == NULL || config->driver.tx == NULL ||
+        config->od.entries == NULL) {
+        return CO_ERR_ARG;
+    }
+    uint8_t id = config->node_id;
+    if ((id < 1 || id > 127) && id != CO_NODE_ID_UNCONFIGURED) {
+        return CO_ERR_ARG;
+    }
+    if (co_od_validate(&config->od, NULL) != CO_OK) {
+        return CO_ERR_CONFIG;
+    }
+    memset(node, 0, sizeof *node);
+    node->cfg = *config;
+    node->node_id = id;
+    node->nmt_state = CO_NMT_INITIALISING;
+    node->next_due_us = CO_TIME_NEVER;
+    node->hb_next_us = CO_TIME_NEVER;
+    node->boot_deadline_us = CO_TIME_NEVER;
+    node->life_deadline_us = CO_TIME_NEVER;
+    node->guard_time = co_od_find(&config->od, 0x100C, 0, NULL);
+    node->life_factor = co_od_find(&config->od, 0x100D, 0, NULL);
+    node->error_behaviour = co_od_find(&config->od, 0x1029, 1, NULL);
+    return co_hb_bind(node);
+}
+
+co_err_t co_node_start(co_node_t *node, uint64_t now_us)
+{
+    if (node->started) {
+        return CO_ERR_STATE;
+    }
+    node->started = true;
+    node->now_us = now_us;
+    co_nmt_reset(node, true);
+    return CO_OK;
+}
+
+uint8_t co_node_id(const co_node_t *node) { return node->node_id; }
+
+const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stats; }
+
+/* ---- dispatch */
+
+static co_service_t route_service(uint8_t kind)
+{
+    return kind == CO_ROUTE_NMT ? CO_SVC_NMT : CO_SVC_ERROR_CONTROL;
+}
+
+void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
+{
+    node->now_us = now_us;
+    node->stats.rx_frames++;
+    const co_route_t *route = co_routes_find(node, co_route_key(frame));
+    if (route == NULL) {
+        node->stats.rx_unrouted++;
+        return;
+    }
+    if (frame->len > 8) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    if (!node->started || !co_nmt_allows((co_nmt_state_t)node->nmt_state,
+                                         route_service(route->kind))) {
+        node->stats.rx_gated++;
+        return;
+    }
+    uint8_t slot = route->slot;
+    switch (route->kind) {
+    case CO_ROUTE_NMT:
+        co_nmt_ingest(node, frame);
+        break;
+    case CO_ROUTE_GUARD_RTR:
+        co_guard_rtr(node, frame);
+        break;
+    case CO_ROUTE_HB_CONSUMER:
+        co_hb_ingest(node, slot, frame);
+        break;
+    case CO_ROUTE_GUARD_REPLY:
+        co_guard_reply(node, slot, frame);
+        break;
+    default:
+        break;
+    }
+}
+
+/* ---- time */
+
+void co_node_schedule(co_node_t *node, uint64_t due_us)
+{
+    if (due_us < node->next_due_us) {
+        node->next_due_us = due_us;
+    }
+}
+
+static uint64_t poll_due(co_node_t *node, uint64_t now_us)
+{
+    node->now_us = now_us;
+    if (node->txq_count) {
+        co_txq_flush(node);
+    }
+    if (!node->started) {
+        return CO_TIME_NEVER;
+    }
+    /* Services may schedule work while they run (a reset, a new watch): start from
+     * "never" and let co_node_schedule lower it, then add what the services return. */
+    node->next_due_us = CO_TIME_NEVER;
+    uint64_t next = co_hb_poll(node, now_us);
+    next = co_min_u64(next, co_guard_poll(node, now_us));
+    co_node_schedule(node, next);
+    return node->next_due_us;
+}
+
+uint64_t co_node_poll(co_node_t *node, uint64_t now_us)
+{
+    if (now_us < node->next_due_us && node->txq_count == 0) {
+        return node->next_due_us;
+    }
+    return poll_due(node, now_us);
+}
+
+/* ---- events and error behaviour */
+
+void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,
+                      uint8_t previous)
+{
+    if (node->cfg.on_errctl) {
+        co_ec_event_t ev = {.kind = kind, .node_id = node_id, .state = state, .previous = previous};
+        node->cfg.on_errctl(node->cfg.user, &ev);
+    }
+}
+
+/* Communication error (heartbeat or life guarding lost): 0x1029 sub1 says what the NMT
+ * state does. EMCY 0x8130 will be produced here once EMCY exists. */
+void co_node_comm_error(co_node_t *node)
+{
+    switch (co_entry_uint(node->error_behaviour)) {
+    case 0:
+        if (node->nmt_state == CO_NMT_OPERATIONAL) {
+            (void)co_nmt_apply(node, CO_NMT_CMD_ENTER_PRE_OPERATIONAL);
+        }
+        break;
+    case 2:
+        (void)co_nmt_apply(node, CO_NMT_CMD_STOP);
+        break;
+    default: /* 1 and manufacturer-specific values: no change */
+        break;
+    }
+}
+
+/* ---- object dictionary access */
+
+/* Service side of a write: refuse values a service cannot take. */
+static co_abort_t service_check(const co_node_t *node, const co_od_entry_t *entry,
+                                const uint8_t *data, uint32_t len)
+{
+    return co_hb_check_write(node, entry, data, len);
+}
+
+/* Service side of a write: take the new value into effect at once. */
+static void service_apply(co_node_t *node, const co_od_entry_t *entry)
+{
+    switch (entry->index) {
+    case 0x1016:
+    case 0x1017:
+        co_hb_written(node, entry);
+        break;
+    case 0x100C:
+    case 0x100D:
+        co_guard_written(node);
+        break;
+    default:
+        break;
+    }
+}
+
+static co_abort_t write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                              uint32_t len)
+{
+    const co_od_t *od = &node->cfg.od;
+    co_abort_t abort = co_od_check(od, entry, data, len);
+    if (abort == CO_ABORT_NONE) {
+        abort = service_check(node, entry, data, len);
+    }
+    if (abort == CO_ABORT_NONE) {
+        abort = co_od_store(od, entry, data, len);
+    }
+    if (abort != CO_ABORT_NONE) {
+        return abort;
+    }
+    service_apply(node, entry);
+    if (entry->hooks && entry->hooks->written) {
+        entry->hooks->written(od->hook_ctx, entry);
+    }
+    return CO_ABORT_NONE;
+}
+
+co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                             uint32_t len)
+{
+    co_abort_t abort;
+    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, &abort);
+    if (entry == NULL) {
+        return abort;
+    }
+    abort = co_od_access(entry, true);
+    return abort != CO_ABORT_NONE ? abort : write_entry(node, entry, data, len);
+}
+
+co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                            uint32_t cap, uint32_t *len)
+{
+    co_abort_t abort;
+    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, &abort);
+    if (entry == NULL) {
+        return abort;
+    }
+    abort = co_od_access(entry, false);
+    if (abort != CO_ABORT_NONE) {
+        return abort;
+    }
+    uint32_t total = 0;
+    abort = co_od_read(&node->cfg.od, entry, 0, buf, cap, len, &total);
+    if (abort == CO_ABORT_NONE && total != CO_OD_SIZE_UNKNOWN && total > *len) {
+        return CO_ABORT_LEN_HIGH;
+    }
+    return abort;
+}
+
+co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64_t value)
+{
+    co_abort_t abort;
+    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, &abort);
+    if (entry == NULL) {
+        return abort;
+    }
+    uint32_t size = co_type_size((co_type_t)entry->type);
+    if (size == 0 || size > 8 || entry->type == CO_TYPE_REAL32 || entry->type == CO_TYPE_REAL64 ||
+        entry->type == CO_TYPE_TIME_OF_DAY || entry->type == CO_TYPE_TIME_DIFFERENCE) {
+        return CO_ABORT_TYPE_MISMATCH;
+    }
+    uint8_t wire[8];
+    for (uint32_t i = 0; i < size; i++) {
+        wire[i] = (uint8_t)(value >> (8 * i));
+    }
+    return write_entry(node, entry, wire, size);
+}
+
+co_err_t co_node_get_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t *value)
+{
+    return co_od_get_uint(&node->cfg.od, index, sub, value);
+}

@@ -1,0 +1,574 @@
+/*
+ * od.c -- the object dictionary: look-up, wire conversion, checks, hooks, reset.
+ *
+ * Values live in native form; everything that crosses this API is wire form
+ * (little-endian). Numbers always pass through a 64-bit bit pattern:
+ * native storage <-> uint64_t <-> wire bytes, built with shifts, so the code
+ * never depends on the host's byte order.
+ */
+#include "canola/od.h"
+
+#include <string.h>
+
+/* REAL32/REAL64 are copied bit for bit through uint32_t/uint64_t. */
+_Static_assert(sizeof(float) == 4, "REAL32 needs a 4-byte float");
+_Static_assert(sizeof(double) == 8, "REAL64 needs an 8-byte double");
+
+/* How a type's value is stored and checked. K_NONE: an unknown type code (validate rejects
+ * it; otherwise handled as raw bytes). K_RAW: TIME_OF_DAY and TIME_DIFFERENCE, 6 bytes kept in
+ * wire order. */
+enum kind {
+    K_NONE,
+    K_BOOL,
+    K_SIGNED,
+    K_UNSIGNED,
+    K_REAL,
+    K_RAW,
+    K_VSTRING,
+    K_OSTRING,
+    K_USTRING,
+    K_DOMAIN
+};
+
+typedef struct type_info {
+    uint8_t wire;  /* bytes on the wire; 0 = variable length */
+    uint8_t width; /* bytes of native storage (fixed types only) */
+    uint8_t kind;  /* enum kind */
+} type_info_t;
+
+/* Indexed by type code; the gaps (0x00, 0x0E, 0x17) are zero: K_NONE. */
+static const type_info_t k_types[] = {
+    [CO_TYPE_BOOLEAN] = {1, 1, K_BOOL},           [CO_TYPE_INTEGER8] = {1, 1, K_SIGNED},
+    [CO_TYPE_INTEGER16] = {2, 2, K_SIGNED},       [CO_TYPE_INTEGER32] = {4, 4, K_SIGNED},
+    [CO_TYPE_UNSIGNED8] = {1, 1, K_UNSIGNED},     [CO_TYPE_UNSIGNED16] = {2, 2, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED32] = {4, 4, K_UNSIGNED},    [CO_TYPE_REAL32] = {4, 4, K_REAL},
+    [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING}, [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
+    [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING}, [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
+    [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},    [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
+    [CO_TYPE_INTEGER24] = {3, 4, K_SIGNED},       [CO_TYPE_REAL64] = {8, 8, K_REAL},
+    [CO_TYPE_INTEGER40] = {5, 8, K_SIGNED},       [CO_TYPE_INTEGER48] = {6, 8, K_SIGNED},
+    [CO_TYPE_INTEGER56] = {7, 8, K_SIGNED},       [CO_TYPE_INTEGER64] = {8, 8, K_SIGNED},
+    [CO_TYPE_UNSIGNED24] = {3, 4, K_UNSIGNED},    [CO_TYPE_UNSIGNED40] = {5, 8, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED48] = {6, 8, K_UNSIGNED},    [CO_TYPE_UNSIGNED56] = {7, 8, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED64] = {8, 8, K_UNSIGNED},
+};
+
+static const type_info_t k_unknown = {0, 0, K_NONE};
+
+static const type_info_t *type_info(unsigned type)
+{
+    return type < sizeof k_types / sizeof k_types[0] ? &k_types[type] : &k_unknown;
+}
+
+static bool is_number(const type_info_t *t) { return t->kind >= K_BOOL && t->kind <= K_REAL; }
+
+static bool is_integer(const type_info_t *t)
+{
+    return t->kind == K_SIGNED || t->kind == K_UNSIGNED;
+}
+
+static uint32_t key_of(uint16_t index, uint8_t sub) { return ((uint32_t)index << 8) | sub; }
+
+static uint32_t entry_key(const co_od_entry_t *e) { return key_of(e->index, e->sub); }
+
+static uint32_t min_u32(uint32_t a, uint32_t b) { return a < b ? a : b; }
+
+static bool has_read_hook(const co_od_entry_t *e) { return e->hooks && e->hooks->read; }
+
+static bool has_write_hook(const co_od_entry_t *e) { return e->hooks && e->hooks->write; }
+
+/* memcpy that accepts a NULL pointer when there is nothing to copy. */
+static void copy_bytes(void *dst, const void *src, uint32_t n)
+{
+    if (n > 0) {
+        memcpy(dst, src, n);
+    }
+}
+
+/* ---- Bit patterns. */
+
+/* Sign-extend the low `nbits` bits of `bits` to 64 bits (unsigned arithmetic only). */
+static uint64_t sign_extend(uint64_t bits, unsigned nbits)
+{
+    if (nbits >= 64u) {
+        return bits;
+    }
+    uint64_t sign = (uint64_t)1 << (nbits - 1u);
+    bits &= (sign << 1) - 1u;
+    return (bits ^ sign) - sign;
+}
+
+/* Two's-complement pattern to int64_t without an implementation-defined conversion. */
+static int64_t to_signed(uint64_t bits)
+{
+    if (bits <= (uint64_t)INT64_MAX) {
+        return (int64_t)bits;
+    }
+    return -(int64_t)~bits - 1;
+}
+
+static uint64_t wire_get(const uint8_t *p, unsigned n)
+{
+    uint64_t v = 0;
+    while (n-- > 0u) {
+        v = (v << 8) | p[n];
+    }
+    return v;
+}
+
+static void wire_put(uint8_t *p, uint64_t v, unsigned n)
+{
+    for (unsigned i = 0; i < n; i++) {
+        p[i] = (uint8_t)(v >> (8u * i));
+    }
+}
+
+/* A number's wire bytes as a bit pattern, signed types sign-extended from the wire width. */
+static uint64_t wire_number(const type_info_t *t, const uint8_t *data)
+{
+    uint64_t bits = wire_get(data, t->wire);
+    return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->wire) : bits;
+}
+
+/* Native storage of a number, seen through a union of the unsigned widths. */
+typedef union native {
+    uint8_t u8;
+    uint16_t u16;
+    uint32_t u32;
+    uint64_t u64;
+} native_t;
+
+/* Native storage as a bit pattern (signed types sign-extended; reals as raw bits). */
+static uint64_t native_get(const void *value, const type_info_t *t)
+{
+    native_t v;
+    memcpy(&v, value, t->width);
+    uint64_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : t->width == 4 ? v.u32 : v.u64;
+    return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->width) : bits;
+}
+
+/* Store a bit pattern truncated to the storage width (exact-width signed types are two's
+ * complement, so an unsigned copy of the same width holds the same value). */
+static void native_set(void *value, const type_info_t *t, uint64_t bits)
+{
+    native_t v;
+    if (t->kind == K_BOOL) {
+        bits = bits != 0u;
+    }
+    if (t->width == 1) {
+        v.u8 = (uint8_t)bits;
+    } else if (t->width == 2) {
+        v.u16 = (uint16_t)bits;
+    } else if (t->width == 4) {
+        v.u32 = (uint32_t)bits;
+    } else {
+        v.u64 = bits;
+    }
+    memcpy(value, &v, t->width);
+}
+
+/* A REAL32/REAL64 bit pattern as double (float and integer byte orders assumed equal). */
+static double real_value(const type_info_t *t, uint64_t bits)
+{
+    if (t->wire == 4) {
+        uint32_t b = (uint32_t)bits;
+        float f;
+        memcpy(&f, &b, sizeof f);
+        return (double)f;
+    }
+    double d;
+    memcpy(&d, &bits, sizeof d);
+    return d;
+}
+
+/* ---- Table checks and look-up. */
+
+static bool storage_ok(const co_od_entry_t *e, const type_info_t *t)
+{
+    if (e->value != NULL) {
+        /* a DOMAIN kept in RAM needs its buffer */
+        return t->kind != K_DOMAIN || ((const co_od_domain_t *)e->value)->data != NULL;
+    }
+    bool rd = has_read_hook(e);
+    bool wr = has_write_hook(e);
+    if (((e->attr & CO_OD_READ) && !rd) || ((e->attr & CO_OD_WRITE) && !wr)) {
+        return false;
+    }
+    return rd || wr; /* an entry with neither storage nor hooks holds nothing */
+}
+
+static bool entry_ok(const co_od_entry_t *e)
+{
+    const type_info_t *t = type_info(e->type);
+    if (t->kind == K_NONE) {
+        return false;
+    }
+    if (t->wire != 0 ? e->size != t->wire : e->size == 0) {
+        return false;
+    }
+    if (t->kind == K_USTRING && (e->size & 1u) != 0) {
+        return false; /* whole 16-bit code units only */
+    }
+    return storage_ok(e, t);
+}
+
+/* Entry i is well formed and comes strictly after entry i - 1. */
+static bool entry_fits(const co_od_entry_t *entries, uint32_t i)
+{
+    bool sorted = i == 0 || entry_key(&entries[i]) > entry_key(&entries[i - 1u]);
+    return sorted && entry_ok(&entries[i]);
+}
+
+co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
+{
+    if (od == NULL) {
+        return CO_ERR_ARG;
+    }
+    uint32_t i = 0;
+    while (od->entries != NULL && i < od->count && entry_fits(od->entries, i)) {
+        i++;
+    }
+    if (i == od->count) {
+        return CO_OK;
+    }
+    if (bad != NULL) {
+        *bad = i;
+    }
+    return CO_ERR_CONFIG;
+}
+
+/* Position of the first entry whose key is >= key (count when there is none). */
+static uint32_t lower_bound(const co_od_t *od, uint32_t key)
+{
+    uint32_t lo = 0;
+    uint32_t hi = od->count;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2u;
+        if (entry_key(&od->entries[mid]) < key) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort)
+{
+    uint32_t pos = lower_bound(od, key_of(index, sub));
+    const co_od_entry_t *e = od->entries;
+    if (pos < od->count && e[pos].index == index && e[pos].sub == sub) {
+        return &e[pos];
+    }
+    if (abort != NULL) {
+        /* entries of the same index, if any, sit right before or at pos */
+        bool known =
+            (pos < od->count && e[pos].index == index) || (pos > 0 && e[pos - 1u].index == index);
+        *abort = known ? CO_ABORT_NO_SUB : CO_ABORT_NO_OBJECT;
+    }
+    return NULL;
+}
+
+uint32_t co_type_size(co_type_t type) { return type_info((unsigned)type)->wire; }
+
+/* ---- Reading. */
+
+static uint32_t vstring_len(const uint8_t *s, uint32_t cap)
+{
+    uint32_t n = 0;
+    while (n < cap && s[n] != 0) {
+        n++;
+    }
+    return n;
+}
+
+/* Bytes before the first zero code unit; a zero unit is two zero bytes in either order. */
+static uint32_t ustring_len(const uint8_t *s, uint32_t cap)
+{
+    uint32_t n = 0;
+    while (n + 2u <= cap && (s[n] != 0 || s[n + 1u] != 0)) {
+        n += 2u;
+    }
+    return n;
+}
+
+uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
+{
+    (void)od;
+    if (entry->value == NULL) {
+        return entry->size;
+    }
+    switch (type_info(entry->type)->kind) {
+    case K_VSTRING:
+        return vstring_len(entry->value, entry->size);
+    case K_USTRING:
+        return ustring_len(entry->value, entry->size);
+    case K_DOMAIN:
+        return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
+    default:
+        return entry->size;
+    }
+}
+
+co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
+{
+    if (!write) {
+        return (entry->attr & CO_OD_READ) ? CO_ABORT_NONE : CO_ABORT_WRITE_ONLY;
+    }
+    bool writable = (entry->attr & CO_OD_WRITE) && !(entry->attr & CO_OD_CONST);
+    return writable ? CO_ABORT_NONE : CO_ABORT_READ_ONLY;
+}
+
+/* The wire bytes of a stored value: numbers are encoded into tmp, the rest is kept as is. */
+static const uint8_t *wire_view(const co_od_entry_t *e, uint8_t tmp[8])
+{
+    const type_info_t *t = type_info(e->type);
+    if (is_number(t)) {
+        wire_put(tmp, native_get(e->value, t), t->wire);
+        return tmp;
+    }
+    if (t->kind == K_DOMAIN) {
+        return ((const co_od_domain_t *)e->value)->data;
+    }
+    return e->value;
+}
+
+co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                      uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    uint32_t whole = CO_OD_SIZE_UNKNOWN;
+    *n = 0;
+    if (has_read_hook(entry)) {
+        /* the hook always gets a place for the total, even when the caller has none */
+        co_abort_t abort = entry->hooks->read(od->hook_ctx, entry, offset, buf, cap, n, &whole);
+        if (total != NULL) {
+            *total = whole;
+        }
+        return abort;
+    }
+    if (entry->value == NULL) {
+        return CO_ABORT_WRITE_ONLY;
+    }
+    whole = co_od_value_len(od, entry);
+    if (total != NULL) {
+        *total = whole;
+    }
+    if (offset > whole) {
+        return CO_ABORT_GENERAL;
+    }
+    uint8_t tmp[8];
+    uint32_t count = min_u32(cap, whole - offset);
+    if (count > 0) {
+        memcpy(buf, wire_view(entry, tmp) + offset, count);
+    }
+    *n = count;
+    return CO_ABORT_NONE;
+}
+
+/* ---- Writing. */
+
+/* Fixed types need exactly their wire size (validate makes it the entry's size);
+ * variable ones at most the capacity. */
+static co_abort_t check_len(const co_od_entry_t *e, const type_info_t *t, uint32_t len)
+{
+    uint32_t want = t->wire;
+    if (want != 0) {
+        return len > want ? CO_ABORT_LEN_HIGH : len < want ? CO_ABORT_LEN_LOW : CO_ABORT_NONE;
+    }
+    if (len > e->size) {
+        return CO_ABORT_LEN_HIGH;
+    }
+    return (t->kind == K_USTRING && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
+}
+
+static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, uint64_t bits)
+{
+    bool low;
+    bool high;
+    if (t->kind == K_SIGNED) {
+        int64_t v = to_signed(bits);
+        low = v < lim->low.i;
+        high = v > lim->high.i;
+    } else if (t->kind == K_REAL) {
+        double v = real_value(t, bits);
+        if (v != v) {
+            return CO_ABORT_VALUE; /* NaN lies within no range */
+        }
+        low = v < lim->low.f;
+        high = v > lim->high.f;
+    } else {
+        low = bits < lim->low.u;
+        high = bits > lim->high.u;
+    }
+    return low ? CO_ABORT_VALUE_LOW : high ? CO_ABORT_VALUE_HIGH : CO_ABORT_NONE;
+}
+
+static co_abort_t check_number(const co_od_entry_t *e, const type_info_t *t, const uint8_t *data)
+{
+    uint64_t bits = wire_number(t, data);
+    if (t->kind == K_BOOL && bits > 1u) {
+        return CO_ABORT_VALUE;
+    }
+    return e->limits ? check_limits(e->limits, t, bits) : CO_ABORT_NONE;
+}
+
+co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
+                       uint32_t len)
+{
+    const type_info_t *t = type_info(entry->type);
+    co_abort_t abort = check_len(entry, t, len);
+    if (abort == CO_ABORT_NONE && is_number(t)) {
+        abort = check_number(entry, t, data);
+    }
+    if (abort == CO_ABORT_NONE && entry->hooks && entry->hooks->check) {
+        abort = entry->hooks->check(od->hook_ctx, entry, data, len);
+    }
+    return abort;
+}
+
+/* Decode a wire value of checked length into the entry's storage. */
+static void store_value(const co_od_entry_t *e, const type_info_t *t, const uint8_t *data,
+                        uint32_t len)
+{
+    if (is_number(t)) {
+        native_set(e->value, t, wire_number(t, data));
+    } else if (t->kind == K_RAW) {
+        memcpy(e->value, data, t->wire);
+    } else if (t->kind == K_DOMAIN) {
+        co_od_domain_t *d = e->value;
+        copy_bytes(d->data, data, len);
+        d->len = len;
+    } else {
+        /* strings: zero the tail so a shorter VISIBLE_STRING ends in NUL */
+        copy_bytes(e->value, data, len);
+        memset((uint8_t *)e->value + len, 0, e->size - len);
+    }
+}
+
+co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
+                       uint32_t len)
+{
+    if (entry->value == NULL) {
+        if (has_write_hook(entry)) {
+            return entry->hooks->write(od->hook_ctx, entry, 0, data, len, len, true);
+        }
+        return CO_ABORT_UNSUPPORTED;
+    }
+    const type_info_t *t = type_info(entry->type);
+    co_abort_t abort = check_len(entry, t, len); /* never overrun the storage */
+    if (abort == CO_ABORT_NONE) {
+        store_value(entry, t, data, len);
+    }
+    return abort;
+}
+
+static void notify_written(const co_od_t *od, const co_od_entry_t *entry)
+{
+    if (entry->hooks && entry->hooks->written) {
+        entry->hooks->written(od->hook_ctx, entry);
+    }
+}
+
+co_abort_t co_od_write(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
+                       uint32_t len)
+{
+    co_abort_t abort = co_od_check(od, entry, data, len);
+    if (abort == CO_ABORT_NONE) {
+        abort = co_od_store(od, entry, data, len);
+    }
+    if (abort == CO_ABORT_NONE) {
+        notify_written(od, entry);
+    }
+    return abort;
+}
+
+co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset,
+                             const uint8_t *data, uint32_t n, uint32_t total, bool last)
+{
+    if (!has_write_hook(entry)) {
+        return CO_ABORT_UNSUPPORTED;
+    }
+    co_abort_t abort = entry->hooks->write(od->hook_ctx, entry, offset, data, n, total, last);
+    if (abort == CO_ABORT_NONE && last) {
+        notify_written(od, entry);
+    }
+    return abort;
+}
+
+/* ---- Power-on values. */
+
+static void reset_domain(const co_od_entry_t *e)
+{
+    const co_od_domain_t *src = e->dflt;
+    co_od_domain_t *dst = e->value;
+    uint32_t n = min_u32(src->len, e->size);
+    copy_bytes(dst->data, src->data, n);
+    dst->len = n;
+}
+
+static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
+{
+    if (e->dflt == NULL || e->value == NULL) {
+        return;
+    }
+    const type_info_t *t = type_info(e->type);
+    if (t->kind == K_DOMAIN) {
+        reset_domain(e);
+        return;
+    }
+    memcpy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
+    if ((e->attr & CO_OD_NODEID) && is_integer(t)) {
+        native_set(e->value, t, native_get(e->value, t) + node_id);
+    }
+}
+
+void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
+{
+    uint32_t i = lower_bound(od, key_of(first, 0));
+    for (; i < od->count && od->entries[i].index <= last; i++) {
+        reset_entry(&od->entries[i], node_id);
+    }
+}
+
+/* ---- Native integer access. */
+
+static bool has_uint(const co_od_entry_t *e)
+{
+    const type_info_t *t = type_info(e->type);
+    return e->value != NULL && (is_integer(t) || t->kind == K_BOOL);
+}
+
+static co_err_t find_uint(const co_od_t *od, uint16_t index, uint8_t sub,
+                          const co_od_entry_t **entry)
+{
+    *entry = co_od_find(od, index, sub, NULL);
+    if (*entry == NULL) {
+        return CO_ERR_NOT_FOUND;
+    }
+    return has_uint(*entry) ? CO_OK : CO_ERR_ARG;
+}
+
+co_err_t co_od_get_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t *value)
+{
+    const co_od_entry_t *e;
+    co_err_t err = find_uint(od, index, sub, &e);
+    if (err == CO_OK) {
+        *value = native_get(e->value, type_info(e->type));
+    }
+    return err;
+}
+
+co_err_t co_od_set_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t value)
+{
+    const co_od_entry_t *e;
+    co_err_t err = find_uint(od, index, sub, &e);
+    if (err == CO_OK) {
+        native_set(e->value, type_info(e->type), value);
+    }
+    return err;
+}
+
+uint64_t co_od_entry_uint(const co_od_entry_t *entry)
+{
+    return has_uint(entry) ? native_get(entry->value, type_info(entry->type)) : 0;
+}

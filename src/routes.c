@@ -1,0 +1,79 @@
+/*
+ * routes.c -- the receive routes: which service owns which COB-ID.
+ *
+ * A small array sorted by key, searched by bisection, rebuilt from the services'
+ * configuration whenever a COB-ID object changes (reset communication, a write to
+ * 0x1016, a new guarding watch). Frames are dispatched in O(log routes) whatever
+ * the number of services.
+ */
+#include "internal.h"
+
+static void add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+{
+    if (node->route_count >= CO_RX_ROUTES_MAX || co_routes_find(node, key)) {
+        return; /* a key has one owner; the first configured keeps it */
+    }
+    /* Insertion keeps the array sorted; n is small and this runs only on changes. */
+    uint8_t at = node->route_count;
+    while (at > 0 && node->routes[at - 1].key > key) {
+        node->routes[at] = node->routes[at - 1];
+        at--;
+    }
+    node->routes[at] = (co_route_t){.key = key, .kind = kind, .slot = slot};
+    node->route_count++;
+}
+
+void co_routes_rebuild(co_node_t *node)
+{
+    node->route_count = 0;
+    add(node, 0x000, CO_ROUTE_NMT, 0);
+    if (node->node_id >= 1 && node->node_id <= 127) {
+        add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);
+    }
+    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
+        const co_hb_consumer_t *c = &node->hb_consumers[i];
+        if (c->watch != CO_HB_WATCH_UNUSED) {
+            add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
+        }
+    }
+    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+        const co_guard_watch_t *w = &node->guard_watch[i];
+        if (w->guard_ms != 0) {
+            add(node, 0x700u + w->node_id, CO_ROUTE_GUARD_REPLY, i);
+        }
+    }
+    if (node->cfg.driver.on_routes_changed) {
+        node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
+    }
+}
+
+const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)
+{
+    uint32_t lo = 0;
+    uint32_t hi = node->route_count;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        uint32_t k = node->routes[mid].key;
+        if (k == key) {
+            return &node->routes[mid];
+        }
+        if (k < key) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    return NULL;
+}
+
+bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)
+{
+    return co_routes_find(node, co_route_key(frame)) != NULL;
+}
+
+uint32_t co_node_route_count(const co_node_t *node) { return node->route_count; }
+
+uint32_t co_node_route_id(const co_node_t *node, uint32_t i)
+{
+    return i < node->route_count ? node->routes[i].key : 0;
+}

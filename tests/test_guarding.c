@@ -1,0 +1,147 @@
+/* test_guarding.c -- node guarding: the node's replies and life guarding, the master's watch. */
+#include "check.h"
+#include "harness.h"
+
+#define MS 1000ull
+
+static char dump[4096];
+
+static void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
+{
+    co_frame_t f = frm(id, hex);
+    co_node_ingest(&t->node, now, &f);
+}
+
+static void set_u16(test_node_t *t, uint16_t idx, uint16_t v)
+{
+    uint8_t b[2];
+    co_put_u16(b, v);
+    CHECK_EQ(co_node_write_net(&t->node, idx, 0, b, 2), CO_ABORT_NONE);
+}
+
+static void test_replies_toggle_and_state(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    ingest(&t, 1 * MS, 0x705, "R1");
+    ingest(&t, 2 * MS, 0x705, "R1");
+    ingest(&t, 3 * MS, 0x000, "01 05");
+    ingest(&t, 4 * MS, 0x705, "R1");
+    ingest(&t, 5 * MS, 0x000, "02 05");
+    ingest(&t, 6 * MS, 0x705, "R1");
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#7F 705#FF 705#05 705#84");
+    /* Reset communication: the toggle starts at 0 again (after the boot-up). */
+    ingest(&t, 7 * MS, 0x000, "82 05");
+    fake_clear(&t.bus);
+    ingest(&t, 8 * MS, 0x705, "R1");
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#7F");
+}
+
+static void test_no_reply_while_heartbeat_runs(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 100);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    ingest(&t, 1 * MS, 0x705, "R1");
+    CHECK_EQ(t.bus.count, 0);
+    /* A data frame on our own ID is someone else's: counted, not answered. */
+    ingest(&t, 1 * MS, 0x705, "05");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+}
+
+static void test_life_guarding_event_and_error_behaviour(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    set_u16(&t, 0x100C, 100);
+    uint8_t factor = 3;
+    CHECK_EQ(co_node_write_net(&t.node, 0x100D, 0, &factor, 1), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x000, "01 05");
+    /* Not monitored before the first RTR. */
+    co_node_poll(&t.node, 5000 * MS);
+    CHECK_EQ(t.event_count, 0);
+    ingest(&t, 5000 * MS, 0x705, "R1");
+    CHECK_EQ(co_node_poll(&t.node, 5000 * MS), 5300 * MS);
+    ingest(&t, 5200 * MS, 0x705, "R1");
+    CHECK_EQ(co_node_poll(&t.node, 5499 * MS), 5500 * MS);
+    CHECK_EQ(t.event_count, 0);
+    co_node_poll(&t.node, 5500 * MS);
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(t.events[0].kind, CO_EC_LIFE_GUARD);
+    CHECK_EQ(t.events[0].node_id, 5);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL); /* 0x1029 sub1 = 0 */
+    ingest(&t, 6000 * MS, 0x705, "R1");
+    CHECK_EQ(t.events[1].kind, CO_EC_LIFE_GUARD_RESUMED);
+}
+
+static void test_master_watch_sends_rtr_and_checks_replies(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_guard_watch(&t.node, 5, 100, 3), CO_OK);
+    CHECK_EQ(co_node_poll(&t.node, 0), 100 * MS);
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#R1");
+    ingest(&t, 1 * MS, 0x705, "7F");
+    CHECK_EQ(t.events[0].kind, CO_EC_STARTED);
+    CHECK_EQ(t.events[0].state, 0x7F);
+    co_node_poll(&t.node, 100 * MS);
+    ingest(&t, 101 * MS, 0x705, "85"); /* toggle 1, operational */
+    CHECK_EQ(t.events[1].kind, CO_EC_STATE_CHANGED);
+    CHECK_EQ(t.events[1].state, 0x05);
+    co_node_poll(&t.node, 200 * MS);
+    ingest(&t, 201 * MS, 0x705, "85"); /* toggle not alternated */
+    CHECK_EQ(t.events[2].kind, CO_EC_GUARD_TOGGLE);
+    CHECK_EQ(t.event_count, 3);
+    /* Silence: the life time (300 ms) counts from the last good reply at 101 ms. */
+    CHECK_EQ(co_node_poll(&t.node, 300 * MS), 400 * MS);
+    CHECK_EQ(co_node_poll(&t.node, 400 * MS), 401 * MS);
+    co_node_poll(&t.node, 401 * MS);
+    CHECK_EQ(t.events[3].kind, CO_EC_GUARD_TIMEOUT);
+    CHECK_EQ(t.events[3].node_id, 5);
+    CHECK_EQ(fake_count_id(&t.bus, 0x705), 5); /* RTRs at 0, 100, 200, 300, 400 ms */
+    /* The next good reply (toggle resynchronised to 0) resumes. */
+    ingest(&t, 450 * MS, 0x705, "05");
+    CHECK_EQ(t.events[4].kind, CO_EC_GUARD_RESUMED);
+}
+
+static void test_master_watch_limits(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(co_guard_watch(&t.node, 0, 100, 3), CO_ERR_ARG);
+    CHECK_EQ(co_guard_watch(&t.node, 128, 100, 3), CO_ERR_ARG);
+    CHECK_EQ(co_guard_watch(&t.node, 5, 100, 0), CO_ERR_ARG);
+    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+        CHECK_EQ(co_guard_watch(&t.node, (uint8_t)(10 + i), 100, 2), CO_OK);
+    }
+    CHECK_EQ(co_guard_watch(&t.node, 60, 100, 2), CO_ERR_FULL);
+    CHECK_EQ(co_guard_watch(&t.node, 10, 200, 2), CO_OK); /* replaces its own slot */
+    CHECK_EQ(co_guard_watch(&t.node, 10, 0, 0), CO_OK);   /* removes it */
+    co_frame_t reply = frm(0x70A, "05");
+    CHECK(!co_node_accepts(&t.node, &reply));
+    CHECK_EQ(co_guard_watch(&t.node, 60, 100, 2), CO_OK);
+    /* A node the heartbeat consumer watches cannot be guarded, nor the reverse. */
+    uint8_t b[4];
+    co_put_u32(b, hb_consumer_value(20, 100));
+    CHECK_EQ(co_node_write_net(&t.node, 0x1016, 1, b, 4), CO_ABORT_NONE);
+    CHECK_EQ(co_guard_watch(&t.node, 20, 100, 2), CO_ERR_STATE);
+    co_put_u32(b, hb_consumer_value(60, 100));
+    CHECK_EQ(co_node_write_net(&t.node, 0x1016, 2, b, 4), CO_ABORT_PARAM_INCOMPAT);
+}
+
+int main(void)
+{
+    RUN(test_replies_toggle_and_state);
+    RUN(test_no_reply_while_heartbeat_runs);
+    RUN(test_life_guarding_event_and_error_behaviour);
+    RUN(test_master_watch_sends_rtr_and_checks_replies);
+    RUN(test_master_watch_limits);
+    return check_summary();
+}

@@ -1,0 +1,185 @@
+/* test_node.c -- node lifecycle, transmit queue, receive routes, OD access through the node. */
+#include "check.h"
+#include "harness.h"
+
+#define MS 1000ull
+
+static char dump[4096];
+
+static void test_init_rejects_bad_config(void)
+{
+    test_node_t t;
+    CHECK_EQ(test_node_init(&t, 0, 0), CO_ERR_ARG);
+    CHECK_EQ(test_node_init(&t, 128, 0), CO_ERR_ARG);
+    CHECK_EQ(test_node_init(&t, 127, 0), CO_OK);
+    CHECK_EQ(test_node_init(&t, 1, 0), CO_OK);
+    CHECK_EQ(co_node_init(NULL, &t.cfg), CO_ERR_ARG);
+    CHECK_EQ(co_node_init(&t.node, NULL), CO_ERR_ARG);
+    co_node_config_t cfg = t.cfg;
+    cfg.driver.tx = NULL;
+    CHECK_EQ(co_node_init(&t.node, &cfg), CO_ERR_ARG);
+    /* An unsorted dictionary is a configuration error. */
+    co_od_entry_t swapped = t.od.entries[0];
+    t.od.entries[0] = t.od.entries[1];
+    t.od.entries[1] = swapped;
+    CHECK_EQ(co_node_init(&t.node, &t.cfg), CO_ERR_CONFIG);
+}
+
+static void test_poll_before_start_and_when_idle(void)
+{
+    test_node_t t;
+    test_node_init(&t, 3, 0);
+    CHECK_EQ(co_node_poll(&t.node, 0), CO_TIME_NEVER);
+    co_frame_t nmt = frm(0x000, "01 03");
+    co_node_ingest(&t.node, 0, &nmt); /* a node not started listens to nothing */
+    CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 1);
+    CHECK_EQ(t.bus.count, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(co_node_poll(&t.node, 1), CO_TIME_NEVER);
+    CHECK_EQ(co_node_poll(&t.node, 2), CO_TIME_NEVER);
+}
+
+static void test_busy_driver_queues_and_poll_sends_by_priority(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    t.bus.busy = true;
+    co_frame_t a = frm(0x700, "01");
+    co_frame_t b = frm(0x080, "02");
+    co_frame_t c = frm(0x700, "03");
+    co_frame_t d = frm(0x000, "04");
+    co_frame_t ext = frm(0x00100000, "05"); /* 29-bit, base ID 0x004 */
+    co_frame_t std4 = frm(0x004, "06");
+    CHECK_EQ(co_node_send(&t.node, &a), CO_OK);
+    CHECK_EQ(co_node_send(&t.node, &b), CO_OK);
+    CHECK_EQ(co_node_send(&t.node, &c), CO_OK);
+    CHECK_EQ(co_node_send(&t.node, &d), CO_OK);
+    CHECK_EQ(co_node_send(&t.node, &ext), CO_OK);
+    CHECK_EQ(co_node_send(&t.node, &std4), CO_OK);
+    CHECK_EQ(t.bus.count, 0);
+    CHECK_EQ(co_node_stats(&t.node)->tx_queued, 6);
+    /* Still busy: poll keeps them. */
+    co_node_poll(&t.node, 1);
+    CHECK_EQ(t.bus.count, 0);
+    t.bus.busy = false;
+    co_node_poll(&t.node, 2);
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump),
+              "000#04 004#06 00100000#05 080#02 700#01 700#03");
+    CHECK_EQ(co_node_stats(&t.node)->tx_frames, 7); /* with the boot-up */
+}
+
+static void test_queue_overflow_is_counted_and_reported(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    t.bus.busy = true;
+    co_frame_t f = frm(0x181, "00");
+    for (int i = 0; i < CO_TX_QUEUE_LEN; i++) {
+        CHECK_EQ(co_node_send(&t.node, &f), CO_OK);
+    }
+    CHECK_EQ(co_node_send(&t.node, &f), CO_ERR_FULL);
+    CHECK_EQ(co_node_stats(&t.node)->tx_overflow, 1);
+    CHECK_EQ(t.error_count, 1);
+    CHECK_EQ(t.errors[0], CO_NODE_ERR_TX_OVERFLOW);
+}
+
+static co_err_t failing_tx(void *ctx, const co_frame_t *frame)
+{
+    (void)ctx;
+    (void)frame;
+    return CO_ERR_ARG;
+}
+
+static void test_driver_error_drops_frame(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    t.node.cfg.driver.tx = failing_tx;
+    co_node_start(&t.node, 0);
+    CHECK_EQ(co_node_stats(&t.node)->tx_dropped, 1); /* the boot-up */
+    CHECK_EQ(t.errors[0], CO_NODE_ERR_TX_DRIVER);
+    CHECK_EQ(t.node.txq_count, 0);
+}
+
+static void test_routes_and_acceptance(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_frame_t nmt = frm(0x000, "01 05");
+    co_frame_t guard = frm(0x705, "R1");
+    co_frame_t sdo = frm(0x605, "40 00 10 00 00 00 00 00");
+    co_frame_t ext = frm(0x00000705 | 0x10000000, "00");
+    CHECK(co_node_accepts(&t.node, &nmt));
+    CHECK(co_node_accepts(&t.node, &guard));
+    CHECK(!co_node_accepts(&t.node, &sdo)); /* no SDO server yet */
+    CHECK(!co_node_accepts(&t.node, &ext));
+    CHECK_EQ(co_node_route_count(&t.node), 2);
+    CHECK_EQ(co_node_route_id(&t.node, 0), 0x000);
+    CHECK_EQ(co_node_route_id(&t.node, 1), 0x705);
+    CHECK(t.bus.routes_changed >= 1);
+    co_node_ingest(&t.node, 1, &sdo);
+    CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 1);
+    co_frame_t too_long = nmt;
+    too_long.len = 9;
+    co_node_ingest(&t.node, 1, &too_long);
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
+}
+
+static void test_od_access_through_node(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint8_t buf[32];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&t.node, 0x1000, 0, buf, sizeof buf, &len), CO_ABORT_NONE);
+    CHECK_EQ(len, 4);
+    CHECK_EQ(co_get_u32(buf), 0x191);
+    CHECK_EQ(co_node_read_net(&t.node, 0x1234, 0, buf, sizeof buf, &len), CO_ABORT_NO_OBJECT);
+    CHECK_EQ(co_node_read_net(&t.node, 0x1000, 1, buf, sizeof buf, &len), CO_ABORT_NO_SUB);
+    CHECK_EQ(co_node_read_net(&t.node, 0x2004, 0, buf, sizeof buf, &len), CO_ABORT_WRITE_ONLY);
+    CHECK_EQ(co_node_read_net(&t.node, 0x1008, 0, buf, sizeof buf, &len), CO_ABORT_NONE);
+    CHECK_EQ(len, 14);
+    CHECK(memcmp(buf, "canola example", 14) == 0);
+    CHECK_EQ(co_node_read_net(&t.node, 0x1008, 0, buf, 4, &len), CO_ABORT_LEN_HIGH);
+    uint8_t v4[4] = {1, 2, 3, 4};
+    CHECK_EQ(co_node_write_net(&t.node, 0x1000, 0, v4, 4), CO_ABORT_READ_ONLY);
+    CHECK_EQ(co_node_write_net(&t.node, 0x1008, 0, v4, 4), CO_ABORT_READ_ONLY);
+    CHECK_EQ(co_node_write_net(&t.node, 0x2000, 0, v4, 3), CO_ABORT_LEN_LOW);
+    CHECK_EQ(co_node_write_net(&t.node, 0x2000, 0, v4, 5), CO_ABORT_LEN_HIGH);
+    CHECK_EQ(co_node_write_net(&t.node, 0x2000, 0, v4, 4), CO_ABORT_NONE);
+    CHECK_EQ(t.od.app_u32, 0x04030201);
+    uint8_t i16[2];
+    co_put_u16(i16, (uint16_t)101);
+    CHECK_EQ(co_node_write_net(&t.node, 0x2001, 0, i16, 2), CO_ABORT_VALUE_HIGH);
+    co_put_u16(i16, (uint16_t)-101);
+    CHECK_EQ(co_node_write_net(&t.node, 0x2001, 0, i16, 2), CO_ABORT_VALUE_LOW);
+    co_put_u16(i16, (uint16_t)-100);
+    CHECK_EQ(co_node_write_net(&t.node, 0x2001, 0, i16, 2), CO_ABORT_NONE);
+    CHECK_EQ(t.od.app_i16, -100);
+    /* The application may write what the network may not. */
+    CHECK_EQ(co_node_set_uint(&t.node, 0x1001, 0, 0x11), CO_ABORT_NONE);
+    CHECK_EQ(t.od.error_register, 0x11);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1001, 0, &v), CO_OK);
+    CHECK_EQ(v, 0x11);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2002, 0, 1), CO_ABORT_TYPE_MISMATCH);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2001, 0, 500), CO_ABORT_VALUE_HIGH);
+}
+
+int main(void)
+{
+    RUN(test_init_rejects_bad_config);
+    RUN(test_poll_before_start_and_when_idle);
+    RUN(test_busy_driver_queues_and_poll_sends_by_priority);
+    RUN(test_queue_overflow_is_counted_and_reported);
+    RUN(test_driver_error_drops_frame);
+    RUN(test_routes_and_acceptance);
+    RUN(test_od_access_through_node);
+    return check_summary();
+}
