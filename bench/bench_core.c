@@ -83,8 +83,10 @@ int main(int argc, char **argv)
             measure_nmt_command(&b, i);
         }
     } else {
-        fprintf(stderr, "bench_core: unknown operation '%s' (poll_idle, heartbeat_consumed, "
-                        "nmt_command)\n", op);
+        fprintf(stderr,
+                "bench_core: unknown operation '%s' (poll_idle, heartbeat_consumed, "
+                "nmt_command)\n",
+                op);
         return 2;
     }
     return sink == 42 ? 1 : 0;

@@ -43,24 +43,38 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     x->app_domain.data = x->domain_buf;
     uint32_t n = 0;
     add(x, &n, VAR(0x1000, 0, CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &x->device_type, &k_device_type));
-    add(x, &n, VAR(0x1001, 0, CO_TYPE_UNSIGNED8, CO_OD_RO | CO_OD_TPDO, 1, &x->error_register, &k_zero_u8));
+    add(x, &n,
+        VAR(0x1001, 0, CO_TYPE_UNSIGNED8, CO_OD_RO | CO_OD_TPDO, 1, &x->error_register,
+            &k_zero_u8));
     add(x, &n, VAR(0x1008, 0, CO_TYPE_VISIBLE_STRING, CO_OD_CO, 16, x->device_name, k_device_name));
     add(x, &n, VAR(0x100C, 0, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &x->guard_time_ms, &k_zero_u16));
     add(x, &n, VAR(0x100D, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->life_factor, &k_zero_u8));
-    add(x, &n, VAR(0x1014, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &x->emcy_cob_id, &k_emcy_cob_id));
-    add(x, &n, VAR(0x1016, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->hb_consumer_count, &k_hb_consumer_count));
+    add(x, &n,
+        VAR(0x1014, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &x->emcy_cob_id,
+            &k_emcy_cob_id));
+    add(x, &n,
+        VAR(0x1016, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->hb_consumer_count,
+            &k_hb_consumer_count));
     for (uint8_t i = 0; i < EXAMPLE_HB_CONSUMERS; i++) {
-        add(x, &n, VAR(0x1016, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->hb_consumer[i], &k_zero_u32));
+        add(x, &n,
+            VAR(0x1016, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->hb_consumer[i],
+                &k_zero_u32));
     }
     /* The power-on value of 0x1017 is per instance here, so it lives in RAM. */
-    add(x, &n, VAR(0x1017, 0, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &x->hb_period_ms, &x->hb_period_default));
-    add(x, &n, VAR(0x1018, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->identity_count, &k_identity_count));
+    add(x, &n,
+        VAR(0x1017, 0, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &x->hb_period_ms, &x->hb_period_default));
+    add(x, &n,
+        VAR(0x1018, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->identity_count, &k_identity_count));
     for (uint8_t i = 0; i < 4; i++) {
-        add(x, &n, VAR(0x1018, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &x->identity[i], &k_identity[i]));
+        add(x, &n,
+            VAR(0x1018, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &x->identity[i],
+                &k_identity[i]));
     }
     add(x, &n, VAR(0x1029, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->eb_count, &k_one_u8));
     add(x, &n, VAR(0x1029, 1, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->eb_comm, &k_zero_u8));
-    add(x, &n, VAR(0x2000, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, 4, &x->app_u32, &k_app_u32));
+    add(x, &n,
+        VAR(0x2000, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, 4, &x->app_u32,
+            &k_app_u32));
     co_od_entry_t i16 = VAR(0x2001, 0, CO_TYPE_INTEGER16, CO_OD_RW, 2, &x->app_i16, &k_app_i16);
     i16.limits = &k_i16_limits;
     add(x, &n, i16);
@@ -71,7 +85,9 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     add(x, &n, VAR(0x2006, 0, CO_TYPE_REAL32, CO_OD_RW, 4, &x->app_real, &k_zero_real));
     add(x, &n, VAR(0x6200, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->outputs_count, &k_outputs_count));
     for (uint8_t i = 0; i < 4; i++) {
-        add(x, &n, VAR(0x6200, (uint8_t)(i + 1), CO_TYPE_UNSIGNED8, CO_OD_RWW | CO_OD_RPDO, 1, &x->outputs[i], &k_zero_u8));
+        add(x, &n,
+            VAR(0x6200, (uint8_t)(i + 1), CO_TYPE_UNSIGNED8, CO_OD_RWW | CO_OD_RPDO, 1,
+                &x->outputs[i], &k_zero_u8));
     }
     /* Values start at their defaults, as after a power-on reset. */
     co_od_t od = {.entries = x->entries, .count = n, .hook_ctx = NULL};

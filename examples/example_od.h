@@ -19,32 +19,32 @@
 
 typedef struct example_od {
     /* communication profile */
-    uint32_t device_type;     /* 0x1000 */
-    uint8_t error_register;   /* 0x1001 */
-    char device_name[16];     /* 0x1008 */
-    uint16_t guard_time_ms;   /* 0x100C */
-    uint32_t emcy_cob_id;     /* 0x1014: 0x80 + $NODEID */
-    uint8_t life_factor;      /* 0x100D */
+    uint32_t device_type;                       /* 0x1000 */
+    uint8_t error_register;                     /* 0x1001 */
+    char device_name[16];                       /* 0x1008 */
+    uint16_t guard_time_ms;                     /* 0x100C */
+    uint32_t emcy_cob_id;                       /* 0x1014: 0x80 + $NODEID */
+    uint8_t life_factor;                        /* 0x100D */
     uint8_t hb_consumer_count;                  /* 0x1016 sub0 */
     uint32_t hb_consumer[EXAMPLE_HB_CONSUMERS]; /* 0x1016 sub1..4 */
-    uint16_t hb_period_ms;    /* 0x1017 */
+    uint16_t hb_period_ms;                      /* 0x1017 */
     uint16_t hb_period_default; /* power-on value of 0x1017 (set by example_od_init) */
-    uint8_t identity_count;   /* 0x1018 sub0 */
-    uint32_t identity[4];     /* 0x1018 sub1..4: vendor, product, revision, serial */
-    uint8_t eb_count;         /* 0x1029 sub0 */
-    uint8_t eb_comm;          /* 0x1029 sub1: communication error behaviour */
+    uint8_t identity_count;     /* 0x1018 sub0 */
+    uint32_t identity[4];       /* 0x1018 sub1..4: vendor, product, revision, serial */
+    uint8_t eb_count;           /* 0x1029 sub0 */
+    uint8_t eb_comm;            /* 0x1029 sub1: communication error behaviour */
     /* manufacturer area */
-    uint32_t app_u32;         /* 0x2000: rw, default 0x12345678 */
-    int16_t app_i16;          /* 0x2001: rw, limits -100..100 */
-    char app_string[16];      /* 0x2002: rw VISIBLE_STRING, capacity 16 */
+    uint32_t app_u32;    /* 0x2000: rw, default 0x12345678 */
+    int16_t app_i16;     /* 0x2001: rw, limits -100..100 */
+    char app_string[16]; /* 0x2002: rw VISIBLE_STRING, capacity 16 */
     uint8_t domain_buf[EXAMPLE_DOMAIN_CAP];
     co_od_domain_t app_domain; /* 0x2003: rw DOMAIN in RAM */
-    uint8_t app_wo;           /* 0x2004: write-only u8 */
-    int64_t app_i64;          /* 0x2005: rw INTEGER64 */
-    float app_real;           /* 0x2006: rw REAL32 */
+    uint8_t app_wo;            /* 0x2004: write-only u8 */
+    int64_t app_i64;           /* 0x2005: rw INTEGER64 */
+    float app_real;            /* 0x2006: rw REAL32 */
     /* device profile area */
-    uint8_t outputs_count;    /* 0x6200 sub0 */
-    uint8_t outputs[4];       /* 0x6200 sub1..4, rww, PDO-mappable */
+    uint8_t outputs_count; /* 0x6200 sub0 */
+    uint8_t outputs[4];    /* 0x6200 sub1..4, rww, PDO-mappable */
     co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES];
 } example_od_t;
 

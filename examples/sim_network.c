@@ -48,8 +48,8 @@ static void master_event(void *user, const co_ec_event_t *ev)
                co_nmt_state_name(ev->state));
         break;
     case CO_EC_STATE_CHANGED:
-        printf("# %.6f master: node %u %s -> %s\n", t, ev->node_id,
-               co_nmt_state_name(ev->previous), co_nmt_state_name(ev->state));
+        printf("# %.6f master: node %u %s -> %s\n", t, ev->node_id, co_nmt_state_name(ev->previous),
+               co_nmt_state_name(ev->state));
         break;
     case CO_EC_HB_TIMEOUT:
         printf("# %.6f master: node %u HEARTBEAT LOST (last state %s)\n", t, ev->node_id,

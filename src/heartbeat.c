@@ -155,8 +155,7 @@ static uint64_t consumers_poll(co_node_t *node, uint64_t now_us)
         for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
             const co_hb_consumer_t *c = &node->hb_consumers[i];
             if (c->watch != CO_HB_WATCH_UNUSED && !c->ever_heard) {
-                co_node_ec_event(node, CO_EC_NOT_BOOTED, c->node_id, CO_STATE_NONE,
-                                 CO_STATE_NONE);
+                co_node_ec_event(node, CO_EC_NOT_BOOTED, c->node_id, CO_STATE_NONE, CO_STATE_NONE);
             }
         }
     }
@@ -171,8 +170,8 @@ uint64_t co_hb_poll(co_node_t *node, uint64_t now_us)
 
 /* ---- object dictionary writes */
 
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                             const uint8_t *data, uint32_t len)
+co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                             uint32_t len)
 {
     if (entry->index != 0x1016 || entry->sub == 0 || len != 4) {
         return CO_ABORT_NONE;

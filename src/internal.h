@@ -12,7 +12,28 @@ enum co_route_kind {
     CO_ROUTE_GUARD_RTR,   /* own 0x700 + id: node guarding request (RTR) */
     CO_ROUTE_HB_CONSUMER, /* 0x700 + n: heartbeat of a consumed node (slot = consumer) */
     CO_ROUTE_GUARD_REPLY, /* 0x700 + n: guarding reply of a guarded node (slot = watch) */
+    CO_ROUTE_SDO_SERVER,  /* an SDO server's request COB-ID (slot = channel) */
+    CO_ROUTE_SDO_CLIENT,  /* an SDO client's response COB-ID (slot = channel) */
 };
+
+/* COB-ID objects (0x1200, 0x1280, ...): bit 31 = not valid, bit 29 = 29-bit identifier. */
+#define CO_COB_INVALID 0x80000000u
+#define CO_COB_EXT 0x20000000u
+
+/* Route key of a COB-ID object value. */
+static inline uint32_t co_cob_key(uint32_t cob)
+{
+    return (cob & CO_COB_EXT) ? ((cob & CO_ID_EXT_MAX) | 0x80000000u) : (cob & CO_ID_STD_MAX);
+}
+
+/* Frame addressed by a COB-ID object value. */
+static inline co_frame_t co_cob_frame(uint32_t cob, uint8_t len)
+{
+    co_frame_t f = {.id = (cob & CO_COB_EXT) ? (cob & CO_ID_EXT_MAX) : (cob & CO_ID_STD_MAX),
+                    .flags = (cob & CO_COB_EXT) ? CO_FRAME_EXT : 0,
+                    .len = len};
+    return f;
+}
 
 /* Heartbeat consumer watch states (co_hb_consumer_t.watch). */
 enum co_hb_watch {
@@ -44,6 +65,9 @@ void co_node_schedule(co_node_t *node, uint64_t due_us);
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,
                       uint8_t previous);
 void co_node_comm_error(co_node_t *node);
+/* A whole new value for an entry, with checks, service effects and hooks (no access rights). */
+co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len);
 
 /* routes.c */
 void co_routes_rebuild(co_node_t *node);
@@ -51,6 +75,25 @@ const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
 
 /* txq.c */
 void co_txq_flush(co_node_t *node);
+/* True when nothing waits in the transmit queue: a sender of many frames (block
+ * transfer) sends only then, so it never floods the queue; poll resumes it. */
+static inline bool co_txq_idle(const co_node_t *node) { return node->txq_count == 0; }
+
+/* crc16.c: CRC-16-CCITT (polynomial 0x1021, no reflection, no final XOR), continued
+ * from `crc` (start with 0). */
+uint16_t co_crc16(uint16_t crc, const uint8_t *data, uint32_t len);
+
+/* sdo_server.c */
+void co_sdo_server_reset_comm(co_node_t *node);
+void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
+uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
+void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
+uint64_t co_sdo_timeout_us(const co_node_t *node);
+
+/* sdo_client.c */
+void co_sdo_client_reset_comm(co_node_t *node);
+void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
+uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);
 
 /* nmt.c */
 void co_nmt_ingest(co_node_t *node, const co_frame_t *frame);
@@ -61,8 +104,8 @@ void co_hb_reset_comm(co_node_t *node);
 void co_hb_state_entered(co_node_t *node);
 void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_hb_poll(co_node_t *node, uint64_t now_us);
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                             const uint8_t *data, uint32_t len);
+co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                             uint32_t len);
 void co_hb_written(co_node_t *node, const co_od_entry_t *entry);
 co_err_t co_hb_bind(co_node_t *node);
 

@@ -77,6 +77,8 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, node->node_id);
     co_hb_reset_comm(node);
     co_guard_reset_comm(node);
+    co_sdo_server_reset_comm(node);
+    co_sdo_client_reset_comm(node);
     co_routes_rebuild(node);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);

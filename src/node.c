@@ -10,8 +10,7 @@
 
 co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
 {
-    if (node == NULL || config == NULL || config->driver.tx == NULL ||
-        config->od.entries == NULL) {
+    if (node == NULL || config == NULL || config->driver.tx == NULL || config->od.entries == NULL) {
         return CO_ERR_ARG;
     }
     uint8_t id = config->node_id;
@@ -54,7 +53,15 @@ const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stat
 
 static co_service_t route_service(uint8_t kind)
 {
-    return kind == CO_ROUTE_NMT ? CO_SVC_NMT : CO_SVC_ERROR_CONTROL;
+    switch (kind) {
+    case CO_ROUTE_NMT:
+        return CO_SVC_NMT;
+    case CO_ROUTE_SDO_SERVER:
+    case CO_ROUTE_SDO_CLIENT:
+        return CO_SVC_SDO;
+    default:
+        return CO_SVC_ERROR_CONTROL;
+    }
 }
 
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
@@ -70,8 +77,8 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         node->stats.rx_malformed++;
         return;
     }
-    if (!node->started || !co_nmt_allows((co_nmt_state_t)node->nmt_state,
-                                         route_service(route->kind))) {
+    if (!node->started ||
+        !co_nmt_allows((co_nmt_state_t)node->nmt_state, route_service(route->kind))) {
         node->stats.rx_gated++;
         return;
     }
@@ -88,6 +95,12 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         break;
     case CO_ROUTE_GUARD_REPLY:
         co_guard_reply(node, slot, frame);
+        break;
+    case CO_ROUTE_SDO_SERVER:
+        co_sdo_server_ingest(node, slot, frame);
+        break;
+    case CO_ROUTE_SDO_CLIENT:
+        co_sdo_client_ingest(node, slot, frame);
         break;
     default:
         break;
@@ -117,6 +130,8 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     node->next_due_us = CO_TIME_NEVER;
     uint64_t next = co_hb_poll(node, now_us);
     next = co_min_u64(next, co_guard_poll(node, now_us));
+    next = co_min_u64(next, co_sdo_server_poll(node, now_us));
+    next = co_min_u64(next, co_sdo_client_poll(node, now_us));
     co_node_schedule(node, next);
     return node->next_due_us;
 }
@@ -180,11 +195,14 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
         co_guard_written(node);
         break;
     default:
+        if (entry->index >= 0x1200 && entry->index <= 0x127F) {
+            co_sdo_server_written(node, entry);
+        }
         break;
     }
 }
 
-static co_abort_t write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                               uint32_t len)
 {
     const co_od_t *od = &node->cfg.od;
@@ -214,7 +232,7 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
         return abort;
     }
     abort = co_od_access(entry, true);
-    return abort != CO_ABORT_NONE ? abort : write_entry(node, entry, data, len);
+    return abort != CO_ABORT_NONE ? abort : co_node_write_entry(node, entry, data, len);
 }
 
 co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
@@ -253,7 +271,7 @@ co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64
     for (uint32_t i = 0; i < size; i++) {
         wire[i] = (uint8_t)(value >> (8 * i));
     }
-    return write_entry(node, entry, wire, size);
+    return co_node_write_entry(node, entry, wire, size);
 }
 
 co_err_t co_node_get_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t *value)

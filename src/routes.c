@@ -14,7 +14,7 @@ static void add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
         return; /* a key has one owner; the first configured keeps it */
     }
     /* Insertion keeps the array sorted; n is small and this runs only on changes. */
-    uint8_t at = node->route_count;
+    uint16_t at = node->route_count;
     while (at > 0 && node->routes[at - 1].key > key) {
         node->routes[at] = node->routes[at - 1];
         at--;
@@ -40,6 +40,18 @@ void co_routes_rebuild(co_node_t *node)
         const co_guard_watch_t *w = &node->guard_watch[i];
         if (w->guard_ms != 0) {
             add(node, 0x700u + w->node_id, CO_ROUTE_GUARD_REPLY, i);
+        }
+    }
+    for (uint8_t i = 0; i < CO_SDO_SERVERS_MAX; i++) {
+        uint32_t cob = node->sdo_servers[i].cob_rx;
+        if (!(cob & CO_COB_INVALID)) {
+            add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
+        }
+    }
+    for (uint8_t i = 0; i < CO_SDO_CLIENTS_MAX; i++) {
+        uint32_t cob = node->sdo_clients[i].cob_rx;
+        if (!(cob & CO_COB_INVALID)) {
+            add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);
         }
     }
     if (node->cfg.driver.on_routes_changed) {

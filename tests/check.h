@@ -32,7 +32,7 @@ static int check_tests_failed;
         unsigned long long check_a_ = (unsigned long long)(a);                                     \
         unsigned long long check_b_ = (unsigned long long)(b);                                     \
         if (check_a_ != check_b_) {                                                                \
-            printf("  %s:%d: %s == %s failed: 0x%llx != 0x%llx\n", __FILE__, __LINE__, #a, #b,    \
+            printf("  %s:%d: %s == %s failed: 0x%llx != 0x%llx\n", __FILE__, __LINE__, #a, #b,     \
                    check_a_, check_b_);                                                            \
             check_failures_here++;                                                                 \
         }                                                                                          \

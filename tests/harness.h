@@ -12,7 +12,7 @@
 typedef struct fake_bus {
     co_frame_t frames[FAKE_MAX_FRAMES];
     uint32_t count;
-    bool busy;           /* tx answers CO_ERR_BUSY while set */
+    bool busy; /* tx answers CO_ERR_BUSY while set */
     uint32_t tx_calls;
     uint32_t routes_changed;
 } fake_bus_t;

@@ -112,16 +112,19 @@ static void test_routes_and_acceptance(void)
     co_frame_t nmt = frm(0x000, "01 05");
     co_frame_t guard = frm(0x705, "R1");
     co_frame_t sdo = frm(0x605, "40 00 10 00 00 00 00 00");
+    co_frame_t pdo = frm(0x185, "00");
     co_frame_t ext = frm(0x00000705 | 0x10000000, "00");
     CHECK(co_node_accepts(&t.node, &nmt));
     CHECK(co_node_accepts(&t.node, &guard));
-    CHECK(!co_node_accepts(&t.node, &sdo)); /* no SDO server yet */
+    CHECK(co_node_accepts(&t.node, &sdo));
+    CHECK(!co_node_accepts(&t.node, &pdo)); /* no PDO yet */
     CHECK(!co_node_accepts(&t.node, &ext));
-    CHECK_EQ(co_node_route_count(&t.node), 2);
+    CHECK_EQ(co_node_route_count(&t.node), 3);
     CHECK_EQ(co_node_route_id(&t.node, 0), 0x000);
-    CHECK_EQ(co_node_route_id(&t.node, 1), 0x705);
+    CHECK_EQ(co_node_route_id(&t.node, 1), 0x605);
+    CHECK_EQ(co_node_route_id(&t.node, 2), 0x705);
     CHECK(t.bus.routes_changed >= 1);
-    co_node_ingest(&t.node, 1, &sdo);
+    co_node_ingest(&t.node, 1, &pdo);
     CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 1);
     co_frame_t too_long = nmt;
     too_long.len = 9;

@@ -10,6 +10,7 @@
 #include "canola/nmt.h"
 #include "canola/node.h"
 #include "canola/od.h"
+#include "canola/sdo.h"
 #include "canola/types.h"
 
 #define CANOLA_VERSION "0.1.0"

@@ -30,10 +30,28 @@
 #define CO_GUARD_WATCH_MAX 4
 #endif
 
+/** SDO server channels: 0x1200 + i (channel 0 is the default server). 0..128. */
+#ifndef CO_SDO_SERVERS_MAX
+#define CO_SDO_SERVERS_MAX 1
+#endif
+
+/** SDO client channels: 0x1280 + i. 0..128. */
+#ifndef CO_SDO_CLIENTS_MAX
+#define CO_SDO_CLIENTS_MAX 1
+#endif
+
+/** Bytes of buffer per SDO channel: the largest value a download collects before storing
+ *  it whole (larger values need a write hook), and one block of a block transfer
+ *  (block size = min(127, CO_SDO_BUF_SIZE / 7)). 7..65535. */
+#ifndef CO_SDO_BUF_SIZE
+#define CO_SDO_BUF_SIZE 889
+#endif
+
 /** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
  *  heartbeat consumer and guarded node, and room for the other services. */
 #ifndef CO_RX_ROUTES_MAX
-#define CO_RX_ROUTES_MAX (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX)
+#define CO_RX_ROUTES_MAX                                                                           \
+    (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX)
 #endif
 
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
@@ -45,8 +63,17 @@
 #if CO_GUARD_WATCH_MAX < 0 || CO_GUARD_WATCH_MAX > 127
 #error "CO_GUARD_WATCH_MAX must be 0..127"
 #endif
-#if CO_RX_ROUTES_MAX < 2 || CO_RX_ROUTES_MAX > 255
-#error "CO_RX_ROUTES_MAX must be 2..255"
+#if CO_SDO_SERVERS_MAX < 0 || CO_SDO_SERVERS_MAX > 128
+#error "CO_SDO_SERVERS_MAX must be 0..128"
+#endif
+#if CO_SDO_CLIENTS_MAX < 0 || CO_SDO_CLIENTS_MAX > 128
+#error "CO_SDO_CLIENTS_MAX must be 0..128"
+#endif
+#if CO_SDO_BUF_SIZE < 7 || CO_SDO_BUF_SIZE > 65535
+#error "CO_SDO_BUF_SIZE must be 7..65535"
+#endif
+#if CO_RX_ROUTES_MAX < 2 || CO_RX_ROUTES_MAX > 1024
+#error "CO_RX_ROUTES_MAX must be 2..1024"
 #endif
 
 #endif /* CANOLA_CONFIG_H */

@@ -38,25 +38,25 @@ extern "C" {
 
 /** What happened to a monitored node (or, for CO_EC_LIFE_GUARD*, to this node). */
 typedef enum co_ec_event_kind {
-    CO_EC_BOOT = 1,         /**< boot-up received (first boot, or after a timeout) */
-    CO_EC_REMOTE_RESET,     /**< boot-up from a node that had been seen running: it was reset */
-    CO_EC_STARTED,          /**< first heartbeat received: monitoring runs */
-    CO_EC_STATE_CHANGED,    /**< the node reports another NMT state */
-    CO_EC_HB_TIMEOUT,       /**< heartbeat not received within the consumer time */
-    CO_EC_HB_RESUMED,       /**< heartbeat received again after a timeout */
-    CO_EC_NOT_BOOTED,       /**< nothing heard from a consumed node within the boot time */
-    CO_EC_GUARD_TIMEOUT,    /**< master: no guarding reply within the life time */
-    CO_EC_GUARD_TOGGLE,     /**< master: a guarding reply with the wrong toggle bit */
-    CO_EC_GUARD_RESUMED,    /**< master: a good guarding reply after a timeout */
-    CO_EC_LIFE_GUARD,       /**< this node: no guarding RTR within its life time */
+    CO_EC_BOOT = 1,           /**< boot-up received (first boot, or after a timeout) */
+    CO_EC_REMOTE_RESET,       /**< boot-up from a node that had been seen running: it was reset */
+    CO_EC_STARTED,            /**< first heartbeat received: monitoring runs */
+    CO_EC_STATE_CHANGED,      /**< the node reports another NMT state */
+    CO_EC_HB_TIMEOUT,         /**< heartbeat not received within the consumer time */
+    CO_EC_HB_RESUMED,         /**< heartbeat received again after a timeout */
+    CO_EC_NOT_BOOTED,         /**< nothing heard from a consumed node within the boot time */
+    CO_EC_GUARD_TIMEOUT,      /**< master: no guarding reply within the life time */
+    CO_EC_GUARD_TOGGLE,       /**< master: a guarding reply with the wrong toggle bit */
+    CO_EC_GUARD_RESUMED,      /**< master: a good guarding reply after a timeout */
+    CO_EC_LIFE_GUARD,         /**< this node: no guarding RTR within its life time */
     CO_EC_LIFE_GUARD_RESUMED, /**< this node: guarding RTRs arrive again */
 } co_ec_event_kind_t;
 
 typedef struct co_ec_event {
     co_ec_event_kind_t kind;
-    uint8_t node_id;   /**< the monitored node (this node's ID for life guarding) */
-    uint8_t state;     /**< the node's NMT state now (last known on timeouts) */
-    uint8_t previous;  /**< the state known before this event */
+    uint8_t node_id;  /**< the monitored node (this node's ID for life guarding) */
+    uint8_t state;    /**< the node's NMT state now (last known on timeouts) */
+    uint8_t previous; /**< the state known before this event */
 } co_ec_event_t;
 
 /** Watch of one heartbeat consumer entry; public only so the node can embed it. */
@@ -76,8 +76,8 @@ typedef struct co_guard_watch {
     uint16_t guard_ms; /**< 0 = slot unused */
     uint8_t node_id;
     uint8_t factor;
-    uint8_t state;       /**< last state reported, 0xFF = none yet */
-    uint8_t toggle;      /**< toggle expected in the next reply, 0xFF = take any */
+    uint8_t state;  /**< last state reported, 0xFF = none yet */
+    uint8_t toggle; /**< toggle expected in the next reply, 0xFF = take any */
     bool lost;
 } co_guard_watch_t;
 

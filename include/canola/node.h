@@ -32,6 +32,7 @@
 #include "canola/errctl.h"
 #include "canola/nmt.h"
 #include "canola/od.h"
+#include "canola/sdo.h"
 #include "canola/types.h"
 
 #ifdef __cplusplus
@@ -63,8 +64,9 @@ typedef struct co_node_config {
     co_od_t od;      /**< the object dictionary; its entries must outlive the node */
     co_driver_t driver;
     bool self_start;       /**< enter OPERATIONAL by itself after boot-up */
-    uint16_t boot_time_ms; /**< report consumed nodes not heard this long after reset
-                                communication (CO_EC_NOT_BOOTED); 0 = off */
+    uint16_t boot_time_ms;   /**< report consumed nodes not heard this long after reset
+                                  communication (CO_EC_NOT_BOOTED); 0 = off */
+    uint16_t sdo_timeout_ms; /**< SDO server and client time-out; 0 = 1000 ms */
     void *user;            /**< first argument of every callback below */
     /** Optional callbacks. */
     void (*on_state)(void *user, co_nmt_state_t state);
@@ -103,7 +105,7 @@ struct co_node {
 
     /* Receive routes, sorted by key. */
     co_route_t routes[CO_RX_ROUTES_MAX];
-    uint8_t route_count;
+    uint16_t route_count;
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
     co_frame_t txq[CO_TX_QUEUE_LEN];
@@ -128,6 +130,10 @@ struct co_node {
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
 
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
+
+    /* SDO channels. */
+    co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
+    co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX > 0 ? CO_SDO_CLIENTS_MAX : 1];
 
     co_node_stats_t stats;
 };

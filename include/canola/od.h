@@ -116,8 +116,8 @@ typedef struct co_od_hooks {
     co_abort_t (*check)(void *ctx, const co_od_entry_t *entry, const uint8_t *data, uint32_t len);
     /** Take the value instead of storage, in pieces: `offset` of this piece, `total` the
      *  announced size or CO_OD_SIZE_UNKNOWN, `last` true on the final piece. */
-    co_abort_t (*write)(void *ctx, const co_od_entry_t *entry, uint32_t offset,
-                        const uint8_t *data, uint32_t n, uint32_t total, bool last);
+    co_abort_t (*write)(void *ctx, const co_od_entry_t *entry, uint32_t offset, const uint8_t *data,
+                        uint32_t n, uint32_t total, bool last);
     /** Told after a new value was stored. */
     void (*written)(void *ctx, const co_od_entry_t *entry);
 } co_od_hooks_t;
@@ -126,11 +126,11 @@ typedef struct co_od_hooks {
 struct co_od_entry {
     uint16_t index;
     uint8_t sub;
-    uint8_t type;  /**< co_type_t */
-    uint8_t attr;  /**< CO_OD_* attributes */
-    uint32_t size; /**< bytes on the wire; capacity for strings and domains */
-    void *value;   /**< native storage, or NULL when hooks produce/take the value */
-    const void *dflt;             /**< power-on value (same form as value), or NULL: reset leaves it */
+    uint8_t type;     /**< co_type_t */
+    uint8_t attr;     /**< CO_OD_* attributes */
+    uint32_t size;    /**< bytes on the wire; capacity for strings and domains */
+    void *value;      /**< native storage, or NULL when hooks produce/take the value */
+    const void *dflt; /**< power-on value (same form as value), or NULL: reset leaves it */
     const co_od_limits_t *limits; /**< numeric limits, or NULL */
     const co_od_hooks_t *hooks;   /**< application hooks, or NULL */
 };
@@ -166,8 +166,8 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write);
 /** Read a piece of the wire value: up to `cap` bytes from `offset` into `buf`; `*n` gets
  *  the bytes copied, `*total` (may be NULL) the whole length. Access rights are not checked
  *  (see co_od_access). Returns an abort code. */
-co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset,
-                      uint8_t *buf, uint32_t cap, uint32_t *n, uint32_t *total);
+co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                      uint32_t cap, uint32_t *n, uint32_t *total);
 
 /** Check a whole new wire value without storing it: length against the type (0x06070012
  *  too long / 0x06070013 too short), BOOLEAN 0/1 (0x06090030), limits (0x06090031/32),

@@ -53,37 +53,37 @@ typedef struct co_frame {
 typedef uint32_t co_abort_t;
 
 #define CO_ABORT_NONE 0x00000000u
-#define CO_ABORT_TOGGLE 0x05030000u          /**< toggle bit not alternated */
-#define CO_ABORT_TIMEOUT 0x05040000u         /**< SDO protocol timed out */
-#define CO_ABORT_COMMAND 0x05040001u         /**< command specifier not valid or unknown */
-#define CO_ABORT_BLOCK_SIZE 0x05040002u      /**< invalid block size */
-#define CO_ABORT_SEQUENCE 0x05040003u        /**< invalid sequence number */
-#define CO_ABORT_CRC 0x05040004u             /**< CRC error */
-#define CO_ABORT_OUT_OF_MEMORY 0x05040005u   /**< out of memory */
-#define CO_ABORT_UNSUPPORTED 0x06010000u     /**< unsupported access to an object */
-#define CO_ABORT_WRITE_ONLY 0x06010001u      /**< attempt to read a write-only object */
-#define CO_ABORT_READ_ONLY 0x06010002u       /**< attempt to write a read-only object */
-#define CO_ABORT_NO_OBJECT 0x06020000u       /**< object does not exist */
-#define CO_ABORT_NO_MAP 0x06040041u          /**< object cannot be mapped to the PDO */
-#define CO_ABORT_MAP_LEN 0x06040042u         /**< mapped objects would exceed PDO length */
-#define CO_ABORT_PARAM_INCOMPAT 0x06040043u  /**< general parameter incompatibility */
+#define CO_ABORT_TOGGLE 0x05030000u         /**< toggle bit not alternated */
+#define CO_ABORT_TIMEOUT 0x05040000u        /**< SDO protocol timed out */
+#define CO_ABORT_COMMAND 0x05040001u        /**< command specifier not valid or unknown */
+#define CO_ABORT_BLOCK_SIZE 0x05040002u     /**< invalid block size */
+#define CO_ABORT_SEQUENCE 0x05040003u       /**< invalid sequence number */
+#define CO_ABORT_CRC 0x05040004u            /**< CRC error */
+#define CO_ABORT_OUT_OF_MEMORY 0x05040005u  /**< out of memory */
+#define CO_ABORT_UNSUPPORTED 0x06010000u    /**< unsupported access to an object */
+#define CO_ABORT_WRITE_ONLY 0x06010001u     /**< attempt to read a write-only object */
+#define CO_ABORT_READ_ONLY 0x06010002u      /**< attempt to write a read-only object */
+#define CO_ABORT_NO_OBJECT 0x06020000u      /**< object does not exist */
+#define CO_ABORT_NO_MAP 0x06040041u         /**< object cannot be mapped to the PDO */
+#define CO_ABORT_MAP_LEN 0x06040042u        /**< mapped objects would exceed PDO length */
+#define CO_ABORT_PARAM_INCOMPAT 0x06040043u /**< general parameter incompatibility */
 #define CO_ABORT_INTERNAL_INCOMPAT 0x06040047u
-#define CO_ABORT_HARDWARE 0x06060000u        /**< access failed due to a hardware error */
-#define CO_ABORT_TYPE_MISMATCH 0x06070010u   /**< data type / length does not match */
-#define CO_ABORT_LEN_HIGH 0x06070012u        /**< length of service parameter too high */
-#define CO_ABORT_LEN_LOW 0x06070013u         /**< length of service parameter too low */
-#define CO_ABORT_NO_SUB 0x06090011u          /**< sub-index does not exist */
-#define CO_ABORT_VALUE 0x06090030u           /**< invalid value (download only) */
-#define CO_ABORT_VALUE_HIGH 0x06090031u      /**< value too high */
-#define CO_ABORT_VALUE_LOW 0x06090032u       /**< value too low */
-#define CO_ABORT_MAX_LESS_MIN 0x06090036u    /**< maximum value less than minimum value */
-#define CO_ABORT_NO_RESOURCE 0x060A0023u     /**< resource not available: SDO connection */
-#define CO_ABORT_GENERAL 0x08000000u         /**< general error */
-#define CO_ABORT_DATA_STORE 0x08000020u      /**< data cannot be transferred or stored */
-#define CO_ABORT_DATA_LOCAL 0x08000021u      /**< ... because of local control */
-#define CO_ABORT_DATA_STATE 0x08000022u      /**< ... because of the present device state */
-#define CO_ABORT_NO_OD 0x08000023u           /**< object dictionary not present */
-#define CO_ABORT_NO_DATA 0x08000024u         /**< no data available */
+#define CO_ABORT_HARDWARE 0x06060000u      /**< access failed due to a hardware error */
+#define CO_ABORT_TYPE_MISMATCH 0x06070010u /**< data type / length does not match */
+#define CO_ABORT_LEN_HIGH 0x06070012u      /**< length of service parameter too high */
+#define CO_ABORT_LEN_LOW 0x06070013u       /**< length of service parameter too low */
+#define CO_ABORT_NO_SUB 0x06090011u        /**< sub-index does not exist */
+#define CO_ABORT_VALUE 0x06090030u         /**< invalid value (download only) */
+#define CO_ABORT_VALUE_HIGH 0x06090031u    /**< value too high */
+#define CO_ABORT_VALUE_LOW 0x06090032u     /**< value too low */
+#define CO_ABORT_MAX_LESS_MIN 0x06090036u  /**< maximum value less than minimum value */
+#define CO_ABORT_NO_RESOURCE 0x060A0023u   /**< resource not available: SDO connection */
+#define CO_ABORT_GENERAL 0x08000000u       /**< general error */
+#define CO_ABORT_DATA_STORE 0x08000020u    /**< data cannot be transferred or stored */
+#define CO_ABORT_DATA_LOCAL 0x08000021u    /**< ... because of local control */
+#define CO_ABORT_DATA_STATE 0x08000022u    /**< ... because of the present device state */
+#define CO_ABORT_NO_OD 0x08000023u         /**< object dictionary not present */
+#define CO_ABORT_NO_DATA 0x08000024u       /**< no data available */
 
 /* ---- Little-endian helpers for byte buffers (safe for any alignment). */
 static inline uint16_t co_get_u16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }

@@ -439,13 +439,10 @@ static uint64_t next_event(const co_sim_bus_t *bus)
             next = port->node_due_us;
         }
     }
-    exact_t idle = {bus->idle_at_us, bus->idle_rem};
-    uint64_t frames = first_ready(bus);
-    if (bus->transmitting) {
-        frames = exact_ceil(idle);
-    } else if (bus->bitrate && frames != CO_TIME_NEVER && frames < exact_ceil(idle)) {
-        frames = exact_ceil(idle); /* ready, but the bus is still in use */
-    }
+    /* With nothing on the wire the bus has been idle since the latest instant handled, so
+     * the next frame starts when it is ready. */
+    exact_t end = {bus->idle_at_us, bus->idle_rem};
+    uint64_t frames = bus->transmitting ? exact_ceil(end) : first_ready(bus);
     return frames < next ? frames : next;
 }
 
