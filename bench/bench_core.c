@@ -1,7 +1,8 @@
 /*
- * bench_core.c -- operations of the core, each in its own never-inlined function
- * so callgrind (--toggle-collect=measure_<name>) counts exactly its instructions.
- * Not a test: it asserts nothing and is run by bench/run under valgrind.
+ * bench_core.c -- operations of the core, each run inside a never-inlined function
+ * measure_<operation> so that callgrind (--toggle-collect=measure_<operation>)
+ * counts exactly its instructions. Not a test: it asserts nothing; bench/run runs
+ * it under valgrind and divides by the iterations (and, for transfers, by bytes).
  *
  * usage: bench_core OPERATION [ITERATIONS]
  */
@@ -12,28 +13,126 @@
 #include "canola/canola.h"
 #include "example_od.h"
 
+#define BIG 889u /* one full block: 127 segments of 7 bytes */
+
+/* Keeps the last frame sent, so a run can be checked for an SDO abort at the end. */
 static co_err_t tx_sink(void *ctx, const co_frame_t *frame)
 {
-    (void)ctx;
-    (void)frame;
+    *(co_frame_t *)ctx = *frame;
     return CO_OK;
 }
 
 typedef struct bench {
     example_od_t od;
     co_node_t node;
-    co_frame_t frames[2];
+    co_frame_t frames[256];
+    unsigned frame_count;
     uint64_t now_us;
+    /* a bench-only dictionary with one large DOMAIN for transfers */
+    uint8_t big[BIG];
+    co_od_domain_t big_domain;
+    co_od_entry_t big_entries[2];
+    uint32_t device_type;
+    co_frame_t last_tx;
 } bench_t;
 
-static void setup(bench_t *b, uint8_t id, uint16_t hb_ms)
+static void start(bench_t *b, uint8_t id, co_od_t od, uint16_t hb_ms)
 {
-    co_node_config_t cfg = {.node_id = id, .od = example_od_init(&b->od, hb_ms)};
+    (void)hb_ms;
+    co_node_config_t cfg = {.node_id = id, .od = od};
     cfg.driver.tx = tx_sink;
+    cfg.driver.ctx = &b->last_tx;
     if (co_node_init(&b->node, &cfg) != CO_OK || co_node_start(&b->node, 0) != CO_OK) {
         fprintf(stderr, "bench_core: node setup failed\n");
         exit(1);
     }
+}
+
+static void setup(bench_t *b, uint8_t id, uint16_t hb_ms)
+{
+    start(b, id, example_od_init(&b->od, hb_ms), hb_ms);
+}
+
+static void setup_big(bench_t *b)
+{
+    b->big_domain = (co_od_domain_t){.data = b->big, .len = BIG};
+    for (unsigned i = 0; i < BIG; i++) {
+        b->big[i] = (uint8_t)(i * 7u);
+    }
+    b->big_entries[0] = (co_od_entry_t){.index = 0x1000, .type = CO_TYPE_UNSIGNED32,
+                                        .attr = CO_OD_RO, .size = 4, .value = &b->device_type};
+    b->big_entries[1] = (co_od_entry_t){.index = 0x2100, .type = CO_TYPE_DOMAIN,
+                                        .attr = CO_OD_RW, .size = BIG, .value = &b->big_domain};
+    co_od_t od = {.entries = b->big_entries, .count = 2};
+    start(b, 5, od, 0);
+}
+
+static co_frame_t sdo_req(const uint8_t d[8])
+{
+    co_frame_t f = {.id = 0x605, .len = 8};
+    memcpy(f.data, d, 8);
+    return f;
+}
+
+/* Script of the client's frames for one transfer of BIG bytes of 0x2100. */
+static void script_segmented_download(bench_t *b)
+{
+    uint8_t init[8] = {0x21, 0x00, 0x21, 0x00};
+    co_put_u32(&init[4], BIG);
+    b->frames[b->frame_count++] = sdo_req(init);
+    uint32_t off = 0;
+    uint8_t toggle = 0;
+    while (off < BIG) {
+        uint32_t n = BIG - off < 7 ? BIG - off : 7;
+        uint8_t d[8] = {(uint8_t)((toggle << 4) | ((7 - n) << 1) | (off + n >= BIG ? 1 : 0))};
+        memcpy(&d[1], &b->big[off], n);
+        b->frames[b->frame_count++] = sdo_req(d);
+        off += n;
+        toggle ^= 1;
+    }
+}
+
+static void script_segmented_upload(bench_t *b)
+{
+    uint8_t init[8] = {0x40, 0x00, 0x21, 0x00};
+    b->frames[b->frame_count++] = sdo_req(init);
+    for (unsigned i = 0; i < (BIG + 6) / 7; i++) {
+        uint8_t d[8] = {(uint8_t)(0x60 | ((i & 1) << 4))};
+        b->frames[b->frame_count++] = sdo_req(d);
+    }
+}
+
+static void script_block_download(bench_t *b)
+{
+    uint8_t init[8] = {0xC6, 0x00, 0x21, 0x00};
+    co_put_u32(&init[4], BIG);
+    b->frames[b->frame_count++] = sdo_req(init);
+    for (unsigned seq = 1; seq <= 127; seq++) {
+        uint8_t d[8] = {(uint8_t)(seq | (seq == 127 ? 0x80 : 0))};
+        memcpy(&d[1], &b->big[(seq - 1) * 7], 7);
+        b->frames[b->frame_count++] = sdo_req(d);
+    }
+    uint16_t crc = 0;
+    for (unsigned i = 0; i < BIG; i++) { /* bitwise CRC-16-CCITT, independent of the core */
+        crc ^= (uint16_t)(b->big[i] << 8);
+        for (int k = 0; k < 8; k++) {
+            crc = (uint16_t)((crc & 0x8000) ? (crc << 1) ^ 0x1021 : crc << 1);
+        }
+    }
+    uint8_t end[8] = {0xC1, (uint8_t)crc, (uint8_t)(crc >> 8)};
+    b->frames[b->frame_count++] = sdo_req(end);
+}
+
+static void script_block_upload(bench_t *b)
+{
+    uint8_t init[8] = {0xA4, 0x00, 0x21, 0x00, 127, 0};
+    uint8_t start_[8] = {0xA3};
+    uint8_t ack[8] = {0xA2, 127, 127};
+    uint8_t end[8] = {0xA1};
+    b->frames[b->frame_count++] = sdo_req(init);
+    b->frames[b->frame_count++] = sdo_req(start_);
+    b->frames[b->frame_count++] = sdo_req(ack);
+    b->frames[b->frame_count++] = sdo_req(end);
 }
 
 __attribute__((noinline)) uint64_t measure_poll_idle(bench_t *b)
@@ -41,14 +140,26 @@ __attribute__((noinline)) uint64_t measure_poll_idle(bench_t *b)
     return co_node_poll(&b->node, b->now_us);
 }
 
-__attribute__((noinline)) void measure_heartbeat_consumed(bench_t *b)
+/* One frame into the node. */
+__attribute__((noinline)) void measure_ingest(bench_t *b, unsigned i)
 {
-    co_node_ingest(&b->node, b->now_us, &b->frames[0]);
+    co_node_ingest(&b->node, b->now_us, &b->frames[i % b->frame_count]);
 }
 
-__attribute__((noinline)) void measure_nmt_command(bench_t *b, unsigned i)
+/* A whole scripted transfer. */
+__attribute__((noinline)) void measure_transfer(bench_t *b)
 {
-    co_node_ingest(&b->node, b->now_us, &b->frames[i & 1u]);
+    for (unsigned i = 0; i < b->frame_count; i++) {
+        co_node_ingest(&b->node, b->now_us, &b->frames[i]);
+    }
+}
+
+static void run_ingest(bench_t *b, unsigned n)
+{
+    for (unsigned i = 0; i < n; i++) {
+        b->now_us = 1000 + i;
+        measure_ingest(b, i);
+    }
 }
 
 int main(int argc, char **argv)
@@ -68,26 +179,49 @@ int main(int argc, char **argv)
         uint8_t v[4];
         co_put_u32(v, (3u << 16) | 1000u);
         co_node_write_net(&b.node, 0x1016, 1, v, 4);
-        b.frames[0] = (co_frame_t){.id = 0x703, .len = 1, .data = {0x05}};
+        b.frames[b.frame_count++] = (co_frame_t){.id = 0x703, .len = 1, .data = {0x05}};
         co_node_ingest(&b.node, 0, &b.frames[0]); /* monitoring starts at the first one */
-        for (unsigned i = 0; i < n; i++) {
-            b.now_us = 1000 + i;
-            measure_heartbeat_consumed(&b);
-        }
+        run_ingest(&b, n);
     } else if (strcmp(op, "nmt_command") == 0) {
         setup(&b, 5, 0);
-        b.frames[0] = (co_frame_t){.id = 0x000, .len = 2, .data = {0x01, 0x05}};
-        b.frames[1] = (co_frame_t){.id = 0x000, .len = 2, .data = {0x80, 0x00}};
+        b.frames[b.frame_count++] = (co_frame_t){.id = 0x000, .len = 2, .data = {0x01, 0x05}};
+        b.frames[b.frame_count++] = (co_frame_t){.id = 0x000, .len = 2, .data = {0x80, 0x00}};
+        run_ingest(&b, n);
+    } else if (strcmp(op, "sdo_expedited_upload") == 0) {
+        setup(&b, 5, 0);
+        b.frames[b.frame_count++] = sdo_req((const uint8_t[8]){0x40, 0x00, 0x20, 0x00});
+        run_ingest(&b, n);
+    } else if (strcmp(op, "sdo_expedited_download") == 0) {
+        setup(&b, 5, 0);
+        b.frames[b.frame_count++] =
+            sdo_req((const uint8_t[8]){0x23, 0x00, 0x20, 0x00, 0x78, 0x56, 0x34, 0x12});
+        run_ingest(&b, n);
+    } else if (strncmp(op, "sdo_", 4) == 0) {
+        setup_big(&b);
+        if (strcmp(op, "sdo_segmented_download") == 0) {
+            script_segmented_download(&b);
+        } else if (strcmp(op, "sdo_segmented_upload") == 0) {
+            script_segmented_upload(&b);
+        } else if (strcmp(op, "sdo_block_download") == 0) {
+            script_block_download(&b);
+        } else if (strcmp(op, "sdo_block_upload") == 0) {
+            script_block_upload(&b);
+        } else {
+            fprintf(stderr, "bench_core: unknown operation '%s'\n", op);
+            return 2;
+        }
         for (unsigned i = 0; i < n; i++) {
             b.now_us = 1000 + i;
-            measure_nmt_command(&b, i);
+            measure_transfer(&b);
         }
     } else {
-        fprintf(stderr,
-                "bench_core: unknown operation '%s' (poll_idle, heartbeat_consumed, "
-                "nmt_command)\n",
-                op);
+        fprintf(stderr, "bench_core: unknown operation '%s'\n", op);
         return 2;
+    }
+    if (b.last_tx.id >= 0x580 && b.last_tx.id <= 0x5FF && b.last_tx.data[0] == 0x80) {
+        fprintf(stderr, "bench_core: %s ended in SDO abort 0x%08X: the figure is void\n", op,
+                (unsigned)co_get_u32(&b.last_tx.data[4]));
+        return 1;
     }
     return sink == 42 ? 1 : 0;
 }

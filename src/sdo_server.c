@@ -133,7 +133,6 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
 static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 {
     co_abort_t abort = CO_ABORT_NONE;
-    s->crc = co_crc16(s->crc, s->buf, s->buf_len);
     if (streams(s)) {
         uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
         abort = co_od_write_piece(&node->cfg.od, s->entry, s->done, s->buf, s->buf_len, total,
@@ -157,6 +156,9 @@ static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *da
                            s->buf_len + n > s->entry->size
                        ? CO_ABORT_LEN_HIGH
                        : CO_ABORT_OUT_OF_MEMORY;
+        }
+        if (s->crc_on) { /* the CRC covers data as it leaves the buffer */
+            s->crc = co_crc16(s->crc, s->buf, s->buf_len);
         }
         co_abort_t abort = flush(node, s, false);
         if (abort != CO_ABORT_NONE) {
@@ -187,6 +189,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
     }
     s->size_known = sized;
     s->size = co_get_u32(&d[4]);
+    s->crc_on = false;
     co_abort_t abort = check_download_size(s);
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
@@ -359,9 +362,7 @@ static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_
         return;
     }
     s->buf_len -= unused; /* the last segment's padding */
-    uint16_t crc_before = s->crc;
-    uint16_t crc = co_crc16(crc_before, s->buf, s->buf_len);
-    if (s->crc_on && crc != co_get_u16(&d[1])) {
+    if (s->crc_on && co_crc16(s->crc, s->buf, s->buf_len) != co_get_u16(&d[1])) {
         abort_transfer(node, s, CO_ABORT_CRC);
         return;
     }
@@ -468,7 +469,9 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         acked = s->buf_len;
     }
     bool all_acked = ackseq == sub_block_segments(s);
-    s->crc = co_crc16(s->crc, s->buf, acked);
+    if (s->crc_on) {
+        s->crc = co_crc16(s->crc, s->buf, acked);
+    }
     s->done += acked;
     if (all_acked && s->last_sent) {
         uint8_t unused = (uint8_t)(SEG_BYTES - s->last_len);

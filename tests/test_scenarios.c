@@ -216,7 +216,16 @@ static void test_stopped_device_sends_only_heartbeats(void)
         }
     }
     CHECK_EQ(from_node2, 10);
-    /* TODO(issue 3): and an SDO request gets no answer once the SDO server exists. */
+    /* An SDO request (read 0x1000) gets no answer while stopped... */
+    co_frame_t req = frm(0x602, "40 00 10 00 00 00 00 00");
+    co_node_send(&net->master.node, &req);
+    co_sim_run_until(&net->bus, 1100 * MS);
+    CHECK_EQ(count_frames(net, 0, "582#4300100091010000"), 0);
+    /* ...and the same request is answered once the node is pre-operational again. */
+    co_nmt_send(&net->master.node, CO_NMT_CMD_ENTER_PRE_OPERATIONAL, 2);
+    co_node_send(&net->master.node, &req);
+    co_sim_run_until(&net->bus, 1200 * MS);
+    CHECK_EQ(count_frames(net, 0, "582#4300100091010000"), 1);
     free(net);
 }
 

@@ -42,7 +42,7 @@ static void wire_put(wire_t *w, uint32_t value, unsigned n, bool in_crc)
         uint8_t bit = (uint8_t)((value >> n) & 1u);
         if (in_crc) {
             bool feedback = (bit ^ (w->crc >> 14)) & 1u;
-            w->crc = (uint16_t)((w->crc << 1) & 0x7FFFu);
+            w->crc = (uint16_t)(((uint32_t)w->crc << 1) & 0x7FFFu);
             if (feedback) {
                 w->crc = (uint16_t)(w->crc ^ CRC15_POLY);
             }

@@ -67,7 +67,7 @@ typedef struct co_sim_port {
     co_sim_rx_fn rx;     /**< raw port receive callback */
     void *rx_ctx;
     uint64_t node_due_us; /**< next co_node_poll deadline of the node */
-    uint8_t mailboxes;    /**< transmit slots (1..CO_SIM_PENDING_MAX) */
+    uint8_t mailboxes;    /**< transmit slots (1..255; attach sets 3: change it after) */
     uint8_t in_flight;    /**< own frames pending on the bus */
     uint8_t index;        /**< position on the bus */
     bool bus_off;
