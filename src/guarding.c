@@ -94,7 +94,7 @@ co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uin
         }
     }
     co_guard_watch_t *slot = NULL;
-    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         co_guard_watch_t *w = &node->guard_watch[i];
         if (w->guard_ms != 0 && w->node_id == node_id) {
             slot = w;
@@ -177,7 +177,7 @@ static uint64_t watch_poll(co_node_t *node, co_guard_watch_t *w, uint64_t now_us
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = life_poll(node, now_us);
-    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         if (node->guard_watch[i].guard_ms != 0) {
             next = co_min_u64(next, watch_poll(node, &node->guard_watch[i], now_us));
         }

@@ -45,8 +45,21 @@ enum co_hb_watch {
 
 #define CO_STATE_NONE 0xFFu /* "no state heard yet" */
 
+/* Table sizes as values: a configuration may set one to 0, and a loop bound that is a
+ * literal 0 would make the compiler warn about an always-false comparison. */
+static inline uint8_t co_guard_watch_max(void) { return CO_GUARD_WATCH_MAX; }
+static inline uint8_t co_sdo_servers_max(void) { return CO_SDO_SERVERS_MAX; }
+static inline uint8_t co_sdo_clients_max(void) { return CO_SDO_CLIENTS_MAX; }
+
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 static inline uint64_t co_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
+
+/* SDO server and client time-out (co_node_config_t.sdo_timeout_ms, default 1 s). */
+static inline uint64_t co_sdo_timeout_us(const co_node_t *node)
+{
+    uint16_t ms = node->cfg.sdo_timeout_ms;
+    return co_ms_to_us(ms ? ms : 1000u);
+}
 
 /* Integer value of an optional entry (0 when the OD lacks it). */
 static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
@@ -88,7 +101,6 @@ void co_sdo_server_reset_comm(co_node_t *node);
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
-uint64_t co_sdo_timeout_us(const co_node_t *node);
 
 /* sdo_client.c */
 void co_sdo_client_reset_comm(co_node_t *node);

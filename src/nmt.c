@@ -3,29 +3,27 @@
  */
 #include "internal.h"
 
-bool co_nmt_allows(co_nmt_state_t state, co_service_t service)
+uint16_t co_nmt_services(co_nmt_state_t state)
 {
-    uint16_t allowed;
     switch (state) {
     case CO_NMT_INITIALISING:
-        allowed = CO_SVC_BOOTUP | CO_SVC_LSS;
-        break;
+        return CO_SVC_BOOTUP | CO_SVC_LSS;
     case CO_NMT_PRE_OPERATIONAL:
-        allowed = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-                  CO_SVC_EMCY | CO_SVC_LSS;
-        break;
+        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
+               CO_SVC_EMCY | CO_SVC_LSS;
     case CO_NMT_OPERATIONAL:
-        allowed = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-                  CO_SVC_EMCY | CO_SVC_PDO | CO_SVC_LSS;
-        break;
+        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
+               CO_SVC_EMCY | CO_SVC_PDO | CO_SVC_LSS;
     case CO_NMT_STOPPED:
-        allowed = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
-        break;
+        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
     default:
-        allowed = CO_SVC_LSS;
-        break;
+        return CO_SVC_LSS;
     }
-    return (allowed & (uint16_t)service) != 0;
+}
+
+bool co_nmt_allows(co_nmt_state_t state, co_service_t service)
+{
+    return (co_nmt_services(state) & (uint16_t)service) != 0;
 }
 
 const char *co_nmt_state_name(uint8_t state)
@@ -52,6 +50,7 @@ static void enter(co_node_t *node, co_nmt_state_t state)
         return;
     }
     node->nmt_state = (uint8_t)state;
+    node->services = co_nmt_services(state);
     if (node->cfg.on_state) {
         node->cfg.on_state(node->cfg.user, state);
     }

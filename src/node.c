@@ -24,6 +24,7 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     node->cfg = *config;
     node->node_id = id;
     node->nmt_state = CO_NMT_INITIALISING;
+    node->services = co_nmt_services(CO_NMT_INITIALISING);
     node->next_due_us = CO_TIME_NEVER;
     node->hb_next_us = CO_TIME_NEVER;
     node->boot_deadline_us = CO_TIME_NEVER;
@@ -51,19 +52,6 @@ const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stat
 
 /* ---- dispatch */
 
-static co_service_t route_service(uint8_t kind)
-{
-    switch (kind) {
-    case CO_ROUTE_NMT:
-        return CO_SVC_NMT;
-    case CO_ROUTE_SDO_SERVER:
-    case CO_ROUTE_SDO_CLIENT:
-        return CO_SVC_SDO;
-    default:
-        return CO_SVC_ERROR_CONTROL;
-    }
-}
-
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
@@ -77,8 +65,7 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         node->stats.rx_malformed++;
         return;
     }
-    if (!node->started ||
-        !co_nmt_allows((co_nmt_state_t)node->nmt_state, route_service(route->kind))) {
+    if (!(node->services & route->service)) {
         node->stats.rx_gated++;
         return;
     }

@@ -8,6 +8,19 @@
  */
 #include "internal.h"
 
+static uint16_t kind_service(uint8_t kind)
+{
+    switch (kind) {
+    case CO_ROUTE_NMT:
+        return CO_SVC_NMT;
+    case CO_ROUTE_SDO_SERVER:
+    case CO_ROUTE_SDO_CLIENT:
+        return CO_SVC_SDO;
+    default:
+        return CO_SVC_ERROR_CONTROL;
+    }
+}
+
 static void add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
 {
     if (node->route_count >= CO_RX_ROUTES_MAX || co_routes_find(node, key)) {
@@ -19,7 +32,8 @@ static void add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
         node->routes[at] = node->routes[at - 1];
         at--;
     }
-    node->routes[at] = (co_route_t){.key = key, .kind = kind, .slot = slot};
+    node->routes[at] =
+        (co_route_t){.key = key, .service = kind_service(kind), .kind = kind, .slot = slot};
     node->route_count++;
 }
 
@@ -36,19 +50,19 @@ void co_routes_rebuild(co_node_t *node)
             add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
         }
     }
-    for (uint8_t i = 0; i < CO_GUARD_WATCH_MAX; i++) {
+    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         const co_guard_watch_t *w = &node->guard_watch[i];
         if (w->guard_ms != 0) {
             add(node, 0x700u + w->node_id, CO_ROUTE_GUARD_REPLY, i);
         }
     }
-    for (uint8_t i = 0; i < CO_SDO_SERVERS_MAX; i++) {
+    for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
         uint32_t cob = node->sdo_servers[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
             add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
         }
     }
-    for (uint8_t i = 0; i < CO_SDO_CLIENTS_MAX; i++) {
+    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
         uint32_t cob = node->sdo_clients[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
             add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);

@@ -20,19 +20,19 @@
 
 enum client_state {
     IDLE = 0,
-    UP_INIT,   /* 0x40 sent, expect the initiate upload response */
-    UP_SEG,    /* upload segment requested */
-    DN_INIT,   /* initiate download sent, expect 0x60 */
-    DN_SEG,    /* download segment sent, expect its confirmation */
-    BUP_INIT,  /* block upload initiate sent (a normal response is a protocol switch) */
-    BUP_DATA,  /* receiving sub-blocks */
-    BUP_END,   /* last segment received, expect the server's end */
-    BDN_INIT,  /* block download initiate sent, expect the block size */
-    BDN_DATA,  /* sending a sub-block (paced by the tx queue), then expect its ack */
-    BDN_END,   /* end sent, expect 0xA1 */
+    UP_INIT,  /* 0x40 sent, expect the initiate upload response */
+    UP_SEG,   /* upload segment requested */
+    DN_INIT,  /* initiate download sent, expect 0x60 */
+    DN_SEG,   /* download segment sent, expect its confirmation */
+    BUP_INIT, /* block upload initiate sent (a normal response is a protocol switch) */
+    BUP_DATA, /* receiving sub-blocks */
+    BUP_END,  /* last segment received, expect the server's end */
+    BDN_INIT, /* block download initiate sent, expect the block size */
+    BDN_DATA, /* sending a sub-block (paced by the tx queue), then expect its ack */
+    BDN_END,  /* end sent, expect 0xA1 */
 };
 
-#define SEG 7u          /* data bytes per segment */
+#define SEG 7u /* data bytes per segment */
 #define BLKSIZE_MAX 127u
 
 static uint8_t channel_of(const co_node_t *node, const co_sdo_client_t *c)
@@ -538,8 +538,8 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
     return CO_OK;
 }
 
-co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize,
-                                     bool crc, uint8_t pst)
+co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize, bool crc,
+                                     uint8_t pst)
 {
     if (node == NULL || channel >= CO_SDO_CLIENTS_MAX || blksize < 1 || blksize > BLKSIZE_MAX) {
         return CO_ERR_ARG;
@@ -572,8 +572,7 @@ static co_err_t can_start(const co_node_t *node, uint8_t channel, co_sdo_mode_t 
     return CO_OK;
 }
 
-static void begin(co_sdo_client_t *c, uint16_t index, uint8_t sub,
-                  co_sdo_done_fn done, void *ctx)
+static void begin(co_sdo_client_t *c, uint16_t index, uint8_t sub, co_sdo_done_fn done, void *ctx)
 {
     apply_defaults(c);
     c->done_fn = done;
@@ -628,12 +627,12 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
 }
 
 co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
-                         co_sdo_mode_t mode, const uint8_t *data, uint32_t len,
-                         co_sdo_done_fn done, void *ctx)
+                         co_sdo_mode_t mode, const uint8_t *data, uint32_t len, co_sdo_done_fn done,
+                         void *ctx)
 {
     co_err_t err = can_start(node, channel, mode);
-    if (err == CO_OK && ((data == NULL && len > 0) ||
-                         (mode == CO_SDO_EXPEDITED && (len == 0 || len > 4)))) {
+    if (err == CO_OK &&
+        ((data == NULL && len > 0) || (mode == CO_SDO_EXPEDITED && (len == 0 || len > 4)))) {
         err = CO_ERR_ARG;
     }
     if (err != CO_OK) {
@@ -687,6 +686,5 @@ co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code)
 
 bool co_sdo_client_busy(const co_node_t *node, uint8_t channel)
 {
-    return node != NULL && channel < CO_SDO_CLIENTS_MAX &&
-           node->sdo_clients[channel].state != IDLE;
+    return node != NULL && channel < CO_SDO_CLIENTS_MAX && node->sdo_clients[channel].state != IDLE;
 }

@@ -24,13 +24,6 @@ enum server_state {
 
 #define SEG_BYTES 7u
 #define BLOCK_SIZE_MAX (CO_SDO_BUF_SIZE / SEG_BYTES < 127 ? CO_SDO_BUF_SIZE / SEG_BYTES : 127)
-#define DEFAULT_TIMEOUT_MS 1000u
-
-uint64_t co_sdo_timeout_us(const co_node_t *node)
-{
-    uint16_t ms = node->cfg.sdo_timeout_ms;
-    return co_ms_to_us(ms ? ms : DEFAULT_TIMEOUT_MS);
-}
 
 /* ---- channels and their COB-IDs */
 
@@ -58,7 +51,7 @@ static void load_channel(co_node_t *node, uint8_t ch)
 
 void co_sdo_server_reset_comm(co_node_t *node)
 {
-    for (uint8_t ch = 0; ch < CO_SDO_SERVERS_MAX; ch++) {
+    for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
         node->sdo_servers[ch].state = IDLE;
         load_channel(node, ch);
     }
@@ -67,7 +60,7 @@ void co_sdo_server_reset_comm(co_node_t *node)
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t ch = entry->index - 0x1200u;
-    if (ch < CO_SDO_SERVERS_MAX && (entry->sub == 1 || entry->sub == 2)) {
+    if (ch < co_sdo_servers_max() && (entry->sub == 1 || entry->sub == 2)) {
         node->sdo_servers[ch].state = IDLE;
         load_channel(node, (uint8_t)ch);
         co_routes_rebuild(node);
@@ -236,7 +229,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         return;
     }
     s->toggle ^= 1u;
-    uint8_t r[8] = {(uint8_t)(0x20u | (toggle << 4))};
+    uint8_t r[8] = {(uint8_t)(0x20u | ((unsigned)toggle << 4))};
     send(node, s, r);
     if (last) {
         s->state = IDLE;
@@ -294,7 +287,7 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d
     }
     s->done += n;
     bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < SEG_BYTES;
-    r[0] = (uint8_t)((toggle << 4) | ((SEG_BYTES - n) << 1) | (last ? 1u : 0u));
+    r[0] = (uint8_t)(((unsigned)toggle << 4) | ((SEG_BYTES - n) << 1) | (last ? 1u : 0u));
     s->toggle ^= 1u;
     send(node, s, r);
     if (last) {
@@ -475,7 +468,7 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
     s->done += acked;
     if (all_acked && s->last_sent) {
         uint8_t unused = (uint8_t)(SEG_BYTES - s->last_len);
-        uint8_t end[8] = {(uint8_t)(0xC1u | (unused << 2)), (uint8_t)s->crc,
+        uint8_t end[8] = {(uint8_t)(0xC1u | ((unsigned)unused << 2)), (uint8_t)s->crc,
                           (uint8_t)(s->crc >> 8)};
         send(node, s, end);
         s->state = BLOCK_UP_END;
@@ -608,8 +601,8 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
-    bool allowed = co_nmt_allows((co_nmt_state_t)node->nmt_state, CO_SVC_SDO);
-    for (uint8_t ch = 0; ch < CO_SDO_SERVERS_MAX; ch++) {
+    bool allowed = node->services & CO_SVC_SDO;
+    for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
         co_sdo_server_t *s = &node->sdo_servers[ch];
         if (s->state == IDLE) {
             continue;

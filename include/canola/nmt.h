@@ -74,6 +74,9 @@ typedef enum co_service {
  *  every state). O(1). */
 bool co_nmt_allows(co_nmt_state_t state, co_service_t service);
 
+/** The co_service_t bits allowed in `state`. O(1). */
+uint16_t co_nmt_services(co_nmt_state_t state);
+
 /** Human-readable state name ("pre-operational", ...); "unknown" for other values. */
 const char *co_nmt_state_name(uint8_t state);
 

@@ -90,6 +90,7 @@ typedef struct co_node_stats {
 /** One receive route: COB-ID key -> service and slot. Internal. */
 typedef struct co_route {
     uint32_t key; /**< id, with bit 31 set for 29-bit ids */
+    uint16_t service; /**< co_service_t bit the NMT state must allow */
     uint8_t kind;
     uint8_t slot;
 } co_route_t;
@@ -99,6 +100,7 @@ struct co_node {
     co_node_config_t cfg;
     uint64_t now_us;      /**< time of the latest ingest/poll */
     uint64_t next_due_us; /**< earliest deadline of any service */
+    uint16_t services;       /**< co_service_t bits the current NMT state allows */
     uint8_t node_id;
     uint8_t nmt_state;
     bool started;
