@@ -123,21 +123,29 @@ int main(int argc, char **argv)
         return 1;
     }
 
-    co_sim_run_until(&bus, 250 * MS);
-    printf("# master: start all nodes\n");
-    co_nmt_send(&master.node, CO_NMT_CMD_START, 0);
-    co_sim_run_until(&bus, 450 * MS);
-    printf("# master: stop node 3\n");
-    co_nmt_send(&master.node, CO_NMT_CMD_STOP, 3);
-    co_sim_run_until(&bus, 650 * MS);
-    printf("# master: all nodes to pre-operational\n");
-    co_nmt_send(&master.node, CO_NMT_CMD_ENTER_PRE_OPERATIONAL, 0);
-    co_sim_run_until(&bus, 850 * MS);
-    printf("# master: reset node 4\n");
-    co_nmt_send(&master.node, CO_NMT_CMD_RESET_NODE, 4);
-    co_sim_run_until(&bus, 1050 * MS);
-    printf("# node 2 goes bus-off\n");
-    co_sim_set_bus_off(&devices[0].port, true);
+    /* The script: at each time, the master sends a command (or node 2 drops off). */
+    static const struct {
+        uint64_t at_ms;
+        const char *what;
+        co_nmt_cmd_t cmd;
+        uint8_t target;
+    } script[] = {
+        {250, "start all nodes", CO_NMT_CMD_START, 0},
+        {450, "stop node 3", CO_NMT_CMD_STOP, 3},
+        {650, "all nodes to pre-operational", CO_NMT_CMD_ENTER_PRE_OPERATIONAL, 0},
+        {850, "reset node 4", CO_NMT_CMD_RESET_NODE, 4},
+        {1050, NULL, 0, 0},
+    };
+    for (size_t i = 0; i < sizeof script / sizeof script[0]; i++) {
+        co_sim_run_until(&bus, script[i].at_ms * MS);
+        if (script[i].what == NULL) {
+            printf("# node 2 goes bus-off\n");
+            co_sim_set_bus_off(&devices[0].port, true);
+            continue;
+        }
+        printf("# master: %s\n", script[i].what);
+        co_nmt_send(&master.node, script[i].cmd, script[i].target);
+    }
     co_sim_run_until(&bus, 1500 * MS);
 
     const co_sim_stats_t *st = co_sim_stats(&bus);

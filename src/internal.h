@@ -104,6 +104,7 @@ void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
 
 /* sdo_client.c */
 void co_sdo_client_reset_comm(co_node_t *node);
+void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);
 

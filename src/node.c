@@ -125,6 +125,7 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
 
 uint64_t co_node_poll(co_node_t *node, uint64_t now_us)
 {
+    node->now_us = now_us; /* the clock the application's calls in between will use */
     if (now_us < node->next_due_us && node->txq_count == 0) {
         return node->next_due_us;
     }
@@ -184,6 +185,8 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
     default:
         if (entry->index >= 0x1200 && entry->index <= 0x127F) {
             co_sdo_server_written(node, entry);
+        } else if (entry->index >= 0x1280 && entry->index <= 0x12FF) {
+            co_sdo_client_written(node, entry);
         }
         break;
     }

@@ -99,13 +99,6 @@ static void cmd_frame(const co_sdo_client_t *c, uint8_t d[8], uint8_t cmd, uint3
     co_put_u32(&d[4], value);
 }
 
-static void send_cmd(co_node_t *node, co_sdo_client_t *c, uint8_t cmd, uint32_t value)
-{
-    uint8_t d[8];
-    cmd_frame(c, d, cmd, value);
-    send8(node, c, d);
-}
-
 /* Frames of block transfer without index: command and two parameter bytes. */
 static void send_short(co_node_t *node, co_sdo_client_t *c, uint8_t cmd, uint8_t p1, uint8_t p2)
 {
@@ -421,24 +414,61 @@ static co_abort_t on_block_download_end(co_node_t *node, co_sdo_client_t *c, con
 
 /* ---- the node's side */
 
+/* Take the channel's parameters from 0x1280 + ch when the dictionary has them: sub1
+ * COB-ID client -> server, sub2 server -> client, sub3 server node-ID. Returns false when
+ * it has not. */
+static bool load_from_od(co_node_t *node, uint8_t ch)
+{
+    co_sdo_client_t *c = &node->sdo_clients[ch];
+    uint16_t index = (uint16_t)(0x1280u + ch);
+    uint64_t tx = 0;
+    uint64_t rx = 0;
+    uint64_t id = 0;
+    if (co_od_get_uint(&node->cfg.od, index, 1, &tx) != CO_OK ||
+        co_od_get_uint(&node->cfg.od, index, 2, &rx) != CO_OK) {
+        return false;
+    }
+    (void)co_od_get_uint(&node->cfg.od, index, 3, &id);
+    c->cob_tx = (uint32_t)tx;
+    c->cob_rx = (uint32_t)rx;
+    c->server_id = (uint8_t)id;
+    if (c->server_id == node->node_id) {
+        c->cob_rx = CO_COB_INVALID; /* served locally */
+    }
+    return true;
+}
+
 void co_sdo_client_reset_comm(co_node_t *node)
 {
-    for (uint8_t i = 0; i < CO_SDO_CLIENTS_MAX; i++) {
+    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
         co_sdo_client_t *c = &node->sdo_clients[i];
         apply_defaults(c);
-        if (c->server_id == 0) {
-            c->cob_tx = CO_COB_INVALID;
-            c->cob_rx = CO_COB_INVALID;
-        }
         if (c->state != IDLE) {
             finish(node, c, CO_ABORT_GENERAL, 0); /* ends locally: no frame */
         }
+        if (!load_from_od(node, i) && c->server_id == 0) {
+            c->cob_tx = CO_COB_INVALID;
+            c->cob_rx = CO_COB_INVALID;
+        }
+    }
+}
+
+void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry)
+{
+    uint32_t ch = entry->index - 0x1280u;
+    if (ch < co_sdo_clients_max() && entry->sub >= 1 && entry->sub <= 3) {
+        co_sdo_client_t *c = &node->sdo_clients[ch];
+        if (c->state != IDLE) {
+            fail(node, c, CO_ABORT_GENERAL); /* its server changed under it */
+        }
+        (void)load_from_od(node, (uint8_t)ch);
+        co_routes_rebuild(node);
     }
 }
 
 void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
 {
-    if (channel >= CO_SDO_CLIENTS_MAX) {
+    if (channel >= co_sdo_clients_max()) {
         return;
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
@@ -499,7 +529,7 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
-    for (uint8_t i = 0; i < CO_SDO_CLIENTS_MAX; i++) {
+    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
         co_sdo_client_t *c = &node->sdo_clients[i];
         if (c->state == BDN_DATA) {
             pump(node, c);
@@ -518,7 +548,7 @@ uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us)
 
 co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id)
 {
-    if (node == NULL || channel >= CO_SDO_CLIENTS_MAX || server_id < 1 || server_id > 127) {
+    if (node == NULL || channel >= co_sdo_clients_max() || server_id < 1 || server_id > 127) {
         return CO_ERR_ARG;
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
@@ -541,7 +571,7 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
 co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize, bool crc,
                                      uint8_t pst)
 {
-    if (node == NULL || channel >= CO_SDO_CLIENTS_MAX || blksize < 1 || blksize > BLKSIZE_MAX) {
+    if (node == NULL || channel >= co_sdo_clients_max() || blksize < 1 || blksize > BLKSIZE_MAX) {
         return CO_ERR_ARG;
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
@@ -554,7 +584,7 @@ co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t b
 /* Checks common to uploads and downloads. */
 static co_err_t can_start(const co_node_t *node, uint8_t channel, co_sdo_mode_t mode)
 {
-    if (node == NULL || channel >= CO_SDO_CLIENTS_MAX || (unsigned)mode > CO_SDO_BLOCK) {
+    if (node == NULL || channel >= co_sdo_clients_max() || (unsigned)mode > CO_SDO_BLOCK) {
         return CO_ERR_ARG;
     }
     const co_sdo_client_t *c = &node->sdo_clients[channel];
@@ -613,16 +643,15 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
     c->up_buf = buf;
     c->cap = cap;
     c->mode = (uint8_t)mode;
+    uint8_t d[8];
+    cmd_frame(c, d, mode == CO_SDO_BLOCK ? (uint8_t)(0xA0 | (c->use_crc ? 0x04 : 0x00)) : 0x40, 0);
     if (mode == CO_SDO_BLOCK) {
-        c->state = BUP_INIT;
         c->blksize = c->want_blksize;
-        uint8_t cmd = (uint8_t)(0xA0 | (c->use_crc ? 0x04 : 0x00));
-        uint8_t d[8] = {cmd, (uint8_t)index, (uint8_t)(index >> 8), sub, c->blksize, c->pst, 0, 0};
-        send8(node, c, d);
-    } else {
-        c->state = UP_INIT;
-        send_cmd(node, c, 0x40, 0);
+        d[4] = c->blksize;
+        d[5] = c->pst;
     }
+    c->state = mode == CO_SDO_BLOCK ? BUP_INIT : UP_INIT;
+    send8(node, c, d);
     return CO_OK;
 }
 
@@ -654,26 +683,22 @@ co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8
         mode = (len >= 1 && len <= 4) ? CO_SDO_EXPEDITED : CO_SDO_SEGMENTED;
     }
     c->mode = (uint8_t)mode;
+    uint8_t d[8];
     if (mode == CO_SDO_EXPEDITED) {
-        uint32_t v = 0;
-        for (uint32_t i = 0; i < len; i++) {
-            v |= (uint32_t)data[i] << (8 * i);
-        }
-        c->state = DN_INIT;
-        send_cmd(node, c, (uint8_t)(0x23 | ((4u - len) << 2)), v);
-    } else if (mode == CO_SDO_SEGMENTED) {
-        c->state = DN_INIT;
-        send_cmd(node, c, 0x21, len);
+        cmd_frame(c, d, (uint8_t)(0x23 | ((4u - len) << 2)), 0);
+        memcpy(&d[4], data, len);
     } else {
-        c->state = BDN_INIT;
-        send_cmd(node, c, (uint8_t)(0xC2 | (c->use_crc ? 0x04 : 0x00)), len);
+        uint8_t block = (uint8_t)(0xC2 | (c->use_crc ? 0x04 : 0x00));
+        cmd_frame(c, d, mode == CO_SDO_SEGMENTED ? 0x21 : block, len);
     }
+    c->state = mode == CO_SDO_BLOCK ? BDN_INIT : DN_INIT;
+    send8(node, c, d);
     return CO_OK;
 }
 
 co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code)
 {
-    if (node == NULL || channel >= CO_SDO_CLIENTS_MAX) {
+    if (node == NULL || channel >= co_sdo_clients_max()) {
         return CO_ERR_ARG;
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
@@ -686,5 +711,6 @@ co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code)
 
 bool co_sdo_client_busy(const co_node_t *node, uint8_t channel)
 {
-    return node != NULL && channel < CO_SDO_CLIENTS_MAX && node->sdo_clients[channel].state != IDLE;
+    return node != NULL && channel < co_sdo_clients_max() &&
+           node->sdo_clients[channel].state != IDLE;
 }

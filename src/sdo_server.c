@@ -350,7 +350,7 @@ static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_
         return;
     }
     uint32_t unused = (d[0] >> 2) & 7u;
-    if (unused >= SEG_BYTES || unused > s->buf_len) {
+    if (unused > s->buf_len) { /* n = 7: an empty value's only segment */
         abort_transfer(node, s, CO_ABORT_COMMAND);
         return;
     }

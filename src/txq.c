@@ -45,6 +45,10 @@ void co_txq_flush(co_node_t *node)
     if (sent) {
         node->txq_count = (uint8_t)(node->txq_count - sent);
         memmove(&node->txq[0], &node->txq[sent], node->txq_count * sizeof node->txq[0]);
+        if (node->txq_count == 0) {
+            /* room again: a paced sender (block transfer) goes on at the next poll */
+            co_node_schedule(node, node->now_us);
+        }
     }
 }
 

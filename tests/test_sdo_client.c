@@ -507,12 +507,10 @@ static void test_block_download(void)
     for (uint32_t len = 0; len <= 15; len++) {
         block_download(len, 127, true);
     }
-    /* 1..127 segments per sub-block, over several sub-blocks */
-    static const uint8_t blks[] = {1, 2, 3, 7, 64, 126, 127};
-    for (unsigned i = 0; i < sizeof blks; i++) {
-        block_download(7u * 127u + 3u, blks[i], true);
-        block_download(7u * blks[i], blks[i], false);
-        block_download(7u * blks[i] + 1, blks[i], true);
+    /* every block size 1..127, over several sub-blocks (a full last one, a short one) */
+    for (unsigned blk = 1; blk <= 127; blk++) {
+        block_download(7u * blk * 2u, (uint8_t)blk, blk % 2 == 0);
+        block_download(7u * blk + 1u + blk % 7u, (uint8_t)blk, true);
     }
     block_download(2000, 127, true);
 }

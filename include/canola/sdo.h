@@ -30,12 +30,15 @@
  *
  * Client. Channel i talks to one server: co_sdo_client_setup() sets its server
  * node-ID and the default COB-IDs (0x600 + n, 0x580 + n); 0x1280 + i in the OD,
- * when present, is kept in step. Transfers are asynchronous: start one, the
+ * when present, is kept in step both ways (a write to it reconfigures the channel,
+ * and reset communication reloads it from its power-on values, as it does every
+ * communication object; a channel without 0x1280 + i keeps its setup). Transfers are asynchronous: start one, the
  * node's ingest/poll drive it, and a completion callback reports the abort code
  * (CO_ABORT_NONE on success) and the bytes transferred. A channel whose server is
  * the node itself reads and writes the node's own dictionary, with no frames.
  *
- * Memory: each channel holds a CO_SDO_BUF_SIZE buffer and about 64 bytes of state.
+ * Memory: each server channel holds a CO_SDO_BUF_SIZE buffer and about 64 bytes of
+ * state; a client channel about 80 bytes (it works in the caller's buffers).
  * Cost: an expedited request is O(log entries) for the look-up plus O(1).
  */
 #ifndef CANOLA_SDO_H
@@ -54,7 +57,7 @@ typedef struct co_node co_node_t;
 /** How a client transfers (the server follows whatever the client asks). */
 typedef enum co_sdo_mode {
     CO_SDO_AUTO = 0,      /**< expedited when it fits in 4 bytes, else segmented */
-    CO_SDO_EXPEDITED = 1, /**< download only; values of 1..4 bytes */
+    CO_SDO_EXPEDITED = 1, /**< downloads of 1..4 bytes; for uploads the same as AUTO */
     CO_SDO_SEGMENTED = 2,
     CO_SDO_BLOCK = 3,
 } co_sdo_mode_t;
@@ -99,7 +102,6 @@ typedef struct co_sdo_client {
     uint32_t size;   /**< indicated size (upload) */
     uint32_t done;   /**< bytes transferred so far */
     uint16_t index;
-    uint16_t crc;
     uint8_t sub;
     uint8_t server_id;
     uint8_t state;
