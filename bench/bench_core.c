@@ -59,10 +59,16 @@ static void setup_big(bench_t *b)
     for (unsigned i = 0; i < BIG; i++) {
         b->big[i] = (uint8_t)(i * 7u);
     }
-    b->big_entries[0] = (co_od_entry_t){.index = 0x1000, .type = CO_TYPE_UNSIGNED32,
-                                        .attr = CO_OD_RO, .size = 4, .value = &b->device_type};
-    b->big_entries[1] = (co_od_entry_t){.index = 0x2100, .type = CO_TYPE_DOMAIN,
-                                        .attr = CO_OD_RW, .size = BIG, .value = &b->big_domain};
+    b->big_entries[0] = (co_od_entry_t){.index = 0x1000,
+                                        .type = CO_TYPE_UNSIGNED32,
+                                        .attr = CO_OD_RO,
+                                        .size = 4,
+                                        .value = &b->device_type};
+    b->big_entries[1] = (co_od_entry_t){.index = 0x2100,
+                                        .type = CO_TYPE_DOMAIN,
+                                        .attr = CO_OD_RW,
+                                        .size = BIG,
+                                        .value = &b->big_domain};
     co_od_t od = {.entries = b->big_entries, .count = 2};
     start(b, 5, od, 0);
 }

@@ -1,4 +1,5 @@
-/* configs/minimal.h -- the smallest useful device: a short queue, few consumers, no guarding master. */
+/* configs/minimal.h -- the smallest useful device: a short queue, few consumers, no guarding
+ * master. */
 #define CO_TX_QUEUE_LEN 4
 #define CO_HB_CONSUMERS_MAX 1
 #define CO_GUARD_WATCH_MAX 0

@@ -6,7 +6,7 @@
 #include "internal.h"
 
 static const uint16_t k_table[256] = {
-#define R1(c) ((uint16_t)(((c) & 0x8000u) ? (((c) << 1) ^ 0x1021u) : ((c) << 1)))
+#define R1(c) ((uint16_t)(((c)&0x8000u) ? (((c) << 1) ^ 0x1021u) : ((c) << 1)))
 #define R2(c) R1(R1(c) & 0xFFFFu)
 #define R4(c) R2(R2(c) & 0xFFFFu)
 #define R8(c) R4(R4(c) & 0xFFFFu)

@@ -98,12 +98,15 @@ uint16_t co_crc16(uint16_t crc, const uint8_t *data, uint32_t len);
 
 /* sdo_server.c */
 void co_sdo_server_reset_comm(co_node_t *node);
+/* The NMT state no longer allows SDO: open transfers end without a frame. */
+void co_sdo_server_stop(co_node_t *node);
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
 
 /* sdo_client.c */
 void co_sdo_client_reset_comm(co_node_t *node);
+void co_sdo_client_stop(co_node_t *node);
 void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);

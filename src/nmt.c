@@ -51,6 +51,10 @@ static void enter(co_node_t *node, co_nmt_state_t state)
     }
     node->nmt_state = (uint8_t)state;
     node->services = co_nmt_services(state);
+    if (!(node->services & CO_SVC_SDO)) {
+        co_sdo_server_stop(node);
+        co_sdo_client_stop(node);
+    }
     if (node->cfg.on_state) {
         node->cfg.on_state(node->cfg.user, state);
     }

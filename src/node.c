@@ -193,7 +193,7 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
 }
 
 co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                              uint32_t len)
+                               uint32_t len)
 {
     const co_od_t *od = &node->cfg.od;
     co_abort_t abort = co_od_check(od, entry, data, len);

@@ -453,6 +453,16 @@ void co_sdo_client_reset_comm(co_node_t *node)
     }
 }
 
+void co_sdo_client_stop(co_node_t *node)
+{
+    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
+        co_sdo_client_t *c = &node->sdo_clients[i];
+        if (c->state != IDLE) {
+            finish(node, c, CO_ABORT_DATA_STATE, 0); /* no frame: SDO may not be sent now */
+        }
+    }
+}
+
 void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t ch = entry->index - 0x1280u;

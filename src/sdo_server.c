@@ -13,13 +13,13 @@
 
 enum server_state {
     IDLE = 0,
-    DOWN_SEGMENTED,  /* expect a download segment */
-    UP_SEGMENTED,    /* expect an upload segment request */
-    BLOCK_DOWN,      /* receiving a sub-block */
-    BLOCK_DOWN_END,  /* expect the end of a block download */
-    BLOCK_UP_START,  /* initiate answered, expect the client's start */
-    BLOCK_UP,        /* sending a sub-block, then expect its acknowledgement */
-    BLOCK_UP_END,    /* end sent, expect the client's end response */
+    DOWN_SEGMENTED, /* expect a download segment */
+    UP_SEGMENTED,   /* expect an upload segment request */
+    BLOCK_DOWN,     /* receiving a sub-block */
+    BLOCK_DOWN_END, /* expect the end of a block download */
+    BLOCK_UP_START, /* initiate answered, expect the client's start */
+    BLOCK_UP,       /* sending a sub-block, then expect its acknowledgement */
+    BLOCK_UP_END,   /* end sent, expect the client's end response */
 };
 
 #define SEG_BYTES 7u
@@ -54,6 +54,13 @@ void co_sdo_server_reset_comm(co_node_t *node)
     for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
         node->sdo_servers[ch].state = IDLE;
         load_channel(node, ch);
+    }
+}
+
+void co_sdo_server_stop(co_node_t *node)
+{
+    for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
+        node->sdo_servers[ch].state = IDLE; /* no frame: SDO may not be sent now */
     }
 }
 
@@ -128,8 +135,8 @@ static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
     co_abort_t abort = CO_ABORT_NONE;
     if (streams(s)) {
         uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
-        abort = co_od_write_piece(&node->cfg.od, s->entry, s->done, s->buf, s->buf_len, total,
-                                  last);
+        abort =
+            co_od_write_piece(&node->cfg.od, s->entry, s->done, s->buf, s->buf_len, total, last);
     } else if (last) {
         abort = co_node_write_entry(node, s->entry, s->buf, s->buf_len);
     }
@@ -143,7 +150,9 @@ static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 /* Append received bytes; when the buffer is full, stream it on or fail. */
 static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t n)
 {
-    if (s->buf_len + n > sizeof s->buf) {
+    /* a block's last segment may carry up to 6 bytes of padding past the value */
+    uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
+    if (s->buf_len + n > room) {
         if (!streams(s)) {
             return s->entry->value && co_type_size((co_type_t)s->entry->type) == 0 &&
                            s->buf_len + n > s->entry->size
@@ -197,6 +206,9 @@ static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
 {
     if (s->size_known && received(s) != s->size) {
         return received(s) > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
+    }
+    if (!streams(s) && s->buf_len > CO_SDO_BUF_SIZE) {
+        return CO_ABORT_OUT_OF_MEMORY;
     }
     return flush(node, s, true);
 }
@@ -382,8 +394,8 @@ static co_abort_t load_sub_block(co_node_t *node, co_sdo_server_t *s, uint32_t *
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    s->last_sent = total != CO_OD_SIZE_UNKNOWN ? s->done + s->buf_len >= total
-                                               : s->buf_len < chunk_cap(s);
+    s->last_sent =
+        total != CO_OD_SIZE_UNKNOWN ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
     s->seq = 0;
     return CO_ABORT_NONE;
 }
@@ -601,15 +613,12 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
-    bool allowed = node->services & CO_SVC_SDO;
     for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
         co_sdo_server_t *s = &node->sdo_servers[ch];
         if (s->state == IDLE) {
             continue;
         }
-        if (!allowed) {
-            s->state = IDLE; /* the NMT state ended SDO: nothing may be sent */
-        } else if (now_us >= s->deadline_us) {
+        if (now_us >= s->deadline_us) {
             abort_transfer(node, s, CO_ABORT_TIMEOUT);
         } else {
             if (s->state == BLOCK_UP) {

@@ -463,8 +463,8 @@ static void test_arbitration_ext_std(void)
     co_sim_send(&b, &ext_same0);
     CHECK_EQ(co_sim_run_until(bus, 100000), CO_OK);
     CHECK_EQ(rd.n, 5);
-    CHECK_EQ(rd.f[0].id, ext_low.id);    /* the base ID decides first */
-    CHECK_EQ(rd.f[1].id, 0x123);         /* same base: 11-bit beats 29-bit, */
+    CHECK_EQ(rd.f[0].id, ext_low.id);       /* the base ID decides first */
+    CHECK_EQ(rd.f[1].id, 0x123);            /* same base: 11-bit beats 29-bit, */
     CHECK(!(rd.f[1].flags & CO_FRAME_RTR)); /* data beats remote */
     CHECK_EQ(rd.f[2].id, 0x123);
     CHECK(rd.f[2].flags & CO_FRAME_RTR);
@@ -897,8 +897,8 @@ static void test_node_heartbeat_timed(void)
     char want[256];
     uint32_t tb0 = co_sim_frame_bits(&boot) * 8u, th = co_sim_frame_bits(&hb) * 8u;
     snprintf(want, sizeof want,
-             "(0.%06u) sim0 705#00\n(0.%06u) sim0 705#7F\n(0.%06u) sim0 705#7F\n", tb0,
-             100000 + th, 200000 + th);
+             "(0.%06u) sim0 705#00\n(0.%06u) sim0 705#7F\n(0.%06u) sim0 705#7F\n", tb0, 100000 + th,
+             200000 + th);
     CHECK_STR(tb.text, want);
     double load = co_sim_load(bus);
     double expect = (double)(tb0 + 2 * th) / 250000.0;
@@ -934,8 +934,8 @@ static void test_node_acceptance(void)
 
 static void test_node_set_by_application(void)
 {
-    /* The application changes the node between runs (new heartbeat period): the next run
-     * polls it at once, so the new deadline is honoured. */
+    /* The application changes the node between runs (new heartbeat period): the new
+     * deadline is honoured. */
     co_sim_bus_t *bus = new_bus(0);
     static rec_t rr;
     static sim_node_t n;
@@ -947,10 +947,11 @@ static void test_node_set_by_application(void)
     CHECK_EQ(rr.n, 1);
     CHECK_EQ(co_node_set_uint(&n.node, 0x1017, 0, 10), CO_ABORT_NONE);
     co_sim_run_until(bus, 35000);
-    /* The node counts the period from the latest time it was given (0). */
+    /* The run ended by telling the node the time (1000 us): the new period counts from
+     * there. */
     CHECK_EQ(rr.n, 4);
-    CHECK_EQ(rr.t[1], 10000);
-    CHECK_EQ(rr.t[3], 30000);
+    CHECK_EQ(rr.t[1], 11000);
+    CHECK_EQ(rr.t[3], 31000);
 }
 
 static void test_node_mailbox_refill(void)

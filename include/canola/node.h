@@ -63,11 +63,11 @@ typedef struct co_node_config {
     uint8_t node_id; /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
     co_od_t od;      /**< the object dictionary; its entries must outlive the node */
     co_driver_t driver;
-    bool self_start;       /**< enter OPERATIONAL by itself after boot-up */
+    bool self_start;         /**< enter OPERATIONAL by itself after boot-up */
     uint16_t boot_time_ms;   /**< report consumed nodes not heard this long after reset
                                   communication (CO_EC_NOT_BOOTED); 0 = off */
     uint16_t sdo_timeout_ms; /**< SDO server and client time-out; 0 = 1000 ms */
-    void *user;            /**< first argument of every callback below */
+    void *user;              /**< first argument of every callback below */
     /** Optional callbacks. */
     void (*on_state)(void *user, co_nmt_state_t state);
     void (*on_reset)(void *user, co_reset_t what);
@@ -89,7 +89,7 @@ typedef struct co_node_stats {
 
 /** One receive route: COB-ID key -> service and slot. Internal. */
 typedef struct co_route {
-    uint32_t key; /**< id, with bit 31 set for 29-bit ids */
+    uint32_t key;     /**< id, with bit 31 set for 29-bit ids */
     uint16_t service; /**< co_service_t bit the NMT state must allow */
     uint8_t kind;
     uint8_t slot;
@@ -100,7 +100,7 @@ struct co_node {
     co_node_config_t cfg;
     uint64_t now_us;      /**< time of the latest ingest/poll */
     uint64_t next_due_us; /**< earliest deadline of any service */
-    uint16_t services;       /**< co_service_t bits the current NMT state allows */
+    uint16_t services;    /**< co_service_t bits the current NMT state allows */
     uint8_t node_id;
     uint8_t nmt_state;
     bool started;

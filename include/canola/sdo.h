@@ -32,8 +32,8 @@
  * node-ID and the default COB-IDs (0x600 + n, 0x580 + n); 0x1280 + i in the OD,
  * when present, is kept in step both ways (a write to it reconfigures the channel,
  * and reset communication reloads it from its power-on values, as it does every
- * communication object; a channel without 0x1280 + i keeps its setup). Transfers are asynchronous: start one, the
- * node's ingest/poll drive it, and a completion callback reports the abort code
+ * communication object; a channel without 0x1280 + i keeps its setup). Transfers are asynchronous:
+ * start one, the node's ingest/poll drive it, and a completion callback reports the abort code
  * (CO_ABORT_NONE on success) and the bytes transferred. A channel whose server is
  * the node itself reads and writes the node's own dictionary, with no frames.
  *
@@ -107,11 +107,11 @@ typedef struct co_sdo_client {
     uint8_t state;
     uint8_t mode;
     uint8_t toggle;
-    uint8_t blksize;   /**< block size asked for (uploads) / granted (downloads) */
+    uint8_t blksize; /**< block size asked for (uploads) / granted (downloads) */
     uint8_t seq;
     bool size_known;
     bool crc_on;
-    bool use_crc;      /**< offer CRC in block transfers (default true) */
+    bool use_crc;         /**< offer CRC in block transfers (default true) */
     uint8_t want_blksize; /**< block size to ask for, 1..127 (default 127) */
     uint8_t pst;          /**< protocol switch threshold for block uploads (default 0) */
 } co_sdo_client_t;
@@ -124,8 +124,8 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
 
 /** Block transfer options of a channel: block size 1..127 asked for, CRC offered, protocol
  *  switch threshold for uploads (0 = never switch). Returns CO_ERR_ARG on a bad value. */
-co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize,
-                                     bool crc, uint8_t pst);
+co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize, bool crc,
+                                     uint8_t pst);
 
 /** Start reading (index, sub) of the channel's server into `buf` (capacity `cap`; must stay
  *  valid until `done` runs). A value longer than `cap` aborts with 0x05040005 (also sent to
@@ -139,8 +139,8 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
 /** Start writing `len` bytes of `data` (valid until `done` runs) to (index, sub). Errors as
  *  co_sdo_upload; CO_SDO_EXPEDITED with len 0 or > 4 is CO_ERR_ARG. */
 co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
-                         co_sdo_mode_t mode, const uint8_t *data, uint32_t len,
-                         co_sdo_done_fn done, void *ctx);
+                         co_sdo_mode_t mode, const uint8_t *data, uint32_t len, co_sdo_done_fn done,
+                         void *ctx);
 
 /** Abort the channel's transfer with `code` (sent to the server); `done` runs with it.
  *  Returns CO_ERR_STATE when no transfer is open. */

@@ -29,10 +29,10 @@ _Static_assert(CO_SIM_PORTS_MAX <= 256, "port indices are stored in 8 bits");
 
 /* A bit stream being measured: CRC over what is fed with `in_crc`, stuff bits counted. */
 typedef struct wire {
-    uint32_t bits;  /* bits so far, stuff bits included */
+    uint32_t bits; /* bits so far, stuff bits included */
     uint16_t crc;
-    uint8_t level;  /* level of the latest bit on the wire */
-    uint8_t run;    /* bits of that level in a row (a stuff bit starts a new run) */
+    uint8_t level; /* level of the latest bit on the wire */
+    uint8_t run;   /* bits of that level in a row (a stuff bit starts a new run) */
 } wire_t;
 
 /* Feed the `n` low bits of `value`, most significant first. */
@@ -190,8 +190,7 @@ static co_err_t attach(co_sim_bus_t *bus, co_sim_port_t *port)
 
 co_err_t co_sim_port_attach(co_sim_bus_t *bus, co_sim_port_t *port) { return attach(bus, port); }
 
-co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx,
-                                void *ctx)
+co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx, void *ctx)
 {
     co_err_t err = attach(bus, port);
     if (err == CO_OK) {
@@ -473,6 +472,14 @@ co_err_t co_sim_run_until(co_sim_bus_t *bus, uint64_t until_us)
         }
     }
     bus->now_us = until_us;
+    /* Tell every node the time, so that what the application calls between runs (start a
+     * transfer, write an object) times itself from now, not from the node's last event. */
+    for (uint32_t i = 0; i < bus->port_count; i++) {
+        co_sim_port_t *port = bus->ports[i];
+        if (port->node) {
+            port->node_due_us = co_node_poll(port->node, until_us);
+        }
+    }
     return CO_OK;
 }
 

@@ -63,8 +63,8 @@ typedef void (*co_sim_trace_fn)(void *ctx, const char *line);
 
 typedef struct co_sim_port {
     co_sim_bus_t *bus;
-    co_node_t *node;     /**< node behind this port, or NULL for a raw port */
-    co_sim_rx_fn rx;     /**< raw port receive callback */
+    co_node_t *node; /**< node behind this port, or NULL for a raw port */
+    co_sim_rx_fn rx; /**< raw port receive callback */
     void *rx_ctx;
     uint64_t node_due_us; /**< next co_node_poll deadline of the node */
     uint8_t mailboxes;    /**< transmit slots (1..255; attach sets 3: change it after) */
@@ -83,21 +83,21 @@ typedef struct co_sim_pending {
 
 /** Statistics of the bus since co_sim_bus_init. */
 typedef struct co_sim_stats {
-    uint64_t frames;      /**< frames that completed on the bus */
-    uint64_t bits;        /**< their bits, stuffing and interframe space included */
-    uint64_t busy_us;     /**< time the bus was occupied (timing model only) */
-    uint64_t dropped;     /**< frames removed by fault injection */
-    uint64_t corrupted;   /**< frames altered by fault injection */
-    uint64_t refused;     /**< tx attempts answered busy (mailboxes full) */
-    uint64_t overflow;    /**< frames lost because the pending list was full */
+    uint64_t frames;    /**< frames that completed on the bus */
+    uint64_t bits;      /**< their bits, stuffing and interframe space included */
+    uint64_t busy_us;   /**< time the bus was occupied (timing model only) */
+    uint64_t dropped;   /**< frames removed by fault injection */
+    uint64_t corrupted; /**< frames altered by fault injection */
+    uint64_t refused;   /**< tx attempts answered busy (mailboxes full) */
+    uint64_t overflow;  /**< frames lost because the pending list was full */
 } co_sim_stats_t;
 
 struct co_sim_bus {
     uint64_t now_us;
-    uint32_t bitrate; /**< 0 = instant delivery */
-    uint64_t idle_at_us; /**< timing model: when the bus is free again ... */
-    uint32_t idle_rem;   /**< ... exactly: idle_at_us + idle_rem / bitrate us (no drift) */
-    bool transmitting;   /**< timing model: `on_bus` occupies the bus until then */
+    uint32_t bitrate;        /**< 0 = instant delivery */
+    uint64_t idle_at_us;     /**< timing model: when the bus is free again ... */
+    uint32_t idle_rem;       /**< ... exactly: idle_at_us + idle_rem / bitrate us (no drift) */
+    bool transmitting;       /**< timing model: `on_bus` occupies the bus until then */
     co_sim_pending_t on_bus; /**< the frame on the wire (its mailbox is still taken) */
     co_sim_port_t *ports[CO_SIM_PORTS_MAX];
     uint32_t port_count;
@@ -106,7 +106,7 @@ struct co_sim_bus {
     uint32_t seq;
     /* faults */
     uint64_t rng;
-    uint64_t drop_nth;      /**< 0 = off; counts frames sent on the bus from 1 */
+    uint64_t drop_nth; /**< 0 = off; counts frames sent on the bus from 1 */
     uint64_t sent_count;
     double drop_p;
     double corrupt_p;
@@ -130,8 +130,7 @@ co_driver_t co_sim_port_driver(co_sim_port_t *port);
 void co_sim_port_bind(co_sim_port_t *port, co_node_t *node);
 
 /** Attach a raw port: `rx` receives every frame others send. */
-co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx,
-                                void *ctx);
+co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx, void *ctx);
 
 /** Send a frame from a port at the bus's current time (raw ports; nodes send through
  *  their driver). Returns CO_ERR_BUSY when the port's mailboxes are full, CO_OK else
