@@ -56,7 +56,7 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
     node->stats.rx_frames++;
-    const co_route_t *route = co_routes_find(node, co_route_key(frame));
+    const co_route_t *route = co_routes_lookup(node, co_route_key(frame));
     if (route == NULL) {
         node->stats.rx_unrouted++;
         return;

@@ -368,6 +368,15 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
     if (entry->value == NULL) {
         return CO_ABORT_WRITE_ONLY;
     }
+    const type_info_t *t = type_info(entry->type);
+    if (wire_is_native(t) && offset == 0 && cap >= t->wire) { /* a whole number, as stored */
+        memcpy(buf, entry->value, t->wire);
+        *n = t->wire;
+        if (total != NULL) {
+            *total = t->wire;
+        }
+        return CO_ABORT_NONE;
+    }
     whole = co_od_value_len(od, entry);
     if (total != NULL) {
         *total = whole;

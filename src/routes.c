@@ -40,6 +40,7 @@ static void add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
 void co_routes_rebuild(co_node_t *node)
 {
     node->route_count = 0;
+    node->route_hint = 0;
     add(node, 0x000, CO_ROUTE_NMT, 0);
     if (node->node_id >= 1 && node->node_id <= 127) {
         add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);

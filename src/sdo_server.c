@@ -167,7 +167,11 @@ static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *da
             return abort;
         }
     }
-    memcpy(&s->buf[s->buf_len], data, n);
+    if (n == SEG_BYTES) {
+        memcpy(&s->buf[s->buf_len], data, SEG_BYTES); /* the usual case, copied inline */
+    } else {
+        memcpy(&s->buf[s->buf_len], data, n);
+    }
     s->buf_len += n;
     return CO_ABORT_NONE;
 }

@@ -380,11 +380,90 @@ static void test_thousand_transfers_on_a_lossy_bus(void)
     free(bus);
 }
 
+typedef struct value_result {
+    int calls;
+    co_abort_t abort;
+    uint64_t value;
+    uint32_t len;
+} value_result_t;
+
+static void on_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len)
+{
+    (void)channel;
+    value_result_t *r = ctx;
+    r->calls++;
+    r->abort = abort;
+    r->value = value;
+    r->len = len;
+}
+
+static void on_written(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
+{
+    on_value(ctx, channel, abort, 0, len);
+}
+
+/* One call reads or writes a typed value of a remote node. */
+static void test_typed_values_in_one_call(void)
+{
+    co_sim_bus_t *bus = calloc(1, sizeof *bus);
+    server_t *srv = calloc(1, sizeof *srv);
+    client_t *cli = calloc(1, sizeof *cli);
+    co_sim_bus_init(bus, 1000000);
+    server_start(bus, srv, 5);
+    client_start(bus, cli, 1, 5, 8);
+    co_sim_run_until(bus, 1 * MS);
+    value_result_t r = {0};
+    CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, on_value, &r), CO_OK);
+    CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, on_value, &r), CO_ERR_BUSY);
+    co_sim_run_until(bus, 10 * MS);
+    CHECK_EQ(r.calls, 1);
+    CHECK_EQ(r.abort, CO_ABORT_NONE);
+    CHECK_EQ(r.value, 0x12345678);
+    CHECK_EQ(r.len, 4);
+
+    r = (value_result_t){0};
+    CHECK_EQ(co_sdo_write_value(&cli->node, 0, 0x2001, 0, (uint64_t)(int64_t)-5, 2, on_written, &r),
+             CO_OK);
+    co_sim_run_until(bus, 20 * MS);
+    CHECK_EQ(r.abort, CO_ABORT_NONE);
+    CHECK_EQ(srv->od.app_i16, -5);
+
+    r = (value_result_t){0};
+    co_sdo_write_value(&cli->node, 0, 0x2001, 0, 500, 2, on_written, &r);
+    co_sim_run_until(bus, 30 * MS);
+    CHECK_EQ(r.abort, CO_ABORT_VALUE_HIGH); /* the server's abort code, passed on */
+    CHECK_EQ(srv->od.app_i16, -5);
+
+    /* 8 bytes: segmented, still one call. */
+    r = (value_result_t){0};
+    co_sdo_write_value(&cli->node, 0, 0x2005, 0, 0x8877665544332211ull, 8, on_written, &r);
+    co_sim_run_until(bus, 40 * MS);
+    CHECK_EQ(r.abort, CO_ABORT_NONE);
+    r = (value_result_t){0};
+    co_sdo_read_value(&cli->node, 0, 0x2005, 0, on_value, &r);
+    co_sim_run_until(bus, 50 * MS);
+    CHECK_EQ(r.value, 0x8877665544332211ull);
+    CHECK_EQ(r.len, 8);
+
+    /* A 14-byte string does not fit a value. */
+    r = (value_result_t){0};
+    co_sdo_read_value(&cli->node, 0, 0x1008, 0, on_value, &r);
+    co_sim_run_until(bus, 60 * MS);
+    CHECK_EQ(r.calls, 1);
+    CHECK_EQ(r.abort, CO_ABORT_OUT_OF_MEMORY);
+    CHECK_EQ(co_sdo_write_value(&cli->node, 0, 0x2000, 0, 1, 9, on_written, &r), CO_ERR_ARG);
+    free(cli->buf);
+    free(cli);
+    free(srv);
+    free(bus);
+}
+
 int main(void)
 {
     RUN(test_ten_mebibytes_block_both_ways);
     RUN(test_segmented_one_mebibyte_both_ways);
     RUN(test_ten_clients_ten_servers_at_once);
     RUN(test_thousand_transfers_on_a_lossy_bus);
+    RUN(test_typed_values_in_one_call);
     return check_summary();
 }

@@ -108,6 +108,7 @@ struct co_node {
     /* Receive routes, sorted by key. */
     co_route_t routes[CO_RX_ROUTES_MAX];
     uint16_t route_count;
+    uint16_t route_hint; /**< the route found last */
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
     co_frame_t txq[CO_TX_QUEUE_LEN];

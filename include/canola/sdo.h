@@ -62,6 +62,11 @@ typedef enum co_sdo_mode {
     CO_SDO_BLOCK = 3,
 } co_sdo_mode_t;
 
+/** Completion of a typed read (co_sdo_read_value): `value` holds the `len` (1..8) bytes
+ *  received, little-endian, zero-extended (sign-extend signed types yourself). */
+typedef void (*co_sdo_value_fn)(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value,
+                                uint32_t len);
+
 /** Completion of a client transfer: `abort` is CO_ABORT_NONE on success, `len` the bytes
  *  uploaded into the caller's buffer or downloaded from it. */
 typedef void (*co_sdo_done_fn)(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
@@ -114,6 +119,11 @@ typedef struct co_sdo_client {
     bool use_crc;         /**< offer CRC in block transfers (default true) */
     uint8_t want_blksize; /**< block size to ask for, 1..127 (default 127) */
     uint8_t pst;          /**< protocol switch threshold for block uploads (default 0) */
+    /* co_sdo_read_value / co_sdo_write_value */
+    co_sdo_value_fn value_fn;
+    co_sdo_done_fn value_done_fn;
+    void *value_ctx;
+    uint8_t value[8];
 } co_sdo_client_t;
 
 /* ---- client */
@@ -141,6 +151,19 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
 co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
                          co_sdo_mode_t mode, const uint8_t *data, uint32_t len, co_sdo_done_fn done,
                          void *ctx);
+
+/* ---- one-call typed access for C masters */
+
+/** Read a value of up to 8 bytes (any integer, REAL or BOOLEAN entry) of the channel's
+ *  server; `done` gets it decoded. A longer value aborts with 0x05040005. Errors as
+ *  co_sdo_upload. */
+co_err_t co_sdo_read_value(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
+                           co_sdo_value_fn done, void *ctx);
+
+/** Write the low `size` (1..8) bytes of `value` to (index, sub), little-endian, expedited
+ *  when size <= 4. Returns CO_ERR_ARG for another size, else as co_sdo_download. */
+co_err_t co_sdo_write_value(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
+                            uint64_t value, uint8_t size, co_sdo_done_fn done, void *ctx);
 
 /** Abort the channel's transfer with `code` (sent to the server); `done` runs with it.
  *  Returns CO_ERR_STATE when no transfer is open. */
