@@ -1,7 +1,17 @@
-/* configs/minimal.h -- the smallest useful device: a short queue, few consumers, no guarding
- * master. */
+/* configs/minimal.h -- the smallest useful device: a short queue, one consumer, no guarding
+ * master, an SDO server with a small buffer and no client. */
+#ifndef CO_TX_QUEUE_LEN
 #define CO_TX_QUEUE_LEN 4
+#endif
+#ifndef CO_HB_CONSUMERS_MAX
 #define CO_HB_CONSUMERS_MAX 1
+#endif
+#ifndef CO_GUARD_WATCH_MAX
 #define CO_GUARD_WATCH_MAX 0
+#endif
+#ifndef CO_SDO_CLIENTS_MAX
 #define CO_SDO_CLIENTS_MAX 0
+#endif
+#ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 32
+#endif

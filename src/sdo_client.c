@@ -565,6 +565,12 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
     if (c->state != IDLE) {
         return CO_ERR_BUSY;
     }
+    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
+        if (i != channel && node->sdo_clients[i].server_id == server_id &&
+            server_id != node->node_id) {
+            return CO_ERR_STATE; /* its responses would reach only one of the two */
+        }
+    }
     apply_defaults(c);
     c->server_id = server_id;
     c->cob_tx = 0x600u + server_id;

@@ -64,13 +64,33 @@ void co_sdo_server_stop(co_node_t *node)
     }
 }
 
+/* Take new COB-IDs into use. A channel reconfigured by a request it is serving itself
+ * answers that request on the old COB-ID first: the reload waits for the answer. */
+static void apply_reloads(co_node_t *node)
+{
+    bool changed = false;
+    for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
+        co_sdo_server_t *s = &node->sdo_servers[ch];
+        if (s->reload) {
+            s->reload = false;
+            s->state = IDLE;
+            load_channel(node, ch);
+            changed = true;
+        }
+    }
+    if (changed) {
+        co_routes_rebuild(node);
+    }
+}
+
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t ch = entry->index - 0x1200u;
     if (ch < co_sdo_servers_max() && (entry->sub == 1 || entry->sub == 2)) {
-        node->sdo_servers[ch].state = IDLE;
-        load_channel(node, (uint8_t)ch);
-        co_routes_rebuild(node);
+        node->sdo_servers[ch].reload = true;
+        if (!node->sdo_serving) {
+            apply_reloads(node);
+        }
     }
 }
 
@@ -84,6 +104,9 @@ static void refresh(co_node_t *node, co_sdo_server_t *s)
 
 static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
 {
+    if (s->cob_tx & CO_COB_INVALID) {
+        return; /* never on a COB-ID marked not valid */
+    }
     co_frame_t f = co_cob_frame(s->cob_tx, 8);
     memcpy(f.data, data, 8);
     co_node_send(node, &f);
@@ -586,6 +609,8 @@ static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t
     }
 }
 
+static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d);
+
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
 {
     if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
@@ -598,6 +623,15 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         s->state = IDLE;
         return;
     }
+    node->sdo_serving = true;
+    serve(node, s, d);
+    node->sdo_serving = false;
+    apply_reloads(node);
+}
+
+/* One request of an open or new transfer. */
+static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
     if (s->state == BLOCK_DOWN) { /* every frame of a sub-block is a segment */
         block_segment(node, s, d);
     } else if (is_initiate(d[0])) {

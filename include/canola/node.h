@@ -20,6 +20,11 @@
  *   3. implement tx(); co_node_accepts() tells it which IDs to let through its
  *      hardware filter (on_routes_changed says when that set changed).
  *
+ * The node's clock is the time of the latest co_node_ingest()/co_node_poll(); the
+ * functions an application calls in between (start an SDO transfer, write 0x1017, add a
+ * guarding watch) time themselves from it. A loop that may have slept long should call
+ * co_node_poll(node, now) before such calls: it is cheap and also runs what is due.
+ *
  * Threading: none inside. All calls on one node must be serialised by the
  * caller (one task, or one lock). Callbacks run inside the call that caused
  * them and may call co_node_* functions except co_node_ingest/co_node_poll.
@@ -137,6 +142,7 @@ struct co_node {
     /* SDO channels. */
     co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
     co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX > 0 ? CO_SDO_CLIENTS_MAX : 1];
+    bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
 
     co_node_stats_t stats;
 };

@@ -91,6 +91,7 @@ typedef struct co_sdo_server {
     bool size_known;
     bool crc_on;
     bool last_sent;
+    bool reload; /**< new COB-IDs to take once the current request is answered */
     uint8_t buf[CO_SDO_BUF_SIZE + 6]; /**< + room for a block's last segment padding */
 } co_sdo_server_t;
 
@@ -129,7 +130,9 @@ typedef struct co_sdo_client {
 /* ---- client */
 
 /** Point client channel `channel` at server `server_id` (1..127) with the default COB-IDs.
- *  Returns CO_ERR_ARG for a bad channel or node-ID, CO_ERR_BUSY during a transfer. */
+ *  Returns CO_ERR_ARG for a bad channel or node-ID, CO_ERR_BUSY during a transfer,
+ *  CO_ERR_STATE when another channel already talks to that server (both would listen to
+ *  the same response COB-ID). */
 co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id);
 
 /** Block transfer options of a channel: block size 1..127 asked for, CRC offered, protocol
