@@ -68,6 +68,10 @@ void co_sdo_server_stop(co_node_t *node)
  * answers that request on the old COB-ID first: the reload waits for the answer. */
 static void apply_reloads(co_node_t *node)
 {
+    if (!node->sdo_reload) {
+        return;
+    }
+    node->sdo_reload = false;
     bool changed = false;
     for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
         co_sdo_server_t *s = &node->sdo_servers[ch];
@@ -88,6 +92,7 @@ void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
     uint32_t ch = entry->index - 0x1200u;
     if (ch < co_sdo_servers_max() && (entry->sub == 1 || entry->sub == 2)) {
         node->sdo_servers[ch].reload = true;
+        node->sdo_reload = true;
         if (!node->sdo_serving) {
             apply_reloads(node);
         }
@@ -364,10 +369,15 @@ static void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
     }
     bool in_order = seqno == s->seq + 1u;
     if (in_order) {
-        co_abort_t abort = collect(node, s, &d[1], SEG_BYTES);
-        if (abort != CO_ABORT_NONE) {
-            abort_transfer(node, s, abort);
-            return;
+        if (s->buf_len + SEG_BYTES <= sizeof s->buf) { /* the usual case: room in the buffer */
+            memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES);
+            s->buf_len += SEG_BYTES;
+        } else {
+            co_abort_t abort = collect(node, s, &d[1], SEG_BYTES);
+            if (abort != CO_ABORT_NONE) {
+                abort_transfer(node, s, abort);
+                return;
+            }
         }
         s->seq = seqno;
     }

@@ -143,6 +143,7 @@ struct co_node {
     co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
     co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX > 0 ? CO_SDO_CLIENTS_MAX : 1];
     bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
+    bool sdo_reload;  /**< a server channel waits to take new COB-IDs */
 
     co_node_stats_t stats;
 };
