@@ -352,6 +352,19 @@ static const uint8_t *wire_view(const co_od_entry_t *e, uint8_t tmp[8])
     return e->value;
 }
 
+const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, uint32_t *len)
+{
+    if (has_read_hook(entry) || entry->value == NULL) {
+        return NULL;
+    }
+    const type_info_t *t = type_info(entry->type);
+    if (is_number(t) && !wire_is_native(t)) {
+        return NULL;
+    }
+    *len = co_od_value_len(od, entry);
+    return t->kind == K_DOMAIN ? ((const co_od_domain_t *)entry->value)->data : entry->value;
+}
+
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
                       uint32_t cap, uint32_t *n, uint32_t *total)
 {

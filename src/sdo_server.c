@@ -324,10 +324,16 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d
     uint8_t r[8] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
-    co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
-    if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+    const uint8_t *wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    if (wire != NULL && s->done <= total) { /* stored in wire form: copy the piece */
+        n = total - s->done < SEG_BYTES ? total - s->done : SEG_BYTES;
+        memcpy(&r[1], wire + s->done, n);
+    } else {
+        co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
+        if (abort != CO_ABORT_NONE) {
+            abort_transfer(node, s, abort);
+            return;
+        }
     }
     s->done += n;
     bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < SEG_BYTES;
