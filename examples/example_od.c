@@ -9,6 +9,10 @@ static const uint8_t k_zero_u8 = 0;
 static const uint16_t k_zero_u16 = 0;
 static const uint32_t k_zero_u32 = 0;
 static const uint32_t k_emcy_cob_id = 0x80; /* + $NODEID */
+static const uint32_t k_sync_cob_id = 0x80;
+static const uint32_t k_time_cob_id = 0x80000100u; /* consumes TIME */
+static const uint32_t k_cob_unused = 0x80000000u;
+static const uint8_t k_emcy_consumer_count = EXAMPLE_EMCY_CONSUMERS;
 static const uint8_t k_hb_consumer_count = EXAMPLE_HB_CONSUMERS;
 static const uint8_t k_identity_count = 4;
 static const uint32_t k_identity[4] = {0x00000CA0u, 0x00000001u, 0x00010000u, 0x00000000u};
@@ -46,12 +50,23 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     add(x, &n,
         VAR(0x1001, 0, CO_TYPE_UNSIGNED8, CO_OD_RO | CO_OD_TPDO, 1, &x->error_register,
             &k_zero_u8));
+    add(x, &n, VAR(0x1003, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->error_count, &k_zero_u8));
+    for (uint8_t i = 0; i < EXAMPLE_EMCY_HISTORY; i++) {
+        add(x, &n,
+            VAR(0x1003, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &x->error_history[i],
+                &k_zero_u32));
+    }
+    add(x, &n, VAR(0x1005, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->sync_cob_id, &k_sync_cob_id));
+    add(x, &n, VAR(0x1006, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->sync_period_us, &k_zero_u32));
+    add(x, &n, VAR(0x1007, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->sync_window_us, &k_zero_u32));
     add(x, &n, VAR(0x1008, 0, CO_TYPE_VISIBLE_STRING, CO_OD_CO, 16, x->device_name, k_device_name));
     add(x, &n, VAR(0x100C, 0, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &x->guard_time_ms, &k_zero_u16));
     add(x, &n, VAR(0x100D, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->life_factor, &k_zero_u8));
+    add(x, &n, VAR(0x1012, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->time_cob_id, &k_time_cob_id));
     add(x, &n,
         VAR(0x1014, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &x->emcy_cob_id,
             &k_emcy_cob_id));
+    add(x, &n, VAR(0x1015, 0, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &x->emcy_inhibit, &k_zero_u16));
     add(x, &n,
         VAR(0x1016, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->hb_consumer_count,
             &k_hb_consumer_count));
@@ -69,6 +84,15 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
         add(x, &n,
             VAR(0x1018, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &x->identity[i],
                 &k_identity[i]));
+    }
+    add(x, &n, VAR(0x1019, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->sync_overflow, &k_zero_u8));
+    add(x, &n,
+        VAR(0x1028, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->emcy_consumer_count,
+            &k_emcy_consumer_count));
+    for (uint8_t i = 0; i < EXAMPLE_EMCY_CONSUMERS; i++) {
+        add(x, &n,
+            VAR(0x1028, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->emcy_consumer[i],
+                &k_cob_unused));
     }
     add(x, &n, VAR(0x1029, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->eb_count, &k_one_u8));
     add(x, &n, VAR(0x1029, 1, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->eb_comm, &k_zero_u8));

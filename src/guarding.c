@@ -46,6 +46,7 @@ void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
         node->life_lost = false;
         co_node_ec_event(node, CO_EC_LIFE_GUARD_RESUMED, node->node_id, node->nmt_state,
                          node->nmt_state);
+        co_node_comm_resumed(node);
     }
 }
 
@@ -71,7 +72,7 @@ static uint64_t life_poll(co_node_t *node, uint64_t now_us)
     node->life_lost = true;
     node->life_deadline_us = CO_TIME_NEVER;
     co_node_ec_event(node, CO_EC_LIFE_GUARD, node->node_id, node->nmt_state, node->nmt_state);
-    co_node_comm_error(node);
+    co_node_comm_lost(node);
     return CO_TIME_NEVER;
 }
 

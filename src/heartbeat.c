@@ -118,6 +118,7 @@ void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         c->deadline_us = CO_TIME_NEVER;
         co_node_ec_event(node, was_running ? CO_EC_REMOTE_RESET : CO_EC_BOOT, c->node_id, state,
                          previous);
+        co_node_comm_resumed(node); /* a lost node that boots is back */
         return;
     }
     uint8_t watch = c->watch;
@@ -128,6 +129,7 @@ void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         co_node_ec_event(node, CO_EC_STARTED, c->node_id, state, previous);
     } else if (watch == CO_HB_WATCH_LOST) {
         co_node_ec_event(node, CO_EC_HB_RESUMED, c->node_id, state, previous);
+        co_node_comm_resumed(node);
     } else if (state != previous) {
         co_node_ec_event(node, CO_EC_STATE_CHANGED, c->node_id, state, previous);
     }
@@ -145,7 +147,7 @@ static uint64_t consumers_poll(co_node_t *node, uint64_t now_us)
             c->watch = CO_HB_WATCH_LOST;
             c->deadline_us = CO_TIME_NEVER;
             co_node_ec_event(node, CO_EC_HB_TIMEOUT, c->node_id, c->state, c->state);
-            co_node_comm_error(node);
+            co_node_comm_lost(node);
         } else {
             next = co_min_u64(next, c->deadline_us);
         }

@@ -14,6 +14,9 @@ enum co_route_kind {
     CO_ROUTE_GUARD_REPLY, /* 0x700 + n: guarding reply of a guarded node (slot = watch) */
     CO_ROUTE_SDO_SERVER,  /* an SDO server's request COB-ID (slot = channel) */
     CO_ROUTE_SDO_CLIENT,  /* an SDO client's response COB-ID (slot = channel) */
+    CO_ROUTE_SYNC,        /* 0x1005 */
+    CO_ROUTE_TIME,        /* 0x1012, when consuming */
+    CO_ROUTE_EMCY,        /* a COB-ID of 0x1028 (slot = consumer entry) */
 };
 
 /* COB-ID objects (0x1200, 0x1280, ...): bit 31 = not valid, bit 29 = 29-bit identifier. */
@@ -77,13 +80,22 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
 void co_node_schedule(co_node_t *node, uint64_t due_us);
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,
                       uint8_t previous);
-void co_node_comm_error(co_node_t *node);
+/* Communication lost (heartbeat or life guarding): EMCY 0x8130 and the error behaviour
+ * of 0x1029 sub1. Resumed: 0x8130 clears once nothing is lost any more. */
+void co_node_comm_lost(co_node_t *node);
+void co_node_comm_resumed(co_node_t *node);
+/* Apply the communication error behaviour of 0x1029 sub1 (also for bus-off). */
+void co_node_error_behaviour(co_node_t *node);
+void co_node_state_changed(co_node_t *node);
 /* A whole new value for an entry, with checks, service effects and hooks (no access rights). */
 co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                uint32_t len);
 
 /* routes.c */
 void co_routes_rebuild(co_node_t *node);
+/* Add a route while rebuilding (services call it from their co_*_add_routes). A key
+ * already routed keeps its first owner; a full table drops the route. */
+void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot);
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
 
 /* co_routes_find with a one-entry memory: a stream of frames on one COB-ID (an SDO
@@ -146,5 +158,31 @@ void co_guard_rtr(co_node_t *node, const co_frame_t *frame);
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us);
 void co_guard_written(co_node_t *node);
+
+/* emcy.c */
+void co_emcy_reset_comm(co_node_t *node);
+void co_emcy_add_routes(co_node_t *node);
+void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us);
+co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
+                               const uint8_t *data, uint32_t len);
+void co_emcy_written(co_node_t *node, const co_od_entry_t *entry);
+void co_emcy_state_entered(co_node_t *node);
+
+/* sync.c */
+void co_sync_reset_comm(co_node_t *node);
+void co_sync_add_routes(co_node_t *node);
+void co_sync_ingest(co_node_t *node, const co_frame_t *frame);
+uint64_t co_sync_poll(co_node_t *node, uint64_t now_us);
+co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
+                               const uint8_t *data, uint32_t len);
+void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
+void co_sync_state_entered(co_node_t *node);
+
+/* time.c */
+void co_time_reset_comm(co_node_t *node);
+void co_time_add_routes(co_node_t *node);
+void co_time_ingest(co_node_t *node, const co_frame_t *frame);
+void co_time_written(co_node_t *node, const co_od_entry_t *entry);
 
 #endif /* CANOLA_INTERNAL_H */

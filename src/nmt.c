@@ -51,10 +51,7 @@ static void enter(co_node_t *node, co_nmt_state_t state)
     }
     node->nmt_state = (uint8_t)state;
     node->services = co_nmt_services(state);
-    if (!(node->services & CO_SVC_SDO)) {
-        co_sdo_server_stop(node);
-        co_sdo_client_stop(node);
-    }
+    co_node_state_changed(node);
     if (node->cfg.on_state) {
         node->cfg.on_state(node->cfg.user, state);
     }
@@ -82,6 +79,9 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_guard_reset_comm(node);
     co_sdo_server_reset_comm(node);
     co_sdo_client_reset_comm(node);
+    co_sync_reset_comm(node);
+    co_time_reset_comm(node);
+    co_emcy_reset_comm(node);
     co_routes_rebuild(node);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);

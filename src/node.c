@@ -89,6 +89,15 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
     case CO_ROUTE_SDO_CLIENT:
         co_sdo_client_ingest(node, slot, frame);
         break;
+    case CO_ROUTE_SYNC:
+        co_sync_ingest(node, frame);
+        break;
+    case CO_ROUTE_TIME:
+        co_time_ingest(node, frame);
+        break;
+    case CO_ROUTE_EMCY:
+        co_emcy_ingest(node, slot, frame);
+        break;
     default:
         break;
     }
@@ -119,6 +128,8 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     next = co_min_u64(next, co_guard_poll(node, now_us));
     next = co_min_u64(next, co_sdo_server_poll(node, now_us));
     next = co_min_u64(next, co_sdo_client_poll(node, now_us));
+    next = co_min_u64(next, co_sync_poll(node, now_us));
+    next = co_min_u64(next, co_emcy_poll(node, now_us));
     co_node_schedule(node, next);
     return node->next_due_us;
 }
@@ -143,9 +154,7 @@ void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id,
     }
 }
 
-/* Communication error (heartbeat or life guarding lost): 0x1029 sub1 says what the NMT
- * state does. EMCY 0x8130 will be produced here once EMCY exists. */
-void co_node_comm_error(co_node_t *node)
+void co_node_error_behaviour(co_node_t *node)
 {
     switch (co_entry_uint(node->error_behaviour)) {
     case 0:
@@ -161,13 +170,57 @@ void co_node_comm_error(co_node_t *node)
     }
 }
 
+void co_node_comm_lost(co_node_t *node)
+{
+    (void)co_emcy_raise(node, 0x8130, NULL);
+    co_node_error_behaviour(node);
+}
+
+/* Anything still lost: a consumed heartbeat, a guarded node, our own life guarding. */
+static bool comm_still_lost(const co_node_t *node)
+{
+    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
+        if (node->hb_consumers[i].watch == CO_HB_WATCH_LOST) {
+            return true;
+        }
+    }
+    return node->life_lost;
+}
+
+void co_node_comm_resumed(co_node_t *node)
+{
+    if (!comm_still_lost(node) && co_emcy_active(node, 0x8130)) {
+        (void)co_emcy_clear(node, 0x8130);
+    }
+}
+
+/* The NMT state changed: services that depend on it start, stop or catch up. */
+void co_node_state_changed(co_node_t *node)
+{
+    if (!(node->services & CO_SVC_SDO)) {
+        co_sdo_server_stop(node);
+        co_sdo_client_stop(node);
+    }
+    co_sync_state_entered(node);
+    co_emcy_state_entered(node);
+}
+
 /* ---- object dictionary access */
 
 /* Service side of a write: refuse values a service cannot take. */
 static co_abort_t service_check(const co_node_t *node, const co_od_entry_t *entry,
                                 const uint8_t *data, uint32_t len)
 {
-    return co_hb_check_write(node, entry, data, len);
+    switch (entry->index) {
+    case 0x1016:
+        return co_hb_check_write(node, entry, data, len);
+    case 0x1003:
+        return co_emcy_check_write(node, entry, data, len);
+    case 0x1019:
+        return co_sync_check_write(node, entry, data, len);
+    default:
+        return CO_ABORT_NONE;
+    }
 }
 
 /* Service side of a write: take the new value into effect at once. */
@@ -181,6 +234,21 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
     case 0x100C:
     case 0x100D:
         co_guard_written(node);
+        break;
+    case 0x1005:
+    case 0x1006:
+    case 0x1007:
+    case 0x1019:
+        co_sync_written(node, entry);
+        break;
+    case 0x1012:
+        co_time_written(node, entry);
+        break;
+    case 0x1003:
+    case 0x1014:
+    case 0x1015:
+    case 0x1028:
+        co_emcy_written(node, entry);
         break;
     default:
         if (entry->index >= 0x1200 && entry->index <= 0x127F) {

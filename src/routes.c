@@ -16,12 +16,18 @@ static uint16_t kind_service(uint8_t kind)
     case CO_ROUTE_SDO_SERVER:
     case CO_ROUTE_SDO_CLIENT:
         return CO_SVC_SDO;
+    case CO_ROUTE_SYNC:
+        return CO_SVC_SYNC;
+    case CO_ROUTE_TIME:
+        return CO_SVC_TIME;
+    case CO_ROUTE_EMCY:
+        return CO_SVC_EMCY;
     default:
         return CO_SVC_ERROR_CONTROL;
     }
 }
 
-static void add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
 {
     if (node->route_count >= CO_RX_ROUTES_MAX || co_routes_find(node, key)) {
         return; /* a key has one owner; the first configured keeps it */
@@ -41,34 +47,37 @@ void co_routes_rebuild(co_node_t *node)
 {
     node->route_count = 0;
     node->route_hint = 0;
-    add(node, 0x000, CO_ROUTE_NMT, 0);
+    co_routes_add(node, 0x000, CO_ROUTE_NMT, 0);
     if (node->node_id >= 1 && node->node_id <= 127) {
-        add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);
+        co_routes_add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);
     }
     for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
         const co_hb_consumer_t *c = &node->hb_consumers[i];
         if (c->watch != CO_HB_WATCH_UNUSED) {
-            add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
+            co_routes_add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
         }
     }
     for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         const co_guard_watch_t *w = &node->guard_watch[i];
         if (w->guard_ms != 0) {
-            add(node, 0x700u + w->node_id, CO_ROUTE_GUARD_REPLY, i);
+            co_routes_add(node, 0x700u + w->node_id, CO_ROUTE_GUARD_REPLY, i);
         }
     }
     for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
         uint32_t cob = node->sdo_servers[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
-            add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
+            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
         }
     }
     for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
         uint32_t cob = node->sdo_clients[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
-            add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);
+            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);
         }
     }
+    co_sync_add_routes(node);
+    co_time_add_routes(node);
+    co_emcy_add_routes(node);
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }

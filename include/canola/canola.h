@@ -6,11 +6,14 @@
 #define CANOLA_CANOLA_H
 
 #include "canola/config.h"
+#include "canola/emcy.h"
 #include "canola/errctl.h"
 #include "canola/nmt.h"
 #include "canola/node.h"
 #include "canola/od.h"
 #include "canola/sdo.h"
+#include "canola/sync.h"
+#include "canola/time.h"
 #include "canola/types.h"
 
 #define CANOLA_VERSION "0.1.0"

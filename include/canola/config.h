@@ -47,11 +47,27 @@
 #define CO_SDO_BUF_SIZE 889
 #endif
 
+/** EMCY frames that may wait for the inhibit time (0x1015). 1..255. */
+#ifndef CO_EMCY_QUEUE_LEN
+#define CO_EMCY_QUEUE_LEN 4
+#endif
+
+/** Errors that can be active at once (for the error register 0x1001). 1..255. */
+#ifndef CO_EMCY_ACTIVE_MAX
+#define CO_EMCY_ACTIVE_MAX 8
+#endif
+
+/** EMCY consumer entries (0x1028 sub1..N). 0..127. */
+#ifndef CO_EMCY_CONSUMERS_MAX
+#define CO_EMCY_CONSUMERS_MAX 8
+#endif
+
 /** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
  *  heartbeat consumer and guarded node, and room for the other services. */
 #ifndef CO_RX_ROUTES_MAX
 #define CO_RX_ROUTES_MAX                                                                           \
-    (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX)
+    (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +      \
+     CO_EMCY_CONSUMERS_MAX)
 #endif
 
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
@@ -71,6 +87,15 @@
 #endif
 #if CO_SDO_BUF_SIZE < 7 || CO_SDO_BUF_SIZE > 65535
 #error "CO_SDO_BUF_SIZE must be 7..65535"
+#endif
+#if CO_EMCY_QUEUE_LEN < 1 || CO_EMCY_QUEUE_LEN > 255
+#error "CO_EMCY_QUEUE_LEN must be 1..255"
+#endif
+#if CO_EMCY_ACTIVE_MAX < 1 || CO_EMCY_ACTIVE_MAX > 255
+#error "CO_EMCY_ACTIVE_MAX must be 1..255"
+#endif
+#if CO_EMCY_CONSUMERS_MAX < 0 || CO_EMCY_CONSUMERS_MAX > 127
+#error "CO_EMCY_CONSUMERS_MAX must be 0..127"
 #endif
 #if CO_RX_ROUTES_MAX < 2 || CO_RX_ROUTES_MAX > 1024
 #error "CO_RX_ROUTES_MAX must be 2..1024"

@@ -34,10 +34,13 @@
 #define CANOLA_NODE_H
 
 #include "canola/config.h"
+#include "canola/emcy.h"
 #include "canola/errctl.h"
 #include "canola/nmt.h"
 #include "canola/od.h"
 #include "canola/sdo.h"
+#include "canola/sync.h"
+#include "canola/time.h"
 #include "canola/types.h"
 
 #ifdef __cplusplus
@@ -78,6 +81,9 @@ typedef struct co_node_config {
     void (*on_reset)(void *user, co_reset_t what);
     void (*on_errctl)(void *user, const co_ec_event_t *event);
     void (*on_error)(void *user, co_node_error_t error);
+    void (*on_emcy)(void *user, const co_emcy_msg_t *emcy);    /**< EMCY consumer (0x1028) */
+    void (*on_sync)(void *user, uint8_t counter);              /**< every SYNC handled */
+    void (*on_time)(void *user, const co_time_of_day_t *time); /**< TIME consumed */
 } co_node_config_t;
 
 /** Counters, never reset by the node. */
@@ -142,6 +148,10 @@ struct co_node {
     /* SDO channels. */
     co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
     co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX > 0 ? CO_SDO_CLIENTS_MAX : 1];
+    co_emcy_t emcy;
+    co_sync_t sync;
+    co_time_t time;
+
     bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
     bool sdo_reload;  /**< a server channel waits to take new COB-IDs */
 
