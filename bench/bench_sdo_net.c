@@ -11,13 +11,14 @@
  *
  * Block rows: client node 1 and server node 5 on co_sim_bus_init(&bus, 1000000); the
  * client asks for block size 127 with CRC; the server's 0x3000 is a DOMAIN with no storage
- * whose read hook produces a pattern and whose write hook checks it. sim_us is simulated
- * time from the call that starts the transfer to the end of the transfer's last frame on
- * the bus (interframe space included), as a listening raw port sees it; done_us is the time
- * to the done callback. They are equal for a download (the server's end response is the
- * last frame); a block upload's client reports done when it sends its end response, one
- * frame before the bus is through, so sim_us is the figure comparable with the limit, which
- * counts that frame too. Deterministic: no repetition needed.
+ * whose read hook produces a pattern (seed 17) and whose write hook checks it
+ * (examples/pattern_domain.h). sim_us is simulated time from the call that starts the
+ * transfer to the end of the transfer's last frame on the bus (interframe space included),
+ * as a listening raw port sees it; done_us is the time to the done callback. They are
+ * equal for a download (the server's end response is the last frame); a block upload's
+ * client reports done when it sends its end response, one frame before the bus is through,
+ * so sim_us is the figure comparable with the limit, which counts that frame too.
+ * Deterministic: no repetition needed.
  *
  * The limit: the bus time of exactly the frames the protocol needs, back to back. Every
  * frame is built here as the protocol defines it, with the transfer's real payload bytes,
@@ -48,6 +49,7 @@
 
 #include "canola/canola.h"
 #include "canola/sim.h"
+#include "pattern_domain.h"
 
 #define CLIENT_ID 1u
 #define SERVER_ID 5u
@@ -57,6 +59,7 @@
 #define BLKSIZE 127u
 #define BITRATE 1000000u
 #define DEVICE_TYPE 0x00020192u
+#define PATTERN_SEED 17u /* the data of block transfers */
 
 static const char *g_op = "";
 
@@ -64,12 +67,6 @@ static void die(const char *what)
 {
     fprintf(stderr, "bench_sdo_net: %s: %s: no figure\n", g_op, what);
     exit(1);
-}
-
-static uint8_t pattern(uint32_t i)
-{
-    uint32_t x = (i + 17u) * 2654435761u;
-    return (uint8_t)(x >> 24);
 }
 
 /* Bitwise CRC-16-CCITT (0x1021, initial 0), independent of the core's. */
@@ -87,48 +84,10 @@ static uint16_t crc16(const uint8_t *d, uint32_t n)
 
 /* ---- the nodes' dictionaries */
 
-typedef struct stream {
-    uint32_t length;   /* what an upload produces */
-    uint32_t received; /* bytes a download delivered in order */
-    bool mismatch;
-    bool complete;
-} stream_t;
-
-static co_abort_t stream_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
-                              uint32_t cap, uint32_t *n, uint32_t *total)
-{
-    (void)e;
-    stream_t *s = ctx;
-    uint32_t left = offset < s->length ? s->length - offset : 0;
-    *n = cap < left ? cap : left;
-    for (uint32_t i = 0; i < *n; i++) {
-        buf[i] = pattern(offset + i);
-    }
-    *total = s->length;
-    return CO_ABORT_NONE;
-}
-
-static co_abort_t stream_write(void *ctx, const co_od_entry_t *e, uint32_t offset,
-                               const uint8_t *data, uint32_t n, uint32_t total, bool last)
-{
-    (void)e;
-    (void)total;
-    stream_t *s = ctx;
-    s->mismatch |= offset != s->received;
-    for (uint32_t i = 0; i < n; i++) {
-        s->mismatch |= data[i] != pattern(offset + i);
-    }
-    s->received = offset + n;
-    s->complete = last;
-    return CO_ABORT_NONE;
-}
-
-static const co_od_hooks_t k_stream_hooks = {.read = stream_read, .write = stream_write};
-
 typedef struct peer {
     uint32_t device_type;
     co_od_entry_t entries[2];
-    stream_t stream;
+    pattern_domain_t stream;
     co_node_t node;
     co_sim_port_t port;
 } peer_t;
@@ -142,11 +101,7 @@ static co_od_t peer_od(peer_t *p, bool server)
                                     .attr = CO_OD_RO,
                                     .size = 4,
                                     .value = &p->device_type};
-    p->entries[1] = (co_od_entry_t){.index = STREAM_INDEX,
-                                    .type = CO_TYPE_DOMAIN,
-                                    .attr = CO_OD_RW,
-                                    .size = 0xFFFFFFFFu,
-                                    .hooks = &k_stream_hooks};
+    p->entries[1] = pattern_domain_entry(STREAM_INDEX);
     return (co_od_t){.entries = p->entries, .count = server ? 2u : 1u, .hook_ctx = &p->stream};
 }
 
@@ -255,8 +210,10 @@ static int run_block(bool upload, uint32_t n)
     if (!bus || !srv || !cli || !buf) {
         die("out of memory");
     }
-    for (uint32_t i = 0; i < n; i++) {
-        buf[i] = upload ? 0 : pattern(i);
+    if (upload) {
+        memset(buf, 0, n);
+    } else {
+        pattern_fill(buf, PATTERN_SEED, n);
     }
     if (co_sim_bus_init(bus, BITRATE) != CO_OK || co_sim_port_attach(bus, &srv->port) != CO_OK ||
         co_sim_port_attach(bus, &cli->port) != CO_OK ||
@@ -273,7 +230,8 @@ static int run_block(bool upload, uint32_t n)
     }
     co_sim_run_until(bus, 10000); /* boot-up frames gone, bus idle */
 
-    srv->stream.length = n;
+    srv->stream =
+        (pattern_domain_t){.length = n, .up_seed = PATTERN_SEED, .down_seed = PATTERN_SEED};
     result_t r = {.bus = bus};
     uint64_t t0 = bus->now_us;
     uint64_t boot_frames = co_sim_stats(bus)->frames;
@@ -305,12 +263,10 @@ static int run_block(bool upload, uint32_t n)
         die("the transfer reported a wrong length");
     }
     if (upload) {
-        for (uint32_t i = 0; i < n; i++) {
-            if (buf[i] != pattern(i)) {
-                die("the uploaded data is wrong");
-            }
+        if (!pattern_matches(buf, PATTERN_SEED, n)) {
+            die("the uploaded data is wrong");
         }
-    } else if (srv->stream.received != n || srv->stream.mismatch || !srv->stream.complete) {
+    } else if (!pattern_domain_received(&srv->stream, n)) {
         die("the server received wrong data");
     }
 

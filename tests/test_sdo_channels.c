@@ -7,10 +7,10 @@
  * A device here is the example dictionary plus the SDO server parameters 0x1200 (the
  * default channel, 0x600/0x580 + $NODEID), 0x1201 and 0x1202 (off at power-on: both
  * COB-IDs 0x80000000), and 0x3000, a DOMAIN with no storage whose read hook produces a
- * pattern and whose write hook checks what arrives against one, so transfers of any size
- * stream through the server. A master is the example dictionary plus the SDO client
- * parameters 0x1280..0x1282 with per-instance power-on values; it deliberately has no
- * 0x1283, so client channel 3 is a channel "without 0x1280 + i".
+ * pattern and whose write hook checks what arrives against one (pattern_domain.h), so
+ * transfers of any size stream through the server. A master is the example dictionary
+ * plus the SDO client parameters 0x1280..0x1282 with per-instance power-on values; it
+ * deliberately has no 0x1283, so client channel 3 is a channel "without 0x1280 + i".
  *
  * Frame-level tests run a device on the recording fake driver (harness.h) and compare
  * frames byte for byte; transfer tests put devices and masters on the simulated bus at
@@ -21,6 +21,7 @@
 #include "canola/sim.h"
 #include "check.h"
 #include "harness.h"
+#include "pattern_domain.h"
 
 #if CO_SDO_SERVERS_MAX < 4 || CO_SDO_CLIENTS_MAX < 4
 #error "test_sdo_channels needs CO_SDO_SERVERS_MAX and CO_SDO_CLIENTS_MAX of at least 4"
@@ -79,73 +80,21 @@ static uint32_t merge_od(co_od_entry_t *out, uint32_t cap, const co_od_t *base,
     return n;
 }
 
-/* ---- the streaming object 0x3000 */
+/* ---- building a device, and talking to one frame by frame */
 
-typedef struct stream {
-    uint32_t length;   /* upload: bytes the read hook produces */
-    uint32_t seed;     /* pattern seed */
-    uint32_t received; /* download: bytes delivered in order */
-    bool mismatch;     /* download: a byte differed from the pattern or came out of order */
-    bool complete;     /* download: the last piece arrived */
-} stream_t;
-
-static uint8_t pattern(uint32_t seed, uint32_t i)
-{
-    uint32_t x = (i + seed) * 2654435761u;
-    return (uint8_t)(x >> 24);
-}
-
-/* A device: SDO server channels 0..2 and 0x3000 (the hooks' context). */
+/* A device: SDO server channels 0..2 and 0x3000. Its pattern_domain_t is the hooks'
+ * context: a test sets what an upload produces and what a download must carry. */
 typedef struct device {
     example_od_t od;
     uint8_t server_subs[3];      /* 0x1200..0x1202 sub0 */
     uint32_t server_cob[3][2];   /* sub1 client -> server, sub2 server -> client */
     uint8_t server_client_id[3]; /* 0x1201, 0x1202 sub3 (index 0 unused) */
-    stream_t up;                 /* what an upload of 0x3000 produces */
-    stream_t down;               /* what a download of 0x3000 must carry */
+    pattern_domain_t stream;     /* 0x3000 */
     co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 16];
     co_node_t node;
     co_sim_port_t port;
     fake_bus_t fake;
 } device_t;
-
-static co_abort_t stream_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
-                              uint32_t cap, uint32_t *n, uint32_t *total)
-{
-    (void)e;
-    const stream_t *s = &((device_t *)ctx)->up;
-    uint32_t left = offset < s->length ? s->length - offset : 0;
-    *n = cap < left ? cap : left;
-    for (uint32_t i = 0; i < *n; i++) {
-        buf[i] = pattern(s->seed, offset + i);
-    }
-    *total = s->length;
-    return CO_ABORT_NONE;
-}
-
-static co_abort_t stream_write(void *ctx, const co_od_entry_t *e, uint32_t offset,
-                               const uint8_t *data, uint32_t n, uint32_t total, bool last)
-{
-    (void)e;
-    (void)total;
-    stream_t *s = &((device_t *)ctx)->down;
-    if (offset == 0) {
-        s->received = 0;
-        s->mismatch = false;
-        s->complete = false;
-    }
-    s->mismatch |= offset != s->received;
-    for (uint32_t i = 0; i < n; i++) {
-        s->mismatch |= data[i] != pattern(s->seed, offset + i);
-    }
-    s->received = offset + n;
-    s->complete = last;
-    return CO_ABORT_NONE;
-}
-
-static const co_od_hooks_t k_stream_hooks = {.read = stream_read, .write = stream_write};
-
-/* ---- building a device, and talking to one frame by frame */
 
 static co_node_config_t device_config(device_t *d, uint8_t node_id)
 {
@@ -169,12 +118,10 @@ static co_node_config_t device_config(device_t *d, uint8_t node_id)
         extra[n++] =
             ENTRY(index, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &d->server_client_id[ch], &k_zero_u8);
     }
-    co_od_entry_t stream = ENTRY(0x3000, 0, CO_TYPE_DOMAIN, CO_OD_RW, 0xFFFFFFFFu, NULL, NULL);
-    stream.hooks = &k_stream_hooks;
-    extra[n++] = stream;
+    extra[n++] = pattern_domain_entry(0x3000);
     uint32_t count = merge_od(d->entries, EXAMPLE_OD_MAX_ENTRIES + 16, &base, extra, n);
     co_node_config_t cfg = {.node_id = node_id,
-                            .od = {.entries = d->entries, .count = count, .hook_ctx = d}};
+                            .od = {.entries = d->entries, .count = count, .hook_ctx = &d->stream}};
     return cfg;
 }
 
@@ -201,11 +148,6 @@ static bool device_accepts(const device_t *d, uint32_t id)
 {
     co_frame_t f = frm(id, "00 00 00 00 00 00 00 00");
     return co_node_accepts(&d->node, &f);
-}
-
-static bool download_arrived(const device_t *d, uint32_t len)
-{
-    return d->down.received == len && d->down.complete && !d->down.mismatch;
 }
 
 /* ---- dictionary access through the node (writes take effect on the services) */
@@ -319,9 +261,7 @@ static co_err_t start_stream_download(master_t *m, uint8_t ch, co_sdo_mode_t mod
                                       uint32_t len)
 {
     xfer_t *x = xfer_begin(m, ch);
-    for (uint32_t i = 0; i < len; i++) {
-        x->buf[i] = pattern(seed, i);
-    }
+    pattern_fill(x->buf, seed, len);
     return co_sdo_download(&m->node, ch, 0x3000, 0, mode, x->buf, len, on_done, x);
 }
 
@@ -338,17 +278,9 @@ static bool xfer_ok(const xfer_t *x, uint32_t len)
     return x->done_calls == 1 && x->abort == CO_ABORT_NONE && x->len == len;
 }
 
-static bool upload_matches(const xfer_t *x, const stream_t *s)
+static bool upload_matches(const xfer_t *x, const pattern_domain_t *s)
 {
-    if (!xfer_ok(x, s->length)) {
-        return false;
-    }
-    for (uint32_t i = 0; i < x->len; i++) {
-        if (x->buf[i] != pattern(s->seed, i)) {
-            return false;
-        }
-    }
-    return true;
+    return xfer_ok(x, s->length) && pattern_matches(x->buf, s->up_seed, x->len);
 }
 
 /* ---- the simulated bus, with a raw port noting when each 11-bit COB-ID was seen */
@@ -644,16 +576,15 @@ static void test_two_masters_on_server_channels_0_and_1_at_once(void)
     CHECK(device_accepts(d, 0x640));
 
     const uint32_t down_len = 3000;
-    d->down = (stream_t){.seed = 11};
-    d->up = (stream_t){.length = 2000, .seed = 22};
+    d->stream = (pattern_domain_t){.length = 2000, .up_seed = 22, .down_seed = 11};
     CHECK_EQ(start_stream_download(a, 0, CO_SDO_BLOCK, 11, down_len), CO_OK);
     CHECK_EQ(start_upload(b, 0, 0x3000, 0, CO_SDO_SEGMENTED), CO_OK);
     xfer_t *both[] = {&a->xfer[0], &b->xfer[0]};
     run_until_done(w, both, 2, 2000);
 
     CHECK(xfer_ok(&a->xfer[0], down_len));
-    CHECK(download_arrived(d, down_len));
-    CHECK(upload_matches(&b->xfer[0], &d->up));
+    CHECK(pattern_domain_received(&d->stream, down_len));
+    CHECK(upload_matches(&b->xfer[0], &d->stream));
     CHECK(spans_overlap(&w->sniffer, 0x605, 0x640));
     CHECK(spans_overlap(&w->sniffer, 0x585, 0x5C0));
     CHECK_EQ(co_node_stats(&d->node)->tx_overflow, 0);
@@ -672,16 +603,15 @@ static void test_block_upload_and_block_download_on_two_server_channels(void)
     configure_client(b, 1, 0x640, 0x5C0, 5);
     run_ms(w, 1);
 
-    d->up = (stream_t){.length = 4000, .seed = 3};
-    d->down = (stream_t){.seed = 4};
+    d->stream = (pattern_domain_t){.length = 4000, .up_seed = 3, .down_seed = 4};
     CHECK_EQ(start_upload(a, 0, 0x3000, 0, CO_SDO_BLOCK), CO_OK);
     CHECK_EQ(start_stream_download(b, 1, CO_SDO_BLOCK, 4, 3500), CO_OK);
     xfer_t *both[] = {&a->xfer[0], &b->xfer[1]};
     run_until_done(w, both, 2, 2000);
 
-    CHECK(upload_matches(&a->xfer[0], &d->up));
+    CHECK(upload_matches(&a->xfer[0], &d->stream));
     CHECK(xfer_ok(&b->xfer[1], 3500));
-    CHECK(download_arrived(d, 3500));
+    CHECK(pattern_domain_received(&d->stream, 3500));
     CHECK(spans_overlap(&w->sniffer, 0x605, 0x640));
     CHECK(spans_overlap(&w->sniffer, 0x585, 0x5C0));
     CHECK_EQ(co_node_stats(&d->node)->tx_overflow, 0);
@@ -708,10 +638,10 @@ static void test_one_master_four_client_channels_four_devices(void)
     CHECK_EQ(get_uint(&m->node, 0x1282, 3), 7);
     run_ms(w, 1);
 
-    d[0]->down = (stream_t){.seed = 10};
-    d[1]->up = (stream_t){.length = 3000, .seed = 11};
-    d[2]->down = (stream_t){.seed = 12};
-    d[3]->up = (stream_t){.length = 1500, .seed = 13};
+    d[0]->stream = (pattern_domain_t){.down_seed = 10};
+    d[1]->stream = (pattern_domain_t){.length = 3000, .up_seed = 11};
+    d[2]->stream = (pattern_domain_t){.down_seed = 12};
+    d[3]->stream = (pattern_domain_t){.length = 1500, .up_seed = 13};
     CHECK_EQ(start_stream_download(m, 0, CO_SDO_BLOCK, 10, 3000), CO_OK);
     CHECK_EQ(start_upload(m, 1, 0x3000, 0, CO_SDO_BLOCK), CO_OK);
     CHECK_EQ(start_stream_download(m, 2, CO_SDO_SEGMENTED, 12, 1500), CO_OK);
@@ -723,11 +653,11 @@ static void test_one_master_four_client_channels_four_devices(void)
     run_until_done(w, all, 4, 3000);
 
     CHECK(xfer_ok(&m->xfer[0], 3000));
-    CHECK(download_arrived(d[0], 3000));
-    CHECK(upload_matches(&m->xfer[1], &d[1]->up));
+    CHECK(pattern_domain_received(&d[0]->stream, 3000));
+    CHECK(upload_matches(&m->xfer[1], &d[1]->stream));
     CHECK(xfer_ok(&m->xfer[2], 1500));
-    CHECK(download_arrived(d[2], 1500));
-    CHECK(upload_matches(&m->xfer[3], &d[3]->up));
+    CHECK(pattern_domain_received(&d[2]->stream, 1500));
+    CHECK(upload_matches(&m->xfer[3], &d[3]->stream));
     /* Bus access follows CAN priority (the two block transfers fill the bus and channel 3's
      * 0x608 waits for them), but no channel ran alone: each overlapped another. */
     for (uint32_t ch = 0; ch < 4; ch++) {
@@ -740,21 +670,21 @@ static void test_one_master_four_client_channels_four_devices(void)
     CHECK_EQ(co_node_stats(&m->node)->tx_overflow, 0);
 
     /* and the other way round on the same channels */
-    d[0]->up = (stream_t){.length = 2500, .seed = 20};
-    d[1]->down = (stream_t){.seed = 21};
-    d[2]->up = (stream_t){.length = 700, .seed = 22};
-    d[3]->down = (stream_t){.seed = 23};
+    d[0]->stream = (pattern_domain_t){.length = 2500, .up_seed = 20};
+    d[1]->stream = (pattern_domain_t){.down_seed = 21};
+    d[2]->stream = (pattern_domain_t){.length = 700, .up_seed = 22};
+    d[3]->stream = (pattern_domain_t){.down_seed = 23};
     CHECK_EQ(start_upload(m, 0, 0x3000, 0, CO_SDO_SEGMENTED), CO_OK);
     CHECK_EQ(start_stream_download(m, 1, CO_SDO_SEGMENTED, 21, 2500), CO_OK);
     CHECK_EQ(start_upload(m, 2, 0x3000, 0, CO_SDO_BLOCK), CO_OK);
     CHECK_EQ(start_stream_download(m, 3, CO_SDO_BLOCK, 23, 700), CO_OK);
     run_until_done(w, all, 4, 3000);
-    CHECK(upload_matches(&m->xfer[0], &d[0]->up));
+    CHECK(upload_matches(&m->xfer[0], &d[0]->stream));
     CHECK(xfer_ok(&m->xfer[1], 2500));
-    CHECK(download_arrived(d[1], 2500));
-    CHECK(upload_matches(&m->xfer[2], &d[2]->up));
+    CHECK(pattern_domain_received(&d[1]->stream, 2500));
+    CHECK(upload_matches(&m->xfer[2], &d[2]->stream));
     CHECK(xfer_ok(&m->xfer[3], 700));
-    CHECK(download_arrived(d[3], 700));
+    CHECK(pattern_domain_received(&d[3]->stream, 700));
     free(w);
 }
 

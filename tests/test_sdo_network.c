@@ -2,81 +2,25 @@
  * test_sdo_network.c -- SDO clients and servers on the simulated bus: large transfers in
  * every mode, many transfers at once, and transfers through a lossy bus.
  *
- * The server's object 0x3000 is a DOMAIN with no storage: its read hook produces a
- * pattern of a chosen length and its write hook checks what arrives against the same
- * pattern, so transfers of any size need no buffer on either side but the client's.
+ * The server's object 0x3000 is a DOMAIN with no storage (pattern_domain.h): its read hook
+ * produces a pattern of a chosen length and its write hook checks what arrives against the
+ * same pattern, so transfers of any size need no buffer on either side but the client's.
  */
 #include <stdlib.h>
 
 #include "canola/sim.h"
 #include "check.h"
 #include "harness.h"
+#include "pattern_domain.h"
 
 #define MS 1000ull
-
-/* ---- the streaming object */
-
-typedef struct stream_obj {
-    uint32_t length;   /* what an upload produces */
-    uint32_t seed;     /* pattern seed */
-    uint32_t received; /* bytes a download delivered in order and matching the pattern */
-    uint32_t pieces;
-    bool mismatch;
-    bool complete; /* the last piece arrived */
-} stream_obj_t;
-
-static uint8_t pattern(uint32_t seed, uint32_t i)
-{
-    uint32_t x = (i + seed) * 2654435761u;
-    return (uint8_t)(x >> 24);
-}
-
-static co_abort_t stream_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
-                              uint32_t cap, uint32_t *n, uint32_t *total)
-{
-    (void)e;
-    stream_obj_t *s = ctx;
-    uint32_t left = offset < s->length ? s->length - offset : 0;
-    *n = cap < left ? cap : left;
-    for (uint32_t i = 0; i < *n; i++) {
-        buf[i] = pattern(s->seed, offset + i);
-    }
-    *total = s->length;
-    return CO_ABORT_NONE;
-}
-
-static co_abort_t stream_write(void *ctx, const co_od_entry_t *e, uint32_t offset,
-                               const uint8_t *data, uint32_t n, uint32_t total, bool last)
-{
-    (void)e;
-    (void)total;
-    stream_obj_t *s = ctx;
-    if (offset == 0) {
-        s->received = 0;
-        s->pieces = 0;
-        s->mismatch = false;
-        s->complete = false;
-    }
-    if (offset != s->received) {
-        s->mismatch = true;
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        s->mismatch |= data[i] != pattern(s->seed, offset + i);
-    }
-    s->received = offset + n;
-    s->pieces++;
-    s->complete = last;
-    return CO_ABORT_NONE;
-}
-
-static const co_od_hooks_t k_stream_hooks = {.read = stream_read, .write = stream_write};
 
 /* ---- a server: the example dictionary plus 0x3000 */
 
 typedef struct server {
     example_od_t od;
     co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 1];
-    stream_obj_t obj;
+    pattern_domain_t obj;
     co_node_t node;
     co_sim_port_t port;
 } server_t;
@@ -111,11 +55,7 @@ static void server_start(co_sim_bus_t *bus, server_t *s, uint8_t id)
     uint32_t n = 0;
     for (uint32_t i = 0; i < base.count; i++) {
         if (base.entries[i].index > 0x3000 && n == i) {
-            s->entries[n++] = (co_od_entry_t){.index = 0x3000,
-                                              .type = CO_TYPE_DOMAIN,
-                                              .attr = CO_OD_RW,
-                                              .size = 0xFFFFFFFFu,
-                                              .hooks = &k_stream_hooks};
+            s->entries[n++] = pattern_domain_entry(0x3000);
         }
         s->entries[n++] = base.entries[i];
     }
@@ -143,24 +83,9 @@ static void client_start(co_sim_bus_t *bus, client_t *c, uint8_t id, uint8_t ser
     c->buf = malloc(cap ? cap : 1);
 }
 
-static bool upload_matches(const client_t *c, const stream_obj_t *obj)
+static bool upload_matches(const client_t *c, const pattern_domain_t *obj)
 {
-    if (c->len != obj->length) {
-        return false;
-    }
-    for (uint32_t i = 0; i < c->len; i++) {
-        if (c->buf[i] != pattern(obj->seed, i)) {
-            return false;
-        }
-    }
-    return true;
-}
-
-static void fill_pattern(client_t *c, uint32_t seed, uint32_t len)
-{
-    for (uint32_t i = 0; i < len; i++) {
-        c->buf[i] = pattern(seed, i);
-    }
+    return c->len == obj->length && pattern_matches(c->buf, obj->up_seed, c->len);
 }
 
 /* Run until the client's transfer is done (or `limit_us` of simulated time passed). */
@@ -185,7 +110,7 @@ static void test_ten_mebibytes_block_both_ways(void)
     client_start(bus, cli, 1, 5, size);
     co_sim_run_until(bus, 1 * MS);
 
-    srv->obj = (stream_obj_t){.length = size, .seed = 7};
+    srv->obj = (pattern_domain_t){.length = size, .up_seed = 7};
     CHECK_EQ(
         co_sdo_upload(&cli->node, 0, 0x3000, 0, CO_SDO_BLOCK, cli->buf, cli->cap, on_done, cli),
         CO_OK);
@@ -195,8 +120,8 @@ static void test_ten_mebibytes_block_both_ways(void)
     CHECK(upload_matches(cli, &srv->obj));
 
     cli->done_calls = 0;
-    srv->obj.seed = 11;
-    fill_pattern(cli, 11, size);
+    srv->obj.down_seed = 11;
+    pattern_fill(cli->buf, 11, size);
     CHECK_EQ(co_sdo_download(&cli->node, 0, 0x3000, 0, CO_SDO_BLOCK, cli->buf, size, on_done, cli),
              CO_OK);
     run_until_done(bus, cli, 100000 * MS);
@@ -225,13 +150,13 @@ static void test_segmented_one_mebibyte_both_ways(void)
     server_start(bus, srv, 5);
     client_start(bus, cli, 1, 5, size);
     co_sim_run_until(bus, 1 * MS);
-    srv->obj = (stream_obj_t){.length = size, .seed = 3};
+    srv->obj = (pattern_domain_t){.length = size, .up_seed = 3, .down_seed = 3};
     co_sdo_upload(&cli->node, 0, 0x3000, 0, CO_SDO_SEGMENTED, cli->buf, cli->cap, on_done, cli);
     run_until_done(bus, cli, 100000 * MS);
     CHECK_EQ(cli->abort, CO_ABORT_NONE);
     CHECK(upload_matches(cli, &srv->obj));
     cli->done_calls = 0;
-    fill_pattern(cli, 3, size);
+    pattern_fill(cli->buf, 3, size);
     co_sdo_download(&cli->node, 0, 0x3000, 0, CO_SDO_SEGMENTED, cli->buf, size, on_done, cli);
     run_until_done(bus, cli, 100000 * MS);
     CHECK_EQ(cli->abort, CO_ABORT_NONE);
@@ -255,7 +180,7 @@ static void test_ten_clients_ten_servers_at_once(void)
     for (uint8_t i = 0; i < PAIRS; i++) {
         server_start(bus, &srv[i], (uint8_t)(20 + i));
         client_start(bus, &cli[i], (uint8_t)(1 + i), (uint8_t)(20 + i), size);
-        srv[i].obj = (stream_obj_t){.length = size - i * 100u, .seed = i};
+        srv[i].obj = (pattern_domain_t){.length = size - i * 100u, .up_seed = i};
     }
     co_sim_run_until(bus, 10 * MS);
     for (uint8_t i = 0; i < PAIRS; i++) {
@@ -270,8 +195,8 @@ static void test_ten_clients_ten_servers_at_once(void)
         CHECK_EQ(cli[i].abort, CO_ABORT_NONE);
         CHECK(upload_matches(&cli[i], &srv[i].obj));
         cli[i].done_calls = 0;
-        fill_pattern(&cli[i], 100u + i, size);
-        srv[i].obj.seed = 100u + i;
+        pattern_fill(cli[i].buf, 100u + i, size);
+        srv[i].obj.down_seed = 100u + i;
         co_sdo_mode_t mode = (i % 2) ? CO_SDO_SEGMENTED : CO_SDO_BLOCK;
         co_sdo_download(&cli[i].node, 0, 0x3000, 0, mode, cli[i].buf, size, on_done, &cli[i]);
     }
@@ -317,7 +242,8 @@ static void test_thousand_transfers_on_a_lossy_bus(void)
                                                               : CO_SDO_BLOCK);
         block_total += mode == CO_SDO_BLOCK;
         srv->obj.length = size;
-        srv->obj.seed = i;
+        srv->obj.up_seed = i;
+        srv->obj.down_seed = i;
         srv->obj.received = 0;
         srv->obj.complete = false;
         cli->done_calls = 0;
@@ -325,7 +251,7 @@ static void test_thousand_transfers_on_a_lossy_bus(void)
         if (upload) {
             err = co_sdo_upload(&cli->node, 0, 0x3000, 0, mode, cli->buf, cli->cap, on_done, cli);
         } else {
-            fill_pattern(cli, i, size);
+            pattern_fill(cli->buf, i, size);
             err = co_sdo_download(&cli->node, 0, 0x3000, 0, mode, cli->buf, size, on_done, cli);
         }
         CHECK_EQ(err, CO_OK);
@@ -338,8 +264,7 @@ static void test_thousand_transfers_on_a_lossy_bus(void)
         }
         if (cli->abort == CO_ABORT_NONE) {
             bool right =
-                upload ? upload_matches(cli, &srv->obj)
-                       : (srv->obj.received == size && !srv->obj.mismatch && srv->obj.complete);
+                upload ? upload_matches(cli, &srv->obj) : pattern_domain_received(&srv->obj, size);
             if (right) {
                 ok++;
                 block_ok += mode == CO_SDO_BLOCK;
