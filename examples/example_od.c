@@ -17,6 +17,7 @@ static const uint8_t k_hb_consumer_count = EXAMPLE_HB_CONSUMERS;
 static const uint8_t k_identity_count = 4;
 static const uint32_t k_identity[4] = {0x00000CA0u, 0x00000001u, 0x00010000u, 0x00000000u};
 static const uint8_t k_one_u8 = 1;
+static const uint8_t k_three_u8 = 3;
 static const uint32_t k_app_u32 = 0x12345678u;
 static const int16_t k_app_i16 = 0;
 static const char k_app_string[16] = "hello";
@@ -62,6 +63,18 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     add(x, &n, VAR(0x1008, 0, CO_TYPE_VISIBLE_STRING, CO_OD_CO, 16, x->device_name, k_device_name));
     add(x, &n, VAR(0x100C, 0, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &x->guard_time_ms, &k_zero_u16));
     add(x, &n, VAR(0x100D, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->life_factor, &k_zero_u8));
+    add(x, &n, VAR(0x1010, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->store_count, &k_three_u8));
+    for (uint8_t i = 0; i < 3; i++) {
+        add(x, &n,
+            VAR(0x1010, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->store[i],
+                &k_zero_u32));
+    }
+    add(x, &n, VAR(0x1011, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->restore_count, &k_three_u8));
+    for (uint8_t i = 0; i < 3; i++) {
+        add(x, &n,
+            VAR(0x1011, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->restore[i],
+                &k_zero_u32));
+    }
     add(x, &n, VAR(0x1012, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &x->time_cob_id, &k_time_cob_id));
     add(x, &n,
         VAR(0x1014, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &x->emcy_cob_id,

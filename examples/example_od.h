@@ -3,7 +3,8 @@
  *
  * A small device: the mandatory communication objects, error control
  * (0x100C, 0x100D, 0x1016 with 4 consumer entries, 0x1017, 0x1029), EMCY (0x1003,
- * 0x1014, 0x1015, 0x1028), SYNC (0x1005..0x1007, 0x1019), TIME (0x1012), identity,
+ * 0x1014, 0x1015, 0x1028), SYNC (0x1005..0x1007, 0x1019), TIME (0x1012), stored
+ * parameters (0x1010, 0x1011), identity,
  * and a few application objects of assorted types. Each node in a process needs
  * its own values, so the table lives in RAM next to them: example_od_init()
  * fills an example_od_t and returns the co_od_t to give the node.
@@ -22,17 +23,21 @@
 
 typedef struct example_od {
     /* communication profile */
-    uint32_t device_type;                           /* 0x1000 */
-    uint8_t error_register;                         /* 0x1001 */
-    uint8_t error_count;                            /* 0x1003 sub0 */
-    uint32_t error_history[EXAMPLE_EMCY_HISTORY];   /* 0x1003 sub1..8, newest first */
-    uint32_t sync_cob_id;                           /* 0x1005 */
-    uint32_t sync_period_us;                        /* 0x1006 */
-    uint32_t sync_window_us;                        /* 0x1007 */
-    uint32_t time_cob_id;                           /* 0x1012 */
-    uint16_t emcy_inhibit;                          /* 0x1015, 100 us units */
-    uint8_t sync_overflow;                          /* 0x1019 */
-    uint8_t emcy_consumer_count;                    /* 0x1028 sub0 */
+    uint32_t device_type;                         /* 0x1000 */
+    uint8_t error_register;                       /* 0x1001 */
+    uint8_t error_count;                          /* 0x1003 sub0 */
+    uint32_t error_history[EXAMPLE_EMCY_HISTORY]; /* 0x1003 sub1..8, newest first */
+    uint32_t sync_cob_id;                         /* 0x1005 */
+    uint8_t store_count;                          /* 0x1010 sub0 */
+    uint32_t store[3];           /* 0x1010 sub1..3: save all / communication / application */
+    uint8_t restore_count;       /* 0x1011 sub0 */
+    uint32_t restore[3];         /* 0x1011 sub1..3 */
+    uint32_t sync_period_us;     /* 0x1006 */
+    uint32_t sync_window_us;     /* 0x1007 */
+    uint32_t time_cob_id;        /* 0x1012 */
+    uint16_t emcy_inhibit;       /* 0x1015, 100 us units */
+    uint8_t sync_overflow;       /* 0x1019 */
+    uint8_t emcy_consumer_count; /* 0x1028 sub0 */
     uint32_t emcy_consumer[EXAMPLE_EMCY_CONSUMERS]; /* 0x1028 sub1..4 */
     char device_name[16];                           /* 0x1008 */
     uint16_t guard_time_ms;                         /* 0x100C */

@@ -179,6 +179,13 @@ co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sync_state_entered(co_node_t *node);
 
+/* storage.c */
+void co_storage_load(co_node_t *node, co_param_group_t group);
+co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                                  uint32_t len);
+void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);
+void co_storage_reset_comm(co_node_t *node);
+
 /* time.c */
 void co_time_reset_comm(co_node_t *node);
 void co_time_add_routes(co_node_t *node);

@@ -70,11 +70,14 @@ void co_nmt_reset(co_node_t *node, bool application)
     enter(node, CO_NMT_INITIALISING);
     if (application) {
         co_od_reset(&node->cfg.od, 0x2000, 0x9FFF, node->node_id);
+        co_storage_load(node, CO_PARAMS_APPLICATION);
         if (node->cfg.on_reset) {
             node->cfg.on_reset(node->cfg.user, CO_RESET_APPLICATION);
         }
     }
     co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, node->node_id);
+    co_storage_load(node, CO_PARAMS_COMMUNICATION);
+    co_storage_reset_comm(node);
     co_hb_reset_comm(node);
     co_guard_reset_comm(node);
     co_sdo_server_reset_comm(node);

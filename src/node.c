@@ -208,10 +208,13 @@ void co_node_state_changed(co_node_t *node)
 /* ---- object dictionary access */
 
 /* Service side of a write: refuse values a service cannot take. */
-static co_abort_t service_check(const co_node_t *node, const co_od_entry_t *entry,
-                                const uint8_t *data, uint32_t len)
+static co_abort_t service_check(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                                uint32_t len)
 {
     switch (entry->index) {
+    case 0x1010:
+    case 0x1011:
+        return co_storage_check_write(node, entry, data, len); /* the command runs here */
     case 0x1016:
         return co_hb_check_write(node, entry, data, len);
     case 0x1003:
@@ -243,6 +246,10 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
         break;
     case 0x1012:
         co_time_written(node, entry);
+        break;
+    case 0x1010:
+    case 0x1011:
+        co_storage_show_capability(node, entry);
         break;
     case 0x1003:
     case 0x1014:

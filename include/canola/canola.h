@@ -12,6 +12,7 @@
 #include "canola/node.h"
 #include "canola/od.h"
 #include "canola/sdo.h"
+#include "canola/storage.h"
 #include "canola/sync.h"
 #include "canola/time.h"
 #include "canola/types.h"

@@ -62,6 +62,11 @@
 #define CO_EMCY_CONSUMERS_MAX 8
 #endif
 
+/** Longest value (bytes) stored by 0x1010; longer ones are not stored. 1..255. */
+#ifndef CO_STORE_VALUE_MAX
+#define CO_STORE_VALUE_MAX 64
+#endif
+
 /** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
  *  heartbeat consumer and guarded node, and room for the other services. */
 #ifndef CO_RX_ROUTES_MAX
@@ -96,6 +101,9 @@
 #endif
 #if CO_EMCY_CONSUMERS_MAX < 0 || CO_EMCY_CONSUMERS_MAX > 127
 #error "CO_EMCY_CONSUMERS_MAX must be 0..127"
+#endif
+#if CO_STORE_VALUE_MAX < 1 || CO_STORE_VALUE_MAX > 255
+#error "CO_STORE_VALUE_MAX must be 1..255"
 #endif
 #if CO_RX_ROUTES_MAX < 2 || CO_RX_ROUTES_MAX > 1024
 #error "CO_RX_ROUTES_MAX must be 2..1024"

@@ -39,6 +39,7 @@
 #include "canola/nmt.h"
 #include "canola/od.h"
 #include "canola/sdo.h"
+#include "canola/storage.h"
 #include "canola/sync.h"
 #include "canola/time.h"
 #include "canola/types.h"
@@ -71,11 +72,12 @@ typedef struct co_node_config {
     uint8_t node_id; /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
     co_od_t od;      /**< the object dictionary; its entries must outlive the node */
     co_driver_t driver;
-    bool self_start;         /**< enter OPERATIONAL by itself after boot-up */
-    uint16_t boot_time_ms;   /**< report consumed nodes not heard this long after reset
-                                  communication (CO_EC_NOT_BOOTED); 0 = off */
-    uint16_t sdo_timeout_ms; /**< SDO server and client time-out; 0 = 1000 ms */
-    void *user;              /**< first argument of every callback below */
+    const co_storage_t *storage; /**< parameter storage (0x1010/0x1011), or NULL */
+    bool self_start;             /**< enter OPERATIONAL by itself after boot-up */
+    uint16_t boot_time_ms;       /**< report consumed nodes not heard this long after reset
+                                      communication (CO_EC_NOT_BOOTED); 0 = off */
+    uint16_t sdo_timeout_ms;     /**< SDO server and client time-out; 0 = 1000 ms */
+    void *user;                  /**< first argument of every callback below */
     /** Optional callbacks. */
     void (*on_state)(void *user, co_nmt_state_t state);
     void (*on_reset)(void *user, co_reset_t what);
