@@ -51,7 +51,7 @@ typedef struct co_emcy_msg {
 
 /** EMCY state of a node (embedded in co_node_t; fields are internal). */
 typedef struct co_emcy {
-    uint64_t next_us;                    /**< inhibit: earliest next frame */
+    uint64_t last_us; /**< inhibit: time of the latest frame sent, CO_TIME_NEVER: none */
     uint8_t queue[CO_EMCY_QUEUE_LEN][8]; /**< frames waiting for the inhibit time */
     uint8_t queue_count;
     uint16_t active[CO_EMCY_ACTIVE_MAX]; /**< error codes active now */
