@@ -147,7 +147,7 @@ static void frame_send(co_node_t *node, const uint8_t data[8], uint64_t now_us)
 {
     co_frame_t f = co_cob_frame(producer_cob(node), 8);
     memcpy(f.data, data, 8);
-    (void)co_node_send(node, &f); /* a full tx queue counts the loss itself */
+    (void)co_node_send_as(node, &f, CO_SVC_EMCY); /* a full tx queue counts the loss itself */
     node->emcy.last_us = now_us;
 }
 

@@ -36,7 +36,7 @@ void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
                         .len = 1,
                         .data = {(uint8_t)((node->guard_toggle << 7) | node->nmt_state)}};
     node->guard_toggle ^= 1u;
-    co_node_send(node, &reply);
+    co_node_send_as(node, &reply, CO_SVC_ERROR_CONTROL);
 
     uint64_t life_us = life_time_us(node);
     node->life_guarding = life_us != 0;
@@ -165,7 +165,7 @@ static uint64_t watch_poll(co_node_t *node, co_guard_watch_t *w, uint64_t now_us
 {
     if (now_us >= w->next_rtr_us) {
         co_frame_t rtr = {.id = GUARD_COB_BASE + w->node_id, .flags = CO_FRAME_RTR, .len = 1};
-        co_node_send(node, &rtr);
+        co_node_send_as(node, &rtr, CO_SVC_ERROR_CONTROL);
         w->next_rtr_us = now_us + co_ms_to_us(w->guard_ms);
     }
     if (!w->lost && now_us >= w->life_deadline_us) {

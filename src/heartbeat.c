@@ -32,7 +32,7 @@ static uint64_t producer_poll(co_node_t *node, uint64_t now_us)
         return node->hb_next_us;
     }
     co_frame_t hb = {.id = HB_COB_BASE + node->node_id, .len = 1, .data = {node->nmt_state}};
-    co_node_send(node, &hb);
+    co_node_send_as(node, &hb, CO_SVC_ERROR_CONTROL);
     uint64_t period_us = co_ms_to_us(producer_period_ms(node));
     node->hb_next_us += period_us;
     if (node->hb_next_us <= now_us) { /* polled late: keep the period, drop the missed beats */

@@ -23,6 +23,13 @@ enum co_route_kind {
 #define CO_COB_INVALID 0x80000000u
 #define CO_COB_EXT 0x20000000u
 
+/* A COB-ID object value that names an identifier of its own format: an 11-bit one
+ * (bit 29 clear) has nothing in bits 11..28. */
+static inline bool co_cob_valid(uint32_t cob)
+{
+    return (cob & CO_COB_EXT) || (cob & 0x1FFFF800u) == 0;
+}
+
 /* Route key of a COB-ID object value. */
 static inline uint32_t co_cob_key(uint32_t cob)
 {
@@ -115,6 +122,10 @@ static inline const co_route_t *co_routes_lookup(co_node_t *node, uint32_t key)
 
 /* txq.c */
 void co_txq_flush(co_node_t *node);
+/* co_node_send for a service's frame (`service`: a co_service_t bit, 0 = none): refused
+ * with CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue
+ * if the state stops allowing it before the driver takes it. */
+co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service);
 /* True when nothing waits in the transmit queue: a sender of many frames (block
  * transfer) sends only then, so it never floods the queue; poll resumes it. */
 static inline bool co_txq_idle(const co_node_t *node) { return node->txq_count == 0; }

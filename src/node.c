@@ -208,9 +208,21 @@ void co_node_state_changed(co_node_t *node)
 /* ---- object dictionary access */
 
 /* Service side of a write: refuse values a service cannot take. */
+/* The objects whose value is a COB-ID (bit 31 valid, bit 29 frame format, the ID). */
+static bool is_cob_id_object(const co_od_entry_t *e)
+{
+    uint16_t i = e->index;
+    return ((i == 0x1005 || i == 0x1012 || i == 0x1014) && e->sub == 0) ||
+           (i >= 0x1200 && i <= 0x12FF && (e->sub == 1 || e->sub == 2)) ||
+           (i == 0x1028 && e->sub >= 1);
+}
+
 static co_abort_t service_check(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                 uint32_t len)
 {
+    if (len == 4 && is_cob_id_object(entry) && !co_cob_valid(co_get_u32(data))) {
+        return CO_ABORT_VALUE;
+    }
     switch (entry->index) {
     case 0x1010:
     case 0x1011:

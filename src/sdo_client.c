@@ -81,7 +81,7 @@ static void transmit(co_node_t *node, const co_sdo_client_t *c, const uint8_t d[
 {
     co_frame_t f = co_cob_frame(c->cob_tx, 8);
     memcpy(f.data, d, 8);
-    (void)co_node_send(node, &f); /* a lost frame ends in the time-out */
+    (void)co_node_send_as(node, &f, CO_SVC_SDO); /* a lost frame ends in the time-out */
 }
 
 static void send8(co_node_t *node, co_sdo_client_t *c, const uint8_t d[8])

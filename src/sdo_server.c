@@ -114,7 +114,7 @@ static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
     }
     co_frame_t f = co_cob_frame(s->cob_tx, 8);
     memcpy(f.data, data, 8);
-    co_node_send(node, &f);
+    co_node_send_as(node, &f, CO_SVC_SDO);
 }
 
 /* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`. */
@@ -283,11 +283,26 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
 /* ---- upload */
 
 /* Read the value from `offset`: up to `cap` bytes into `buf`; `*total` is its size. */
+/* Read the value from `offset` until `cap` bytes or its end: a read hook may hand out
+ * fewer bytes per call than asked (an empty piece ends a value of unknown size). */
 static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, uint8_t *buf,
                           uint32_t cap, uint32_t *n, uint32_t *total)
 {
+    *n = 0;
     *total = CO_OD_SIZE_UNKNOWN;
-    return co_od_read(&node->cfg.od, s->entry, offset, buf, cap, n, total);
+    while (*n < cap) {
+        uint32_t got = 0;
+        co_abort_t abort =
+            co_od_read(&node->cfg.od, s->entry, offset + *n, buf + *n, cap - *n, &got, total);
+        if (abort != CO_ABORT_NONE) {
+            return abort;
+        }
+        *n += got;
+        if (got == 0 || (*total != CO_OD_SIZE_UNKNOWN && offset + *n >= *total)) {
+            break;
+        }
+    }
+    return CO_ABORT_NONE;
 }
 
 static void initiate_upload(co_node_t *node, co_sdo_server_t *s)

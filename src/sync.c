@@ -107,7 +107,7 @@ static void produce(co_node_t *node)
         s->counter = counter == overflow ? 1 : (uint8_t)(counter + 1);
         f.data[0] = counter;
     }
-    co_node_send(node, &f);
+    co_node_send_as(node, &f, CO_SVC_SYNC);
     sync_handled(node, counter); /* a node does not receive its own frames */
 }
 

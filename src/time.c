@@ -52,7 +52,7 @@ co_err_t co_time_send(co_node_t *node, const co_time_of_day_t *t)
     }
     co_frame_t f = co_cob_frame(node->time.cob_id, TIME_FRAME_LEN);
     co_time_encode(t, f.data);
-    return co_node_send(node, &f);
+    return co_node_send_as(node, &f, CO_SVC_TIME);
 }
 
 /* ---- consumer */

@@ -2,7 +2,9 @@
  * txq.c -- sending frames: straight to the driver when it is free, else into a
  * bounded queue kept in arbitration order (the frame the bus would let through
  * first leaves first; equal identifiers keep their order, so SDO segments of one
- * transfer never overtake each other).
+ * transfer never overtake each other). A service's frame remembers its service: if
+ * the NMT state stops allowing it while the frame waits (an SDO answer queued just
+ * before "stop"), the frame is dropped instead of sent.
  */
 #include <string.h>
 
@@ -36,15 +38,27 @@ static bool driver_take(co_node_t *node, const co_frame_t *frame)
     return true;
 }
 
+/* A waiting frame whose service the NMT state no longer allows. */
+static bool void_now(const co_node_t *node, const co_tx_item_t *item)
+{
+    return item->service != 0 && !(node->services & item->service);
+}
+
 void co_txq_flush(co_node_t *node)
 {
-    uint8_t sent = 0;
-    while (sent < node->txq_count && driver_take(node, &node->txq[sent])) {
-        sent++;
+    uint8_t gone = 0;
+    while (gone < node->txq_count) {
+        const co_tx_item_t *item = &node->txq[gone];
+        if (void_now(node, item)) {
+            node->stats.tx_gated++;
+        } else if (!driver_take(node, &item->frame)) {
+            break;
+        }
+        gone++;
     }
-    if (sent) {
-        node->txq_count = (uint8_t)(node->txq_count - sent);
-        memmove(&node->txq[0], &node->txq[sent], node->txq_count * sizeof node->txq[0]);
+    if (gone) {
+        node->txq_count = (uint8_t)(node->txq_count - gone);
+        memmove(&node->txq[0], &node->txq[gone], node->txq_count * sizeof node->txq[0]);
         if (node->txq_count == 0) {
             /* room again: a paced sender (block transfer) goes on at the next poll */
             co_node_schedule(node, node->now_us);
@@ -52,7 +66,7 @@ void co_txq_flush(co_node_t *node)
     }
 }
 
-static co_err_t enqueue(co_node_t *node, const co_frame_t *frame)
+static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
     if (node->txq_count >= CO_TX_QUEUE_LEN) {
         node->stats.tx_overflow++;
@@ -63,22 +77,32 @@ static co_err_t enqueue(co_node_t *node, const co_frame_t *frame)
     }
     uint32_t rank = priority(frame);
     uint8_t at = node->txq_count;
-    while (at > 0 && priority(&node->txq[at - 1]) > rank) {
+    while (at > 0 && priority(&node->txq[at - 1].frame) > rank) {
         at--;
     }
-    memmove(&node->txq[at + 1], &node->txq[at], (size_t)(node->txq_count - at) * sizeof *frame);
-    node->txq[at] = *frame;
+    memmove(&node->txq[at + 1], &node->txq[at],
+            (size_t)(node->txq_count - at) * sizeof node->txq[0]);
+    node->txq[at] = (co_tx_item_t){.frame = *frame, .service = service};
     node->txq_count++;
     node->stats.tx_queued++;
     return CO_OK;
 }
 
-co_err_t co_node_send(co_node_t *node, const co_frame_t *frame)
+co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
+    if (service != 0 && !(node->services & service)) {
+        node->stats.tx_gated++;
+        return CO_ERR_STATE;
+    }
     if (node->txq_count == 0 && driver_take(node, frame)) {
         return CO_OK;
     }
-    co_err_t err = enqueue(node, frame);
+    co_err_t err = enqueue(node, frame, service);
     co_txq_flush(node);
     return err;
+}
+
+co_err_t co_node_send(co_node_t *node, const co_frame_t *frame)
+{
+    return co_node_send_as(node, frame, 0);
 }

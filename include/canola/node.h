@@ -98,7 +98,14 @@ typedef struct co_node_stats {
     uint32_t tx_queued;    /**< frames that had to wait for the driver */
     uint32_t tx_overflow;  /**< frames lost because the queue was full */
     uint32_t tx_dropped;   /**< frames the driver refused with an error */
+    uint32_t tx_gated;     /**< service frames the NMT state no longer allowed to send */
 } co_node_stats_t;
+
+/** A frame waiting for the driver, with the service that sent it (0: none). Internal. */
+typedef struct co_tx_item {
+    co_frame_t frame;
+    uint16_t service;
+} co_tx_item_t;
 
 /** One receive route: COB-ID key -> service and slot. Internal. */
 typedef struct co_route {
@@ -124,7 +131,7 @@ struct co_node {
     uint16_t route_hint; /**< the route found last */
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
-    co_frame_t txq[CO_TX_QUEUE_LEN];
+    co_tx_item_t txq[CO_TX_QUEUE_LEN];
     uint8_t txq_count;
 
     /* Heartbeat producer (0x1017). */
@@ -196,7 +203,8 @@ const co_node_stats_t *co_node_stats(const co_node_t *node);
 
 /** Queue a frame for sending (or send it now when the queue is empty and the driver
  *  free). Never blocks. Returns CO_ERR_FULL when the queue was full (the frame is lost
- *  and counted), CO_OK otherwise. Services use this; so may applications. */
+ *  and counted), CO_OK otherwise. For the application's own frames (services send theirs
+ *  tagged with their service, so that a state change drops what they left waiting). */
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame);
 
 /* ---- Object dictionary access through the node, so that writes take effect on the
