@@ -85,7 +85,8 @@ static uint64_t watch_life_us(const co_guard_watch_t *w)
 
 co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)
 {
-    if (node_id < 1 || node_id > 127 || (guard_ms != 0 && factor == 0)) {
+    if (node_id < 1 || node_id > 127 || node_id == node->node_id ||
+        (guard_ms != 0 && factor == 0)) {
         return CO_ERR_ARG;
     }
     for (uint8_t i = 0; i < node->hb_consumer_count; i++) {

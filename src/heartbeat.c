@@ -184,6 +184,9 @@ co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, 
     if (id == 0 || time_ms == 0) {
         return CO_ABORT_NONE;
     }
+    if (id == node->node_id) {
+        return CO_ABORT_PARAM_INCOMPAT; /* a node does not consume its own heartbeat */
+    }
     for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
         if ((uint8_t)(i + 1) == entry->sub) {
             continue;

@@ -122,6 +122,9 @@ static inline const co_route_t *co_routes_lookup(co_node_t *node, uint32_t key)
 
 /* txq.c */
 void co_txq_flush(co_node_t *node);
+/* Drop the waiting frames of services the current NMT state does not allow (at every state
+ * change: a reset must not let stale heartbeats or SDO answers out after its boot-up). */
+void co_txq_purge(co_node_t *node);
 /* co_node_send for a service's frame (`service`: a co_service_t bit, 0 = none): refused
  * with CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue
  * if the state stops allowing it before the driver takes it. */

@@ -68,14 +68,16 @@ static void send_bootup(co_node_t *node)
 void co_nmt_reset(co_node_t *node, bool application)
 {
     enter(node, CO_NMT_INITIALISING);
+    /* $NODEID defaults of an unconfigured node (0xFF) stay at their base values. */
+    uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id;
     if (application) {
-        co_od_reset(&node->cfg.od, 0x2000, 0x9FFF, node->node_id);
+        co_od_reset(&node->cfg.od, 0x2000, 0x9FFF, id);
         co_storage_load(node, CO_PARAMS_APPLICATION);
         if (node->cfg.on_reset) {
             node->cfg.on_reset(node->cfg.user, CO_RESET_APPLICATION);
         }
     }
-    co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, node->node_id);
+    co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, id);
     co_storage_load(node, CO_PARAMS_COMMUNICATION);
     co_storage_reset_comm(node);
     co_hb_reset_comm(node);

@@ -56,13 +56,14 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
     node->stats.rx_frames++;
+    bool ext = frame->flags & CO_FRAME_EXT;
+    if (frame->len > 8 || frame->id > (ext ? CO_ID_EXT_MAX : CO_ID_STD_MAX)) {
+        node->stats.rx_malformed++; /* no controller delivers this: never let it match */
+        return;
+    }
     const co_route_t *route = co_routes_lookup(node, co_route_key(frame));
     if (route == NULL) {
         node->stats.rx_unrouted++;
-        return;
-    }
-    if (frame->len > 8) {
-        node->stats.rx_malformed++;
         return;
     }
     if (!(node->services & route->service)) {
@@ -197,6 +198,7 @@ void co_node_comm_resumed(co_node_t *node)
 /* The NMT state changed: services that depend on it start, stop or catch up. */
 void co_node_state_changed(co_node_t *node)
 {
+    co_txq_purge(node);
     if (!(node->services & CO_SVC_SDO)) {
         co_sdo_server_stop(node);
         co_sdo_client_stop(node);

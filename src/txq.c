@@ -44,6 +44,19 @@ static bool void_now(const co_node_t *node, const co_tx_item_t *item)
     return item->service != 0 && !(node->services & item->service);
 }
 
+void co_txq_purge(co_node_t *node)
+{
+    uint8_t kept = 0;
+    for (uint8_t i = 0; i < node->txq_count; i++) {
+        if (void_now(node, &node->txq[i])) {
+            node->stats.tx_gated++;
+        } else {
+            node->txq[kept++] = node->txq[i];
+        }
+    }
+    node->txq_count = kept;
+}
+
 void co_txq_flush(co_node_t *node)
 {
     uint8_t gone = 0;

@@ -165,11 +165,72 @@ static void test_sdo_response_queued_before_stop_is_not_sent_when_stopped(void)
     CHECK_EQ(fake_count_id(&t.bus, 0x585), 0);
 }
 
+/* ---- Follow-ups of the same review */
+
+/* A heartbeat left waiting by a busy driver must not leave after the boot-up that a reset
+ * sends: the reset makes it stale (same COB-ID, so it would otherwise go first). */
+static void test_reset_drops_a_heartbeat_left_waiting(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 100);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    t.bus.busy = true;
+    co_node_poll(&t.node, 100 * MS); /* the heartbeat 705#7F waits */
+    co_frame_t reset = frm(0x000, "81 05");
+    co_node_ingest(&t.node, 110 * MS, &reset);
+    t.bus.busy = false;
+    co_node_poll(&t.node, 111 * MS);
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#00");
+    CHECK_EQ(co_node_stats(&t.node)->tx_gated, 1);
+}
+
+/* An 11-bit frame whose identifier does not fit 11 bits is malformed, not a match for a
+ * 29-bit route or anything else. */
+static void test_standard_frame_with_an_oversized_id_is_malformed(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_frame_t bad = frm(0x000, "01 05");
+    bad.id = 0x80000000u; /* no CO_FRAME_EXT */
+    co_node_ingest(&t.node, 1, &bad);
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
+}
+
+/* An unconfigured node (0xFF) keeps $NODEID defaults at their base: 0x1014 is 0x80, not
+ * 0x80 + 0xFF. */
+static void test_unconfigured_node_keeps_node_id_defaults_at_base(void)
+{
+    test_node_t t;
+    test_node_init(&t, CO_NODE_ID_UNCONFIGURED, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(t.od.emcy_cob_id, 0x80);
+}
+
+/* A node neither consumes its own heartbeat nor guards itself (0x700 + its ID is its own
+ * error-control COB-ID). */
+static void test_own_node_id_refused_for_monitoring(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint8_t v[4];
+    co_put_u32(v, hb_consumer_value(5, 100));
+    CHECK_EQ(co_node_write_net(&t.node, 0x1016, 1, v, 4), CO_ABORT_PARAM_INCOMPAT);
+    CHECK_EQ(co_guard_watch(&t.node, 5, 100, 3), CO_ERR_ARG);
+}
+
 int main(void)
 {
     RUN(test_expedited_upload_collects_every_piece_of_a_short_read_hook);
     RUN(test_block_upload_sends_segments_when_read_hook_gives_short_pieces);
     RUN(test_client_cob_id_with_bits_above_11_bit_id_is_refused);
     RUN(test_sdo_response_queued_before_stop_is_not_sent_when_stopped);
+    RUN(test_reset_drops_a_heartbeat_left_waiting);
+    RUN(test_standard_frame_with_an_oversized_id_is_malformed);
+    RUN(test_unconfigured_node_keeps_node_id_defaults_at_base);
+    RUN(test_own_node_id_refused_for_monitoring);
     return check_summary();
 }

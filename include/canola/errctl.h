@@ -9,7 +9,7 @@
  * time in ms in bits 0..15; node-ID 0 or time 0 = entry unused). Monitoring of a
  * node starts with its first heartbeat (CiA 301); from then on a silence longer
  * than the time is a timeout. Two entries with the same node-ID and a non-zero
- * time are refused with abort 0x06040043.
+ * time, or an entry naming the node itself, are refused with abort 0x06040043.
  *
  * Node guarding (legacy): a master sends RTR on 0x700 + n every guard time; the
  * node answers one byte, toggle bit 7 (0 first after reset communication, then
@@ -88,7 +88,8 @@ uint8_t co_hb_remote_state(const co_node_t *node, uint8_t node_id);
 /** Start node guarding `node_id` (1..127) from the master side: an RTR every guard_ms,
  *  a timeout after guard_ms * factor without a reply. Replaces an existing watch of the
  *  same node; guard_ms = 0 removes it. Returns CO_ERR_FULL when all CO_GUARD_WATCH_MAX
- *  slots are taken, CO_ERR_ARG for a bad node-ID or a zero factor, CO_ERR_STATE when the
+ *  slots are taken, CO_ERR_ARG for a bad node-ID (or this node's own) or a zero factor,
+ *  CO_ERR_STATE when the
  *  heartbeat consumer already watches that node. */
 co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor);
 
