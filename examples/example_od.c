@@ -18,6 +18,16 @@ static const uint8_t k_identity_count = 4;
 static const uint32_t k_identity[4] = {0x00000CA0u, 0x00000001u, 0x00010000u, 0x00000000u};
 static const uint8_t k_one_u8 = 1;
 static const uint8_t k_three_u8 = 3;
+static const uint8_t k_five_u8 = 5;
+static const uint8_t k_six_u8 = 6;
+static const uint8_t k_type_event = 255;
+static const uint32_t k_rpdo_cob[EXAMPLE_PDOS] = {0x200, 0x300, 0x400, 0x500}; /* + $NODEID */
+static const uint32_t k_tpdo_cob[EXAMPLE_PDOS] = {0x180, 0x280, 0x380, 0x480}; /* + $NODEID */
+static const uint8_t k_rpdo_map_count[EXAMPLE_PDOS] = {4, 0, 0, 0};
+static const uint8_t k_tpdo_map_count[EXAMPLE_PDOS] = {1, 0, 0, 0};
+static const uint32_t k_rpdo1_map[EXAMPLE_PDO_ENTRIES] = {0x62000108, 0x62000208, 0x62000308,
+                                                          0x62000408};
+static const uint32_t k_tpdo1_map[EXAMPLE_PDO_ENTRIES] = {0x20000020};
 static const uint32_t k_app_u32 = 0x12345678u;
 static const int16_t k_app_i16 = 0;
 static const char k_app_string[16] = "hello";
@@ -40,6 +50,36 @@ static void add(example_od_t *x, uint32_t *n, co_od_entry_t e)
         .index = (idx), .sub = (s), .type = (t), .attr = (a), .size = (sz), .value = (val),        \
         .dflt = (def)                                                                              \
     }
+
+/* A PDO communication record: sub0, 1, 2, [3], 5, [6] (3 and 6 for TPDOs). */
+static void add_pdo_comm(example_od_t *x, uint32_t *n, struct example_pdo *p, uint16_t index,
+                         bool tpdo, const uint32_t *cob)
+{
+    add(x, n,
+        VAR(index, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &p->comm_count,
+            tpdo ? &k_six_u8 : &k_five_u8));
+    add(x, n, VAR(index, 1, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &p->cob_id, cob));
+    add(x, n, VAR(index, 2, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &p->type, &k_type_event));
+    if (tpdo) {
+        add(x, n, VAR(index, 3, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &p->inhibit, &k_zero_u16));
+    }
+    add(x, n, VAR(index, 5, CO_TYPE_UNSIGNED16, CO_OD_RW, 2, &p->event_ms, &k_zero_u16));
+    if (tpdo) {
+        add(x, n, VAR(index, 6, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &p->sync_start, &k_zero_u8));
+    }
+}
+
+/* A PDO mapping record: sub0 and EXAMPLE_PDO_ENTRIES entries. */
+static void add_pdo_map(example_od_t *x, uint32_t *n, struct example_pdo *p, uint16_t index,
+                        const uint8_t *count, const uint32_t *defaults)
+{
+    add(x, n, VAR(index, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &p->map_count, count));
+    for (uint8_t i = 0; i < EXAMPLE_PDO_ENTRIES; i++) {
+        add(x, n,
+            VAR(index, (uint8_t)(i + 1), CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &p->map[i],
+                defaults ? &defaults[i] : &k_zero_u32));
+    }
+}
 
 co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
 {
@@ -109,6 +149,21 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     }
     add(x, &n, VAR(0x1029, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->eb_count, &k_one_u8));
     add(x, &n, VAR(0x1029, 1, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &x->eb_comm, &k_zero_u8));
+    /* PDOs, in index order: 0x1400.., 0x1600.., 0x1800.., 0x1A00.. */
+    for (uint8_t i = 0; i < EXAMPLE_PDOS; i++) {
+        add_pdo_comm(x, &n, &x->rpdo[i], (uint16_t)(0x1400 + i), false, &k_rpdo_cob[i]);
+    }
+    for (uint8_t i = 0; i < EXAMPLE_PDOS; i++) {
+        add_pdo_map(x, &n, &x->rpdo[i], (uint16_t)(0x1600 + i), &k_rpdo_map_count[i],
+                    i == 0 ? k_rpdo1_map : NULL);
+    }
+    for (uint8_t i = 0; i < EXAMPLE_PDOS; i++) {
+        add_pdo_comm(x, &n, &x->tpdo[i], (uint16_t)(0x1800 + i), true, &k_tpdo_cob[i]);
+    }
+    for (uint8_t i = 0; i < EXAMPLE_PDOS; i++) {
+        add_pdo_map(x, &n, &x->tpdo[i], (uint16_t)(0x1A00 + i), &k_tpdo_map_count[i],
+                    i == 0 ? k_tpdo1_map : NULL);
+    }
     add(x, &n,
         VAR(0x2000, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, 4, &x->app_u32,
             &k_app_u32));

@@ -4,7 +4,7 @@
  * A small device: the mandatory communication objects, error control
  * (0x100C, 0x100D, 0x1016 with 4 consumer entries, 0x1017, 0x1029), EMCY (0x1003,
  * 0x1014, 0x1015, 0x1028), SYNC (0x1005..0x1007, 0x1019), TIME (0x1012), stored
- * parameters (0x1010, 0x1011), identity,
+ * parameters (0x1010, 0x1011), 4 RPDOs and 4 TPDOs, identity,
  * and a few application objects of assorted types. Each node in a process needs
  * its own values, so the table lives in RAM next to them: example_od_init()
  * fills an example_od_t and returns the co_od_t to give the node.
@@ -16,7 +16,9 @@
 #include "canola/od.h"
 
 #define EXAMPLE_HB_CONSUMERS 4
-#define EXAMPLE_OD_MAX_ENTRIES 80
+#define EXAMPLE_OD_MAX_ENTRIES 200
+#define EXAMPLE_PDOS 4 /* RPDO1..4 and TPDO1..4 */
+#define EXAMPLE_PDO_ENTRIES 8
 #define EXAMPLE_EMCY_HISTORY 8
 #define EXAMPLE_EMCY_CONSUMERS 4
 #define EXAMPLE_DOMAIN_CAP 64
@@ -28,7 +30,19 @@ typedef struct example_od {
     uint8_t error_count;                          /* 0x1003 sub0 */
     uint32_t error_history[EXAMPLE_EMCY_HISTORY]; /* 0x1003 sub1..8, newest first */
     uint32_t sync_cob_id;                         /* 0x1005 */
-    uint8_t store_count;                          /* 0x1010 sub0 */
+    /* PDO communication and mapping: RPDO n at 0x1400+n / 0x1600+n, TPDO at 0x1800+n /
+     * 0x1A00+n. RPDO1 maps 0x6200 sub1..4, TPDO1 maps 0x2000; the others map nothing. */
+    struct example_pdo {
+        uint8_t comm_count; /* sub0 */
+        uint32_t cob_id;    /* sub1 */
+        uint8_t type;       /* sub2 */
+        uint16_t inhibit;   /* sub3 (TPDO) */
+        uint16_t event_ms;  /* sub5 */
+        uint8_t sync_start; /* sub6 (TPDO) */
+        uint8_t map_count;  /* mapping sub0 */
+        uint32_t map[EXAMPLE_PDO_ENTRIES];
+    } rpdo[EXAMPLE_PDOS], tpdo[EXAMPLE_PDOS];
+    uint8_t store_count;         /* 0x1010 sub0 */
     uint32_t store[3];           /* 0x1010 sub1..3: save all / communication / application */
     uint8_t restore_count;       /* 0x1011 sub0 */
     uint32_t restore[3];         /* 0x1011 sub1..3 */

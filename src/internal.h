@@ -17,6 +17,8 @@ enum co_route_kind {
     CO_ROUTE_SYNC,        /* 0x1005 */
     CO_ROUTE_TIME,        /* 0x1012, when consuming */
     CO_ROUTE_EMCY,        /* a COB-ID of 0x1028 (slot = consumer entry) */
+    CO_ROUTE_RPDO,        /* an RPDO's COB-ID (slot = RPDO) */
+    CO_ROUTE_TPDO_RTR,    /* a TPDO's COB-ID, for remote requests (slot = TPDO) */
 };
 
 /* COB-ID objects (0x1200, 0x1280, ...): bit 31 = not valid, bit 29 = 29-bit identifier. */
@@ -192,6 +194,20 @@ co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry
                                const uint8_t *data, uint32_t len);
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sync_state_entered(co_node_t *node);
+
+/* pdo.c */
+co_err_t co_pdo_bind(co_node_t *node); /* at init: count the PDOs the dictionary has */
+void co_pdo_reset_comm(co_node_t *node);
+void co_pdo_add_routes(co_node_t *node);
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame);
+void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame);
+void co_pdo_sync(co_node_t *node, uint8_t counter); /* every SYNC handled (own or received) */
+uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us);
+co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                              uint32_t len);
+void co_pdo_written(co_node_t *node, const co_od_entry_t *entry);
+void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
+void co_pdo_state_entered(co_node_t *node);
 
 /* storage.c */
 void co_storage_load(co_node_t *node, co_param_group_t group);

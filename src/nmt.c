@@ -87,6 +87,7 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_sync_reset_comm(node);
     co_time_reset_comm(node);
     co_emcy_reset_comm(node);
+    co_pdo_reset_comm(node);
     co_routes_rebuild(node);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);

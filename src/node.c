@@ -32,7 +32,8 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     node->guard_time = co_od_find(&config->od, 0x100C, 0, NULL);
     node->life_factor = co_od_find(&config->od, 0x100D, 0, NULL);
     node->error_behaviour = co_od_find(&config->od, 0x1029, 1, NULL);
-    return co_hb_bind(node);
+    co_err_t err = co_hb_bind(node);
+    return err == CO_OK ? co_pdo_bind(node) : err;
 }
 
 co_err_t co_node_start(co_node_t *node, uint64_t now_us)
@@ -99,6 +100,12 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
     case CO_ROUTE_EMCY:
         co_emcy_ingest(node, slot, frame);
         break;
+    case CO_ROUTE_RPDO:
+        co_pdo_rx(node, slot, frame);
+        break;
+    case CO_ROUTE_TPDO_RTR:
+        co_pdo_rtr(node, slot, frame);
+        break;
     default:
         break;
     }
@@ -131,6 +138,7 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     next = co_min_u64(next, co_sdo_client_poll(node, now_us));
     next = co_min_u64(next, co_sync_poll(node, now_us));
     next = co_min_u64(next, co_emcy_poll(node, now_us));
+    next = co_min_u64(next, co_pdo_poll(node, now_us));
     co_node_schedule(node, next);
     return node->next_due_us;
 }
@@ -205,6 +213,7 @@ void co_node_state_changed(co_node_t *node)
     }
     co_sync_state_entered(node);
     co_emcy_state_entered(node);
+    co_pdo_state_entered(node);
 }
 
 /* ---- object dictionary access */
@@ -224,6 +233,9 @@ static co_abort_t service_check(co_node_t *node, const co_od_entry_t *entry, con
 {
     if (len == 4 && is_cob_id_object(entry) && !co_cob_valid(co_get_u32(data))) {
         return CO_ABORT_VALUE;
+    }
+    if (entry->index >= 0x1400 && entry->index <= 0x1BFF) {
+        return co_pdo_check_write(node, entry, data, len);
     }
     switch (entry->index) {
     case 0x1010:
@@ -272,7 +284,9 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
         co_emcy_written(node, entry);
         break;
     default:
-        if (entry->index >= 0x1200 && entry->index <= 0x127F) {
+        if (entry->index >= 0x1400 && entry->index <= 0x1BFF) {
+            co_pdo_written(node, entry);
+        } else if (entry->index >= 0x1200 && entry->index <= 0x127F) {
             co_sdo_server_written(node, entry);
         } else if (entry->index >= 0x1280 && entry->index <= 0x12FF) {
             co_sdo_client_written(node, entry);
@@ -296,6 +310,7 @@ co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, cons
         return abort;
     }
     service_apply(node, entry);
+    co_pdo_changed(node, entry); /* change of state: event-driven TPDOs mapping it */
     if (entry->hooks && entry->hooks->written) {
         entry->hooks->written(od->hook_ctx, entry);
     }

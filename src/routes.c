@@ -22,6 +22,9 @@ static uint16_t kind_service(uint8_t kind)
         return CO_SVC_TIME;
     case CO_ROUTE_EMCY:
         return CO_SVC_EMCY;
+    case CO_ROUTE_RPDO:
+    case CO_ROUTE_TPDO_RTR:
+        return CO_SVC_PDO;
     default:
         return CO_SVC_ERROR_CONTROL;
     }
@@ -78,6 +81,7 @@ void co_routes_rebuild(co_node_t *node)
     co_sync_add_routes(node);
     co_time_add_routes(node);
     co_emcy_add_routes(node);
+    co_pdo_add_routes(node);
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }

@@ -32,6 +32,7 @@ static void sync_handled(co_node_t *node, uint8_t counter)
 {
     node->sync.last_us = node->now_us;
     node->sync.last_counter = counter;
+    co_pdo_sync(node, counter);
     if (node->cfg.on_sync) {
         node->cfg.on_sync(node->cfg.user, counter);
     }

@@ -11,6 +11,7 @@
 #include "canola/nmt.h"
 #include "canola/node.h"
 #include "canola/od.h"
+#include "canola/pdo.h"
 #include "canola/sdo.h"
 #include "canola/storage.h"
 #include "canola/sync.h"

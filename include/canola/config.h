@@ -62,6 +62,19 @@
 #define CO_EMCY_CONSUMERS_MAX 8
 #endif
 
+/** RPDOs and TPDOs a node handles (0x1400.., 0x1800..). 0..256. */
+#ifndef CO_RPDO_MAX
+#define CO_RPDO_MAX 4
+#endif
+#ifndef CO_TPDO_MAX
+#define CO_TPDO_MAX 4
+#endif
+
+/** Mapping entries per PDO (CiA 301 allows up to 64; 8 covers byte-sized entries). */
+#ifndef CO_PDO_MAP_MAX
+#define CO_PDO_MAP_MAX 8
+#endif
+
 /** Longest value (bytes) stored by 0x1010; longer ones are not stored. 1..255. */
 #ifndef CO_STORE_VALUE_MAX
 #define CO_STORE_VALUE_MAX 64
@@ -72,7 +85,7 @@
 #ifndef CO_RX_ROUTES_MAX
 #define CO_RX_ROUTES_MAX                                                                           \
     (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +      \
-     CO_EMCY_CONSUMERS_MAX)
+     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX)
 #endif
 
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
@@ -101,6 +114,12 @@
 #endif
 #if CO_EMCY_CONSUMERS_MAX < 0 || CO_EMCY_CONSUMERS_MAX > 127
 #error "CO_EMCY_CONSUMERS_MAX must be 0..127"
+#endif
+#if CO_RPDO_MAX < 0 || CO_RPDO_MAX > 256 || CO_TPDO_MAX < 0 || CO_TPDO_MAX > 256
+#error "CO_RPDO_MAX and CO_TPDO_MAX must be 0..256"
+#endif
+#if CO_PDO_MAP_MAX < 1 || CO_PDO_MAP_MAX > 64
+#error "CO_PDO_MAP_MAX must be 1..64"
 #endif
 #if CO_STORE_VALUE_MAX < 1 || CO_STORE_VALUE_MAX > 255
 #error "CO_STORE_VALUE_MAX must be 1..255"

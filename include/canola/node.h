@@ -38,6 +38,7 @@
 #include "canola/errctl.h"
 #include "canola/nmt.h"
 #include "canola/od.h"
+#include "canola/pdo.h"
 #include "canola/sdo.h"
 #include "canola/storage.h"
 #include "canola/sync.h"
@@ -86,6 +87,7 @@ typedef struct co_node_config {
     void (*on_emcy)(void *user, const co_emcy_msg_t *emcy);    /**< EMCY consumer (0x1028) */
     void (*on_sync)(void *user, uint8_t counter);              /**< every SYNC handled */
     void (*on_time)(void *user, const co_time_of_day_t *time); /**< TIME consumed */
+    void (*on_rpdo)(void *user, uint16_t rpdo);                /**< RPDO (0-based) applied */
 } co_node_config_t;
 
 /** Counters, never reset by the node. */
@@ -157,6 +159,12 @@ struct co_node {
     /* SDO channels. */
     co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
     co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX > 0 ? CO_SDO_CLIENTS_MAX : 1];
+    /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. */
+    co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
+    co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];
+    uint16_t rpdo_count;
+    uint16_t tpdo_count;
+
     co_emcy_t emcy;
     co_sync_t sync;
     co_time_t time;
