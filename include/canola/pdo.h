@@ -74,6 +74,9 @@ typedef struct co_pdo {
     uint64_t next_us; /**< TPDO: event timer / inhibit end; RPDO: deadline */
     uint64_t inhibit_until_us;
     uint32_t cob_id;
+    uint16_t event_ms;  /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
+    uint16_t inhibit;   /**< TPDO sub3: inhibit time, 100 us */
+    uint8_t sync_start; /**< TPDO sub6: SYNC start value */
     uint8_t count;      /**< mapped entries */
     uint8_t bits;       /**< mapped bits in all */
     uint8_t type;       /**< transmission type */

@@ -1,0 +1,53 @@
+/*
+ * src/pdo_internal.h -- what pdo.c (shared), pdo_rx.c and pdo_tx.c tell each other.
+ */
+#ifndef CANOLA_PDO_INTERNAL_H
+#define CANOLA_PDO_INTERNAL_H
+
+#include "internal.h"
+
+/* co_pdo_t.flags */
+#define PDO_F_PRESENT 0x01u   /* the dictionary has this PDO's communication object */
+#define PDO_F_PENDING 0x02u   /* TPDO: an event waits (inhibit end, or SYNC for type 0) */
+#define PDO_F_SAMPLED 0x04u   /* TPDO 252: data[] holds the sample of the last SYNC */
+#define PDO_F_STARTED 0x08u   /* TPDO 1..240 with a SYNC start value: counting has begun */
+#define PDO_F_WAITING 0x10u   /* RPDO 0..240: data[] waits for the next SYNC */
+#define PDO_F_TIMED_OUT 0x20u /* RPDO: deadline missed and reported, until the next RPDO */
+#define PDO_F_LEN_ERROR 0x40u /* RPDO: raised 0x8210/0x8220, until a frame of the right length */
+
+#define PDO_RTR_NOT_ALLOWED 0x40000000u /* TPDO COB-ID bit 30 */
+
+static inline void pdo_set(co_pdo_t *p, unsigned f) { p->flags = (uint8_t)(p->flags | f); }
+static inline void pdo_clear(co_pdo_t *p, unsigned f) { p->flags = (uint8_t)(p->flags & ~f); }
+static inline bool pdo_has(const co_pdo_t *p, unsigned f) { return (p->flags & f) != 0; }
+
+/* A PDO that runs: present, valid (COB-ID bit 31 clear) and mapping something. A PDO
+ * mapping nothing (also one whose mapping failed to resolve) does nothing. */
+static inline bool pdo_active(const co_pdo_t *p)
+{
+    return pdo_has(p, PDO_F_PRESENT) && !(p->cob_id & CO_COB_INVALID) && p->count > 0;
+}
+
+/* PDOs run in operational only. */
+static inline bool pdo_running(const co_node_t *node)
+{
+    return node->nmt_state == CO_NMT_OPERATIONAL;
+}
+
+/* Bytes the mapping fills. */
+static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
+
+/* pdo.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
+void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n);
+
+/* pdo_tx.c */
+void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
+bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
+void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter, bool in_window);
+uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+
+/* pdo_rx.c */
+void rpdo_sync(co_node_t *node, uint8_t n, bool in_window);
+uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+
+#endif /* CANOLA_PDO_INTERNAL_H */

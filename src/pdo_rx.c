@@ -1,0 +1,174 @@
+/*
+ * pdo_rx.c -- RPDOs: length checks, applying the data to the mapped objects (at once or
+ * at the next SYNC) and deadline monitoring (see canola/pdo.h).
+ *
+ * Received values are stored with co_od_store, as a PDO is no SDO: no limits, no check
+ * hook, no service effects; the entry's written hook runs, and TPDOs mapping the entry
+ * see the change as an event.
+ */
+#include <string.h>
+
+#include "pdo_internal.h"
+
+#define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
+#define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
+#define EMCY_RPDO_TIMEOUT 0x8250u
+
+/* One mapped value from the frame at bit `pos`. A whole value is stored as it comes; a
+ * value mapped with fewer bits keeps the bits the frame does not carry. */
+static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t *data,
+                       uint32_t pos)
+{
+    const co_od_t *od = &node->cfg.od;
+    const co_od_entry_t *e = item->entry;
+    uint32_t size = co_type_size((co_type_t)e->type);
+    uint8_t wire[8] = {0};
+    const uint8_t *value = wire;
+    if (pos % 8u == 0 && item->bits == 8u * size) {
+        value = data + pos / 8u;
+    } else {
+        uint32_t n;
+        (void)co_od_read(od, e, 0, wire, sizeof wire, &n, NULL); /* unreadable: zeros */
+        pdo_copy_bits(wire, 0, data, pos, item->bits);
+    }
+    if (co_od_store(od, e, value, size) != CO_ABORT_NONE) {
+        return;
+    }
+    if (e->hooks && e->hooks->written) {
+        e->hooks->written(od->hook_ctx, e);
+    }
+    co_pdo_changed(node, e);
+}
+
+static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
+{
+    const co_pdo_t *p = &node->rpdo[n];
+    uint32_t pos = 0;
+    for (uint8_t i = 0; i < p->count; i++) {
+        if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
+            store_item(node, &p->items[i], data, pos);
+        }
+        pos += p->items[i].bits;
+    }
+    if (node->cfg.on_rpdo) {
+        node->cfg.on_rpdo(node->cfg.user, n);
+    }
+}
+
+/* Another RPDO than `self` has `flag` set. */
+static bool other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
+{
+    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+        const co_pdo_t *p = &node->rpdo[n];
+        if (p != self && pdo_has(p, flag)) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static void clear_if_active(co_node_t *node, uint16_t code)
+{
+    if (co_emcy_active(node, code)) {
+        (void)co_emcy_clear(node, code);
+    }
+}
+
+/* A frame of usable length arrived: the deadline restarts, a missed one is over. */
+static void received(co_node_t *node, co_pdo_t *p)
+{
+    if (p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+    if (pdo_has(p, PDO_F_TIMED_OUT)) {
+        pdo_clear(p, PDO_F_TIMED_OUT);
+        if (!other_has(node, p, PDO_F_TIMED_OUT)) {
+            clear_if_active(node, EMCY_RPDO_TIMEOUT);
+        }
+    }
+}
+
+static void length_error(co_node_t *node, co_pdo_t *p, uint16_t code)
+{
+    pdo_set(p, PDO_F_LEN_ERROR);
+    (void)co_emcy_raise(node, code, NULL);
+}
+
+/* A length error of this RPDO is over once it arrives with exactly the mapped length
+ * (and the codes clear when no other RPDO still has one). */
+static void length_ok(co_node_t *node, co_pdo_t *p)
+{
+    if (!pdo_has(p, PDO_F_LEN_ERROR)) {
+        return;
+    }
+    pdo_clear(p, PDO_F_LEN_ERROR);
+    if (!other_has(node, p, PDO_F_LEN_ERROR)) {
+        clear_if_active(node, EMCY_PDO_LENGTH);
+        clear_if_active(node, EMCY_PDO_EXCEEDED);
+    }
+}
+
+/* Synchronous data waits for the next SYNC; a frame outside the window after the last
+ * SYNC is dropped (before any SYNC it waits). */
+static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
+{
+    bool synced = node->sync.last_us != CO_TIME_NEVER;
+    if (synced && !co_sync_in_window(node, node->now_us)) {
+        return;
+    }
+    memcpy(p->data, frame->data, frame->len);
+    p->len = frame->len;
+    pdo_set(p, PDO_F_WAITING);
+}
+
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+{
+    if (frame->flags & CO_FRAME_RTR) {
+        node->stats.rx_malformed++; /* RPDOs are not requested */
+        return;
+    }
+    if (rpdo >= node->rpdo_count || !pdo_active(&node->rpdo[rpdo])) {
+        return;
+    }
+    co_pdo_t *p = &node->rpdo[rpdo];
+    if (8u * frame->len < p->bits) {
+        length_error(node, p, EMCY_PDO_LENGTH);
+        return;
+    }
+    received(node, p);
+    if (p->type <= 240) {
+        hold_for_sync(node, p, frame);
+    } else {
+        apply(node, rpdo, frame->data);
+    }
+    if (frame->len > pdo_bytes(p)) {
+        length_error(node, p, EMCY_PDO_EXCEEDED);
+    } else {
+        length_ok(node, p);
+    }
+}
+
+void rpdo_sync(co_node_t *node, uint8_t n, bool in_window)
+{
+    co_pdo_t *p = &node->rpdo[n];
+    if (!pdo_has(p, PDO_F_WAITING)) {
+        return;
+    }
+    pdo_clear(p, PDO_F_WAITING);
+    if (in_window && pdo_active(p)) {
+        apply(node, n, p->data);
+    }
+}
+
+uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+{
+    if (now_us < p->next_us) {
+        return p->next_us;
+    }
+    p->next_us = CO_TIME_NEVER; /* reported once, until the next RPDO */
+    pdo_set(p, PDO_F_TIMED_OUT);
+    (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
+    co_node_error_behaviour(node);
+    return CO_TIME_NEVER;
+}

@@ -1,0 +1,169 @@
+/*
+ * pdo_tx.c -- TPDOs: packing the mapped values and sending them by transmission type
+ * (see canola/pdo.h). Values come from co_od_read, so read hooks produce them.
+ */
+#include <string.h>
+
+#include "pdo_internal.h"
+
+static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
+
+/* One mapped value into the frame at bit `pos`: whole bytes straight from co_od_read,
+ * anything else through a bit copy of the value's low bits. */
+static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out, uint32_t pos)
+{
+    uint32_t n;
+    if (pos % 8u == 0 && item->bits % 8u == 0) {
+        (void)co_od_read(od, item->entry, 0, out + pos / 8u, item->bits / 8u, &n, NULL);
+        return;
+    }
+    uint8_t wire[8] = {0};
+    (void)co_od_read(od, item->entry, 0, wire, sizeof wire, &n, NULL);
+    pdo_copy_bits(out, pos, wire, 0, item->bits);
+}
+
+static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
+{
+    memset(out, 0, 8);
+    uint32_t pos = 0;
+    for (uint8_t i = 0; i < p->count; i++) {
+        pack_item(&node->cfg.od, &p->items[i], out, pos);
+        pos += p->items[i].bits;
+    }
+}
+
+static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+{
+    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
+    memcpy(f.data, data, f.len);
+    (void)co_node_send_as(node, &f, CO_SVC_PDO);
+}
+
+static void send_fresh(co_node_t *node, const co_pdo_t *p)
+{
+    uint8_t data[8];
+    pack(node, p, data);
+    send_data(node, p, data);
+}
+
+/* An event-driven transmission: the inhibit time and the event timer count from it. */
+static void send_event(co_node_t *node, co_pdo_t *p)
+{
+    pdo_clear(p, PDO_F_PENDING);
+    send_fresh(node, p);
+    p->inhibit_until_us = node->now_us + (uint64_t)p->inhibit * 100u;
+    tpdo_start(node, p);
+}
+
+void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && event_driven(p) && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
+
+bool tpdo_event(co_node_t *node, co_pdo_t *p)
+{
+    if (!pdo_active(p) || !pdo_running(node) || (p->type != 0 && !event_driven(p))) {
+        return false;
+    }
+    pdo_set(p, PDO_F_PENDING); /* type 0: goes at the next SYNC */
+    if (event_driven(p)) {
+        if (node->now_us >= p->inhibit_until_us) {
+            send_event(node, p);
+        } else {
+            co_node_schedule(node, p->inhibit_until_us);
+        }
+    }
+    return true;
+}
+
+/* Type 1..240: the n-th SYNC counted (from the one whose counter equals the SYNC start
+ * value, when that and the counter are not 0). */
+static bool cyclic_due(co_pdo_t *p, uint8_t counter)
+{
+    if (p->sync_start != 0 && counter != 0 && !pdo_has(p, PDO_F_STARTED)) {
+        if (counter != p->sync_start) {
+            return false;
+        }
+        pdo_set(p, PDO_F_STARTED);
+        p->sync_count = 0;
+        return true;
+    }
+    p->sync_count++;
+    if (p->sync_count < p->type) {
+        return false;
+    }
+    p->sync_count = 0;
+    return true;
+}
+
+void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter, bool in_window)
+{
+    if (!pdo_active(p)) {
+        return;
+    }
+    if (p->type == 0) {
+        if (pdo_has(p, PDO_F_PENDING) && in_window) {
+            pdo_clear(p, PDO_F_PENDING);
+            send_fresh(node, p);
+        }
+    } else if (p->type <= 240) {
+        if (cyclic_due(p, counter) && in_window) {
+            send_fresh(node, p);
+        }
+    } else if (p->type == 252) {
+        pack(node, p, p->data);
+        pdo_set(p, PDO_F_SAMPLED);
+    }
+}
+
+void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
+{
+    if (!(frame->flags & CO_FRAME_RTR)) {
+        node->stats.rx_malformed++; /* data on our own TPDO's COB-ID */
+        return;
+    }
+    if (tpdo >= node->tpdo_count || !pdo_active(&node->tpdo[tpdo])) {
+        return;
+    }
+    co_pdo_t *p = &node->tpdo[tpdo];
+    if (p->type == 253) {
+        send_fresh(node, p);
+    } else if (p->type == 252 && pdo_has(p, PDO_F_SAMPLED)) {
+        send_data(node, p, p->data); /* before the first SYNC there is nothing to send */
+    }
+}
+
+uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+{
+    if (!pdo_active(p) || !event_driven(p)) {
+        return CO_TIME_NEVER;
+    }
+    if (now_us >= p->next_us) { /* the event timer is an event */
+        p->next_us = CO_TIME_NEVER;
+        pdo_set(p, PDO_F_PENDING);
+    }
+    if (pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us) {
+        send_event(node, p);
+    }
+    if (pdo_has(p, PDO_F_PENDING)) {
+        return co_min_u64(p->next_us, p->inhibit_until_us);
+    }
+    return p->next_us;
+}
+
+co_err_t co_tpdo_request(co_node_t *node, uint8_t n)
+{
+    if (n >= node->tpdo_count || !pdo_has(&node->tpdo[n], PDO_F_PRESENT)) {
+        return CO_ERR_ARG;
+    }
+    co_pdo_t *p = &node->tpdo[n];
+    if (!pdo_active(p) || !pdo_running(node)) {
+        return CO_ERR_STATE;
+    }
+    (void)tpdo_event(node, p);
+    return CO_OK;
+}
