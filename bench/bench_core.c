@@ -73,6 +73,39 @@ static void setup_big(bench_t *b)
     start(b, 5, od, 0);
 }
 
+static void set_u32(bench_t *b, uint16_t index, uint8_t sub, uint32_t v)
+{
+    uint8_t d[4];
+    co_put_u32(d, v);
+    if (co_node_write_net(&b->node, index, sub, d, 4) != CO_ABORT_NONE) {
+        fprintf(stderr, "bench_core: writing 0x%04X sub %u failed\n", index, sub);
+        exit(1);
+    }
+}
+
+static void set_u8(bench_t *b, uint16_t index, uint8_t sub, uint8_t v)
+{
+    if (co_node_write_net(&b->node, index, sub, &v, 1) != CO_ABORT_NONE) {
+        fprintf(stderr, "bench_core: writing 0x%04X sub %u failed\n", index, sub);
+        exit(1);
+    }
+}
+
+/* PDO 1 (communication `comm`, mapping `map`) re-mapped by the CiA 301 procedure to
+ * 0x2000 and 0x2007 (2 x u32, 8 bytes), then the node made operational. */
+static void map_two_u32(bench_t *b, uint16_t comm, uint16_t map)
+{
+    uint64_t cob = 0;
+    co_node_get_uint(&b->node, comm, 1, &cob);
+    set_u32(b, comm, 1, (uint32_t)cob | 0x80000000u);
+    set_u8(b, map, 0, 0);
+    set_u32(b, map, 1, 0x20000020);
+    set_u32(b, map, 2, 0x20070020);
+    set_u8(b, map, 0, 2);
+    set_u32(b, comm, 1, (uint32_t)cob & 0x7FFFFFFFu);
+    co_nmt_apply(&b->node, CO_NMT_CMD_START);
+}
+
 static co_frame_t sdo_req(const uint8_t d[8])
 {
     co_frame_t f = {.id = 0x605, .len = 8};
@@ -202,6 +235,28 @@ int main(int argc, char **argv)
         b.frames[b.frame_count++] =
             sdo_req((const uint8_t[8]){0x23, 0x00, 0x20, 0x00, 0x78, 0x56, 0x34, 0x12});
         run_ingest(&b, n);
+    } else if (strcmp(op, "rpdo_2x_u32") == 0) {
+        setup(&b, 5, 0);
+        set_u32(&b, 0x1800, 1, 0x80000185u); /* TPDO1 maps 0x2000: off, so only the RPDO counts */
+        map_two_u32(&b, 0x1400, 0x1600);
+        b.frames[b.frame_count++] =
+            (co_frame_t){.id = 0x205, .len = 8, .data = {1, 2, 3, 4, 5, 6, 7, 8}};
+        run_ingest(&b, n);
+        if (b.od.app_u32 != 0x04030201u || b.od.app_u32b != 0x08070605u) {
+            fprintf(stderr, "bench_core: the RPDO was not applied: the figure is void\n");
+            return 1;
+        }
+    } else if (strcmp(op, "sync_tpdo") == 0) {
+        setup(&b, 5, 0);
+        map_two_u32(&b, 0x1800, 0x1A00);
+        set_u8(&b, 0x1800, 2, 1); /* synchronous, every SYNC */
+        b.frames[b.frame_count++] = (co_frame_t){.id = 0x080, .len = 0};
+        b.od.app_u32 = 0x11223344;
+        run_ingest(&b, n);
+        if (b.last_tx.id != 0x185 || b.last_tx.len != 8 || b.last_tx.data[0] != 0x44) {
+            fprintf(stderr, "bench_core: no TPDO followed the SYNC: the figure is void\n");
+            return 1;
+        }
     } else if (strncmp(op, "sdo_", 4) == 0) {
         setup_big(&b);
         if (strcmp(op, "sdo_segmented_download") == 0) {

@@ -175,6 +175,9 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     add(x, &n, VAR(0x2004, 0, CO_TYPE_UNSIGNED8, CO_OD_WO, 1, &x->app_wo, &k_zero_u8));
     add(x, &n, VAR(0x2005, 0, CO_TYPE_INTEGER64, CO_OD_RW, 8, &x->app_i64, &k_zero_i64));
     add(x, &n, VAR(0x2006, 0, CO_TYPE_REAL32, CO_OD_RW, 4, &x->app_real, &k_zero_real));
+    add(x, &n,
+        VAR(0x2007, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, 4, &x->app_u32b,
+            &k_zero_u32));
     add(x, &n, VAR(0x6200, 0, CO_TYPE_UNSIGNED8, CO_OD_CO, 1, &x->outputs_count, &k_outputs_count));
     for (uint8_t i = 0; i < 4; i++) {
         add(x, &n,

@@ -74,6 +74,7 @@ typedef struct example_od {
     uint8_t app_wo;            /* 0x2004: write-only u8 */
     int64_t app_i64;           /* 0x2005: rw INTEGER64 */
     float app_real;            /* 0x2006: rw REAL32 */
+    uint32_t app_u32b;         /* 0x2007: rw, PDO-mappable both ways, default 0 */
     /* device profile area */
     uint8_t outputs_count; /* 0x6200 sub0 */
     uint8_t outputs[4];    /* 0x6200 sub1..4, rww, PDO-mappable */

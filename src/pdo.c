@@ -89,6 +89,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t bits = (uint8_t)value;
     item->entry = NULL;
+    item->direct = NULL;
     item->bits = bits;
     if (bits == 0) {
         return CO_ABORT_NO_MAP;
@@ -103,6 +104,13 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
         return CO_ABORT_NO_MAP;
     }
     item->entry = e;
+    /* A whole number stored as it travels (and no hook to run): copied straight to and
+     * from the frame. */
+    uint32_t len = 0;
+    uint32_t size = co_type_size((co_type_t)e->type);
+    bool whole = bits == 8u * size && size != 0;
+    bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
+    item->direct = whole && plain ? e->value : NULL;
     return CO_ABORT_NONE;
 }
 
@@ -210,6 +218,20 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     restart(node, p, tpdo);
 }
 
+/* How many TPDOs an object change can trigger (active, type 0 or event-driven): when
+ * none, a changed value costs no search. Counted again whenever a TPDO changes. */
+static void count_listeners(co_node_t *node)
+{
+    uint16_t listeners = 0;
+    for (uint16_t n = 0; n < node->tpdo_count; n++) {
+        const co_pdo_t *p = &node->tpdo[n];
+        if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
+            listeners++;
+        }
+    }
+    node->tpdo_listeners = listeners;
+}
+
 void co_pdo_reset_comm(co_node_t *node)
 {
     for (uint16_t n = 0; n < node->rpdo_count; n++) {
@@ -218,6 +240,7 @@ void co_pdo_reset_comm(co_node_t *node)
     for (uint16_t n = 0; n < node->tpdo_count; n++) {
         load_pdo(node, &node->tpdo[n], true, n);
     }
+    count_listeners(node);
 }
 
 void co_pdo_add_routes(co_node_t *node)
@@ -296,7 +319,7 @@ static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
 {
-    if ((entry->attr & CO_OD_TPDO) && pdo_running(node)) {
+    if (node->tpdo_listeners != 0 && (entry->attr & CO_OD_TPDO) && pdo_running(node)) {
         (void)mark_tpdos(node, entry);
     }
 }
@@ -384,6 +407,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
     restart(node, p, r.tpdo);
+    count_listeners(node);
     if (p->cob_id != old_cob || p->type != old_type || pdo_active(p) != was_active) {
         co_routes_rebuild(node);
     }

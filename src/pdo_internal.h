@@ -4,6 +4,8 @@
 #ifndef CANOLA_PDO_INTERNAL_H
 #define CANOLA_PDO_INTERNAL_H
 
+#include <string.h>
+
 #include "internal.h"
 
 /* co_pdo_t.flags */
@@ -32,6 +34,29 @@ static inline bool pdo_active(const co_pdo_t *p)
 static inline bool pdo_running(const co_node_t *node)
 {
     return node->nmt_state == CO_NMT_OPERATIONAL;
+}
+
+/* Copy a whole mapped value: the usual widths as fixed-size copies (compiled inline, not
+ * a library call), anything else with memcpy. */
+static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
+{
+    switch (bytes) {
+    case 1:
+        memcpy(dst, src, 1);
+        break;
+    case 2:
+        memcpy(dst, src, 2);
+        break;
+    case 4:
+        memcpy(dst, src, 4);
+        break;
+    case 8:
+        memcpy(dst, src, 8);
+        break;
+    default:
+        memcpy(dst, src, bytes);
+        break;
+    }
 }
 
 /* Bytes the mapping fills. */

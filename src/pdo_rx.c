@@ -21,6 +21,11 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
 {
     const co_od_t *od = &node->cfg.od;
     const co_od_entry_t *e = item->entry;
+    if (item->direct != NULL && pos % 8u == 0) { /* the common case: bytes into storage */
+        pdo_copy_value(item->direct, data + pos / 8u, item->bits / 8u);
+        co_pdo_changed(node, e);
+        return;
+    }
     uint32_t size = co_type_size((co_type_t)e->type);
     uint8_t wire[8] = {0};
     const uint8_t *value = wire;

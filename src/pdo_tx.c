@@ -13,6 +13,10 @@ static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
+    if (item->direct != NULL && pos % 8u == 0) { /* the common case: bytes from storage */
+        pdo_copy_value(out + pos / 8u, item->direct, item->bits / 8u);
+        return;
+    }
     if (pos % 8u == 0 && item->bits % 8u == 0) {
         (void)co_od_read(od, item->entry, 0, out + pos / 8u, item->bits / 8u, &n, NULL);
         return;

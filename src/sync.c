@@ -1,8 +1,9 @@
 /*
  * sync.c -- SYNC producer and consumer (0x1005, 0x1006, 0x1007, 0x1019).
  *
- * Only the COB-ID is kept in co_sync_t; period, window and counter overflow are read
- * from the dictionary when needed, so a new value counts from the next use on.
+ * co_sync_t keeps the COB-ID and the entries of period, window and counter overflow,
+ * found once per reset communication; their values are read when needed, so a new value
+ * counts from the next use on, without a look-up per SYNC.
  */
 #include "internal.h"
 
@@ -16,13 +17,16 @@ static uint32_t od_value(const co_node_t *node, uint16_t index)
     return (uint32_t)v;
 }
 
-static uint32_t period_us(const co_node_t *node) { return od_value(node, 0x1006); }
+static uint32_t period_us(const co_node_t *node)
+{
+    return (uint32_t)co_entry_uint(node->sync.period);
+}
 
 /* Overflow value when SYNCs carry a counter, 0 when they carry no data (0x1019 is 0, or
  * the refused value 1 set natively). */
 static uint8_t counter_overflow(const co_node_t *node)
 {
-    uint8_t n = (uint8_t)od_value(node, 0x1019);
+    uint8_t n = (uint8_t)co_entry_uint(node->sync.overflow);
     return n >= 2 ? n : 0;
 }
 
@@ -59,7 +63,7 @@ bool co_sync_in_window(const co_node_t *node, uint64_t now_us)
     if (last == CO_TIME_NEVER || now_us < last) {
         return false;
     }
-    uint32_t window = od_value(node, 0x1007);
+    uint32_t window = (uint32_t)co_entry_uint(node->sync.window);
     return window == 0 || now_us - last < window;
 }
 
@@ -137,6 +141,9 @@ void co_sync_reset_comm(co_node_t *node)
 {
     co_sync_t *s = &node->sync;
     s->cob_id = od_value(node, 0x1005);
+    s->period = co_od_find(&node->cfg.od, 0x1006, 0, NULL); /* absent: 0, feature off */
+    s->window = co_od_find(&node->cfg.od, 0x1007, 0, NULL);
+    s->overflow = co_od_find(&node->cfg.od, 0x1019, 0, NULL);
     s->next_us = CO_TIME_NEVER; /* initialising: starts on entering pre-operational */
     s->last_us = CO_TIME_NEVER;
     s->counter = 1;

@@ -164,6 +164,7 @@ struct co_node {
     co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];
     uint16_t rpdo_count;
     uint16_t tpdo_count;
+    uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
 
     co_emcy_t emcy;
     co_sync_t sync;

@@ -65,6 +65,7 @@ typedef struct co_node co_node_t;
 /** One resolved mapping entry (internal). */
 typedef struct co_pdo_item {
     const co_od_entry_t *entry; /**< NULL for a dummy entry */
+    void *direct;               /**< the storage, when the value travels as it is stored */
     uint8_t bits;               /**< bits mapped */
 } co_pdo_item_t;
 

@@ -33,11 +33,14 @@ typedef struct co_node co_node_t;
 
 /** SYNC state of a node (embedded in co_node_t; fields are internal). */
 typedef struct co_sync {
-    uint64_t next_us;     /**< producer: next SYNC */
-    uint64_t last_us;     /**< time of the latest SYNC, CO_TIME_NEVER before the first */
-    uint32_t cob_id;      /**< 0x1005 */
-    uint8_t counter;      /**< producer: counter of the next SYNC; consumer: latest */
-    uint8_t last_counter; /**< counter of the latest SYNC */
+    uint64_t next_us; /**< producer: next SYNC */
+    uint64_t last_us; /**< time of the latest SYNC, CO_TIME_NEVER before the first */
+    uint32_t cob_id;  /**< 0x1005 */
+    const struct co_od_entry *period;   /**< 0x1006, or NULL */
+    const struct co_od_entry *window;   /**< 0x1007, or NULL */
+    const struct co_od_entry *overflow; /**< 0x1019, or NULL */
+    uint8_t counter;                    /**< producer: counter of the next SYNC; consumer: latest */
+    uint8_t last_counter;               /**< counter of the latest SYNC */
 } co_sync_t;
 
 /** True when the synchronous window (0x1007) after the latest SYNC is still open at
