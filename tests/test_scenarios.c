@@ -290,6 +290,60 @@ static void test_timing_model_orders_simultaneous_bootups_by_id(void)
     free(net);
 }
 
+/* Process data on the 1 Mbit/s bus: the master produces SYNC every 10 ms, device 2
+ * answers each with its synchronous TPDO1 right after the SYNC frame, and the master's
+ * event-driven TPDO1 lands in device 3's outputs through its RPDO1. */
+static void test_sync_and_pdos_on_the_timed_bus(void)
+{
+    network_t *net = network_up(1000000);
+    co_node_t *master = &net->master.node;
+    co_node_t *dev2 = &net->devices[0].node;
+    co_node_t *dev3 = &net->devices[1].node;
+    uint8_t v[4];
+    /* Device 2: TPDO1 (0x2000) synchronous, every SYNC. */
+    CHECK_EQ(co_node_write_net(dev2, 0x1800, 2, (const uint8_t[]){1}, 1), CO_ABORT_NONE);
+    co_node_set_uint(dev2, 0x2000, 0, 0xA1B2C3D4);
+    /* Device 3: RPDO1 re-mapped by the CiA 301 procedure to listen to the master's TPDO1. */
+    co_put_u32(v, 0x80000203u);
+    CHECK_EQ(co_node_write_net(dev3, 0x1400, 1, v, 4), CO_ABORT_NONE);
+    co_put_u32(v, 0x181);
+    CHECK_EQ(co_node_write_net(dev3, 0x1400, 1, v, 4), CO_ABORT_NONE);
+    /* Master: SYNC producer every 10 ms, from now (t = 0, pre-operational allows SYNC). */
+    co_put_u32(v, 10000);
+    CHECK_EQ(co_node_write_net(master, 0x1006, 0, v, 4), CO_ABORT_NONE);
+    co_put_u32(v, 0x40000080u);
+    CHECK_EQ(co_node_write_net(master, 0x1005, 0, v, 4), CO_ABORT_NONE);
+    co_nmt_send(master, CO_NMT_CMD_START, 0);
+    co_sim_run_until(&net->bus, 5 * MS);
+    uint32_t from = net->trace_count;
+    co_sim_run_until(&net->bus, 45 * MS);
+    /* SYNCs go out at 10, 20, 30 and 40 ms (arriving one frame time later); each is
+     * followed at once by device 2's TPDO, one TPDO frame time after it. */
+    uint32_t syncs = 0;
+    for (uint32_t i = from; i + 1 < net->trace_count; i++) {
+        if (strstr(net->trace[i], " 080#") == NULL) {
+            continue;
+        }
+        syncs++;
+        CHECK(strstr(net->trace[i + 1], " 182#D4C3B2A1") != NULL);
+        double t_sync = atof(net->trace[i] + 1);
+        double t_pdo = atof(net->trace[i + 1] + 1);
+        co_frame_t sync = frm(0x080, "");
+        co_frame_t pdo = frm(0x182, "D4 C3 B2 A1");
+        double sync_s = co_sim_frame_bits(&sync) / 1e6;
+        double pdo_s = co_sim_frame_bits(&pdo) / 1e6;
+        CHECK(t_sync - 0.010 * syncs > sync_s - 1.5e-6 && t_sync - 0.010 * syncs < sync_s + 1.5e-6);
+        CHECK(t_pdo - t_sync > pdo_s - 1.5e-6 && t_pdo - t_sync < pdo_s + 1.5e-6);
+    }
+    CHECK_EQ(syncs, 4);
+    /* The master writes its 0x2000: TPDO1 (type 255) carries it to device 3's outputs. */
+    co_node_set_uint(master, 0x2000, 0, 0x44332211);
+    co_sim_run_until(&net->bus, 46 * MS);
+    CHECK_EQ(net->devices[1].od.outputs[0], 0x11);
+    CHECK_EQ(net->devices[1].od.outputs[3], 0x44);
+    free(net);
+}
+
 int main(void)
 {
     RUN(test_power_on_three_bootups_once_each);
@@ -299,5 +353,6 @@ int main(void)
     RUN(test_lost_heartbeat_reported_after_consumer_time_never_before);
     RUN(test_node_that_never_boots_reported_after_boot_time);
     RUN(test_timing_model_orders_simultaneous_bootups_by_id);
+    RUN(test_sync_and_pdos_on_the_timed_bus);
     return check_summary();
 }
