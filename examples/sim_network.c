@@ -2,10 +2,12 @@
  * sim_network.c -- a master and three devices on the simulated bus.
  *
  * The master (node 1) consumes the heartbeats of devices 2, 3 and 4 (each
- * produces one every 100 ms) and walks the network through the NMT states:
- * start all, stop one, back to pre-operational, reset one; then device 2 drops
- * off the bus and the master reports the lost heartbeat. Every frame is printed
- * in candump log format, every event the master sees as a comment line.
+ * produces one every 100 ms), reads device 2's vendor-ID by SDO, produces SYNC
+ * every 100 ms (each operational device answers with its synchronous TPDO1) and
+ * walks the network through the NMT states: start all, stop one, back to
+ * pre-operational, reset one; then device 2 drops off the bus and the master
+ * reports the lost heartbeat. Every frame is printed in candump log format, every
+ * event the master sees as a comment line.
  *
  * usage: sim_network [BITRATE]   (bit/s, 10000..1000000; default 125000)
  */
@@ -61,6 +63,28 @@ static void master_event(void *user, const co_ec_event_t *ev)
     }
 }
 
+static void vendor_read(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len)
+{
+    (void)channel;
+    (void)len;
+    const co_sim_bus_t *bus = ctx;
+    if (abort != CO_ABORT_NONE) {
+        printf("# %.6f master: reading node 2's vendor-ID failed, abort 0x%08X\n",
+               (double)bus->now_us / 1e6, (unsigned)abort);
+        return;
+    }
+    printf("# %.6f master: node 2 vendor-ID 0x%08X (SDO upload of 0x1018 sub1)\n",
+           (double)bus->now_us / 1e6, (unsigned)value);
+}
+
+/* Write a u32 as the network would; false when the device refuses it. */
+static bool write_u32(co_node_t *node, uint16_t index, uint8_t sub, uint32_t value)
+{
+    uint8_t v[4];
+    co_put_u32(v, value);
+    return co_node_write_net(node, index, sub, v, 4) == CO_ABORT_NONE;
+}
+
 static int start_station(co_sim_bus_t *bus, station_t *s, uint8_t id, uint16_t hb_ms,
                          void (*on_errctl)(void *, const co_ec_event_t *))
 {
@@ -113,13 +137,30 @@ int main(int argc, char **argv)
         err = start_station(&bus, &devices[i], (uint8_t)(2 + i), 100, NULL);
     }
     for (uint8_t i = 0; i < DEVICES && err == 0; i++) {
+        uint8_t id = (uint8_t)(2 + i);
         /* The master consumes each device's heartbeat with a 250 ms time-out. */
-        uint8_t v[4];
-        co_put_u32(v, ((uint32_t)(2 + i) << 16) | 250u);
-        err = co_node_write_net(&master.node, 0x1016, (uint8_t)(i + 1), v, 4) ? -1 : 0;
+        err =
+            write_u32(&master.node, 0x1016, (uint8_t)(i + 1), ((uint32_t)id << 16) | 250u) ? 0 : -1;
+        /* Each device sends 0x2000 in TPDO1 after every SYNC (transmission type 1). */
+        uint8_t sync_type = 1;
+        err |= co_node_write_net(&devices[i].node, 0x1800, 2, &sync_type, 1) ? -1 : 0;
+        err |= co_node_set_uint(&devices[i].node, 0x2000, 0, 0x1000u * id) ? -1 : 0;
+    }
+    /* The master produces SYNC every 100 ms and reads device 2's vendor-ID by SDO. */
+    if (err == 0 && !(write_u32(&master.node, 0x1006, 0, 100000) &&
+                      write_u32(&master.node, 0x1005, 0, 0x40000080u) &&
+                      co_sdo_client_setup(&master.node, 0, 2) == CO_OK)) {
+        err = -1;
     }
     if (err != 0) {
         fprintf(stderr, "sim_network: setting up the network failed\n");
+        return 1;
+    }
+
+    /* Once the boot-ups are on the bus, the master reads device 2's vendor-ID. */
+    co_sim_run_until(&bus, 50 * MS);
+    if (co_sdo_read_value(&master.node, 0, 0x1018, 1, vendor_read, &bus) != CO_OK) {
+        fprintf(stderr, "sim_network: the SDO read could not start\n");
         return 1;
     }
 
