@@ -185,7 +185,7 @@ void co_node_comm_lost(co_node_t *node)
     co_node_error_behaviour(node);
 }
 
-/* Anything still lost: a consumed heartbeat, a guarded node, our own life guarding. */
+/* Anything still lost: a consumed heartbeat, or our own life guarding. */
 static bool comm_still_lost(const co_node_t *node)
 {
     for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
