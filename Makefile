@@ -9,7 +9,7 @@ BUILD_SAN  ?= build-san
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs format format-check bench clean
+.PHONY: all demo test test-plain test-san test-configs test-python format format-check bench clean
 
 all: $(BUILD)/build.stamp
 
@@ -20,7 +20,7 @@ $(BUILD)/build.stamp: FORCE
 demo: all
 	./$(BUILD)/sim_network
 
-test: test-plain test-san test-configs format-check
+test: test-plain test-san test-configs test-python format-check
 
 test-plain:
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
@@ -42,6 +42,14 @@ test-configs:
 	  echo "config $$name: core builds" || exit 1; \
 	done
 
+# The Python package (python/): its own virtual environment, pinned tools, pytest, ruff, mypy.
+PY_VENV = build-py/venv
+test-python:
+	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)
+	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[test]'
+	cd python && ../$(PY_VENV)/bin/python -m pytest -q tests
+	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src
+
 format-check:
 	@if command -v clang-format >/dev/null 2>&1; then \
 	  clang-format --dry-run --Werror $(FORMAT_SRC) && echo "format check: ok"; \
@@ -56,6 +64,6 @@ bench:
 	./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-*
+	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py
 
 FORCE:

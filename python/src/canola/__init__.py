@@ -1,0 +1,7 @@
+"""canola: the Python side of the canola CANopen stack."""
+
+from canola.errors import Diagnostic, EdsError, Error
+
+__version__ = "0.1.0"
+
+__all__ = ["Diagnostic", "EdsError", "Error", "__version__"]
