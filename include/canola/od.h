@@ -22,7 +22,8 @@
  * co_node_ingest() / the access function); they must not block.
  *
  * Threading: none inside. One OD belongs to one node; guard it with the node.
- * Memory: 24..32 bytes of const data per entry plus the values themselves.
+ * Memory: 28 bytes of const data per entry on 32-bit targets (48 on 64-bit hosts), plus
+ * the values themselves.
  */
 #ifndef CANOLA_OD_H
 #define CANOLA_OD_H

@@ -47,7 +47,8 @@
  * PDOs run in operational only.
  *
  * Cost: an RPDO of two byte-aligned 32-bit entries is a route look-up plus two copies.
- * Memory: about 16 bytes per PDO plus 12 per mapped entry.
+ * Memory (32-bit targets): 40 bytes per PDO plus 12 per mapping slot (CO_PDO_MAP_MAX),
+ * 136 bytes per PDO with the default 8 slots.
  */
 #ifndef CANOLA_PDO_H
 #define CANOLA_PDO_H
