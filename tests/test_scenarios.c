@@ -206,6 +206,9 @@ static void test_stopped_device_sends_only_heartbeats(void)
     co_sim_run_until(&net->bus, 1 * MS); /* past the boot-ups */
     co_nmt_send(&net->master.node, CO_NMT_CMD_STOP, 2);
     uint32_t from = net->trace_count;
+    co_sim_run_until(&net->bus, 500 * MS);
+    /* A change of TPDO1's object (0x2000, event-driven) sends no PDO while stopped. */
+    co_node_set_uint(&net->devices[0].node, 0x2000, 0, 0xCAFE);
     co_sim_run_until(&net->bus, 1000 * MS);
     uint32_t from_node2 = 0;
     for (uint32_t i = from; i < net->trace_count; i++) {
@@ -216,6 +219,7 @@ static void test_stopped_device_sends_only_heartbeats(void)
         }
     }
     CHECK_EQ(from_node2, 10);
+    CHECK_EQ(count_frames(net, from, "182#FECA0000"), 0);
     /* An SDO request (read 0x1000) gets no answer while stopped... */
     co_frame_t req = frm(0x602, "40 00 10 00 00 00 00 00");
     co_node_send(&net->master.node, &req);
@@ -226,6 +230,12 @@ static void test_stopped_device_sends_only_heartbeats(void)
     co_node_send(&net->master.node, &req);
     co_sim_run_until(&net->bus, 1200 * MS);
     CHECK_EQ(count_frames(net, 0, "582#4300100091010000"), 1);
+    /* Started, the same change does send TPDO1. */
+    co_nmt_send(&net->master.node, CO_NMT_CMD_START, 2);
+    co_sim_run_until(&net->bus, 1300 * MS);
+    co_node_set_uint(&net->devices[0].node, 0x2000, 0, 0xBEEF);
+    co_sim_run_until(&net->bus, 1400 * MS);
+    CHECK_EQ(count_frames(net, 0, "182#EFBE0000"), 1);
     free(net);
 }
 
