@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-__all__ = ["Diagnostic", "EdsError", "Error"]
+__all__ = ["ABORT_TEXT", "Diagnostic", "EdsError", "Error", "SdoAbort"]
 
 
 class Error(Exception):
@@ -72,3 +72,55 @@ class EdsError(Error):
         self.key = first.key
         self.reason = first.message
         super().__init__("\n".join(str(p) for p in self.problems))
+
+
+#: CiA 301 texts of the SDO abort codes (those the canola core uses).
+ABORT_TEXT: dict[int, str] = {
+    0x05030000: "Toggle bit not alternated",
+    0x05040000: "SDO protocol timed out",
+    0x05040001: "Client/server command specifier not valid or unknown",
+    0x05040002: "Invalid block size",
+    0x05040003: "Invalid sequence number",
+    0x05040004: "CRC error",
+    0x05040005: "Out of memory",
+    0x06010000: "Unsupported access to an object",
+    0x06010001: "Attempt to read a write only object",
+    0x06010002: "Attempt to write a read only object",
+    0x06020000: "Object does not exist in the object dictionary",
+    0x06040041: "Object cannot be mapped to the PDO",
+    0x06040042: "The number and length of the objects to be mapped would exceed PDO length",
+    0x06040043: "General parameter incompatibility reason",
+    0x06040047: "General internal incompatibility in the device",
+    0x06060000: "Access failed due to a hardware error",
+    0x06070010: "Data type does not match, length of service parameter does not match",
+    0x06070012: "Data type does not match, length of service parameter too high",
+    0x06070013: "Data type does not match, length of service parameter too low",
+    0x06090011: "Sub-index does not exist",
+    0x06090030: "Invalid value for parameter (download only)",
+    0x06090031: "Value of parameter written too high (download only)",
+    0x06090032: "Value of parameter written too low (download only)",
+    0x06090036: "Maximum value is less than minimum value",
+    0x060A0023: "Resource not available: SDO connection",
+    0x08000000: "General error",
+    0x08000020: "Data cannot be transferred or stored to the application",
+    0x08000021: "Data cannot be transferred or stored to the application because of local "
+                "control",
+    0x08000022: "Data cannot be transferred or stored to the application because of the "
+                "present device state",
+    0x08000023: "Object dictionary dynamic generation fails or no object dictionary is "
+                "present",
+    0x08000024: "No data available",
+}
+
+
+class SdoAbort(Error):  # noqa: N818 -- the CiA name of the event
+    """An object dictionary access (local or over SDO) ended with a CiA 301 abort code.
+
+    ``code`` is the abort code; ``text`` its CiA 301 meaning ("unknown abort code" for
+    codes not in :data:`ABORT_TEXT`).
+    """
+
+    def __init__(self, code: int) -> None:
+        self.code = code
+        self.text = ABORT_TEXT.get(code, "unknown abort code")
+        super().__init__(f"SDO abort 0x{code:08X}: {self.text}")
