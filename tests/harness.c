@@ -151,3 +151,28 @@ int test_find_event(const test_node_t *t, co_ec_event_kind_t kind, uint8_t node_
     }
     return -1;
 }
+
+void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
+{
+    co_frame_t f = frm(id, hex);
+    co_node_ingest(&t->node, now, &f);
+}
+
+co_abort_t write_u8(test_node_t *t, uint16_t idx, uint8_t sub, uint8_t v)
+{
+    return co_node_write_net(&t->node, idx, sub, &v, 1);
+}
+
+co_abort_t write_u16(test_node_t *t, uint16_t idx, uint8_t sub, uint16_t v)
+{
+    uint8_t b[2];
+    co_put_u16(b, v);
+    return co_node_write_net(&t->node, idx, sub, b, 2);
+}
+
+co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v)
+{
+    uint8_t b[4];
+    co_put_u32(b, v);
+    return co_node_write_net(&t->node, idx, sub, b, 4);
+}

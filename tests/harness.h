@@ -50,6 +50,13 @@ typedef struct test_node {
 co_err_t test_node_init(test_node_t *t, uint8_t node_id, uint16_t hb_ms);
 /** Index of the first recorded event of `kind` for `node_id`, or -1. */
 int test_find_event(const test_node_t *t, co_ec_event_kind_t kind, uint8_t node_id);
+/** Feed frm(id, hex) to the node at `now`. */
+void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex);
+/** Write a little-endian value as the network would (co_node_write_net); the abort code. */
+co_abort_t write_u8(test_node_t *t, uint16_t idx, uint8_t sub, uint8_t v);
+co_abort_t write_u16(test_node_t *t, uint16_t idx, uint8_t sub, uint16_t v);
+co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v);
+
 /** 0x1016 value for consuming `node_id` with `time_ms`. */
 static inline uint32_t hb_consumer_value(uint8_t node_id, uint16_t time_ms)
 {

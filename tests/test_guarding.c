@@ -6,12 +6,6 @@
 
 static char dump[4096];
 
-static void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
-{
-    co_frame_t f = frm(id, hex);
-    co_node_ingest(&t->node, now, &f);
-}
-
 static void set_u16(test_node_t *t, uint16_t idx, uint16_t v)
 {
     uint8_t b[2];

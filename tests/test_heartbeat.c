@@ -6,26 +6,6 @@
 
 static char dump[4096];
 
-static void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
-{
-    co_frame_t f = frm(id, hex);
-    co_node_ingest(&t->node, now, &f);
-}
-
-static co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v)
-{
-    uint8_t b[4];
-    co_put_u32(b, v);
-    return co_node_write_net(&t->node, idx, sub, b, 4);
-}
-
-static co_abort_t write_u16(test_node_t *t, uint16_t idx, uint8_t sub, uint16_t v)
-{
-    uint8_t b[2];
-    co_put_u16(b, v);
-    return co_node_write_net(&t->node, idx, sub, b, 2);
-}
-
 static void test_producer_period_and_state_byte(void)
 {
     test_node_t t;

@@ -4,12 +4,6 @@
 
 static char dump[4096];
 
-static void ingest(test_node_t *t, uint64_t now, const char *hex, uint32_t id)
-{
-    co_frame_t f = frm(id, hex);
-    co_node_ingest(&t->node, now, &f);
-}
-
 static void test_boot_sends_one_bootup_then_pre_operational(void)
 {
     test_node_t t;
@@ -45,16 +39,16 @@ static void test_commands_to_own_id_and_to_all(void)
     test_node_t t;
     test_node_init(&t, 5, 0);
     co_node_start(&t.node, 0);
-    ingest(&t, 1, "01 05", 0x000);
+    ingest(&t, 1, 0x000, "01 05");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_OPERATIONAL);
-    ingest(&t, 2, "02 00", 0x000);
+    ingest(&t, 2, 0x000, "02 00");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_STOPPED);
-    ingest(&t, 3, "80 05", 0x000);
+    ingest(&t, 3, 0x000, "80 05");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
-    ingest(&t, 4, "01 00", 0x000);
+    ingest(&t, 4, 0x000, "01 00");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_OPERATIONAL);
     /* Addressed to another node: no change, not malformed. */
-    ingest(&t, 5, "02 06", 0x000);
+    ingest(&t, 5, 0x000, "02 06");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_OPERATIONAL);
     CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 0);
     CHECK_EQ(t.bus.count, 1); /* state changes send nothing by themselves */
@@ -65,11 +59,11 @@ static void test_wrong_length_and_unknown_command_are_ignored(void)
     test_node_t t;
     test_node_init(&t, 5, 0);
     co_node_start(&t.node, 0);
-    ingest(&t, 1, "01", 0x000);
-    ingest(&t, 1, "01 05 00", 0x000);
-    ingest(&t, 1, "", 0x000);
-    ingest(&t, 1, "03 05", 0x000);
-    ingest(&t, 1, "R2", 0x000);
+    ingest(&t, 1, 0x000, "01");
+    ingest(&t, 1, 0x000, "01 05 00");
+    ingest(&t, 1, 0x000, "");
+    ingest(&t, 1, 0x000, "03 05");
+    ingest(&t, 1, 0x000, "R2");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
     CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 5);
 }
@@ -82,9 +76,9 @@ static void test_reset_node_restores_application_objects(void)
     CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 0xCAFE), CO_ABORT_NONE);
     CHECK_EQ(co_node_set_uint(&t.node, 0x1017, 0, 500), CO_ABORT_NONE);
     CHECK_EQ(t.od.app_u32, 0xCAFE);
-    ingest(&t, 10, "01 05", 0x000);
+    ingest(&t, 10, 0x000, "01 05");
     fake_clear(&t.bus);
-    ingest(&t, 20, "81 05", 0x000);
+    ingest(&t, 20, 0x000, "81 05");
     CHECK_EQ(t.od.app_u32, 0x12345678);
     CHECK_EQ(t.od.hb_period_ms, 0);
     CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#00");
@@ -100,7 +94,7 @@ static void test_reset_communication_keeps_application_objects(void)
     co_node_set_uint(&t.node, 0x1017, 0, 500);
     fake_clear(&t.bus);
     t.reset_count = 0;
-    ingest(&t, 20, "82 00", 0x000);
+    ingest(&t, 20, 0x000, "82 00");
     CHECK_EQ(t.od.app_u32, 0xCAFE);
     CHECK_EQ(t.od.hb_period_ms, 0);
     CHECK_EQ(t.reset_count, 1);
@@ -131,7 +125,7 @@ static void test_unconfigured_node_stays_initialising(void)
     co_node_start(&t.node, 0);
     CHECK_EQ(t.bus.count, 0);
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_INITIALISING);
-    ingest(&t, 1, "01 00", 0x000);
+    ingest(&t, 1, 0x000, "01 00");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_INITIALISING);
     CHECK_EQ(co_node_stats(&t.node)->rx_gated, 1);
     co_node_poll(&t.node, 1000000);
@@ -199,10 +193,10 @@ static void test_stopped_node_still_obeys_nmt(void)
     test_node_t t;
     test_node_init(&t, 5, 0);
     co_node_start(&t.node, 0);
-    ingest(&t, 1, "02 05", 0x000);
+    ingest(&t, 1, 0x000, "02 05");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_STOPPED);
     fake_clear(&t.bus);
-    ingest(&t, 2, "81 05", 0x000);
+    ingest(&t, 2, 0x000, "81 05");
     CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#00");
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
 }

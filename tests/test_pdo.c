@@ -24,31 +24,6 @@ static void rec_rpdo(void *user, uint16_t rpdo)
 
 static const char *bus(test_node_t *t) { return fake_dump(&t->bus, dump, sizeof dump); }
 
-static void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
-{
-    co_frame_t f = frm(id, hex);
-    co_node_ingest(&t->node, now, &f);
-}
-
-static co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v)
-{
-    uint8_t b[4];
-    co_put_u32(b, v);
-    return co_node_write_net(&t->node, idx, sub, b, 4);
-}
-
-static co_abort_t write_u16(test_node_t *t, uint16_t idx, uint8_t sub, uint16_t v)
-{
-    uint8_t b[2];
-    co_put_u16(b, v);
-    return co_node_write_net(&t->node, idx, sub, b, 2);
-}
-
-static co_abort_t write_u8(test_node_t *t, uint16_t idx, uint8_t sub, uint8_t v)
-{
-    return co_node_write_net(&t->node, idx, sub, &v, 1);
-}
-
 /* A started node (no heartbeat), recording RPDOs, boot-up cleared; operational if asked. */
 static void setup(test_node_t *t, bool operational)
 {

@@ -152,14 +152,14 @@ static bool device_accepts(const device_t *d, uint32_t id)
 
 /* ---- dictionary access through the node (writes take effect on the services) */
 
-static co_abort_t write_u32(co_node_t *node, uint16_t index, uint8_t sub, uint32_t value)
+static co_abort_t node_write_u32(co_node_t *node, uint16_t index, uint8_t sub, uint32_t value)
 {
     uint8_t wire[4];
     co_put_u32(wire, value);
     return co_node_write_net(node, index, sub, wire, sizeof wire);
 }
 
-static co_abort_t write_u8(co_node_t *node, uint16_t index, uint8_t sub, uint8_t value)
+static co_abort_t node_write_u8(co_node_t *node, uint16_t index, uint8_t sub, uint8_t value)
 {
     return co_node_write_net(node, index, sub, &value, 1);
 }
@@ -384,18 +384,18 @@ static bool spans_overlap(const sniffer_t *s, uint32_t a, uint32_t b)
  * SDO download from a master would write it. */
 static void configure_channel_1(co_node_t *node)
 {
-    CHECK_EQ(write_u32(node, 0x1201, 1, 0x640), CO_ABORT_NONE);
-    CHECK_EQ(write_u32(node, 0x1201, 2, 0x5C0), CO_ABORT_NONE);
-    CHECK_EQ(write_u8(node, 0x1201, 3, 1), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(node, 0x1201, 1, 0x640), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(node, 0x1201, 2, 0x5C0), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u8(node, 0x1201, 3, 1), CO_ABORT_NONE);
 }
 
 /* Client channel `ch` of a master at server `id` through 0x1280 + ch. */
 static void configure_client(master_t *m, uint8_t ch, uint32_t cob_tx, uint32_t cob_rx, uint8_t id)
 {
     uint16_t index = (uint16_t)(0x1280 + ch);
-    CHECK_EQ(write_u32(&m->node, index, 1, cob_tx), CO_ABORT_NONE);
-    CHECK_EQ(write_u32(&m->node, index, 2, cob_rx), CO_ABORT_NONE);
-    CHECK_EQ(write_u8(&m->node, index, 3, id), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&m->node, index, 1, cob_tx), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&m->node, index, 2, cob_rx), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u8(&m->node, index, 3, id), CO_ABORT_NONE);
 }
 
 /* ---- server channels, frame by frame */
@@ -449,11 +449,11 @@ static void test_server_channel_1_off_again_when_sub1_invalid(void)
     device_start_fake(d, 5);
     configure_channel_1(&d->node);
     CHECK(device_accepts(d, 0x640));
-    CHECK_EQ(write_u32(&d->node, 0x1201, 1, COB_OFF), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1201, 1, COB_OFF), CO_ABORT_NONE);
     CHECK(!device_accepts(d, 0x640));
     CHECK_STR(exchange(d, frm(0x640, "40 00 10 00 00 00 00 00"), buf, sizeof buf), "");
     /* valid again: it answers again */
-    CHECK_EQ(write_u32(&d->node, 0x1201, 1, 0x640), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1201, 1, 0x640), CO_ABORT_NONE);
     CHECK_STR(exchange(d, frm(0x640, "40 00 10 00 00 00 00 00"), buf, sizeof buf),
               "5C0#4300100091010000");
     free(d);
@@ -465,15 +465,15 @@ static void test_server_channel_with_invalid_response_cob_does_not_listen(void)
     device_t *d = calloc(1, sizeof *d);
     char buf[256];
     device_start_fake(d, 5);
-    CHECK_EQ(write_u32(&d->node, 0x1201, 1, 0x640), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1201, 1, 0x640), CO_ABORT_NONE);
     CHECK_EQ(get_uint(&d->node, 0x1201, 2), COB_OFF);
     CHECK(!device_accepts(d, 0x640));
     CHECK_STR(exchange(d, frm(0x640, "40 00 10 00 00 00 00 00"), buf, sizeof buf), "");
     /* and once sub2 is valid it does */
-    CHECK_EQ(write_u32(&d->node, 0x1201, 2, 0x5C0), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1201, 2, 0x5C0), CO_ABORT_NONE);
     CHECK(device_accepts(d, 0x640));
     /* invalid sub2 again (same identifier, bit 31 set): off again */
-    CHECK_EQ(write_u32(&d->node, 0x1201, 2, COB_OFF | 0x5C0), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1201, 2, COB_OFF | 0x5C0), CO_ABORT_NONE);
     CHECK(!device_accepts(d, 0x640));
     CHECK_STR(exchange(d, frm(0x640, "40 00 10 00 00 00 00 00"), buf, sizeof buf), "");
     free(d);
@@ -485,8 +485,8 @@ static void test_server_channels_1_and_2_are_independent(void)
     char buf[256];
     device_start_fake(d, 5);
     configure_channel_1(&d->node);
-    CHECK_EQ(write_u32(&d->node, 0x1202, 1, 0x641), CO_ABORT_NONE);
-    CHECK_EQ(write_u32(&d->node, 0x1202, 2, 0x5C1), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1202, 1, 0x641), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1202, 2, 0x5C1), CO_ABORT_NONE);
     /* open a segmented upload on channel 1, then use channel 2 in between */
     CHECK_STR(exchange(d, frm(0x640, "40 08 10 00 00 00 00 00"), buf, sizeof buf),
               "5C0#410810000E000000");
@@ -497,7 +497,7 @@ static void test_server_channels_1_and_2_are_independent(void)
     CHECK_STR(exchange(d, frm(0x640, "60 00 00 00 00 00 00 00"), buf, sizeof buf),
               "5C0#0063616E6F6C6120");
     /* turning channel 2 off leaves channel 1's transfer alone */
-    CHECK_EQ(write_u32(&d->node, 0x1202, 1, COB_OFF), CO_ABORT_NONE);
+    CHECK_EQ(node_write_u32(&d->node, 0x1202, 1, COB_OFF), CO_ABORT_NONE);
     CHECK_STR(exchange(d, frm(0x640, "70 00 00 00 00 00 00 00"), buf, sizeof buf),
               "5C0#116578616D706C65");
     free(d);

@@ -5,13 +5,6 @@
 
 static co_sim_storage_t g_storage;
 
-static co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v)
-{
-    uint8_t b[4];
-    co_put_u32(b, v);
-    return co_node_write_net(&t->node, idx, sub, b, 4);
-}
-
 /* A power-on: fresh values (the example's defaults), the same storage. */
 static void power_on(test_node_t *t, uint8_t id, bool with_storage)
 {

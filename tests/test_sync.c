@@ -34,31 +34,13 @@ static void setup(test_node_t *t)
     fake_clear(&t->bus);
 }
 
-static void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
-{
-    co_frame_t f = frm(id, hex);
-    co_node_ingest(&t->node, now, &f);
-}
-
-static co_abort_t write_u32(test_node_t *t, uint16_t idx, uint32_t v)
-{
-    uint8_t b[4];
-    co_put_u32(b, v);
-    return co_node_write_net(&t->node, idx, 0, b, 4);
-}
-
-static co_abort_t write_u8(test_node_t *t, uint16_t idx, uint8_t v)
-{
-    return co_node_write_net(&t->node, idx, 0, &v, 1);
-}
-
 /* Make the node a SYNC producer on 0x080 at `now` with `period_us` (and 0x1019 first). */
 static void make_producer(test_node_t *t, uint64_t now, uint32_t period_us, uint8_t overflow)
 {
     t->node.now_us = now;
-    CHECK_EQ(write_u8(t, 0x1019, overflow), CO_ABORT_NONE);
-    CHECK_EQ(write_u32(t, 0x1005, 0x40000080u), CO_ABORT_NONE);
-    CHECK_EQ(write_u32(t, 0x1006, period_us), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(t, 0x1019, 0, overflow), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1005, 0, 0x40000080u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1006, 0, period_us), CO_ABORT_NONE);
 }
 
 /* ---- producer */
@@ -162,17 +144,17 @@ static void test_period_change_takes_effect_at_once(void)
     co_node_poll(&t.node, 20 * MS);
     /* New period: the next SYNC one new period from now; the counter goes on. */
     t.node.now_us = 23 * MS;
-    CHECK_EQ(write_u32(&t, 0x1006, 5000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 5000), CO_ABORT_NONE);
     CHECK_EQ(co_node_poll(&t.node, 23 * MS), 28 * MS);
     CHECK_EQ(co_node_poll(&t.node, 28 * MS), 33 * MS);
     /* Period 0: idle. */
     t.node.now_us = 30 * MS;
-    CHECK_EQ(write_u32(&t, 0x1006, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 0), CO_ABORT_NONE);
     CHECK_EQ(co_node_poll(&t.node, 33 * MS), CO_TIME_NEVER);
     CHECK_EQ(co_node_poll(&t.node, 1000 * MS), CO_TIME_NEVER);
     /* Enabled again: from scratch, counter at 1. */
     t.node.now_us = 1000 * MS;
-    CHECK_EQ(write_u32(&t, 0x1006, 20000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 20000), CO_ABORT_NONE);
     CHECK_EQ(co_node_poll(&t.node, 1000 * MS), 1020 * MS);
     co_node_poll(&t.node, 1020 * MS);
     CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "080#01 080#02 080#03 080#01");
@@ -186,11 +168,11 @@ static void test_producer_bit_of_0x1005(void)
     co_node_poll(&t.node, 10 * MS);
     /* Bit 30 cleared: idle, though the period stays. */
     t.node.now_us = 12 * MS;
-    CHECK_EQ(write_u32(&t, 0x1005, 0x80), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x80), CO_ABORT_NONE);
     CHECK_EQ(co_node_poll(&t.node, 20 * MS), CO_TIME_NEVER);
     /* Set again: one period from now. */
     t.node.now_us = 57 * MS;
-    CHECK_EQ(write_u32(&t, 0x1005, 0x40000080u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x40000080u), CO_ABORT_NONE);
     CHECK_EQ(co_node_poll(&t.node, 57 * MS), 67 * MS);
     co_node_poll(&t.node, 67 * MS);
     CHECK_EQ(fake_count_id(&t.bus, 0x080), 2);
@@ -201,8 +183,8 @@ static void test_producer_29_bit_cob_id(void)
     test_node_t t;
     setup(&t);
     t.node.now_us = 0;
-    CHECK_EQ(write_u32(&t, 0x1005, 0x60000000u | 0x12345u), CO_ABORT_NONE);
-    CHECK_EQ(write_u32(&t, 0x1006, 1000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x60000000u | 0x12345u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 1000), CO_ABORT_NONE);
     CHECK_EQ(co_node_poll(&t.node, 1000), 2000);
     CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "00012345#");
     CHECK_EQ(t.bus.frames[0].flags, CO_FRAME_EXT);
@@ -253,20 +235,20 @@ static void test_overflow_write_rules(void)
 {
     test_node_t t;
     setup(&t);
-    CHECK_EQ(write_u8(&t, 0x1019, 1), CO_ABORT_VALUE);
-    CHECK_EQ(write_u8(&t, 0x1019, 241), CO_ABORT_VALUE);
-    CHECK_EQ(write_u8(&t, 0x1019, 255), CO_ABORT_VALUE);
-    CHECK_EQ(write_u8(&t, 0x1019, 2), CO_ABORT_NONE);
-    CHECK_EQ(write_u8(&t, 0x1019, 240), CO_ABORT_NONE);
-    CHECK_EQ(write_u8(&t, 0x1019, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 1), CO_ABORT_VALUE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 241), CO_ABORT_VALUE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 255), CO_ABORT_VALUE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 2), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 240), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 0), CO_ABORT_NONE);
     CHECK_EQ(t.od.sync_overflow, 0);
     /* Not while a period is set, producer or not. */
-    CHECK_EQ(write_u32(&t, 0x1006, 10000), CO_ABORT_NONE);
-    CHECK_EQ(write_u8(&t, 0x1019, 5), CO_ABORT_DATA_STATE);
-    CHECK_EQ(write_u8(&t, 0x1019, 0), CO_ABORT_DATA_STATE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 10000), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 5), CO_ABORT_DATA_STATE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 0), CO_ABORT_DATA_STATE);
     CHECK_EQ(t.od.sync_overflow, 0);
-    CHECK_EQ(write_u32(&t, 0x1006, 0), CO_ABORT_NONE);
-    CHECK_EQ(write_u8(&t, 0x1019, 5), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 5), CO_ABORT_NONE);
     CHECK_EQ(t.od.sync_overflow, 5);
 }
 
@@ -281,7 +263,7 @@ static void test_consumer_reports_sync_with_counter(void)
     CHECK_EQ(syncs.count, 1);
     CHECK_EQ(syncs.counters[0], 0);
     CHECK_EQ(co_sync_counter(&t.node), 0);
-    CHECK_EQ(write_u8(&t, 0x1019, 4), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 4), CO_ABORT_NONE);
     ingest(&t, 2 * MS, 0x080, "03");
     CHECK_EQ(syncs.count, 2);
     CHECK_EQ(syncs.counters[1], 3);
@@ -300,7 +282,7 @@ static void test_consumer_wrong_length_is_not_reported(void)
     CHECK_EQ(syncs.count, 0);
     CHECK(!co_sync_in_window(&t.node, 1 * MS));
     /* A counter expected: none or two bytes are wrong. */
-    CHECK_EQ(write_u8(&t, 0x1019, 10), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 10), CO_ABORT_NONE);
     ingest(&t, 2 * MS, 0x080, "");
     ingest(&t, 3 * MS, 0x080, "01 02");
     CHECK_EQ(syncs.count, 0);
@@ -319,7 +301,7 @@ static void test_window_edges(void)
     test_node_t t;
     setup(&t);
     CHECK(!co_sync_in_window(&t.node, 0)); /* before any SYNC, even without a window */
-    CHECK_EQ(write_u32(&t, 0x1007, 1000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1007, 0, 1000), CO_ABORT_NONE);
     CHECK(!co_sync_in_window(&t.node, 0));
     ingest(&t, 50 * MS, 0x080, "");
     CHECK(co_sync_in_window(&t.node, 50 * MS));
@@ -331,10 +313,10 @@ static void test_window_edges(void)
     CHECK(co_sync_in_window(&t.node, 60 * MS + 999));
     CHECK(!co_sync_in_window(&t.node, 60 * MS + 1000));
     /* A new window length counts at once; 0 means no window. */
-    CHECK_EQ(write_u32(&t, 0x1007, 2000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1007, 0, 2000), CO_ABORT_NONE);
     CHECK(co_sync_in_window(&t.node, 60 * MS + 1999));
     CHECK(!co_sync_in_window(&t.node, 60 * MS + 2000));
-    CHECK_EQ(write_u32(&t, 0x1007, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1007, 0, 0), CO_ABORT_NONE);
     CHECK(co_sync_in_window(&t.node, 10000 * MS));
 }
 
@@ -361,7 +343,7 @@ static void test_cob_id_change_moves_the_route(void)
     co_frame_t new_id = frm(0x081, "");
     CHECK(co_node_accepts(&t.node, &old_id));
     uint32_t changes = t.bus.routes_changed;
-    CHECK_EQ(write_u32(&t, 0x1005, 0x81), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x81), CO_ABORT_NONE);
     CHECK(t.bus.routes_changed > changes);
     CHECK(!co_node_accepts(&t.node, &old_id));
     CHECK(co_node_accepts(&t.node, &new_id));
@@ -369,10 +351,10 @@ static void test_cob_id_change_moves_the_route(void)
     CHECK_EQ(syncs.count, 1);
     /* Only the producer bit changes: same route, no rebuild. */
     changes = t.bus.routes_changed;
-    CHECK_EQ(write_u32(&t, 0x1005, 0x40000081u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x40000081u), CO_ABORT_NONE);
     CHECK_EQ(t.bus.routes_changed, changes);
     /* A 29-bit identifier. */
-    CHECK_EQ(write_u32(&t, 0x1005, 0x20000000u | 0x1ABCDu), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x20000000u | 0x1ABCDu), CO_ABORT_NONE);
     co_frame_t ext = frm(0x1ABCD, "");
     CHECK(co_node_accepts(&t.node, &ext));
     ingest(&t, 2 * MS, 0x1ABCD, "");

@@ -33,19 +33,6 @@ static void setup(test_node_t *t)
     fake_clear(&t->bus);
 }
 
-static void ingest(test_node_t *t, uint64_t now, uint32_t id, const char *hex)
-{
-    co_frame_t f = frm(id, hex);
-    co_node_ingest(&t->node, now, &f);
-}
-
-static co_abort_t write_u32(test_node_t *t, uint16_t idx, uint32_t v)
-{
-    uint8_t b[4];
-    co_put_u32(b, v);
-    return co_node_write_net(&t->node, idx, 0, b, 4);
-}
-
 /* Days from 1984-01-01 to a Gregorian date, counted the slow, obvious way. */
 static bool leap(unsigned y) { return (y % 4 == 0 && y % 100 != 0) || y % 400 == 0; }
 
@@ -145,7 +132,7 @@ static void test_send_byte_exact(void)
 {
     test_node_t t;
     setup(&t);
-    CHECK_EQ(write_u32(&t, 0x1012, 0x40000100u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x40000100u), CO_ABORT_NONE);
     co_time_of_day_t noon = {43200000u, 5844};
     CHECK_EQ(co_time_send(&t.node, &noon), CO_OK);
     co_time_of_day_t last = {LAST_MS, 65535};
@@ -154,7 +141,7 @@ static void test_send_byte_exact(void)
     /* In operational too, and on a 29-bit identifier. */
     ingest(&t, 1 * MS, 0x000, "01 05");
     fake_clear(&t.bus);
-    CHECK_EQ(write_u32(&t, 0x1012, 0x60000000u | 0x1ABCDEu), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x60000000u | 0x1ABCDEu), CO_ABORT_NONE);
     co_time_of_day_t small = {1, 2};
     CHECK_EQ(co_time_send(&t.node, &small), CO_OK);
     CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "001ABCDE#010000000200");
@@ -175,7 +162,7 @@ static void test_send_refused(void)
     fake_clear(&t.bus);
     /* 0x1012 = 0x80000100: a consumer, no producer. */
     CHECK_EQ(co_time_send(&t.node, &noon), CO_ERR_STATE);
-    CHECK_EQ(write_u32(&t, 0x1012, 0xC0000100u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0xC0000100u), CO_ABORT_NONE);
     co_time_of_day_t bad = {86400000u, 0};
     CHECK_EQ(co_time_send(&t.node, &bad), CO_ERR_ARG);
     CHECK_EQ(co_time_send(&t.node, NULL), CO_ERR_ARG);
@@ -231,12 +218,12 @@ static void test_consumer_bit_and_state(void)
     CHECK_EQ(seen.count, 1);
     /* Bit 31 cleared: not consumed any more. */
     co_frame_t time = frm(0x100, "");
-    CHECK_EQ(write_u32(&t, 0x1012, 0x00000100u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x00000100u), CO_ABORT_NONE);
     CHECK(!co_node_accepts(&t.node, &time));
     ingest(&t, 5 * MS, 0x100, "01 00 00 00 00 00");
     CHECK_EQ(seen.count, 1);
     /* Consumed again, on another identifier. */
-    CHECK_EQ(write_u32(&t, 0x1012, 0x80000101u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x80000101u), CO_ABORT_NONE);
     co_frame_t moved = frm(0x101, "");
     CHECK(co_node_accepts(&t.node, &moved));
     CHECK(!co_node_accepts(&t.node, &time));
@@ -246,7 +233,7 @@ static void test_consumer_bit_and_state(void)
     CHECK_EQ(seen.times[1].days, 3);
     /* Producer bit only: routes unchanged. */
     uint32_t changes = t.bus.routes_changed;
-    CHECK_EQ(write_u32(&t, 0x1012, 0xC0000101u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0xC0000101u), CO_ABORT_NONE);
     CHECK_EQ(t.bus.routes_changed, changes);
 }
 
