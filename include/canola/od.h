@@ -34,6 +34,12 @@
 extern "C" {
 #endif
 
+/** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
+ *  refuse to compile against a library whose layout differs. */
+#ifndef CO_OD_FORMAT
+#define CO_OD_FORMAT 1
+#endif
+
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
 typedef enum co_type {
     CO_TYPE_BOOLEAN = 0x01,

@@ -256,6 +256,39 @@ def test_cli_eds_error_exits_1(tmp_path: Path) -> None:
     assert "Traceback" not in result.stderr
 
 
+def run_canola(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "canola.cli", *args], capture_output=True,
+                          text=True, check=False, cwd=HERE)
+
+
+def test_canola_odgen_command_names_files_after_the_input(tmp_path: Path) -> None:
+    result = run_canola("odgen", str(SAMPLE), "-o", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "sample.c").read_bytes() == (GOLDEN / "sample.c").read_bytes()
+
+
+@pytest.mark.parametrize("args", [["odgen"], ["odgen", str(SAMPLE)], ["frobnicate"], []])
+def test_canola_command_bad_arguments_exit_2_with_one_line(args: list[str]) -> None:
+    result = run_canola(*args)
+    assert result.returncode == 2
+    out = (result.stderr or result.stdout).strip()
+    assert len(out.splitlines()) == 1, out
+
+
+def test_generated_header_refuses_another_dictionary_format(tmp_path: Path) -> None:
+    cc = compiler()
+    generate_sample(tmp_path)
+    probe = tmp_path / "probe.c"
+    probe.write_text('#include "sample.h"\n')
+    ok = compile_c(cc, probe, tmp_path)
+    assert ok.returncode == 0, ok.stderr
+    other = subprocess.run(
+        [cc, *WARNINGS, "-DCO_OD_FORMAT=2", f"-I{INCLUDE}", f"-I{tmp_path}", "-c", str(probe),
+         "-o", str(tmp_path / "probe2.o")], capture_output=True, text=True, check=False)
+    assert other.returncode != 0
+    assert "regenerate it with the odgen of this canola" in other.stderr
+
+
 # --- corpus of real files ---------------------------------------------------------------
 
 

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
 import sys
 from collections.abc import Callable, Sequence
@@ -56,6 +57,9 @@ from pathlib import Path
 from canola import eds
 from canola.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
+
+# The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
+OD_FORMAT = 1
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -445,6 +449,11 @@ def _header(name: str, source: str, struct: list[str], skipped: Sequence[eds.Var
         "",
         '#include "canola/od.h"',
         "",
+        f"#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != {OD_FORMAT}",
+        f'#error "{name}.h was generated for object dictionary format {OD_FORMAT}: '
+        'regenerate it with the odgen of this canola"',
+        "#endif",
+        "",
         "#ifdef __cplusplus",
         'extern "C" {',
         "#endif",
@@ -578,14 +587,22 @@ def _int_range(low: int, high: int) -> Callable[[str], int]:
     return conv
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Command line: ``canola-odgen INPUT --name NAME --out-dir DIR [--node-id N]``."""
-    p = _Parser(prog="canola-odgen",
+def _name_from_path(path: str) -> str:
+    """A C identifier from a file name: its stem, lower case, other characters as '_'."""
+    stem = os.path.splitext(os.path.basename(path))[0].lower()
+    name = re.sub(r"[^a-z0-9_]", "_", stem)
+    return name if name and not name[0].isdigit() else "od_" + name
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "canola-odgen") -> int:
+    """Command line: ``canola odgen INPUT -o DIR [--name NAME] [--node-id N]``."""
+    p = _Parser(prog=prog,
                 description="Generate a canola object dictionary (C) from an EDS/DCF.")
     p.add_argument("input", help="EDS or DCF file")
-    p.add_argument("--name", required=True, type=_c_name,
-                   help="C name: files NAME.h/NAME.c, symbols NAME_od, NAME_values")
-    p.add_argument("--out-dir", required=True, help="folder for the generated files")
+    p.add_argument("--name", type=_c_name,
+                   help="C name: files NAME.h/NAME.c, symbols NAME_od, NAME_values "
+                        "(default: from the input's file name)")
+    p.add_argument("-o", "--out-dir", required=True, help="folder for the generated files")
     p.add_argument("--node-id", type=_int_range(1, 127),
                    help="node-ID to define as NAME_NODE_ID (default: the DCF's NodeID)")
     p.add_argument("--domain-size", type=_int_range(0, 0xFFFFFFFF), default=0,
@@ -593,10 +610,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--min-string-size", type=_int_range(0, 0xFFFF), default=0,
                    help="minimum capacity of string entries in bytes")
     args = p.parse_args(argv)
+    name: str = args.name if args.name is not None else _name_from_path(args.input)
+    if _NAME.fullmatch(name) is None:
+        p.error(f"cannot make a C name of {args.input!r}: give --name")
     opts = GenerateOptions(domain_size=args.domain_size, min_string_size=args.min_string_size,
                            node_id=args.node_id)
     try:
-        generate_files(args.input, args.name, args.out_dir, opts)
+        generate_files(args.input, name, args.out_dir, opts)
     except EdsError as exc:
         print(exc, file=sys.stderr)
         return 1
