@@ -97,18 +97,39 @@ static void run_until_done(co_sim_bus_t *bus, client_t *c, uint64_t limit_us)
     }
 }
 
+/* ---- a client (node 1) and a server (node 5) on one bus, past their boot-ups */
+
+typedef struct pair {
+    co_sim_bus_t bus;
+    server_t srv;
+    client_t cli;
+} pair_t;
+
+static pair_t *pair_up(uint32_t bitrate, uint32_t cap)
+{
+    pair_t *p = calloc(1, sizeof *p);
+    co_sim_bus_init(&p->bus, bitrate);
+    server_start(&p->bus, &p->srv, 5);
+    client_start(&p->bus, &p->cli, 1, 5, cap);
+    co_sim_run_until(&p->bus, 1 * MS);
+    return p;
+}
+
+static void pair_free(pair_t *p)
+{
+    free(p->cli.buf);
+    free(p);
+}
+
 /* ---- tests */
 
 static void test_ten_mebibytes_block_both_ways(void)
 {
     const uint32_t size = 10u * 1024u * 1024u;
-    co_sim_bus_t *bus = calloc(1, sizeof *bus);
-    server_t *srv = calloc(1, sizeof *srv);
-    client_t *cli = calloc(1, sizeof *cli);
-    co_sim_bus_init(bus, 0);
-    server_start(bus, srv, 5);
-    client_start(bus, cli, 1, 5, size);
-    co_sim_run_until(bus, 1 * MS);
+    pair_t *pair = pair_up(0, size);
+    co_sim_bus_t *bus = &pair->bus;
+    server_t *srv = &pair->srv;
+    client_t *cli = &pair->cli;
 
     srv->obj = (pattern_domain_t){.length = size, .up_seed = 7};
     CHECK_EQ(
@@ -134,22 +155,16 @@ static void test_ten_mebibytes_block_both_ways(void)
     CHECK(srv->obj.pieces >= size / CO_SDO_BUF_SIZE);
     CHECK_EQ(co_node_stats(&cli->node)->tx_overflow, 0);
     CHECK_EQ(co_node_stats(&srv->node)->tx_overflow, 0);
-    free(cli->buf);
-    free(cli);
-    free(srv);
-    free(bus);
+    pair_free(pair);
 }
 
 static void test_segmented_one_mebibyte_both_ways(void)
 {
     const uint32_t size = 1024u * 1024u;
-    co_sim_bus_t *bus = calloc(1, sizeof *bus);
-    server_t *srv = calloc(1, sizeof *srv);
-    client_t *cli = calloc(1, sizeof *cli);
-    co_sim_bus_init(bus, 0);
-    server_start(bus, srv, 5);
-    client_start(bus, cli, 1, 5, size);
-    co_sim_run_until(bus, 1 * MS);
+    pair_t *pair = pair_up(0, size);
+    co_sim_bus_t *bus = &pair->bus;
+    server_t *srv = &pair->srv;
+    client_t *cli = &pair->cli;
     srv->obj = (pattern_domain_t){.length = size, .up_seed = 3, .down_seed = 3};
     co_sdo_upload(&cli->node, 0, 0x3000, 0, CO_SDO_SEGMENTED, cli->buf, cli->cap, on_done, cli);
     run_until_done(bus, cli, 100000 * MS);
@@ -162,10 +177,7 @@ static void test_segmented_one_mebibyte_both_ways(void)
     CHECK_EQ(cli->abort, CO_ABORT_NONE);
     CHECK_EQ(srv->obj.received, size);
     CHECK(!srv->obj.mismatch);
-    free(cli->buf);
-    free(cli);
-    free(srv);
-    free(bus);
+    pair_free(pair);
 }
 
 #define PAIRS 10
@@ -219,13 +231,10 @@ static void test_ten_clients_ten_servers_at_once(void)
  * with an abort code, and never later than the time-out after its last frame. */
 static void test_thousand_transfers_on_a_lossy_bus(void)
 {
-    co_sim_bus_t *bus = calloc(1, sizeof *bus);
-    server_t *srv = calloc(1, sizeof *srv);
-    client_t *cli = calloc(1, sizeof *cli);
-    co_sim_bus_init(bus, 1000000);
-    server_start(bus, srv, 5);
-    client_start(bus, cli, 1, 5, 2000);
-    co_sim_run_until(bus, 1 * MS);
+    pair_t *pair = pair_up(1000000, 2000);
+    co_sim_bus_t *bus = &pair->bus;
+    server_t *srv = &pair->srv;
+    client_t *cli = &pair->cli;
     co_sim_seed(bus, 20261123);
     co_sim_drop_probability(bus, 0.01);
     uint32_t ok = 0;
@@ -299,10 +308,7 @@ static void test_thousand_transfers_on_a_lossy_bus(void)
     CHECK(ok > 0);
     CHECK(block_ok * 10 >= block_total * 8);
     CHECK(co_sim_stats(bus)->dropped > 100);
-    free(cli->buf);
-    free(cli);
-    free(srv);
-    free(bus);
+    pair_free(pair);
 }
 
 typedef struct value_result {
@@ -330,13 +336,10 @@ static void on_written(void *ctx, uint8_t channel, co_abort_t abort, uint32_t le
 /* One call reads or writes a typed value of a remote node. */
 static void test_typed_values_in_one_call(void)
 {
-    co_sim_bus_t *bus = calloc(1, sizeof *bus);
-    server_t *srv = calloc(1, sizeof *srv);
-    client_t *cli = calloc(1, sizeof *cli);
-    co_sim_bus_init(bus, 1000000);
-    server_start(bus, srv, 5);
-    client_start(bus, cli, 1, 5, 8);
-    co_sim_run_until(bus, 1 * MS);
+    pair_t *pair = pair_up(1000000, 8);
+    co_sim_bus_t *bus = &pair->bus;
+    server_t *srv = &pair->srv;
+    client_t *cli = &pair->cli;
     value_result_t r = {0};
     CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, on_value, &r), CO_OK);
     CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, on_value, &r), CO_ERR_BUSY);
@@ -377,10 +380,7 @@ static void test_typed_values_in_one_call(void)
     CHECK_EQ(r.calls, 1);
     CHECK_EQ(r.abort, CO_ABORT_OUT_OF_MEMORY);
     CHECK_EQ(co_sdo_write_value(&cli->node, 0, 0x2000, 0, 1, 9, on_written, &r), CO_ERR_ARG);
-    free(cli->buf);
-    free(cli);
-    free(srv);
-    free(bus);
+    pair_free(pair);
 }
 
 int main(void)
