@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python format format-check bench clean
+.PHONY: all demo test test-plain test-san test-configs test-python format format-check bench fuzz clean
 
 all: $(BUILD)/build.stamp
 
@@ -50,6 +50,20 @@ test-python:
 	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[test]'
 	cd python && ../$(PY_VENV)/bin/python -m pytest -q tests
 	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src
+
+# libFuzzer (clang) on the frame input path: replay the seed corpus, then fuzz for a while.
+# New inputs go to build-fuzz/; a finding is a crash file there (turn it into a test).
+FUZZ_SECONDS ?= 30
+FUZZ_FLAGS = -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+fuzz:
+	@mkdir -p build-fuzz/corpus-node
+	clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples src/*.c examples/example_od.c \
+	  fuzz/fuzz_node.c -o build-fuzz/fuzz_node
+	build-fuzz/fuzz_node -artifact_prefix=build-fuzz/ fuzz/corpus/node/*
+	@build-fuzz/fuzz_node -artifact_prefix=build-fuzz/ -max_total_time=$(FUZZ_SECONDS) \
+	  -print_final_stats=1 \
+	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
+	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
 
 format-check:
 	@if command -v clang-format >/dev/null 2>&1; then \
