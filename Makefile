@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python format format-check bench fuzz clean
+.PHONY: all demo test test-plain test-san test-configs test-python format format-check bench fuzz coverage py-env clean
 
 all: $(BUILD)/build.stamp
 
@@ -42,14 +42,31 @@ test-configs:
 	  cmake --build build-config-$$name --target canola >/dev/null && \
 	  echo "config $$name: core builds" || exit 1; \
 	done
+	@if command -v clang >/dev/null 2>&1; then \
+	  for f in src/*.c; do \
+	    clang -std=c11 -Wall -Wextra -Wconversion -Wshadow -Werror -pedantic -Iinclude -Isrc \
+	      -fsyntax-only $$f || exit 1; \
+	  done && echo "clang: core builds"; \
+	else echo "clang: SKIPPED (not installed; .ci/run installs it)"; fi
 
 # The Python package (python/): its own virtual environment, pinned tools, pytest, ruff, mypy.
 PY_VENV = build-py/venv
-test-python:
+py-env:
 	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)
 	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[test]'
+
+test-python: py-env
 	cd python && ../$(PY_VENV)/bin/python -m pytest -q tests
 	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src
+
+# Coverage of the core by the C tests (gcovr from the Python environment's pinned tools).
+coverage: py-env
+	cmake -S . -B build-cov $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS="--coverage -O0" \
+	  -DCMAKE_EXE_LINKER_FLAGS=--coverage >/dev/null
+	cmake --build build-cov >/dev/null
+	find build-cov -name '*.gcda' -delete
+	cd build-cov && ctest >/dev/null
+	$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary build-cov | tail -n 3
 
 # libFuzzer (clang) on the frame input path: replay the seed corpus, then fuzz for a while.
 # New inputs go to build-fuzz/; a finding is a crash file there (turn it into a test).
@@ -79,6 +96,6 @@ bench:
 	./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py
+	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz
 
 FORCE:
