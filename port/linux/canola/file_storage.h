@@ -1,0 +1,37 @@
+/*
+ * canola/file_storage.h -- parameter storage in files, for Linux (port/linux).
+ *
+ * Each group is one file in a folder: comm.params (0x1000..0x1FFF) and app.params
+ * (0x2000..0x9FFF). A save writes a temporary file beside it, fsyncs it, renames it over
+ * the old one and fsyncs the folder: whenever the power goes, the folder holds the old
+ * image or the new one, never a mix. A temporary file left by an interrupted save is
+ * ignored (and replaced by the next save).
+ *
+ * Not part of the portable core: uses POSIX file calls. One save at a time per object.
+ */
+#ifndef CANOLA_FILE_STORAGE_H
+#define CANOLA_FILE_STORAGE_H
+
+#include "canola/storage.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CO_FILE_STORAGE_PATH_MAX 256
+
+typedef struct co_file_storage {
+    co_storage_t api; /**< give &api to co_node_config_t.storage */
+    char dir[CO_FILE_STORAGE_PATH_MAX];
+    int fd; /**< the temporary file of a save in progress, or -1 */
+    co_param_group_t group;
+} co_file_storage_t;
+
+/** Storage in folder `dir` (which must exist). Returns CO_ERR_ARG when the path is too
+ *  long or not a folder. */
+co_err_t co_file_storage_init(co_file_storage_t *fs, const char *dir);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CANOLA_FILE_STORAGE_H */
