@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python format format-check bench fuzz coverage py-env clean
+.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz coverage py-env clean
 
 all: $(BUILD)/build.stamp
 
@@ -21,7 +21,7 @@ $(BUILD)/build.stamp: FORCE
 demo: all
 	./$(BUILD)/sim_network
 
-test: test-plain test-san test-configs test-python format-check
+test: test-plain test-san test-configs test-python test-vcan format-check
 
 test-plain:
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
@@ -82,6 +82,17 @@ fuzz:
 	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
 	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
 
+# The SocketCAN driver (port/linux/socketcan.c) on a real Linux CAN stack: vcan0 natively
+# when the kernel has it, else inside canvm (../shared/tools/canvm), else reported NOT RUN.
+VCAN_BUILD = build-vcan
+VCAN_SRC   = $(wildcard src/*.c) examples/example_od.c port/linux/socketcan.c \
+             tests/linux/test_socketcan.c
+test-vcan:
+	@mkdir -p $(VCAN_BUILD)
+	gcc -std=gnu11 -O2 -g -Wall -Wextra -Wconversion -Wshadow -Werror \
+	  -Iinclude -Isrc -Iexamples -Iport/linux -Itests $(VCAN_SRC) -o $(VCAN_BUILD)/test_socketcan
+	tests/linux/run-vcan-tier $(VCAN_BUILD)/test_socketcan
+
 format-check:
 	@if command -v clang-format >/dev/null 2>&1; then \
 	  clang-format --dry-run --Werror $(FORMAT_SRC) && echo "format check: ok"; \
@@ -96,6 +107,6 @@ bench:
 	./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz
+	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan
 
 FORCE:

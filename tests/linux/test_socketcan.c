@@ -1,0 +1,251 @@
+/*
+ * test_socketcan.c -- the SocketCAN driver on a real Linux CAN stack (vcan0).
+ *
+ * A canola node (node-ID 5, the example dictionary, heartbeat 100 ms) runs through the
+ * driver; a second plain raw socket on the same interface plays the rest of the network.
+ * Run by tests/linux/run-vcan-tier (natively or inside canvm). Bounded: alarm(5).
+ */
+#define _GNU_SOURCE
+
+#include "canola/node.h"
+#include "canola/socketcan.h"
+#include "check.h"
+#include "example_od.h"
+
+#include <errno.h>
+#include <linux/can.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <poll.h>
+#include <stdlib.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#define IFNAME "vcan0"
+#define NODE_ID 5
+
+static example_od_t od_values;
+static co_node_t node;
+static co_socketcan_t can;
+static int peer = -1;
+
+/* Frames the peer saw, with the time they arrived. */
+#define LOG_MAX 256
+static struct can_frame seen[LOG_MAX];
+static uint64_t seen_us[LOG_MAX];
+static int seen_count;
+
+static int open_peer(void)
+{
+    int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+    if (fd < 0) {
+        return -1;
+    }
+    struct sockaddr_can addr;
+    memset(&addr, 0, sizeof addr);
+    addr.can_family = AF_CAN;
+    addr.can_ifindex = (int)if_nametoindex(IFNAME);
+    if (addr.can_ifindex == 0 || bind(fd, (struct sockaddr *)&addr, sizeof addr) != 0) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+static void peer_send(uint32_t id, const uint8_t *data, uint8_t len)
+{
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = id;
+    cf.len = len;
+    memcpy(cf.data, data, len);
+    CHECK(write(peer, &cf, sizeof cf) == (ssize_t)sizeof cf);
+}
+
+static void drain_peer(void)
+{
+    struct can_frame cf;
+    while (read(peer, &cf, sizeof cf) == (ssize_t)sizeof cf) {
+        if (seen_count < LOG_MAX) {
+            seen[seen_count] = cf;
+            seen_us[seen_count] = co_linux_now_us();
+            seen_count++;
+        }
+    }
+}
+
+/* Run the node's event loop (and collect what the peer sees) until `until_us`. */
+static void pump_until(uint64_t until_us)
+{
+    for (;;) {
+        uint64_t now = co_linux_now_us();
+        uint64_t next = co_node_poll(&node, now);
+        drain_peer();
+        if (now >= until_us) {
+            return;
+        }
+        uint64_t wake = next < until_us ? next : until_us;
+        int timeout_ms = wake > now ? (int)((wake - now + 999u) / 1000u) : 0;
+        struct pollfd fds[2] = {{.fd = co_socketcan_fd(&can), .events = POLLIN},
+                                {.fd = peer, .events = POLLIN}};
+        int rc = poll(fds, 2, timeout_ms);
+        if (rc < 0 && errno != EINTR) {
+            CHECK(rc >= 0);
+            return;
+        }
+        if (rc > 0 && (fds[0].revents & POLLIN)) {
+            CHECK(co_socketcan_receive(&can, co_linux_now_us()) >= 0);
+        }
+    }
+}
+
+/* Index of the first frame seen at or after `from` with this id and payload, or -1. */
+static int find_seen(int from, uint32_t id, const uint8_t *data, uint8_t len)
+{
+    for (int i = from; i < seen_count; i++) {
+        if (seen[i].can_id == id && seen[i].len == len && memcmp(seen[i].data, data, len) == 0) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+/* Pump until such a frame appears (index) or `ms` passed (-1). */
+static int wait_for(int from, uint32_t id, const uint8_t *data, uint8_t len, unsigned ms)
+{
+    uint64_t end = co_linux_now_us() + (uint64_t)ms * 1000u;
+    for (;;) {
+        int i = find_seen(from, id, data, len);
+        if (i >= 0 || co_linux_now_us() >= end) {
+            return i;
+        }
+        uint64_t step = co_linux_now_us() + 5000u;
+        pump_until(step < end ? step : end);
+    }
+}
+
+/* The socket's kernel filter holds exactly the node's routes, in order. */
+static void check_filter_equals_routes(void)
+{
+    struct can_filter f[CAN_RAW_FILTER_MAX];
+    socklen_t len = sizeof f;
+    CHECK(getsockopt(co_socketcan_fd(&can), SOL_CAN_RAW, CAN_RAW_FILTER, f, &len) == 0);
+    uint32_t n = co_node_route_count(&node);
+    CHECK_EQ(len, n * sizeof f[0]);
+    for (uint32_t i = 0; i < n && i * sizeof f[0] < len; i++) {
+        uint32_t key = co_node_route_id(&node, i);
+        uint32_t want = key & 0x80000000u ? (key & CAN_EFF_MASK) | CAN_EFF_FLAG : key;
+        CHECK_EQ(f[i].can_id, want);
+        CHECK_EQ(f[i].can_mask & CAN_RTR_FLAG, 0); /* remote frames (guarding) pass */
+    }
+}
+
+static void test_filter_after_bind(void) { check_filter_equals_routes(); }
+
+static void test_filter_follows_routes(void)
+{
+    /* Routes are built by reset communication (co_node_start): on_routes_changed must
+     * have reprogrammed the filter. They include NMT (0x000) and the SDO server. */
+    uint32_t n = co_node_route_count(&node);
+    CHECK(n > 0);
+    check_filter_equals_routes();
+    int nmt = 0, sdo = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        nmt |= co_node_route_id(&node, i) == 0x000u;
+        sdo |= co_node_route_id(&node, i) == 0x600u + NODE_ID;
+    }
+    CHECK(nmt && sdo);
+}
+
+static void test_boot_up(void)
+{
+    CHECK_EQ(co_node_start(&node, co_linux_now_us()), CO_OK);
+    const uint8_t boot[1] = {0x00};
+    CHECK(wait_for(0, 0x700u + NODE_ID, boot, 1, 500) >= 0);
+}
+
+static void test_unrouted_id_filtered(void)
+{
+    uint32_t before = co_node_stats(&node)->rx_frames;
+    const uint8_t data[4] = {0xDE, 0xAD, 0xBE, 0xEF};
+    peer_send(0x123, data, 4);
+    pump_until(co_linux_now_us() + 50000u);
+    CHECK_EQ(co_node_stats(&node)->rx_frames, before);
+    CHECK_EQ(co_node_stats(&node)->rx_unrouted, 0);
+}
+
+static void test_nmt_start_shows_in_heartbeat(void)
+{
+    uint32_t before = co_node_stats(&node)->rx_frames;
+    pump_until(co_linux_now_us() + 1000u);
+    int from = seen_count;
+    const uint8_t start[2] = {0x01, NODE_ID};
+    uint64_t t0 = co_linux_now_us();
+    peer_send(0x000, start, 2);
+    const uint8_t operational[1] = {0x05};
+    int i = wait_for(from, 0x700u + NODE_ID, operational, 1, 400);
+    CHECK(i >= 0);
+    if (i >= 0) {
+        CHECK(seen_us[i] - t0 < 250000u);
+    }
+    CHECK_EQ(co_node_stats(&node)->rx_frames, before + 1);
+}
+
+static void test_sdo_upload_device_type(void)
+{
+    int from = seen_count;
+    const uint8_t req[8] = {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0};
+    peer_send(0x600u + NODE_ID, req, 8);
+    const uint8_t resp[8] = {0x43, 0x00, 0x10, 0x00, 0x91, 0x01, 0x00, 0x00};
+    CHECK(wait_for(from, 0x580u + NODE_ID, resp, 8, 500) >= 0);
+}
+
+static void test_heartbeat_period(void)
+{
+    /* Heartbeats keep coming about every 100 ms. */
+    int from = seen_count;
+    pump_until(co_linux_now_us() + 450000u);
+    int beats = 0;
+    for (int i = from; i < seen_count; i++) {
+        beats += seen[i].can_id == 0x700u + NODE_ID;
+    }
+    CHECK(beats >= 3 && beats <= 6);
+}
+
+int main(void)
+{
+    alarm(5); /* bounded run time: SIGALRM ends a hung run with a failure */
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    co_err_t rc = co_socketcan_open(&can, IFNAME);
+    if (rc != CO_OK) {
+        printf("cannot open %s: %d (%s)\n", IFNAME, rc, strerror(errno));
+        return 1;
+    }
+    peer = open_peer();
+    if (peer < 0) {
+        printf("cannot open the peer socket: %s\n", strerror(errno));
+        return 1;
+    }
+    co_node_config_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.node_id = NODE_ID;
+    cfg.od = example_od_init(&od_values, 100);
+    cfg.driver = co_socketcan_driver(&can);
+    if (co_node_init(&node, &cfg) != CO_OK || co_socketcan_bind(&can, &node) != CO_OK) {
+        printf("cannot set up the node\n");
+        return 1;
+    }
+    uint64_t t0 = co_linux_now_us();
+    RUN(test_filter_after_bind);
+    RUN(test_boot_up);
+    RUN(test_filter_follows_routes);
+    RUN(test_unrouted_id_filtered);
+    RUN(test_nmt_start_shows_in_heartbeat);
+    RUN(test_sdo_upload_device_type);
+    RUN(test_heartbeat_period);
+    printf("run time %u ms, node rx %u tx %u\n", (unsigned)((co_linux_now_us() - t0) / 1000u),
+           (unsigned)co_node_stats(&node)->rx_frames, (unsigned)co_node_stats(&node)->tx_frames);
+    co_socketcan_close(&can);
+    close(peer);
+    return check_summary();
+}
