@@ -12,9 +12,6 @@
 
 #define REG_GENERIC 0x01u
 
-/* Table size as a value: CO_EMCY_CONSUMERS_MAX may be 0 (see internal.h). */
-static uint8_t consumers_max(void) { return CO_EMCY_CONSUMERS_MAX; }
-
 /* ---- error register */
 
 uint8_t co_emcy_register_bit(uint16_t code)
@@ -284,7 +281,7 @@ static void consumers_bind(co_node_t *node)
 {
     co_emcy_t *e = &node->emcy;
     e->consumer_count = 0;
-    while (e->consumer_count < consumers_max()) {
+    while (e->consumer_count < co_emcy_consumers_max()) {
         uint64_t cob = 0;
         if (co_od_get_uint(&node->cfg.od, 0x1028, (uint8_t)(e->consumer_count + 1), &cob) !=
             CO_OK) {

@@ -62,6 +62,7 @@ enum co_hb_watch {
 static inline uint8_t co_guard_watch_max(void) { return CO_GUARD_WATCH_MAX; }
 static inline uint8_t co_sdo_servers_max(void) { return CO_SDO_SERVERS_MAX; }
 static inline uint8_t co_sdo_clients_max(void) { return CO_SDO_CLIENTS_MAX; }
+static inline uint8_t co_emcy_consumers_max(void) { return CO_EMCY_CONSUMERS_MAX; }
 
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 static inline uint64_t co_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }

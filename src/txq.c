@@ -2,9 +2,9 @@
  * txq.c -- sending frames: straight to the driver when it is free, else into a
  * bounded queue kept in arbitration order (the frame the bus would let through
  * first leaves first; equal identifiers keep their order, so SDO segments of one
- * transfer never overtake each other). A service's frame remembers its service: if
- * the NMT state stops allowing it while the frame waits (an SDO answer queued just
- * before "stop"), the frame is dropped instead of sent.
+ * transfer never overtake each other). A service's frame remembers its service: when
+ * the NMT state changes, frames whose service the new state does not allow (an SDO
+ * answer queued just before "stop") are dropped instead of sent.
  */
 #include <string.h>
 
@@ -59,14 +59,9 @@ void co_txq_purge(co_node_t *node)
 
 void co_txq_flush(co_node_t *node)
 {
+    /* Nothing waiting is void here: every state change purges the queue (co_txq_purge). */
     uint8_t gone = 0;
-    while (gone < node->txq_count) {
-        const co_tx_item_t *item = &node->txq[gone];
-        if (void_now(node, item)) {
-            node->stats.tx_gated++;
-        } else if (!driver_take(node, &item->frame)) {
-            break;
-        }
+    while (gone < node->txq_count && driver_take(node, &node->txq[gone].frame)) {
         gone++;
     }
     if (gone) {
