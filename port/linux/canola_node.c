@@ -1,0 +1,212 @@
+/*
+ * canola_node.c -- canola-node: the example device (examples/example_od.c) as a Linux
+ * program, firmware-style: one node on SocketCAN or on a socketcand server/hub, run by
+ * the event loop (canola/linux_loop.h).
+ *
+ * usage: canola-node (--iface IFACE | --bus socketcand://HOST:PORT/CHANNEL) --node-id N
+ *                    [--store DIR] [--heartbeat MS]
+ *
+ * NMT state changes are logged to stderr, one line each. SIGTERM or SIGINT stop it
+ * cleanly (exit 0). Bad arguments: one line on stderr, exit 2. A bus that fails or
+ * cannot be opened: one line, exit 1.
+ */
+#include "canola/file_storage.h"
+#include "canola/linux_loop.h"
+#include "canola/socketcan.h"
+#include "canola/socketcand.h"
+#include "example_od.h"
+
+#include <errno.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PROG "canola-node"
+#define CONNECT_TIMEOUT_MS 5000u
+
+static const char usage[] =
+    "usage: " PROG " (--iface IFACE | --bus socketcand://HOST:PORT/CHANNEL) --node-id N\n"
+    "                   [--store DIR] [--heartbeat MS]\n"
+    "  --iface IFACE    SocketCAN interface (can0, vcan0)\n"
+    "  --bus URL        socketcand server or `canola bus serve` hub\n"
+    "  --node-id N      1..127\n"
+    "  --store DIR      keep stored parameters (0x1010/0x1011) in files in DIR\n"
+    "  --heartbeat MS   producer heartbeat time 0x1017 at power-on (default 1000)\n";
+
+typedef struct args {
+    const char *iface;
+    const char *bus;
+    const char *store;
+    long node_id;
+    long heartbeat_ms;
+} args_t;
+
+typedef struct app {
+    example_od_t od;
+    co_node_t node;
+    co_loop_t loop;
+    co_socketcan_t can;
+    co_socketcand_t scd;
+    co_file_storage_t storage;
+    const char *where;
+} app_t;
+
+static app_t app; /* large (the dictionary and the node): not on the stack */
+
+static int bad_args(const char *fmt, const char *value)
+{
+    fprintf(stderr, PROG ": ");
+    fprintf(stderr, fmt, value);
+    fprintf(stderr, " (" PROG " --help)\n");
+    return 2;
+}
+
+/* A whole decimal or 0x-hex number within lo..hi, else -1. */
+static long number(const char *s, long lo, long hi)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(s, &end, 0);
+    if (errno != 0 || end == s || *end != '\0' || v < lo || v > hi) {
+        return -1;
+    }
+    return v;
+}
+
+static int parse_args(int argc, char **argv, args_t *a)
+{
+    memset(a, 0, sizeof *a);
+    a->node_id = -1;
+    a->heartbeat_ms = 1000;
+    for (int i = 1; i < argc; i++) {
+        const char *opt = argv[i];
+        if (strcmp(opt, "--help") == 0 || strcmp(opt, "-h") == 0) {
+            fputs(usage, stdout);
+            exit(0);
+        }
+        if (strncmp(opt, "--", 2) != 0) {
+            return bad_args("unexpected argument '%s'", opt);
+        }
+        if (i + 1 >= argc) {
+            return bad_args("%s needs a value", opt);
+        }
+        const char *val = argv[++i];
+        if (strcmp(opt, "--iface") == 0) {
+            a->iface = val;
+        } else if (strcmp(opt, "--bus") == 0) {
+            a->bus = val;
+        } else if (strcmp(opt, "--store") == 0) {
+            a->store = val;
+        } else if (strcmp(opt, "--node-id") == 0) {
+            if ((a->node_id = number(val, 1, 127)) < 0) {
+                return bad_args("--node-id must be 1..127, not '%s'", val);
+            }
+        } else if (strcmp(opt, "--heartbeat") == 0) {
+            if ((a->heartbeat_ms = number(val, 0, 65535)) < 0) {
+                return bad_args("--heartbeat must be 0..65535 ms, not '%s'", val);
+            }
+        } else {
+            return bad_args("unknown option '%s'", opt);
+        }
+    }
+    if ((a->iface == NULL) == (a->bus == NULL)) {
+        return bad_args("give exactly one of --iface and --bus%s", "");
+    }
+    if (a->node_id < 0) {
+        return bad_args("--node-id is required%s", "");
+    }
+    if (a->bus != NULL) {
+        co_socketcand_url_t u;
+        char why[96];
+        if (co_socketcand_parse_url(a->bus, &u, why, sizeof why) != CO_OK) {
+            fprintf(stderr, PROG ": --bus %s: %s (" PROG " --help)\n", a->bus, why);
+            return 2;
+        }
+    }
+    return 0;
+}
+
+static void on_state(void *user, co_nmt_state_t state)
+{
+    app_t *a = user;
+    fprintf(stderr, PROG ": node %u on %s: %s\n", co_node_id(&a->node), a->where,
+            co_nmt_state_name(state));
+}
+
+static void on_error(void *user, co_node_error_t error)
+{
+    app_t *a = user;
+    fprintf(stderr, PROG ": node %u on %s: %s\n", co_node_id(&a->node), a->where,
+            error == CO_NODE_ERR_TX_OVERFLOW ? "transmit queue overflow, a frame was lost"
+                                             : "the bus refused a frame");
+}
+
+int main(int argc, char **argv)
+{
+    args_t args;
+    int rc = parse_args(argc, argv, &args);
+    if (rc != 0) {
+        return rc;
+    }
+    co_node_config_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.node_id = (uint8_t)args.node_id;
+    cfg.od = example_od_init(&app.od, (uint16_t)args.heartbeat_ms);
+    cfg.user = &app;
+    cfg.on_state = on_state;
+    cfg.on_error = on_error;
+    if (args.store != NULL) {
+        if (co_file_storage_init(&app.storage, args.store) != CO_OK) {
+            fprintf(stderr, PROG ": --store %s: not a folder (or the path is too long)\n",
+                    args.store);
+            return 2;
+        }
+        cfg.storage = &app.storage.api;
+    }
+
+    /* Signals first: a SIGTERM during the connection must not kill us half-way. */
+    if (co_loop_init(&app.loop) != CO_OK || co_loop_handle_signals(&app.loop) != CO_OK) {
+        fprintf(stderr, PROG ": event loop: %s\n", strerror(errno));
+        return 1;
+    }
+    co_transport_t *t;
+    if (args.iface != NULL) {
+        app.where = args.iface;
+        if (co_socketcan_open(&app.can, args.iface) != CO_OK) {
+            fprintf(stderr, PROG ": %s\n", app.can.transport.error);
+            return 1;
+        }
+        t = &app.can.transport;
+    } else {
+        app.where = args.bus;
+        if (co_socketcand_open(&app.scd, args.bus, CONNECT_TIMEOUT_MS) != CO_OK) {
+            fprintf(stderr, PROG ": %s\n", app.scd.transport.error);
+            return 1;
+        }
+        t = &app.scd.transport;
+    }
+    if (co_loop_add_node(&app.loop, &app.node, &cfg, t) != CO_OK) {
+        fprintf(stderr, PROG ": cannot set up node %ld\n", args.node_id);
+        return 1;
+    }
+    fprintf(stderr, PROG ": node %ld on %s, heartbeat %ld ms%s%s\n", args.node_id, app.where,
+            args.heartbeat_ms, args.store ? ", parameters in " : "", args.store ? args.store : "");
+    (void)co_node_start(&app.node, co_linux_now_us());
+
+    co_loop_reason_t why = co_loop_run(&app.loop);
+    int status = 0;
+    if (why == CO_LOOP_SIGNAL) {
+        fprintf(stderr, PROG ": stopped by %s\n",
+                co_loop_signal(&app.loop) == SIGINT ? "SIGINT" : "SIGTERM");
+    } else if (why == CO_LOOP_TRANSPORT_FAILED) {
+        fprintf(stderr, PROG ": %s\n", co_loop_failed(&app.loop)->error);
+        status = 1;
+    } else {
+        fprintf(stderr, PROG ": event loop: %s\n", co_loop_reason_name(why));
+        status = 1;
+    }
+    co_transport_close(t);
+    co_loop_close(&app.loop);
+    return status;
+}

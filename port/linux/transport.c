@@ -1,0 +1,25 @@
+/* transport.c -- what every transport shares; see canola/transport.h. */
+#include "canola/transport.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+
+void co_transport_close(co_transport_t *t)
+{
+    if (t != NULL && t->ops != NULL && t->ops->close != NULL) {
+        t->ops->close(t);
+    }
+}
+
+void co_transport_fail(co_transport_t *t, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(t->error, sizeof t->error, fmt, ap);
+    va_end(ap);
+    for (char *c = t->error; *c; c++) {
+        if (*c == '\n' || *c == '\r') {
+            *c = ' '; /* one line, whatever the peer sent */
+        }
+    }
+}
