@@ -1,0 +1,420 @@
+/*
+ * test_linux_loop.c -- the epoll + timerfd event loop, natively (no CAN needed).
+ *
+ * A node runs on one end of a SOCK_SEQPACKET socketpair (co_socketcan_open_fd: frames in
+ * SocketCAN's layout); the test plays the rest of the bus on the other end, watched by
+ * the same loop as an application fd. Checks: wake-up for the heartbeat deadline within
+ * a tolerance, no busy polling (wake-ups counted over idle intervals), frames in and
+ * out, two nodes on two transports, SIGTERM/SIGINT, co_loop_stop, a failed transport, a
+ * busy transport retried. Bounded: alarm(20).
+ */
+#define _GNU_SOURCE
+
+#include "canola/linux_loop.h"
+#include "canola/socketcan.h"
+#include "check.h"
+#include "example_od.h"
+
+#include <errno.h>
+#include <linux/can.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#define MS 1000u
+
+typedef struct seen {
+    struct can_frame f;
+    uint64_t at_us;
+} seen_t;
+
+/* One node on a socketpair, the peer end watched by the loop. */
+typedef struct rig {
+    co_loop_t loop;
+    example_od_t od;
+    co_node_t node;
+    co_node_config_t cfg;
+    co_socketcan_t can;
+    int peer;
+    seen_t seen[512];
+    int count;
+    co_nmt_state_t states[16];
+    int state_count;
+} rig_t;
+
+static rig_t R; /* large: not on the stack */
+
+static void peer_ready(void *ctx, int fd, uint32_t events)
+{
+    rig_t *r = ctx;
+    (void)events;
+    struct can_frame cf;
+    while (read(fd, &cf, sizeof cf) == (ssize_t)sizeof cf) {
+        if (r->count < (int)(sizeof r->seen / sizeof r->seen[0])) {
+            r->seen[r->count].f = cf;
+            r->seen[r->count].at_us = co_linux_now_us();
+            r->count++;
+        }
+    }
+}
+
+static void on_state(void *user, co_nmt_state_t s)
+{
+    rig_t *r = user;
+    if (r->state_count < 16) {
+        r->states[r->state_count++] = s;
+    }
+}
+
+static void peer_send(rig_t *r, uint32_t id, const uint8_t *data, uint8_t len)
+{
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = id;
+    cf.len = len;
+    memcpy(cf.data, data, len);
+    CHECK(write(r->peer, &cf, sizeof cf) == (ssize_t)sizeof cf);
+}
+
+/* Node `id` with heartbeat `hb_ms` on a fresh socketpair; not started. */
+static void rig_open(rig_t *r, uint8_t id, uint16_t hb_ms)
+{
+    memset(r, 0, sizeof *r);
+    int sv[2];
+    CHECK(socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, sv) == 0);
+    CHECK_EQ(co_loop_init(&r->loop), CO_OK);
+    CHECK_EQ(co_socketcan_open_fd(&r->can, sv[0]), CO_OK);
+    r->peer = sv[1];
+    CHECK_EQ(co_socketcan_open_fd(&(co_socketcan_t){0}, -1), CO_ERR_ARG);
+    r->cfg.node_id = id;
+    r->cfg.od = example_od_init(&r->od, hb_ms);
+    r->cfg.user = r;
+    r->cfg.on_state = on_state;
+    CHECK_EQ(co_loop_add_node(&r->loop, &r->node, &r->cfg, &r->can.transport), CO_OK);
+    CHECK_EQ(co_loop_add_fd(&r->loop, r->peer, EPOLLIN, peer_ready, r), CO_OK);
+}
+
+static void rig_close(rig_t *r)
+{
+    co_loop_close(&r->loop);
+    co_socketcan_close(&r->can);
+    close(r->peer);
+}
+
+static void run_ms(rig_t *r, unsigned ms)
+{
+    co_loop_reason_t why = co_loop_run_until(&r->loop, co_linux_now_us() + ms * MS);
+    CHECK_EQ(why, CO_LOOP_DEADLINE);
+}
+
+static void test_boot_up_and_heartbeat_deadlines(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 100);
+    uint64_t t0 = co_linux_now_us();
+    CHECK_EQ(co_node_start(&r->node, t0), CO_OK);
+    run_ms(r, 560);
+    CHECK(r->count >= 5);
+    CHECK_EQ(r->seen[0].f.can_id, 0x705);
+    CHECK_EQ(r->seen[0].f.data[0], 0x00); /* boot-up */
+    /* Heartbeats every 100 ms: the loop wakes for each deadline, not early, not much
+     * later (the tolerance allows for a loaded machine). */
+    int beats = 0;
+    uint64_t prev = r->seen[0].at_us;
+    for (int i = 1; i < r->count; i++) {
+        if (r->seen[i].f.can_id != 0x705) {
+            continue;
+        }
+        uint64_t gap = r->seen[i].at_us - prev;
+        if (gap < 99 * MS || gap > 140 * MS) {
+            printf("  heartbeat %d came %llu us after the previous one\n", beats,
+                   (unsigned long long)gap);
+        }
+        CHECK(gap >= 99 * MS);
+        CHECK(gap <= 140 * MS);
+        CHECK_EQ(r->seen[i].f.data[0], 0x7F); /* pre-operational */
+        prev = r->seen[i].at_us;
+        beats++;
+    }
+    CHECK(beats >= 4 && beats <= 6);
+    CHECK(r->state_count >= 1);
+    CHECK_EQ(r->states[r->state_count - 1], CO_NMT_PRE_OPERATIONAL);
+    rig_close(r);
+}
+
+static void test_no_busy_polling(void)
+{
+    /* Heartbeat 200 ms, 1 s idle: each beat costs at most two wake-ups (the timer and the
+     * peer fd that receives it). A 1 ms tick would be ~1000. */
+    rig_t *r = &R;
+    rig_open(r, 5, 200);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    run_ms(r, 50); /* the boot-up */
+    uint32_t w0 = co_loop_stats(&r->loop)->wakeups;
+    run_ms(r, 1000);
+    uint32_t woke = co_loop_stats(&r->loop)->wakeups - w0;
+    printf("  1 s with a 200 ms heartbeat: %u wake-ups\n", woke);
+    CHECK(woke >= 5);
+    CHECK(woke <= 14);
+    rig_close(r);
+
+    /* No heartbeat at all: nothing to do, nothing wakes the process. */
+    rig_open(r, 5, 0);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    run_ms(r, 50);
+    w0 = co_loop_stats(&r->loop)->wakeups;
+    run_ms(r, 300);
+    woke = co_loop_stats(&r->loop)->wakeups - w0;
+    printf("  300 ms idle, no heartbeat: %u wake-ups\n", woke);
+    CHECK(woke <= 1); /* the run's own end */
+    rig_close(r);
+}
+
+static void test_frames_in_nmt_and_sdo(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 100);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    run_ms(r, 20);
+    int from = r->count;
+    const uint8_t start[2] = {0x01, 5};
+    uint64_t t0 = co_linux_now_us();
+    peer_send(r, 0x000, start, 2);
+    const uint8_t req[8] = {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0};
+    peer_send(r, 0x605, req, 8);
+    run_ms(r, 150);
+    CHECK_EQ(co_nmt_state(&r->node), CO_NMT_OPERATIONAL);
+    CHECK(co_loop_stats(&r->loop)->frames_in >= 2);
+    int sdo = -1, hb = -1;
+    for (int i = from; i < r->count; i++) {
+        if (r->seen[i].f.can_id == 0x585 && sdo < 0) {
+            sdo = i;
+        }
+        if (r->seen[i].f.can_id == 0x705 && r->seen[i].f.data[0] == 0x05 && hb < 0) {
+            hb = i;
+        }
+    }
+    CHECK(sdo >= 0);
+    CHECK(hb >= 0);
+    if (sdo >= 0) {
+        CHECK_EQ(r->seen[sdo].f.data[0], 0x43);
+        CHECK_EQ(r->seen[sdo].f.data[4], 0x91);   /* 0x1000 device type of the example */
+        CHECK(r->seen[sdo].at_us - t0 < 50 * MS); /* answered on arrival, not on a tick */
+    }
+    rig_close(r);
+}
+
+/* ---- two nodes, two transports, one loop */
+
+static example_od_t od6;
+static co_node_t node6;
+static co_socketcan_t can6;
+static int ec_started;
+
+static void on_errctl6(void *user, const co_ec_event_t *ev)
+{
+    (void)user;
+    if (ev->kind == CO_EC_STARTED && ev->node_id == 5) {
+        ec_started++;
+    }
+}
+
+static void test_two_nodes_two_transports(void)
+{
+    /* Node 5 on end A, node 6 on end B of one socketpair: a two-station bus. Node 6
+     * consumes node 5's heartbeat. */
+    rig_t *r = &R;
+    memset(r, 0, sizeof *r);
+    int sv[2];
+    CHECK(socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, sv) == 0);
+    CHECK_EQ(co_loop_init(&r->loop), CO_OK);
+    CHECK_EQ(co_socketcan_open_fd(&r->can, sv[0]), CO_OK);
+    CHECK_EQ(co_socketcan_open_fd(&can6, sv[1]), CO_OK);
+    r->cfg.node_id = 5;
+    r->cfg.od = example_od_init(&r->od, 50);
+    CHECK_EQ(co_loop_add_node(&r->loop, &r->node, &r->cfg, &r->can.transport), CO_OK);
+    co_node_config_t c6;
+    memset(&c6, 0, sizeof c6);
+    c6.node_id = 6;
+    c6.od = example_od_init(&od6, 0);
+    c6.on_errctl = on_errctl6;
+    /* The same transport or the same node twice is refused. */
+    CHECK_EQ(co_loop_add_node(&r->loop, &node6, &c6, &r->can.transport), CO_ERR_ARG);
+    CHECK_EQ(co_loop_add_node(&r->loop, &node6, &c6, &can6.transport), CO_OK);
+    uint64_t now = co_linux_now_us();
+    CHECK_EQ(co_node_start(&node6, now), CO_OK);
+    const uint8_t hb[4] = {0xF4, 0x01, 0x05, 0x00}; /* node 5, 500 ms */
+    CHECK_EQ(co_node_write_net(&node6, 0x1016, 1, hb, 4), CO_ABORT_NONE);
+    CHECK_EQ(co_node_start(&r->node, now), CO_OK);
+    run_ms(r, 200);
+    CHECK_EQ(ec_started, 1);
+    CHECK(co_node_stats(&node6)->rx_frames >= 3);
+    co_loop_close(&r->loop);
+    co_socketcan_close(&r->can);
+    co_socketcan_close(&can6);
+}
+
+/* ---- stopping */
+
+static void test_sigterm_stops_the_loop(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 100);
+    CHECK_EQ(co_loop_handle_signals(&r->loop), CO_OK);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    pid_t child = fork();
+    if (child == 0) {
+        usleep(150 * MS);
+        kill(getppid(), SIGTERM);
+        _exit(0);
+    }
+    uint64_t t0 = co_linux_now_us();
+    co_loop_reason_t why = co_loop_run_until(&r->loop, t0 + 3000 * MS);
+    uint64_t took = co_linux_now_us() - t0;
+    CHECK_EQ(why, CO_LOOP_SIGNAL);
+    CHECK_EQ(co_loop_signal(&r->loop), SIGTERM);
+    CHECK(took >= 140 * MS && took < 1000 * MS);
+    waitpid(child, NULL, 0);
+
+    /* SIGINT too, even when it is already pending when the loop starts. */
+    raise(SIGINT);
+    why = co_loop_run_until(&r->loop, co_linux_now_us() + 3000 * MS);
+    CHECK_EQ(why, CO_LOOP_SIGNAL);
+    CHECK_EQ(co_loop_signal(&r->loop), SIGINT);
+    rig_close(r); /* restores the mask: the default actions are back */
+    sigset_t cur;
+    sigprocmask(SIG_BLOCK, NULL, &cur);
+    CHECK(!sigismember(&cur, SIGTERM));
+}
+
+static void stop_on_first(void *ctx, int fd, uint32_t events)
+{
+    rig_t *r = ctx;
+    peer_ready(ctx, fd, events);
+    co_loop_stop(&r->loop);
+}
+
+static void test_stop_from_a_callback_and_remove_fd(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 100);
+    CHECK_EQ(co_loop_remove_fd(&r->loop, r->peer), CO_OK);
+    CHECK_EQ(co_loop_remove_fd(&r->loop, r->peer), CO_ERR_NOT_FOUND);
+    CHECK_EQ(co_loop_add_fd(&r->loop, r->peer, EPOLLIN, stop_on_first, r), CO_OK);
+    CHECK_EQ(co_loop_add_fd(&r->loop, r->peer, EPOLLIN, stop_on_first, r), CO_ERR_ARG);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK); /* boot-up */
+    co_loop_reason_t why = co_loop_run_until(&r->loop, co_linux_now_us() + 2000 * MS);
+    CHECK_EQ(why, CO_LOOP_STOPPED);
+    CHECK(r->count >= 1);
+    rig_close(r);
+}
+
+static void test_peer_gone_fails_the_transport(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 100);
+    CHECK_EQ(co_loop_remove_fd(&r->loop, r->peer), CO_OK);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    close(r->peer);
+    r->peer = -1;
+    co_loop_reason_t why = co_loop_run_until(&r->loop, co_linux_now_us() + 2000 * MS);
+    CHECK_EQ(why, CO_LOOP_TRANSPORT_FAILED);
+    CHECK(co_loop_failed(&r->loop) == &r->can.transport);
+    CHECK(strlen(r->can.transport.error) > 0);
+    printf("  failed transport says: %s\n", r->can.transport.error);
+    co_loop_close(&r->loop);
+    co_socketcan_close(&r->can);
+}
+
+/* ---- a transport that is busy a few times: the node's frames wait and go out later */
+
+typedef struct busy_transport {
+    co_transport_t t;
+    int busy_left;
+    int sent;
+    uint8_t last_state;
+} busy_transport_t;
+
+static co_rx_t bt_recv(co_transport_t *t, co_frame_t *f, uint32_t *ev)
+{
+    (void)t;
+    (void)f;
+    (void)ev;
+    return CO_RX_AGAIN;
+}
+
+static co_err_t bt_send(co_transport_t *t, const co_frame_t *f)
+{
+    busy_transport_t *b = (busy_transport_t *)t;
+    if (b->busy_left > 0) {
+        b->busy_left--;
+        return CO_ERR_BUSY;
+    }
+    b->sent++;
+    b->last_state = f->data[0];
+    return CO_OK;
+}
+
+static const co_transport_ops_t bt_ops = {.recv = bt_recv, .send = bt_send};
+
+static void test_busy_transport_is_retried(void)
+{
+    rig_t *r = &R;
+    memset(r, 0, sizeof *r);
+    int pfd[2];
+    CHECK(pipe(pfd) == 0);
+    busy_transport_t bt = {.t = {.ops = &bt_ops, .fd = pfd[0]}, .busy_left = 3};
+    CHECK_EQ(co_loop_init(&r->loop), CO_OK);
+    r->cfg.node_id = 9;
+    r->cfg.od = example_od_init(&r->od, 0);
+    CHECK_EQ(co_loop_add_node(&r->loop, &r->node, &r->cfg, &bt.t), CO_OK);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK); /* boot-up: busy */
+    CHECK_EQ(bt.sent, 0);
+    run_ms(r, 100);
+    CHECK_EQ(bt.sent, 1); /* the boot-up, after three refusals */
+    CHECK_EQ(bt.last_state, 0x00);
+    CHECK_EQ(co_loop_stats(&r->loop)->busy, 3);
+    CHECK(co_loop_stats(&r->loop)->wakeups <= 6); /* retried on a timer, not spinning */
+    co_loop_close(&r->loop);
+    close(pfd[0]);
+    close(pfd[1]);
+}
+
+static void test_bad_arguments(void)
+{
+    co_loop_t loop;
+    CHECK_EQ(co_loop_init(NULL), CO_ERR_ARG);
+    CHECK_EQ(co_loop_init(&loop), CO_OK);
+    co_node_t node;
+    co_node_config_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    co_socketcan_t closed;
+    memset(&closed, 0, sizeof closed);
+    closed.transport.fd = -1;
+    CHECK_EQ(co_loop_add_node(&loop, &node, &cfg, &closed.transport), CO_ERR_ARG);
+    CHECK_EQ(co_loop_add_node(&loop, &node, &cfg, NULL), CO_ERR_ARG);
+    CHECK_EQ(co_loop_add_fd(&loop, -1, EPOLLIN, peer_ready, NULL), CO_ERR_ARG);
+    CHECK_EQ(co_loop_add_fd(&loop, 0, EPOLLIN, NULL, NULL), CO_ERR_ARG);
+    CHECK_STR(co_loop_reason_name(CO_LOOP_SIGNAL), "signal");
+    co_loop_close(&loop);
+    co_loop_close(&loop); /* twice is fine */
+}
+
+int main(void)
+{
+    alarm(20); /* bounded run time */
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    RUN(test_boot_up_and_heartbeat_deadlines);
+    RUN(test_no_busy_polling);
+    RUN(test_frames_in_nmt_and_sdo);
+    RUN(test_two_nodes_two_transports);
+    RUN(test_sigterm_stops_the_loop);
+    RUN(test_stop_from_a_callback_and_remove_fd);
+    RUN(test_peer_gone_fails_the_transport);
+    RUN(test_busy_transport_is_retried);
+    RUN(test_bad_arguments);
+    return check_summary();
+}
