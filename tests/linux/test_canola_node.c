@@ -1,1 +1,298 @@
-int main(void) { return 0; }
+/*
+ * test_canola_node.c -- the canola-node program, natively: run over --bus against a fake
+ * socketcand server in this process (loopback TCP), and with bad arguments.
+ *
+ * usage: test_canola_node PATH-TO-canola-node
+ *
+ * Checks: boot-up, an NMT start seen in the heartbeat, an SDO "save" with --store DIR
+ * writing the parameter files, the NMT state changes on stderr, a clean exit 0 on SIGTERM
+ * and SIGINT, exit 1 when the server goes away, one-line errors and exit 2 for bad
+ * arguments. Bounded: every wait has a time-out; alarm(30).
+ */
+#define _GNU_SOURCE
+
+#include "check.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char *prog;
+
+static long now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1000L + ts.tv_nsec / 1000000L;
+}
+
+typedef struct child {
+    pid_t pid;
+    int err; /* read end of its stderr */
+    char text[4096];
+    size_t len;
+} child_t;
+
+static void spawn(child_t *c, char *const argv[])
+{
+    memset(c, 0, sizeof *c);
+    int p[2];
+    CHECK(pipe2(p, O_CLOEXEC) == 0);
+    c->pid = fork();
+    if (c->pid == 0) {
+        dup2(p[1], 2);
+        int null = open("/dev/null", O_WRONLY);
+        dup2(null, 1);
+        execv(argv[0], argv);
+        _exit(127);
+    }
+    close(p[1]);
+    c->err = p[0];
+    fcntl(c->err, F_SETFL, O_NONBLOCK);
+}
+
+static void collect(child_t *c)
+{
+    ssize_t n;
+    while ((n = read(c->err, c->text + c->len, sizeof c->text - 1 - c->len)) > 0) {
+        c->len += (size_t)n;
+    }
+    c->text[c->len] = '\0';
+}
+
+/* Wait up to `ms` for the child to exit; its exit status, or -1 (then it is killed). */
+static int finish(child_t *c, int ms)
+{
+    long end = now_ms() + ms;
+    int status;
+    for (;;) {
+        collect(c);
+        pid_t r = waitpid(c->pid, &status, WNOHANG);
+        if (r == c->pid) {
+            collect(c);
+            close(c->err);
+            return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        }
+        if (now_ms() > end) {
+            kill(c->pid, SIGKILL);
+            waitpid(c->pid, &status, 0);
+            close(c->err);
+            return -1;
+        }
+        usleep(5000);
+    }
+}
+
+/* ---- the fake server side */
+
+typedef struct conn {
+    int fd;
+    char buf[16384];
+    size_t len;
+} conn_t;
+
+/* Read until `text` appears after offset `from` or `ms` pass; its offset or -1. */
+static long wait_text(conn_t *k, size_t from, const char *text, int ms)
+{
+    long end = now_ms() + ms;
+    for (;;) {
+        k->buf[k->len] = '\0';
+        const char *hit = from <= k->len ? strstr(k->buf + from, text) : NULL;
+        if (hit != NULL) {
+            return hit - k->buf;
+        }
+        long left = end - now_ms();
+        struct pollfd p = {.fd = k->fd, .events = POLLIN};
+        if (left <= 0 || poll(&p, 1, (int)left) <= 0) {
+            return -1;
+        }
+        ssize_t n = read(k->fd, k->buf + k->len, sizeof k->buf - 1 - k->len);
+        if (n <= 0) {
+            return -1;
+        }
+        k->len += (size_t)n;
+    }
+}
+
+static void send_text(conn_t *k, const char *text)
+{
+    CHECK(write(k->fd, text, strlen(text)) == (ssize_t)strlen(text));
+}
+
+static int listen_loopback(unsigned *port)
+{
+    int ls = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    CHECK(bind(ls, (struct sockaddr *)&a, sizeof a) == 0);
+    CHECK(listen(ls, 1) == 0);
+    CHECK(getsockname(ls, (struct sockaddr *)&a, &al) == 0);
+    *port = ntohs(a.sin_port);
+    return ls;
+}
+
+static int accept_within(int ls, int ms)
+{
+    struct pollfd p = {.fd = ls, .events = POLLIN};
+    if (poll(&p, 1, ms) <= 0) {
+        return -1;
+    }
+    return accept4(ls, NULL, NULL, SOCK_CLOEXEC);
+}
+
+/* Start canola-node on a fresh server, do the handshake; conn fd -1 on failure. */
+static void start_node(child_t *c, conn_t *k, const char *store, int *listener)
+{
+    unsigned port;
+    int ls = listen_loopback(&port);
+    char url[64];
+    snprintf(url, sizeof url, "socketcand://127.0.0.1:%u/vcan0", port);
+    char *argv[12] = {(char *)prog, "--bus", url, "--node-id", "7", "--heartbeat", "100", NULL};
+    if (store != NULL) {
+        argv[7] = "--store";
+        argv[8] = (char *)store;
+        argv[9] = NULL;
+    }
+    spawn(c, argv);
+    memset(k, 0, sizeof *k);
+    k->fd = accept_within(ls, 5000);
+    CHECK(k->fd >= 0);
+    *listener = ls;
+    if (k->fd < 0) {
+        return;
+    }
+    send_text(k, "< hi >");
+    CHECK(wait_text(k, 0, "< open vcan0 >", 3000) >= 0);
+    send_text(k, "< ok >");
+    CHECK(wait_text(k, 0, "< rawmode >", 3000) >= 0);
+    send_text(k, "< ok >");
+}
+
+static void test_runs_on_a_socketcand_bus(void)
+{
+    child_t c;
+    conn_t k;
+    int ls;
+    char dir[] = "/tmp/canola-node-test-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    start_node(&c, &k, dir, &ls);
+    long boot = wait_text(&k, 0, "< send 707 1 00 >", 3000);
+    CHECK(boot >= 0);
+    long hb = wait_text(&k, (size_t)(boot + 1), "< send 707 1 7F >", 3000);
+    CHECK(hb >= 0);
+    /* NMT start node 7. */
+    send_text(&k, "< frame 000 1.000000 0107 >");
+    CHECK(wait_text(&k, (size_t)hb, "< send 707 1 05 >", 3000) >= 0);
+    /* 0x1010 sub1 = "save": the parameters land in files in --store. */
+    size_t from = k.len;
+    send_text(&k, "< frame 607 2.000000 2310100173617665 >");
+    CHECK(wait_text(&k, from, "< send 587 8 60 10 10 01 00 00 00 00 >", 3000) >= 0);
+    char path[128];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/comm.params", dir);
+    CHECK(stat(path, &st) == 0 && st.st_size > 0);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/app.params", dir);
+    unlink(path);
+    rmdir(dir);
+    kill(c.pid, SIGTERM);
+    CHECK_EQ(finish(&c, 3000), 0);
+    CHECK(strstr(c.text, "node 7 on socketcand://") != NULL);
+    CHECK(strstr(c.text, ": pre-operational\n") != NULL);
+    CHECK(strstr(c.text, ": operational\n") != NULL);
+    CHECK(strstr(c.text, "stopped by SIGTERM") != NULL);
+    printf("  its stderr:\n%s", c.text);
+    close(k.fd);
+    close(ls);
+}
+
+static void test_sigint_and_server_gone(void)
+{
+    child_t c;
+    conn_t k;
+    int ls;
+    start_node(&c, &k, NULL, &ls);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", 3000) >= 0);
+    kill(c.pid, SIGINT);
+    CHECK_EQ(finish(&c, 3000), 0);
+    CHECK(strstr(c.text, "stopped by SIGINT") != NULL);
+    close(k.fd);
+    close(ls);
+
+    start_node(&c, &k, NULL, &ls);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", 3000) >= 0);
+    close(k.fd); /* the server goes away */
+    CHECK_EQ(finish(&c, 3000), 1);
+    CHECK(strstr(c.text, "closed the connection") != NULL);
+    close(ls);
+}
+
+/* One line on stderr and exit status `want`. */
+static void expect_error(int want, const char *part, char *const argv[])
+{
+    child_t c;
+    spawn(&c, argv);
+    int rc = finish(&c, 3000);
+    int lines = 0;
+    for (const char *p = c.text; *p; p++) {
+        lines += *p == '\n';
+    }
+    if (rc != want || lines != 1 || strstr(c.text, part) == NULL) {
+        printf("  %s ...: exit %d, stderr '%s'\n", argv[1] ? argv[1] : "", rc, c.text);
+    }
+    CHECK_EQ(rc, want);
+    CHECK_EQ(lines, 1);
+    CHECK(strstr(c.text, part) != NULL);
+}
+
+static void test_bad_arguments(void)
+{
+    char *p = (char *)prog;
+    expect_error(2, "exactly one of --iface and --bus", (char *[]){p, "--node-id", "5", NULL});
+    expect_error(2, "--node-id must be 1..127",
+                 (char *[]){p, "--iface", "vcan0", "--node-id", "0", NULL});
+    expect_error(2, "--node-id must be 1..127",
+                 (char *[]){p, "--iface", "vcan0", "--node-id", "5x", NULL});
+    expect_error(2, "--node-id is required", (char *[]){p, "--iface", "vcan0", NULL});
+    expect_error(2, "unknown option", (char *[]){p, "--frobnicate", "1", NULL});
+    expect_error(2, "needs a value", (char *[]){p, "--iface", NULL});
+    expect_error(
+        2, "exactly one",
+        (char *[]){p, "--iface", "vcan0", "--bus", "socketcand://h/c", "--node-id", "5", NULL});
+    expect_error(2, "not a socketcand:// URL",
+                 (char *[]){p, "--bus", "tcp://h:1/c", "--node-id", "5", NULL});
+    expect_error(2, "--heartbeat must be",
+                 (char *[]){p, "--iface", "vcan0", "--node-id", "5", "--heartbeat", "-1", NULL});
+    expect_error(2, "not a folder",
+                 (char *[]){p, "--bus", "socketcand://127.0.0.1:1/c", "--node-id", "5", "--store",
+                            "/nonexistent/dir", NULL});
+    expect_error(1, "no such CAN interface",
+                 (char *[]){p, "--iface", "nosuchcan9", "--node-id", "5", NULL});
+    expect_error(1, "Connection refused",
+                 (char *[]){p, "--bus", "socketcand://127.0.0.1:1/vcan0", "--node-id", "5", NULL});
+}
+
+int main(int argc, char **argv)
+{
+    alarm(30);
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    signal(SIGPIPE, SIG_IGN);
+    if (argc != 2) {
+        printf("usage: test_canola_node PATH-TO-canola-node\n");
+        return 2;
+    }
+    prog = argv[1];
+    RUN(test_runs_on_a_socketcand_bus);
+    RUN(test_sigint_and_server_gone);
+    RUN(test_bad_arguments);
+    return check_summary();
+}
