@@ -82,16 +82,13 @@ fuzz:
 	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
 	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
 
-# The SocketCAN driver (port/linux/socketcan.c) on a real Linux CAN stack: vcan0 natively
-# when the kernel has it, else inside canvm (../shared/tools/canvm), else reported NOT RUN.
-VCAN_BUILD = build-vcan
-VCAN_SRC   = $(wildcard src/*.c) examples/example_od.c port/linux/socketcan.c \
-             tests/linux/test_socketcan.c
+# The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
+# candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
+# one canvm run (../shared/tools/canvm), else reported NOT RUN.
 test-vcan:
-	@mkdir -p $(VCAN_BUILD)
-	gcc -std=gnu11 -O2 -g -Wall -Wextra -Wconversion -Wshadow -Werror \
-	  -Iinclude -Isrc -Iexamples -Iport/linux -Itests $(VCAN_SRC) -o $(VCAN_BUILD)/test_socketcan
-	tests/linux/run-vcan-tier $(VCAN_BUILD)/test_socketcan
+	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	cmake --build $(BUILD) --target test_socketcan canola-node
+	tests/linux/run-vcan-tier $(BUILD)
 
 format-check:
 	@if command -v clang-format >/dev/null 2>&1; then \

@@ -3,10 +3,14 @@
  *
  * A canola node (node-ID 5, the example dictionary, heartbeat 100 ms) runs through the
  * driver; a second plain raw socket on the same interface plays the rest of the network.
- * Run by tests/linux/run-vcan-tier (natively or inside canvm). Bounded: alarm(5).
+ * Then the event loop runs a second node (node-ID 6) on its own socket, and error frames
+ * written to vcan0 by the peer go to the bus events (when this kernel delivers error
+ * frames that a socket wrote: it says which). Run by tests/linux/vcan-tier.sh (natively
+ * or inside canvm). Bounded: alarm(10).
  */
 #define _GNU_SOURCE
 
+#include "canola/linux_loop.h"
 #include "canola/node.h"
 #include "canola/socketcan.h"
 #include "check.h"
@@ -14,10 +18,12 @@
 
 #include <errno.h>
 #include <linux/can.h>
+#include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <poll.h>
 #include <stdlib.h>
+#include <sys/epoll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -212,9 +218,99 @@ static void test_heartbeat_period(void)
     CHECK(beats >= 3 && beats <= 6);
 }
 
+static void test_error_frames(void)
+{
+    /* Error passive, written by the peer as a controller would report it. Whether the
+     * kernel passes error frames from a socket on to other sockets is the kernel's
+     * choice: when it does not, the decoder and the event path are covered natively by
+     * test_can_errors, and this says so. */
+    uint32_t before = can.rx_errors;
+    int from = seen_count;
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = CAN_ERR_FLAG | CAN_ERR_CRTL;
+    cf.len = CAN_ERR_DLC;
+    cf.data[1] = CAN_ERR_CRTL_RX_PASSIVE;
+    ssize_t n = write(peer, &cf, sizeof cf);
+    pump_until(co_linux_now_us() + 100000u);
+    if (n != (ssize_t)sizeof cf || can.rx_errors == before) {
+        printf("  vcan0: an error frame written by a socket was %s: not delivered to the node "
+               "(the mapping is tested natively by test_can_errors)\n",
+               n == (ssize_t)sizeof cf ? "accepted" : "refused");
+        return;
+    }
+    printf("  vcan0: the kernel delivered the error frame: checking the EMCYs\n");
+    int found = -1;
+    for (int i = from; i < seen_count; i++) {
+        if (seen[i].can_id == 0x80u + NODE_ID && seen[i].data[0] == 0x20 &&
+            seen[i].data[1] == 0x81) {
+            found = i;
+        }
+    }
+    CHECK(found >= 0);
+    CHECK(co_emcy_active(&node, 0x8120));
+    cf.can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED;
+    cf.data[1] = 0;
+    CHECK(write(peer, &cf, sizeof cf) == (ssize_t)sizeof cf);
+    pump_until(co_linux_now_us() + 100000u);
+    CHECK(co_emcy_active(&node, 0x8140));
+    CHECK(!co_emcy_active(&node, 0x8120));
+}
+
+/* ---- the event loop on vcan0: node 6 on its own socket, the peer as an application fd */
+
+static co_loop_t loop;
+static example_od_t od6;
+static co_node_t node6;
+static co_socketcan_t can6;
+
+static void loop_peer_ready(void *ctx, int fd, uint32_t events)
+{
+    (void)ctx;
+    (void)fd;
+    (void)events;
+    drain_peer();
+}
+
+static void test_event_loop_on_vcan0(void)
+{
+    CHECK_EQ(co_loop_init(&loop), CO_OK);
+    CHECK_EQ(co_socketcan_open(&can6, IFNAME), CO_OK);
+    co_node_config_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.node_id = 6;
+    cfg.od = example_od_init(&od6, 100);
+    CHECK_EQ(co_loop_add_node(&loop, &node6, &cfg, &can6.transport), CO_OK);
+    CHECK_EQ(co_loop_add_fd(&loop, peer, EPOLLIN, loop_peer_ready, NULL), CO_OK);
+    int from = seen_count;
+    uint64_t t0 = co_linux_now_us();
+    CHECK_EQ(co_node_start(&node6, t0), CO_OK);
+    const uint8_t boot[1] = {0x00};
+    CHECK_EQ(co_loop_run_until(&loop, t0 + 50000u), CO_LOOP_DEADLINE);
+    CHECK(find_seen(from, 0x706, boot, 1) >= 0);
+    /* NMT start from the peer: the loop reads it from the kernel (filter = routes). */
+    const uint8_t start[2] = {0x01, 6};
+    peer_send(0x000, start, 2);
+    uint32_t w0 = co_loop_stats(&loop)->wakeups;
+    CHECK_EQ(co_loop_run_until(&loop, t0 + 1050000u), CO_LOOP_DEADLINE);
+    uint32_t woke = co_loop_stats(&loop)->wakeups - w0;
+    const uint8_t operational[1] = {0x05};
+    int beats = 0;
+    for (int i = from; i < seen_count; i++) {
+        beats += seen[i].can_id == 0x706 && seen[i].data[0] == 0x05;
+    }
+    printf("  loop on vcan0: %d heartbeats in 1 s, %u wake-ups\n", beats, woke);
+    CHECK(find_seen(from, 0x706, operational, 1) >= 0);
+    CHECK(beats >= 8 && beats <= 11);
+    CHECK(woke <= 2 * 11 + 4); /* timer + peer per beat: no tick */
+    CHECK(co_loop_stats(&loop)->frames_in >= 1);
+    co_loop_close(&loop);
+    co_socketcan_close(&can6);
+}
+
 int main(void)
 {
-    alarm(5); /* bounded run time: SIGALRM ends a hung run with a failure */
+    alarm(10); /* bounded run time: SIGALRM ends a hung run with a failure */
     setvbuf(stdout, NULL, _IOLBF, 0);
     co_err_t rc = co_socketcan_open(&can, IFNAME);
     if (rc != CO_OK) {
@@ -243,6 +339,8 @@ int main(void)
     RUN(test_nmt_start_shows_in_heartbeat);
     RUN(test_sdo_upload_device_type);
     RUN(test_heartbeat_period);
+    RUN(test_error_frames);
+    RUN(test_event_loop_on_vcan0);
     printf("run time %u ms, node rx %u tx %u\n", (unsigned)((co_linux_now_us() - t0) / 1000u),
            (unsigned)co_node_stats(&node)->rx_frames, (unsigned)co_node_stats(&node)->tx_frames);
     co_socketcan_close(&can);

@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# vcan-tier.sh BUILD -- the SocketCAN tier on vcan0 (which must exist and be up): run it
+# through tests/linux/run-vcan-tier, which finds vcan0 natively or inside canvm.
+#
+#   1. C: BUILD/tests/test_socketcan (the driver, kernel filters, error frames, the event
+#      loop on vcan0);
+#   2. canola-node on vcan0 with can-utils as the outside world: candump sees its boot-up
+#      and heartbeats, `cansend vcan0 000#0105` starts it, SIGTERM stops it (exit 0);
+#   3. Python: `pytest -m vcan` with CANOLA_VCAN=vcan0 when the venv (build-py/venv)
+#      exists; pytest's "no tests ran" (exit 5) counts as success.
+#
+# Each part prints one summary line; the exit status is 0 only when none failed.
+# Every wait is bounded.
+set -uo pipefail
+
+build=${1:?usage: vcan-tier.sh BUILD}
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+[[ $build == /* ]] || build=$PWD/$build
+failed=0
+summary() { # summary PART STATUS DETAIL
+    echo "vcan tier: $1: $2${3:+ ($3)}"
+    [[ $2 == FAIL ]] && failed=1
+    return 0
+}
+
+ip link show dev vcan0 >/dev/null 2>&1 || { echo "vcan-tier.sh: no vcan0" >&2; exit 2; }
+tmp=$(mktemp -d /tmp/canola-vcan.XXXXXX)
+pids=()
+cleanup() {
+    for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
+    rm -rf "$tmp"
+}
+trap cleanup EXIT
+
+# ---- 1. the C test of the SocketCAN driver and the event loop
+if "$build/tests/test_socketcan" >"$tmp/c.log" 2>&1; then
+    summary "C test_socketcan" PASS "$(tail -n 1 "$tmp/c.log")"
+else
+    cat "$tmp/c.log"
+    summary "C test_socketcan" FAIL "$(tail -n 1 "$tmp/c.log")"
+fi
+grep -E "vcan0:|loop on vcan0" "$tmp/c.log" | sed 's/^ */  /'
+
+# ---- 2. canola-node on vcan0, seen by candump, started by cansend
+# wait_for FILE PATTERN SECONDS: until grep finds it (0) or the time is up (1).
+wait_for() {
+    local end=$((SECONDS + $3))
+    until grep -q -- "$2" "$1" 2>/dev/null; do
+        ((SECONDS >= end)) && return 1
+        sleep 0.1
+    done
+}
+node_part() {
+    if ! command -v candump >/dev/null || ! command -v cansend >/dev/null; then
+        summary "canola-node on vcan0" FAIL "can-utils (candump, cansend) not installed"
+        return
+    fi
+    candump -L vcan0 >"$tmp/candump.log" 2>&1 &
+    pids+=($!)
+    sleep 0.3
+    "$build/canola-node" --iface vcan0 --node-id 5 --heartbeat 100 2>"$tmp/node.err" &
+    local node=$!
+    pids+=("$node")
+    local why=""
+    wait_for "$tmp/candump.log" " 705#00" 10 || why="no boot-up 705#00 in candump"
+    [[ -z $why ]] && { wait_for "$tmp/candump.log" " 705#7F" 10 || why="no heartbeat 705#7F"; }
+    [[ -z $why ]] && { cansend vcan0 000#0105 || why="cansend failed"; }
+    [[ -z $why ]] && { wait_for "$tmp/candump.log" " 705#05" 10 || why="no 705#05 after 000#0105"; }
+    kill -TERM "$node" 2>/dev/null
+    local rc=0 waited=0
+    while kill -0 "$node" 2>/dev/null && ((waited < 50)); do sleep 0.1; waited=$((waited + 1)); done
+    if kill -0 "$node" 2>/dev/null; then
+        kill -KILL "$node"
+        [[ -z $why ]] && why="did not stop on SIGTERM"
+    fi
+    wait "$node" 2>/dev/null || rc=$?
+    [[ -z $why && $rc != 0 ]] && why="exit $rc after SIGTERM"
+    [[ -z $why ]] && { grep -q ": operational" "$tmp/node.err" || why="no state change on stderr"; }
+    [[ -z $why ]] && { grep -q "stopped by SIGTERM" "$tmp/node.err" || why="no stop message"; }
+    local beats
+    beats=$(grep -c " 705#" "$tmp/candump.log")
+    if [[ -z $why ]]; then
+        summary "canola-node on vcan0" PASS "boot-up, $beats frames on 0x705, started by cansend, exit 0 on SIGTERM"
+    else
+        echo "  candump:"; sed 's/^/    /' "$tmp/candump.log" | tail -n 20
+        echo "  canola-node stderr:"; sed 's/^/    /' "$tmp/node.err"
+        summary "canola-node on vcan0" FAIL "$why"
+    fi
+}
+node_part
+
+# ---- 3. the Python tests marked vcan
+py=$root/build-py/venv/bin/python
+if [[ -x $py ]]; then
+    rc=0
+    (cd "$root/python" && CANOLA_VCAN=vcan0 timeout 600 "$py" -m pytest -m vcan -q tests) \
+        >"$tmp/py.log" 2>&1 || rc=$?
+    last=$(tail -n 1 "$tmp/py.log")
+    case $rc in
+        0) summary "Python pytest -m vcan" PASS "$last" ;;
+        5) summary "Python pytest -m vcan" PASS "no tests marked vcan yet" ;;
+        *) cat "$tmp/py.log"; summary "Python pytest -m vcan" FAIL "exit $rc: $last" ;;
+    esac
+else
+    summary "Python pytest -m vcan" "NOT RUN" "no build-py/venv: make py-env"
+fi
+
+if ((failed)); then
+    echo "vcan tier: FAILED"
+    exit 1
+fi
+echo "vcan tier: passed"
