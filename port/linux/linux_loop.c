@@ -76,9 +76,9 @@ co_err_t co_loop_handle_signals(co_loop_t *loop)
 
 static void fail(co_loop_t *loop, co_loop_node_t *ep)
 {
-    if (loop->failed == NULL) {
-        loop->failed = ep->transport;
-    }
+    ep->failed = true;
+    loop->failed = ep->transport;
+    loop->failure_news = true;
     loop->reason = CO_LOOP_TRANSPORT_FAILED;
     if (ep->transport->fd >= 0) {
         /* Out of the epoll set, so that a loop that goes on with its other nodes does not
@@ -101,7 +101,7 @@ static co_err_t loop_tx(void *ctx, const co_frame_t *frame)
 {
     co_loop_node_t *ep = ctx;
     co_transport_t *t = ep->transport;
-    if (ep->loop->failed == t) {
+    if (ep->failed) {
         return CO_ERR_STATE;
     }
     co_err_t rc = t->ops->send(t, frame);
@@ -232,7 +232,7 @@ static uint64_t poll_nodes(co_loop_t *loop, uint64_t now)
     uint64_t wake = CO_TIME_NEVER;
     for (unsigned i = 0; i < loop->node_count; i++) {
         co_loop_node_t *ep = &loop->nodes[i];
-        if (loop->failed == ep->transport) {
+        if (ep->failed) {
             continue;
         }
         if (ep->retry_us <= now) {
@@ -244,7 +244,7 @@ static uint64_t poll_nodes(co_loop_t *loop, uint64_t now)
             wake = now; /* input waits in the transport: no sleeping */
         }
         bool want_out = transport_pending(ep->transport);
-        if (want_out != ep->watch_out && loop->failed != ep->transport) {
+        if (want_out != ep->watch_out) {
             struct epoll_event ev = {.events = EPOLLIN | (want_out ? EPOLLOUT : 0u),
                                      .data.u64 = TAG(TAG_NODE, i)};
             if (epoll_ctl(loop->epfd, EPOLL_CTL_MOD, ep->transport->fd, &ev) == 0) {
@@ -294,7 +294,7 @@ static void node_ready(co_loop_t *loop, co_loop_node_t *ep, uint32_t events)
         } else {
             dispatch_events(ep->node, bus);
         }
-        if (loop->failed == t) {
+        if (ep->failed) {
             return; /* a send inside the ingest broke it */
         }
     }
@@ -321,7 +321,7 @@ static void handle(co_loop_t *loop, const struct epoll_event *ev)
         break;
     }
     case TAG_NODE:
-        if (value < loop->node_count && loop->failed != loop->nodes[value].transport) {
+        if (value < loop->node_count && !loop->nodes[value].failed) {
             node_ready(loop, &loop->nodes[value], ev->events);
         }
         break;
@@ -342,9 +342,10 @@ co_loop_reason_t co_loop_run_until(co_loop_t *loop, uint64_t until_us)
     if (loop == NULL || loop->epfd < 0) {
         return CO_LOOP_SYSTEM_ERROR;
     }
-    loop->reason = CO_LOOP_RUNNING;
+    /* A transport that failed outside the run (co_node_start's boot-up) is news too. */
+    loop->reason = loop->failure_news ? CO_LOOP_TRANSPORT_FAILED : CO_LOOP_RUNNING;
     loop->until_us = until_us;
-    for (;;) {
+    while (loop->reason == CO_LOOP_RUNNING) {
         uint64_t now = co_linux_now_us();
         uint64_t wake = min_u64(poll_nodes(loop, now), until_us);
         if (loop->reason != CO_LOOP_RUNNING) {
@@ -376,17 +377,23 @@ co_loop_reason_t co_loop_run_until(co_loop_t *loop, uint64_t until_us)
         }
         for (unsigned i = 0; i < loop->node_count && loop->reason == CO_LOOP_RUNNING; i++) {
             co_loop_node_t *ep = &loop->nodes[i];
-            if (loop->failed != ep->transport && transport_buffered(ep->transport)) {
+            if (!ep->failed && transport_buffered(ep->transport)) {
                 node_ready(loop, ep, EPOLLIN);
             }
         }
         if (loop->reason != CO_LOOP_RUNNING) {
-            /* Let the nodes send what the last frames asked for before returning. */
+            /* Let the nodes send what the last frames asked for before returning (a
+             * transport failing now is news for the next run, not a lost signal). */
+            co_loop_reason_t why = loop->reason;
             (void)poll_nodes(loop, co_linux_now_us());
+            loop->reason = why;
             break;
         }
     }
     loop->until_us = CO_TIME_NEVER;
+    if (loop->reason == CO_LOOP_TRANSPORT_FAILED) {
+        loop->failure_news = false;
+    }
     return loop->reason;
 }
 

@@ -5,9 +5,9 @@
  * usage: test_canola_node PATH-TO-canola-node
  *
  * Checks: boot-up, an NMT start seen in the heartbeat, an SDO "save" with --store DIR
- * writing the parameter files, the NMT state changes on stderr, a clean exit 0 on SIGTERM
- * and SIGINT, exit 1 when the server goes away, one-line errors and exit 2 for bad
- * arguments. Bounded: every wait has a time-out; alarm(30).
+ * writing the parameter files and a restart reading them back, the NMT state changes on stderr, a
+ * clean exit 0 on SIGTERM and SIGINT, exit 1 when the server goes away, one-line errors and exit 2
+ * for bad arguments. Bounded: every wait has a time-out; alarm(30).
  */
 #define _GNU_SOURCE
 
@@ -192,18 +192,17 @@ static void test_runs_on_a_socketcand_bus(void)
     /* NMT start node 7. */
     send_text(&k, "< frame 000 1.000000 0107 >");
     CHECK(wait_text(&k, (size_t)hb, "< send 707 1 05 >", 3000) >= 0);
-    /* 0x1010 sub1 = "save": the parameters land in files in --store. */
+    /* 0x1017 = 250 ms, then 0x1010 sub1 = "save": the parameters land in --store. */
     size_t from = k.len;
-    send_text(&k, "< frame 607 2.000000 2310100173617665 >");
+    send_text(&k, "< frame 607 2.000000 2B171000FA000000 >");
+    CHECK(wait_text(&k, from, "< send 587 8 60 17 10 00 00 00 00 00 >", 3000) >= 0);
+    from = k.len;
+    send_text(&k, "< frame 607 2.100000 2310100173617665 >");
     CHECK(wait_text(&k, from, "< send 587 8 60 10 10 01 00 00 00 00 >", 3000) >= 0);
     char path[128];
     struct stat st;
     snprintf(path, sizeof path, "%s/comm.params", dir);
     CHECK(stat(path, &st) == 0 && st.st_size > 0);
-    unlink(path);
-    snprintf(path, sizeof path, "%s/app.params", dir);
-    unlink(path);
-    rmdir(dir);
     kill(c.pid, SIGTERM);
     CHECK_EQ(finish(&c, 3000), 0);
     CHECK(strstr(c.text, "node 7 on socketcand://") != NULL);
@@ -213,6 +212,21 @@ static void test_runs_on_a_socketcand_bus(void)
     printf("  its stderr:\n%s", c.text);
     close(k.fd);
     close(ls);
+
+    /* Power cycle: the stored 250 ms beats --heartbeat 100. */
+    start_node(&c, &k, dir, &ls);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", 3000) >= 0);
+    from = k.len;
+    send_text(&k, "< frame 607 3.000000 4017100000000000 >");
+    CHECK(wait_text(&k, from, "< send 587 8 4B 17 10 00 FA 00 00 00 >", 3000) >= 0);
+    kill(c.pid, SIGTERM);
+    CHECK_EQ(finish(&c, 3000), 0);
+    close(k.fd);
+    close(ls);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/app.params", dir);
+    unlink(path);
+    CHECK(rmdir(dir) == 0);
 }
 
 static void test_sigint_and_server_gone(void)

@@ -360,6 +360,42 @@ static co_err_t bt_send(co_transport_t *t, const co_frame_t *f)
 
 static const co_transport_ops_t bt_ops = {.recv = bt_recv, .send = bt_send};
 
+static co_err_t broken_send(co_transport_t *t, const co_frame_t *f)
+{
+    (void)f;
+    co_transport_fail(t, "broken on purpose");
+    return CO_ERR_STATE;
+}
+
+static const co_transport_ops_t broken_ops = {.recv = bt_recv, .send = broken_send};
+
+static void test_failure_before_the_run_is_reported(void)
+{
+    /* The boot-up fails inside co_node_start, before the loop runs: the first run reports
+     * it at once; the failed node is then left alone and a second run just runs. */
+    rig_t *r = &R;
+    memset(r, 0, sizeof *r);
+    int pfd[2];
+    CHECK(pipe(pfd) == 0);
+    busy_transport_t bt = {.t = {.ops = &broken_ops, .fd = pfd[0]}};
+    CHECK_EQ(co_loop_init(&r->loop), CO_OK);
+    r->cfg.node_id = 9;
+    r->cfg.od = example_od_init(&r->od, 100);
+    CHECK_EQ(co_loop_add_node(&r->loop, &r->node, &r->cfg, &bt.t), CO_OK);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    uint64_t t0 = co_linux_now_us();
+    CHECK_EQ(co_loop_run_until(&r->loop, t0 + 1000 * MS), CO_LOOP_TRANSPORT_FAILED);
+    CHECK(co_linux_now_us() - t0 < 100 * MS);
+    CHECK(co_loop_failed(&r->loop) == &bt.t);
+    CHECK_STR(bt.t.error, "broken on purpose");
+    uint32_t dropped = co_node_stats(&r->node)->tx_dropped;
+    CHECK_EQ(co_loop_run_until(&r->loop, co_linux_now_us() + 250 * MS), CO_LOOP_DEADLINE);
+    CHECK_EQ(co_node_stats(&r->node)->tx_dropped, dropped); /* not polled any more */
+    co_loop_close(&r->loop);
+    close(pfd[0]);
+    close(pfd[1]);
+}
+
 static void test_busy_transport_is_retried(void)
 {
     rig_t *r = &R;
@@ -415,6 +451,7 @@ int main(void)
     RUN(test_stop_from_a_callback_and_remove_fd);
     RUN(test_peer_gone_fails_the_transport);
     RUN(test_busy_transport_is_retried);
+    RUN(test_failure_before_the_run_is_reported);
     RUN(test_bad_arguments);
     return check_summary();
 }

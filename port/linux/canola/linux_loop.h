@@ -16,7 +16,8 @@
  * transports without their own buffer (a full SocketCAN queue), after
  * CO_LOOP_RETRY_US. A transport that fails (the socketcand server closed, the CAN
  * interface went away) stops the loop with CO_LOOP_TRANSPORT_FAILED; its error text is
- * in the transport (co_loop_failed).
+ * in the transport (co_loop_failed). Its node is left alone from then on (no more polls,
+ * its fd out of the epoll set): running the loop again goes on with the other nodes.
  *
  * Use:
  *     co_loop_t loop;
@@ -76,6 +77,7 @@ typedef struct co_loop_node {
     uint64_t next_us;  /**< what co_node_poll returned last */
     uint64_t retry_us; /**< poll again then (a busy transport), CO_TIME_NEVER: none */
     bool watch_out;    /**< EPOLLOUT is armed for the transport's buffer */
+    bool failed;       /**< the transport failed: the node is left alone */
 } co_loop_node_t;
 
 /** One application fd. Internal. */
@@ -110,7 +112,8 @@ struct co_loop {
     unsigned fd_count;
     co_loop_reason_t reason;
     int signo;
-    co_transport_t *failed;
+    co_transport_t *failed; /**< the transport that failed last */
+    bool failure_news;      /**< a failure not reported by a run yet (it may come first) */
     co_loop_stats_t stats;
 };
 
@@ -155,7 +158,7 @@ void co_loop_stop(co_loop_t *loop);
 /** The signal that stopped the loop (SIGTERM, SIGINT), 0 if none. */
 int co_loop_signal(const co_loop_t *loop);
 
-/** The transport that failed (its .error says why), NULL if none. */
+/** The transport that failed last (its .error says why), NULL if none. */
 co_transport_t *co_loop_failed(const co_loop_t *loop);
 
 /** Counters. */
