@@ -113,10 +113,10 @@ static co_err_t loop_tx(void *ctx, const co_frame_t *frame)
             /* No buffer whose draining would tell us: try again a little later. */
             ep->retry_us = min_u64(ep->retry_us, co_linux_now_us() + CO_LOOP_RETRY_US);
         }
-    } else {
+    } else if (rc == CO_ERR_STATE) {
         fail(ep->loop, ep);
     }
-    return rc;
+    return rc; /* other errors: the node drops this frame and counts it */
 }
 
 static void loop_routes_changed(void *ctx)

@@ -285,6 +285,11 @@ static void test_handshake_and_raw_mode(void)
     CHECK(strstr(r->heard, "< send 705 1 00 >") == r->heard); /* boot-up first */
     CHECK_EQ(run_ms(r, 120), CO_LOOP_DEADLINE);
     CHECK(strstr(r->heard, "< send 705 1 05 >") != NULL); /* heartbeat: operational */
+    /* A frame the protocol cannot carry is dropped by the node; the connection stays. */
+    co_frame_t bad = {.id = 0x800, .len = 0};
+    (void)co_node_send(&r->node, &bad);
+    CHECK_EQ(co_node_stats(&r->node)->tx_dropped, 1);
+    CHECK_EQ(run_ms(r, 20), CO_LOOP_DEADLINE);
     rig_close(r);
 }
 

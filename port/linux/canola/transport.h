@@ -37,7 +37,8 @@ typedef struct co_transport_ops {
     /** Read the next frame or bus events without blocking. */
     co_rx_t (*recv)(co_transport_t *t, co_frame_t *frame, uint32_t *events);
     /** Write one frame without blocking: CO_OK (taken), CO_ERR_BUSY (no room now: try
-     *  again when `pending` is false or after a short while), CO_ERR_STATE (broken). */
+     *  again when `pending` is false or after a short while), CO_ERR_ARG (this frame
+     *  cannot be carried: the node drops it), CO_ERR_STATE (broken: set error). */
     co_err_t (*send)(co_transport_t *t, const co_frame_t *frame);
     /** Optional: true while output waits in the transport's own buffer (the loop then
      *  waits for the fd to become writable and calls flush). */
