@@ -25,7 +25,9 @@
  *                                       bus-off and restarted become bus events
  * and frames are sent as
  *     < send ID LEN B0 B1 ... >        ID as %03X (11-bit) or %08X (29-bit), bytes %02X
- *     < sendrtr ID LEN >               a remote frame
+ *     < sendrtr ID LEN >               a remote frame (socketcand answers it in raw mode
+ *                                       with < error unknown command >: node guarding
+ *                                       needs a hub that carries remote frames)
  * Other well-formed messages (< echo >, < stat ... >, < ok >) are counted and ignored; a
  * server error message (< error unknown command >) is counted in server_errors.
  *
