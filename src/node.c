@@ -106,6 +106,12 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
     case CO_ROUTE_TPDO_RTR:
         co_pdo_rtr(node, slot, frame);
         break;
+    case CO_ROUTE_LSS_SLAVE:
+        co_lss_slave_ingest(node, frame);
+        break;
+    case CO_ROUTE_LSS_MASTER:
+        co_lss_master_ingest(node, frame);
+        break;
     default:
         break;
     }
@@ -139,6 +145,8 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     next = co_min_u64(next, co_sync_poll(node, now_us));
     next = co_min_u64(next, co_emcy_poll(node, now_us));
     next = co_min_u64(next, co_pdo_poll(node, now_us));
+    next = co_min_u64(next, co_lss_slave_poll(node, now_us));
+    next = co_min_u64(next, co_lss_master_poll(node, now_us));
     co_node_schedule(node, next);
     return node->next_due_us;
 }

@@ -80,6 +80,15 @@
 #define CO_STORE_VALUE_MAX 64
 #endif
 
+/** LSS (CiA 305, canola/lss.h): the slave (every node answers on 0x7E5) and the master.
+ *  0 leaves them out of the build. */
+#ifndef CO_LSS_SLAVE
+#define CO_LSS_SLAVE 1
+#endif
+#ifndef CO_LSS_MASTER
+#define CO_LSS_MASTER 1
+#endif
+
 /** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
  *  heartbeat consumer and guarded node, and room for the other services. */
 #ifndef CO_RX_ROUTES_MAX
@@ -88,6 +97,9 @@
      CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX)
 #endif
 
+#if (CO_LSS_SLAVE != 0 && CO_LSS_SLAVE != 1) || (CO_LSS_MASTER != 0 && CO_LSS_MASTER != 1)
+#error "CO_LSS_SLAVE and CO_LSS_MASTER must be 0 or 1"
+#endif
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
 #error "CO_TX_QUEUE_LEN must be 1..255"
 #endif

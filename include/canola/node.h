@@ -36,6 +36,7 @@
 #include "canola/config.h"
 #include "canola/emcy.h"
 #include "canola/errctl.h"
+#include "canola/lss.h"
 #include "canola/nmt.h"
 #include "canola/od.h"
 #include "canola/pdo.h"
@@ -172,6 +173,13 @@ struct co_node {
 
     bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
     bool sdo_reload;  /**< a server channel waits to take new COB-IDs */
+
+#if CO_LSS_SLAVE
+    co_lss_slave_t lss_slave;
+#endif
+#if CO_LSS_MASTER
+    co_lss_master_t lss_master;
+#endif
 
     co_node_stats_t stats;
 };
