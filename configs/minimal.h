@@ -22,3 +22,7 @@
 #ifndef CO_LSS_MASTER
 #define CO_LSS_MASTER 0
 #endif
+/* No CANopen manager. */
+#ifndef CO_MANAGER
+#define CO_MANAGER 0
+#endif

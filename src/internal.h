@@ -21,6 +21,7 @@ enum co_route_kind {
     CO_ROUTE_TPDO_RTR,    /* a TPDO's COB-ID, for remote requests (slot = TPDO) */
     CO_ROUTE_LSS_SLAVE,   /* 0x7E5: LSS request */
     CO_ROUTE_LSS_MASTER,  /* 0x7E4: LSS answer */
+    CO_ROUTE_MGR_BOOTUP,  /* 0x700 + n of a slave the manager boots (slot = n) */
 };
 
 /* COB-ID objects (0x1200, 0x1280, ...): bit 31 = not valid, bit 29 = 29-bit identifier. */
@@ -273,6 +274,33 @@ static inline bool co_lss_master_listening(const co_node_t *node)
     (void)node;
     return false;
 }
+#endif
+
+/* manager.c: no-ops when left out of the build. */
+#if CO_MANAGER
+uint64_t co_manager_poll(co_node_t *node, uint64_t now_us);
+void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame);
+void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev);
+void co_manager_add_routes(co_node_t *node);
+#else
+static inline uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame)
+{
+    (void)node;
+    (void)n;
+    (void)frame;
+}
+static inline void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev)
+{
+    (void)node;
+    (void)ev;
+}
+static inline void co_manager_add_routes(co_node_t *node) { (void)node; }
 #endif
 
 #endif /* CANOLA_INTERNAL_H */

@@ -269,8 +269,7 @@ co_err_t co_lss_switch_selective(co_node_t *node, const co_lss_address_t *addres
     return err;
 }
 
-co_err_t co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done,
-                                  void *ctx)
+co_err_t co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done, void *ctx)
 {
     if ((node_id < 1 || node_id > 127) && node_id != CO_NODE_ID_UNCONFIGURED) {
         return CO_ERR_ARG;
@@ -406,22 +405,22 @@ co_err_t co_lss_activate_bit_timing(co_node_t *node, uint16_t delay_ms)
         return CO_ERR_STATE;                                                                       \
     }
 co_err_t co_lss_switch_selective(co_node_t *node, const co_lss_address_t *address,
-                                 co_lss_done_fn done, void *ctx) CO_LSS_ABSENT((void)address)
-co_err_t co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done,
-                                  void *ctx) CO_LSS_ABSENT((void)node_id)
-co_err_t co_lss_configure_bit_timing(co_node_t *node, uint8_t table, uint8_t index,
-                                     co_lss_done_fn done, void *ctx)
-    CO_LSS_ABSENT((void)table, (void)index)
-co_err_t co_lss_store(co_node_t *node, co_lss_done_fn done, void *ctx) CO_LSS_ABSENT((void)0)
-co_err_t co_lss_inquire(co_node_t *node, uint8_t cs, co_lss_done_fn done, void *ctx)
-    CO_LSS_ABSENT((void)cs)
-co_err_t co_lss_identify_remote(co_node_t *node, const co_lss_address_t *low,
-                                const co_lss_address_t *high, co_lss_done_fn done, void *ctx)
-    CO_LSS_ABSENT((void)low, (void)high)
-co_err_t co_lss_identify_non_configured(co_node_t *node, co_lss_done_fn done, void *ctx)
-    CO_LSS_ABSENT((void)0)
-co_err_t co_lss_fastscan(co_node_t *node, const co_lss_fastscan_t *scan, co_lss_done_fn done,
-                         void *ctx) CO_LSS_ABSENT((void)scan)
+                                 co_lss_done_fn done, void *ctx)
+    CO_LSS_ABSENT((void)address) co_err_t
+    co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done, void *ctx)
+        CO_LSS_ABSENT((void)node_id) co_err_t
+    co_lss_configure_bit_timing(co_node_t *node, uint8_t table, uint8_t index, co_lss_done_fn done,
+                                void *ctx) CO_LSS_ABSENT((void)table, (void)index) co_err_t
+    co_lss_store(co_node_t *node, co_lss_done_fn done, void *ctx) CO_LSS_ABSENT((void)0) co_err_t
+    co_lss_inquire(co_node_t *node, uint8_t cs, co_lss_done_fn done, void *ctx)
+        CO_LSS_ABSENT((void)cs) co_err_t
+    co_lss_identify_remote(co_node_t *node, const co_lss_address_t *low,
+                           const co_lss_address_t *high, co_lss_done_fn done, void *ctx)
+        CO_LSS_ABSENT((void)low, (void)high) co_err_t
+    co_lss_identify_non_configured(co_node_t *node, co_lss_done_fn done, void *ctx)
+        CO_LSS_ABSENT((void)0) co_err_t
+    co_lss_fastscan(co_node_t *node, const co_lss_fastscan_t *scan, co_lss_done_fn done, void *ctx)
+        CO_LSS_ABSENT((void)scan)
 
 #endif
 

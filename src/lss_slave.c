@@ -84,7 +84,8 @@ static void identify(co_node_t *node, uint8_t step, uint32_t value)
     if (step == 0) {
         s->ident = 0;
     }
-    uint32_t mine = address_part(node, step < 2 ? step : (uint8_t)(2 + (step - 2) / 2));
+    uint8_t part = step < 2 ? step : (uint8_t)(2u + (step - 2u) / 2u);
+    uint32_t mine = address_part(node, part);
     bool low = step == 2 || step == 4;
     bool ok = step < 2 ? mine == value : (low ? mine >= value : mine <= value);
     if (s->ident != step || !ok) {
@@ -137,7 +138,7 @@ static void configure(co_node_t *node, const uint8_t *d)
         answer_error(node, d[0], valid_node_id(d[1]) ? 0 : 1);
         break;
     case CO_LSS_CS_CONFIG_BIT_TIMING: {
-        bool ok = d[1] == 0 && d[2] < 16 && ((s->cfg.bit_timings >> d[2]) & 1u);
+        bool ok = d[1] == 0 && d[2] < 16 && (((unsigned)s->cfg.bit_timings >> d[2]) & 1u);
         if (ok) {
             s->bit_timing = d[2];
         }

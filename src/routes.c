@@ -91,6 +91,7 @@ void co_routes_rebuild(co_node_t *node)
     if (co_lss_master_listening(node)) {
         co_routes_add(node, CO_LSS_COB_SLAVE, CO_ROUTE_LSS_MASTER, 0);
     }
+    co_manager_add_routes(node); /* last: a consumed node's heartbeat route comes first */
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }

@@ -153,9 +153,8 @@ static void test_bit_timing_configure_and_activate(void)
 {
     test_node_t *t = slave(5);
     app_t a = {.node = &t->node};
-    co_lss_slave_config_t lc = {.bit_timings = (1u << 2) | (1u << 3),
-                                .on_bit_timing = on_bit_timing,
-                                .ctx = &a};
+    co_lss_slave_config_t lc = {
+        .bit_timings = (1u << 2) | (1u << 3), .on_bit_timing = on_bit_timing, .ctx = &a};
     CHECK_EQ(co_lss_slave_setup(&t->node, &lc), CO_OK);
     to_config(t);
     ingest(t, 0, LSS, "15 0A 00 00 00 00 00 00"); /* nothing configured: ignored */
@@ -340,7 +339,7 @@ static void test_master_configure_node_id(void)
     CHECK(co_lss_master_busy(&m->node));
     CHECK_EQ(co_lss_store(&m->node, on_done, &log), CO_ERR_BUSY);
     ingest(m, 1 * MS, 0x7E4, "5E 00 00 00 00 00 00 00"); /* not its answer */
-    ingest(m, 1 * MS, 0x7E4, "11 00 00 00"); /* short: malformed */
+    ingest(m, 1 * MS, 0x7E4, "11 00 00 00");             /* short: malformed */
     CHECK_EQ(log.n, 0);
     ingest(m, 2 * MS, 0x7E4, "11 00 00 00 00 00 00 00");
     CHECK_EQ(log.n, 1);

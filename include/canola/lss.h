@@ -156,21 +156,21 @@ co_lss_mode_t co_lss_slave_mode(const co_node_t *node);
 
 /** How a master request ended. */
 typedef enum co_lss_status {
-    CO_LSS_OK = 0,       /**< answered (and, for configure/store, accepted) */
-    CO_LSS_TIMEOUT,      /**< no answer within the time-out (fastscan: no slave found) */
-    CO_LSS_REFUSED,      /**< the slave answered with an error: see error, spec_error */
-    CO_LSS_SCAN_FAILED,  /**< fastscan: a slave stopped answering half-way */
-    CO_LSS_CANCELLED,    /**< co_lss_master_cancel */
+    CO_LSS_OK = 0,      /**< answered (and, for configure/store, accepted) */
+    CO_LSS_TIMEOUT,     /**< no answer within the time-out (fastscan: no slave found) */
+    CO_LSS_REFUSED,     /**< the slave answered with an error: see error, spec_error */
+    CO_LSS_SCAN_FAILED, /**< fastscan: a slave stopped answering half-way */
+    CO_LSS_CANCELLED,   /**< co_lss_master_cancel */
 } co_lss_status_t;
 
 /** Result of a master request, given to its completion callback. */
 typedef struct co_lss_result {
-    uint8_t cs;         /**< the request's command specifier */
-    uint8_t status;     /**< co_lss_status_t */
-    uint8_t error;      /**< configure/store: the slave's error code (0 = success) */
-    uint8_t spec_error; /**< ... and its manufacturer-specific error */
-    uint32_t value;     /**< inquire: the value (node-ID in the low byte) */
-    uint16_t answers;   /**< identify: answers counted during the time-out */
+    uint8_t cs;               /**< the request's command specifier */
+    uint8_t status;           /**< co_lss_status_t */
+    uint8_t error;            /**< configure/store: the slave's error code (0 = success) */
+    uint8_t spec_error;       /**< ... and its manufacturer-specific error */
+    uint32_t value;           /**< inquire: the value (node-ID in the low byte) */
+    uint16_t answers;         /**< identify: answers counted during the time-out */
     co_lss_address_t address; /**< fastscan: the address found */
 } co_lss_result_t;
 
@@ -191,11 +191,11 @@ typedef struct co_lss_master {
     uint32_t timeout_ms;
     uint32_t scan[4]; /**< fastscan: address being found */
     co_lss_result_t result;
-    uint8_t op;    /**< request cs in progress, 0 = idle */
-    uint8_t known; /**< fastscan: known parts */
-    uint8_t sub;   /**< fastscan: part being checked, 4 = done */
-    int8_t bit;    /**< fastscan: bit being checked, -1 = verify the part */
-    bool heard;    /**< an answer arrived during this step */
+    uint8_t op;     /**< request cs in progress, 0 = idle */
+    uint8_t known;  /**< fastscan: known parts */
+    uint8_t sub;    /**< fastscan: part being checked, 4 = done */
+    int8_t bit;     /**< fastscan: bit being checked, -1 = verify the part */
+    bool heard;     /**< an answer arrived during this step */
     bool listening; /**< route 0x7E4 installed */
 } co_lss_master_t;
 
@@ -224,8 +224,7 @@ co_err_t co_lss_activate_bit_timing(co_node_t *node, uint16_t delay_ms);
 co_err_t co_lss_switch_selective(co_node_t *node, const co_lss_address_t *address,
                                  co_lss_done_fn done, void *ctx);
 /** Configure the node-ID (1..127 or 0xFF) of the slave in configuration. */
-co_err_t co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done,
-                                  void *ctx);
+co_err_t co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done, void *ctx);
 /** Configure the bit timing (`table` 0: CiA 301 index) of the slave in configuration. */
 co_err_t co_lss_configure_bit_timing(co_node_t *node, uint8_t table, uint8_t index,
                                      co_lss_done_fn done, void *ctx);

@@ -37,6 +37,7 @@
 #include "canola/emcy.h"
 #include "canola/errctl.h"
 #include "canola/lss.h"
+#include "canola/manager.h"
 #include "canola/nmt.h"
 #include "canola/od.h"
 #include "canola/pdo.h"
@@ -179,6 +180,9 @@ struct co_node {
 #endif
 #if CO_LSS_MASTER
     co_lss_master_t lss_master;
+#endif
+#if CO_MANAGER
+    co_manager_t *manager; /**< attached by co_manager_init, or NULL */
 #endif
 
     co_node_stats_t stats;
