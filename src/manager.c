@@ -19,8 +19,8 @@ enum step {
     STEP_SERIAL,
     STEP_DATE, /* read 0x1020 sub1 and sub2 when a date/time is expected */
     STEP_TIME,
-    STEP_DCF,  /* download the concise DCF */
-    STEP_EC,   /* wait for the first heartbeat */
+    STEP_DCF, /* download the concise DCF */
+    STEP_EC,  /* wait for the first heartbeat */
     STEP_DONE,
 };
 
@@ -38,11 +38,8 @@ static void report(co_manager_t *m, uint8_t n, co_mgr_event_kind_t kind, uint8_t
                    uint32_t abort, uint32_t value)
 {
     if (m->cfg.on_event) {
-        co_mgr_event_t ev = {.node_id = n,
-                             .kind = (uint8_t)kind,
-                             .reason = reason,
-                             .abort = abort,
-                             .value = value};
+        co_mgr_event_t ev = {
+            .node_id = n, .kind = (uint8_t)kind, .reason = reason, .abort = abort, .value = value};
         if (kind == CO_MGR_FAILED) {
             ev.index = m->index;
             ev.sub = m->sub;
@@ -331,8 +328,7 @@ static bool mandatory_ready(const co_manager_t *m)
 {
     for (uint8_t n = 1; n <= 127; n++) {
         uint8_t s = m->state[n - 1];
-        if (listed(m, n) && n != m->node->node_id &&
-            (slave(m, n)->assignment & CO_MGR_MANDATORY) &&
+        if (listed(m, n) && n != m->node->node_id && (slave(m, n)->assignment & CO_MGR_MANDATORY) &&
             s != CO_MGR_CONFIGURED && s != CO_MGR_RUNNING) {
             return false;
         }

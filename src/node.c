@@ -151,6 +151,7 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     next = co_min_u64(next, co_lss_slave_poll(node, now_us));
     next = co_min_u64(next, co_lss_master_poll(node, now_us));
     next = co_min_u64(next, co_manager_poll(node, now_us));
+    next = co_min_u64(next, co_flash_poll(node, now_us));
     co_node_schedule(node, next);
     return node->next_due_us;
 }

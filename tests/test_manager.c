@@ -188,10 +188,8 @@ static net_t *ten_devices(void)
     dcf_u32(n->dcf[1], &off, 0x2007, 0, 9);
     n->slaves[5 - 1].dcf = n->dcf[1];
     n->slaves[5 - 1].dcf_len = off;
-    co_manager_config_t mc = {.nmt_startup = CO_MGR_NMT_MASTER,
-                              .slaves = n->slaves,
-                              .on_event = on_event,
-                              .ctx = n};
+    co_manager_config_t mc = {
+        .nmt_startup = CO_MGR_NMT_MASTER, .slaves = n->slaves, .on_event = on_event, .ctx = n};
     CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
     return n;
 }
@@ -371,12 +369,27 @@ static void add_1020(station_t *s, dated_t *v)
     static const uint8_t k_two = 2;
     static const uint32_t k_zero = 0;
     co_od_entry_t add[3] = {
-        {.index = 0x1020, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1,
-         .value = &v->count, .dflt = &k_two},
-        {.index = 0x1020, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW, .size = 4,
-         .value = &v->date, .dflt = &k_zero},
-        {.index = 0x1020, .sub = 2, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW, .size = 4,
-         .value = &v->time, .dflt = &k_zero},
+        {.index = 0x1020,
+         .sub = 0,
+         .type = CO_TYPE_UNSIGNED8,
+         .attr = CO_OD_RO,
+         .size = 1,
+         .value = &v->count,
+         .dflt = &k_two},
+        {.index = 0x1020,
+         .sub = 1,
+         .type = CO_TYPE_UNSIGNED32,
+         .attr = CO_OD_RW,
+         .size = 4,
+         .value = &v->date,
+         .dflt = &k_zero},
+        {.index = 0x1020,
+         .sub = 2,
+         .type = CO_TYPE_UNSIGNED32,
+         .attr = CO_OD_RW,
+         .size = 4,
+         .value = &v->time,
+         .dflt = &k_zero},
     };
     co_node_config_t cfg = s->node.cfg;
     uint32_t at = 0;

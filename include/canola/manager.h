@@ -8,18 +8,15 @@
  * keeps in the master's objects:
  *   0x1F80 NMT start-up: bit 0 NMT master (must be set), bit 1 start all nodes with one
  *          NMT command (node-ID 0) instead of one per slave (only when every listed
- *          slave booted: else one per slave, so the refused ones stay stopped), bit 2 the master does not
- *          enter operational by itself, bit 3 the master does not start the slaves
- *          (the application does: the manager stops after configuring them);
- *   0x1F81 slave assignment: bit 0 the node is a slave, bit 2 boot it again when it
- *          sends a boot-up later, bit 3 mandatory (the network is not started without
- *          it); other bits are kept but not used;
- *   0x1F84..0x1F88 expected device type, vendor-ID, product code, revision and serial
- *          number (0 = not checked);
- *   0x1F22 concise DCF: the configuration, downloaded entry by entry;
- *   0x1F26/0x1F27 expected configuration date and time: when the slave's 0x1020 sub1
- *          and sub2 hold exactly these, the download is skipped (0/0 = always download);
- *   the heartbeat consumer time the master uses for the slave (its 0x1016 entry).
+ *          slave booted: else one per slave, so the refused ones stay stopped), bit 2 the master
+ * does not enter operational by itself, bit 3 the master does not start the slaves (the application
+ * does: the manager stops after configuring them); 0x1F81 slave assignment: bit 0 the node is a
+ * slave, bit 2 boot it again when it sends a boot-up later, bit 3 mandatory (the network is not
+ * started without it); other bits are kept but not used; 0x1F84..0x1F88 expected device type,
+ * vendor-ID, product code, revision and serial number (0 = not checked); 0x1F22 concise DCF: the
+ * configuration, downloaded entry by entry; 0x1F26/0x1F27 expected configuration date and time:
+ * when the slave's 0x1020 sub1 and sub2 hold exactly these, the download is skipped (0/0 = always
+ * download); the heartbeat consumer time the master uses for the slave (its 0x1016 entry).
  *
  * Boot of one slave (the "boot slave" process), in order; the first failure ends it
  * with its reason:
@@ -120,8 +117,8 @@ typedef struct co_mgr_slave {
     uint32_t serial;      /**< 0x1F88 */
     const uint8_t *dcf;   /**< 0x1F22 concise DCF (must outlive the boot), or NULL */
     uint32_t dcf_len;
-    uint32_t config_date; /**< 0x1F26 */
-    uint32_t config_time; /**< 0x1F27 */
+    uint32_t config_date;  /**< 0x1F26 */
+    uint32_t config_time;  /**< 0x1F27 */
     uint16_t heartbeat_ms; /**< consumer time for this slave, 0 = no heartbeat watch */
 } co_mgr_slave_t;
 

@@ -41,6 +41,7 @@
 #include "canola/nmt.h"
 #include "canola/od.h"
 #include "canola/pdo.h"
+#include "canola/program.h"
 #include "canola/sdo.h"
 #include "canola/storage.h"
 #include "canola/sync.h"
@@ -183,6 +184,7 @@ struct co_node {
 #endif
 #if CO_MANAGER
     co_manager_t *manager; /**< attached by co_manager_init, or NULL */
+    co_flash_t *flash;     /**< program download in progress, or NULL */
 #endif
 
     co_node_stats_t stats;
