@@ -384,7 +384,9 @@ static void slave_booted_up(co_manager_t *m, uint8_t n)
     if (!m->running || !listed(m, n) || s == CO_MGR_BOOTING || s == CO_MGR_WAITING) {
         return;
     }
-    if (slave(m, n)->assignment & CO_MGR_BOOT_ON_BOOTUP) {
+    uint32_t a = slave(m, n)->assignment;
+    /* A mandatory slave the halted network waits for is always worth another try. */
+    if ((a & CO_MGR_BOOT_ON_BOOTUP) || ((a & CO_MGR_MANDATORY) && !m->network_started)) {
         m->state[n - 1] = CO_MGR_WAITING;
         co_node_schedule(m->node, m->node->now_us);
     }
@@ -469,6 +471,10 @@ co_err_t co_manager_start(co_manager_t *mgr)
         bool slave_n = listed(mgr, n) && n != mgr->node->node_id;
         mgr->state[n - 1] = slave_n ? CO_MGR_WAITING : CO_MGR_UNLISTED;
         mgr->reason[n - 1] = slave_n ? CO_BOOT_OK : CO_BOOT_NOT_LISTED;
+        if (slave_n && mgr->cfg.reset_slaves &&
+            !(mgr->cfg.slaves[n - 1].assignment & CO_MGR_KEEP_ALIVE)) {
+            (void)co_nmt_send(mgr->node, CO_NMT_CMD_RESET_COMMUNICATION, n);
+        }
     }
     co_node_schedule(mgr->node, mgr->node->now_us);
     return CO_OK;

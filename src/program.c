@@ -6,8 +6,7 @@
 
 void co_program_init(co_program_t *p, const co_program_app_t *app, bool running, uint32_t ident)
 {
-    *p = (co_program_t){.ident = ident,
-                        .state = running ? CO_PROGRAM_START : CO_PROGRAM_STOP};
+    *p = (co_program_t){.ident = ident, .state = running ? CO_PROGRAM_START : CO_PROGRAM_STOP};
     if (app != NULL) {
         p->app = *app;
     }
@@ -75,8 +74,8 @@ static co_abort_t control_write(void *ctx, const co_od_entry_t *entry, uint32_t 
 }
 
 /* Little-endian bytes of a value of `size` bytes, read from `offset`. */
-static co_abort_t read_value(uint32_t v, uint32_t size, uint32_t offset, uint8_t *buf,
-                             uint32_t cap, uint32_t *n, uint32_t *total)
+static co_abort_t read_value(uint32_t v, uint32_t size, uint32_t offset, uint8_t *buf, uint32_t cap,
+                             uint32_t *n, uint32_t *total)
 {
     uint8_t wire[4];
     co_put_u32(wire, v);
@@ -88,8 +87,8 @@ static co_abort_t read_value(uint32_t v, uint32_t size, uint32_t offset, uint8_t
     return CO_ABORT_NONE;
 }
 
-static co_abort_t control_read(void *ctx, const co_od_entry_t *entry, uint32_t offset,
-                               uint8_t *buf, uint32_t cap, uint32_t *n, uint32_t *total)
+static co_abort_t control_read(void *ctx, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                               uint32_t cap, uint32_t *n, uint32_t *total)
 {
     (void)entry;
     const co_program_t *p = ctx;
@@ -104,8 +103,8 @@ static co_abort_t ident_read(void *ctx, const co_od_entry_t *entry, uint32_t off
     return read_value(p->ident, 4, offset, buf, cap, n, total);
 }
 
-static co_abort_t status_read(void *ctx, const co_od_entry_t *entry, uint32_t offset,
-                              uint8_t *buf, uint32_t cap, uint32_t *n, uint32_t *total)
+static co_abort_t status_read(void *ctx, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                              uint32_t cap, uint32_t *n, uint32_t *total)
 {
     (void)entry;
     const co_program_t *p = ctx;

@@ -71,8 +71,8 @@ static void run(co_flash_t *f)
         err = co_sdo_write_value(node, ch, 0x1F51, sub, CO_PROGRAM_CLEAR, 1, on_step, f);
         break;
     case CO_FLASH_STAGE_DATA:
-        err = co_sdo_download(node, ch, 0x1F50, sub, CO_SDO_BLOCK, f->req.data, f->req.len,
-                              on_step, f);
+        err = co_sdo_download(node, ch, 0x1F50, sub, CO_SDO_BLOCK, f->req.data, f->req.len, on_step,
+                              f);
         break;
     case CO_FLASH_STAGE_START:
         err = co_sdo_write_value(node, ch, 0x1F51, sub, CO_PROGRAM_START, 1, on_step, f);

@@ -30,6 +30,7 @@ typedef struct net {
     uint32_t event_count;
     uint8_t dcf[4][128];
     uint32_t start_frames; /* NMT start commands seen on the bus */
+    uint32_t reset_frames; /* NMT reset communication commands */
 } net_t;
 
 static void on_event(void *ctx, const co_mgr_event_t *ev)
@@ -45,6 +46,7 @@ static void on_trace(void *ctx, const char *line)
 {
     net_t *n = ctx;
     n->start_frames += strstr(line, " 000#01") != NULL;
+    n->reset_frames += strstr(line, " 000#82") != NULL;
 }
 
 static const co_mgr_event_t *find(const net_t *n, uint8_t node, co_mgr_event_kind_t kind)
@@ -299,7 +301,9 @@ static void test_missing_mandatory_keeps_the_network_down(void)
     CHECK_EQ(co_nmt_state(dev(n, 2)), CO_NMT_PRE_OPERATIONAL);
     CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_CONFIGURED);
     CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_PRE_OPERATIONAL);
-    /* It comes: booted, and the whole network starts. */
+    /* It comes (a mandatory slave boots on its boot-up even without bit 2): booted, and
+     * the whole network starts. */
+    n->slaves[6 - 1].assignment &= ~CO_MGR_BOOT_ON_BOOTUP;
     co_node_start(dev(n, 6), n->bus.now_us);
     co_sim_run_until(&n->bus, 8000 * MS);
     CHECK(co_manager_network_started(&n->mgr));
@@ -434,6 +438,33 @@ static void test_configuration_skipped_when_date_matches(void)
     free(n);
 }
 
+static void test_reset_slaves_spares_keep_alive(void)
+{
+    net_t *n = ten_devices();
+    n->mgr.cfg.reset_slaves = true;
+    n->slaves[9 - 1].assignment |= CO_MGR_KEEP_ALIVE;
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        co_node_start(dev(n, id), 0);
+    }
+    /* Both stop their heartbeat; the reset brings node 10's back, node 9 is spared. */
+    CHECK_EQ(co_node_set_uint(dev(n, 9), 0x1017, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(dev(n, 10), 0x1017, 0, 0), CO_ABORT_NONE);
+    co_sim_run_until(&n->bus, 10 * MS);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    CHECK_EQ(n->reset_frames, DEVICES - 1);
+    const co_mgr_event_t *e = find(n, 9, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'K');
+    }
+    CHECK(find(n, 10, CO_MGR_FAILED) == NULL);
+    CHECK(find(n, 10, CO_MGR_STARTED) != NULL);
+    CHECK(co_manager_network_started(&n->mgr));
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
@@ -442,6 +473,7 @@ int main(void)
     RUN(test_ten_devices_boot_from_one_description);
     RUN(test_missing_mandatory_keeps_the_network_down);
     RUN(test_start_all_when_everyone_booted);
+    RUN(test_reset_slaves_spares_keep_alive);
     RUN(test_configuration_skipped_when_date_matches);
     RUN(test_start_all_with_a_failure_starts_one_by_one);
     return check_summary();

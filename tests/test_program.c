@@ -18,7 +18,7 @@ typedef struct flash_app {
     uint32_t sum;
     uint32_t bytes;
     uint32_t pieces;
-    bool broken;      /* every write fails */
+    bool broken; /* every write fails */
     bool refuse_start;
     uint8_t commands[8];
     uint32_t command_count;
@@ -73,7 +73,8 @@ static void add_program_objects(example_od_t *od, co_node_config_t *cfg, flash_a
     a->count1 = a->count2 = a->count3 = a->count4 = 1;
     co_od_entry_t add[8] = {
         {0x1F50, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &a->count1, &k_one, NULL, NULL},
-        {0x1F50, 1, CO_TYPE_DOMAIN, CO_OD_WO, 0xFFFFFFFFu, NULL, NULL, NULL, &co_program_data_hooks},
+        {0x1F50, 1, CO_TYPE_DOMAIN, CO_OD_WO, 0xFFFFFFFFu, NULL, NULL, NULL,
+         &co_program_data_hooks},
         {0x1F51, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &a->count2, &k_one, NULL, NULL},
         {0x1F51, 1, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, NULL, NULL, NULL, &co_program_control_hooks},
         {0x1F56, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &a->count3, &k_one, NULL, NULL},

@@ -6,17 +6,20 @@
  *
  * The network description is plain data, one record per node-ID, holding what CiA 302
  * keeps in the master's objects:
- *   0x1F80 NMT start-up: bit 0 NMT master (must be set), bit 1 start all nodes with one
- *          NMT command (node-ID 0) instead of one per slave (only when every listed
- *          slave booted: else one per slave, so the refused ones stay stopped), bit 2 the master
- * does not enter operational by itself, bit 3 the master does not start the slaves (the application
- * does: the manager stops after configuring them); 0x1F81 slave assignment: bit 0 the node is a
- * slave, bit 2 boot it again when it sends a boot-up later, bit 3 mandatory (the network is not
- * started without it); other bits are kept but not used; 0x1F84..0x1F88 expected device type,
- * vendor-ID, product code, revision and serial number (0 = not checked); 0x1F22 concise DCF: the
- * configuration, downloaded entry by entry; 0x1F26/0x1F27 expected configuration date and time:
- * when the slave's 0x1020 sub1 and sub2 hold exactly these, the download is skipped (0/0 = always
- * download); the heartbeat consumer time the master uses for the slave (its 0x1016 entry).
+ *   0x1F80 NMT start-up: bit 0 NMT master (must be set); bit 1 start all nodes with one
+ *          NMT command (node-ID 0) instead of one per slave, used only when every
+ *          listed slave booted (so the refused ones stay stopped); bit 2 the master
+ *          does not enter operational by itself; bit 3 the master does not start the
+ *          slaves (the application does: the manager stops after configuring them);
+ *   0x1F81 slave assignment: bit 0 the node is a slave; bit 2 boot it again when it
+ *          sends a boot-up later; bit 3 mandatory (the network is not started without
+ *          it); bit 4 keep-alive (reset_slaves spares it); other bits are not used;
+ *   0x1F84..0x1F88 expected device type, vendor-ID, product code, revision and serial
+ *          number (0 = not checked);
+ *   0x1F22 concise DCF: the configuration, downloaded entry by entry;
+ *   0x1F26/0x1F27 expected configuration date and time: when the slave's 0x1020 sub1
+ *          and sub2 hold exactly these, the download is skipped (0/0 = always download);
+ *   the heartbeat consumer time the master uses for the slave (its 0x1016 entry).
  *
  * Boot of one slave (the "boot slave" process), in order; the first failure ends it
  * with its reason:
@@ -34,14 +37,17 @@
  * The network: co_manager_start() boots every listed slave once. When all mandatory
  * slaves booted, the network starts (0x1F80) and CO_MGR_NETWORK_STARTED is reported;
  * while a mandatory slave failed, CO_MGR_NETWORK_HALTED names it and nothing is started.
- * A slave that failed or was missing and then sends its boot-up is booted again (bit 2
- * of 0x1F81 set); a late slave is started as soon as it is booted if the network runs.
+ * A slave that failed or was missing and then sends its boot-up is booted again when bit 2
+ * of 0x1F81 is set, and always when it is mandatory and the network waits for it; a late
+ * slave is started as soon as it is booted if the network runs.
  * A booted slave's heartbeat loss is reported (reason E) and the slave counts as missing
- * until its next boot-up. Not done: resetting the slaves at start (send the NMT reset
- * yourself first if you want it), keep-alive (bit 4), software checks (0x1F53/0x1F54),
- * node guarding, boot time (0x1F89), flying master.
+ * until its next boot-up. With reset_slaves, co_manager_start() first sends NMT reset
+ * communication to each listed slave without keep-alive, one command per slave (never
+ * to all: that would reset the master and unlisted nodes too). Not done: the check
+ * that a keep-alive slave is operational (L), software checks (0x1F53/0x1F54), node
+ * guarding, boot time (0x1F89), flying master.
  *
- * Memory: co_manager_t (~400 bytes) and the description table (127 records) belong to the
+ * Memory: co_manager_t (~340 bytes) and the description table (127 records) belong to the
  * caller; the node keeps a pointer. With a manager the node routes 0x700 + n of every
  * listed slave (CO_RX_ROUTES_MAX grows by 127 when CO_MANAGER is 1). Threading and
  * callbacks as the node's (canola/node.h).
@@ -68,6 +74,7 @@ typedef struct co_node co_node_t;
 #define CO_MGR_SLAVE 0x01u
 #define CO_MGR_BOOT_ON_BOOTUP 0x04u
 #define CO_MGR_MANDATORY 0x08u
+#define CO_MGR_KEEP_ALIVE 0x10u
 
 /** Why a slave's boot failed: the CiA 302-2 letters. */
 typedef enum co_boot_reason {
@@ -126,6 +133,7 @@ typedef struct co_manager_config {
     uint32_t nmt_startup;         /**< 0x1F80 */
     const co_mgr_slave_t *slaves; /**< 127 records: node-ID n at slaves[n - 1] */
     uint8_t sdo_channel;          /**< SDO client channel the manager may use */
+    bool reset_slaves;            /**< reset communication of the slaves before booting */
     void (*on_event)(void *ctx, const co_mgr_event_t *event);
     void *ctx;
 } co_manager_config_t;

@@ -60,8 +60,8 @@ typedef struct co_program_app {
     /** Take a piece of the image (0x1F50): `offset` of this piece, `total` the announced
      *  size (CO_OD_SIZE_UNKNOWN if none), `last` on the final piece. Return
      *  CO_ABORT_NONE or an abort code (the download stops; 0x1F57 says write error). */
-    co_abort_t (*write)(void *ctx, uint32_t offset, const uint8_t *data, uint32_t n,
-                        uint32_t total, bool last);
+    co_abort_t (*write)(void *ctx, uint32_t offset, const uint8_t *data, uint32_t n, uint32_t total,
+                        bool last);
     /** Carry out a 0x1F51 command (CO_PROGRAM_*); return CO_ABORT_NONE or an abort code. */
     co_abort_t (*control)(void *ctx, uint8_t command);
     void *ctx;
@@ -113,11 +113,11 @@ typedef struct co_flash_result {
 } co_flash_result_t;
 
 typedef struct co_flash_request {
-    uint8_t channel;   /**< SDO client channel (set up by co_flash_start) */
-    uint8_t server;    /**< the device's node-ID */
-    uint8_t program;   /**< sub-index of 0x1F50/0x1F51/0x1F56 (0 = 1) */
-    bool clear;        /**< clear the program before the download */
-    bool check_ident;  /**< compare 0x1F56 with `ident` after the start */
+    uint8_t channel;  /**< SDO client channel (set up by co_flash_start) */
+    uint8_t server;   /**< the device's node-ID */
+    uint8_t program;  /**< sub-index of 0x1F50/0x1F51/0x1F56 (0 = 1) */
+    bool clear;       /**< clear the program before the download */
+    bool check_ident; /**< compare 0x1F56 with `ident` after the start */
     uint32_t ident;
     const uint8_t *data; /**< the image (valid until done) */
     uint32_t len;
