@@ -465,6 +465,79 @@ static void test_reset_slaves_spares_keep_alive(void)
     free(n);
 }
 
+/* ---- LSS then manager: unconfigured devices get node-IDs, and their boot-ups boot them */
+
+typedef struct lss_log {
+    co_lss_result_t last;
+    uint32_t count;
+} lss_log_t;
+
+static void on_lss(void *ctx, const co_lss_result_t *r)
+{
+    lss_log_t *log = ctx;
+    log->last = *r;
+    log->count++;
+}
+
+static void lss_wait(net_t *n)
+{
+    for (int i = 0; i < 1000 && co_lss_master_busy(&n->master.node); i++) {
+        co_sim_run_until(&n->bus, n->bus.now_us + 10 * MS);
+    }
+}
+
+static void test_lss_assigned_devices_are_booted_by_the_manager(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    station(n, &n->master, 1, 0, NULL);
+    /* Four devices without node-ID; serials 0x300, 0x100, 0x400, 0x200. */
+    static const uint32_t serials[4] = {0x300, 0x100, 0x400, 0x200};
+    for (uint8_t i = 0; i < 4; i++) {
+        uint32_t ident[4] = {0xCA0, 0x77, 0x00010000, serials[i]};
+        station(n, &n->dev[i], 0xFF, 100, ident);
+    }
+    /* Nodes 20..23 as the plant wants them: fastscan finds the lowest address first. */
+    for (uint8_t k = 0; k < 4; k++) {
+        co_mgr_slave_t *s = &n->slaves[20 + k - 1];
+        s->assignment = CO_MGR_SLAVE | CO_MGR_BOOT_ON_BOOTUP;
+        s->vendor = 0xCA0;
+        s->serial = 0x100u * (k + 1u);
+        s->heartbeat_ms = 300;
+    }
+    co_manager_config_t mc = {
+        .nmt_startup = CO_MGR_NMT_MASTER, .slaves = n->slaves, .on_event = on_event, .ctx = n};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    co_node_start(&n->master.node, 0);
+    for (uint8_t i = 0; i < 4; i++) {
+        co_node_start(&n->dev[i].node, 0);
+    }
+    co_lss_master_set_timeout(&n->master.node, 5);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 6000 * MS); /* four times no answer: B, network started */
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 20), CO_BOOT_NO_ANSWER);
+    lss_log_t log = {0};
+    for (uint8_t k = 0; k < 4; k++) {
+        CHECK_EQ(co_lss_fastscan(&n->master.node, NULL, on_lss, &log), CO_OK);
+        lss_wait(n);
+        CHECK_EQ(log.last.status, CO_LSS_OK);
+        CHECK_EQ(log.last.address.serial, 0x100u * (k + 1u));
+        CHECK_EQ(co_lss_configure_node_id(&n->master.node, (uint8_t)(20 + k), on_lss, &log), CO_OK);
+        lss_wait(n);
+        CHECK_EQ(log.last.status, CO_LSS_OK);
+        co_lss_switch_global(&n->master.node, CO_LSS_WAITING);
+    }
+    co_sim_run_until(&n->bus, n->bus.now_us + 3000 * MS);
+    for (uint8_t i = 0; i < 4; i++) {
+        uint8_t id = co_node_id(&n->dev[i].node);
+        CHECK_EQ(id, 20 + serials[i] / 0x100 - 1);
+        CHECK_EQ(co_manager_slave_state(&n->mgr, id), CO_MGR_RUNNING);
+        CHECK_EQ(co_nmt_state(&n->dev[i].node), CO_NMT_OPERATIONAL);
+    }
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
@@ -474,6 +547,7 @@ int main(void)
     RUN(test_missing_mandatory_keeps_the_network_down);
     RUN(test_start_all_when_everyone_booted);
     RUN(test_reset_slaves_spares_keep_alive);
+    RUN(test_lss_assigned_devices_are_booted_by_the_manager);
     RUN(test_configuration_skipped_when_date_matches);
     RUN(test_start_all_with_a_failure_starts_one_by_one);
     return check_summary();
