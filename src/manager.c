@@ -463,10 +463,14 @@ co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_co
 
 co_err_t co_manager_start(co_manager_t *mgr)
 {
-    if (mgr->running || !mgr->node->started) {
+    if (!mgr->node->started) {
         return CO_ERR_STATE;
     }
+    if (mgr->current != 0) {
+        return CO_ERR_BUSY; /* a slave's boot is in progress */
+    }
     mgr->running = true;
+    mgr->network_started = false;
     for (uint8_t n = 1; n <= 127; n++) {
         bool slave_n = listed(mgr, n) && n != mgr->node->node_id;
         mgr->state[n - 1] = slave_n ? CO_MGR_WAITING : CO_MGR_UNLISTED;

@@ -208,7 +208,8 @@ static void test_ten_devices_boot_from_one_description(void)
     }
     co_sim_run_until(&n->bus, 10 * MS);
     CHECK_EQ(co_manager_start(&n->mgr), CO_OK);
-    CHECK_EQ(co_manager_start(&n->mgr), CO_ERR_STATE);
+    co_sim_run_until(&n->bus, 11 * MS);
+    CHECK_EQ(co_manager_start(&n->mgr), CO_ERR_BUSY); /* node 2 is being booted */
     co_sim_run_until(&n->bus, 5000 * MS);
 
     /* Wrong vendor: refused, reported with what it said. */
@@ -277,6 +278,27 @@ static void test_ten_devices_boot_from_one_description(void)
         CHECK_EQ(e->reason, 'E');
     }
     CHECK_EQ(co_manager_slave_state(&n->mgr, 9), CO_MGR_MISSING);
+
+    /* The master resets its communication (its heartbeat watches are gone) and starts the
+     * manager over: the slaves are booted and watched again, node 9 is still missing. */
+    co_sim_set_bus_off(&n->dev[9 - FIRST].port, false);
+    co_node_set_uint(dev(n, 9), 0x1017, 0, 0); /* it stays silent */
+    co_nmt_apply(&n->master.node, CO_NMT_CMD_RESET_COMMUNICATION);
+    uint32_t before = n->event_count;
+    while (co_manager_start(&n->mgr) == CO_ERR_BUSY) {
+        co_sim_run_until(&n->bus, n->bus.now_us + 10 * MS);
+    }
+    co_sim_run_until(&n->bus, n->bus.now_us + 5000 * MS);
+    uint32_t booted = 0, k = 0;
+    for (uint32_t i = before; i < n->event_count; i++) {
+        booted += n->events[i].kind == CO_MGR_BOOTED;
+        k += n->events[i].kind == CO_MGR_FAILED && n->events[i].node_id == 9 &&
+             n->events[i].reason == 'K';
+    }
+    CHECK_EQ(booted, DEVICES - 3); /* 3 and 5 refused again, 9 silent */
+    CHECK_EQ(k, 1);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
     free(n);
 }
 

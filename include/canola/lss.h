@@ -124,8 +124,9 @@ typedef struct co_lss_slave_config {
     uint16_t bit_timings;
     /** Switch the controller to table-0 index `index` (activate bit timing). */
     void (*on_bit_timing)(void *ctx, uint8_t index);
-    /** Store node-ID and bit timing index persistently (store configuration). Return
-     *  CO_OK, or an error (answered as error 2, storage media access error). */
+    /** Store node-ID and bit timing index persistently (store configuration); the bit
+     *  timing is 0xFF when none was configured (keep the stored one). Return CO_OK, or an
+     *  error (answered as error 2, storage media access error). */
     co_err_t (*store)(void *ctx, uint8_t node_id, uint8_t bit_timing);
     void *ctx;
 } co_lss_slave_config_t;

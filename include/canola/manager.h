@@ -172,8 +172,11 @@ typedef struct co_manager {
  *  bit 0 is clear, CO_ERR_STATE when the manager is not built in (CO_MANAGER 0). */
 co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_config_t *config);
 
-/** Start the boot of every listed slave (the node must be started). Returns
- *  CO_ERR_STATE when the node is not started or the manager runs already. */
+/** Start the boot of every listed slave (the node must be started). Called again, it
+ *  starts over: every slave booted anew, the network started again once the mandatory
+ *  ones are back (after the master's own reset communication, which forgets the heartbeat
+ *  watches, for example). Returns CO_ERR_STATE when the node is not started, CO_ERR_BUSY
+ *  while a slave's boot is in progress. */
 co_err_t co_manager_start(co_manager_t *mgr);
 
 /** The state and last failure reason of slave `node_id` (1..127). */
