@@ -560,11 +560,94 @@ static void test_lss_assigned_devices_are_booted_by_the_manager(void)
     free(n);
 }
 
+/* ---- the description in the master's own dictionary */
+
+typedef struct master_objects {
+    uint8_t count;
+    uint32_t startup;
+    uint32_t assign[2];  /* 0x1F81 sub2, sub3 */
+    uint32_t vendor3;    /* 0x1F85 sub3 */
+    co_od_domain_t dcf2; /* 0x1F22 sub2 */
+} master_objects_t;
+
+static void add_master_objects(station_t *s, master_objects_t *o)
+{
+    o->count = 127;
+    co_od_entry_t add[8] = {
+        {0x1F22, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &o->count, NULL, NULL, NULL},
+        {0x1F22, 2, CO_TYPE_DOMAIN, CO_OD_RW, 128, &o->dcf2, NULL, NULL, NULL},
+        {0x1F80, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->startup, NULL, NULL, NULL},
+        {0x1F81, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &o->count, NULL, NULL, NULL},
+        {0x1F81, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->assign[0], NULL, NULL, NULL},
+        {0x1F81, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->assign[1], NULL, NULL, NULL},
+        {0x1F85, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &o->count, NULL, NULL, NULL},
+        {0x1F85, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->vendor3, NULL, NULL, NULL},
+    };
+    co_node_config_t cfg = s->node.cfg;
+    uint32_t at = 0;
+    while (at < cfg.od.count && s->od.entries[at].index < 0x1F22) {
+        at++;
+    }
+    memmove(&s->od.entries[at + 8], &s->od.entries[at], (cfg.od.count - at) * sizeof add[0]);
+    memcpy(&s->od.entries[at], add, sizeof add);
+    cfg.od.count += 8;
+    CHECK_EQ(co_node_init(&s->node, &cfg), CO_OK);
+}
+
+static void test_description_from_the_master_dictionary(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    station(n, &n->master, 1, 0, NULL);
+    static master_objects_t o;
+    memset(&o, 0, sizeof o);
+    o.dcf2.data = n->dcf[0]; /* a DOMAIN in RAM has its buffer from the start */
+    add_master_objects(&n->master, &o);
+    static const uint32_t ident[4] = {0xCA0, 1, 0x10000, 0};
+    station(n, &n->dev[0], 2, 100, ident);
+    station(n, &n->dev[1], 3, 100, ident);
+    co_node_start(&n->master.node, 0);
+    /* As a DCF of the master would set them (after its reset communication). */
+    o.startup = CO_MGR_NMT_MASTER;
+    o.assign[0] = CO_MGR_SLAVE | CO_MGR_MANDATORY;
+    o.assign[1] = CO_MGR_SLAVE;
+    o.vendor3 = 0x1234;
+    uint32_t off = 0;
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0xFEEDF00D);
+    o.dcf2.len = off;
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, (2u << 16) | 250), CO_ABORT_NONE);
+    uint32_t startup = 0;
+    CHECK_EQ(co_manager_load_od(&n->master.node.cfg.od, n->slaves, &startup), CO_OK);
+    CHECK_EQ(startup, CO_MGR_NMT_MASTER);
+    CHECK_EQ(n->slaves[2 - 1].assignment, CO_MGR_SLAVE | CO_MGR_MANDATORY);
+    CHECK(n->slaves[2 - 1].dcf == n->dcf[0]);
+    CHECK_EQ(n->slaves[2 - 1].dcf_len, off);
+    CHECK_EQ(n->slaves[2 - 1].heartbeat_ms, 250);
+    CHECK_EQ(n->slaves[3 - 1].vendor, 0x1234);
+    CHECK_EQ(n->slaves[4 - 1].assignment, 0);
+    co_manager_config_t mc = {
+        .nmt_startup = startup, .slaves = n->slaves, .on_event = on_event, .ctx = n};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    co_node_start(&n->dev[0].node, 0);
+    co_node_start(&n->dev[1].node, 0);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    CHECK_EQ(n->dev[0].od.app_u32, 0xFEEDF00D);
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 3), CO_BOOT_VENDOR);
+    /* A dictionary without 0x1F80 describes no network. */
+    example_od_t plain;
+    co_od_t od = example_od_init(&plain, 0);
+    CHECK_EQ(co_manager_load_od(&od, n->slaves, &startup), CO_ERR_NOT_FOUND);
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
     RUN(test_reason_texts);
     RUN(test_init_arguments);
+    RUN(test_description_from_the_master_dictionary);
     RUN(test_ten_devices_boot_from_one_description);
     RUN(test_missing_mandatory_keeps_the_network_down);
     RUN(test_start_all_when_everyone_booted);

@@ -56,6 +56,7 @@
 #define CANOLA_MANAGER_H
 
 #include "canola/config.h"
+#include "canola/od.h"
 #include "canola/types.h"
 
 #ifdef __cplusplus
@@ -171,6 +172,14 @@ typedef struct co_manager {
  *  for NULL arguments, a missing table or a bad SDO channel, CO_ERR_CONFIG when 0x1F80
  *  bit 0 is clear, CO_ERR_STATE when the manager is not built in (CO_MANAGER 0). */
 co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_config_t *config);
+
+/** Fill a network description (`slaves`: 127 records) and `*nmt_startup` from a master's
+ *  dictionary: 0x1F80 sub0, and for node n sub-index n of 0x1F81, 0x1F84..0x1F88,
+ *  0x1F26, 0x1F27 and 0x1F22 (a DOMAIN kept in RAM, used in place: it must stay put
+ *  while the manager runs); heartbeat times from the master's 0x1016 entries naming a
+ *  slave. Missing entries read as 0. Returns CO_ERR_NOT_FOUND without 0x1F80,
+ *  CO_ERR_ARG for NULL. O(127 log entries). */
+co_err_t co_manager_load_od(const co_od_t *od, co_mgr_slave_t *slaves, uint32_t *nmt_startup);
 
 /** Start the boot of every listed slave (the node must be started). Called again, it
  *  starts over: every slave booted anew, the network started again once the mandatory
