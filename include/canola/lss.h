@@ -3,9 +3,10 @@
  * rate over the bus, and find devices that have none.
  *
  * Two fixed COB-IDs, every frame 8 bytes, byte 0 the command specifier (cs):
- * master -> slaves on 0x7E5, slave -> master on 0x7E4. Frames of another length, RTRs
- * and unknown specifiers are ignored (counted in stats.rx_malformed). LSS runs in every
- * NMT state, initialisation included.
+ * master -> slaves on 0x7E5, slave -> master on 0x7E4. Frames of another length and
+ * RTRs are ignored and counted in stats.rx_malformed, as are unknown specifiers on 0x7E5
+ * (the master ignores answers it does not wait for). LSS runs in every NMT state,
+ * initialisation included.
  *
  *   cs    request (0x7E5)                        answer (0x7E4)
  *   0x04  switch state global [mode]             none (0 = waiting, 1 = configuration)
@@ -42,21 +43,21 @@
  * co_lss_slave_config_t.bit_timings. Activate: after `delay` ms the slave calls
  * on_bit_timing (the application switches its controller), and sends nothing for
  * another `delay` ms. Store: through the application's store callback; none = error 1.
- * Fastscan and 0x4C are answered only by a slave in waiting without node-ID (0xFF); a
- * fastscan that completes the 128-bit match (bit checked 0, sub 3 -> next 0) puts that
- * slave in configuration.
+ * 0x4C is answered by every slave without node-ID (0xFF), fastscan only by those that
+ * are also in waiting; a fastscan that completes the 128-bit match (bit checked 0,
+ * sub 3 -> next 0) puts that slave in configuration.
  *
  * Master. Built in with CO_LSS_MASTER (default 1). One request at a time, asynchronous
  * like the SDO client: start it, the node's ingest/poll drive it, a completion callback
  * gets a co_lss_result_t. Every request with an answer times out after the master's
  * time-out (co_lss_master_set_timeout, default 100 ms); requests whose answer may come
  * from several slaves (identify, fastscan steps) always wait the whole time-out, so an
- * answer that arrives late never counts for the next step. Fastscan costs (4 + 128
- * bits unknown + 4) time-outs per device; parts of the address given as known skip
- * their 32 bit checks.
+ * answer that arrives late never counts for the next step. Fastscan costs 133 time-outs
+ * per device (the reset, 32 bits and a verify per address part); a part given as known
+ * skips its 32 bit checks.
  *
- * Threading and memory as the node (canola/node.h): the slave's state is ~24 bytes and
- * the master's ~64 bytes inside co_node_t; no allocation.
+ * Threading and memory as the node (canola/node.h): the slave's state is 56 bytes and
+ * the master's 80 bytes inside co_node_t (x86-64); no allocation.
  */
 #ifndef CANOLA_LSS_H
 #define CANOLA_LSS_H

@@ -47,8 +47,8 @@
  * that a keep-alive slave is operational (L), software checks (0x1F53/0x1F54), node
  * guarding, boot time (0x1F89), flying master.
  *
- * Memory: co_manager_t (~340 bytes) and the description table (127 records) belong to the
- * caller; the node keeps a pointer. With a manager the node routes 0x700 + n of every
+ * Memory: co_manager_t (336 bytes on x86-64) and the description table (127 records)
+ * belong to the caller; the node keeps a pointer. With a manager the node routes 0x700 + n of every
  * listed slave (CO_RX_ROUTES_MAX grows by 127 when CO_MANAGER is 1). Threading and
  * callbacks as the node's (canola/node.h).
  */
