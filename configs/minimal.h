@@ -15,3 +15,14 @@
 #ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 32
 #endif
+/* A device with a fixed node-ID: no LSS. */
+#ifndef CO_LSS_SLAVE
+#define CO_LSS_SLAVE 0
+#endif
+#ifndef CO_LSS_MASTER
+#define CO_LSS_MASTER 0
+#endif
+/* No CANopen manager. */
+#ifndef CO_MANAGER
+#define CO_MANAGER 0
+#endif

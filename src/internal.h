@@ -19,6 +19,9 @@ enum co_route_kind {
     CO_ROUTE_EMCY,        /* a COB-ID of 0x1028 (slot = consumer entry) */
     CO_ROUTE_RPDO,        /* an RPDO's COB-ID (slot = RPDO) */
     CO_ROUTE_TPDO_RTR,    /* a TPDO's COB-ID, for remote requests (slot = TPDO) */
+    CO_ROUTE_LSS_SLAVE,   /* 0x7E5: LSS request */
+    CO_ROUTE_LSS_MASTER,  /* 0x7E4: LSS answer */
+    CO_ROUTE_MGR_BOOTUP,  /* 0x700 + n of a slave the manager boots (slot = n) */
 };
 
 /* COB-ID objects (0x1200, 0x1280, ...): bit 31 = not valid, bit 29 = 29-bit identifier. */
@@ -222,5 +225,89 @@ void co_time_reset_comm(co_node_t *node);
 void co_time_add_routes(co_node_t *node);
 void co_time_ingest(co_node_t *node, const co_frame_t *frame);
 void co_time_written(co_node_t *node, const co_od_entry_t *entry);
+
+/* lss_slave.c, lss_master.c: no-ops when left out of the build. */
+#if CO_LSS_SLAVE
+void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame);
+uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us);
+/* At every reset: the node-ID the node runs with from now on (CiA 305 pending node-ID). */
+void co_lss_slave_reset(co_node_t *node, bool application);
+#else
+static inline void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame)
+{
+    (void)node;
+    (void)frame;
+}
+static inline uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_lss_slave_reset(co_node_t *node, bool application)
+{
+    (void)node;
+    (void)application;
+}
+#endif
+#if CO_LSS_MASTER
+void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame);
+uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us);
+static inline bool co_lss_master_listening(const co_node_t *node)
+{
+    return node->lss_master.listening;
+}
+#else
+static inline void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame)
+{
+    (void)node;
+    (void)frame;
+}
+static inline uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline bool co_lss_master_listening(const co_node_t *node)
+{
+    (void)node;
+    return false;
+}
+#endif
+
+/* manager.c: no-ops when left out of the build. */
+#if CO_MANAGER
+uint64_t co_manager_poll(co_node_t *node, uint64_t now_us);
+void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame);
+void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev);
+void co_manager_add_routes(co_node_t *node);
+uint64_t co_flash_poll(co_node_t *node, uint64_t now_us); /* program_master.c: progress */
+#else
+static inline uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame)
+{
+    (void)node;
+    (void)n;
+    (void)frame;
+}
+static inline void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev)
+{
+    (void)node;
+    (void)ev;
+}
+static inline void co_manager_add_routes(co_node_t *node) { (void)node; }
+static inline uint64_t co_flash_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+#endif
 
 #endif /* CANOLA_INTERNAL_H */

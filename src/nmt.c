@@ -68,6 +68,7 @@ static void send_bootup(co_node_t *node)
 void co_nmt_reset(co_node_t *node, bool application)
 {
     enter(node, CO_NMT_INITIALISING);
+    co_lss_slave_reset(node, application);
     /* $NODEID defaults of an unconfigured node (0xFF) stay at their base values. */
     uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id;
     if (application) {

@@ -106,6 +106,15 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
     case CO_ROUTE_TPDO_RTR:
         co_pdo_rtr(node, slot, frame);
         break;
+    case CO_ROUTE_LSS_SLAVE:
+        co_lss_slave_ingest(node, frame);
+        break;
+    case CO_ROUTE_LSS_MASTER:
+        co_lss_master_ingest(node, frame);
+        break;
+    case CO_ROUTE_MGR_BOOTUP:
+        co_manager_bootup(node, slot, frame);
+        break;
     default:
         break;
     }
@@ -139,6 +148,10 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     next = co_min_u64(next, co_sync_poll(node, now_us));
     next = co_min_u64(next, co_emcy_poll(node, now_us));
     next = co_min_u64(next, co_pdo_poll(node, now_us));
+    next = co_min_u64(next, co_lss_slave_poll(node, now_us));
+    next = co_min_u64(next, co_lss_master_poll(node, now_us));
+    next = co_min_u64(next, co_manager_poll(node, now_us));
+    next = co_min_u64(next, co_flash_poll(node, now_us));
     co_node_schedule(node, next);
     return node->next_due_us;
 }
@@ -157,10 +170,11 @@ uint64_t co_node_poll(co_node_t *node, uint64_t now_us)
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,
                       uint8_t previous)
 {
+    co_ec_event_t ev = {.kind = kind, .node_id = node_id, .state = state, .previous = previous};
     if (node->cfg.on_errctl) {
-        co_ec_event_t ev = {.kind = kind, .node_id = node_id, .state = state, .previous = previous};
         node->cfg.on_errctl(node->cfg.user, &ev);
     }
+    co_manager_ec_event(node, &ev); /* the manager boots slaves on boot-up, watches losses */
 }
 
 void co_node_error_behaviour(co_node_t *node)

@@ -25,6 +25,9 @@ static uint16_t kind_service(uint8_t kind)
     case CO_ROUTE_RPDO:
     case CO_ROUTE_TPDO_RTR:
         return CO_SVC_PDO;
+    case CO_ROUTE_LSS_SLAVE:
+    case CO_ROUTE_LSS_MASTER:
+        return CO_SVC_LSS;
     default:
         return CO_SVC_ERROR_CONTROL;
     }
@@ -82,6 +85,13 @@ void co_routes_rebuild(co_node_t *node)
     co_time_add_routes(node);
     co_emcy_add_routes(node);
     co_pdo_add_routes(node);
+    if (CO_LSS_SLAVE) {
+        co_routes_add(node, CO_LSS_COB_MASTER, CO_ROUTE_LSS_SLAVE, 0);
+    }
+    if (co_lss_master_listening(node)) {
+        co_routes_add(node, CO_LSS_COB_SLAVE, CO_ROUTE_LSS_MASTER, 0);
+    }
+    co_manager_add_routes(node); /* last: a consumed node's heartbeat route comes first */
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }

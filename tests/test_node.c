@@ -120,14 +120,15 @@ static void test_routes_and_acceptance(void)
     CHECK(!co_node_accepts(&t.node, &pdo)); /* TPDO1 (type 255) takes no RTR: no route */
     CHECK(!co_node_accepts(&t.node, &ext));
     /* NMT, SYNC (0x1005), TIME (0x1012 consumes), RPDO1 (the only PDO that maps
-     * something), the SDO server, guarding: sorted. */
-    CHECK_EQ(co_node_route_count(&t.node), 6);
+     * something), the SDO server, guarding, LSS requests: sorted. */
+    CHECK_EQ(co_node_route_count(&t.node), 7);
     CHECK_EQ(co_node_route_id(&t.node, 0), 0x000);
     CHECK_EQ(co_node_route_id(&t.node, 1), 0x080);
     CHECK_EQ(co_node_route_id(&t.node, 2), 0x100);
     CHECK_EQ(co_node_route_id(&t.node, 3), 0x205);
     CHECK_EQ(co_node_route_id(&t.node, 4), 0x605);
     CHECK_EQ(co_node_route_id(&t.node, 5), 0x705);
+    CHECK_EQ(co_node_route_id(&t.node, 6), 0x7E5);
     CHECK(t.bus.routes_changed >= 1);
     co_node_ingest(&t.node, 1, &pdo);
     CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 1);

@@ -80,14 +80,35 @@
 #define CO_STORE_VALUE_MAX 64
 #endif
 
+/** LSS (CiA 305, canola/lss.h): the slave (every node answers on 0x7E5) and the master.
+ *  0 leaves them out of the build. */
+#ifndef CO_LSS_SLAVE
+#define CO_LSS_SLAVE 1
+#endif
+#ifndef CO_LSS_MASTER
+#define CO_LSS_MASTER 1
+#endif
+
+/** The CANopen manager (CiA 302-2, canola/manager.h). 0 leaves it out of the build. */
+#ifndef CO_MANAGER
+#define CO_MANAGER 1
+#endif
+
 /** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
- *  heartbeat consumer and guarded node, and room for the other services. */
+ *  heartbeat consumer and guarded node, room for the other services, and the boot-ups
+ *  of every slave a manager watches. */
 #ifndef CO_RX_ROUTES_MAX
 #define CO_RX_ROUTES_MAX                                                                           \
     (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +      \
-     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX)
+     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_MANAGER ? 127 : 0))
 #endif
 
+#if (CO_LSS_SLAVE != 0 && CO_LSS_SLAVE != 1) || (CO_LSS_MASTER != 0 && CO_LSS_MASTER != 1)
+#error "CO_LSS_SLAVE and CO_LSS_MASTER must be 0 or 1"
+#endif
+#if CO_MANAGER != 0 && CO_MANAGER != 1
+#error "CO_MANAGER must be 0 or 1"
+#endif
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
 #error "CO_TX_QUEUE_LEN must be 1..255"
 #endif

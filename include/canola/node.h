@@ -36,9 +36,12 @@
 #include "canola/config.h"
 #include "canola/emcy.h"
 #include "canola/errctl.h"
+#include "canola/lss.h"
+#include "canola/manager.h"
 #include "canola/nmt.h"
 #include "canola/od.h"
 #include "canola/pdo.h"
+#include "canola/program.h"
 #include "canola/sdo.h"
 #include "canola/storage.h"
 #include "canola/sync.h"
@@ -172,6 +175,17 @@ struct co_node {
 
     bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
     bool sdo_reload;  /**< a server channel waits to take new COB-IDs */
+
+#if CO_LSS_SLAVE
+    co_lss_slave_t lss_slave;
+#endif
+#if CO_LSS_MASTER
+    co_lss_master_t lss_master;
+#endif
+#if CO_MANAGER
+    co_manager_t *manager; /**< attached by co_manager_init, or NULL */
+    co_flash_t *flash;     /**< program download in progress, or NULL */
+#endif
 
     co_node_stats_t stats;
 };

@@ -1,0 +1,659 @@
+/*
+ * test_manager.c -- the CANopen manager (CiA 302-2): concise DCF helpers, reason texts,
+ * and networks booted from one description on the simulated bus.
+ */
+#include <stdlib.h>
+
+#include "canola/sim.h"
+#include "check.h"
+#include "harness.h"
+
+#define MS 1000ull
+#define DEVICES 10
+#define FIRST 2 /* devices are nodes 2..11, the master node 1 */
+
+typedef struct station {
+    example_od_t od;
+    co_node_t node;
+    co_sim_port_t port;
+    uint32_t ident[4];
+} station_t;
+
+typedef struct net {
+    co_sim_bus_t bus;
+    station_t master;
+    station_t dev[DEVICES];
+    co_manager_t mgr;
+    co_mgr_slave_t slaves[127];
+    co_mgr_event_t events[64];
+    uint64_t event_at[64];
+    uint32_t event_count;
+    uint8_t dcf[4][128];
+    uint32_t start_frames; /* NMT start commands seen on the bus */
+    uint32_t reset_frames; /* NMT reset communication commands */
+} net_t;
+
+static void on_event(void *ctx, const co_mgr_event_t *ev)
+{
+    net_t *n = ctx;
+    if (n->event_count < 64) {
+        n->event_at[n->event_count] = n->bus.now_us;
+        n->events[n->event_count++] = *ev;
+    }
+}
+
+static void on_trace(void *ctx, const char *line)
+{
+    net_t *n = ctx;
+    n->start_frames += strstr(line, " 000#01") != NULL;
+    n->reset_frames += strstr(line, " 000#82") != NULL;
+}
+
+static const co_mgr_event_t *find(const net_t *n, uint8_t node, co_mgr_event_kind_t kind)
+{
+    for (uint32_t i = 0; i < n->event_count; i++) {
+        if (n->events[i].node_id == node && n->events[i].kind == kind) {
+            return &n->events[i];
+        }
+    }
+    return NULL;
+}
+
+static void station(net_t *n, station_t *s, uint8_t id, uint16_t hb_ms, const uint32_t ident[4])
+{
+    co_node_config_t cfg = {.node_id = id, .od = example_od_init(&s->od, hb_ms)};
+    if (ident) {
+        memcpy(s->ident, ident, sizeof s->ident);
+        for (uint32_t e = 0; e < cfg.od.count; e++) {
+            co_od_entry_t *en = &s->od.entries[e];
+            if (en->index == 0x1018 && en->sub >= 1) {
+                en->dflt = &s->ident[en->sub - 1];
+            }
+        }
+    }
+    CHECK_EQ(co_sim_port_attach(&n->bus, &s->port), CO_OK);
+    cfg.driver = co_sim_port_driver(&s->port);
+    CHECK_EQ(co_node_init(&s->node, &cfg), CO_OK);
+    co_sim_port_bind(&s->port, &s->node);
+}
+
+static co_node_t *dev(net_t *n, uint8_t id) { return &n->dev[id - FIRST].node; }
+
+static uint32_t dcf_u32(uint8_t *buf, uint32_t *off, uint16_t idx, uint8_t sub, uint32_t v)
+{
+    uint8_t b[4];
+    co_put_u32(b, v);
+    CHECK_EQ(co_dcf_put(buf, 128, off, idx, sub, b, 4), CO_OK);
+    return *off;
+}
+
+static uint32_t dcf_u16(uint8_t *buf, uint32_t *off, uint16_t idx, uint8_t sub, uint16_t v)
+{
+    uint8_t b[2];
+    co_put_u16(b, v);
+    CHECK_EQ(co_dcf_put(buf, 128, off, idx, sub, b, 2), CO_OK);
+    return *off;
+}
+
+/* ---- concise DCF and texts */
+
+static void test_dcf_put_and_check(void)
+{
+    uint8_t buf[32];
+    uint32_t off = 0;
+    uint8_t v[2] = {0x64, 0x00};
+    CHECK_EQ(co_dcf_put(buf, sizeof buf, &off, 0x1017, 0, v, 2), CO_OK);
+    CHECK_EQ(off, 4 + 7 + 2);
+    static const uint8_t want[] = {1, 0, 0, 0, 0x17, 0x10, 0x00, 2, 0, 0, 0, 0x64, 0x00};
+    CHECK(memcmp(buf, want, sizeof want) == 0);
+    CHECK_EQ(co_dcf_check(buf, off), CO_OK);
+    CHECK_EQ(co_dcf_check(buf, off - 1), CO_ERR_CONFIG); /* cut in a record */
+    CHECK_EQ(co_dcf_check(buf, off + 1), CO_ERR_CONFIG); /* bytes after the last */
+    CHECK_EQ(co_dcf_check(buf, 3), CO_ERR_CONFIG);
+    buf[0] = 2; /* claims a record that is not there */
+    CHECK_EQ(co_dcf_check(buf, off), CO_ERR_CONFIG);
+    buf[0] = 1;
+    uint8_t big[20] = {0};
+    CHECK_EQ(co_dcf_put(buf, sizeof buf, &off, 0x2000, 0, big, sizeof big), CO_ERR_FULL);
+    CHECK_EQ(co_get_u32(buf), 1);
+    /* A size field near 2^32 must not wrap the check. */
+    static const uint8_t huge[] = {1, 0, 0, 0, 0, 0x20, 0, 0xFF, 0xFF, 0xFF, 0xFF, 0};
+    CHECK_EQ(co_dcf_check(huge, sizeof huge), CO_ERR_CONFIG);
+}
+
+static void test_reason_texts(void)
+{
+    CHECK_STR(co_boot_reason_text(CO_BOOT_VENDOR), "D: vendor-ID does not match");
+    CHECK_STR(co_boot_reason_text(CO_BOOT_CONFIG), "J: configuration download failed");
+    CHECK_STR(co_boot_reason_text(CO_BOOT_NO_ANSWER),
+              "B: no answer to the read of the device type");
+    CHECK_STR(co_boot_reason_text(CO_BOOT_OK), "");
+    CHECK_STR(co_boot_reason_text('Z'), "unknown reason");
+    CHECK_STR(co_mgr_event_name(CO_MGR_NETWORK_HALTED), "network halted");
+}
+
+static void test_init_arguments(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 0);
+    station(n, &n->master, 1, 0, NULL);
+    co_manager_config_t mc = {.nmt_startup = 0, .slaves = n->slaves};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_ERR_CONFIG);
+    mc.nmt_startup = CO_MGR_NMT_MASTER;
+    mc.slaves = NULL;
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_ERR_ARG);
+    mc.slaves = n->slaves;
+    mc.sdo_channel = 1; /* one client channel in this build */
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_ERR_ARG);
+    mc.sdo_channel = 0;
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    CHECK_EQ(co_manager_start(&n->mgr), CO_ERR_STATE); /* node not started */
+    free(n);
+}
+
+/* ---- ten devices from one description */
+
+static net_t *ten_devices(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    co_sim_set_trace(&n->bus, on_trace, n);
+    station(n, &n->master, 1, 0, NULL);
+    for (uint8_t i = 0; i < DEVICES; i++) {
+        uint8_t id = (uint8_t)(FIRST + i);
+        uint32_t ident[4] = {id == 3 ? 0xBADu : 0xCA0u, 0x100u + id, 0x00010000u, 5000u + id};
+        station(n, &n->dev[i], id, 100, ident);
+        co_mgr_slave_t *s = &n->slaves[id - 1];
+        s->assignment = CO_MGR_SLAVE | CO_MGR_BOOT_ON_BOOTUP;
+        s->device_type = 0x191;
+        s->vendor = 0xCA0;
+        s->product = 0x100u + id;
+        if (id % 2 == 0) {
+            s->serial = 5000u + id;
+        }
+        if (id == 2 || id == 6) {
+            s->assignment |= CO_MGR_MANDATORY;
+        }
+        if (id == 2 || id == 6 || id == 9 || id == 10) {
+            s->heartbeat_ms = 300;
+        }
+    }
+    /* Node 2: a configuration. Node 5: one the device refuses (0x2001 is -100..100). */
+    uint32_t off = 0;
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0xAABBCCDD);
+    dcf_u16(n->dcf[0], &off, 0x1017, 0, 50);
+    n->slaves[2 - 1].dcf = n->dcf[0];
+    n->slaves[2 - 1].dcf_len = off;
+    off = 0;
+    dcf_u32(n->dcf[1], &off, 0x2000, 0, 7);
+    dcf_u16(n->dcf[1], &off, 0x2001, 0, 500);
+    dcf_u32(n->dcf[1], &off, 0x2007, 0, 9);
+    n->slaves[5 - 1].dcf = n->dcf[1];
+    n->slaves[5 - 1].dcf_len = off;
+    co_manager_config_t mc = {
+        .nmt_startup = CO_MGR_NMT_MASTER, .slaves = n->slaves, .on_event = on_event, .ctx = n};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    return n;
+}
+
+static void test_ten_devices_boot_from_one_description(void)
+{
+    net_t *n = ten_devices();
+    /* Everybody powers on at 0 except node 4, which is switched on at 8 s. */
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        if (id != 4) {
+            co_node_start(dev(n, id), 0);
+        }
+    }
+    co_sim_run_until(&n->bus, 10 * MS);
+    CHECK_EQ(co_manager_start(&n->mgr), CO_OK);
+    co_sim_run_until(&n->bus, 11 * MS);
+    CHECK_EQ(co_manager_start(&n->mgr), CO_ERR_BUSY); /* node 2 is being booted */
+    co_sim_run_until(&n->bus, 5000 * MS);
+
+    /* Wrong vendor: refused, reported with what it said. */
+    const co_mgr_event_t *e = find(n, 3, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'D');
+        CHECK_EQ(e->value, 0xBAD);
+        CHECK_EQ(e->index, 0x1018);
+        CHECK_EQ(e->sub, 1);
+    }
+    /* Missing optional node: no answer (the SDO time-out). */
+    e = find(n, 4, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'B');
+        CHECK_EQ(e->abort, CO_ABORT_TIMEOUT);
+    }
+    /* The refused configuration entry, with its abort code. */
+    e = find(n, 5, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'J');
+        CHECK_EQ(e->abort, CO_ABORT_VALUE_HIGH);
+        CHECK_EQ(e->index, 0x2001);
+        CHECK_EQ(e->sub, 0);
+    }
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 5), CO_BOOT_CONFIG);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 5), CO_MGR_FAILED_STATE);
+    /* The mandatory ones booted: the network runs, the good devices are operational. */
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK(find(n, 0, CO_MGR_NETWORK_STARTED) != NULL);
+    CHECK(find(n, 2, CO_MGR_NETWORK_HALTED) == NULL);
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        bool good = id != 3 && id != 4 && id != 5;
+        CHECK_EQ(co_nmt_state(dev(n, id)) == CO_NMT_OPERATIONAL, good);
+        CHECK_EQ(co_manager_slave_state(&n->mgr, id) == CO_MGR_RUNNING, good);
+        CHECK_EQ(find(n, id, CO_MGR_STARTED) != NULL, good);
+    }
+    CHECK_EQ(co_nmt_state(dev(n, 3)), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(dev(n, 5)), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(n->start_frames, DEVICES - 3); /* one NMT start per good slave */
+    /* Node 2 got its configuration. */
+    CHECK_EQ(n->dev[0].od.app_u32, 0xAABBCCDD);
+    CHECK_EQ(n->dev[0].od.hb_period_ms, 50);
+    /* Node 5: what came before the refused entry was written, nothing after it. */
+    CHECK_EQ(n->dev[3].od.app_u32, 7);
+    CHECK_EQ(n->dev[3].od.app_u32b, 0);
+
+    /* Node 4 appears: its boot-up makes the manager boot it and start it. */
+    co_node_start(dev(n, 4), n->bus.now_us);
+    co_sim_run_until(&n->bus, 7000 * MS);
+    e = find(n, 4, CO_MGR_BOOTED);
+    CHECK(e != NULL);
+    CHECK(find(n, 4, CO_MGR_STARTED) != NULL);
+    CHECK_EQ(co_nmt_state(dev(n, 4)), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 4), CO_MGR_RUNNING);
+
+    /* A watched device goes silent: heartbeat lost (E). */
+    co_sim_set_bus_off(&n->dev[9 - FIRST].port, true);
+    co_sim_run_until(&n->bus, 8000 * MS);
+    e = find(n, 9, CO_MGR_LOST);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'E');
+    }
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 9), CO_MGR_MISSING);
+
+    /* The master resets its communication (its heartbeat watches are gone) and starts the
+     * manager over: the slaves are booted and watched again, node 9 is still missing. */
+    co_sim_set_bus_off(&n->dev[9 - FIRST].port, false);
+    co_node_set_uint(dev(n, 9), 0x1017, 0, 0); /* it stays silent */
+    co_nmt_apply(&n->master.node, CO_NMT_CMD_RESET_COMMUNICATION);
+    uint32_t before = n->event_count;
+    while (co_manager_start(&n->mgr) == CO_ERR_BUSY) {
+        co_sim_run_until(&n->bus, n->bus.now_us + 10 * MS);
+    }
+    co_sim_run_until(&n->bus, n->bus.now_us + 5000 * MS);
+    uint32_t booted = 0, k = 0;
+    for (uint32_t i = before; i < n->event_count; i++) {
+        booted += n->events[i].kind == CO_MGR_BOOTED;
+        k += n->events[i].kind == CO_MGR_FAILED && n->events[i].node_id == 9 &&
+             n->events[i].reason == 'K';
+    }
+    CHECK_EQ(booted, DEVICES - 3); /* 3 and 5 refused again, 9 silent */
+    CHECK_EQ(k, 1);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+    free(n);
+}
+
+static void test_missing_mandatory_keeps_the_network_down(void)
+{
+    net_t *n = ten_devices();
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        if (id != 6) { /* mandatory node 6 is off */
+            co_node_start(dev(n, id), 0);
+        }
+    }
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 6000 * MS);
+    const co_mgr_event_t *e = find(n, 6, CO_MGR_NETWORK_HALTED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'B');
+    }
+    CHECK(!co_manager_network_started(&n->mgr));
+    CHECK_EQ(n->start_frames, 0);
+    CHECK_EQ(co_nmt_state(dev(n, 2)), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_CONFIGURED);
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_PRE_OPERATIONAL);
+    /* It comes (a mandatory slave boots on its boot-up even without bit 2): booted, and
+     * the whole network starts. */
+    n->slaves[6 - 1].assignment &= ~CO_MGR_BOOT_ON_BOOTUP;
+    co_node_start(dev(n, 6), n->bus.now_us);
+    co_sim_run_until(&n->bus, 8000 * MS);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(dev(n, 6)), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(dev(n, 2)), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+    free(n);
+}
+
+static void test_start_all_when_everyone_booted(void)
+{
+    net_t *n = ten_devices();
+    n->mgr.cfg.nmt_startup = CO_MGR_NMT_MASTER | CO_MGR_START_ALL | CO_MGR_NO_SELF_START;
+    n->slaves[3 - 1].vendor = 0xBAD; /* describe node 3 as it is, give node 5 no DCF */
+    n->slaves[5 - 1].dcf = NULL;
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        co_node_start(dev(n, id), 0);
+    }
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(n->start_frames, 1); /* 000#0100: one NMT start for all */
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        CHECK_EQ(co_nmt_state(dev(n, id)), CO_NMT_OPERATIONAL);
+        CHECK(find(n, id, CO_MGR_STARTED) != NULL);
+    }
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_PRE_OPERATIONAL); /* bit 2: not itself */
+    free(n);
+}
+
+static void test_start_all_with_a_failure_starts_one_by_one(void)
+{
+    net_t *n = ten_devices();
+    n->mgr.cfg.nmt_startup = CO_MGR_NMT_MASTER | CO_MGR_START_ALL;
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        co_node_start(dev(n, id), 0);
+    }
+    /* Node 10 is watched, but its producer is off: K. */
+    CHECK_EQ(co_node_set_uint(dev(n, 10), 0x1017, 0, 0), CO_ABORT_NONE);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    const co_mgr_event_t *e = find(n, 10, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'K');
+    }
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(n->start_frames, DEVICES - 3); /* 3, 5 and 10 failed */
+    CHECK_EQ(co_nmt_state(dev(n, 3)), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(dev(n, 10)), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+    free(n);
+}
+
+/* ---- configuration date and time (0x1020) */
+
+typedef struct dated {
+    uint8_t count;
+    uint32_t date, time;
+} dated_t;
+
+/* Give a device 0x1020 sub0..2 (inserted into its table in order). */
+static void add_1020(station_t *s, dated_t *v)
+{
+    static const uint8_t k_two = 2;
+    static const uint32_t k_zero = 0;
+    co_od_entry_t add[3] = {
+        {.index = 0x1020,
+         .sub = 0,
+         .type = CO_TYPE_UNSIGNED8,
+         .attr = CO_OD_RO,
+         .size = 1,
+         .value = &v->count,
+         .dflt = &k_two},
+        {.index = 0x1020,
+         .sub = 1,
+         .type = CO_TYPE_UNSIGNED32,
+         .attr = CO_OD_RW,
+         .size = 4,
+         .value = &v->date,
+         .dflt = &k_zero},
+        {.index = 0x1020,
+         .sub = 2,
+         .type = CO_TYPE_UNSIGNED32,
+         .attr = CO_OD_RW,
+         .size = 4,
+         .value = &v->time,
+         .dflt = &k_zero},
+    };
+    co_node_config_t cfg = s->node.cfg;
+    uint32_t at = 0;
+    while (at < cfg.od.count && s->od.entries[at].index < 0x1020) {
+        at++;
+    }
+    memmove(&s->od.entries[at + 3], &s->od.entries[at], (cfg.od.count - at) * sizeof add[0]);
+    memcpy(&s->od.entries[at], add, sizeof add);
+    cfg.od.count += 3;
+    CHECK_EQ(co_node_init(&s->node, &cfg), CO_OK); /* again: the table moved under it */
+}
+
+static void test_configuration_skipped_when_date_matches(void)
+{
+    net_t *n = ten_devices();
+    static dated_t d2, d7;
+    memset(&d2, 0, sizeof d2);
+    memset(&d7, 0, sizeof d7);
+    add_1020(&n->dev[2 - FIRST], &d2);
+    add_1020(&n->dev[7 - FIRST], &d7);
+    /* Both described with the same DCF and date; node 2 has it already, node 7 not. */
+    n->slaves[7 - 1].dcf = n->slaves[2 - 1].dcf;
+    n->slaves[7 - 1].dcf_len = n->slaves[2 - 1].dcf_len;
+    for (uint8_t id = 2; id <= 7; id += 5) {
+        n->slaves[id - 1].config_date = 0x1234;
+        n->slaves[id - 1].config_time = 0x5678;
+    }
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        co_node_start(dev(n, id), 0);
+    }
+    d2.date = 0x1234; /* after start: reset communication cleared it */
+    d2.time = 0x5678;
+    d7.date = 0x1234;
+    d7.time = 0x5679;
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    CHECK(find(n, 2, CO_MGR_BOOTED) != NULL);
+    CHECK(find(n, 7, CO_MGR_BOOTED) != NULL);
+    CHECK_EQ(n->dev[2 - FIRST].od.app_u32, 0x12345678); /* untouched: skipped */
+    CHECK_EQ(n->dev[7 - FIRST].od.app_u32, 0xAABBCCDD); /* time differs: downloaded */
+    free(n);
+}
+
+static void test_reset_slaves_spares_keep_alive(void)
+{
+    net_t *n = ten_devices();
+    n->mgr.cfg.reset_slaves = true;
+    n->slaves[9 - 1].assignment |= CO_MGR_KEEP_ALIVE;
+    co_node_start(&n->master.node, 0);
+    for (uint8_t id = FIRST; id < FIRST + DEVICES; id++) {
+        co_node_start(dev(n, id), 0);
+    }
+    /* Both stop their heartbeat; the reset brings node 10's back, node 9 is spared. */
+    CHECK_EQ(co_node_set_uint(dev(n, 9), 0x1017, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(dev(n, 10), 0x1017, 0, 0), CO_ABORT_NONE);
+    co_sim_run_until(&n->bus, 10 * MS);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    CHECK_EQ(n->reset_frames, DEVICES - 1);
+    const co_mgr_event_t *e = find(n, 9, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, 'K');
+    }
+    CHECK(find(n, 10, CO_MGR_FAILED) == NULL);
+    CHECK(find(n, 10, CO_MGR_STARTED) != NULL);
+    CHECK(co_manager_network_started(&n->mgr));
+    free(n);
+}
+
+/* ---- LSS then manager: unconfigured devices get node-IDs, and their boot-ups boot them */
+
+typedef struct lss_log {
+    co_lss_result_t last;
+    uint32_t count;
+} lss_log_t;
+
+static void on_lss(void *ctx, const co_lss_result_t *r)
+{
+    lss_log_t *log = ctx;
+    log->last = *r;
+    log->count++;
+}
+
+static void lss_wait(net_t *n)
+{
+    for (int i = 0; i < 1000 && co_lss_master_busy(&n->master.node); i++) {
+        co_sim_run_until(&n->bus, n->bus.now_us + 10 * MS);
+    }
+}
+
+static void test_lss_assigned_devices_are_booted_by_the_manager(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    station(n, &n->master, 1, 0, NULL);
+    /* Four devices without node-ID; serials 0x300, 0x100, 0x400, 0x200. */
+    static const uint32_t serials[4] = {0x300, 0x100, 0x400, 0x200};
+    for (uint8_t i = 0; i < 4; i++) {
+        uint32_t ident[4] = {0xCA0, 0x77, 0x00010000, serials[i]};
+        station(n, &n->dev[i], 0xFF, 100, ident);
+    }
+    /* Nodes 20..23 as the plant wants them: fastscan finds the lowest address first. */
+    for (uint8_t k = 0; k < 4; k++) {
+        co_mgr_slave_t *s = &n->slaves[20 + k - 1];
+        s->assignment = CO_MGR_SLAVE | CO_MGR_BOOT_ON_BOOTUP;
+        s->vendor = 0xCA0;
+        s->serial = 0x100u * (k + 1u);
+        s->heartbeat_ms = 300;
+    }
+    co_manager_config_t mc = {
+        .nmt_startup = CO_MGR_NMT_MASTER, .slaves = n->slaves, .on_event = on_event, .ctx = n};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    co_node_start(&n->master.node, 0);
+    for (uint8_t i = 0; i < 4; i++) {
+        co_node_start(&n->dev[i].node, 0);
+    }
+    co_lss_master_set_timeout(&n->master.node, 5);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 6000 * MS); /* four times no answer: B, network started */
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 20), CO_BOOT_NO_ANSWER);
+    lss_log_t log = {0};
+    for (uint8_t k = 0; k < 4; k++) {
+        CHECK_EQ(co_lss_fastscan(&n->master.node, NULL, on_lss, &log), CO_OK);
+        lss_wait(n);
+        CHECK_EQ(log.last.status, CO_LSS_OK);
+        CHECK_EQ(log.last.address.serial, 0x100u * (k + 1u));
+        CHECK_EQ(co_lss_configure_node_id(&n->master.node, (uint8_t)(20 + k), on_lss, &log), CO_OK);
+        lss_wait(n);
+        CHECK_EQ(log.last.status, CO_LSS_OK);
+        co_lss_switch_global(&n->master.node, CO_LSS_WAITING);
+    }
+    co_sim_run_until(&n->bus, n->bus.now_us + 3000 * MS);
+    for (uint8_t i = 0; i < 4; i++) {
+        uint8_t id = co_node_id(&n->dev[i].node);
+        CHECK_EQ(id, 20 + serials[i] / 0x100 - 1);
+        CHECK_EQ(co_manager_slave_state(&n->mgr, id), CO_MGR_RUNNING);
+        CHECK_EQ(co_nmt_state(&n->dev[i].node), CO_NMT_OPERATIONAL);
+    }
+    free(n);
+}
+
+/* ---- the description in the master's own dictionary */
+
+typedef struct master_objects {
+    uint8_t count;
+    uint32_t startup;
+    uint32_t assign[2];  /* 0x1F81 sub2, sub3 */
+    uint32_t vendor3;    /* 0x1F85 sub3 */
+    co_od_domain_t dcf2; /* 0x1F22 sub2 */
+} master_objects_t;
+
+static void add_master_objects(station_t *s, master_objects_t *o)
+{
+    o->count = 127;
+    co_od_entry_t add[8] = {
+        {0x1F22, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &o->count, NULL, NULL, NULL},
+        {0x1F22, 2, CO_TYPE_DOMAIN, CO_OD_RW, 128, &o->dcf2, NULL, NULL, NULL},
+        {0x1F80, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->startup, NULL, NULL, NULL},
+        {0x1F81, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &o->count, NULL, NULL, NULL},
+        {0x1F81, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->assign[0], NULL, NULL, NULL},
+        {0x1F81, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->assign[1], NULL, NULL, NULL},
+        {0x1F85, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &o->count, NULL, NULL, NULL},
+        {0x1F85, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &o->vendor3, NULL, NULL, NULL},
+    };
+    co_node_config_t cfg = s->node.cfg;
+    uint32_t at = 0;
+    while (at < cfg.od.count && s->od.entries[at].index < 0x1F22) {
+        at++;
+    }
+    memmove(&s->od.entries[at + 8], &s->od.entries[at], (cfg.od.count - at) * sizeof add[0]);
+    memcpy(&s->od.entries[at], add, sizeof add);
+    cfg.od.count += 8;
+    CHECK_EQ(co_node_init(&s->node, &cfg), CO_OK);
+}
+
+static void test_description_from_the_master_dictionary(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    station(n, &n->master, 1, 0, NULL);
+    static master_objects_t o;
+    memset(&o, 0, sizeof o);
+    o.dcf2.data = n->dcf[0]; /* a DOMAIN in RAM has its buffer from the start */
+    add_master_objects(&n->master, &o);
+    static const uint32_t ident[4] = {0xCA0, 1, 0x10000, 0};
+    station(n, &n->dev[0], 2, 100, ident);
+    station(n, &n->dev[1], 3, 100, ident);
+    co_node_start(&n->master.node, 0);
+    /* As a DCF of the master would set them (after its reset communication). */
+    o.startup = CO_MGR_NMT_MASTER;
+    o.assign[0] = CO_MGR_SLAVE | CO_MGR_MANDATORY;
+    o.assign[1] = CO_MGR_SLAVE;
+    o.vendor3 = 0x1234;
+    uint32_t off = 0;
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0xFEEDF00D);
+    o.dcf2.len = off;
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, (2u << 16) | 250), CO_ABORT_NONE);
+    uint32_t startup = 0;
+    CHECK_EQ(co_manager_load_od(&n->master.node.cfg.od, n->slaves, &startup), CO_OK);
+    CHECK_EQ(startup, CO_MGR_NMT_MASTER);
+    CHECK_EQ(n->slaves[2 - 1].assignment, CO_MGR_SLAVE | CO_MGR_MANDATORY);
+    CHECK(n->slaves[2 - 1].dcf == n->dcf[0]);
+    CHECK_EQ(n->slaves[2 - 1].dcf_len, off);
+    CHECK_EQ(n->slaves[2 - 1].heartbeat_ms, 250);
+    CHECK_EQ(n->slaves[3 - 1].vendor, 0x1234);
+    CHECK_EQ(n->slaves[4 - 1].assignment, 0);
+    co_manager_config_t mc = {
+        .nmt_startup = startup, .slaves = n->slaves, .on_event = on_event, .ctx = n};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    co_node_start(&n->dev[0].node, 0);
+    co_node_start(&n->dev[1].node, 0);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    CHECK_EQ(n->dev[0].od.app_u32, 0xFEEDF00D);
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 3), CO_BOOT_VENDOR);
+    /* A dictionary without 0x1F80 describes no network. */
+    example_od_t plain;
+    co_od_t od = example_od_init(&plain, 0);
+    CHECK_EQ(co_manager_load_od(&od, n->slaves, &startup), CO_ERR_NOT_FOUND);
+    free(n);
+}
+
+int main(void)
+{
+    RUN(test_dcf_put_and_check);
+    RUN(test_reason_texts);
+    RUN(test_init_arguments);
+    RUN(test_description_from_the_master_dictionary);
+    RUN(test_ten_devices_boot_from_one_description);
+    RUN(test_missing_mandatory_keeps_the_network_down);
+    RUN(test_start_all_when_everyone_booted);
+    RUN(test_reset_slaves_spares_keep_alive);
+    RUN(test_lss_assigned_devices_are_booted_by_the_manager);
+    RUN(test_configuration_skipped_when_date_matches);
+    RUN(test_start_all_with_a_failure_starts_one_by_one);
+    return check_summary();
+}
