@@ -77,7 +77,24 @@ static inline uint64_t co_sdo_timeout_us(const co_node_t *node)
 /* Integer value of an optional entry (0 when the OD lacks it). */
 static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
 {
-    return entry ? co_od_entry_uint(entry) : 0;
+    if (entry == NULL) {
+        return 0;
+    }
+    /* The communication objects read on every SYNC or poll are u8/u16/u32 in storage:
+     * read them in place; any other type takes the general path. */
+    if (entry->value != NULL) {
+        switch (entry->type) {
+        case CO_TYPE_UNSIGNED8:
+            return *(const uint8_t *)entry->value;
+        case CO_TYPE_UNSIGNED16:
+            return *(const uint16_t *)entry->value;
+        case CO_TYPE_UNSIGNED32:
+            return *(const uint32_t *)entry->value;
+        default:
+            break;
+        }
+    }
+    return co_od_entry_uint(entry);
 }
 
 /* Route key: the identifier, bit 31 marking 29-bit identifiers. */

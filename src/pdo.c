@@ -114,12 +114,25 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     return CO_ABORT_NONE;
 }
 
+/* Every item is copied straight between the frame and storage (no dummy entry, no bit
+ * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
+static bool all_direct(const co_pdo_t *p)
+{
+    for (uint8_t i = 0; i < p->count; i++) {
+        if (p->items[i].direct == NULL || p->items[i].bits % 8u != 0) {
+            return false;
+        }
+    }
+    return true;
+}
+
 /* Resolve entries 1..n of mapping object `index` into out's items, count and bits. */
 static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, bool tpdo,
                                   co_pdo_t *out)
 {
     out->count = 0;
     out->bits = 0;
+    out->plain = false;
     if (n == 0) {
         return CO_ABORT_NONE;
     }
@@ -146,6 +159,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
+    out->plain = all_direct(out);
     return CO_ABORT_NONE;
 }
 
@@ -172,6 +186,7 @@ static void load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     if (resolve_mapping(&node->cfg.od, idx, n, tpdo, p) != CO_ABORT_NONE) {
         p->count = 0;
         p->bits = 0;
+        p->plain = false;
     }
 }
 
@@ -223,13 +238,18 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 static void count_listeners(co_node_t *node)
 {
     uint16_t listeners = 0;
+    uint16_t sync_end = 0;
     for (uint16_t n = 0; n < node->tpdo_count; n++) {
         const co_pdo_t *p = &node->tpdo[n];
         if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
             listeners++;
         }
+        if (pdo_active(p) && (p->type <= 240 || p->type == 252)) {
+            sync_end = (uint16_t)(n + 1u);
+        }
     }
     node->tpdo_listeners = listeners;
+    node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
 }
 
 void co_pdo_reset_comm(co_node_t *node)
@@ -272,11 +292,16 @@ void co_pdo_state_entered(co_node_t *node)
 
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
+    if (!pdo_running(node)) {
+        return;
+    }
     bool in_window = co_sync_in_window(node, node->now_us);
     for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
-        rpdo_sync(node, (uint8_t)n, in_window);
+        if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
+            rpdo_sync(node, (uint8_t)n, in_window);
+        }
     }
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
         tpdo_sync(node, &node->tpdo[n], counter, in_window);
     }
 }

@@ -45,15 +45,37 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
     co_pdo_changed(node, e);
 }
 
+/* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
+ * told when some TPDO listens to changes. */
+static void apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+{
+    const co_pdo_item_t *item = p->items;
+    const co_pdo_item_t *end = item + p->count;
+    for (; item < end; item++) {
+        uint32_t bytes = item->bits / 8u;
+        pdo_copy_value(item->direct, data, bytes);
+        data += bytes;
+    }
+    if (node->tpdo_listeners != 0) {
+        for (item = p->items; item < end; item++) {
+            co_pdo_changed(node, item->entry);
+        }
+    }
+}
+
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    uint32_t pos = 0;
-    for (uint8_t i = 0; i < p->count; i++) {
-        if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
-            store_item(node, &p->items[i], data, pos);
+    if (p->plain) {
+        apply_plain(node, p, data);
+    } else {
+        uint32_t pos = 0;
+        for (uint8_t i = 0; i < p->count; i++) {
+            if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
+                store_item(node, &p->items[i], data, pos);
+            }
+            pos += p->items[i].bits;
         }
-        pos += p->items[i].bits;
     }
     if (node->cfg.on_rpdo) {
         node->cfg.on_rpdo(node->cfg.user, n);

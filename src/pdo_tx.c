@@ -29,6 +29,15 @@ static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 {
     memset(out, 0, 8);
+    if (p->plain) { /* whole values as stored: one copy each */
+        uint8_t *at = out;
+        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
+            uint32_t bytes = item->bits / 8u;
+            pdo_copy_value(at, item->direct, bytes);
+            at += bytes;
+        }
+        return;
+    }
     uint32_t pos = 0;
     for (uint8_t i = 0; i < p->count; i++) {
         pack_item(&node->cfg.od, &p->items[i], out, pos);

@@ -85,6 +85,7 @@ typedef struct co_pdo {
     uint8_t sync_count; /**< SYNCs counted towards the next transmission */
     uint8_t flags;      /**< internal state bits */
     uint8_t len;        /**< RPDO: bytes of the frame waiting for the next SYNC */
+    bool plain;         /**< every item a whole byte-aligned value copied as stored */
     uint8_t data[8];    /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 } co_pdo_t;
 
