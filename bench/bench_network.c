@@ -83,7 +83,8 @@ static void map_tpdo(station_t *s)
 
 static void start_station(co_sim_bus_t *bus, station_t *s, uint8_t id)
 {
-    co_node_config_t cfg = {.node_id = id, .od = example_od_init(&s->od, 0)};
+    co_node_config_t cfg = {.node_id = id,
+                            .od = example_od_keyed(&s->od, example_od_init(&s->od, 0))};
     if (co_sim_port_attach(bus, &s->port) != CO_OK) {
         die("port attach failed");
     }
