@@ -103,6 +103,9 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
     return frame->id | ((frame->flags & CO_FRAME_EXT) ? 0x80000000u : 0u);
 }
 
+/* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
+static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
+
 /* node.c */
 void co_node_schedule(co_node_t *node, uint64_t due_us);
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,

@@ -130,7 +130,8 @@ struct co_node {
     /* Receive routes, sorted by key. */
     co_route_t routes[CO_RX_ROUTES_MAX];
     uint16_t route_count;
-    uint16_t route_hint; /**< the route found last */
+    uint16_t route_hint;   /**< the route found last */
+    uint32_t route_groups; /**< bit (key >> 6) % 32 set for every route: a quick "no" */
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
     co_tx_item_t txq[CO_TX_QUEUE_LEN];

@@ -236,6 +236,7 @@ co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
     p->frame = *frame;
     p->ready_us = bus->now_us + bus->delay_us;
     p->seq = bus->seq++;
+    p->bits = co_sim_frame_bits(frame); /* arbitration and completion both need it */
     p->port = port->index;
     port->in_flight++;
     return CO_OK;
@@ -298,7 +299,7 @@ static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
 {
     co_frame_t frame = p->frame;
     bus->stats.frames++;
-    bus->stats.bits += co_sim_frame_bits(&frame);
+    bus->stats.bits += p->bits;
     if (bus->bitrate) {
         bus->stats.busy_us = bits_to_us(bus->stats.bits, bus->bitrate);
     }
@@ -390,7 +391,7 @@ static void start_transmission(co_sim_bus_t *bus, uint64_t t)
     }
     bus->on_bus = pending_take(bus, best);
     bus->transmitting = true;
-    exact_t end = exact_add_bits(start, co_sim_frame_bits(&bus->on_bus.frame), bus->bitrate);
+    exact_t end = exact_add_bits(start, bus->on_bus.bits, bus->bitrate);
     bus->idle_at_us = end.us;
     bus->idle_rem = end.rem;
 }

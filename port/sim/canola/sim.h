@@ -78,6 +78,7 @@ typedef struct co_sim_pending {
     co_frame_t frame;
     uint64_t ready_us; /**< earliest start of transmission */
     uint32_t seq;      /**< send order, breaks ties */
+    uint32_t bits;     /**< co_sim_frame_bits of the frame, computed once when sent */
     uint8_t port;
 } co_sim_pending_t;
 
