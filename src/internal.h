@@ -103,6 +103,14 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
     return frame->id | ((frame->flags & CO_FRAME_EXT) ? 0x80000000u : 0u);
 }
 
+/* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
+ * compilers without the attribute just decide for themselves). */
+#if defined(__GNUC__) || defined(__clang__)
+#define CO_NOINLINE __attribute__((noinline))
+#else
+#define CO_NOINLINE
+#endif
+
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
 

@@ -159,7 +159,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
-    out->plain = all_direct(out);
+    out->plain = n > 0 && all_direct(out);
     return CO_ABORT_NONE;
 }
 
@@ -200,6 +200,8 @@ static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
     p->inhibit_until_us = 0;
     p->sync_count = 0;
     p->len = 0;
+    /* every change of parameters or mapping ends here: decide the receive fast path */
+    p->rx_fast = !tpdo && pdo_active(p) && p->plain && p->type > 240 && p->event_ms == 0;
     if (tpdo) {
         tpdo_start(node, p);
     }

@@ -47,7 +47,7 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
 
 /* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
  * told when some TPDO listens to changes. */
-static void apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+static inline void apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
     const co_pdo_item_t *item = p->items;
     const co_pdo_item_t *end = item + p->count;
@@ -149,15 +149,10 @@ static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
     pdo_set(p, PDO_F_WAITING);
 }
 
-void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+/* Every frame of an active RPDO that is not the usual one (see co_pdo_rx). Kept out of
+ * line so that the usual frame does not pay for this path's registers. */
+static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
-    if (frame->flags & CO_FRAME_RTR) {
-        node->stats.rx_malformed++; /* RPDOs are not requested */
-        return;
-    }
-    if (rpdo >= node->rpdo_count || !pdo_active(&node->rpdo[rpdo])) {
-        return;
-    }
     co_pdo_t *p = &node->rpdo[rpdo];
     if (8u * frame->len < p->bits) {
         length_error(node, p, EMCY_PDO_LENGTH);
@@ -173,6 +168,31 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
         length_error(node, p, EMCY_PDO_EXCEEDED);
     } else {
         length_ok(node, p);
+    }
+}
+
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+{
+    if (frame->flags & CO_FRAME_RTR) {
+        node->stats.rx_malformed++; /* RPDOs are not requested */
+        return;
+    }
+    if (rpdo >= node->rpdo_count) {
+        return;
+    }
+    const co_pdo_t *p = &node->rpdo[rpdo];
+    if (p->rx_fast && frame->len == pdo_bytes(p) &&
+        !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
+        /* The usual frame: asynchronous, exactly the mapped length, no deadline, nothing
+         * reported that it could clear. Applied at once, as rx_general would. */
+        apply_plain(node, p, frame->data);
+        if (node->cfg.on_rpdo) {
+            node->cfg.on_rpdo(node->cfg.user, rpdo);
+        }
+        return;
+    }
+    if (pdo_active(p)) {
+        rx_general(node, rpdo, frame);
     }
 }
 

@@ -86,6 +86,7 @@ typedef struct co_pdo {
     uint8_t flags;      /**< internal state bits */
     uint8_t len;        /**< RPDO: bytes of the frame waiting for the next SYNC */
     bool plain;         /**< every item a whole byte-aligned value copied as stored */
+    bool rx_fast;       /**< RPDO: active, plain, asynchronous, no deadline (co_pdo_rx) */
     uint8_t data[8];    /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 } co_pdo_t;
 
