@@ -15,3 +15,22 @@
 #ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 32
 #endif
+/* Features the minimal device leaves out (canola/config.h: feature switches). */
+#ifndef CO_CONFIG_SDO_BLOCK
+#define CO_CONFIG_SDO_BLOCK 0
+#endif
+#ifndef CO_CONFIG_GUARDING
+#define CO_CONFIG_GUARDING 0
+#endif
+#ifndef CO_CONFIG_TIME
+#define CO_CONFIG_TIME 0
+#endif
+#ifndef CO_CONFIG_STORAGE
+#define CO_CONFIG_STORAGE 0
+#endif
+#ifndef CO_CONFIG_REAL_LIMITS
+#define CO_CONFIG_REAL_LIMITS 0
+#endif
+#ifndef CO_CONFIG_LSS
+#define CO_CONFIG_LSS 0
+#endif

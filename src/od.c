@@ -8,6 +8,8 @@
  */
 #include "canola/od.h"
 
+#include "canola/config.h"
+
 #include <string.h>
 
 /* REAL32/REAL64 are copied bit for bit through uint32_t/uint64_t. */
@@ -223,6 +225,9 @@ static bool entry_ok(const co_od_entry_t *e)
     }
     if (t->kind == K_USTRING && (e->size & 1u) != 0) {
         return false; /* whole 16-bit code units only */
+    }
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && e->limits != NULL) {
+        return false; /* REAL limits are left out of this build */
     }
     return storage_ok(e, t);
 }
@@ -448,7 +453,7 @@ static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, 
         int64_t v = to_signed(bits);
         low = v < lim->low.i;
         high = v > lim->high.i;
-    } else if (t->kind == K_REAL) {
+    } else if (CO_CONFIG_REAL_LIMITS && t->kind == K_REAL) {
         double v = real_value(t, bits);
         if (v != v) {
             return CO_ABORT_VALUE; /* NaN lies within no range */

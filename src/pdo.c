@@ -236,7 +236,8 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 }
 
 /* How many TPDOs an object change can trigger (active, type 0 or event-driven): when
- * none, a changed value costs no search. Counted again whenever a TPDO changes. */
+ * none, a changed value costs no search; and how far a SYNC needs to look among TPDOs and
+ * RPDOs. Counted again whenever a PDO changes. */
 static void count_listeners(co_node_t *node)
 {
     uint16_t listeners = 0;
@@ -252,6 +253,13 @@ static void count_listeners(co_node_t *node)
     }
     node->tpdo_listeners = listeners;
     node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
+    uint16_t rx_end = 0;
+    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+        if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
+            rx_end = (uint16_t)(n + 1u);
+        }
+    }
+    node->rpdo_sync_end = rx_end; /* nor at an RPDO past this one */
 }
 
 void co_pdo_reset_comm(co_node_t *node)
@@ -298,7 +306,7 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
         return;
     }
     bool in_window = co_sync_in_window(node, node->now_us);
-    for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n, in_window);
         }

@@ -54,9 +54,9 @@ static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 
 static void send_fresh(co_node_t *node, const co_pdo_t *p)
 {
-    uint8_t data[8];
-    pack(node, p, data);
-    send_data(node, p, data);
+    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
+    pack(node, p, f.data); /* straight into the frame: no second copy */
+    (void)co_node_send_as(node, &f, CO_SVC_PDO);
 }
 
 /* An event-driven transmission: the inhibit time and the event timer count from it. */

@@ -53,7 +53,7 @@ void co_routes_rebuild(co_node_t *node)
     node->route_hint = 0;
     node->route_groups = 0;
     co_routes_add(node, 0x000, CO_ROUTE_NMT, 0);
-    if (node->node_id >= 1 && node->node_id <= 127) {
+    if (CO_CONFIG_GUARDING && node->node_id >= 1 && node->node_id <= 127) {
         co_routes_add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);
     }
     for (uint8_t i = 0; i < node->hb_consumer_count; i++) {

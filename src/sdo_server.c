@@ -187,7 +187,7 @@ static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *da
                        ? CO_ABORT_LEN_HIGH
                        : CO_ABORT_OUT_OF_MEMORY;
         }
-        if (s->crc_on) { /* the CRC covers data as it leaves the buffer */
+        if (CO_CONFIG_SDO_BLOCK && s->crc_on) { /* the CRC covers data as it leaves the buffer */
             s->crc = co_crc16(s->crc, s->buf, s->buf_len);
         }
         co_abort_t abort = flush(node, s, false);
@@ -583,6 +583,10 @@ static void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
         abort_transfer(node, s, abort);
         return;
     }
+    if (!CO_CONFIG_SDO_BLOCK && (cs == 5 || cs == 6)) {
+        abort_transfer(node, s, CO_ABORT_COMMAND); /* block transfer is left out */
+        return;
+    }
     switch (cs) {
     case 1:
         initiate_download(node, s, d);
@@ -602,6 +606,10 @@ static void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 /* A frame inside an open transfer. */
 static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
+    if (!CO_CONFIG_SDO_BLOCK && s->state >= BLOCK_DOWN) {
+        abort_transfer(node, s, CO_ABORT_COMMAND); /* unreachable: no block state is entered */
+        return;
+    }
     switch (s->state) {
     case DOWN_SEGMENTED:
         download_segment(node, s, d);
@@ -663,7 +671,8 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 /* One request of an open or new transfer. */
 static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    if (s->state == BLOCK_DOWN) { /* every frame of a sub-block is a segment */
+    if (CO_CONFIG_SDO_BLOCK &&
+        s->state == BLOCK_DOWN) { /* every frame of a sub-block is a segment */
         block_segment(node, s, d);
     } else if (is_initiate(d[0])) {
         initiate(node, s, d);
@@ -690,7 +699,7 @@ uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
         if (now_us >= s->deadline_us) {
             abort_transfer(node, s, CO_ABORT_TIMEOUT);
         } else {
-            if (s->state == BLOCK_UP) {
+            if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_UP) {
                 pump_sub_block(node, s);
             }
             next = co_min_u64(next, s->deadline_us);

@@ -88,6 +88,55 @@
      CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX)
 #endif
 
+/* ---- Feature switches: 1 builds the feature in, 0 leaves it out, so that a device pays
+ * (in flash) only for what it uses. A feature left out behaves as a dictionary or
+ * configuration without it would: its objects have no effect, its frames are not routed,
+ * its API functions return CO_ERR_STATE (or CO_ERR_ARG for an SDO block request). The
+ * number of SDO clients is its own switch: CO_SDO_CLIENTS_MAX 0. */
+
+/** SDO block transfer (CiA 301 7.2.4.3.9..): the server answers block requests with abort
+ *  0x05040001 without it, and the client refuses CO_SDO_BLOCK; the CRC-16 tables go too. */
+#ifndef CO_CONFIG_SDO_BLOCK
+#define CO_CONFIG_SDO_BLOCK 1
+#endif
+
+/** Node guarding and life guarding (0x100C, 0x100D, co_guard_watch). Without it the node
+ *  does not answer guarding RTRs: heartbeat is the error control protocol. */
+#ifndef CO_CONFIG_GUARDING
+#define CO_CONFIG_GUARDING 1
+#endif
+
+/** TIME producer and consumer (0x1012). */
+#ifndef CO_CONFIG_TIME
+#define CO_CONFIG_TIME 1
+#endif
+
+/** Store and restore parameters (0x1010, 0x1011) through co_node_config_t.storage; without
+ *  it the node behaves as with no storage given. */
+#ifndef CO_CONFIG_STORAGE
+#define CO_CONFIG_STORAGE 1
+#endif
+
+/** Limits on REAL32/REAL64 entries (double comparisons: soft-float code on MCUs without
+ *  an FPU). Without it a dictionary giving a REAL entry limits fails co_od_validate. */
+#ifndef CO_CONFIG_REAL_LIMITS
+#define CO_CONFIG_REAL_LIMITS 1
+#endif
+
+/** Layer setting services (branch lss: lss.c and the network manager check it). */
+#ifndef CO_CONFIG_LSS
+#define CO_CONFIG_LSS 1
+#endif
+
+#if (CO_CONFIG_SDO_BLOCK != 0 && CO_CONFIG_SDO_BLOCK != 1) ||                                      \
+    (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
+    (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
+    (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
+    (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1) ||                                  \
+    (CO_CONFIG_LSS != 0 && CO_CONFIG_LSS != 1)
+#error "CO_CONFIG_* feature switches are 0 or 1"
+#endif
+
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
 #error "CO_TX_QUEUE_LEN must be 1..255"
 #endif

@@ -167,6 +167,7 @@ struct co_node {
     uint16_t tpdo_count;
     uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
     uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
+    uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
 
     co_emcy_t emcy;
     co_sync_t sync;
