@@ -1,5 +1,6 @@
 /* configs/minimal.h -- the smallest useful device: a short queue, one consumer, no guarding
- * master, an SDO server with a small buffer and no client. */
+ * master, an SDO server with a small buffer and no client, no EMCY consumer, and the
+ * optional features off (block transfer, guarding, TIME, storage, REAL limits, LSS). */
 #ifndef CO_TX_QUEUE_LEN
 #define CO_TX_QUEUE_LEN 4
 #endif
@@ -14,6 +15,9 @@
 #endif
 #ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 32
+#endif
+#ifndef CO_EMCY_CONSUMERS_MAX
+#define CO_EMCY_CONSUMERS_MAX 0 /* it sends EMCY; it does not watch other nodes' */
 #endif
 /* Features the minimal device leaves out (canola/config.h: feature switches). */
 #ifndef CO_CONFIG_SDO_BLOCK

@@ -89,7 +89,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t bits = (uint8_t)value;
     item->entry = NULL;
-    item->direct = NULL;
+    item->direct = false;
     item->bits = bits;
     if (bits == 0) {
         return CO_ABORT_NO_MAP;
@@ -110,7 +110,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     uint32_t size = co_type_size((co_type_t)e->type);
     bool whole = bits == 8u * size && size != 0;
     bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
-    item->direct = whole && plain ? e->value : NULL;
+    item->direct = whole && plain;
     return CO_ABORT_NONE;
 }
 
@@ -119,7 +119,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
 static bool all_direct(const co_pdo_t *p)
 {
     for (uint8_t i = 0; i < p->count; i++) {
-        if (p->items[i].direct == NULL || p->items[i].bits % 8u != 0) {
+        if (!p->items[i].direct || p->items[i].bits % 8u != 0) {
             return false;
         }
     }

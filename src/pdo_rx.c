@@ -21,8 +21,8 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
 {
     const co_od_t *od = &node->cfg.od;
     const co_od_entry_t *e = item->entry;
-    if (item->direct != NULL && pos % 8u == 0) { /* the common case: bytes into storage */
-        pdo_copy_value(item->direct, data + pos / 8u, item->bits / 8u);
+    if (item->direct && pos % 8u == 0) { /* the common case: bytes into storage */
+        pdo_copy_value(e->value, data + pos / 8u, item->bits / 8u);
         co_pdo_changed(node, e);
         return;
     }
@@ -53,7 +53,7 @@ static inline void apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t
     const co_pdo_item_t *end = item + p->count;
     for (; item < end; item++) {
         uint32_t bytes = item->bits / 8u;
-        pdo_copy_value(item->direct, data, bytes);
+        pdo_copy_value(item->entry->value, data, bytes);
         data += bytes;
     }
     if (node->tpdo_listeners != 0) {

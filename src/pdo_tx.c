@@ -13,8 +13,8 @@ static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
-    if (item->direct != NULL && pos % 8u == 0) { /* the common case: bytes from storage */
-        pdo_copy_value(out + pos / 8u, item->direct, item->bits / 8u);
+    if (item->direct && pos % 8u == 0) { /* the common case: bytes from storage */
+        pdo_copy_value(out + pos / 8u, item->entry->value, item->bits / 8u);
         return;
     }
     if (pos % 8u == 0 && item->bits % 8u == 0) {
@@ -33,7 +33,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
         uint8_t *at = out;
         for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
             uint32_t bytes = item->bits / 8u;
-            pdo_copy_value(at, item->direct, bytes);
+            pdo_copy_value(at, item->entry->value, bytes);
             at += bytes;
         }
         return;

@@ -117,12 +117,19 @@ static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
     co_node_send_as(node, &f, CO_SVC_SDO);
 }
 
-/* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`. */
+/* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`
+ * (built in the frame itself: the expedited answers are the hot ones). */
 static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
-    uint8_t d[8] = {cmd, (uint8_t)s->index, (uint8_t)(s->index >> 8), s->sub};
-    co_put_u32(&d[4], tail);
-    send(node, s, d);
+    if (s->cob_tx & CO_COB_INVALID) {
+        return; /* never on a COB-ID marked not valid */
+    }
+    co_frame_t f = co_cob_frame(s->cob_tx, 8);
+    f.data[0] = cmd;
+    co_put_u16(&f.data[1], s->index);
+    f.data[3] = s->sub;
+    co_put_u32(&f.data[4], tail);
+    co_node_send_as(node, &f, CO_SVC_SDO);
 }
 
 static void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
@@ -310,6 +317,14 @@ static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
     uint8_t first[4] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
+    const uint8_t *wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    if (wire != NULL && total >= 1 && total <= 4) { /* stored in wire form: answer from it */
+        for (uint32_t i = 0; i < total; i++) {
+            first[i] = wire[i]; /* at most 4 bytes: no call to memcpy */
+        }
+        respond(node, s, (uint8_t)(0x43u | ((4u - total) << 2)), co_get_u32(first));
+        return;
+    }
     co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);

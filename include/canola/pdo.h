@@ -66,8 +66,8 @@ typedef struct co_node co_node_t;
 /** One resolved mapping entry (internal). */
 typedef struct co_pdo_item {
     const co_od_entry_t *entry; /**< NULL for a dummy entry */
-    void *direct;               /**< the storage, when the value travels as it is stored */
     uint8_t bits;               /**< bits mapped */
+    bool direct; /**< the value travels as it is stored: copied to/from entry->value */
 } co_pdo_item_t;
 
 /** One PDO's resolved mapping and state (embedded in the node; fields are internal). */
