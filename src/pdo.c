@@ -200,8 +200,6 @@ static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
     p->inhibit_until_us = 0;
     p->sync_count = 0;
     p->len = 0;
-    /* every change of parameters or mapping ends here: decide the receive fast path */
-    p->rx_fast = !tpdo && pdo_active(p) && p->plain && p->type > 240 && p->event_ms == 0;
     if (tpdo) {
         tpdo_start(node, p);
     }
@@ -228,10 +226,18 @@ co_err_t co_pdo_bind(co_node_t *node)
     return CO_OK;
 }
 
+/* After parameters or mapping loaded (NMT states do not change it): may a frame of this
+ * RPDO take co_pdo_rx's short path? */
+static void decide_fast(co_pdo_t *p, bool tpdo)
+{
+    p->rx_fast = !tpdo && pdo_active(p) && p->plain && p->type > 240 && p->event_ms == 0;
+}
+
 static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     load_comm(node, p, tpdo, num);
     load_mapping(node, p, tpdo, num);
+    decide_fast(p, tpdo);
     restart(node, p, tpdo);
 }
 
@@ -441,6 +447,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         load_comm(node, p, r.tpdo, r.num);
         p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
+    decide_fast(p, r.tpdo);
     restart(node, p, r.tpdo);
     count_listeners(node);
     if (p->cob_id != old_cob || p->type != old_type || pdo_active(p) != was_active) {
