@@ -114,6 +114,17 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
 
+/* co_sync_in_window, inline for the PDO paths that ask at every SYNC and synchronous RPDO. */
+static inline bool co_sync_window_open(const co_node_t *node, uint64_t now_us)
+{
+    uint64_t last = node->sync.last_us;
+    if (last == CO_TIME_NEVER || now_us < last) {
+        return false;
+    }
+    uint32_t window = (uint32_t)co_entry_uint(node->sync.window);
+    return window == 0 || now_us - last < window;
+}
+
 /* node.c */
 void co_node_schedule(co_node_t *node, uint64_t due_us);
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,

@@ -311,7 +311,7 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     if (!pdo_running(node)) {
         return;
     }
-    bool in_window = co_sync_in_window(node, node->now_us);
+    bool in_window = co_sync_window_open(node, node->now_us);
     for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n, in_window);

@@ -141,7 +141,7 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
 static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
 {
     bool synced = node->sync.last_us != CO_TIME_NEVER;
-    if (synced && !co_sync_in_window(node, node->now_us)) {
+    if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
     memcpy(p->data, frame->data, frame->len);
