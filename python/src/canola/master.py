@@ -30,7 +30,7 @@ import threading
 import time
 from collections.abc import Callable
 from importlib import resources
-from typing import Any, Literal, TypeVar
+from typing import Any, TypeVar
 
 from canola import eds, values
 from canola._core import ffi, lib
@@ -455,5 +455,3 @@ class Master(NodeBase):
         else:
             time.sleep(seconds)
 
-
-Mode = Literal["auto", "block"]
