@@ -245,6 +245,23 @@ def test_bad_construction() -> None:
     master = Master(bus, node_id=4)
     with pytest.raises(Error, match="not started"):
         master.sdo(5).upload(0x1000, 0)
+    with pytest.raises(Error, match="cannot read file"):
+        Device(DATA / "missing.eds", 5, bus)
+    with pytest.raises(Error, match="sdo_timeout_ms 0"):
+        Master(bus, node_id=2, sdo_timeout_ms=0)
+    with pytest.raises(Error, match="CAN-ID 2048"):
+        master.send(0x800)
+    with pytest.raises(Error, match="at most 8 bytes"):
+        master.send_pdo(0x205, bytes(9))
+    with pytest.raises(Error, match="counter overflow 1"):
+        master.start_sync(1000, overflow=1)
+    with pytest.raises(Error, match="cannot monitor node 4"):
+        master.monitor(4, 100)
+    master.start()
+    with pytest.raises(Error, match="sub-index 256"):
+        master.sdo(5).upload(0x1000, 256)
+    with pytest.raises(Error, match="index 65536"):
+        master.sdo(5).download(0x10000, 0, b"")
 
 
 def test_deterministic() -> None:

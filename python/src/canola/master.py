@@ -94,7 +94,8 @@ class SdoClient:
     transfer earlier than the master's SDO time-out. An abort (from either side) raises
     :class:`~canola.errors.SdoAbort` with its ``code``; no answer raises
     :class:`SdoTimeout` (code 0x05040000). One transfer at a time per node: a second one
-    waits for the first.
+    waits for the first. On a SimBus every form runs the simulated bus until the transfer
+    ends (the asyncio forms too: virtual time has no other driver).
     """
 
     def __init__(self, master: Master, node: int) -> None:
