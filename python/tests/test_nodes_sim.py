@@ -179,6 +179,17 @@ def test_pdos_sync_time(net: tuple[SimBus, Master, Device]) -> None:
     bus.run_for(1000)
     assert times == [TimeOfDay(1000, 2)]
     assert "100#E80300000200" in _frames(bus)
+    # periodic TIME, from a clock of the application's
+    ticks = iter(range(100))
+    began = bus.now_us
+    master.start_time(100, clock=lambda: dt.datetime(1984, 1, 1, 0, 0, next(ticks),
+                                                      tzinfo=dt.UTC))
+    bus.run_for(350_000)
+    master.stop_time()
+    bus.run_for(300_000)
+    assert times[1:] == [TimeOfDay(0, 0), TimeOfDay(1000, 0), TimeOfDay(2000, 0)]
+    stamps = [line.split()[0] for line in bus.trace if " 100#" in line]
+    assert stamps[1:] == [f"({(began + k * 100_000) / 1e6:.6f})" for k in (1, 2, 3)]
 
 
 def test_store_dir(tmp_path: Path) -> None:

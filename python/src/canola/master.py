@@ -34,7 +34,7 @@ from typing import Any, TypeVar
 
 from canola import eds, values
 from canola._core import ffi, lib
-from canola._engine import Bus, Frame
+from canola._engine import Bus, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
     EmcyEvent,
@@ -292,6 +292,7 @@ class Master(NodeBase):
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
         self._engine.add_frame_listener(self._frame)
+        self._time_timer: _Timer | None = None
 
     def __enter__(self) -> Master:
         self.start()
@@ -447,6 +448,22 @@ class Master(NodeBase):
         with self._engine.locked() as node:
             err = int(lib.co_time_send(node, ffi.new("co_time_of_day_t *", tod)))
         check(err, "co_time_send")
+
+    def start_time(self, period_ms: int,
+                   clock: Callable[[], dt.datetime] | None = None) -> None:
+        """Produce TIME every ``period_ms``: ``clock()`` (default: now, UTC) each time.
+        Replaces a running TIME production."""
+        if not isinstance(period_ms, int) or not 1 <= period_ms <= 86_400_000:
+            raise Error(f"TIME period {period_ms!r} ms is outside 1..86400000")
+        self.stop_time()
+        self._time_timer = self._engine.add_timer(
+            period_ms * 1000, lambda: self.send_time(clock() if clock else None))
+
+    def stop_time(self) -> None:
+        """Stop producing TIME periodically."""
+        if self._time_timer is not None:
+            self._engine.remove_timer(self._time_timer)
+            self._time_timer = None
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` pass: virtual time on a SimBus, a sleep on python-can."""
