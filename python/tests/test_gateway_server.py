@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import base64
 import os
 import tempfile
 
@@ -269,6 +270,25 @@ def test_events_to_subscribed_clients() -> None:
         assert await every.ask("[5] 5 r 0x1000 0 u32") == "[5] 401"
         for c in (quiet, boots, every):
             await c.close()
+        await server.close()
+
+    run(main())
+
+
+def test_one_mib_domain_block_mode() -> None:
+    async def main() -> None:
+        m = _master()
+        server, address = await _start(m)
+        c = await Client.connect(address)
+        data = os.urandom(1024 * 1024)
+        text = base64.b64encode(data).decode()
+        assert await c.ask("[1] set sdo_block 1") == "[1] OK"
+        assert await c.ask(f"[2] 5 w 0x2200 0 d {text}") == "[2] OK"
+        assert m.objects[5, 0x2200, 0] == data
+        assert m.calls[-1] == ("down", 5, True, 500)
+        assert await c.ask("[3] 5 r 0x2200 0 d") == f"[3] {text}"
+        assert m.calls[-1] == ("up", 5, True, 500)
+        await c.close()
         await server.close()
 
     run(main())

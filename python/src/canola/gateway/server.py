@@ -207,6 +207,8 @@ class GatewayServer:
                 await writer.drain()
 
             await self.serve_stream(read, write, eof_cancels=True)
+        except asyncio.CancelledError:
+            pass  # close() drops the client; the task ends here, not with an error
         finally:
             self._tasks.discard(task)
             writer.close()
