@@ -6,11 +6,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
+from collections.abc import Iterator
 from typing import Any, NoReturn
 
 import can
 
 from canola.buses import BusError, open_bus
+from canola.candump import LogFrame
 
 __all__ = [
     "CliError",
@@ -19,6 +22,7 @@ __all__ = [
     "add_bus_options",
     "bus_from_args",
     "emit_json",
+    "live_frames",
     "node_id",
     "node_or_all",
     "object_address",
@@ -114,3 +118,18 @@ def emit_json(obj: Any) -> None:
     """One JSON document per line on stdout."""
     sys.stdout.write(json.dumps(obj, sort_keys=True) + "\n")
     sys.stdout.flush()
+
+
+def live_frames(bus: can.BusABC, duration: float | None) -> Iterator[LogFrame]:
+    """Frames received on ``bus`` until ``duration`` seconds have passed (forever if None)."""
+    deadline = None if duration is None else time.monotonic() + duration
+    channel = str(getattr(bus, "channel_info", "bus"))
+    while True:
+        wait = 0.2 if deadline is None else min(0.2, deadline - time.monotonic())
+        if wait <= 0:
+            return
+        msg = bus.recv(wait)
+        if msg is None or msg.is_error_frame:
+            continue
+        yield LogFrame(msg.timestamp, channel, msg.arbitration_id, bytes(msg.data),
+                       msg.is_extended_id, msg.is_remote_frame)
