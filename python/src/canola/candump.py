@@ -21,8 +21,8 @@ __all__ = ["CandumpError", "LogFrame", "parse_line", "read_log"]
 
 _LOG = re.compile(r"\((\d+(?:\.\d+)?)\)\s+(\S+)\s+([0-9A-Fa-f]{1,8})#(R\d?|[0-9A-Fa-f]*)\s*")
 _SCREEN = re.compile(
-    r"(?:\((\d+(?:\.\d+)?)\)\s+)?(\S+)\s+([0-9A-Fa-f]{1,8})\s+\[(\d)\]\s+"
-    r"(remote request|(?:[0-9A-Fa-f]{2}(?:\s+|$))*)\s*")
+    r"(?:\((\d+(?:\.\d+)?)\)\s+)?(\S+)\s+([0-9A-Fa-f]{1,8})\s+\[(\d)\]"
+    r"(?:\s+(remote request|(?:[0-9A-Fa-f]{2}(?:\s+|$))*))?\s*")
 
 
 class CandumpError(Error):
@@ -54,6 +54,7 @@ def parse_line(line: str) -> LogFrame | None:
     m = _SCREEN.fullmatch(text)
     if m is not None:
         stamp, channel, ident, dlc, payload = m.groups()
+        payload = payload or ""
         rtr = payload == "remote request"
         data = b"" if rtr else bytes.fromhex("".join(payload.split()))
         if not rtr and len(data) != int(dlc):
