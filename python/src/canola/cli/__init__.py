@@ -8,6 +8,7 @@
     canola dump [FILE]                        traffic decoded into CANopen meaning
     canola monitor                            live view of every node
     canola device --eds FILE --node-id N      run a canola device
+    canola gateway --iface IFACE [--listen W] CiA 309-3 ASCII gateway
 
 Every bus command takes ``--iface IFACE`` or ``--bus URL``. A bad argument is one line on
 stderr and exit code 2; a failure (no answer, SDO abort, bus missing) one line and exit
@@ -22,7 +23,7 @@ import sys
 from collections.abc import Callable, Sequence
 
 from canola import odgen
-from canola.cli import bus_cmd, dump_cmd, monitor_cmd, nmt_cmd, scan_cmd
+from canola.cli import bus_cmd, dump_cmd, gateway_cmd, monitor_cmd, nmt_cmd, scan_cmd
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
 
@@ -30,7 +31,7 @@ __all__ = ["build_parser", "main"]
 
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, scan_cmd.register,
-    dump_cmd.register, monitor_cmd.register,
+    dump_cmd.register, monitor_cmd.register, gateway_cmd.register,
 )
 
 

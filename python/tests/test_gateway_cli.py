@@ -1,0 +1,82 @@
+"""``canola gateway`` / ``python -m canola.gateway`` as processes (simulated network)."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+from gateway_helpers import Client, run
+
+from canola.cli import main as canola_main
+from canola.gateway.cli import _serve
+
+SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
+SIM = ["--simulate", str(SAMPLE), "--sim-node", "2", "--sim-node", "3"]
+
+
+def test_stdio_script() -> None:
+    script = ("[1] 2 r 0x1008 0 vs\n# comment\n[2] set node 3\n[3] r 0x1000 0 u32\n"
+              "[4] 2 w 0x200C 0 u32 0x10\n[5] 2 r 0x200C 0 x32\nnonsense\n[6] 9 9 9 r\n")
+    done = subprocess.run([sys.executable, "-m", "canola.gateway", *SIM, "--listen", "stdio"],
+                          input=script.encode(), capture_output=True, timeout=60, check=True)
+    assert done.stdout.decode().splitlines() == [
+        '[1] "canola sample"', "[2] OK", "[3] 401", "[4] OK", "[5] 0x00000010", "ERROR:101",
+        "[6] ERROR:101"]
+
+
+def test_tcp_process_and_sigterm() -> None:
+    proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *SIM, "--listen",
+                             "tcp:127.0.0.1:0"], stderr=subprocess.PIPE)
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline().decode()
+        assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
+        address = line.split()[-1]
+
+        async def main() -> None:
+            c = await Client.connect(address)
+            assert await c.ask("[1] 3 r 0x1018 1 u32") == "[1] 3232"
+            await c.close()
+
+        run(main())
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=20) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=20)
+        if proc.stderr is not None:
+            proc.stderr.close()
+
+
+def test_canola_command_arguments() -> None:
+    assert canola_main(["gateway", "--listen", "udp:1", *SIM]) == 2
+    assert canola_main(["gateway", "--iface", "can0", "--bus", "virtual://x"]) == 2
+    assert canola_main(["gateway", "--node-id", "200", *SIM]) == 2
+    assert canola_main(["gateway", "--max-clients", "0", *SIM]) == 2
+
+
+def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:
+    args = argparse.Namespace(simulate=str(SAMPLE), sim_node=[2], node_id=None, eds=None,
+                              listen=f"unix:{tmp_path / 'gw.sock'}", max_clients=2,
+                              max_line=1000, iface=None, bus=None)
+
+    async def main() -> None:
+        task = asyncio.create_task(_serve(args))
+        path = tmp_path / "gw.sock"
+        async with asyncio.timeout(20):
+            while not path.exists():
+                await asyncio.sleep(0.01)
+        c = await Client.connect(f"unix:{path}")
+        assert await c.ask("[1] 2 r 0x1000 0 u32") == "[1] 401"
+        await c.close()
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+    run(main())
