@@ -9,10 +9,14 @@ that carries written bytes must format back to text without a line break.
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import atheris
 
-with atheris.instrument_imports():
+# the sources themselves: an editable install's import finder escapes atheris' import hook
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python" / "src"))
+
+with atheris.instrument_imports(include=["canola"]):
     from canola.gateway.formats import format_value
     from canola.gateway.parser import ParseError, parse_line
     from canola.gateway.requests import SdoWrite

@@ -294,6 +294,62 @@ def test_one_mib_domain_block_mode() -> None:
     run(main())
 
 
+def _pdo_master() -> FakeMaster:
+    m = _master()
+    for base in (0x1400, 0x1800):
+        m.objects[1, base, 1] = (0x80000000).to_bytes(4, "little")
+        m.objects[1, base, 2] = b"\xff"
+    for sub in (3, 5):
+        m.objects[1, 0x1800, sub] = b"\0\0"
+    m.objects[1, 0x1800, 6] = b"\0"
+    for base in (0x1600, 0x1A00):
+        m.objects[1, base, 0] = b"\0"
+        for sub in (1, 2):
+            m.objects[1, base, sub] = b"\0\0\0\0"
+    m.objects[1, 0x2000, 0] = b"\0"
+    m.objects[1, 0x2001, 0] = b"\0\0"
+    return m
+
+
+def test_pdo_configuration_and_data() -> None:
+    async def main() -> None:
+        m = _pdo_master()
+        sent: list[int] = []
+
+        async def pdo_send(num: int) -> None:
+            sent.append(num)
+
+        m.pdo_send = pdo_send  # type: ignore[attr-defined]
+        server, address = await _start(m)
+        c = await Client.connect(address)
+        assert await c.ask("[1] set rpdo 1 0x205 event 2 0x2000 0 u8 0x2001 0 u16") == "[1] OK"
+        assert m.objects[1, 0x1400, 1] == (0x205).to_bytes(4, "little")
+        assert m.objects[1, 0x1400, 2] == b"\xff"
+        assert m.objects[1, 0x1600, 0] == b"\x02"
+        assert m.objects[1, 0x1600, 1] == (0x20000008).to_bytes(4, "little")
+        assert m.objects[1, 0x1600, 2] == (0x20010010).to_bytes(4, "little")
+        m.objects[1, 0x2000, 0] = b"\x2a"
+        m.objects[1, 0x2001, 0] = b"\x34\x12"
+        assert await c.ask("[2] r p 1") == "[2] 1 pdo 2 0x2A 0x1234"
+        assert await c.ask("[3] set tpdox 1 0x185 event 20 500 2 0x2000 0 u8 0x2001 0 u16") \
+            == "[3] OK"
+        assert m.objects[1, 0x1800, 3] == (20).to_bytes(2, "little")
+        assert m.objects[1, 0x1800, 5] == (500).to_bytes(2, "little")
+        assert await c.ask("[4] w p 1 2 7 0x55AA") == "[4] OK"
+        assert m.objects[1, 0x2000, 0] == b"\x07"
+        assert m.objects[1, 0x2001, 0] == b"\xaa\x55"
+        assert sent == [1]
+        assert await c.ask("[5] w p 1 2 256 0") == "[5] ERROR:401"
+        assert await c.ask("[6] w p 1 1 0") == "[6] ERROR:101"
+        assert await c.ask("[7] r p 2") == "[7] ERROR:0x06020000"
+        assert await c.ask("[8] set tpdo 3 0x187 sync1 0") == "[8] ERROR:0x06020000"
+        assert await c.ask("[9] 2 r p 1") == "[9] ERROR:106"
+        await c.close()
+        await server.close()
+
+    run(main())
+
+
 def test_unix_socket() -> None:
     async def main() -> None:
         m = _master()
