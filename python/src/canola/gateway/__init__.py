@@ -6,6 +6,7 @@
 - :mod:`~canola.gateway.events`: boot-up, heartbeat and EMCY events to clients
 - :mod:`~canola.gateway.server`: TCP, Unix socket and stdio clients
 - :mod:`~canola.gateway.backend`: what the gateway needs from a master;
+  :mod:`~canola.gateway.masterbackend`: canola.Master (python-can or simulated bus);
   :mod:`~canola.gateway.simbackend`: a canola.core node on a simulated bus
 """
 
