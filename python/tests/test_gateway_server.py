@@ -219,6 +219,29 @@ def test_pipelined_requests_answer_in_order() -> None:
     run(main())
 
 
+def test_client_that_does_not_read_stalls_nobody() -> None:
+    async def main() -> None:
+        m = _master()
+        server, address = await _start(m)
+        flood = await Client.connect(address)
+        other = await Client.connect(address)
+        assert await flood.ask("[0] set events 1") == "[0] OK"
+        flood.writer.write(b"".join(f"[{i}] 5 r 0x1000 0 x32 # {'.' * 60}\r\n".encode()
+                                    for i in range(40000)))  # and never reads a reply
+        for _ in range(2000):
+            m.emit(BootUp(9))  # events for the flooder too: dropped once its queue is full
+        await asyncio.sleep(0.2)
+        for seq in range(5):
+            assert await other.ask(f"[{seq}] 6 r 0x1000 0 u32", timeout=5) == f"[{seq}] 402"
+        await flood.close()
+        await eventually(lambda: server.clients == 1)
+        assert await other.ask("[9] 6 r 0x1000 0 u32") == "[9] 402"
+        await other.close()
+        await server.close()
+
+    run(main())
+
+
 def test_disconnect_mid_transfer_aborts() -> None:
     async def main() -> None:
         m = _master()

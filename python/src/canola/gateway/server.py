@@ -36,7 +36,7 @@ __all__ = ["DEFAULT_LISTEN", "GatewayServer", "LineSplitter", "Listen", "parse_l
 DEFAULT_LISTEN = "tcp:127.0.0.1:6000"
 MAX_LINE = 4 * 1024 * 1024  # a 1 MiB domain in base64 fits three times over
 MAX_CLIENTS = 16
-_QUEUED_EVENTS = 1024  # per client; more are dropped while the client does not read
+_QUEUED_LINES = 1024  # per client: replies and events not yet sent
 
 
 @dataclass(frozen=True)
@@ -222,15 +222,14 @@ class GatewayServer:
         ``write``. ``eof_cancels``: the end of input drops pending requests (sockets)."""
         self.clients += 1
         session = self.executor.new_session()
-        out: asyncio.Queue[str | None] = asyncio.Queue()
+        # replies and events on their way out; a client that does not read fills it, then
+        # its own requests wait (and its events are dropped), nobody else's
+        out: asyncio.Queue[str | None] = asyncio.Queue(maxsize=_QUEUED_LINES)
         requests: asyncio.Queue[Request | list[str] | None] = asyncio.Queue(maxsize=64)
-        events_queued = 0
 
         def deliver(line: str) -> None:
-            nonlocal events_queued
-            if events_queued < _QUEUED_EVENTS:
-                events_queued += 1
-                out.put_nowait("\0" + line)  # marked: counted as an event
+            if not out.full():
+                out.put_nowait(line)
 
         token = None
         if self.hub is not None:
@@ -239,11 +238,7 @@ class GatewayServer:
             session.on_events_changed = lambda kinds: hub.set_kinds(token, kinds)
 
         async def writer() -> None:
-            nonlocal events_queued
             while (line := await out.get()) is not None:
-                if line.startswith("\0"):
-                    events_queued -= 1
-                    line = line[1:]
                 try:
                     await write(line.encode("utf-8") + b"\r\n")
                 except (ConnectionError, OSError):
@@ -254,7 +249,7 @@ class GatewayServer:
                 lines = item if isinstance(item, list) else await self.executor.execute(
                     session, item)
                 for line in lines:
-                    out.put_nowait(line)
+                    await out.put(line)
 
         write_task = asyncio.create_task(writer())
         work_task = asyncio.create_task(worker())
@@ -286,7 +281,10 @@ class GatewayServer:
                 await work_task
             if token is not None and self.hub is not None:
                 self.hub.remove_sink(token)
-            out.put_nowait(None)
+            try:
+                out.put_nowait(None)
+            except asyncio.QueueFull:
+                write_task.cancel()
             try:  # the last replies, unless the client does not read them
                 await asyncio.wait_for(write_task, 5.0)
             except (TimeoutError, asyncio.CancelledError):
