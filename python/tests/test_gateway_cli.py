@@ -10,8 +10,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import can
 from gateway_helpers import Client, run
 
+from canola import Device
 from canola.cli import main as canola_main
 from canola.gateway.cli import _serve
 
@@ -80,3 +82,35 @@ def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:
             await task
 
     run(main())
+
+
+def test_real_bus_through_canola_master(tmp_path: Path) -> None:
+    """``--bus virtual://CHANNEL``: canola.Master on python-can, a canola.Device peer."""
+    channel = f"gw-cli-{tmp_path.name}"
+    device = Device(SAMPLE, 2, can.Bus(interface="virtual", channel=channel))
+    device.start()
+    path = tmp_path / "gw.sock"
+    args = argparse.Namespace(simulate=None, sim_node=[], node_id=None, eds=None,
+                              listen=f"unix:{path}", max_clients=2, max_line=1000, iface=None,
+                              bus=f"virtual://{channel}")
+
+    async def main() -> None:
+        task = asyncio.create_task(_serve(args))
+        async with asyncio.timeout(20):
+            while not path.exists():
+                await asyncio.sleep(0.01)
+        c = await Client.connect(f"unix:{path}")
+        assert await c.ask("[1] 2 r 0x1018 1 u32") == "[1] 3232"
+        assert await c.ask("[2] 127 r 0x1000 0 u32") == "[2] 0"  # the master's own
+        assert await c.ask("[3] 2 start") == "[3] OK"
+        await c.close()
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+    try:
+        run(main())
+        assert device.nmt_state == "OPERATIONAL"
+    finally:
+        device.stop()
+        device.bus.shutdown()
