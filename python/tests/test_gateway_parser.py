@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import base64
 import random
 import struct
 
 import pytest
 
+from canola import values
 from canola.gateway import GatewayError, ParseError, parse_line
 from canola.gateway.formats import TYPES, format_value, parse_value
 from canola.gateway.requests import (
@@ -190,3 +192,20 @@ def test_random_lines_never_crash() -> None:
             parse_line(line)
         except ParseError as exc:
             assert int(exc.code) >= 100
+
+
+def test_types_agree_with_canola_values() -> None:
+    """The gateway's text forms and canola.values agree on type codes and wire bytes."""
+    for name, code in values.CIA309_NAMES.items():
+        assert TYPES[name].code == code
+    samples: list[tuple[str, str, values.Value]] = [
+        ("b", "1", True), ("i24", "-2", -2), ("u56", "0x10", 16), ("i64", "-1", -1),
+        ("r32", "0.5", 0.5), ("r64", "1e300", 1e300), ("t", "5 6", values.TimeOfDay(5, 6)),
+        ("td", "7 0", values.TimeOfDay(7, 0)), ("vs", '"a b"', "a b"),
+        ("us", base64.b64encode("hé".encode("utf-16-le")).decode(), "hé"),
+        ("os", "AAE=", b"\x00\x01"), ("d", "AAE=", b"\x00\x01"),
+    ]
+    for name, text, value in samples:
+        wire = parse_value(name, text)
+        assert wire == values.encode(name, value), name
+        assert values.decode(name, wire) == value, name
