@@ -23,12 +23,13 @@ SIM = ["--simulate", str(SAMPLE), "--sim-node", "2", "--sim-node", "3"]
 
 def test_stdio_script() -> None:
     script = ("[1] 2 r 0x1008 0 vs\n# comment\n[2] set node 3\n[3] r 0x1000 0 u32\n"
-              "[4] 2 w 0x200C 0 u32 0x10\n[5] 2 r 0x200C 0 x32\nnonsense\n[6] 9 9 9 r\n")
+              "[4] 2 w 0x200C 0 u32 0x10\n[5] 2 r 0x200C 0 x32\nnonsense\n[6] 9 9 9 r\n"
+              "[7] 127 stop\n[8] 127 r 0x1017 0 u16\n")
     done = subprocess.run([sys.executable, "-m", "canola.gateway", *SIM, "--listen", "stdio"],
                           input=script.encode(), capture_output=True, timeout=60, check=True)
     assert done.stdout.decode().splitlines() == [
         '[1] "canola sample"', "[2] OK", "[3] 401", "[4] OK", "[5] 0x00000010", "ERROR:101",
-        "[6] ERROR:101"]
+        "[6] ERROR:101", "[7] OK", "[8] 0"]
 
 
 def test_tcp_process_and_sigterm() -> None:

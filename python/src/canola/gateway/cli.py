@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
     parser.add_argument("--listen", type=_listen, default=DEFAULT_LISTEN, metavar="WHERE",
                         help=f"tcp:HOST:PORT, unix:PATH or stdio (default {DEFAULT_LISTEN})")
     parser.add_argument("--node-id", type=_node, default=None, metavar="N",
-                        help="the gateway's own node-ID (default 127; simulated: 1)")
+                        help="the gateway's own node-ID (default 127)")
     parser.add_argument("--eds", metavar="FILE",
                         help="the gateway's own object dictionary (default: built in)")
     parser.add_argument("--sim-node", type=_node, action="append", default=[], metavar="N",
@@ -82,21 +82,19 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
 
 
 def _simulated(args: argparse.Namespace) -> tuple[Backend, asyncio.Task[None] | None]:
-    from canola import eds  # noqa: PLC0415 -- the simulator only when asked for
-    from canola.core import Node, Od, SimBus  # noqa: PLC0415
-    from canola.gateway.simbackend import SimBackend  # noqa: PLC0415
-    from canola.odgen import GenerateOptions  # noqa: PLC0415
+    from canola.core import SimBus  # noqa: PLC0415 -- the simulator only when asked for
+    from canola.device import Device  # noqa: PLC0415
+    from canola.gateway.masterbackend import MasterBackend  # noqa: PLC0415
+    from canola.master import Master  # noqa: PLC0415
 
-    model = eds.parse(args.simulate)
-    opts = GenerateOptions(min_string_size=64, domain_size=4096)
     bus = SimBus()
-    own = args.node_id or 1
-    master = Node(bus, Od.from_eds(eds.parse(args.eds) if args.eds else model, own, opts), own)
-    devices = [Node(bus, Od.from_eds(model, n, opts), n) for n in args.sim_node if n != own]
+    own = args.node_id or 127
+    master = Master(bus, node_id=own, eds_file=args.eds)
+    devices = [Device(args.simulate, n, bus) for n in args.sim_node if n != own]
     master.start()
     for device in devices:
         device.start()
-    backend = SimBackend(bus, master)
+    backend = MasterBackend(master)
     return backend, asyncio.get_running_loop().create_task(backend.run())
 
 
