@@ -93,6 +93,24 @@ def test_basic_replies_and_sequence_numbers() -> None:
     run(main())
 
 
+def test_a_failing_master_costs_one_reply() -> None:
+    async def main() -> None:
+        m = _master()
+
+        async def broken(*args: object, **kwargs: object) -> bytes:
+            raise RuntimeError("a bug")
+
+        server, address = await _start(m)
+        c = await Client.connect(address)
+        m.sdo_upload = broken  # type: ignore[method-assign]
+        assert await c.ask("[1] 5 r 0x1000 0") == "[1] ERROR:102"
+        assert await c.ask("[2] 5 w 0x2000 0 u8 1") == "[2] OK"
+        await c.close()
+        await server.close()
+
+    run(main())
+
+
 def test_local_node_and_nmt() -> None:
     async def main() -> None:
         m = _master()

@@ -16,6 +16,7 @@ itself.
 from __future__ import annotations
 
 import asyncio
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -54,6 +55,8 @@ __all__ = ["GATEWAY_CLASS", "HELP", "PROTOCOL_VERSION", "Executor", "Session",
 GATEWAY_CLASS = 2
 PROTOCOL_VERSION = (3, 0)
 ABORT_TIMEOUT = 0x05040000
+
+log = logging.getLogger("canola.gateway")
 
 HELP = """\
 canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
@@ -140,7 +143,11 @@ class Executor:
             return [error_reply(seq, exc.code)]
         except TimeoutError:
             return [error_reply(seq, GatewayError.TIMEOUT)]
-        except Error:
+        except Error as exc:
+            log.info("request %d: %s", seq, exc)
+            return [error_reply(seq, GatewayError.INTERNAL_STATE)]
+        except Exception:  # a bug must cost one reply, not the connection
+            log.exception("request %d failed", seq)
             return [error_reply(seq, GatewayError.INTERNAL_STATE)]
 
     # ---- helpers
