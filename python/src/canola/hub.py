@@ -126,9 +126,11 @@ class Hub:
             client.wake.set()
             client.writer.close()
         tasks = list(self._tasks)
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+        if tasks:  # closed connections end their tasks; cancel only what lingers
+            _, lingering = await asyncio.wait(tasks, timeout=2.0)
+            for task in lingering:
+                task.cancel()
+            await asyncio.gather(*lingering, return_exceptions=True)
         if self._server is not None:
             with contextlib.suppress(Exception):
                 await asyncio.wait_for(self._server.wait_closed(), 2.0)
