@@ -286,7 +286,7 @@ def test_python_canopen_process_on_the_same_hub(capsys: pytest.CaptureFixture[st
     try:
         assert peer.stdout is not None and peer.stdout.readline() == "ready\n"
         code, out, _ = cli(capsys, "scan", "--bus", url, "--json")
-        assert [n["node"] for n in json.loads(out)] == [5, 6, 9]
+        assert code == 0 and [n["node"] for n in json.loads(out)] == [5, 6, 9]
         assert cli(capsys, "sdo", "read", "9", "0x1008:0", "vs", "--bus", url)[1] == (
             "canola cli test\n")
         assert cli(capsys, "sdo", "write", "9", "0x2000:0", "u32", "0xBEEF", "--bus", url)[0] == 0
