@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import random
+
 import pytest
 
 from canola.socketcand import (
@@ -92,3 +95,20 @@ def test_frame_checks() -> None:
         Frame(1, bytes(9))
     with pytest.raises(ProtocolError):
         Frame(1, b"\x00", rtr=True)
+
+
+def test_random_input_only_raises_protocol_error() -> None:
+    rng = random.Random(1234)
+    alphabet = b"<> sendopraw0123456789ABCDEFabcdefx\n\t\x00\xff"
+    for _ in range(20000):
+        blob = bytes(rng.choice(alphabet) for _ in range(rng.randrange(0, 60)))
+        try:
+            elements, rest = split_elements(blob)
+        except ProtocolError:
+            continue
+        assert len(rest) <= MAX_ELEMENT
+        for element in elements:
+            with contextlib.suppress(ProtocolError):
+                parse_command(element)
+            with contextlib.suppress(ProtocolError):
+                parse_server_element(element)

@@ -13,6 +13,7 @@ Failures are :class:`BusError` with a one-line message; nothing waits longer tha
 
 from __future__ import annotations
 
+import logging
 import socket
 import urllib.parse
 
@@ -23,6 +24,10 @@ from canola.errors import Error
 __all__ = ["BusError", "open_bus", "parse_bus_url"]
 
 DEFAULT_SOCKETCAND_PORT = 29536
+
+# python-can's socketcand client warns whenever a TCP read ends inside an element, which is
+# ordinary on a busy stream: keep its real errors only.
+logging.getLogger("can.interfaces.socketcand.socketcand").setLevel(logging.ERROR)
 
 
 class BusError(Error):

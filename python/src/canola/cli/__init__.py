@@ -23,15 +23,24 @@ import sys
 from collections.abc import Callable, Sequence
 
 from canola import odgen
-from canola.cli import bus_cmd, dump_cmd, gateway_cmd, monitor_cmd, nmt_cmd, scan_cmd
+from canola.cli import (
+    bus_cmd,
+    device_cmd,
+    dump_cmd,
+    gateway_cmd,
+    monitor_cmd,
+    nmt_cmd,
+    scan_cmd,
+    sdo_cmd,
+)
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
 
 __all__ = ["build_parser", "main"]
 
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
-    bus_cmd.register, nmt_cmd.register, scan_cmd.register,
-    dump_cmd.register, monitor_cmd.register, gateway_cmd.register,
+    bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
+    dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
 )
 
 
