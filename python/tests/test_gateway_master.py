@@ -164,3 +164,47 @@ def test_python_can_other_clients_not_stalled_and_abort_on_disconnect(
         notifier.stop()
         device.stop()
         master.stop()
+
+
+INTEROP = Path(__file__).parent / "data" / "interop.eds"
+
+
+def test_sim_pdos_of_the_gateway() -> None:
+    """The gateway's own PDOs (its dictionary from interop.eds): configure, read, write,
+    and the RPDO event."""
+
+    async def main() -> None:
+        bus = SimBus()
+        master = Master(bus, node_id=GW, eds_file=INTEROP)
+        device = Device(INTEROP, 2, bus)
+        master.start()
+        device.start()
+        bus.run_for(10_000)
+        async with serve(master) as (address, _):
+            c = await Client.connect(address)
+            assert await c.ask("[1] set events 1") == "[1] OK"
+            # RPDO1 of the gateway takes the device's TPDO1 (0x2100 u32, 0x2005 u8)
+            assert await c.ask("[2] set rpdo 1 0x182 event 2 0x2007 0 u32 0x2005 0 u8") == \
+                "[2] OK"
+            assert await c.ask(f"[3] {GW} start") == "[3] OK"
+            assert await c.ask("[4] 2 start") == "[4] OK"
+            device.od.set(0x2100, 0, 0xCAFE)
+            device.od.set(0x2005, 0, 0x2A)  # event-driven TPDO: sent on the change
+            seen = [await c.line()]  # one event per change of a mapped object
+            while seen[-1] != "1 pdo 1 2 0xCAFE 0x2A":
+                seen.append(await c.line())
+            assert [line for line in seen if "pdo" in line] == ["1 pdo 1 2 0xCAFE 0x5",
+                                                                 "1 pdo 1 2 0xCAFE 0x2A"]
+            assert await c.ask("[5] r p 1") == "[5] 1 pdo 2 0xCAFE 0x2A"
+            # TPDO1 of the gateway: two values, sent on request
+            assert await c.ask(f"[6] set tpdo 1 0x{0x180 + GW:X} event 2 0x2006 0 u16 "
+                               "0x2005 0 u8") == "[6] OK"
+            before = len(bus.trace)
+            assert await c.ask("[7] w p 1 2 0x1234 0x56") == "[7] OK"
+            bus.run_for(1000)
+            sent = [line.split()[-1] for line in bus.trace[before:]]
+            assert f"{0x180 + GW:03X}#341256" in sent
+            assert await c.ask("[8] w p 1 2 0x10000 0") == "[8] ERROR:401"
+            await c.close()
+
+    run(main())

@@ -16,7 +16,8 @@ from typing import Protocol
 
 from canola.gateway.requests import NmtCommand
 
-__all__ = ["Backend", "BootUp", "Emcy", "Event", "Heartbeat", "HeartbeatLost", "Listener"]
+__all__ = ["Backend", "BootUp", "Emcy", "Event", "Heartbeat", "HeartbeatLost", "Listener",
+           "Rpdo"]
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,15 @@ class Emcy:
     data: bytes  # the 5 manufacturer-specific bytes
 
 
-Event = BootUp | Heartbeat | HeartbeatLost | Emcy
+@dataclass(frozen=True)
+class Rpdo:
+    """The gateway's own RPDO ``num`` (1-based) received: its mapped values."""
+
+    num: int
+    values: tuple[int, ...]
+
+
+Event = BootUp | Heartbeat | HeartbeatLost | Emcy | Rpdo
 Listener = Callable[[Event], None]
 
 

@@ -6,10 +6,12 @@ Lines (no sequence number; ``<net>`` is the gateway's network number)::
     <net> <node> ERROR 203                                  heartbeat lost
     <net> <node> ERROR 202                                  heartbeat (re)started
     <net> <node> EMCY <code> <register> <b0> <b1> <b2> <b3> <b4>
+    <net> pdo <num> <n> <value>...                          the gateway's RPDO received
 
 EMCY code and register in hexadecimal (4 and 2 digits), the five manufacturer-specific
-bytes in decimal. The hub also is the heartbeat consumer of ``enable heartbeat``: one
-timer per watched node, restarted by each heartbeat, that reports the loss once.
+bytes in decimal; PDO values in hexadecimal (``0x``). The hub also is the heartbeat
+consumer of ``enable heartbeat``: one timer per watched node, restarted by each
+heartbeat, that reports the loss once.
 Backend listeners may run on any thread; the hub moves every event to its event loop.
 """
 
@@ -19,13 +21,21 @@ import asyncio
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from canola.gateway.backend import Backend, BootUp, Emcy, Event, Heartbeat, HeartbeatLost
+from canola.gateway.backend import (
+    Backend,
+    BootUp,
+    Emcy,
+    Event,
+    Heartbeat,
+    HeartbeatLost,
+    Rpdo,
+)
 from canola.gateway.codes import GatewayError
 
 __all__ = ["EVENT_KINDS", "EventHub", "format_event"]
 
-#: Kinds a client can subscribe to: boot-ups, error control (heartbeat), EMCY.
-EVENT_KINDS = frozenset({"boot", "error", "emcy"})
+#: Kinds a client can subscribe to: boot-ups, error control (heartbeat), EMCY, RPDOs.
+EVENT_KINDS = frozenset({"boot", "error", "emcy", "pdo"})
 
 
 def format_event(net: int, event: Event) -> tuple[str, str] | None:
@@ -37,6 +47,9 @@ def format_event(net: int, event: Event) -> tuple[str, str] | None:
     if isinstance(event, Emcy):
         data = " ".join(str(b) for b in event.data[:5].ljust(5, b"\0"))
         return "emcy", f"{net} {event.node} EMCY {event.code:04X} {event.register:02X} {data}"
+    if isinstance(event, Rpdo):
+        values = "".join(f" 0x{v:X}" for v in event.values)
+        return "pdo", f"{net} pdo {event.num} {len(event.values)}{values}"
     return None
 
 

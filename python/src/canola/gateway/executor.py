@@ -27,6 +27,7 @@ from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.events import EVENT_KINDS, EventHub
 from canola.gateway.formats import TYPES, format_value
 from canola.gateway.parser import ParseError
+from canola.gateway.pdo import mapped_entries, mapped_values
 from canola.gateway.requests import (
     BootUpIndication,
     DisableGuarding,
@@ -76,6 +77,7 @@ canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
   info version | help [datatype|lss]
 Events (without sequence number): <net> <node> BOOT_UP | <net> <node> ERROR 203
   (heartbeat lost) | <net> <node> ERROR 202 | <net> <node> EMCY <code> <reg> <5 bytes>
+  | <net> pdo <num> <count> <values> (the gateway's RPDO received)
 '#' starts a comment."""
 
 HELP_DATATYPE = """\
@@ -254,7 +256,7 @@ class Executor:
             return ok
         if isinstance(request, PdoRead):
             self._net(session, request)
-            values = self._pdo_values(0x1600 + request.num - 1)
+            values = mapped_values(self.backend.local_read, 0x1600 + request.num - 1)
             text = " ".join(f"0x{v:X}" for v in values)
             return [f"[{seq}] {self.net} pdo {len(values)}" + (f" {text}" if text else "")]
         if isinstance(request, PdoWrite):
@@ -336,25 +338,8 @@ class Executor:
         self._local_put(mapping, 0, len(request.mapping), 1)
         self._local_put(comm, 1, request.cob_id, 4)
 
-    def _mapped(self, mapping: int) -> list[tuple[int, int, int]]:
-        count = self._local_uint(mapping, 0)
-        out = []
-        for i in range(1, count + 1):
-            entry = self._local_uint(mapping, i)
-            out.append((entry >> 16, (entry >> 8) & 0xFF, entry & 0xFF))
-        return out
-
-    def _pdo_values(self, mapping: int) -> list[int]:
-        values = []
-        for index, sub, _bits in self._mapped(mapping):
-            if index < 0x20 and sub == 0:  # dummy mapping
-                values.append(0)
-                continue
-            values.append(int.from_bytes(self.backend.local_read(index, sub), "little"))
-        return values
-
     async def _pdo_write(self, request: PdoWrite) -> None:
-        entries = self._mapped(0x1A00 + request.num - 1)
+        entries = mapped_entries(self.backend.local_read, 0x1A00 + request.num - 1)
         if len(entries) != len(request.values):
             raise GatewayFailure(GatewayError.SYNTAX, "value count differs from the mapping")
         for (index, sub, bits), value in zip(entries, request.values, strict=True):

@@ -8,8 +8,8 @@ or simulated bus).
 - The gateway's own dictionary is read and written as the network would (access rights,
   lengths, limits), NMT commands to its own node-ID are applied to itself: both through
   the C core directly (canola.Master has no public call for either yet).
-- Events: boot-ups, heartbeats (from the frames), EMCY (the master's EMCY consumer) and
-  the master's own heartbeat-consumer losses.
+- Events: boot-ups, heartbeats (from the frames), EMCY (the master's EMCY consumer),
+  the master's own heartbeat-consumer losses and its RPDOs (their mapped values).
 """
 
 from __future__ import annotations
@@ -22,7 +22,16 @@ from canola._core import ffi, lib
 from canola._nodebase import EmcyEvent, HeartbeatEvent, nmt_command
 from canola.core import SimBus
 from canola.errors import SdoAbort
-from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, HeartbeatLost, Listener
+from canola.gateway.backend import (
+    BootUp,
+    Emcy,
+    Event,
+    Heartbeat,
+    HeartbeatLost,
+    Listener,
+    Rpdo,
+)
+from canola.gateway.pdo import mapped_values
 from canola.gateway.requests import NmtCommand
 from canola.gateway.simbackend import NMT_NAMES
 from canola.master import Frame, Master
@@ -43,6 +52,7 @@ class MasterBackend:
         master.on_frame(self._frame)
         master.on_emcy(self._emcy)
         master.on_heartbeat(self._heartbeat)
+        master.on_rpdo(self._rpdo)
 
     @property
     def node_id(self) -> int:
@@ -120,6 +130,13 @@ class MasterBackend:
     def _heartbeat(self, event: HeartbeatEvent) -> None:
         if event.kind == "lost":
             self._emit(HeartbeatLost(event.node))
+
+    def _rpdo(self, rpdo: int) -> None:  # 0-based
+        try:
+            values = mapped_values(self.local_read, 0x1600 + rpdo)
+        except SdoAbort:
+            return
+        self._emit(Rpdo(rpdo + 1, tuple(values)))
 
     # ---- simulated bus, life cycle
 
