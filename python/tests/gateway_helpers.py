@@ -124,6 +124,15 @@ class Client:
         await self.send(line)
         return await self.line(timeout)
 
+    async def reply(self, line: str, timeout: float = TIMEOUT) -> tuple[str, list[str]]:
+        """Send ``line``; its reply and the event lines that came before it."""
+        await self.send(line)
+        seq = line.split("]", 1)[0] + "]"
+        events: list[str] = []
+        while not (got := await self.line(timeout)).startswith(seq):
+            events.append(got)
+        return got, events
+
     async def close(self) -> None:
         self.writer.close()
         with contextlib.suppress(ConnectionError, TimeoutError):

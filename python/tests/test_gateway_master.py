@@ -102,9 +102,10 @@ def test_sim_events() -> None:
             devices[2].emcy_raise(0x5000, b"\x01\x02")
             assert (await c.line()).startswith("1 2 EMCY 5000 ")
             assert await c.ask("[3] 2 w 0x1017 0 u16 20") == "[3] OK"
-            assert await c.ask("[4] 2 enable heartbeat 300") == "[4] OK"
+            assert await c.ask("[4] 2 enable heartbeat 1000") == "[4] OK"
             await asyncio.sleep(0.5)
-            assert await c.ask("[5] 2 w 0x1017 0 u16 0") == "[5] OK"
+            reply, events = await c.reply("[5] 2 w 0x1017 0 u16 0")
+            assert (reply, events) == ("[5] OK", [])
             assert await c.line(timeout=10) == "1 2 ERROR 203"
             await c.close()
 
@@ -116,7 +117,7 @@ def test_python_can_other_clients_not_stalled_and_abort_on_disconnect(
     watch = can_bus()
     frames: queue.Queue[can.Message] = queue.Queue()
     notifier = can.Notifier(watch, [frames.put])
-    master = Master(can_bus(), node_id=GW, sdo_timeout_ms=3000)
+    master = Master(can_bus(), node_id=GW, sdo_timeout_ms=5000)
     device = Device(SAMPLE, 2, can_bus(), domain_size=880)
     master.start()
     device.start()
@@ -125,16 +126,16 @@ def test_python_can_other_clients_not_stalled_and_abort_on_disconnect(
         async with serve(master) as (address, _):
             a = await Client.connect(address)
             b = await Client.connect(address)
-            # a waits for node 42, which is not there (3 s per answer) ...
+            # a waits for node 42, which is not there (5 s per answer) ...
             await a.send("[1] 42 r 0x1000 0 u32")
             # ... while b is served at once, several times over
             for seq in range(5):
-                assert await b.ask(f"[{seq}] 2 r 0x1018 1 u32", timeout=2.5) == f"[{seq}] 3232"
+                assert await b.ask(f"[{seq}] 2 r 0x1018 1 u32", timeout=4.5) == f"[{seq}] 3232"
             assert await b.ask("[9] set sdo_block 1") == "[9] OK"
             data = os.urandom(800)
             text = base64.b64encode(data).decode()
-            assert await b.ask(f"[10] 2 w 0x2200 0 d {text}", timeout=2.5) == "[10] OK"
-            assert await b.ask("[11] 2 r 0x2200 0 d", timeout=2.5) == f"[11] {text}"
+            assert await b.ask(f"[10] 2 w 0x2200 0 d {text}", timeout=4.5) == "[10] OK"
+            assert await b.ask("[11] 2 r 0x2200 0 d", timeout=4.5) == f"[11] {text}"
             assert await a.line(timeout=10) == "[1] ERROR:0x05040000"
             # a client that leaves in the middle of a transfer: abort frame on the bus
             while not frames.empty():

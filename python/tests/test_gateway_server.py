@@ -289,7 +289,7 @@ def test_events_to_subscribed_clients() -> None:
         every = await Client.connect(address)
         assert await boots.ask("[1] boot_up_indication Enable") == "[1] OK"
         assert await every.ask("[1] set events 1") == "[1] OK"
-        assert await every.ask("[2] 7 enable heartbeat 50") == "[2] OK"
+        assert await every.ask("[2] 7 enable heartbeat 400") == "[2] OK"
         m.emit(BootUp(7))
         assert await boots.line() == "1 7 BOOT_UP"
         assert await every.line() == "1 7 BOOT_UP"
@@ -298,7 +298,7 @@ def test_events_to_subscribed_clients() -> None:
         for _ in range(3):
             m.emit(Heartbeat(7, 0x05))
             await asyncio.sleep(0.01)
-        assert await every.line(timeout=5) == "1 7 ERROR 203"  # no heartbeat for 50 ms
+        assert await every.line(timeout=5) == "1 7 ERROR 203"  # no heartbeat for 400 ms
         m.emit(Heartbeat(7, 0x05))
         assert await every.line() == "1 7 ERROR 202"
         m.emit(HeartbeatLost(8))  # reported by the master itself

@@ -146,12 +146,14 @@ def test_nmt_boot_up_and_heartbeat_events() -> None:
             await c.send("[6] 3 reset comm")
             assert {await c.line(), await c.line()} == {"[6] OK", "1 3 BOOT_UP"}
             assert await c.ask("[7] 2 w 0x1017 0 u16 10") == "[7] OK"
-            assert await c.ask("[8] 2 enable heartbeat 200") == "[8] OK"
+            assert await c.ask("[8] 2 enable heartbeat 1000") == "[8] OK"
             await asyncio.sleep(0.4)  # heartbeats every 10 ms: no event
-            assert await c.ask("[9] 2 w 0x1017 0 u16 0") == "[9] OK"
+            reply, events = await c.reply("[9] 2 w 0x1017 0 u16 0")
+            assert (reply, events) == ("[9] OK", [])
             assert await c.line(timeout=10) == "1 2 ERROR 203"
-            assert await c.ask("[10] 2 w 0x1017 0 u16 10") == "[10] OK"
-            assert await c.line(timeout=10) == "1 2 ERROR 202"
+            reply, events = await c.reply("[10] 2 w 0x1017 0 u16 10")
+            assert reply == "[10] OK"
+            assert (events or [await c.line(timeout=10)]) == ["1 2 ERROR 202"]
             assert await c.ask("[11] 2 disable heartbeat") == "[11] OK"
             await c.close()
 
