@@ -192,3 +192,32 @@ def test_domain_block_mode() -> None:
             await c.close()
 
     run(main())
+
+
+def test_one_mib_domain_of_the_gateway_itself() -> None:
+    """A 1 MiB domain through the text protocol into the gateway's own dictionary (no
+    frames: its own node-ID is served locally)."""
+
+    async def main() -> None:
+        model = eds.parse(SAMPLE)
+        bus = SimBus()
+        own = Node(bus, Od.from_eds(model, 1, GenerateOptions(domain_size=MIB)), 1)
+        own.start()
+        backend = SimBackend(bus, own)
+        server = GatewayServer(Executor(backend))
+        srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+        c = await Client.connect(GatewayServer.address(srv))
+        data = os.urandom(MIB)
+        text = base64.b64encode(data).decode()
+        before = len(bus.trace)
+        assert await c.ask("[1] set sdo_block 1") == "[1] OK"
+        assert await c.ask(f"[2] 1 w 0x2200 0 d {text}", timeout=60) == "[2] OK"
+        assert own.read(0x2200, 0, cap=MIB) == data
+        assert await c.ask("[3] 1 r 0x2200 0 d", timeout=60) == f"[3] {text}"
+        assert await c.ask("[4] 1 w 0x2200 0 d " + base64.b64encode(data + b"x").decode(),
+                           timeout=60) == "[4] ERROR:0x06070012"  # one byte too many
+        assert len(bus.trace) == before
+        await c.close()
+        await server.close()
+
+    run(main(), timeout=120)
