@@ -67,7 +67,7 @@ def test_canola_command_arguments() -> None:
 def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:
     args = argparse.Namespace(simulate=str(SAMPLE), sim_node=[2], node_id=None, eds=None,
                               listen=f"unix:{tmp_path / 'gw.sock'}", max_clients=2,
-                              max_line=1000, iface=None, bus=None)
+                              max_line=1000, iface=None, bus=None, sdo_timeout=1000)
 
     async def main() -> None:
         task = asyncio.create_task(_serve(args))
@@ -93,7 +93,7 @@ def test_real_bus_through_canola_master(tmp_path: Path) -> None:
     path = tmp_path / "gw.sock"
     args = argparse.Namespace(simulate=None, sim_node=[], node_id=None, eds=None,
                               listen=f"unix:{path}", max_clients=2, max_line=1000, iface=None,
-                              bus=f"virtual://{channel}")
+                              bus=f"virtual://{channel}", sdo_timeout=1000)
 
     async def main() -> None:
         task = asyncio.create_task(_serve(args))

@@ -1,7 +1,8 @@
 """``canola gateway``: the CiA 309-3 ASCII gateway as a command.
 
     canola gateway (--iface IFACE | --bus URL | --simulate EDS) [--listen WHERE]
-                   [--node-id N] [--max-clients N] [--max-line BYTES]
+                   [--node-id N] [--sdo-timeout MS] [--eds FILE] [--max-clients N]
+                   [--max-line BYTES]
 
 ``--listen`` is ``tcp:HOST:PORT`` (default tcp:127.0.0.1:6000, loopback only),
 ``unix:PATH`` or ``stdio``. ``--simulate EDS`` runs the gateway's master and the devices
@@ -71,6 +72,8 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
                         help=f"tcp:HOST:PORT, unix:PATH or stdio (default {DEFAULT_LISTEN})")
     parser.add_argument("--node-id", type=_node, default=None, metavar="N",
                         help="the gateway's own node-ID (default 127)")
+    parser.add_argument("--sdo-timeout", type=_positive, default=1000, metavar="MS",
+                        help="the master's SDO time-out per answer (default 1000 ms)")
     parser.add_argument("--eds", metavar="FILE",
                         help="the gateway's own object dictionary (default: built in)")
     parser.add_argument("--sim-node", type=_node, action="append", default=[], metavar="N",
@@ -89,7 +92,7 @@ def _simulated(args: argparse.Namespace) -> tuple[Backend, asyncio.Task[None] | 
 
     bus = SimBus()
     own = args.node_id or 127
-    master = Master(bus, node_id=own, eds_file=args.eds)
+    master = Master(bus, node_id=own, eds_file=args.eds, sdo_timeout_ms=args.sdo_timeout)
     devices = [Device(args.simulate, n, bus) for n in args.sim_node if n != own]
     master.start()
     for device in devices:

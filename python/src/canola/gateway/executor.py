@@ -68,7 +68,7 @@ canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
   reset node | reset comm[unication]      NMT
   enable heartbeat <ms> | disable heartbeat   watch a node's heartbeat
   [<net>] set network|node <n>            defaults of this connection
-  [<net>] set sdo_timeout <ms>            SDO time-out (default 500 ms)
+  [<net>] set sdo_timeout <ms>            SDO time-out (where the master takes one)
   [<net>] set sdo_block 0|1               SDO block transfer
   [<net>] set heartbeat <ms>              the gateway's own heartbeat
   [<net>] set events 0|1                  all events to this connection

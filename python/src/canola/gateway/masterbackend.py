@@ -3,8 +3,10 @@ or simulated bus).
 
 - SDO: the master's asyncio client (one client channel per node, so transfers to
   different nodes run at the same time); cancelling aborts the transfer on the bus. The
-  time-out per answer is the master's ``sdo_timeout_ms``; the whole transfer is not
-  bounded (a 1 MiB block transfer takes seconds on a real bus).
+  time-out per answer is the master's ``sdo_timeout_ms`` (``canola gateway
+  --sdo-timeout``); a client's ``set sdo_timeout`` does not change it (canola.Master has
+  no per-transfer answer time-out). The whole transfer is not bounded (a 1 MiB block
+  transfer takes seconds on a real bus).
 - The gateway's own dictionary is read and written as the network would (access rights,
   lengths, limits), NMT commands to its own node-ID are applied to itself: both through
   the C core directly (canola.Master has no public call for either yet).
@@ -166,7 +168,8 @@ def open_master(args: argparse.Namespace) -> MasterBackend:
 
     bus = open_bus(iface=args.iface, url=args.bus)
     try:
-        master = Master(bus, node_id=args.node_id or 127, eds_file=args.eds)
+        master = Master(bus, node_id=args.node_id or 127, eds_file=args.eds,
+                        sdo_timeout_ms=getattr(args, "sdo_timeout", 1000))
         master.start()
     except BaseException:
         bus.shutdown()
