@@ -85,15 +85,17 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
 
 
 def _simulated(args: argparse.Namespace) -> tuple[Backend, asyncio.Task[None] | None]:
+    from canola import eds  # noqa: PLC0415
     from canola.core import SimBus  # noqa: PLC0415 -- the simulator only when asked for
     from canola.device import Device  # noqa: PLC0415
     from canola.gateway.masterbackend import MasterBackend  # noqa: PLC0415
     from canola.master import Master  # noqa: PLC0415
 
+    model = eds.parse(args.simulate)  # read even without --sim-node: a bad file is reported
     bus = SimBus()
     own = args.node_id or 127
     master = Master(bus, node_id=own, eds_file=args.eds, sdo_timeout_ms=args.sdo_timeout)
-    devices = [Device(args.simulate, n, bus) for n in args.sim_node if n != own]
+    devices = [Device(model, n, bus) for n in args.sim_node if n != own]
     master.start()
     for device in devices:
         device.start()
