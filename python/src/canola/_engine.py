@@ -7,8 +7,11 @@ receives with a time-out equal to the node's next deadline (``co_node_poll``'s r
 capped at :data:`MAX_WAIT_S` so that deadlines that application calls move earlier are
 met within that cap. Callbacks of the C node only record events; the application's
 callbacks run afterwards in the bus thread (python-can) or inside :meth:`SimBus.run_until`
-(simulated bus), never under the lock, in the order the events happened. They must not
-block: a blocking call from a callback raises :class:`~canola.errors.Error`.
+(simulated bus), never under the lock, in the order the events happened, and may call
+any method of the node. They must not block: a blocking SDO call of the same master from
+its callback raises :class:`~canola.errors.Error`; one that waits for another node whose
+answer needs the calling thread (a device's callback reading that device through a
+master) only ends with the SDO time-out.
 """
 
 from __future__ import annotations
@@ -53,6 +56,15 @@ class Frame:
 
     def __repr__(self) -> str:
         return f"Frame(0x{self.can_id:03X}, {self.data.hex()})"
+
+
+class _Timer:
+    __slots__ = ("due_us", "fn", "period_us")
+
+    def __init__(self, due_us: int, period_us: int, fn: Callable[[], None]) -> None:
+        self.due_us = due_us
+        self.period_us = period_us
+        self.fn = fn
 
 
 def _frame_in(frame: Any, timestamp: float) -> Frame:
@@ -103,6 +115,7 @@ class Engine:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
             _check(int(err[0]), "co_node_init")
         self.node = lib.canola_py_dev_node(raw)
+        self._timers: list[_Timer] = []
         self._t0 = time.monotonic_ns()
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -140,6 +153,29 @@ class Engine:
                 fn()
             except Exception:
                 log.exception("%s: a callback raised", self.name)
+
+    # ---- periodic work of the Python side (e.g. TIME production), in the node's time
+
+    def add_timer(self, period_us: int, fn: Callable[[], None]) -> _Timer:
+        """Run ``fn`` every ``period_us`` (first one period from now), like a callback."""
+        timer = _Timer(self.now_us() + period_us, period_us, fn)
+        self._timers.append(timer)
+        return timer
+
+    def remove_timer(self, timer: _Timer) -> None:
+        if timer in self._timers:
+            self._timers.remove(timer)
+
+    def next_timer_us(self) -> int | None:
+        return min((t.due_us for t in self._timers), default=None)
+
+    def run_timers(self, now_us: int) -> None:
+        for timer in list(self._timers):
+            if timer.due_us <= now_us:
+                timer.due_us += timer.period_us
+                if timer.due_us <= now_us:  # fell behind (a slow machine): skip, no burst
+                    timer.due_us = now_us + timer.period_us
+                self.later(timer.fn)
 
     def in_bus_thread(self) -> bool:
         return self._thread is not None and threading.current_thread() is self._thread
@@ -206,13 +242,25 @@ class Engine:
         return int(lib.CO_OK)
 
     def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._loop()
+            except Exception:  # never let the bus thread die silently
+                log.exception("%s: bus thread error", self.name)
+                self._stop.wait(0.05)
+
+    def _loop(self) -> None:
         bus = self.bus
         assert isinstance(bus, can.BusABC)
         frame = ffi.new("co_frame_t *")
         while not self._stop.is_set():
             with self._lock:
                 due = int(lib.co_node_poll(self.node, self.now_us()))
+            self.run_timers(self.now_us())
             self.dispatch()
+            timer = self.next_timer_us()
+            if timer is not None:
+                due = min(due, timer)
             wait = MAX_WAIT_S
             if due != lib.CO_TIME_NEVER:
                 wait = min(MAX_WAIT_S, max(0.0, (due - self.now_us()) / 1e6))
