@@ -136,7 +136,7 @@ def test_slow_client_loses_frames_but_stalls_nobody(hub: HubThread) -> None:
                                    is_extended_id=False))
             received += len(_recv_all(b, 32))
         assert received == count  # the fast reader got everything
-        assert time.monotonic() - start < 30
+        assert time.monotonic() - start < 120  # a stall would cost 5 s per burst
         stats = {s.peer: s for s in hub.hub.clients()}
         slow_stats = stats[f"127.0.0.1:{slow.getsockname()[1]}"]
         assert slow_stats.dropped > 0  # the slow reader lost frames, counted
