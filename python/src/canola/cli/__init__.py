@@ -60,7 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser.parse_args(args_list)
         level = logging.WARNING - 10 * min(args.verbose, 2)
-        logging.basicConfig(level=level, format="canola: %(name)s: %(message)s")
+        logging.basicConfig(level=level, format="%(name)s: %(message)s")
         code: int = args.func(args)
         return code
     except SystemExit as exc:  # --help
