@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz coverage py-env clean
+.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-gateway coverage py-env clean
 
 all: $(BUILD)/build.stamp
 
@@ -81,6 +81,13 @@ fuzz:
 	  -print_final_stats=1 \
 	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
 	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
+
+# atheris on the CiA 309-3 gateway's line parser (the 'fuzz' extra of the Python package).
+fuzz-gateway: py-env
+	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]'
+	@mkdir -p build-fuzz/corpus-gateway
+	$(PY_VENV)/bin/python fuzz/fuzz_gateway_parser.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-gateway
 
 # The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
 # candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
