@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz coverage py-env clean
+.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds coverage py-env clean
 
 all: $(BUILD)/build.stamp
 
@@ -68,19 +68,40 @@ coverage: py-env
 	cd build-cov && ctest >/dev/null
 	$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary build-cov | tail -n 3
 
-# libFuzzer (clang) on the frame input path: replay the seed corpus, then fuzz for a while.
-# New inputs go to build-fuzz/; a finding is a crash file there (turn it into a test).
+# libFuzzer (clang): the frame input path (node) and the SDO client against a hostile server
+# (sdo_client); atheris on the EDS/DCF parser (fuzz/fuzz_eds.py) in the Python environment.
+# Each target replays its seed corpus (fuzz/corpus/<target>/), then fuzzes for FUZZ_SECONDS.
+# New inputs go to build-fuzz/corpus-<target>/; a finding is a crash file in build-fuzz/
+# (turn it into a regression test). For hours: see docs/security.md.
 FUZZ_SECONDS ?= 30
+ATHERIS_VERSION = 3.0.0
+FUZZ_TARGETS = node sdo_client
 FUZZ_FLAGS = -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
-fuzz:
-	@mkdir -p build-fuzz/corpus-node
-	clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples src/*.c examples/example_od.c \
-	  fuzz/fuzz_node.c -o build-fuzz/fuzz_node
-	build-fuzz/fuzz_node -artifact_prefix=build-fuzz/ fuzz/corpus/node/*
-	@build-fuzz/fuzz_node -artifact_prefix=build-fuzz/ -max_total_time=$(FUZZ_SECONDS) \
-	  -print_final_stats=1 \
-	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
-	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
+fuzz: fuzz-c fuzz-eds
+
+fuzz-c:
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p build-fuzz/corpus-$$t && \
+	  clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples src/*.c examples/example_od.c \
+	    fuzz/fuzz_$$t.c -o build-fuzz/fuzz_$$t || exit 1; \
+	  build-fuzz/fuzz_$$t -artifact_prefix=build-fuzz/ fuzz/corpus/$$t/* >/dev/null 2>&1 || \
+	    { echo "fuzz_$$t: the seed corpus fails"; exit 1; }; \
+	  build-fuzz/fuzz_$$t -artifact_prefix=build-fuzz/ -max_total_time=$(FUZZ_SECONDS) \
+	    -print_final_stats=1 build-fuzz/corpus-$$t fuzz/corpus/$$t > build-fuzz/fuzz-$$t.log 2>&1; \
+	  rc=$$?; tail -n 4 build-fuzz/fuzz-$$t.log; echo "fuzz_$$t: exit $$rc"; \
+	  [ $$rc -eq 0 ] || exit $$rc; \
+	done
+
+# atheris has no wheel for every Python: without it the EDS corpus is still replayed.
+fuzz-eds: py-env
+	@mkdir -p build-fuzz/corpus-eds
+	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
+	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check 'atheris==$(ATHERIS_VERSION)' \
+	  >/dev/null 2>&1 || echo "fuzz_eds: atheris not installable here: replaying the corpus only"
+	@$(PY_VENV)/bin/python fuzz/fuzz_eds.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-eds fuzz/corpus/eds \
+	  > build-fuzz/fuzz-eds.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-eds.log; \
+	  echo "fuzz_eds: exit $$rc"; exit $$rc
 
 # The SocketCAN driver (port/linux/socketcan.c) on a real Linux CAN stack: vcan0 natively
 # when the kernel has it, else inside canvm (../shared/tools/canvm), else reported NOT RUN.

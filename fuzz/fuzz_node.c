@@ -12,8 +12,9 @@
  * Missing bytes at the end read as zeros.
  *
  * Invariants checked after the stream (abort() = a finding): after a reset node the node
- * sends its boot-up, and in pre-operational it answers an SDO read of 0x1000 with the device
- * type. The sanitizers check every step for memory errors and undefined behaviour.
+ * sends its boot-up, in pre-operational it answers an SDO read of 0x1000 with the device
+ * type, and its heartbeat (0x1017 back at its power-on 100 ms) comes on time. The sanitizers
+ * check every step for memory errors and undefined behaviour.
  *
  *   make fuzz                 # builds and runs for FUZZ_SECONDS (default 30)
  *   build-fuzz/fuzz_node -max_total_time=3600 fuzz/corpus/node   # for hours
@@ -29,6 +30,7 @@ typedef struct rig {
     co_node_t node;
     co_frame_t last;
     unsigned sent;
+    unsigned heartbeats; /* pre-operational heartbeats sent */
 } rig_t;
 
 static co_err_t capture(void *ctx, const co_frame_t *frame)
@@ -36,6 +38,8 @@ static co_err_t capture(void *ctx, const co_frame_t *frame)
     rig_t *r = ctx;
     r->last = *frame;
     r->sent++;
+    r->heartbeats +=
+        frame->id == 0x705 && frame->len == 1 && frame->data[0] == CO_NMT_PRE_OPERATIONAL;
     return CO_OK;
 }
 
@@ -95,6 +99,11 @@ static void check_alive(rig_t *r, uint64_t now)
     co_node_poll(&r->node, now);
     if (r->sent == 0 || r->last.id != 0x585 || r->last.data[0] != 0x43 ||
         co_get_u32(&r->last.data[4]) != r->od.device_type) {
+        abort();
+    }
+    r->heartbeats = 0;
+    co_node_poll(&r->node, now + 100000u);
+    if (r->heartbeats != 1) {
         abort();
     }
 }
