@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds coverage py-env clean
+.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds coverage py-env lint cortex-m test-m32 test-clang analyse clean
 
 all: $(BUILD)/build.stamp
 
@@ -103,6 +103,51 @@ fuzz-eds: py-env
 	  > build-fuzz/fuzz-eds.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-eds.log; \
 	  echo "fuzz_eds: exit $$rc"; exit $$rc
 
+# Static analysis of the core (src/, include/), warnings as errors: cppcheck (default and
+# multi-channel configuration) and clang-tidy (.clang-tidy). .ci/run installs both.
+LINT_CFLAGS = -std=c11 -Iinclude -Isrc
+lint:
+	@command -v cppcheck >/dev/null || { echo "lint: cppcheck missing (.ci/run installs it)"; exit 1; }
+	@command -v clang-tidy >/dev/null || { echo "lint: clang-tidy missing (.ci/run installs it)"; exit 1; }
+	cppcheck --std=c11 --enable=warning,style,performance,portability --error-exitcode=1 -q \
+	  --inline-suppr --suppressions-list=.cppcheck-suppressions -Iinclude -Isrc -UCO_CONFIG_FILE \
+	  src/*.c
+	cppcheck --std=c11 --enable=warning,style,performance,portability --error-exitcode=1 -q \
+	  --inline-suppr --suppressions-list=.cppcheck-suppressions -Iinclude -Isrc -UCO_CONFIG_FILE \
+	  -DCO_SDO_CLIENTS_MAX=4 -DCO_SDO_SERVERS_MAX=4 src/*.c
+	@echo "cppcheck: clean"
+	@printf '%s\n' src/*.c | xargs -P 2 -I{} clang-tidy --quiet {} -- $(LINT_CFLAGS) 2>/dev/null \
+	  > build-lint.log; rc=$$?; grep -E 'warning:|error:' build-lint.log; rm -f build-lint.log; \
+	  [ $$rc -eq 0 ] && echo "clang-tidy: clean" || { echo "clang-tidy: findings above"; exit 1; }
+
+# The core for a Cortex-M4 (arm-none-eabi-gcc): the strictest warnings, no host headers.
+ARM_FLAGS = -std=c11 -mcpu=cortex-m4 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion \
+            -Wshadow -Wcast-align -Werror -pedantic -Iinclude -Isrc
+cortex-m:
+	@if command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
+	  mkdir -p build-arm && for f in src/*.c; do \
+	    arm-none-eabi-gcc $(ARM_FLAGS) -c $$f -o build-arm/$$(basename $$f .c).o || exit 1; \
+	  done && arm-none-eabi-gcc $(ARM_FLAGS) -DCO_CONFIG_FILE='"'$(CURDIR)/configs/minimal.h'"' \
+	    -c src/node.c -o build-arm/node-minimal.o && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)"; \
+	else echo "cortex-m: SKIPPED (arm-none-eabi-gcc not installed; .ci/run installs it as root)"; fi
+
+# A 32-bit host build of the core and the tests (gcc -m32, from gcc-multilib), tests run.
+test-m32:
+	@if echo 'int main(void){return 0;}' | gcc -m32 -x c - -o /dev/null 2>/dev/null; then \
+	  cmake -S . -B build-m32 $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS=-m32 \
+	    -DCMAKE_EXE_LINKER_FLAGS=-m32 >/dev/null && cmake --build build-m32 >/dev/null && \
+	  cd build-m32 && ctest --output-on-failure; \
+	else echo "test-m32: SKIPPED (gcc -m32 cannot link: apt-get install gcc-multilib)"; fi
+
+# The same tests built by clang (the normal build uses the system cc, gcc).
+test-clang:
+	CC=clang cmake -S . -B build-clang $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	cmake --build build-clang >/dev/null
+	cd build-clang && ctest --output-on-failure
+
+# Everything above: what .ci/run adds to make test.
+analyse: lint cortex-m test-m32 test-clang
+
 # The SocketCAN driver (port/linux/socketcan.c) on a real Linux CAN stack: vcan0 natively
 # when the kernel has it, else inside canvm (../shared/tools/canvm), else reported NOT RUN.
 VCAN_BUILD = build-vcan
@@ -128,6 +173,6 @@ bench:
 	./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan
+	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan build-arm build-m32 build-clang
 
 FORCE:
