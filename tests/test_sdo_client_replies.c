@@ -128,7 +128,7 @@ static void test_block_download_waits_for_the_queue(void)
     CHECK_EQ(co_node_stats(&g_t.node)->tx_queued, 1);
     g_t.bus.busy = false;
     co_node_poll(&g_t.node, 2000);
-    CHECK_EQ(g_t.bus.count, 1 + 5); /* the queued one, then the rest of the 5 */
+    CHECK_EQ(g_t.bus.count, 1 + 5);            /* the queued one, then the rest of the 5 */
     CHECK_EQ(g_t.bus.frames[5].data[0], 0x85); /* seqno 5, last */
     reply("A2 05 7F 00 00 00 00 00");
     CHECK_EQ(g_t.bus.frames[6].data[0] & 0xE3, 0xC1); /* the end */

@@ -1,0 +1,216 @@
+/* test_contracts.c -- the documented answers of the node's API and services to the inputs
+ * they rarely see: bad arguments, frames of the wrong form on a watched COB-ID, requests at
+ * the edges of the SDO block protocol, entries of the wrong type. */
+#include "check.h"
+#include "harness.h"
+
+#define MS 1000ull
+
+static co_err_t no_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_OK;
+}
+
+static void test_node_init_arguments(void)
+{
+    static example_od_t od;
+    static co_node_t node;
+    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&od, 0)};
+    CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_ARG); /* no tx */
+    cfg.driver.tx = no_tx;
+    CHECK_EQ(co_node_init(NULL, &cfg), CO_ERR_ARG);
+    CHECK_EQ(co_node_init(&node, NULL), CO_ERR_ARG);
+    co_node_config_t no_od = cfg;
+    no_od.od.entries = NULL;
+    CHECK_EQ(co_node_init(&node, &no_od), CO_ERR_ARG);
+    cfg.node_id = 0;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_ARG);
+    cfg.node_id = 5;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    /* Nothing runs before start. */
+    CHECK_EQ(co_node_poll(&node, 10 * MS), CO_TIME_NEVER);
+}
+
+static void test_local_reads_of_the_wrong_kind(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint64_t v = 7;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2FFF, 0, &v), CO_ERR_NOT_FOUND);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2006, 0, &v), CO_ERR_ARG); /* REAL32 */
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2002, 0, &v), CO_ERR_ARG); /* a string */
+    CHECK_EQ(v, 7);
+    /* A network read into a buffer too small for the value. */
+    uint8_t buf[2];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&t.node, 0x2000, 0, buf, sizeof buf, &len), CO_ABORT_LEN_HIGH);
+}
+
+/* ---- node guarding, master side */
+
+static void test_guard_watch_limits_and_replies(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    /* One error control per node: a node consumed by heartbeat is not guarded too. */
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(9, 500)), CO_ABORT_NONE);
+    CHECK_EQ(co_guard_watch(&t.node, 9, 100, 3), CO_ERR_STATE);
+    CHECK_EQ(co_guard_watch(&t.node, 9, 0, 0), CO_OK); /* removing what is not there */
+    for (uint8_t id = 10; id < 10 + CO_GUARD_WATCH_MAX; id++) {
+        CHECK_EQ(co_guard_watch(&t.node, id, 100, 3), CO_OK);
+    }
+    CHECK_EQ(co_guard_watch(&t.node, 100, 100, 3), CO_ERR_FULL);
+    CHECK_EQ(co_guard_watch(&t.node, 100, 0, 0), CO_OK);
+    t.event_count = 0;
+    /* Replies of node 10: a wrong length is malformed, another master's RTR is ignored. */
+    uint32_t malformed = co_node_stats(&t.node)->rx_malformed;
+    ingest(&t, 1 * MS, 0x70A, "05 00");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, malformed + 1);
+    ingest(&t, 1 * MS, 0x70A, "R1");
+    CHECK_EQ(t.event_count, 0);
+    /* First reply: started; a change of state is reported; a boot-up restarts the toggle. */
+    ingest(&t, 2 * MS, 0x70A, "7F");
+    ingest(&t, 3 * MS, 0x70A, "85");
+    ingest(&t, 4 * MS, 0x70A, "00");
+    ingest(&t, 5 * MS, 0x70A, "FF"); /* any toggle is taken after a boot-up */
+    CHECK_EQ(t.event_count, 4);
+    CHECK_EQ(t.events[0].kind, CO_EC_STARTED);
+    CHECK_EQ(t.events[1].kind, CO_EC_STATE_CHANGED);
+    CHECK_EQ(t.events[1].state, CO_NMT_OPERATIONAL);
+    CHECK_EQ(t.events[2].kind, CO_EC_BOOT);
+    CHECK_EQ(t.events[3].kind, CO_EC_STATE_CHANGED);
+    CHECK_EQ(t.events[3].previous, CO_NMT_INITIALISING);
+}
+
+/* ---- heartbeat */
+
+static void test_unconfigured_node_sends_no_heartbeat(void)
+{
+    test_node_t t;
+    CHECK_EQ(test_node_init(&t, CO_NODE_ID_UNCONFIGURED, 100), CO_OK);
+    co_node_start(&t.node, 0);
+    co_node_poll(&t.node, 1000 * MS);
+    CHECK_EQ(t.bus.count, 0);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_INITIALISING);
+    CHECK_EQ(co_hb_remote_state(&t.node, 9), 0xFF); /* not consumed */
+}
+
+/* ---- EMCY consumer */
+
+static void test_emcy_consumer_without_callback_or_with_bad_frames(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u32(&t, 0x1028, 1, 0x85), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x085, "10 81 11 00 00 00 00 00"); /* no on_emcy: dropped */
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 0);
+    ingest(&t, 1 * MS, 0x085, "10 81 11");
+    ingest(&t, 1 * MS, 0x085, "R8");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 2);
+    /* The history: only 0 may be written to sub0. */
+    CHECK_EQ(write_u8(&t, 0x1003, 0, 1), CO_ABORT_VALUE);
+    CHECK_EQ(write_u8(&t, 0x1003, 0, 0), CO_ABORT_NONE);
+}
+
+/* ---- SDO server at the edges of block transfer */
+
+static const char *last_frame(const test_node_t *t)
+{
+    static char buf[40];
+    return t->bus.count ? frame_str(&t->bus.frames[t->bus.count - 1], buf, sizeof buf) : "";
+}
+
+static void test_block_download_bad_sequence_number(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x605, "C6 00 20 00 04 00 00 00");
+    CHECK_EQ(t.bus.frames[t.bus.count - 1].data[0], 0xA4);
+    ingest(&t, 0, 0x605, "00 01 02 03 04 05 06 07"); /* seqno 0 */
+    CHECK_STR(last_frame(&t), "585#8000200003000405");
+}
+
+static void test_block_download_of_an_empty_value(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    /* 0x2003 is a DOMAIN: 0 bytes, one segment with nothing in it, n = 7. */
+    ingest(&t, 0, 0x605, "C2 03 20 00 00 00 00 00");
+    ingest(&t, 0, 0x605, "81 00 00 00 00 00 00 00");
+    CHECK_STR(last_frame(&t), "585#A2017F0000000000");
+    ingest(&t, 0, 0x605, "DD 00 00 00 00 00 00 00");
+    CHECK_STR(last_frame(&t), "585#A100000000000000");
+    /* An end claiming more padding than data is refused. */
+    ingest(&t, 0, 0x605, "C2 03 20 00 00 00 00 00");
+    ingest(&t, 0, 0x605, "81 00 00 00 00 00 00 00");
+    ingest(&t, 0, 0x605, "C1 00 00 00 00 00 00 00"); /* n = 0: 7 bytes, but 0 indicated */
+    CHECK_EQ(t.bus.frames[t.bus.count - 1].data[0], 0x80);
+}
+
+static void test_block_upload_bad_acknowledgements(void)
+{
+    const char *acks[] = {"A2 05 10 00 00 00 00 00", "A2 01 00 00 00 00 00 00",
+                          "A2 01 80 00 00 00 00 00"};
+    const co_abort_t codes[] = {CO_ABORT_SEQUENCE, CO_ABORT_BLOCK_SIZE, CO_ABORT_BLOCK_SIZE};
+    for (int i = 0; i < 3; i++) {
+        test_node_t t;
+        test_node_init(&t, 5, 0);
+        co_node_start(&t.node, 0);
+        ingest(&t, 0, 0x605, "A0 08 10 00 02 00 00 00"); /* 0x1008, 2 per sub-block */
+        ingest(&t, 0, 0x605, "A3 00 00 00 00 00 00 00");
+        ingest(&t, 0, 0x605, acks[i]);
+        const co_frame_t *f = &t.bus.frames[t.bus.count - 1];
+        CHECK_EQ(f->data[0], 0x80);
+        CHECK_EQ(co_get_u32(&f->data[4]), codes[i]);
+    }
+}
+
+static void test_expedited_download_without_size(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    /* 0x22: expedited, size not indicated: the object's own size (2 bytes) is taken. */
+    ingest(&t, 0, 0x605, "22 01 20 00 F6 FF 55 55");
+    CHECK_STR(last_frame(&t), "585#6001200000000000");
+    CHECK_EQ(t.od.app_i16, -10);
+}
+
+/* ---- PDO */
+
+static void test_pdo_event_and_rtr_of_what_the_node_lacks(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x000, "01 05");
+    fake_clear(&t.bus);
+    CHECK_EQ(co_pdo_event(&t.node, 0x2FFF, 0), 0); /* no such entry: no TPDO */
+    CHECK_EQ(co_tpdo_request(&t.node, EXAMPLE_PDOS), CO_ERR_ARG);
+    CHECK_EQ(co_tpdo_request(&t.node, 1), CO_ERR_STATE); /* maps nothing: not valid */
+    /* TPDO2 maps nothing: not valid, so an RTR for it is not answered. */
+    ingest(&t, 0, 0x285, "R0");
+    CHECK_EQ(t.bus.count, 0);
+}
+
+int main(void)
+{
+    RUN(test_node_init_arguments);
+    RUN(test_local_reads_of_the_wrong_kind);
+    RUN(test_guard_watch_limits_and_replies);
+    RUN(test_unconfigured_node_sends_no_heartbeat);
+    RUN(test_emcy_consumer_without_callback_or_with_bad_frames);
+    RUN(test_block_download_bad_sequence_number);
+    RUN(test_block_download_of_an_empty_value);
+    RUN(test_block_upload_bad_acknowledgements);
+    RUN(test_expedited_download_without_size);
+    RUN(test_pdo_event_and_rtr_of_what_the_node_lacks);
+    return check_summary();
+}
