@@ -200,6 +200,148 @@ static void test_pdo_event_and_rtr_of_what_the_node_lacks(void)
     CHECK_EQ(t.bus.count, 0);
 }
 
+/* ---- life guarding: a new guard time while monitoring */
+
+static void test_life_time_change_while_guarded(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u16(&t, 0x100C, 0, 100), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x100D, 0, 2), CO_ABORT_NONE);
+    ingest(&t, 10 * MS, 0x705, "R1");                    /* monitoring starts: life time 200 ms */
+    CHECK_EQ(write_u8(&t, 0x100D, 0, 5), CO_ABORT_NONE); /* from now: 500 ms */
+    co_node_poll(&t.node, 250 * MS);
+    CHECK_EQ(t.event_count, 0); /* the old 200 ms would have run out at 210 ms */
+    co_node_poll(&t.node, 509 * MS);
+    CHECK_EQ(t.event_count, 0);
+    co_node_poll(&t.node, 510 * MS);
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(t.events[0].kind, CO_EC_LIFE_GUARD);
+    ingest(&t, 600 * MS, 0x705, "R1"); /* resumed */
+    CHECK_EQ(t.event_count, 2);
+    CHECK_EQ(write_u16(&t, 0x100C, 0, 0), CO_ABORT_NONE); /* guarding off */
+    co_node_poll(&t.node, 5000 * MS);
+    CHECK_EQ(t.event_count, 2);
+}
+
+/* ---- heartbeat consumer entries of the wrong length */
+
+static void test_consumer_entry_of_the_wrong_length(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u16(&t, 0x1016, 1, 500), CO_ABORT_LEN_LOW);
+    CHECK_EQ(co_hb_remote_state(&t.node, 0), 0xFF);
+}
+
+/* ---- TIME */
+
+static void test_time_producer_arguments_and_consumer_without_callback(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_time_of_day_t tod = {.ms = 1000, .days = 1};
+    CHECK_EQ(co_time_send(NULL, &tod), CO_ERR_ARG);
+    CHECK_EQ(co_time_send(&t.node, NULL), CO_ERR_ARG);
+    CHECK_EQ(co_time_send(&t.node, &tod), CO_ERR_STATE); /* not a producer */
+    /* Consumer without on_time: the frame is taken (not malformed) and dropped. */
+    ingest(&t, 0, 0x100, "00 00 00 00 00 00");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 0);
+    CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 0);
+    /* Producer on: now it sends; a producer keeps consuming nothing of its own. */
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x40000100u), CO_ABORT_NONE);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_time_send(&t.node, &tod), CO_OK);
+    CHECK_EQ(fake_count_id(&t.bus, 0x100), 1);
+    tod.ms = 86400000u;
+    CHECK_EQ(co_time_send(&t.node, &tod), CO_ERR_ARG);
+}
+
+/* ---- SYNC configuration changed behind the node's back (a direct write to the value) */
+
+static void test_sync_producer_follows_values_changed_directly(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 5), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 10000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x40000080u), CO_ABORT_NONE);
+    fake_clear(&t.bus);
+    for (uint64_t ms = 10; ms <= 40; ms += 10) {
+        co_node_poll(&t.node, ms * MS);
+    }
+    CHECK_EQ(t.bus.count, 4);
+    CHECK_EQ(t.bus.frames[3].data[0], 4);
+    t.od.sync_overflow = 2; /* the counter (now 5) is past it: starts over at 1 */
+    co_node_poll(&t.node, 50 * MS);
+    CHECK_EQ(t.bus.frames[4].data[0], 1);
+    t.od.sync_period_us = 0; /* period gone: no more SYNC */
+    CHECK_EQ(co_node_poll(&t.node, 60 * MS), CO_TIME_NEVER);
+    CHECK_EQ(t.bus.count, 5);
+}
+
+/* ---- the transmit queue without an on_error callback */
+
+static co_err_t busy_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_ERR_BUSY;
+}
+
+static co_err_t failing_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_ERR_STATE;
+}
+
+static int g_sent;
+static co_err_t counting_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    g_sent++;
+    return CO_OK;
+}
+
+static void test_queue_overflow_and_driver_errors_without_callback(void)
+{
+    static example_od_t od;
+    static co_node_t node;
+    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&od, 0)};
+    cfg.driver.tx = busy_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0); /* the boot-up waits */
+    co_frame_t f = {.id = 0x300, .len = 1};
+    for (int i = 0; i < CO_TX_QUEUE_LEN; i++) {
+        co_node_send(&node, &f);
+    }
+    CHECK_EQ(co_node_stats(&node)->tx_overflow, 1);
+    cfg.driver.tx = failing_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0);
+    CHECK_EQ(co_node_stats(&node)->tx_dropped, 1);
+    /* The application's own frames carry no service: a state change does not purge them,
+     * while a service's frame the new state forbids is dropped. */
+    cfg.driver.tx = busy_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0);
+    co_node_send(&node, &f);
+    co_frame_t req = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    co_node_ingest(&node, 0, &req); /* its SDO response waits in the queue */
+    co_nmt_apply(&node, CO_NMT_CMD_STOP);
+    CHECK_EQ(co_node_stats(&node)->tx_gated, 1);
+    node.cfg.driver.tx = counting_tx;
+    g_sent = 0;
+    co_node_poll(&node, 1 * MS);
+    CHECK_EQ(g_sent, 2); /* the boot-up and the application's frame, not the SDO answer */
+}
+
 int main(void)
 {
     RUN(test_node_init_arguments);
@@ -212,5 +354,10 @@ int main(void)
     RUN(test_block_upload_bad_acknowledgements);
     RUN(test_expedited_download_without_size);
     RUN(test_pdo_event_and_rtr_of_what_the_node_lacks);
+    RUN(test_life_time_change_while_guarded);
+    RUN(test_consumer_entry_of_the_wrong_length);
+    RUN(test_time_producer_arguments_and_consumer_without_callback);
+    RUN(test_sync_producer_follows_values_changed_directly);
+    RUN(test_queue_overflow_and_driver_errors_without_callback);
     return check_summary();
 }

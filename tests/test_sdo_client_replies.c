@@ -271,6 +271,20 @@ static void test_typed_access_arguments(void)
     CHECK_EQ(r.len, 0);
 }
 
+/* Reset communication ends an open transfer locally, as leaving the states that allow SDO
+ * does: reported with 0x08000022, and no frame (the server times out by itself). */
+static void test_reset_communication_ends_a_transfer(void)
+{
+    client();
+    start_download(CO_SDO_SEGMENTED, 10);
+    fake_clear(&g_t.bus);
+    CHECK_EQ(co_nmt_apply(&g_t.node, CO_NMT_CMD_RESET_COMMUNICATION), CO_OK);
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_DATA_STATE);
+    CHECK_EQ(fake_count_id(&g_t.bus, 0x605), 0);
+    CHECK(!co_sdo_client_busy(&g_t.node, 0));
+}
+
 int main(void)
 {
     RUN(test_response_for_another_sub_index);
@@ -287,5 +301,6 @@ int main(void)
     RUN(test_start_refused_by_state_and_arguments);
     RUN(test_local_channel_without_buffers_or_callbacks);
     RUN(test_typed_access_arguments);
+    RUN(test_reset_communication_ends_a_transfer);
     return check_summary();
 }
