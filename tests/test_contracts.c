@@ -342,6 +342,53 @@ static void test_queue_overflow_and_driver_errors_without_callback(void)
     CHECK_EQ(g_sent, 2); /* the boot-up and the application's frame, not the SDO answer */
 }
 
+/* A download without size indication is refused once the server's buffer is full: with
+ * "too long" for an object of variable size, "out of memory" for a fixed one. */
+static void segmented_until_refused(uint16_t index, co_abort_t expected)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    char req[32];
+    snprintf(req, sizeof req, "20 %02X %02X 00 00 00 00 00", index & 0xFF, index >> 8);
+    ingest(&t, 0, 0x605, req); /* segmented, size not indicated */
+    uint32_t segments = 0;
+    for (uint8_t toggle = 0; segments < 200; segments++, toggle ^= 1u) {
+        ingest(&t, 0, 0x605, toggle ? "10 41 41 41 41 41 41 41" : "00 41 41 41 41 41 41 41");
+        if (t.bus.frames[t.bus.count - 1].data[0] == 0x80) {
+            break;
+        }
+    }
+    CHECK_EQ(segments, CO_SDO_BUF_SIZE / 7); /* the segment that no longer fits */
+    CHECK_EQ(co_get_u32(&t.bus.frames[t.bus.count - 1].data[4]), expected);
+}
+
+static void test_unsized_download_beyond_the_buffer(void)
+{
+    segmented_until_refused(0x2002, CO_ABORT_LEN_HIGH);
+    segmented_until_refused(0x2000, CO_ABORT_OUT_OF_MEMORY);
+}
+
+static void test_unsized_block_download_beyond_the_buffer(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x605, "C0 02 20 00 00 00 00 00"); /* block, no size, no CRC */
+    uint8_t blksize = t.bus.frames[t.bus.count - 1].data[4];
+    CHECK_EQ(blksize, CO_SDO_BUF_SIZE / 7 < 127 ? CO_SDO_BUF_SIZE / 7 : 127);
+    char seg[32];
+    for (unsigned i = 1; i <= blksize; i++) {
+        snprintf(seg, sizeof seg, "%02X 41 41 41 41 41 41 41", i);
+        ingest(&t, 0, 0x605, seg);
+    }
+    CHECK_EQ(t.bus.frames[t.bus.count - 1].data[0], 0xA2);
+    ingest(&t, 0, 0x605, "01 41 41 41 41 41 41 41");
+    const co_frame_t *f = &t.bus.frames[t.bus.count - 1];
+    CHECK_EQ(f->data[0], 0x80);
+    CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_LEN_HIGH);
+}
+
 int main(void)
 {
     RUN(test_node_init_arguments);
@@ -359,5 +406,7 @@ int main(void)
     RUN(test_time_producer_arguments_and_consumer_without_callback);
     RUN(test_sync_producer_follows_values_changed_directly);
     RUN(test_queue_overflow_and_driver_errors_without_callback);
+    RUN(test_unsized_download_beyond_the_buffer);
+    RUN(test_unsized_block_download_beyond_the_buffer);
     return check_summary();
 }
