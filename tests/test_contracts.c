@@ -389,6 +389,138 @@ static void test_unsized_block_download_beyond_the_buffer(void)
     CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_LEN_HIGH);
 }
 
+/* ---- more edges, each a documented answer */
+
+static void test_collision_report_of_an_empty_frame(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x705, "");
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(t.events[0].kind, CO_EC_ID_COLLISION);
+    CHECK_EQ(t.events[0].state, 0xFF); /* nothing heard: no byte was read */
+}
+
+static void test_guard_watch_repeats_and_timeouts_once(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(co_guard_watch(&t.node, 9, 100, 2), CO_OK);
+    ingest(&t, 1 * MS, 0x709, "7F");
+    ingest(&t, 2 * MS, 0x709, "FF"); /* same state: no event */
+    CHECK_EQ(t.event_count, 1);
+    co_node_poll(&t.node, 500 * MS);
+    co_node_poll(&t.node, 900 * MS);
+    CHECK_EQ(t.event_count, 2); /* one timeout, not one per poll */
+    CHECK_EQ(t.events[1].kind, CO_EC_GUARD_TIMEOUT);
+}
+
+static void test_heartbeat_consumer_edges(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    /* Node-ID 200 is no node: the entry is unused, nothing is routed for it. */
+    uint32_t routes = co_node_route_count(&t.node);
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(200, 100)), CO_ABORT_NONE);
+    CHECK_EQ(co_node_route_count(&t.node), routes);
+    CHECK_EQ(co_node_route_id(&t.node, routes), 0); /* past the end */
+    /* Two boot-ups in a row: two boots, not a remote reset (it never ran in between). */
+    CHECK_EQ(write_u32(&t, 0x1016, 2, hb_consumer_value(9, 100)), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x709, "00");
+    ingest(&t, 2 * MS, 0x709, "00");
+    CHECK_EQ(t.event_count, 2);
+    CHECK_EQ(t.events[0].kind, CO_EC_BOOT);
+    CHECK_EQ(t.events[1].kind, CO_EC_BOOT);
+}
+
+static void test_nmt_before_start(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    CHECK_EQ(co_nmt_apply(&t.node, CO_NMT_CMD_START), CO_ERR_STATE);
+    CHECK_EQ(t.bus.count, 0);
+}
+
+static void test_emcy_producer_off(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x80000085u), CO_ABORT_NONE);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_emcy_raise(&t.node, 0x5000, NULL), CO_OK);
+    CHECK_EQ(t.bus.count, 0);            /* EMCY off: no frame */
+    CHECK_EQ(t.od.error_count, 1);       /* but recorded */
+    CHECK_EQ(t.od.error_register, 0x01); /* and the register set */
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x85), CO_ABORT_NONE);
+    CHECK_EQ(co_emcy_raise(&t.node, 0x5001, NULL), CO_OK);
+    CHECK_EQ(fake_count_id(&t.bus, 0x085), 1); /* on again: the next one goes out */
+}
+
+static void test_time_cob_id_moves_the_route(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_frame_t old_id = frm(0x100, "00 00 00 00 00 00");
+    co_frame_t new_id = frm(0x101, "00 00 00 00 00 00");
+    CHECK(co_node_accepts(&t.node, &old_id));
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x80000101u), CO_ABORT_NONE);
+    CHECK(!co_node_accepts(&t.node, &old_id));
+    CHECK(co_node_accepts(&t.node, &new_id));
+}
+
+static void test_expedited_without_size_to_wide_objects(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x605, "22 00 20 00 01 02 03 04"); /* u32: 4 bytes taken */
+    CHECK_EQ(t.od.app_u32, 0x04030201u);
+    ingest(&t, 0, 0x605, "22 02 20 00 61 62 63 64"); /* a string: 4 bytes taken */
+    CHECK_STR(t.od.app_string, "abcd");
+}
+
+static void test_pdo_parameter_writes_that_change_nothing(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint32_t changes = t.bus.routes_changed;
+    CHECK_EQ(write_u16(&t, 0x1800, 3, 10), CO_ABORT_NONE); /* inhibit: filters unchanged */
+    CHECK_EQ(t.bus.routes_changed, changes);
+    CHECK_EQ(write_u8(&t, 0x1400, 2, 254), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1400, 2, 253), CO_ABORT_VALUE); /* RTR types are TPDO-only */
+    /* Mapping entries that can never be valid. */
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1600, 0, 0), CO_ABORT_NONE);
+    const uint32_t bad[] = {0x62000100, 0x00050010, 0x00080020};
+    for (int i = 0; i < 3; i++) {
+        CHECK_EQ(write_u32(&t, 0x1600, 1, bad[i]), CO_ABORT_NONE);
+        CHECK_EQ(write_u8(&t, 0x1600, 0, 1), CO_ABORT_NO_MAP); /* 0 bits, too wide, no object */
+    }
+    /* TPDO request in pre-operational: not running. */
+    CHECK_EQ(co_tpdo_request(&t.node, 0), CO_ERR_STATE);
+}
+
+static void test_tpdo_252_rtr_before_any_sync(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 252), CO_ABORT_NONE);
+    ingest(&t, 0, 0x000, "01 05");
+    fake_clear(&t.bus);
+    ingest(&t, 1 * MS, 0x185, "R4"); /* nothing sampled yet: no answer */
+    CHECK_EQ(t.bus.count, 0);
+    ingest(&t, 2 * MS, 0x080, "");
+    ingest(&t, 3 * MS, 0x185, "R4");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 1);
+}
+
 int main(void)
 {
     RUN(test_node_init_arguments);
@@ -408,5 +540,14 @@ int main(void)
     RUN(test_queue_overflow_and_driver_errors_without_callback);
     RUN(test_unsized_download_beyond_the_buffer);
     RUN(test_unsized_block_download_beyond_the_buffer);
+    RUN(test_collision_report_of_an_empty_frame);
+    RUN(test_guard_watch_repeats_and_timeouts_once);
+    RUN(test_heartbeat_consumer_edges);
+    RUN(test_nmt_before_start);
+    RUN(test_emcy_producer_off);
+    RUN(test_time_cob_id_moves_the_route);
+    RUN(test_expedited_without_size_to_wide_objects);
+    RUN(test_pdo_parameter_writes_that_change_nothing);
+    RUN(test_tpdo_252_rtr_before_any_sync);
     return check_summary();
 }

@@ -10,8 +10,13 @@
 
 typedef struct rig {
     test_node_t t;
-    co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 2];
-    uint16_t u16; /* 0x2101: storage with check and written hooks */
+    co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 7];
+    uint16_t u16;     /* 0x2101: storage with check and written hooks */
+    uint16_t plain16; /* 0x2102 */
+    uint64_t plain64; /* 0x2103 */
+    double real64;    /* 0x2104 */
+    uint8_t tod[6];   /* 0x2105 TIME_OF_DAY */
+    char text[8];     /* 0x2106 VISIBLE_STRING, marked mappable */
     uint32_t produced;
     uint8_t taken[8];
     uint32_t taken_len;
@@ -66,7 +71,9 @@ static void h_written(void *ctx, const co_od_entry_t *e)
 static const co_od_hooks_t k_stream = {.read = h_read, .write = h_write};
 static const co_od_hooks_t k_guarded = {.check = h_check, .written = h_written};
 
-/* The example dictionary plus 0x2100 (u32, hooks only) and 0x2101 (u16, checked). */
+/* The example dictionary plus 0x2100 (u32, hooks only), 0x2101 (u16, checked), plain
+ * mappable 0x2102 (u16) and 0x2103 (u64), 0x2104 REAL64, 0x2105 TIME_OF_DAY and 0x2106, a
+ * string wrongly marked mappable. */
 static void rig_up(void)
 {
     memset(&g, 0, sizeof g);
@@ -75,11 +82,21 @@ static void rig_up(void)
     uint8_t map = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO;
     co_od_entry_t stream = {0x2100, 0, CO_TYPE_UNSIGNED32, map, 4, NULL, NULL, NULL, &k_stream};
     co_od_entry_t guarded = {0x2101, 0, CO_TYPE_UNSIGNED16, map, 2, &g.u16, NULL, NULL, &k_guarded};
+    const co_od_entry_t extra[] = {
+        {0x2102, 0, CO_TYPE_UNSIGNED16, map, 2, &g.plain16, NULL, NULL, NULL},
+        {0x2103, 0, CO_TYPE_UNSIGNED64, map, 8, &g.plain64, NULL, NULL, NULL},
+        {0x2104, 0, CO_TYPE_REAL64, CO_OD_RW, 8, &g.real64, NULL, NULL, NULL},
+        {0x2105, 0, CO_TYPE_TIME_OF_DAY, CO_OD_RW, 6, g.tod, NULL, NULL, NULL},
+        {0x2106, 0, CO_TYPE_VISIBLE_STRING, map, sizeof g.text, g.text, NULL, NULL, NULL},
+    };
     uint32_t n = 0;
     for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x2101 && n == i) {
+        if (base.entries[i].index > 0x2106 && n == i) {
             g.entries[n++] = stream;
             g.entries[n++] = guarded;
+            for (size_t k = 0; k < sizeof extra / sizeof extra[0]; k++) {
+                g.entries[n++] = extra[k];
+            }
         }
         g.entries[n++] = base.entries[i];
     }
@@ -137,9 +154,56 @@ static void test_tpdo_from_hooked_objects(void)
     CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#D4C3B2A1442301");
 }
 
+/* Whole 16- and 64-bit values travel by the direct path both ways. */
+static void test_plain_values_of_every_width(void)
+{
+    rig_up();
+    const uint32_t rx1[] = {0x21020010, 0x21000020};
+    const uint32_t rx2[] = {0x21030040};
+    remap(0x1400, 0x1600, 0x205, rx1, 2);
+    remap(0x1401, 0x1601, 0x305, rx2, 1);
+    const uint32_t tx[] = {0x21030040};
+    remap(0x1800, 0x1A00, 0x185, tx, 1);
+    ingest(&g.t, 0, 0x000, "01 05");
+    ingest(&g.t, 1000, 0x205, "34 12 01 02 03 04");
+    CHECK_EQ(g.plain16, 0x1234);
+    CHECK_EQ(co_get_u32(g.taken), 0x04030201u);
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 2000, 0x305, "01 02 03 04 05 06 07 08");
+    CHECK_EQ(g.plain64, 0x0807060504030201ull);
+    /* The TPDO maps 0x2103, changed by the RPDO: an event-driven TPDO goes out. */
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#0102030405060708");
+    /* A string cannot be mapped, whatever its attributes say. */
+    CHECK_EQ(write_u32(&g.t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&g.t, 0x1A00, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1A00, 1, 0x21060008), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&g.t, 0x1A00, 0, 1), CO_ABORT_NO_MAP);
+}
+
+/* Local access to entries that are not plain integers, and hooks on local writes. */
+static void test_local_access_to_other_kinds(void)
+{
+    rig_up();
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x2104, 0, &v), CO_ERR_ARG); /* REAL64 */
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x2105, 0, &v), CO_ERR_ARG); /* TIME_OF_DAY */
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x2100, 0, &v), CO_ERR_ARG); /* no storage */
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x2103, 0, &v), CO_OK);
+    CHECK_EQ(co_node_set_uint(&g.t.node, 0x2101, 0, 7), CO_ABORT_NONE);
+    CHECK_EQ(g.checks, 1);
+    CHECK_EQ(g.written, 1);
+    /* A read hook's value that does not fit the caller's buffer. */
+    uint8_t buf[2];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&g.t.node, 0x2100, 0, buf, sizeof buf, &len), CO_ABORT_LEN_HIGH);
+}
+
 int main(void)
 {
     RUN(test_rpdo_into_hooked_objects);
     RUN(test_tpdo_from_hooked_objects);
+    RUN(test_plain_values_of_every_width);
+    RUN(test_local_access_to_other_kinds);
     return check_summary();
 }
