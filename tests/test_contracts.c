@@ -521,6 +521,68 @@ static void test_tpdo_252_rtr_before_any_sync(void)
     CHECK_EQ(fake_count_id(&t.bus, 0x185), 1);
 }
 
+/* Two RPDOs: an error they share (deadline, length) ends only when both are fine again. */
+static void two_rpdos(test_node_t *t)
+{
+    test_node_init(t, 5, 0);
+    co_node_start(&t->node, 0);
+    CHECK_EQ(write_u8(t, 0x1029, 1, 1), CO_ABORT_NONE); /* stay operational */
+    CHECK_EQ(write_u32(t, 0x1401, 1, 0x80000305u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1601, 1, 0x62000208), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(t, 0x1601, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1401, 1, 0x305), CO_ABORT_NONE);
+    ingest(t, 0, 0x000, "01 05");
+}
+
+static void test_shared_rpdo_errors_end_with_the_last(void)
+{
+    test_node_t t;
+    two_rpdos(&t);
+    CHECK_EQ(write_u16(&t, 0x1400, 5, 50), CO_ABORT_NONE);
+    CHECK_EQ(write_u16(&t, 0x1401, 5, 50), CO_ABORT_NONE);
+    ingest(&t, 10 * MS, 0x205, "01 02 03 04");
+    ingest(&t, 10 * MS, 0x305, "05");
+    co_node_poll(&t.node, 100 * MS);
+    CHECK(co_emcy_active(&t.node, 0x8250));
+    ingest(&t, 110 * MS, 0x205, "01 02 03 04");
+    CHECK(co_emcy_active(&t.node, 0x8250)); /* RPDO2 is still missing */
+    ingest(&t, 120 * MS, 0x305, "05");
+    CHECK(!co_emcy_active(&t.node, 0x8250));
+
+    two_rpdos(&t);
+    ingest(&t, 10 * MS, 0x205, "01 02");
+    ingest(&t, 10 * MS, 0x305, "");
+    CHECK(co_emcy_active(&t.node, 0x8210));
+    ingest(&t, 20 * MS, 0x205, "01 02 03 04");
+    CHECK(co_emcy_active(&t.node, 0x8210));
+    ingest(&t, 20 * MS, 0x305, "05");
+    CHECK(!co_emcy_active(&t.node, 0x8210));
+    CHECK_EQ(t.od.outputs[1], 5);
+}
+
+/* A change of a mapped value sends an event-driven TPDO only: not in pre-operational, not
+ * for a synchronous one. */
+static void test_value_changes_and_tpdo_types(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 0); /* pre-operational */
+    ingest(&t, 0, 0x000, "01 05");
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 1), CO_ABORT_NONE); /* every SYNC */
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 2), CO_ABORT_NONE);
+    CHECK_EQ(co_pdo_event(&t.node, 0x2000, 0), 0);
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 0);
+    ingest(&t, 1 * MS, 0x080, "");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 1);
+    /* A SYNC start value with SYNCs that carry no counter: sent from the first SYNC. */
+    CHECK_EQ(write_u8(&t, 0x1800, 6, 3), CO_ABORT_NONE);
+    ingest(&t, 2 * MS, 0x080, "");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 2);
+}
+
 int main(void)
 {
     RUN(test_node_init_arguments);
@@ -549,5 +611,7 @@ int main(void)
     RUN(test_expedited_without_size_to_wide_objects);
     RUN(test_pdo_parameter_writes_that_change_nothing);
     RUN(test_tpdo_252_rtr_before_any_sync);
+    RUN(test_shared_rpdo_errors_end_with_the_last);
+    RUN(test_value_changes_and_tpdo_types);
     return check_summary();
 }
