@@ -218,6 +218,10 @@ static void test_life_time_change_while_guarded(void)
     co_node_poll(&t.node, 510 * MS);
     CHECK_EQ(t.event_count, 1);
     CHECK_EQ(t.events[0].kind, CO_EC_LIFE_GUARD);
+    CHECK_EQ(co_node_poll(&t.node, 520 * MS), CO_TIME_NEVER); /* lost: nothing to wait for */
+    CHECK_EQ(write_u8(&t, 0x100D, 0, 3), CO_ABORT_NONE);      /* changes nothing while lost */
+    co_node_poll(&t.node, 590 * MS);
+    CHECK_EQ(t.event_count, 1);
     ingest(&t, 600 * MS, 0x705, "R1"); /* resumed */
     CHECK_EQ(t.event_count, 2);
     CHECK_EQ(write_u16(&t, 0x100C, 0, 0), CO_ABORT_NONE); /* guarding off */

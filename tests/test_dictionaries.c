@@ -147,11 +147,200 @@ static void test_incomplete_client_parameters_are_ignored(void)
     CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
 }
 
+/* ---- what a save records */
+
+static uint16_t g_saved[256];
+static uint32_t g_saved_count;
+
+static co_err_t st_begin(void *ctx, co_param_group_t group)
+{
+    (void)ctx;
+    (void)group;
+    return CO_OK;
+}
+
+static co_err_t st_write(void *ctx, const uint8_t *data, uint32_t len)
+{
+    (void)ctx;
+    (void)len;
+    if (g_saved_count < 256) {
+        g_saved[g_saved_count++] = co_get_u16(data);
+    }
+    return CO_OK;
+}
+
+static co_err_t st_commit(void *ctx)
+{
+    (void)ctx;
+    return CO_OK;
+}
+
+static co_err_t st_read(void *ctx, co_param_group_t group, uint32_t offset, uint8_t *buf,
+                        uint32_t cap, uint32_t *n)
+{
+    (void)ctx;
+    (void)group;
+    (void)offset;
+    (void)buf;
+    (void)cap;
+    (void)n;
+    return CO_ERR_NOT_FOUND;
+}
+
+static co_err_t st_erase(void *ctx, co_param_group_t group)
+{
+    (void)ctx;
+    (void)group;
+    return CO_OK;
+}
+
+static const co_storage_t k_recorder = {st_begin, st_write, st_commit, st_read, st_erase, NULL};
+
+static bool saved(uint16_t index)
+{
+    for (uint32_t i = 0; i < g_saved_count; i++) {
+        if (g_saved[i] == index) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static co_abort_t refuse_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
+                              uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)e;
+    (void)offset;
+    (void)buf;
+    (void)cap;
+    (void)n;
+    (void)total;
+    return CO_ABORT_HARDWARE;
+}
+
+static co_abort_t take_write(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                             const uint8_t *data, uint32_t n, uint32_t total, bool last)
+{
+    (void)ctx;
+    (void)e;
+    (void)offset;
+    (void)data;
+    (void)n;
+    (void)total;
+    (void)last;
+    return CO_ABORT_NONE;
+}
+
+static const co_od_hooks_t k_unreadable = {.read = refuse_read};
+static const co_od_hooks_t k_hooks_only = {.read = refuse_read, .write = take_write};
+static char g_long[100];
+static uint32_t g_plain;
+static uint32_t g_const_rw;
+
+static void test_save_records_parameters_only(void)
+{
+    const co_od_entry_t extra[] = {
+        {0x2100, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, NULL, NULL, NULL, &k_hooks_only},
+        {0x2101, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &g_plain, NULL, NULL, &k_unreadable},
+        {0x2102, 0, CO_TYPE_VISIBLE_STRING, CO_OD_RW, sizeof g_long, g_long, NULL, NULL, NULL},
+        {0x2103, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_CONST, 4, &g_const_rw, NULL, NULL, NULL},
+        {0x2104, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &g_plain, NULL, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, sizeof extra / sizeof extra[0]), CO_OK);
+    g.t.node.cfg.storage = &k_recorder;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    memset(g_long, 'x', sizeof g_long - 1); /* 99 characters */
+    g_saved_count = 0;
+    CHECK_EQ(co_storage_save(&g.t.node, 3), CO_OK);
+    CHECK(saved(0x2000));  /* a plain parameter */
+    CHECK(saved(0x2104));  /* another */
+    CHECK(!saved(0x2100)); /* no storage: the hooks own the value */
+    CHECK(!saved(0x2101)); /* unreadable */
+    CHECK(!saved(0x2102)); /* longer than CO_STORE_VALUE_MAX */
+    CHECK(!saved(0x2103)); /* constant */
+    CHECK(!saved(0x2003)); /* a DOMAIN */
+}
+
+/* ---- streamed values */
+
+static uint32_t g_streamed;
+
+static co_abort_t unknown_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
+                               uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)e;
+    for (*n = 0; *n < cap; (*n)++) {
+        buf[*n] = (uint8_t)(offset + *n);
+    }
+    *total = CO_OD_SIZE_UNKNOWN;
+    return CO_ABORT_NONE;
+}
+
+static co_abort_t veto_late(void *ctx, const co_od_entry_t *e, uint32_t offset, const uint8_t *data,
+                            uint32_t n, uint32_t total, bool last)
+{
+    (void)ctx;
+    (void)e;
+    (void)data;
+    (void)total;
+    (void)last;
+    g_streamed = offset + n;
+    return offset + n > 500 ? CO_ABORT_DATA_LOCAL : CO_ABORT_NONE;
+}
+
+static const co_od_hooks_t k_stream = {.read = unknown_read, .write = veto_late};
+
+static void test_streamed_values(void)
+{
+    const co_od_entry_t extra[] = {
+        {0x2100, 0, CO_TYPE_DOMAIN, CO_OD_RW, CO_OD_SIZE_UNKNOWN, NULL, NULL, NULL, &k_stream},
+    };
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    /* A local read of a value of unknown size takes what fits. */
+    uint8_t buf[4];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&g.t.node, 0x2100, 0, buf, sizeof buf, &len), CO_ABORT_NONE);
+    CHECK_EQ(len, 4);
+    CHECK_EQ(buf[3], 3);
+    /* A write hook's veto in the middle of a stream reaches the client. */
+    ingest(&g.t, 0, 0x605, "21 00 21 00 E8 03 00 00"); /* 1000 bytes */
+    uint8_t toggle = 0;
+    for (int i = 0; i < 200; i++, toggle ^= 1u) {
+        ingest(&g.t, 0, 0x605, toggle ? "10 00 00 00 00 00 00 00" : "00 00 00 00 00 00 00 00");
+        if (g.t.bus.frames[g.t.bus.count - 1].data[0] == 0x80) {
+            break;
+        }
+    }
+    const co_frame_t *f = &g.t.bus.frames[g.t.bus.count - 1];
+    CHECK_EQ(f->data[0], 0x80);
+    CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_DATA_LOCAL);
+    CHECK(g_streamed > 500);
+}
+
+/* 0x1010 sub4 (manufacturer-specific groups) is not a group this node stores. */
+static void test_store_sub_index_beyond_the_groups(void)
+{
+    static uint32_t store4;
+    const co_od_entry_t extra[] = {
+        {0x1010, 4, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &store4, NULL, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    g.t.node.cfg.storage = &k_recorder;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(write_u32(&g.t, 0x1010, 4, CO_STORE_SIGNATURE), CO_ABORT_DATA_STORE);
+}
+
 int main(void)
 {
     RUN(test_more_consumer_entries_than_the_node_watches);
     RUN(test_boot_time_without_consumers);
     RUN(test_client_parameters_in_the_dictionary);
     RUN(test_incomplete_client_parameters_are_ignored);
+    RUN(test_save_records_parameters_only);
+    RUN(test_streamed_values);
+    RUN(test_store_sub_index_beyond_the_groups);
     return check_summary();
 }

@@ -16,6 +16,7 @@ typedef struct script {
     int fail_write_at; /* 1-based write call that fails; 0 = none */
     int writes;
     bool fail_erase;
+    bool fail_value_read; /* reads past a record's head fail */
     int commits;
     int erased[3];
 } script_t;
@@ -57,6 +58,9 @@ static co_err_t s_read(void *ctx, co_param_group_t group, uint32_t offset, uint8
     script_t *s = ctx;
     if (!s->stored[group]) {
         return CO_ERR_NOT_FOUND;
+    }
+    if (s->fail_value_read && offset % 8u == 4u) {
+        return CO_ERR_STATE;
     }
     uint32_t left = offset < s->len[group] ? s->len[group] - offset : 0;
     *n = left < cap ? left : cap;
@@ -185,11 +189,25 @@ static void test_truncated_image_keeps_what_was_whole(void)
     CHECK_EQ(t.od.app_u32b, 0xBEEFu);
 }
 
+/* A storage that fails while reading a value: the load stops there, defaults stay. */
+static void test_read_error_stops_the_load(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    uint8_t u32[4];
+    co_put_u32(u32, 0x1234u);
+    add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 4);
+    g_s.fail_value_read = true;
+    power_on(&t);
+    CHECK_EQ(t.od.app_u32b, 0);
+}
+
 int main(void)
 {
     RUN(test_failing_storage_aborts_with_hardware_error);
     RUN(test_save_and_restore_by_group);
     RUN(test_load_applies_only_valid_records);
     RUN(test_truncated_image_keeps_what_was_whole);
+    RUN(test_read_error_stops_the_load);
     return check_summary();
 }
