@@ -333,6 +333,50 @@ static void test_store_sub_index_beyond_the_groups(void)
     CHECK_EQ(write_u32(&g.t, 0x1010, 4, CO_STORE_SIGNATURE), CO_ABORT_DATA_STORE);
 }
 
+/* Parameters of SDO channels the node does not have (one server, one client channel by
+ * default) are plain values: writing them changes no channel; COB-ID values are checked. */
+static void test_parameters_of_channels_the_node_lacks(void)
+{
+    static uint32_t srv[3] = {0x605, 0x585, 0};
+    static uint32_t srv1 = 0x80000000u;
+    static uint8_t cli_count = 3;
+    static uint32_t cli1 = 0x80000000u;
+    static uint8_t diff[6];
+    const co_od_entry_t extra[] = {
+        u32_entry(0x1200, 1, &srv[0]),
+        u32_entry(0x1200, 2, &srv[1]),
+        {0x1200, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &srv[2], NULL, NULL, NULL},
+        u32_entry(0x1201, 1, &srv1),
+        {0x1280, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &cli_count, NULL, NULL, NULL},
+        u32_entry(0x1280, 1, &g_tx),
+        u32_entry(0x1280, 2, &g_rx),
+        {0x1280, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &g_server, NULL, NULL, NULL},
+        u32_entry(0x1280, 4, &g.extra_u32[0]),
+        u32_entry(0x1281, 1, &cli1),
+        {0x2100, 0, CO_TYPE_TIME_DIFFERENCE, CO_OD_RW, 6, diff, NULL, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, sizeof extra / sizeof extra[0]), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&g.t.node, 0, 7), CO_OK);
+    CHECK_EQ(write_u8(&g.t, 0x1200, 3, 9), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1201, 1, 0x80000606u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1201, 1, 0x800u), CO_ABORT_VALUE); /* not an 11-bit ID */
+    CHECK_EQ(write_u8(&g.t, 0x1280, 0, 4), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1280, 4, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1281, 1, 0x609), CO_ABORT_NONE);
+    /* The server still answers on 0x605, the client still talks to node 7. */
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 0, 0x605, "40 00 10 00 00 00 00 00");
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x585), 1);
+    uint8_t buf[4];
+    result_t r = {0};
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
+    /* A TIME_DIFFERENCE is not read as an integer. */
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x2100, 0, &v), CO_ERR_ARG);
+}
+
 int main(void)
 {
     RUN(test_more_consumer_entries_than_the_node_watches);
@@ -342,5 +386,6 @@ int main(void)
     RUN(test_save_records_parameters_only);
     RUN(test_streamed_values);
     RUN(test_store_sub_index_beyond_the_groups);
+    RUN(test_parameters_of_channels_the_node_lacks);
     return check_summary();
 }
