@@ -585,6 +585,13 @@ static void test_value_changes_and_tpdo_types(void)
     CHECK_EQ(write_u8(&t, 0x1800, 6, 3), CO_ABORT_NONE);
     ingest(&t, 2 * MS, 0x080, "");
     CHECK_EQ(fake_count_id(&t.bus, 0x185), 2);
+    /* A TPDO made not valid sends nothing, whatever changes. */
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 255), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(co_pdo_event(&t.node, 0x2000, 0), 0);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 3), CO_ABORT_NONE);
+    ingest(&t, 3 * MS, 0x185, "R4");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 2);
 }
 
 int main(void)

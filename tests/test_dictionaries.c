@@ -271,6 +271,9 @@ static co_abort_t unknown_read(void *ctx, const co_od_entry_t *e, uint32_t offse
 {
     (void)ctx;
     (void)e;
+    if (offset >= CO_SDO_BUF_SIZE) {
+        return CO_ABORT_HARDWARE; /* the source fails after the first buffer */
+    }
     for (*n = 0; *n < cap; (*n)++) {
         buf[*n] = (uint8_t)(offset + *n);
     }
@@ -318,6 +321,14 @@ static void test_streamed_values(void)
     CHECK_EQ(f->data[0], 0x80);
     CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_DATA_LOCAL);
     CHECK(g_streamed > 500);
+    /* A read hook that fails in the middle of a block upload: its code reaches the client. */
+    ingest(&g.t, 0, 0x605, "A0 00 21 00 7F 00 00 00");
+    CHECK_EQ(g.t.bus.frames[g.t.bus.count - 1].data[0], 0xC4); /* size not indicated */
+    ingest(&g.t, 0, 0x605, "A3 00 00 00 00 00 00 00");
+    ingest(&g.t, 0, 0x605, "A2 7F 7F 00 00 00 00 00");
+    f = &g.t.bus.frames[g.t.bus.count - 1];
+    CHECK_EQ(f->data[0], 0x80);
+    CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_HARDWARE);
 }
 
 /* 0x1010 sub4 (manufacturer-specific groups) is not a group this node stores. */
