@@ -11,10 +11,11 @@
  *   3: nmt    -- one command byte applied locally
  * Missing bytes at the end read as zeros.
  *
- * Invariants checked after the stream (abort() = a finding): after a reset node the node
- * sends its boot-up, in pre-operational it answers an SDO read of 0x1000 with the device
- * type, and its heartbeat (0x1017 back at its power-on 100 ms) comes on time. The sanitizers
- * check every step for memory errors and undefined behaviour.
+ * Invariants after every time step: the next deadline lies ahead, and no later than one
+ * heartbeat period while the producer runs. Invariants after the stream (abort() = a finding):
+ * after a reset node the node sends its boot-up, in pre-operational it answers an SDO read of
+ * 0x1000 with the device type, and its heartbeat (0x1017 back at its power-on 100 ms) comes on
+ * time. The sanitizers check every step for memory errors and undefined behaviour.
  *
  *   make fuzz                 # builds and runs for FUZZ_SECONDS (default 30)
  *   build-fuzz/fuzz_node -max_total_time=3600 fuzz/corpus/node   # for hours
@@ -84,6 +85,19 @@ static void feed_write(rig_t *r, reader_t *in)
     (void)co_node_write_net(&r->node, index, sub, data, len);
 }
 
+/* After every poll: the next deadline lies ahead (a poll never asks to be called again at
+ * once), and a running heartbeat producer is never scheduled later than one period. */
+static void check_step(const rig_t *r, uint64_t now, uint64_t next)
+{
+    if (next <= now) {
+        abort();
+    }
+    uint64_t period_us = 1000u * (uint64_t)r->od.hb_period_ms;
+    if (period_us != 0 && r->node.nmt_state != CO_NMT_INITIALISING && next > now + period_us) {
+        abort();
+    }
+}
+
 /* The node is not wedged: a reset brings the boot-up, and SDO answers in pre-operational. */
 static void check_alive(rig_t *r, uint64_t now)
 {
@@ -129,7 +143,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             break;
         case 1:
             now += 100u * (uint64_t)(take(&in) | (take(&in) << 8));
-            co_node_poll(&r.node, now);
+            check_step(&r, now, co_node_poll(&r.node, now));
             break;
         case 2:
             feed_write(&r, &in);
