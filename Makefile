@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-gateway coverage py-env clean
+.PHONY: all demo demo-c test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds fuzz-gateway coverage py-env lint cortex-m test-m32 test-clang analyse clean
 
 all: $(BUILD)/build.stamp
 
@@ -68,26 +68,97 @@ coverage: py-env
 	cd build-cov && ctest >/dev/null
 	$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary build-cov | tail -n 3
 
-# libFuzzer (clang) on the frame input path: replay the seed corpus, then fuzz for a while.
-# New inputs go to build-fuzz/; a finding is a crash file there (turn it into a test).
+# libFuzzer (clang): the frame input path (node) and the SDO client against a hostile server
+# (sdo_client); atheris on the EDS/DCF parser (fuzz/fuzz_eds.py) and the CiA 309-3 gateway's
+# line parser (fuzz/fuzz_gateway_parser.py) in the Python environment (the package's 'fuzz'
+# extra pins atheris).
+# Each target replays its seed corpus (fuzz/corpus/<target>/), then fuzzes for FUZZ_SECONDS.
+# New inputs go to build-fuzz/corpus-<target>/; a finding is a crash file in build-fuzz/
+# (turn it into a regression test). For hours: see docs/security.md.
 FUZZ_SECONDS ?= 30
+FUZZ_TARGETS = node sdo_client
 FUZZ_FLAGS = -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
-fuzz:
-	@mkdir -p build-fuzz/corpus-node
-	clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples src/*.c examples/example_od.c \
-	  fuzz/fuzz_node.c -o build-fuzz/fuzz_node
-	build-fuzz/fuzz_node -artifact_prefix=build-fuzz/ fuzz/corpus/node/*
-	@build-fuzz/fuzz_node -artifact_prefix=build-fuzz/ -max_total_time=$(FUZZ_SECONDS) \
-	  -print_final_stats=1 \
-	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
-	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
+fuzz: fuzz-c fuzz-eds fuzz-gateway
 
-# atheris on the CiA 309-3 gateway's line parser (the 'fuzz' extra of the Python package).
+fuzz-c:
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p build-fuzz/corpus-$$t && \
+	  clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples src/*.c examples/example_od.c \
+	    fuzz/fuzz_$$t.c -o build-fuzz/fuzz_$$t || exit 1; \
+	  build-fuzz/fuzz_$$t -artifact_prefix=build-fuzz/ fuzz/corpus/$$t/* >/dev/null 2>&1 || \
+	    { echo "fuzz_$$t: the seed corpus fails"; exit 1; }; \
+	  build-fuzz/fuzz_$$t -artifact_prefix=build-fuzz/ -max_total_time=$(FUZZ_SECONDS) \
+	    -print_final_stats=1 build-fuzz/corpus-$$t fuzz/corpus/$$t > build-fuzz/fuzz-$$t.log 2>&1; \
+	  rc=$$?; tail -n 4 build-fuzz/fuzz-$$t.log; echo "fuzz_$$t: exit $$rc"; \
+	  [ $$rc -eq 0 ] || exit $$rc; \
+	done
+
+# atheris has no wheel for every Python: without it the EDS corpus is still replayed.
+fuzz-eds: py-env
+	@mkdir -p build-fuzz/corpus-eds
+	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
+	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
+	  >/dev/null 2>&1 || echo "fuzz_eds: atheris not installable here: replaying the corpus only"
+	@$(PY_VENV)/bin/python fuzz/fuzz_eds.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-eds fuzz/corpus/eds \
+	  > build-fuzz/fuzz-eds.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-eds.log; \
+	  echo "fuzz_eds: exit $$rc"; exit $$rc
+
 fuzz-gateway: py-env
-	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]'
 	@mkdir -p build-fuzz/corpus-gateway
-	$(PY_VENV)/bin/python fuzz/fuzz_gateway_parser.py -artifact_prefix=build-fuzz/ \
-	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-gateway
+	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
+	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' >/dev/null 2>&1; \
+	  if ! $(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null; then \
+	    echo "fuzz_gateway: NOT RUN (atheris not installable; tests/test_gateway_parser.py fuzzes by random lines)"; \
+	    exit 0; fi; \
+	  $(PY_VENV)/bin/python fuzz/fuzz_gateway_parser.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-gateway > build-fuzz/fuzz-gateway.log 2>&1; \
+	  rc=$$?; tail -n 4 build-fuzz/fuzz-gateway.log; echo "fuzz_gateway: exit $$rc"; exit $$rc
+
+# Static analysis of the core (src/, include/), warnings as errors: cppcheck (default and
+# multi-channel configuration) and clang-tidy (.clang-tidy). .ci/run installs both.
+LINT_CFLAGS = -std=c11 -Iinclude -Isrc
+lint:
+	@command -v cppcheck >/dev/null || { echo "lint: cppcheck missing (.ci/run installs it)"; exit 1; }
+	@command -v clang-tidy >/dev/null || { echo "lint: clang-tidy missing (.ci/run installs it)"; exit 1; }
+	cppcheck --std=c11 --enable=warning,style,performance,portability --error-exitcode=1 -q \
+	  --inline-suppr --suppressions-list=.cppcheck-suppressions -Iinclude -Isrc -UCO_CONFIG_FILE \
+	  src/*.c
+	cppcheck --std=c11 --enable=warning,style,performance,portability --error-exitcode=1 -q \
+	  --inline-suppr --suppressions-list=.cppcheck-suppressions -Iinclude -Isrc -UCO_CONFIG_FILE \
+	  -DCO_SDO_CLIENTS_MAX=4 -DCO_SDO_SERVERS_MAX=4 src/*.c
+	@echo "cppcheck: clean"
+	@printf '%s\n' src/*.c | xargs -P 2 -I{} clang-tidy --quiet {} -- $(LINT_CFLAGS) 2>/dev/null \
+	  > build-lint.log; rc=$$?; grep -E 'warning:|error:' build-lint.log; rm -f build-lint.log; \
+	  [ $$rc -eq 0 ] && echo "clang-tidy: clean" || { echo "clang-tidy: findings above"; exit 1; }
+
+# The core for a Cortex-M4 (arm-none-eabi-gcc): the strictest warnings, no host headers.
+ARM_FLAGS = -std=c11 -mcpu=cortex-m4 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion \
+            -Wshadow -Wcast-align -Werror -pedantic -Iinclude -Isrc
+cortex-m:
+	@if command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
+	  mkdir -p build-arm && for f in src/*.c; do \
+	    arm-none-eabi-gcc $(ARM_FLAGS) -c $$f -o build-arm/$$(basename $$f .c).o || exit 1; \
+	  done && arm-none-eabi-gcc $(ARM_FLAGS) -DCO_CONFIG_FILE='"'$(CURDIR)/configs/minimal.h'"' \
+	    -c src/node.c -o build-arm/node-minimal.o && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)"; \
+	else echo "cortex-m: SKIPPED (arm-none-eabi-gcc not installed; .ci/run installs it as root)"; fi
+
+# A 32-bit host build of the core and the tests (gcc -m32, from gcc-multilib), tests run.
+test-m32:
+	@if echo 'int main(void){return 0;}' | gcc -m32 -x c - -o /dev/null 2>/dev/null; then \
+	  cmake -S . -B build-m32 $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS=-m32 \
+	    -DCMAKE_EXE_LINKER_FLAGS=-m32 >/dev/null && cmake --build build-m32 >/dev/null && \
+	  cd build-m32 && ctest --output-on-failure; \
+	else echo "test-m32: SKIPPED (gcc -m32 cannot link: apt-get install gcc-multilib)"; fi
+
+# The same tests built by clang (the normal build uses the system cc, gcc).
+test-clang:
+	CC=clang cmake -S . -B build-clang $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	cmake --build build-clang >/dev/null
+	cd build-clang && ctest --output-on-failure
+
+# Everything above: what .ci/run adds to make test.
+analyse: lint cortex-m test-m32 test-clang
 
 # The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
 # candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
@@ -112,6 +183,6 @@ bench:
 	BENCH_QUICK=$(BENCH_QUICK) ./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan
+	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan build-arm build-m32 build-clang
 
 FORCE:

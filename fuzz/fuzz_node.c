@@ -11,9 +11,13 @@
  *   3: nmt    -- one command byte applied locally
  * Missing bytes at the end read as zeros.
  *
- * Invariants checked after the stream (abort() = a finding): after a reset node the node
- * sends its boot-up, and in pre-operational it answers an SDO read of 0x1000 with the device
- * type. The sanitizers check every step for memory errors and undefined behaviour.
+ * Invariants after every frame: in pre-operational and operational, with no SDO transfer
+ * open, the node answers an SDO read of 0x1000 at once. After every time step: the next
+ * deadline lies ahead, and no later than one heartbeat period while the producer runs. Invariants
+ * after the stream (abort() = a finding): after a reset node the node sends its boot-up, in
+ * pre-operational it answers an SDO read of 0x1000 with the device type, and its heartbeat (0x1017
+ * back at its power-on 100 ms) comes on time. The sanitizers check every step for memory errors and
+ * undefined behaviour.
  *
  *   make fuzz                 # builds and runs for FUZZ_SECONDS (default 30)
  *   build-fuzz/fuzz_node -max_total_time=3600 fuzz/corpus/node   # for hours
@@ -29,6 +33,7 @@ typedef struct rig {
     co_node_t node;
     co_frame_t last;
     unsigned sent;
+    unsigned heartbeats; /* pre-operational heartbeats sent */
 } rig_t;
 
 static co_err_t capture(void *ctx, const co_frame_t *frame)
@@ -36,6 +41,8 @@ static co_err_t capture(void *ctx, const co_frame_t *frame)
     rig_t *r = ctx;
     r->last = *frame;
     r->sent++;
+    r->heartbeats +=
+        frame->id == 0x705 && frame->len == 1 && frame->data[0] == CO_NMT_PRE_OPERATIONAL;
     return CO_OK;
 }
 
@@ -80,6 +87,40 @@ static void feed_write(rig_t *r, reader_t *in)
     (void)co_node_write_net(&r->node, index, sub, data, len);
 }
 
+/* After every poll: the next deadline lies ahead (a poll never asks to be called again at
+ * once), and a running heartbeat producer is never scheduled later than one period. */
+static void check_step(const rig_t *r, uint64_t now, uint64_t next)
+{
+    if (next <= now) {
+        abort();
+    }
+    uint64_t period_us = 1000u * (uint64_t)r->od.hb_period_ms;
+    if (period_us != 0 && r->node.nmt_state != CO_NMT_INITIALISING && next > now + period_us) {
+        abort();
+    }
+}
+
+/* After every frame: a node whose state allows SDO and whose server is between transfers
+ * answers an expedited read of 0x1000 at once. (Asking is part of the input from then on:
+ * it ends no transfer, since none is open.) */
+static void check_sdo_answers(rig_t *r, uint64_t now)
+{
+    bool sdo =
+        r->node.nmt_state == CO_NMT_PRE_OPERATIONAL || r->node.nmt_state == CO_NMT_OPERATIONAL;
+    if (!sdo || r->node.sdo_servers[0].state != 0) {
+        return;
+    }
+    /* LSS may have given the node another ID: ask the one it has now. */
+    uint8_t id = co_node_id(&r->node);
+    co_frame_t req = {.id = 0x600u + id, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    r->sent = 0;
+    co_node_ingest(&r->node, now, &req);
+    if (r->sent == 0 || r->last.id != 0x580u + id || r->last.data[0] != 0x43 ||
+        co_get_u32(&r->last.data[4]) != r->od.device_type) {
+        abort();
+    }
+}
+
 /* The node is not wedged: a reset brings the boot-up, and SDO answers in pre-operational. */
 static void check_alive(rig_t *r, uint64_t now)
 {
@@ -89,12 +130,18 @@ static void check_alive(rig_t *r, uint64_t now)
     if (r->sent == 0 || r->node.nmt_state != CO_NMT_PRE_OPERATIONAL) {
         abort();
     }
-    co_frame_t req = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    uint8_t id = co_node_id(&r->node);
+    co_frame_t req = {.id = 0x600u + id, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
     r->sent = 0;
     co_node_ingest(&r->node, now, &req);
     co_node_poll(&r->node, now);
-    if (r->sent == 0 || r->last.id != 0x585 || r->last.data[0] != 0x43 ||
+    if (r->sent == 0 || r->last.id != 0x580u + id || r->last.data[0] != 0x43 ||
         co_get_u32(&r->last.data[4]) != r->od.device_type) {
+        abort();
+    }
+    r->heartbeats = 0;
+    co_node_poll(&r->node, now + 100000u);
+    if (r->heartbeats != 1) {
         abort();
     }
 }
@@ -117,10 +164,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         switch (take(&in) % 4) {
         case 0:
             feed_frame(&r, &in, now);
+            check_sdo_answers(&r, now);
             break;
         case 1:
             now += 100u * (uint64_t)(take(&in) | (take(&in) << 8));
-            co_node_poll(&r.node, now);
+            check_step(&r, now, co_node_poll(&r.node, now));
             break;
         case 2:
             feed_write(&r, &in);

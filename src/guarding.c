@@ -29,7 +29,14 @@ void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
         return; /* not routed without guarding; kept for the dispatch table */
     }
     if (!(frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++; /* a data frame on our own error-control ID */
+        /* A boot-up or heartbeat on our own error-control ID: another node has our node-ID.
+         * Reported once until the application clears 0x8150 (it repeats every heartbeat). */
+        node->stats.rx_malformed++;
+        if (!co_emcy_active(node, 0x8150)) {
+            (void)co_emcy_raise(node, 0x8150, NULL);
+            co_node_ec_event(node, CO_EC_ID_COLLISION, node->node_id,
+                             frame->len ? frame->data[0] : 0xFFu, node->nmt_state);
+        }
         return;
     }
     if (co_entry_uint(node->hb_period) != 0) {

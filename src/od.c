@@ -160,6 +160,7 @@ static uint64_t native_get(const void *value, const type_info_t *t)
 {
     native_t v;
     memcpy(&v, value, t->width);
+    /* NOLINTNEXTLINE(clang-analyzer-core.uninitialized.Assign): widths are 1, 2, 4, 8 */
     uint64_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : t->width == 4 ? v.u32 : v.u64;
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->width) : bits;
 }

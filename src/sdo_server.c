@@ -589,12 +589,12 @@ static void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
     s->buf_len = 0;
     s->toggle = 0;
     s->crc = 0;
-    co_abort_t abort;
+    co_abort_t abort = CO_ABORT_NO_OBJECT;
     s->entry = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
     if (s->entry != NULL) {
         abort = co_od_access(s->entry, write);
     }
-    if (abort != CO_ABORT_NONE) {
+    if (s->entry == NULL || abort != CO_ABORT_NONE) { /* no entry is never served */
         abort_transfer(node, s, abort);
         return;
     }

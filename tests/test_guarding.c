@@ -44,6 +44,16 @@ static void test_no_reply_while_heartbeat_runs(void)
     /* A data frame on our own ID is someone else's: counted, not answered. */
     ingest(&t, 1 * MS, 0x705, "05");
     CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    /* ... another node with our node-ID: reported (event + EMCY 0x8150), once. */
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(t.events[0].kind, CO_EC_ID_COLLISION);
+    CHECK_EQ(t.events[0].state, 5);
+    CHECK_EQ(fake_count_id(&t.bus, 0x085), 1);
+    CHECK_EQ(t.bus.frames[0].data[0], 0x50);
+    CHECK_EQ(t.bus.frames[0].data[1], 0x81);
+    ingest(&t, 2 * MS, 0x705, "");
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(fake_count_id(&t.bus, 0x085), 1);
 }
 
 static void test_life_guarding_event_and_error_behaviour(void)

@@ -50,6 +50,10 @@ typedef enum co_ec_event_kind {
     CO_EC_GUARD_RESUMED,      /**< master: a good guarding reply after a timeout */
     CO_EC_LIFE_GUARD,         /**< this node: no guarding RTR within its life time */
     CO_EC_LIFE_GUARD_RESUMED, /**< this node: guarding RTRs arrive again */
+    CO_EC_ID_COLLISION,       /**< this node: a boot-up or heartbeat on its own COB-ID 0x700 +
+                                   node-ID (another node has the same node-ID; `state` is the
+                                   byte heard, 0xFF if none); also EMCY 0x8150, once until
+                                   the application clears it */
 } co_ec_event_kind_t;
 
 typedef struct co_ec_event {

@@ -534,7 +534,11 @@ def _section(out: list[str], name: str, pairs: Sequence[tuple[str, str | None]])
 
 
 def _num(value: int | None, width: int = 1) -> str | None:
-    return None if value is None else f"0x{value:0{width}X}"
+    if value is None:
+        return None
+    # A file may give a negative number ("0x00-7" evaluates to -7): keep it readable back.
+    sign = "-" if value < 0 else ""
+    return f"{sign}0x{abs(value):0{width}X}"
 
 
 def _var_pairs(var: Variable, dcf: bool) -> list[tuple[str, str | None]]:

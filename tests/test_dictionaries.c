@@ -1,0 +1,402 @@
+/* test_dictionaries.c -- nodes on dictionaries other than the example's: more heartbeat
+ * consumer entries than the node can watch, none at all, SDO client parameters 0x1280 kept
+ * in step with the channel, stored parameters next to hook-served objects. Each dictionary
+ * is the example's with entries left out and others merged in (sorted). */
+#include "check.h"
+#include "harness.h"
+
+#define MS 1000ull
+#define MAX_ENTRIES (EXAMPLE_OD_MAX_ENTRIES + 16)
+
+typedef struct dict {
+    test_node_t t;
+    co_od_entry_t entries[MAX_ENTRIES];
+    uint32_t extra_u32[16];
+} dict_t;
+
+static dict_t g;
+
+static bool before(const co_od_entry_t *a, const co_od_entry_t *b)
+{
+    return a->index < b->index || (a->index == b->index && a->sub < b->sub);
+}
+
+/* The example dictionary without entries of index `drop` (0: none), with `extra` merged in. */
+static co_err_t build(uint16_t hb_ms, uint16_t drop, const co_od_entry_t *extra, uint32_t n_extra)
+{
+    memset(&g, 0, sizeof g);
+    test_node_init(&g.t, 5, hb_ms);
+    co_od_t base = g.t.cfg.od;
+    uint32_t n = 0;
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < base.count; i++) {
+        while (k < n_extra && before(&extra[k], &base.entries[i])) {
+            g.entries[n++] = extra[k++];
+        }
+        if (base.entries[i].index != drop) {
+            g.entries[n++] = base.entries[i];
+        }
+    }
+    while (k < n_extra) {
+        g.entries[n++] = extra[k++];
+    }
+    g.t.cfg.od.entries = g.entries;
+    g.t.cfg.od.count = n;
+    return co_node_init(&g.t.node, &g.t.cfg);
+}
+
+static co_od_entry_t u32_entry(uint16_t index, uint8_t sub, uint32_t *value)
+{
+    return (co_od_entry_t){index, sub, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, value, NULL, NULL, NULL};
+}
+
+static void test_more_consumer_entries_than_the_node_watches(void)
+{
+    co_od_entry_t extra[CO_HB_CONSUMERS_MAX];
+    uint32_t n = 0;
+    for (uint8_t sub = EXAMPLE_HB_CONSUMERS + 1; sub <= CO_HB_CONSUMERS_MAX + 1; sub++) {
+        extra[n] = u32_entry(0x1016, sub, &g.extra_u32[n]);
+        n++;
+    }
+    CHECK_EQ(build(0, 0, extra, n), CO_ERR_CONFIG);
+    CHECK_EQ(build(0, 0, extra, n - 1), CO_OK); /* exactly CO_HB_CONSUMERS_MAX: fine */
+}
+
+static void test_boot_time_without_consumers(void)
+{
+    CHECK_EQ(build(0, 0x1016, NULL, 0), CO_OK);
+    g.t.node.cfg.boot_time_ms = 100;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    co_node_poll(&g.t.node, 1000 * MS);
+    CHECK_EQ(g.t.event_count, 0); /* nobody to miss */
+}
+
+/* 0x1280: sub1 COB-ID client -> server, sub2 server -> client, sub3 server node-ID. */
+static uint32_t g_tx, g_rx;
+static uint8_t g_server;
+
+static void client_params(co_od_entry_t extra[3])
+{
+    extra[0] = u32_entry(0x1280, 1, &g_tx);
+    extra[1] = u32_entry(0x1280, 2, &g_rx);
+    extra[2] =
+        (co_od_entry_t){0x1280, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &g_server, NULL, NULL, NULL};
+}
+
+typedef struct result {
+    int calls;
+    co_abort_t abort;
+} result_t;
+
+static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
+{
+    (void)channel;
+    (void)len;
+    result_t *r = ctx;
+    r->calls++;
+    r->abort = abort;
+}
+
+static void test_client_parameters_in_the_dictionary(void)
+{
+    co_od_entry_t extra[3];
+    client_params(extra);
+    CHECK_EQ(build(0, 0, extra, 3), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    /* Setup writes the parameters; a write to them re-points the channel. */
+    CHECK_EQ(co_sdo_client_setup(&g.t.node, 0, 7), CO_OK);
+    CHECK_EQ(g_tx, 0x607);
+    CHECK_EQ(g_server, 7);
+    CHECK_EQ(write_u32(&g.t, 0x1280, 1, 0x608), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1280, 2, 0x588), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&g.t, 0x1280, 3, 8), CO_ABORT_NONE);
+    uint8_t buf[4];
+    result_t r = {0};
+    fake_clear(&g.t.bus);
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x608), 1);
+    /* Changing the server under an open transfer ends it, with an abort to the old one. */
+    CHECK_EQ(write_u8(&g.t, 0x1280, 3, 9), CO_ABORT_NONE);
+    CHECK_EQ(r.calls, 1);
+    CHECK_EQ(r.abort, CO_ABORT_GENERAL);
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x608), 2);
+    /* Pointed at the node itself: served locally, nothing routed for responses. */
+    CHECK_EQ(write_u8(&g.t, 0x1280, 3, 5), CO_ABORT_NONE);
+    r.calls = 0;
+    fake_clear(&g.t.bus);
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(r.calls, 1);
+    CHECK_EQ(r.abort, CO_ABORT_NONE);
+    CHECK_EQ(co_get_u32(buf), g.t.od.device_type);
+    CHECK_EQ(g.t.bus.count, 0);
+}
+
+/* A dictionary with 0x1280 sub1 only is not a client parameter set: the channel keeps the
+ * setup the application gave it. */
+static void test_incomplete_client_parameters_are_ignored(void)
+{
+    co_od_entry_t extra[1] = {u32_entry(0x1280, 1, &g_tx)};
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&g.t.node, 0, 7), CO_OK);
+    co_nmt_apply(&g.t.node, CO_NMT_CMD_RESET_COMMUNICATION);
+    uint8_t buf[4];
+    result_t r = {0};
+    fake_clear(&g.t.bus);
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
+}
+
+/* ---- what a save records */
+
+static uint16_t g_saved[256];
+static uint32_t g_saved_count;
+
+static co_err_t st_begin(void *ctx, co_param_group_t group)
+{
+    (void)ctx;
+    (void)group;
+    return CO_OK;
+}
+
+static co_err_t st_write(void *ctx, const uint8_t *data, uint32_t len)
+{
+    (void)ctx;
+    (void)len;
+    if (g_saved_count < 256) {
+        g_saved[g_saved_count++] = co_get_u16(data);
+    }
+    return CO_OK;
+}
+
+static co_err_t st_commit(void *ctx)
+{
+    (void)ctx;
+    return CO_OK;
+}
+
+static co_err_t st_read(void *ctx, co_param_group_t group, uint32_t offset, uint8_t *buf,
+                        uint32_t cap, uint32_t *n)
+{
+    (void)ctx;
+    (void)group;
+    (void)offset;
+    (void)buf;
+    (void)cap;
+    (void)n;
+    return CO_ERR_NOT_FOUND;
+}
+
+static co_err_t st_erase(void *ctx, co_param_group_t group)
+{
+    (void)ctx;
+    (void)group;
+    return CO_OK;
+}
+
+static const co_storage_t k_recorder = {st_begin, st_write, st_commit, st_read, st_erase, NULL};
+
+static bool saved(uint16_t index)
+{
+    for (uint32_t i = 0; i < g_saved_count; i++) {
+        if (g_saved[i] == index) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static co_abort_t refuse_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
+                              uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)e;
+    (void)offset;
+    (void)buf;
+    (void)cap;
+    (void)n;
+    (void)total;
+    return CO_ABORT_HARDWARE;
+}
+
+static co_abort_t take_write(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                             const uint8_t *data, uint32_t n, uint32_t total, bool last)
+{
+    (void)ctx;
+    (void)e;
+    (void)offset;
+    (void)data;
+    (void)n;
+    (void)total;
+    (void)last;
+    return CO_ABORT_NONE;
+}
+
+static const co_od_hooks_t k_unreadable = {.read = refuse_read};
+static const co_od_hooks_t k_hooks_only = {.read = refuse_read, .write = take_write};
+static char g_long[100];
+static uint32_t g_plain;
+static uint32_t g_const_rw;
+
+static void test_save_records_parameters_only(void)
+{
+    const co_od_entry_t extra[] = {
+        {0x2100, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, NULL, NULL, NULL, &k_hooks_only},
+        {0x2101, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &g_plain, NULL, NULL, &k_unreadable},
+        {0x2102, 0, CO_TYPE_VISIBLE_STRING, CO_OD_RW, sizeof g_long, g_long, NULL, NULL, NULL},
+        {0x2103, 0, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_CONST, 4, &g_const_rw, NULL, NULL, NULL},
+        {0x2104, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &g_plain, NULL, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, sizeof extra / sizeof extra[0]), CO_OK);
+    g.t.node.cfg.storage = &k_recorder;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    memset(g_long, 'x', sizeof g_long - 1); /* 99 characters */
+    g_saved_count = 0;
+    CHECK_EQ(co_storage_save(&g.t.node, 3), CO_OK);
+    CHECK(saved(0x2000));  /* a plain parameter */
+    CHECK(saved(0x2104));  /* another */
+    CHECK(!saved(0x2100)); /* no storage: the hooks own the value */
+    CHECK(!saved(0x2101)); /* unreadable */
+    CHECK(!saved(0x2102)); /* longer than CO_STORE_VALUE_MAX */
+    CHECK(!saved(0x2103)); /* constant */
+    CHECK(!saved(0x2003)); /* a DOMAIN */
+}
+
+/* ---- streamed values */
+
+static uint32_t g_streamed;
+
+static co_abort_t unknown_read(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
+                               uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)e;
+    if (offset >= CO_SDO_BUF_SIZE) {
+        return CO_ABORT_HARDWARE; /* the source fails after the first buffer */
+    }
+    for (*n = 0; *n < cap; (*n)++) {
+        buf[*n] = (uint8_t)(offset + *n);
+    }
+    *total = CO_OD_SIZE_UNKNOWN;
+    return CO_ABORT_NONE;
+}
+
+static co_abort_t veto_late(void *ctx, const co_od_entry_t *e, uint32_t offset, const uint8_t *data,
+                            uint32_t n, uint32_t total, bool last)
+{
+    (void)ctx;
+    (void)e;
+    (void)data;
+    (void)total;
+    (void)last;
+    g_streamed = offset + n;
+    return offset + n > 500 ? CO_ABORT_DATA_LOCAL : CO_ABORT_NONE;
+}
+
+static const co_od_hooks_t k_stream = {.read = unknown_read, .write = veto_late};
+
+static void test_streamed_values(void)
+{
+    const co_od_entry_t extra[] = {
+        {0x2100, 0, CO_TYPE_DOMAIN, CO_OD_RW, CO_OD_SIZE_UNKNOWN, NULL, NULL, NULL, &k_stream},
+    };
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    /* A local read of a value of unknown size takes what fits. */
+    uint8_t buf[4];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&g.t.node, 0x2100, 0, buf, sizeof buf, &len), CO_ABORT_NONE);
+    CHECK_EQ(len, 4);
+    CHECK_EQ(buf[3], 3);
+    /* A write hook's veto in the middle of a stream reaches the client. */
+    ingest(&g.t, 0, 0x605, "21 00 21 00 E8 03 00 00"); /* 1000 bytes */
+    uint8_t toggle = 0;
+    for (int i = 0; i < 200; i++, toggle ^= 1u) {
+        ingest(&g.t, 0, 0x605, toggle ? "10 00 00 00 00 00 00 00" : "00 00 00 00 00 00 00 00");
+        if (g.t.bus.frames[g.t.bus.count - 1].data[0] == 0x80) {
+            break;
+        }
+    }
+    const co_frame_t *f = &g.t.bus.frames[g.t.bus.count - 1];
+    CHECK_EQ(f->data[0], 0x80);
+    CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_DATA_LOCAL);
+    CHECK(g_streamed > 500);
+    /* A read hook that fails in the middle of a block upload: its code reaches the client. */
+    ingest(&g.t, 0, 0x605, "A0 00 21 00 7F 00 00 00");
+    CHECK_EQ(g.t.bus.frames[g.t.bus.count - 1].data[0], 0xC4); /* size not indicated */
+    ingest(&g.t, 0, 0x605, "A3 00 00 00 00 00 00 00");
+    ingest(&g.t, 0, 0x605, "A2 7F 7F 00 00 00 00 00");
+    f = &g.t.bus.frames[g.t.bus.count - 1];
+    CHECK_EQ(f->data[0], 0x80);
+    CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_HARDWARE);
+}
+
+/* 0x1010 sub4 (manufacturer-specific groups) is not a group this node stores. */
+static void test_store_sub_index_beyond_the_groups(void)
+{
+    static uint32_t store4;
+    const co_od_entry_t extra[] = {
+        {0x1010, 4, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &store4, NULL, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    g.t.node.cfg.storage = &k_recorder;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(write_u32(&g.t, 0x1010, 4, CO_STORE_SIGNATURE), CO_ABORT_DATA_STORE);
+}
+
+/* Parameters of SDO channels the node does not have (one server, one client channel by
+ * default) are plain values: writing them changes no channel; COB-ID values are checked. */
+static void test_parameters_of_channels_the_node_lacks(void)
+{
+    static uint32_t srv[3] = {0x605, 0x585, 0};
+    static uint32_t srv1 = 0x80000000u;
+    static uint8_t cli_count = 3;
+    static uint32_t cli1 = 0x80000000u;
+    static uint8_t diff[6];
+    const co_od_entry_t extra[] = {
+        u32_entry(0x1200, 1, &srv[0]),
+        u32_entry(0x1200, 2, &srv[1]),
+        {0x1200, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &srv[2], NULL, NULL, NULL},
+        u32_entry(0x1201, 1, &srv1),
+        {0x1280, 0, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &cli_count, NULL, NULL, NULL},
+        u32_entry(0x1280, 1, &g_tx),
+        u32_entry(0x1280, 2, &g_rx),
+        {0x1280, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &g_server, NULL, NULL, NULL},
+        u32_entry(0x1280, 4, &g.extra_u32[0]),
+        u32_entry(0x1281, 1, &cli1),
+        {0x2100, 0, CO_TYPE_TIME_DIFFERENCE, CO_OD_RW, 6, diff, NULL, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, sizeof extra / sizeof extra[0]), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&g.t.node, 0, 7), CO_OK);
+    CHECK_EQ(write_u8(&g.t, 0x1200, 3, 9), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1201, 1, 0x80000606u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1201, 1, 0x800u), CO_ABORT_VALUE); /* not an 11-bit ID */
+    CHECK_EQ(write_u8(&g.t, 0x1280, 0, 4), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1280, 4, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1281, 1, 0x609), CO_ABORT_NONE);
+    /* The server still answers on 0x605, the client still talks to node 7. */
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 0, 0x605, "40 00 10 00 00 00 00 00");
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x585), 1);
+    uint8_t buf[4];
+    result_t r = {0};
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
+    /* A TIME_DIFFERENCE is not read as an integer. */
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x2100, 0, &v), CO_ERR_ARG);
+}
+
+int main(void)
+{
+    RUN(test_more_consumer_entries_than_the_node_watches);
+    RUN(test_boot_time_without_consumers);
+    RUN(test_client_parameters_in_the_dictionary);
+    RUN(test_incomplete_client_parameters_are_ignored);
+    RUN(test_save_records_parameters_only);
+    RUN(test_streamed_values);
+    RUN(test_store_sub_index_beyond_the_groups);
+    RUN(test_parameters_of_channels_the_node_lacks);
+    return check_summary();
+}

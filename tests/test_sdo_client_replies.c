@@ -1,0 +1,306 @@
+/* tests/test_sdo_client_replies.c -- the SDO client against replies a correct server never
+ * sends (each one ends the transfer with the CiA code for it, and the abort goes out), and
+ * the argument checks of the client API. Client: node 1, server: node 5. */
+#include "check.h"
+#include "harness.h"
+
+typedef struct result {
+    int calls;
+    co_abort_t abort;
+    uint32_t len;
+    uint64_t value;
+} result_t;
+
+static test_node_t g_t; /* large: static */
+static result_t g_r;
+
+static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
+{
+    (void)channel;
+    result_t *r = ctx;
+    r->calls++;
+    r->abort = abort;
+    r->len = len;
+}
+
+static void on_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len)
+{
+    on_done(ctx, channel, abort, len);
+    ((result_t *)ctx)->value = value;
+}
+
+static co_node_t *client(void)
+{
+    CHECK_EQ(test_node_init(&g_t, 1, 0), CO_OK);
+    CHECK_EQ(co_node_start(&g_t.node, 0), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&g_t.node, 0, 5), CO_OK);
+    fake_clear(&g_t.bus);
+    memset(&g_r, 0, sizeof g_r);
+    return &g_t.node;
+}
+
+static void reply(const char *hex) { ingest(&g_t, 0, 0x585, hex); }
+
+/* The last frame the client sent, candump style. */
+static const char *last_sent(void)
+{
+    static char buf[40];
+    if (g_t.bus.count == 0) {
+        return "";
+    }
+    return frame_str(&g_t.bus.frames[g_t.bus.count - 1], buf, sizeof buf);
+}
+
+static uint8_t g_data[64];
+
+static void start_download(co_sdo_mode_t mode, uint32_t len)
+{
+    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, mode, g_data, len, on_done, &g_r), CO_OK);
+}
+
+/* The transfer ended with `code`, and told the server so. */
+static void check_aborted(co_abort_t code, const char *abort_frame)
+{
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, code);
+    CHECK_EQ(g_r.len, 0);
+    CHECK_STR(last_sent(), abort_frame);
+    CHECK(!co_sdo_client_busy(&g_t.node, 0));
+}
+
+static void test_response_for_another_sub_index(void)
+{
+    client();
+    uint8_t buf[4];
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r);
+    reply("43 00 20 01 01 02 03 04");
+    check_aborted(CO_ABORT_GENERAL, "605#8000200000000008");
+}
+
+static void test_download_initiate_answered_wrongly(void)
+{
+    client();
+    start_download(CO_SDO_SEGMENTED, 10);
+    reply("61 00 20 00 00 00 00 00");
+    check_aborted(CO_ABORT_COMMAND, "605#8000200001000405");
+}
+
+static void test_block_download_initiate_answered_wrongly(void)
+{
+    client();
+    start_download(CO_SDO_BLOCK, 10);
+    reply("60 00 20 00 00 00 00 00");
+    check_aborted(CO_ABORT_COMMAND, "605#8000200001000405");
+}
+
+static void test_block_download_ack_answered_wrongly(void)
+{
+    client();
+    start_download(CO_SDO_BLOCK, 20);
+    reply("A4 00 20 00 7F 00 00 00");
+    CHECK_EQ(g_t.bus.count, 4); /* initiate + 3 segments */
+    reply("A3 03 7F 00 00 00 00 00");
+    check_aborted(CO_ABORT_COMMAND, "605#8000200001000405");
+}
+
+static void test_block_download_ack_with_bad_block_size(void)
+{
+    const char *sizes[] = {"A2 01 00 00 00 00 00 00", "A2 01 80 00 00 00 00 00"};
+    for (int i = 0; i < 2; i++) {
+        client();
+        start_download(CO_SDO_BLOCK, 20);
+        reply("A4 00 20 00 7F 00 00 00");
+        reply(sizes[i]);
+        check_aborted(CO_ABORT_BLOCK_SIZE, "605#8000200002000405");
+    }
+}
+
+/* A block download pauses while the transmit queue holds frames and resumes from poll. */
+static void test_block_download_waits_for_the_queue(void)
+{
+    client();
+    start_download(CO_SDO_BLOCK, 30);
+    g_t.bus.busy = true;
+    reply("A4 00 20 00 7F 00 00 00");
+    co_node_poll(&g_t.node, 1000);
+    /* The driver took nothing: one segment waits in the queue, no more were made. */
+    CHECK_EQ(g_t.bus.count, 1);
+    CHECK_EQ(co_node_stats(&g_t.node)->tx_queued, 1);
+    g_t.bus.busy = false;
+    co_node_poll(&g_t.node, 2000);
+    CHECK_EQ(g_t.bus.count, 1 + 5);            /* the queued one, then the rest of the 5 */
+    CHECK_EQ(g_t.bus.frames[5].data[0], 0x85); /* seqno 5, last */
+    reply("A2 05 7F 00 00 00 00 00");
+    CHECK_EQ(g_t.bus.frames[6].data[0] & 0xE3, 0xC1); /* the end */
+    reply("A1 00 00 00 00 00 00 00");
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+    CHECK_EQ(g_r.len, 30);
+}
+
+static void test_block_upload_segments_out_of_range_are_ignored(void)
+{
+    client();
+    uint8_t buf[32];
+    CHECK_EQ(co_sdo_client_block_options(&g_t.node, 0, 4, false, 0), CO_OK);
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, buf, sizeof buf, on_done, &g_r);
+    reply("C2 00 20 00 0E 00 00 00"); /* 14 bytes, no CRC */
+    uint32_t before = g_t.bus.count;
+    reply("00 01 02 03 04 05 06 07"); /* seqno 0 */
+    reply("05 01 02 03 04 05 06 07"); /* beyond the block size of 4 */
+    CHECK_EQ(g_t.bus.count, before);
+    CHECK_EQ(g_r.calls, 0);
+    reply("01 01 02 03 04 05 06 07");
+    reply("82 08 09 0A 0B 0C 0D 0E");
+    CHECK_STR(last_sent(), "605#A202040000000000");
+    reply("C1 00 00 00 00 00 00 00"); /* n = 0: 14 bytes, as indicated */
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+    CHECK_EQ(g_r.len, 14);
+    CHECK_EQ(buf[13], 0x0E);
+}
+
+static void test_block_upload_end_longer_than_indicated(void)
+{
+    client();
+    uint8_t buf[32];
+    CHECK_EQ(co_sdo_client_block_options(&g_t.node, 0, 4, false, 0), CO_OK);
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, buf, sizeof buf, on_done, &g_r);
+    reply("C2 00 20 00 0A 00 00 00"); /* 10 bytes indicated */
+    reply("01 01 02 03 04 05 06 07");
+    reply("82 08 09 0A 0B 0C 0D 0E");
+    reply("C1 00 00 00 00 00 00 00"); /* says 14 */
+    check_aborted(CO_ABORT_LEN_HIGH, "605#8000200012000706");
+}
+
+static void test_rtr_on_the_response_id_is_malformed(void)
+{
+    client();
+    uint8_t buf[4];
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r);
+    reply("R8");
+    CHECK_EQ(co_node_stats(&g_t.node)->rx_malformed, 1);
+    CHECK(co_sdo_client_busy(&g_t.node, 0)); /* still waiting for the real answer */
+    reply("43 00 20 00 01 02 03 04");
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+}
+
+/* Without a completion callback a transfer still runs and ends. */
+static void test_transfer_without_callback(void)
+{
+    client();
+    uint8_t buf[4];
+    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, NULL, NULL), CO_OK);
+    reply("43 00 20 00 01 02 03 04");
+    CHECK(!co_sdo_client_busy(&g_t.node, 0));
+    CHECK_EQ(buf[3], 4);
+}
+
+static void test_abort_with_code_zero_reports_general_error(void)
+{
+    client();
+    start_download(CO_SDO_SEGMENTED, 10);
+    CHECK_EQ(co_sdo_client_abort(&g_t.node, 0, 0), CO_OK);
+    check_aborted(CO_ABORT_GENERAL, "605#8000200000000008");
+    CHECK_EQ(co_sdo_client_abort(&g_t.node, 0, 0), CO_ERR_STATE);
+    CHECK_EQ(co_sdo_client_abort(NULL, 0, 1), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_client_abort(&g_t.node, CO_SDO_CLIENTS_MAX, 1), CO_ERR_ARG);
+}
+
+static void test_start_refused_by_state_and_arguments(void)
+{
+    co_node_t *n = client();
+    uint8_t buf[4];
+    CHECK_EQ(co_sdo_upload(NULL, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, (co_sdo_mode_t)4, buf, 4, on_done, &g_r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 4, on_done, &g_r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_download(n, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 4, on_done, &g_r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_client_block_options(NULL, 0, 4, true, 0), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_client_block_options(n, CO_SDO_CLIENTS_MAX, 4, true, 0), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_client_block_options(n, 0, 128, true, 0), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_client_setup(NULL, 0, 5), CO_ERR_ARG);
+    CHECK(!co_sdo_client_busy(NULL, 0));
+    CHECK(!co_sdo_client_busy(n, CO_SDO_CLIENTS_MAX));
+    /* Stopped: SDO may not be sent. */
+    ingest(&g_t, 0, 0x000, "02 01");
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r), CO_ERR_STATE);
+    /* A node not started yet. */
+    CHECK_EQ(test_node_init(&g_t, 1, 0), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&g_t.node, 0, 5), CO_OK);
+    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r),
+             CO_ERR_STATE);
+}
+
+/* A channel to the node itself reads and writes locally, with or without a callback. */
+static void test_local_channel_without_buffers_or_callbacks(void)
+{
+    client();
+    CHECK_EQ(co_sdo_client_setup(&g_t.node, 0, 1), CO_OK);
+    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 0, on_done, &g_r), CO_OK);
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_OUT_OF_MEMORY); /* 4 bytes do not fit 0 */
+    uint8_t v[4] = {1, 2, 3, 4};
+    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, v, 4, NULL, NULL), CO_OK);
+    CHECK_EQ(g_t.od.app_u32, 0x04030201u);
+    uint8_t out[4];
+    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, out, 4, NULL, NULL), CO_OK);
+    CHECK_EQ(out[0], 1);
+    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, CO_SDO_SEGMENTED, NULL, 0, on_done, &g_r),
+             CO_OK);
+    CHECK_EQ(g_r.abort, CO_ABORT_LEN_LOW);
+    CHECK_EQ(g_t.bus.count, 0); /* no frames */
+}
+
+static void test_typed_access_arguments(void)
+{
+    co_node_t *n = client();
+    result_t r = {0};
+    CHECK_EQ(co_sdo_read_value(NULL, 0, 0x2000, 0, on_value, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_read_value(n, CO_SDO_CLIENTS_MAX, 0x2000, 0, on_value, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_read_value(n, 0, 0x2000, 0, NULL, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_write_value(NULL, 0, 0x2000, 0, 1, 4, on_done, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 4, NULL, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 0, on_done, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_read_value(n, 0, 0x2000, 0, on_value, &r), CO_OK);
+    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 4, on_done, &r), CO_ERR_BUSY);
+    /* A failed read reports value 0 and length 0. */
+    reply("80 00 20 00 00 00 02 06");
+    CHECK_EQ(r.calls, 1);
+    CHECK_EQ(r.abort, CO_ABORT_NO_OBJECT);
+    CHECK_EQ(r.value, 0);
+    CHECK_EQ(r.len, 0);
+}
+
+/* Reset communication ends an open transfer locally, as leaving the states that allow SDO
+ * does: reported with 0x08000022, and no frame (the server times out by itself). */
+static void test_reset_communication_ends_a_transfer(void)
+{
+    client();
+    start_download(CO_SDO_SEGMENTED, 10);
+    fake_clear(&g_t.bus);
+    CHECK_EQ(co_nmt_apply(&g_t.node, CO_NMT_CMD_RESET_COMMUNICATION), CO_OK);
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_DATA_STATE);
+    CHECK_EQ(fake_count_id(&g_t.bus, 0x605), 0);
+    CHECK(!co_sdo_client_busy(&g_t.node, 0));
+}
+
+int main(void)
+{
+    RUN(test_response_for_another_sub_index);
+    RUN(test_download_initiate_answered_wrongly);
+    RUN(test_block_download_initiate_answered_wrongly);
+    RUN(test_block_download_ack_answered_wrongly);
+    RUN(test_block_download_ack_with_bad_block_size);
+    RUN(test_block_download_waits_for_the_queue);
+    RUN(test_block_upload_segments_out_of_range_are_ignored);
+    RUN(test_block_upload_end_longer_than_indicated);
+    RUN(test_rtr_on_the_response_id_is_malformed);
+    RUN(test_transfer_without_callback);
+    RUN(test_abort_with_code_zero_reports_general_error);
+    RUN(test_start_refused_by_state_and_arguments);
+    RUN(test_local_channel_without_buffers_or_callbacks);
+    RUN(test_typed_access_arguments);
+    RUN(test_reset_communication_ends_a_transfer);
+    return check_summary();
+}

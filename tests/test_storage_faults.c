@@ -1,0 +1,213 @@
+/* test_storage_faults.c -- stored parameters against a storage that fails and images that
+ * are damaged or written by another firmware: saves report 0x06060000, loads apply only
+ * records that are whole, in their group, and valid for the entry. */
+#include "check.h"
+#include "harness.h"
+
+/* A scripted storage: one image per group, failures on demand, call counts. */
+typedef struct script {
+    uint8_t image[3][2048];
+    uint32_t len[3];
+    bool stored[3];
+    uint8_t staging[2048];
+    uint32_t staging_len;
+    co_param_group_t group;
+    bool fail_begin;
+    int fail_write_at; /* 1-based write call that fails; 0 = none */
+    int writes;
+    bool fail_erase;
+    bool fail_value_read; /* reads past a record's head fail */
+    int commits;
+    int erased[3];
+} script_t;
+
+static script_t g_s;
+
+static co_err_t s_begin(void *ctx, co_param_group_t group)
+{
+    script_t *s = ctx;
+    s->group = group;
+    s->staging_len = 0;
+    return s->fail_begin ? CO_ERR_STATE : CO_OK;
+}
+
+static co_err_t s_write(void *ctx, const uint8_t *data, uint32_t len)
+{
+    script_t *s = ctx;
+    if (++s->writes == s->fail_write_at || s->staging_len + len > sizeof s->staging) {
+        return CO_ERR_FULL;
+    }
+    memcpy(&s->staging[s->staging_len], data, len);
+    s->staging_len += len;
+    return CO_OK;
+}
+
+static co_err_t s_commit(void *ctx)
+{
+    script_t *s = ctx;
+    memcpy(s->image[s->group], s->staging, s->staging_len);
+    s->len[s->group] = s->staging_len;
+    s->stored[s->group] = true;
+    s->commits++;
+    return CO_OK;
+}
+
+static co_err_t s_read(void *ctx, co_param_group_t group, uint32_t offset, uint8_t *buf,
+                       uint32_t cap, uint32_t *n)
+{
+    script_t *s = ctx;
+    if (!s->stored[group]) {
+        return CO_ERR_NOT_FOUND;
+    }
+    if (s->fail_value_read && offset % 8u == 4u) {
+        return CO_ERR_STATE;
+    }
+    uint32_t left = offset < s->len[group] ? s->len[group] - offset : 0;
+    *n = left < cap ? left : cap;
+    memcpy(buf, &s->image[group][offset], *n);
+    return CO_OK;
+}
+
+static co_err_t s_erase(void *ctx, co_param_group_t group)
+{
+    script_t *s = ctx;
+    if (s->fail_erase) {
+        return CO_ERR_STATE;
+    }
+    s->erased[group]++;
+    s->stored[group] = false;
+    return CO_OK;
+}
+
+static const co_storage_t k_storage = {s_begin, s_write, s_commit, s_read, s_erase, &g_s};
+
+static void power_on(test_node_t *t)
+{
+    CHECK_EQ(test_node_init(t, 5, 0), CO_OK);
+    t->node.cfg.storage = &k_storage;
+    CHECK_EQ(co_node_start(&t->node, 0), CO_OK);
+}
+
+/* Append one record (index, sub, value bytes) to the stored image of `group`. */
+static void add_record(co_param_group_t group, uint16_t index, uint8_t sub, const uint8_t *v,
+                       uint8_t len)
+{
+    uint8_t *p = &g_s.image[group][g_s.len[group]];
+    co_put_u16(p, index);
+    p[2] = sub;
+    p[3] = len;
+    memcpy(p + 4, v, len);
+    g_s.len[group] += 4u + len;
+    g_s.stored[group] = true;
+}
+
+static void test_failing_storage_aborts_with_hardware_error(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    power_on(&t);
+    g_s.fail_begin = true;
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(g_s.commits, 0);
+    g_s.fail_begin = false;
+    g_s.fail_write_at = 2; /* the second record */
+    CHECK_EQ(write_u32(&t, 0x1010, 3, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(g_s.commits, 0); /* a failed save is never committed */
+    g_s.fail_erase = true;
+    CHECK_EQ(write_u32(&t, 0x1011, 1, CO_RESTORE_SIGNATURE), CO_ABORT_HARDWARE);
+    /* The command objects read as the capability afterwards, whatever happened. */
+    CHECK_EQ(t.od.store[0], 1);
+}
+
+static void test_save_and_restore_by_group(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    power_on(&t);
+    CHECK_EQ(write_u32(&t, 0x1010, 2, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK(g_s.stored[CO_PARAMS_COMMUNICATION] && !g_s.stored[CO_PARAMS_APPLICATION]);
+    CHECK_EQ(write_u32(&t, 0x1010, 3, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK(g_s.stored[CO_PARAMS_APPLICATION]);
+    CHECK_EQ(write_u32(&t, 0x1011, 3, CO_RESTORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK_EQ(g_s.erased[CO_PARAMS_APPLICATION], 1);
+    CHECK_EQ(g_s.erased[CO_PARAMS_COMMUNICATION], 0);
+    CHECK_EQ(write_u32(&t, 0x1011, 2, CO_RESTORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK_EQ(g_s.erased[CO_PARAMS_COMMUNICATION], 1);
+    CHECK_EQ(g_s.erased[CO_PARAMS_APPLICATION], 1);
+    /* The API: groups 1..3 only, and only with storage. */
+    CHECK_EQ(co_storage_save(&t.node, 0), CO_ERR_ARG);
+    CHECK_EQ(co_storage_save(&t.node, 4), CO_ERR_ARG);
+    t.node.cfg.storage = NULL;
+    CHECK_EQ(co_storage_save(&t.node, 1), CO_ERR_STATE);
+    /* A signature of the wrong length is refused by the length check. */
+    t.node.cfg.storage = &k_storage;
+    CHECK_EQ(write_u16(&t, 0x1010, 1, 0x6173), CO_ABORT_LEN_LOW);
+}
+
+static void test_load_applies_only_valid_records(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    uint8_t u32[4];
+    co_put_u32(u32, 0xCAFEu);
+    add_record(CO_PARAMS_APPLICATION, 0x2000, 0, u32, 4); /* good */
+    uint8_t big[2];
+    co_put_u16(big, 500);
+    add_record(CO_PARAMS_APPLICATION, 0x2001, 0, big, 2);   /* above 0x2001's limit of 100 */
+    add_record(CO_PARAMS_APPLICATION, 0x1017, 0, big, 2);   /* not of this group */
+    add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 3);   /* wrong length */
+    add_record(CO_PARAMS_COMMUNICATION, 0x1000, 0, u32, 4); /* device type: not a parameter */
+    uint8_t hb[2];
+    co_put_u16(hb, 300);
+    add_record(CO_PARAMS_COMMUNICATION, 0x1017, 0, hb, 2); /* good */
+    power_on(&t);
+    CHECK_EQ(t.od.app_u32, 0xCAFEu);
+    CHECK_EQ(t.od.app_i16, 0);
+    CHECK_EQ(t.od.app_u32b, 0);
+    CHECK(t.od.device_type != 0xCAFEu);
+    CHECK_EQ(t.od.hb_period_ms, 300);
+}
+
+static void test_truncated_image_keeps_what_was_whole(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    uint8_t u32[4];
+    co_put_u32(u32, 0x1234u);
+    add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 4);
+    co_put_u32(u32, 0xBEEFu);
+    add_record(CO_PARAMS_APPLICATION, 0x2000, 0, u32, 4);
+    g_s.len[CO_PARAMS_APPLICATION] -= 2; /* power cut in the middle of the last value */
+    power_on(&t);
+    CHECK_EQ(t.od.app_u32b, 0x1234u);
+    CHECK_EQ(t.od.app_u32, 0x12345678u); /* its default: the record was not whole */
+    /* A cut inside a record's head ends the load the same way. */
+    memset(&g_s, 0, sizeof g_s);
+    add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 4);
+    g_s.len[CO_PARAMS_APPLICATION] += 2; /* two stray bytes */
+    power_on(&t);
+    CHECK_EQ(t.od.app_u32b, 0xBEEFu);
+}
+
+/* A storage that fails while reading a value: the load stops there, defaults stay. */
+static void test_read_error_stops_the_load(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    uint8_t u32[4];
+    co_put_u32(u32, 0x1234u);
+    add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 4);
+    g_s.fail_value_read = true;
+    power_on(&t);
+    CHECK_EQ(t.od.app_u32b, 0);
+}
+
+int main(void)
+{
+    RUN(test_failing_storage_aborts_with_hardware_error);
+    RUN(test_save_and_restore_by_group);
+    RUN(test_load_applies_only_valid_records);
+    RUN(test_truncated_image_keeps_what_was_whole);
+    RUN(test_read_error_stops_the_load);
+    return check_summary();
+}
