@@ -424,6 +424,9 @@ ffibuilder.set_source(
     sources=[_rel(p) for p in _SOURCES],
     include_dirs=[_rel(p) for p in _INCLUDES],
     define_macros=_CONFIG,
+    # A header change rebuilds the extension (setuptools only compares sources otherwise).
+    depends=[_rel(p) for d in _INCLUDES for p in sorted(glob.glob(os.path.join(d, "**", "*.h"),
+                                                                  recursive=True))],
 )
 
 if __name__ == "__main__":
