@@ -22,7 +22,16 @@ import sys
 from collections.abc import Callable, Sequence
 
 from canola import odgen
-from canola.cli import bus_cmd, device_cmd, dump_cmd, monitor_cmd, nmt_cmd, scan_cmd, sdo_cmd
+from canola.cli import (
+    bus_cmd,
+    demo_cmd,
+    device_cmd,
+    dump_cmd,
+    monitor_cmd,
+    nmt_cmd,
+    scan_cmd,
+    sdo_cmd,
+)
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
 
@@ -30,7 +39,7 @@ __all__ = ["build_parser", "main"]
 
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
-    dump_cmd.register, monitor_cmd.register, device_cmd.register,
+    dump_cmd.register, monitor_cmd.register, device_cmd.register, demo_cmd.register,
 )
 
 
