@@ -257,3 +257,49 @@ def test_device_errors(tmp_path: Path, net: tuple[str, list[Proc]]) -> None:
                               capture_output=True, text=True, timeout=60, check=False)
         assert proc.returncode == 1, args
         one_line_error(proc.stderr)
+
+
+CANOPEN_PEER = """
+import sys, canopen
+host, port, channel, eds = sys.argv[1:5]
+net = canopen.Network()
+net.connect(interface="socketcand", host=host, port=int(port), channel=channel)
+node = canopen.LocalNode(9, eds)
+net.add_node(node)
+node.nmt.state = "PRE-OPERATIONAL"
+node.nmt.start_heartbeat(100)
+print("ready", flush=True)
+sys.stdin.read()  # until the test closes stdin
+print("0x2000 =", hex(node.sdo[0x2000].raw), flush=True)
+node.nmt.stop_heartbeat()
+net.disconnect()
+"""
+
+
+def test_python_canopen_process_on_the_same_hub(capsys: pytest.CaptureFixture[str],
+                                                net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    m = re.fullmatch(r"socketcand://([\d.]+):(\d+)/(\w+)", url)
+    assert m is not None
+    peer = subprocess.Popen([PY, "-c", CANOPEN_PEER, *m.groups(), str(EDS)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert peer.stdout is not None and peer.stdout.readline() == "ready\n"
+        code, out, _ = cli(capsys, "scan", "--bus", url, "--json")
+        assert code == 0 and [n["node"] for n in json.loads(out)] == [5, 6, 9]
+        assert cli(capsys, "sdo", "read", "9", "0x1008:0", "vs", "--bus", url)[1] == (
+            "canola cli test\n")
+        assert cli(capsys, "sdo", "write", "9", "0x2000:0", "u32", "0xBEEF", "--bus", url)[0] == 0
+        out, _ = peer.communicate("", timeout=20)
+        assert out == "0x2000 = 0xbeef\n"
+    finally:
+        if peer.poll() is None:
+            peer.kill()
+
+
+def test_device_stops_on_sigint(net: tuple[str, list[Proc]]) -> None:
+    dev = Proc("device", "--eds", str(EDS), "--node-id", "20", "--bus", net[0])
+    dev.wait_for("node 20: PRE-OPERATIONAL")
+    dev.popen.send_signal(signal.SIGINT)
+    assert dev.popen.wait(10) == 0
+    dev.wait_for("node 20 stopped")

@@ -12,6 +12,7 @@ import can
 import pytest
 
 from canola.hub import HubThread
+from canola.socketcand import Frame, parse_server_element, split_elements
 
 
 @pytest.fixture
@@ -192,3 +193,21 @@ def test_port_in_use_is_one_line_error() -> None:
     assert proc.returncode != 0
     assert len(proc.stderr.strip().splitlines()) == 1
     assert "Traceback" not in proc.stderr
+
+
+def test_remote_frames_and_raw_clients(hub: HubThread) -> None:
+    a, b = _raw(hub.port), _raw(hub.port)
+    for s in (a, b):
+        s.sendall(b"< open rtr >< rawmode >")
+        assert _recv_until(s, b"< ok >< ok >") == b"< ok >< ok >"
+    time.sleep(0.15)
+    a.sendall(b"< sendrtr 70C 1 >< send 1FFFFFFF 1 AA >\n< send 0 0 >")
+    data = _recv_until(b, b"  >")  # the last one, with no data
+    elements, rest = split_elements(data)
+    assert rest == b""
+    got = [parse_server_element(e)[:2] for e in elements]
+    assert got == [("rtr", Frame(0x70C, rtr=True, dlc=1)),
+                   ("frame", Frame(0x1FFFFFFF, b"\xaa", extended=True)),
+                   ("frame", Frame(0, b""))]
+    a.close()
+    b.close()

@@ -7,8 +7,11 @@ receives with a time-out equal to the node's next deadline (``co_node_poll``'s r
 capped at :data:`MAX_WAIT_S` so that deadlines that application calls move earlier are
 met within that cap. Callbacks of the C node only record events; the application's
 callbacks run afterwards in the bus thread (python-can) or inside :meth:`SimBus.run_until`
-(simulated bus), never under the lock, in the order the events happened. They must not
-block: a blocking call from a callback raises :class:`~canola.errors.Error`.
+(simulated bus), never under the lock, in the order the events happened, and may call
+any method of the node. They must not block: a blocking SDO call of the same master from
+its callback raises :class:`~canola.errors.Error`; one that waits for another node whose
+answer needs the calling thread (a device's callback reading that device through a
+master) only ends with the SDO time-out.
 """
 
 from __future__ import annotations
@@ -206,6 +209,14 @@ class Engine:
         return int(lib.CO_OK)
 
     def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._loop()
+            except Exception:  # never let the bus thread die silently
+                log.exception("%s: bus thread error", self.name)
+                self._stop.wait(0.05)
+
+    def _loop(self) -> None:
         bus = self.bus
         assert isinstance(bus, can.BusABC)
         frame = ffi.new("co_frame_t *")

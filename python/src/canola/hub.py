@@ -124,11 +124,13 @@ class Hub:
         for client in list(self._clients):
             client.closing = True
             client.wake.set()
-            client.writer.close()
+            client.writer.transport.abort()  # no waiting for unread data
         tasks = list(self._tasks)
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+        if tasks:  # closed connections end their tasks; cancel only what lingers
+            _, lingering = await asyncio.wait(tasks, timeout=2.0)
+            for task in lingering:
+                task.cancel()
+            await asyncio.gather(*lingering, return_exceptions=True)
         if self._server is not None:
             with contextlib.suppress(Exception):
                 await asyncio.wait_for(self._server.wait_closed(), 2.0)
@@ -141,6 +143,11 @@ class Hub:
 
     async def _serve_client(self, reader: asyncio.StreamReader,
                             writer: asyncio.StreamWriter) -> None:
+        with contextlib.suppress(asyncio.CancelledError):  # cancelled: the hub is closing
+            await self._session(reader, writer)
+
+    async def _session(self, reader: asyncio.StreamReader,
+                       writer: asyncio.StreamWriter) -> None:
         peer = writer.get_extra_info("peername")
         name = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
         writer.transport.set_write_buffer_limits(high=self.write_buffer)

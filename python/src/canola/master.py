@@ -200,10 +200,15 @@ class SdoClient:
                         break
                     bus.run_until(bus.now_us + 1000)
             else:
-                t.event.wait(limit)
-                if not t.done:
-                    master._abort(self.node)
-                    t.event.wait(5.0)
+                end = None if limit is None else time.monotonic() + limit
+                while not t.event.wait(0.05):
+                    if end is not None and time.monotonic() >= end:
+                        master._abort(self.node)  # completes the transfer with 0x05040000
+                        t.event.wait(5.0)
+                        break
+                    if not engine.running:
+                        master._abort(self.node)
+                        raise Error("the master was stopped during an SDO transfer")
             if not t.done:  # pragma: no cover -- the core always completes on abort
                 raise SdoTimeout(self.node, self._timeout_ms(timeout))
             return self._finish(t, timeout)
@@ -236,12 +241,18 @@ class SdoClient:
             t.waker = wake
             start(t, *args)
             try:
-                if timeout is not None:
+                end = None if timeout is None else loop.time() + timeout
+                while not fut.done():
                     try:
-                        await asyncio.wait_for(asyncio.shield(fut), timeout)
+                        await asyncio.wait_for(asyncio.shield(fut), 0.05)
                     except TimeoutError:
-                        master._abort(self.node)
-                await fut
+                        if end is not None and loop.time() >= end:
+                            master._abort(self.node)  # completes it with 0x05040000
+                            end = None
+                        elif not master._engine.running:
+                            master._abort(self.node)
+                            raise Error("the master was stopped during an SDO transfer") \
+                                from None
             except asyncio.CancelledError:
                 master._abort(self.node)  # ends the transfer before the channel is reused
                 raise
