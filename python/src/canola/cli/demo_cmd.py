@@ -68,7 +68,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         net.close()
     if args.json:
-        emit_json(summary_json(steps, frames=trace.frames, seconds=round(net.now(), 6)))
+        emit_json(summary_json(steps, bus=net.description, frames=trace.frames,
+                               seconds=round(net.now(), 6)))
     else:
         if out is not None and trace.hidden:
             print(f"\n{trace.frames} frames in {net.now():.3f} s; {trace.hidden} repeated ones "

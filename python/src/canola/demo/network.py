@@ -21,6 +21,7 @@ import can
 
 from canola.candump import parse_line
 from canola.core import SimBus
+from canola.errors import Error
 
 __all__ = ["CanNetwork", "Network", "SimNetwork", "TraceFrame"]
 
@@ -121,7 +122,10 @@ class CanNetwork(Network):
         return time.time() - self._t0
 
     def _receive(self, timeout: float) -> TraceFrame | None:
-        msg = self.listener.recv(timeout)
+        try:
+            msg = self.listener.recv(timeout)
+        except can.CanError as exc:
+            raise Error(f"the bus went away: {exc}") from None
         if msg is None or msg.is_error_frame or msg.is_fd:
             return None
         stamp = msg.timestamp - self._t0 if msg.timestamp else self.now()

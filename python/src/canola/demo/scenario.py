@@ -274,9 +274,12 @@ class Scenario:
         return True, f"{_nodes(booted)} booted"
 
     def preop(self) -> tuple[bool, str]:
+        sent = self._nmt_seen("preop")
         self.master.nmt(0, "preop")
-        self.wait_until(lambda: all(d.nmt_state == "PRE-OPERATIONAL"
-                                    for d in self.devices.values()), 0.2)
+        self.wait_until(lambda: self._nmt_seen("preop") > sent and all(
+            d.nmt_state == "PRE-OPERATIONAL" for d in self.devices.values()), 0.2)
+        if self._nmt_seen("preop") == sent:
+            return False, "the NMT command did not reach the bus"
         wrong = {n: d.nmt_state for n, d in self.devices.items()
                  if d.nmt_state != "PRE-OPERATIONAL"}
         if wrong:
@@ -362,6 +365,11 @@ class Scenario:
             return False, "; ".join(f"node {n} heartbeat says {s or 'nothing'}"
                                     for n, s in sorted(wrong.items()))
         return True, f"{_nodes(list(self.devices))} heard OPERATIONAL"
+
+    def _nmt_seen(self, command: str) -> int:
+        """How many NMT ``command`` frames to all nodes the trace has seen."""
+        return sum(1 for _, ev in self.trace.events if ev.kind == "nmt"
+                   and ev.fields.get("command") == command and ev.fields.get("target") == 0)
 
     def _syncs(self) -> int:
         return sum(1 for _, ev in self.trace.events if ev.kind == "sync")
