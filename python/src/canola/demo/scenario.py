@@ -111,7 +111,9 @@ class Scenario:
         self._notes: deque[tuple[float, str, str]] = deque()
         self._lock = threading.Lock()
         self.seen = _Seen()
-        self.master = Master(net.node_bus(), MASTER_ID, sdo_timeout_ms=300)
+        # a node that does not answer costs little virtual time, but real buses may be slow
+        self.master = Master(net.node_bus(), MASTER_ID,
+                             sdo_timeout_ms=300 if net.virtual else 1000)
         self.devices: dict[int, Device] = {}
         for spec in DEVICES:
             dev = Device(eds_path(spec), spec.node_id, net.node_bus())
