@@ -7,6 +7,7 @@ import sys
 from typing import TextIO
 
 from canola.cli.common import CliError, Parser, bus_from_args, emit_json
+from canola.demo.devices import DEVICES
 from canola.demo.network import CanNetwork, Network, SimNetwork
 from canola.demo.report import failure_line, summary_json, summary_table
 from canola.demo.scenario import FAULTS, Faults, Scenario
@@ -64,6 +65,9 @@ def run(args: argparse.Namespace) -> int:
         if out is not None:
             print(f"canola demo: a master (node 1) and three devices on {net.description}",
                   file=out)
+            for spec in DEVICES:
+                print(f"  node {spec.node_id}  {spec.role:<10}  {spec.eds} ({spec.profile})",
+                      file=out)
         steps = Scenario(net, trace, faults).run()
     finally:
         net.close()

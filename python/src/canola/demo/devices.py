@@ -46,6 +46,7 @@ class DeviceSpec:
     role: str
     node_id: int
     eds: str
+    profile: str
     tpdo: tuple[Mapped, ...]
     rpdo: tuple[Mapped, ...] = ()
 
@@ -53,15 +54,15 @@ class DeviceSpec:
 IO, DRIVE, SENSOR = 2, 3, 4
 
 DEVICES: tuple[DeviceSpec, ...] = (
-    DeviceSpec("I/O module", IO, "io_module.eds",
+    DeviceSpec("I/O module", IO, "io_module.eds", "CiA 401",
                tpdo=(Mapped(0x6000, 1, 8, "inputs"),),
                rpdo=(Mapped(0x6200, 1, 8, "outputs"),)),
-    DeviceSpec("drive", DRIVE, "drive.eds",
+    DeviceSpec("drive", DRIVE, "drive.eds", "CiA 402",
                tpdo=(Mapped(0x6041, 0, 16, "statusword"),
                      Mapped(0x606C, 0, 32, "velocity", signed=True)),
                rpdo=(Mapped(0x6040, 0, 16, "controlword"),
                      Mapped(0x60FF, 0, 32, "target velocity", signed=True))),
-    DeviceSpec("sensor", SENSOR, "sensor.eds",
+    DeviceSpec("sensor", SENSOR, "sensor.eds", "CiA 404",
                tpdo=(Mapped(0x9130, 1, 32, "temperature", signed=True),)),
 )
 
