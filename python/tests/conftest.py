@@ -20,6 +20,11 @@ _channels = itertools.count()
 #: The SocketCAN interface of the SocketCAN tier, or None (virtual buses).
 VCAN = os.environ.get("CANOLA_VCAN") or None
 
+#: SDO time-outs (ms) of the nodes in tests over python-can. The SocketCAN tier runs in an
+#: emulated VM (canvm, no KVM) where python-canopen takes more than a second to work
+#: through a block of 127 segments before it acknowledges it.
+SDO_TIMEOUT_MS = 5000 if VCAN else 1000
+
 
 @pytest.fixture
 def can_bus() -> Iterator[Callable[[], can.BusABC]]:

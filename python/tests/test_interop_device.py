@@ -18,6 +18,7 @@ import can
 import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
+from conftest import SDO_TIMEOUT_MS
 
 from canola import Device
 from canola.values import TimeOfDay
@@ -37,11 +38,11 @@ class Peer:
 
 @pytest.fixture
 def peer(can_bus: Callable[[], can.BusABC]) -> Iterator[Peer]:
-    device = Device(INTEROP, NODE, can_bus())
+    device = Device(INTEROP, NODE, can_bus(), sdo_timeout_ms=SDO_TIMEOUT_MS)
     network = canopen.Network(can_bus())
     network.connect()
     node = network.add_node(NODE, str(INTEROP))
-    node.sdo.RESPONSE_TIMEOUT = 2.0
+    node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_MS / 1000 + 1
     device.start()
     try:
         yield Peer(device, network, node)
