@@ -8,6 +8,7 @@ import io
 import json
 import os
 import re
+import select
 import signal
 import subprocess
 import sys
@@ -134,6 +135,7 @@ def test_quiet_and_json(capsys: pytest.CaptureFixture[str]) -> None:
 
 @pytest.mark.parametrize("args", [
     ["--fault", "nope"],
+    ["--time-scale", "0"],
     ["--realtime", "--bus", "virtual://x"],
     ["--bus", "virtual://x", "--iface", "vcan0"],
     ["--bus", "bogus://x"],
@@ -230,6 +232,8 @@ def hub() -> Iterator[int]:
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         assert proc.stdout is not None
+        ready, _, _ = select.select([proc.stdout], [], [], 30)  # no hang on a silent hub
+        assert ready, "the hub printed nothing in 30 s"
         line = proc.stdout.readline()  # the hub prints its address first
         m = re.search(r"127\.0\.0\.1:(\d+)", line)
         assert m is not None, line
@@ -263,7 +267,9 @@ def test_demo_on_socketcan_or_virtual(capsys: pytest.CaptureFixture[str]) -> Non
     vcan = os.environ.get("CANOLA_VCAN")
     if vcan:
         watcher = Listener(can.Bus(interface="socketcan", channel=vcan))
-        args = ["--iface", vcan]
+        # The SocketCAN tier may run in canvm under TCG emulation, some 20 times slower:
+        # five Python bus threads cannot keep a 10 ms SYNC cycle there.
+        args = ["--iface", vcan, "--time-scale", "10"]
     else:
         channel = f"demo-{os.getpid()}"
         watcher = Listener(can.Bus(interface="virtual", channel=channel))
@@ -272,15 +278,8 @@ def test_demo_on_socketcan_or_virtual(capsys: pytest.CaptureFixture[str]) -> Non
         code, out, err = demo(capsys, *args)
     finally:
         watcher.close()
+    assert (code, err) == (0, ""), out
     _assert_watched(watcher.frames)
-    marks = summary_marks(out)  # every step is in the summary
-    if vcan:
-        # The SocketCAN tier may run in canvm under TCG emulation, some 20 times slower:
-        # five Python bus threads then miss the 10 ms SYNC cycle and 250 ms heartbeat
-        # deadlines. The steps before SYNC have no such deadline and must pass.
-        assert [marks[title] for _, title in STEPS[:5]] == ["\u2713"] * 5, out
-    else:
-        assert (code, err) == (0, ""), out
 
 
 def test_runs_as_a_program_on_an_ascii_terminal() -> None:

@@ -35,6 +35,9 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p.add_argument("--json", action="store_true", help="the summary as one JSON document")
     p.add_argument("--every-frame", action="store_true",
                    help="also show repeated heartbeats, SYNCs, PDOs and SDO confirmations")
+    p.add_argument("--time-scale", type=int, default=1, metavar="N",
+                   help="stretch every period and time-out N times (1..100), for slow or "
+                        "emulated machines on a real bus (default 1: SYNC every 10 ms)")
     p.add_argument("--fault", choices=sorted(FAULTS),
                    help="break one step on purpose, to see the checks catch it")
     p.set_defaults(func=run)
@@ -57,6 +60,8 @@ def _network(args: argparse.Namespace) -> Network:
 
 
 def run(args: argparse.Namespace) -> int:
+    if not 1 <= args.time_scale <= 100:
+        raise CliError(f"canola demo: error: bad --time-scale {args.time_scale}: 1..100", 2)
     out: TextIO | None = None if args.quiet or args.json else sys.stdout
     net = _network(args)
     try:
@@ -68,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
             for spec in DEVICES:
                 print(f"  node {spec.node_id}  {spec.role:<10}  {spec.eds} ({spec.profile})",
                       file=out)
-        steps = Scenario(net, trace, faults).run()
+        steps = Scenario(net, trace, faults, time_scale=args.time_scale).run()
     finally:
         net.close()
     if args.json:

@@ -15,7 +15,7 @@ STEPS: tuple[tuple[str, str], ...] = (
     ("heartbeat", "heartbeat producer configured by SDO and monitored"),
     ("pdo-mapping", "PDO mapping configured by SDO"),
     ("start", "NMT start: every node operational"),
-    ("sync-tpdo", "SYNC every 10 ms drives the TPDOs"),
+    ("sync-tpdo", "SYNC drives the TPDOs"),
     ("rpdo", "RPDOs from the master applied by the devices"),
     ("emcy", "EMCY raised by a device, reported by the master"),
     ("heartbeat-loss", "a device falls silent, the master reports it"),

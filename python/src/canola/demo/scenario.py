@@ -103,8 +103,15 @@ def _nodes(ids: list[int] | set[int]) -> str:
 class Scenario:
     """The network on ``net``, telling its story on ``trace``."""
 
-    def __init__(self, net: Network, trace: Trace, faults: Faults | None = None) -> None:
+    def __init__(self, net: Network, trace: Trace, faults: Faults | None = None, *,
+                 time_scale: int = 1) -> None:
+        if not 1 <= time_scale <= 100:
+            raise Error(f"time scale {time_scale} is outside 1..100")
         self.net = net
+        self.scale = time_scale
+        self.heartbeat_ms = HEARTBEAT_MS * time_scale
+        self.consumer_ms = CONSUMER_MS * time_scale
+        self.sync_us = SYNC_US * time_scale
         self.trace = trace
         self.faults = faults or Faults()
         self.specs = {spec.node_id: spec for spec in DEVICES}
@@ -113,7 +120,7 @@ class Scenario:
         self.seen = _Seen()
         # a node that does not answer costs little virtual time, but real buses may be slow
         self.master = Master(net.node_bus(), MASTER_ID,
-                             sdo_timeout_ms=300 if net.virtual else 1000)
+                             sdo_timeout_ms=(300 if net.virtual else 1000) * time_scale)
         self.devices: dict[int, Device] = {}
         for spec in DEVICES:
             dev = Device(eds_path(spec), spec.node_id, net.node_bus())
@@ -222,8 +229,9 @@ class Scenario:
         self.net.wait(seconds, self.tick)
 
     def wait_until(self, done: Callable[[], bool], at_most: float) -> bool:
-        """Let time pass in 10 ms steps until ``done()`` or ``at_most`` seconds passed."""
-        end = self.net.now() + at_most
+        """Let time pass in 10 ms steps until ``done()`` or ``at_most`` seconds (times the
+        time scale) passed."""
+        end = self.net.now() + at_most * self.scale
         while not done():
             if self.net.now() >= end:
                 return False
@@ -305,11 +313,11 @@ class Scenario:
     def heartbeat(self) -> tuple[bool, str]:
         def configure(node: int) -> None:
             sdo = self.master.sdo(node)
-            sdo.write(0x1017, 0, "u16", HEARTBEAT_MS)
+            sdo.write(0x1017, 0, "u16", self.heartbeat_ms)
             back = _read_int(self.master, node, 0x1017, 0, "u16")
-            if back != HEARTBEAT_MS:
+            if back != self.heartbeat_ms:
                 raise Error(f"0x1017 reads back {back}")
-            self.master.monitor(node, CONSUMER_MS)
+            self.master.monitor(node, self.consumer_ms)
 
         errors = self._each(configure)
         self.tick()
@@ -321,8 +329,8 @@ class Scenario:
                 errors[node] = f"heartbeat says {state or 'nothing'}"
         if errors:
             return False, self._failed(errors)
-        return True, (f"0x1017 = {HEARTBEAT_MS} ms on {_nodes(list(self.devices))}, all heard "
-                      f"PRE-OPERATIONAL (time-out {CONSUMER_MS} ms)")
+        return True, (f"0x1017 = {self.heartbeat_ms} ms on {_nodes(list(self.devices))}, all "
+                      f"heard PRE-OPERATIONAL (time-out {self.consumer_ms} ms)")
 
     def _map(self, node: int, comm: int, *, mapping: tuple[Mapped, ...],
              transmission: int) -> None:
@@ -382,8 +390,8 @@ class Scenario:
 
     def sync_tpdo(self) -> tuple[bool, str]:
         syncs0, tpdos0 = self._syncs(), self._tpdo_counts()
-        self.master.start_sync(SYNC_US)
-        self.wait(0.055)
+        self.master.start_sync(self.sync_us)
+        self.wait(5.5 * self.sync_us / 1e6)
         syncs = self._syncs() - syncs0
 
         def answered() -> dict[int, int]:
@@ -394,11 +402,11 @@ class Scenario:
         tpdos = answered()
         short = {n: c for n, c in tpdos.items() if c < syncs}
         if syncs < 4:
-            return False, f"{syncs} SYNCs in 55 ms"
+            return False, f"{syncs} SYNCs in {5.5 * self.sync_us / 1000:g} ms"
         if short:
             return False, "; ".join(f"node {n}: {c} TPDOs for {syncs} SYNCs"
                                     for n, c in sorted(short.items()))
-        return True, (f"{syncs} SYNCs, TPDOs " + ", ".join(
+        return True, (f"{syncs} SYNCs (every {self.sync_us / 1000:g} ms), TPDOs " + ", ".join(
             f"node {n} {c}" for n, c in sorted(tpdos.items())))
 
     def _last_tpdo(self, node: int) -> dict[str, int]:
@@ -416,7 +424,7 @@ class Scenario:
                                  + target.to_bytes(4, "little", signed=True))
             outputs = 1 << (cycle // 5)
             self.master.send_pdo(0x200 + IO, bytes([outputs]))
-            self.wait(SYNC_US / 1e6)
+            self.wait(self.sync_us / 1e6)
         drive, io = self.devices[DRIVE], self.devices[IO]
         self.wait_until(lambda: self._last_tpdo(IO).get("inputs") == outputs
                         and self._last_tpdo(DRIVE).get("velocity") == TARGET_RPM, 0.2)
@@ -476,4 +484,5 @@ class Scenario:
         lost = losses()
         if not lost:
             return False, f"the master reported no heartbeat loss of node {SENSOR}"
-        return True, f"node {SENSOR} lost after {CONSUMER_MS} ms, last state {lost[0].state}"
+        return True, (f"node {SENSOR} lost after {self.consumer_ms} ms, "
+                      f"last state {lost[0].state}")
