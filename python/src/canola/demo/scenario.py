@@ -24,10 +24,8 @@ A failing step does not stop the demo: the next steps run and say what they see.
 
 from __future__ import annotations
 
-import threading
-from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from canola.decode import emcy_text
 from canola.demo.devices import (
@@ -35,18 +33,17 @@ from canola.demo.devices import (
     DRIVE,
     IO,
     SENSOR,
-    DeviceSpec,
     Mapped,
     attach_application,
     eds_path,
-    unpack,
 )
-from canola.demo.network import Network, TraceFrame
+from canola.demo.network import Network
+from canola.demo.observer import Observer
 from canola.demo.report import STEPS, Step
 from canola.demo.trace import Trace
 from canola.device import Device
 from canola.errors import Error
-from canola.master import EmcyEvent, Frame, HeartbeatEvent, Master
+from canola.master import EmcyEvent, HeartbeatEvent, Master
 
 __all__ = ["FAULTS", "Faults", "Scenario"]
 
@@ -74,16 +71,6 @@ FAULTS: dict[str, Faults] = {
     "drive-emcy-off": Faults(emcy_off=True),
     "sensor-keeps-beating": Faults(keeps_beating=True),
 }
-
-
-@dataclass
-class _Seen:
-    """What the master's callbacks saw (filled from the bus threads on python-can)."""
-
-    bootups: set[int] = field(default_factory=set)
-    heartbeat: list[HeartbeatEvent] = field(default_factory=list)
-    emcy: list[EmcyEvent] = field(default_factory=list)
-    tpdos: dict[int, list[bytes]] = field(default_factory=dict)
 
 
 def _read_int(master: Master, node: int, index: int, sub: int, data_type: str) -> int:
@@ -115,118 +102,21 @@ class Scenario:
         self.trace = trace
         self.faults = faults or Faults()
         self.specs = {spec.node_id: spec for spec in DEVICES}
-        self._notes: deque[tuple[float, str, str]] = deque()
-        self._lock = threading.Lock()
-        self.seen = _Seen()
+        self.obs = Observer(net, trace)
         # a node that does not answer costs little virtual time, but real buses may be slow
         self.master = Master(net.node_bus(), MASTER_ID,
-                             sdo_timeout_ms=(300 if net.virtual else 1000) * time_scale)
+                             sdo_timeout_ms=min(0xFFFF, (300 if net.virtual else 1000)
+                                                * time_scale))
         self.devices: dict[int, Device] = {}
         for spec in DEVICES:
             dev = Device(eds_path(spec), spec.node_id, net.node_bus())
             attach_application(spec, dev)
-            self._watch_device(spec, dev)
+            self.obs.watch_device(spec, dev)
             self.devices[spec.node_id] = dev
-        self._watch_master()
-        self._mapped = False
-        trace.annotate = self._annotate
-
-    # ---- reports from the callbacks
-
-    def _note(self, who: str, text: str) -> None:
-        self._notes.append((self.net.now(), who, text))
-
-    def _say(self, who: str, text: str) -> None:
-        """A line of the scenario itself, after what happened so far."""
-        self.tick()
-        self.trace.note(self.net.now(), who, text)
-
-    def tick(self) -> None:
-        """Show the frames and the reports since the last tick."""
-        items: list[tuple[float, int, TraceFrame | tuple[float, str, str]]] = [
-            (f.t, 0, f) for f in self.net.drain()]
-        while self._notes:
-            note = self._notes.popleft()
-            items.append((note[0], 1, note))
-        for _, _, item in sorted(items, key=lambda i: (i[0], i[1])):
-            if isinstance(item, TraceFrame):
-                self.trace.frame(item)
-            else:
-                self.trace.note(*item)
-
-    def _name(self, node: int) -> str:
-        spec = self.specs.get(node)
-        return f"node {node} ({spec.role})" if spec else f"node {node}"
-
-    def _watch_master(self) -> None:
-        m, seen = self.master, self.seen
-
-        def bootup(node: int) -> None:
-            with self._lock:
-                seen.bootups.add(node)
-            self._note("master", f"boot-up of {self._name(node)}")
-
-        def heartbeat(ev: HeartbeatEvent) -> None:
-            with self._lock:
-                seen.heartbeat.append(ev)
-            if ev.kind == "lost":
-                text = f"HEARTBEAT LOST of {self._name(ev.node)} (last state {ev.state})"
-            elif ev.kind == "started":
-                text = f"heartbeat of {self._name(ev.node)} monitored, {ev.state}"
-            else:
-                text = f"{self._name(ev.node)} heartbeat {ev.kind}: {ev.state}"
-            self._note("master", text)
-
-        def emcy(ev: EmcyEvent) -> None:
-            with self._lock:
-                seen.emcy.append(ev)
-            self._note("master", f"EMCY from {self._name(ev.node)}: 0x{ev.code:04X} "
-                       f"{emcy_text(ev.code)}, error register 0x{ev.register:02X}")
-
-        def tpdo(frame: Frame) -> None:
-            with self._lock:
-                seen.tpdos.setdefault(frame.can_id - 0x180, []).append(frame.data)
-
-        m.on_bootup(bootup)
-        m.on_heartbeat(heartbeat)
-        m.on_emcy(emcy)
-        for node in self.specs:
-            m.on_frame(tpdo, cob_id=0x180 + node)
-
-    def _watch_device(self, spec: DeviceSpec, dev: Device) -> None:
-        mapped = {(m.index, m.sub): m for m in spec.rpdo}
-        last: dict[tuple[int, int], object] = {}
-
-        def written(index: int, sub: int, value: object) -> None:
-            m = mapped.get((index, sub))
-            if m is None or last.get((index, sub), 0) == value:
-                return
-            was = last.get((index, sub), 0)
-            last[index, sub] = value
-            shown = f"0x{value:04X}" if m.name == "controlword" and isinstance(value, int) \
-                else str(value)
-            self._note(self._name(spec.node_id),
-                       f"RPDO applied: 0x{index:04X}:{sub:02X} {m.name} = {shown} (was {was})")
-
-        dev.on_write(written)
-
-    def _annotate(self, can_id: int, data: bytes) -> str | None:
-        if not self._mapped:
-            return None
-        node, base = can_id & 0x7F, can_id & 0x780
-        spec = self.specs.get(node)
-        if spec is None or base not in (0x180, 0x200):
-            return None
-        values = unpack(spec.tpdo if base == 0x180 else spec.rpdo, data)
-        if values is None:
-            return None
-        return ", ".join(f"{k} 0x{v:04X}" if k in ("statusword", "controlword")
-                         else f"{k} 0x{v:02X}" if k in ("inputs", "outputs")
-                         else f"{k} {v / 100:.2f} degC" if k == "temperature"
-                         else f"{k} {v}" for k, v in values.items())
+        self.obs.watch_master(self.master)
 
     def wait(self, seconds: float) -> None:
-        self.net.wait(seconds, self.tick)
+        self.net.wait(seconds, self.obs.tick)
 
     def wait_until(self, done: Callable[[], bool], at_most: float) -> bool:
         """Let time pass in 10 ms steps until ``done()`` or ``at_most`` seconds (times the
@@ -255,7 +145,7 @@ class Scenario:
                     step.ok, step.detail = actions[step.key]()
                 except Error as exc:
                     step.ok, step.detail = False, str(exc)
-                self.tick()
+                self.obs.tick()
             self.master.stop_sync()
             self.wait(0.02)
         finally:
@@ -272,12 +162,10 @@ class Scenario:
             if node not in self.faults.never_boots:
                 dev.start()
         def all_booted() -> bool:
-            with self._lock:
-                return self.seen.bootups >= set(self.devices)
+            return self.obs.bootups() >= set(self.devices)
 
         self.wait_until(all_booted, 0.5)
-        with self._lock:
-            booted = set(self.seen.bootups)
+        booted = self.obs.bootups()
         missing = set(self.devices) - booted
         if missing:
             return False, f"no boot-up from {_nodes(missing)}"
@@ -320,7 +208,7 @@ class Scenario:
             self.master.monitor(node, self.consumer_ms)
 
         errors = self._each(configure)
-        self.tick()
+        self.obs.tick()
         self.wait_until(lambda: all(self.master.heartbeat_state(n) == "PRE-OPERATIONAL"
                                     for n in self.devices), 2.5 * HEARTBEAT_MS / 1000)
         for node in self.devices:
@@ -358,7 +246,7 @@ class Scenario:
                 self._map(node, 0x1400, mapping=spec.rpdo, transmission=255)  # at once
 
         errors = self._each(configure)
-        self._mapped = True
+        self.obs.mapped = True
         if errors:
             return False, self._failed(errors)
         rx = [n for n, s in self.specs.items() if s.rpdo]
@@ -384,18 +272,14 @@ class Scenario:
     def _syncs(self) -> int:
         return sum(1 for _, ev in self.trace.events if ev.kind == "sync")
 
-    def _tpdo_counts(self) -> dict[int, int]:
-        with self._lock:
-            return {n: len(self.seen.tpdos.get(n, [])) for n in self.devices}
-
     def sync_tpdo(self) -> tuple[bool, str]:
-        syncs0, tpdos0 = self._syncs(), self._tpdo_counts()
+        syncs0, tpdos0 = self._syncs(), self.obs.tpdo_counts()
         self.master.start_sync(self.sync_us)
         self.wait(5.5 * self.sync_us / 1e6)
         syncs = self._syncs() - syncs0
 
         def answered() -> dict[int, int]:
-            return {n: c - tpdos0[n] for n, c in self._tpdo_counts().items()}
+            return {n: c - tpdos0[n] for n, c in self.obs.tpdo_counts().items()}
 
         # the TPDOs of the last SYNC may still be on their way (real buses)
         self.wait_until(lambda: min(answered().values()) >= syncs, 0.05)
@@ -409,12 +293,6 @@ class Scenario:
         return True, (f"{syncs} SYNCs (every {self.sync_us / 1000:g} ms), TPDOs " + ", ".join(
             f"node {n} {c}" for n, c in sorted(tpdos.items())))
 
-    def _last_tpdo(self, node: int) -> dict[str, int]:
-        with self._lock:
-            frames = self.seen.tpdos.get(node, [])
-            data = frames[-1] if frames else b""
-        return unpack(self.specs[node].tpdo, data) or {}
-
     def rpdo(self) -> tuple[bool, str]:
         outputs = 0
         for cycle in range(25):
@@ -426,8 +304,8 @@ class Scenario:
             self.master.send_pdo(0x200 + IO, bytes([outputs]))
             self.wait(self.sync_us / 1e6)
         drive, io = self.devices[DRIVE], self.devices[IO]
-        self.wait_until(lambda: self._last_tpdo(IO).get("inputs") == outputs
-                        and self._last_tpdo(DRIVE).get("velocity") == TARGET_RPM, 0.2)
+        self.wait_until(lambda: self.obs.last_tpdo(IO).get("inputs") == outputs
+                        and self.obs.last_tpdo(DRIVE).get("velocity") == TARGET_RPM, 0.2)
         problems = []
         if drive.od[0x60FF, 0] != TARGET_RPM or drive.od[0x6040, 0] != 0x000F:
             problems.append(f"drive holds target velocity {drive.od[0x60FF, 0]}, "
@@ -435,11 +313,11 @@ class Scenario:
         if io.od[0x6200, 1] != outputs:
             problems.append(f"I/O module holds outputs 0x{io.od[0x6200, 1]:02X}, "
                             f"0x{outputs:02X} sent")
-        fed = self._last_tpdo(DRIVE)
+        fed = self.obs.last_tpdo(DRIVE)
         if fed.get("velocity") != TARGET_RPM or fed.get("statusword") != 0x0237:
             problems.append(f"drive TPDO says {fed or 'nothing'}")
-        if self._last_tpdo(IO).get("inputs") != outputs:
-            problems.append(f"I/O module TPDO says {self._last_tpdo(IO) or 'nothing'}")
+        if self.obs.last_tpdo(IO).get("inputs") != outputs:
+            problems.append(f"I/O module TPDO says {self.obs.last_tpdo(IO) or 'nothing'}")
         if problems:
             return False, "; ".join(problems)
         return True, (f"drive enabled (statusword 0x0237), velocity 0 -> {TARGET_RPM} rpm; "
@@ -449,14 +327,12 @@ class Scenario:
         drive = self.devices[DRIVE]
         if self.faults.emcy_off:
             drive.od[0x1014, 0] = 0x80000000 | (0x80 + DRIVE)
-        with self._lock:
-            before = len(self.seen.emcy)
-        self._say(self._name(DRIVE), "over-temperature: raises EMCY 0x4310")
+        before = len(self.obs.emcys())
+        self.obs.say(self.obs.name(DRIVE), "over-temperature: raises EMCY 0x4310")
         drive.emcy_raise(EMCY_CODE, b"\x5a")
 
         def arrived() -> list[EmcyEvent]:
-            with self._lock:
-                return [e for e in self.seen.emcy[before:] if e.node == DRIVE]
+            return [e for e in self.obs.emcys(before) if e.node == DRIVE]
 
         self.wait_until(lambda: bool(arrived()), 0.2)
         got = arrived()
@@ -468,17 +344,15 @@ class Scenario:
 
     def heartbeat_loss(self) -> tuple[bool, str]:
         sensor = self.devices[SENSOR]
-        with self._lock:
-            before = len(self.seen.heartbeat)
+        before = len(self.obs.heartbeat_events())
         if not self.faults.keeps_beating:
-            self._say(self._name(SENSOR), "falls silent (no heartbeat, no PDO)")
+            self.obs.say(self.obs.name(SENSOR), "falls silent (no heartbeat, no PDO)")
             sensor.od[0x1017, 0] = 0
             if sensor.nmt_state != "INITIALISING":  # else it never spoke at all
                 sensor.nmt_apply("stop")
         def losses() -> list[HeartbeatEvent]:
-            with self._lock:
-                return [e for e in self.seen.heartbeat[before:]
-                        if e.node == SENSOR and e.kind == "lost"]
+            return [e for e in self.obs.heartbeat_events(before)
+                    if e.node == SENSOR and e.kind == "lost"]
 
         self.wait_until(lambda: bool(losses()), 2 * CONSUMER_MS / 1000 + 0.1)
         lost = losses()
