@@ -6,6 +6,10 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import pty
+import re
+import select
+import signal
 import subprocess
 import sys
 import threading
@@ -277,3 +281,30 @@ def test_module_runs_as_a_program() -> None:
                           env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert proc.returncode == 2
     one_line_error(proc.stderr)
+
+
+def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
+    url = f"socketcand://127.0.0.1:{hub.port}/tty"
+    peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="tty")
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "canola.cli", "monitor", "--bus", url],
+                            stdout=follower, stderr=subprocess.PIPE, text=True)
+    os.close(follower)
+    screen = b""
+    try:
+        with _repeating(peer, [(0x703, b"\x05")], 0.1):
+            deadline = time.monotonic() + 30
+            while b"OPERATIONAL" not in screen and time.monotonic() < deadline:
+                ready, _, _ = select.select([leader], [], [], 0.5)
+                if ready:
+                    screen += os.read(leader, 65536)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(10) == 0
+        assert proc.stderr is not None and proc.stderr.read() == ""
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        os.close(leader)
+        peer.shutdown()
+    assert b"\x1b[H\x1b[2J" in screen  # redrawn in place
+    assert re.search(rb"\n\s+3\s+OPERATIONAL", screen)

@@ -28,7 +28,7 @@ def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
     return code, out, err
 
 
-def _wait_line(proc: subprocess.Popen[str], pattern: str, timeout: float = 20) -> str:
+def _wait_line(proc: subprocess.Popen[str], pattern: str, timeout: float = 90) -> str:
     assert proc.stdout is not None
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -61,7 +61,8 @@ def bus_opts() -> Iterator[list[str]]:
 def test_device_and_cli_processes(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                   bus_opts: list[str]) -> None:
     dev = subprocess.Popen([PY, "-m", "canola.cli", "device", "--eds", str(EDS), "--node-id",
-                            "33", *bus_opts], stdout=subprocess.PIPE, text=True)
+                            "33", "--sdo-timeout", "5000", *bus_opts], stdout=subprocess.PIPE,
+                           text=True)
     try:
         _wait_line(dev, "node 33: PRE-OPERATIONAL")
         assert cli(capsys, "sdo", "read", "33", "0x1018:1", *bus_opts)[:2] == (0, "0x00000CA0\n")
@@ -69,10 +70,11 @@ def test_device_and_cli_processes(capsys: pytest.CaptureFixture[str], tmp_path: 
         assert cli(capsys, "sdo", "read", "33", "0x2001:0", "i16", *bus_opts)[1] == "-42\n"
         blob = os.urandom(1500)
         (tmp_path / "in.bin").write_bytes(blob)
+        slow = ["--timeout", "5000"]  # the SocketCAN tier runs under emulation: slow answers
         assert cli(capsys, "sdo", "download", "33", "0x2004:0", str(tmp_path / "in.bin"),
-                   *bus_opts)[::2] == (0, "")
+                   *bus_opts, *slow)[::2] == (0, "")
         assert cli(capsys, "sdo", "upload", "33", "0x2004:0", str(tmp_path / "out.bin"),
-                   *bus_opts)[::2] == (0, "")
+                   *bus_opts, *slow)[::2] == (0, "")
         assert (tmp_path / "out.bin").read_bytes() == blob
         code, out, err = cli(capsys, "sdo", "read", "34", "0x1000:0", "--timeout", "200",
                              *bus_opts)

@@ -184,3 +184,15 @@ def test_asyncio_in_parallel(net: Net, can_bus: Callable[[], can.BusABC]) -> Non
 
         with pytest.raises(SdoTimeout, match="node 98"):
             asyncio.run(silent())
+
+
+def test_periodic_time(net: Net) -> None:
+    times: list[float] = []
+    net.network.subscribe(0x100, lambda can_id, data, ts: times.append(time.monotonic()))
+    net.master.start_time(50)
+    assert wait_until(lambda: len(times) >= 4)
+    net.master.stop_time()
+    time.sleep(0.2)
+    count = len(times)
+    time.sleep(0.2)
+    assert len(times) == count  # stopped

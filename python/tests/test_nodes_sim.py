@@ -179,6 +179,17 @@ def test_pdos_sync_time(net: tuple[SimBus, Master, Device]) -> None:
     bus.run_for(1000)
     assert times == [TimeOfDay(1000, 2)]
     assert "100#E80300000200" in _frames(bus)
+    # periodic TIME, from a clock of the application's
+    ticks = iter(range(100))
+    began = bus.now_us
+    master.start_time(100, clock=lambda: dt.datetime(1984, 1, 1, 0, 0, next(ticks),
+                                                      tzinfo=dt.UTC))
+    bus.run_for(350_000)
+    master.stop_time()
+    bus.run_for(300_000)
+    assert times[1:] == [TimeOfDay(0, 0), TimeOfDay(1000, 0), TimeOfDay(2000, 0)]
+    stamps = [line.split()[0] for line in bus.trace if " 100#" in line]
+    assert stamps[1:] == [f"({(began + k * 100_000) / 1e6:.6f})" for k in (1, 2, 3)]
 
 
 def test_store_dir(tmp_path: Path) -> None:
@@ -245,6 +256,23 @@ def test_bad_construction() -> None:
     master = Master(bus, node_id=4)
     with pytest.raises(Error, match="not started"):
         master.sdo(5).upload(0x1000, 0)
+    with pytest.raises(Error, match="cannot read file"):
+        Device(DATA / "missing.eds", 5, bus)
+    with pytest.raises(Error, match="sdo_timeout_ms 0"):
+        Master(bus, node_id=2, sdo_timeout_ms=0)
+    with pytest.raises(Error, match="CAN-ID 2048"):
+        master.send(0x800)
+    with pytest.raises(Error, match="at most 8 bytes"):
+        master.send_pdo(0x205, bytes(9))
+    with pytest.raises(Error, match="counter overflow 1"):
+        master.start_sync(1000, overflow=1)
+    with pytest.raises(Error, match="cannot monitor node 4"):
+        master.monitor(4, 100)
+    master.start()
+    with pytest.raises(Error, match="sub-index 256"):
+        master.sdo(5).upload(0x1000, 256)
+    with pytest.raises(Error, match="index 65536"):
+        master.sdo(5).download(0x10000, 0, b"")
 
 
 def test_deterministic() -> None:

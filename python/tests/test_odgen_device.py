@@ -85,8 +85,8 @@ static int upload(co_sim_bus_t *bus, co_node_t *client, const co_od_entry_t *e,
     return 0;
 }
 
-static co_od_entry_t client_entries[1] = {{0x1000, 0, CO_TYPE_UNSIGNED32, CO_OD_RO, 4u, NULL,
-                                           NULL, NULL, NULL}};
+static co_od_entry_t client_entries[1] = {
+    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4u}};
 static uint32_t client_device_type;
 
 int main(int argc, char **argv)

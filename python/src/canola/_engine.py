@@ -58,6 +58,15 @@ class Frame:
         return f"Frame(0x{self.can_id:03X}, {self.data.hex()})"
 
 
+class _Timer:
+    __slots__ = ("due_us", "fn", "period_us")
+
+    def __init__(self, due_us: int, period_us: int, fn: Callable[[], None]) -> None:
+        self.due_us = due_us
+        self.period_us = period_us
+        self.fn = fn
+
+
 def _frame_in(frame: Any, timestamp: float) -> Frame:
     return Frame(int(frame.id), bytes(frame.data[0:frame.len]),
                  rtr=bool(frame.flags & lib.CO_FRAME_RTR),
@@ -106,6 +115,7 @@ class Engine:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
             _check(int(err[0]), "co_node_init")
         self.node = lib.canola_py_dev_node(raw)
+        self._timers: list[_Timer] = []
         self._t0 = time.monotonic_ns()
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -143,6 +153,29 @@ class Engine:
                 fn()
             except Exception:
                 log.exception("%s: a callback raised", self.name)
+
+    # ---- periodic work of the Python side (e.g. TIME production), in the node's time
+
+    def add_timer(self, period_us: int, fn: Callable[[], None]) -> _Timer:
+        """Run ``fn`` every ``period_us`` (first one period from now), like a callback."""
+        timer = _Timer(self.now_us() + period_us, period_us, fn)
+        self._timers.append(timer)
+        return timer
+
+    def remove_timer(self, timer: _Timer) -> None:
+        if timer in self._timers:
+            self._timers.remove(timer)
+
+    def next_timer_us(self) -> int | None:
+        return min((t.due_us for t in self._timers), default=None)
+
+    def run_timers(self, now_us: int) -> None:
+        for timer in list(self._timers):
+            if timer.due_us <= now_us:
+                timer.due_us += timer.period_us
+                if timer.due_us <= now_us:  # fell behind (a slow machine): skip, no burst
+                    timer.due_us = now_us + timer.period_us
+                self.later(timer.fn)
 
     def in_bus_thread(self) -> bool:
         return self._thread is not None and threading.current_thread() is self._thread
@@ -223,7 +256,11 @@ class Engine:
         while not self._stop.is_set():
             with self._lock:
                 due = int(lib.co_node_poll(self.node, self.now_us()))
+            self.run_timers(self.now_us())
             self.dispatch()
+            timer = self.next_timer_us()
+            if timer is not None:
+                due = min(due, timer)
             wait = MAX_WAIT_S
             if due != lib.CO_TIME_NEVER:
                 wait = min(MAX_WAIT_S, max(0.0, (due - self.now_us()) / 1e6))

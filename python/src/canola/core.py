@@ -272,9 +272,19 @@ class SimBus:
         """Advance virtual time to ``until_us``, delivering frames and polling nodes."""
         if until_us < self.now_us:
             raise Error(f"cannot run back in time (now {self.now_us} us, asked {until_us} us)")
-        _check(lib.co_sim_run_until(self._bus, until_us), "co_sim_run_until")
-        for engine in self._engines:
-            engine.dispatch()
+        while True:  # step to the timers of the Python side (canola.Master's TIME)
+            step = until_us
+            for engine in self._engines:
+                due = engine.next_timer_us()
+                if due is not None and due < step:
+                    step = max(due, self.now_us)
+            _check(lib.co_sim_run_until(self._bus, step), "co_sim_run_until")
+            for engine in self._engines:
+                engine.run_timers(self.now_us)
+            for engine in self._engines:
+                engine.dispatch()
+            if self.now_us >= until_us:
+                break
 
     def run_for(self, us: int) -> None:
         """Advance virtual time by ``us``."""

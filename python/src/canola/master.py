@@ -30,11 +30,11 @@ import threading
 import time
 from collections.abc import Callable
 from importlib import resources
-from typing import Any, Literal, TypeVar
+from typing import Any, TypeVar
 
 from canola import eds, values
 from canola._core import ffi, lib
-from canola._engine import Bus, Frame
+from canola._engine import Bus, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
     EmcyEvent,
@@ -94,7 +94,8 @@ class SdoClient:
     transfer earlier than the master's SDO time-out. An abort (from either side) raises
     :class:`~canola.errors.SdoAbort` with its ``code``; no answer raises
     :class:`SdoTimeout` (code 0x05040000). One transfer at a time per node: a second one
-    waits for the first.
+    waits for the first. On a SimBus every form runs the simulated bus until the transfer
+    ends (the asyncio forms too: virtual time has no other driver).
     """
 
     def __init__(self, master: Master, node: int) -> None:
@@ -291,6 +292,7 @@ class Master(NodeBase):
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
         self._engine.add_frame_listener(self._frame)
+        self._time_timer: _Timer | None = None
 
     def __enter__(self) -> Master:
         self.start()
@@ -447,6 +449,22 @@ class Master(NodeBase):
             err = int(lib.co_time_send(node, ffi.new("co_time_of_day_t *", tod)))
         check(err, "co_time_send")
 
+    def start_time(self, period_ms: int,
+                   clock: Callable[[], dt.datetime] | None = None) -> None:
+        """Produce TIME every ``period_ms``: ``clock()`` (default: now, UTC) each time.
+        Replaces a running TIME production."""
+        if not isinstance(period_ms, int) or not 1 <= period_ms <= 86_400_000:
+            raise Error(f"TIME period {period_ms!r} ms is outside 1..86400000")
+        self.stop_time()
+        self._time_timer = self._engine.add_timer(
+            period_ms * 1000, lambda: self.send_time(clock() if clock else None))
+
+    def stop_time(self) -> None:
+        """Stop producing TIME periodically."""
+        if self._time_timer is not None:
+            self._engine.remove_timer(self._time_timer)
+            self._time_timer = None
+
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` pass: virtual time on a SimBus, a sleep on python-can."""
         bus = self._engine.bus
@@ -455,5 +473,3 @@ class Master(NodeBase):
         else:
             time.sleep(seconds)
 
-
-Mode = Literal["auto", "block"]

@@ -8,7 +8,7 @@ import json
 import sys
 import time
 from collections.abc import Iterator
-from typing import Any, NoReturn
+from typing import Any, Literal, NoReturn, overload
 
 import can
 
@@ -120,8 +120,19 @@ def emit_json(obj: Any) -> None:
     sys.stdout.flush()
 
 
-def live_frames(bus: can.BusABC, duration: float | None) -> Iterator[LogFrame]:
-    """Frames received on ``bus`` until ``duration`` seconds have passed (forever if None)."""
+@overload
+def live_frames(bus: can.BusABC, duration: float | None) -> Iterator[LogFrame]: ...
+
+
+@overload
+def live_frames(bus: can.BusABC, duration: float | None, *,
+                idle: Literal[True]) -> Iterator[LogFrame | None]: ...
+
+
+def live_frames(bus: can.BusABC, duration: float | None, *,
+                idle: bool = False) -> Iterator[LogFrame | None]:
+    """Frames received on ``bus`` until ``duration`` seconds have passed (forever if None);
+    with ``idle``, None whenever 0.2 s pass without a frame."""
     deadline = None if duration is None else time.monotonic() + duration
     channel = str(getattr(bus, "channel_info", "bus"))
     while True:
@@ -130,6 +141,8 @@ def live_frames(bus: can.BusABC, duration: float | None) -> Iterator[LogFrame]:
             return
         msg = bus.recv(wait)
         if msg is None or msg.is_error_frame:
+            if idle:
+                yield None
             continue
         yield LogFrame(msg.timestamp, channel, msg.arbitration_id, bytes(msg.data),
                        msg.is_extended_id, msg.is_remote_frame)

@@ -9,7 +9,14 @@ import signal
 import threading
 from types import FrameType
 
-from canola.cli.common import CliError, Parser, add_bus_options, bus_from_args, node_id
+from canola.cli.common import (
+    CliError,
+    Parser,
+    add_bus_options,
+    bus_from_args,
+    node_id,
+    positive_ms,
+)
 from canola.device import Device
 from canola.errors import Error
 
@@ -26,12 +33,17 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p.add_argument("--node-id", type=node_id, required=True, metavar="N", help="1..127")
     add_bus_options(p)
     p.add_argument("--store", metavar="DIR", help="parameter storage folder")
+    p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
+                   help="the SDO server's time-out (default 1000 ms; max 65535)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     if not os.path.isfile(args.eds):
         raise CliError(f"cannot read {args.eds}: no such file")
+    if args.sdo_timeout > 0xFFFF:
+        raise CliError(f"canola device: error: --sdo-timeout {args.sdo_timeout}: at most 65535",
+                       2)
     if args.store is not None and not os.path.isdir(args.store):
         raise CliError(f"--store {args.store}: not a folder")
     stop = threading.Event()
@@ -44,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     bus = bus_from_args(args)
     try:
         try:
-            device = Device(args.eds, args.node_id, bus, store_dir=args.store)
+            device = Device(args.eds, args.node_id, bus, store_dir=args.store,
+                            sdo_timeout_ms=args.sdo_timeout)
         except Error as exc:
             raise CliError(f"{args.eds}: {exc}") from None
 

@@ -53,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
                 break
     except CandumpError as exc:
         raise CliError(str(exc)) from None
+    except KeyboardInterrupt:  # Ctrl-C ends a live dump
+        pass
     return 0
 
 

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
+
+import can
 
 from canola.cli.common import (
     CliError,
@@ -50,14 +53,21 @@ def run(args: argparse.Namespace) -> int:
             else:
                 print(render(rows, view.frames))
             return 0
-        next_draw = 0.0
-        for f in live_frames(bus, None):  # until Ctrl-C
-            view.feed(time.time(), f.can_id, f.data, rtr=f.rtr, extended=f.extended)
-            if time.monotonic() >= next_draw:
-                next_draw = time.monotonic() + 0.5
-                sys.stdout.write("\x1b[H\x1b[2J" + render(view.rows(time.time()), view.frames)
-                                 + "\n")
-                sys.stdout.flush()
+        with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C is how the live view ends
+            _live(view, bus)
     finally:
         bus.shutdown()
     return 0
+
+
+def _live(view: NetworkView, bus: can.BusABC) -> None:
+    next_draw = 0.0
+    frames = live_frames(bus, None, idle=True)
+    for f in frames:
+        if f is not None:
+            view.feed(time.time(), f.can_id, f.data, rtr=f.rtr, extended=f.extended)
+        if time.monotonic() >= next_draw:  # redrawn on a quiet bus too (ages grow)
+            next_draw = time.monotonic() + 0.5
+            sys.stdout.write("\x1b[H\x1b[2J" + render(view.rows(time.time()), view.frames)
+                             + "\n")
+            sys.stdout.flush()
