@@ -1,5 +1,6 @@
 # canola -- the commands of the README. Everything builds out of tree with CMake.
-#   make demo    the demo network on the simulated bus
+#   make demo    the demo network (canola demo, from the Python environment)
+#   make demo-c  the C demo network on the simulated bus, as a candump log
 #   make test    every test: normal build, ASan+UBSan build, format check
 #   make bench   instruction counts (valgrind) as a Markdown table (BENCH_QUICK=1: quick)
 #   make format  rewrite the sources with clang-format
@@ -18,7 +19,7 @@ $(BUILD)/build.stamp: FORCE
 	@cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	@cmake --build $(BUILD)
 
-demo: all
+demo-c: all
 	./$(BUILD)/sim_network
 
 test: test-plain test-san test-configs test-python test-vcan format-check
@@ -54,6 +55,12 @@ PY_VENV = build-py/venv
 py-env:
 	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)
 	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[test]'
+
+# The README's main command: a master and three devices through boot-up, SDO configuration,
+# SYNC and PDOs, EMCY and heartbeat loss, decoded and checked (canola demo --help).
+demo:
+	@test -x $(PY_VENV)/bin/canola || $(MAKE) --no-print-directory py-env
+	$(PY_VENV)/bin/canola demo
 
 test-python: py-env
 	cd python && ../$(PY_VENV)/bin/python -m pytest -q tests

@@ -25,6 +25,7 @@ from collections.abc import Callable, Sequence
 from canola import __version__, odgen
 from canola.cli import (
     bus_cmd,
+    demo_cmd,
     device_cmd,
     dump_cmd,
     gateway_cmd,
@@ -41,6 +42,7 @@ __all__ = ["build_parser", "main"]
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
     dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
+    demo_cmd.register,
 )
 
 

@@ -1,0 +1,366 @@
+"""The flow of the demo (seed 001, "Logic Summary"), step by step, each step checked.
+
+A master (node 1, :class:`canola.Master`) and the three devices of
+:mod:`canola.demo.devices` (:class:`canola.Device` each, with its application):
+
+1. the devices power on; the master sees their boot-ups (0x700 + node, data 00);
+2. the master sends NMT "enter pre-operational" to all;
+3. it configures each heartbeat producer by SDO (0x1017 = 100 ms), reads it back and
+   watches the heartbeats (time-out 250 ms);
+4. it maps the first TPDO (synchronous) and RPDO of each device by SDO, with the CiA 301
+   procedure (PDO off, mapping count 0, entries, count, transmission type, PDO on), and
+   reads the mappings back;
+5. NMT start: every heartbeat must then say OPERATIONAL;
+6. SYNC every 10 ms: every device answers each SYNC with its TPDO;
+7. the master sends RPDOs (drive: controlword, target velocity; I/O module: outputs): the
+   devices apply them and the new values come back in their TPDOs;
+8. the drive raises an EMCY (0x4310, excess temperature); the master reports it;
+9. the sensor falls silent; the master reports the heartbeat loss.
+
+A step passes on what the master observes (and, for RPDOs, on the device's dictionary).
+A failing step does not stop the demo: the next steps run and say what they see.
+:class:`Faults` breaks a step on purpose (``canola demo --fault``), to see the checks work.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from canola.decode import emcy_text
+from canola.demo.devices import (
+    DEVICES,
+    DRIVE,
+    IO,
+    SENSOR,
+    Mapped,
+    attach_application,
+    eds_path,
+)
+from canola.demo.network import Network
+from canola.demo.observer import Observer
+from canola.demo.report import STEPS, Step
+from canola.demo.trace import Trace
+from canola.device import Device
+from canola.errors import Error
+from canola.master import EmcyEvent, HeartbeatEvent, Master
+
+__all__ = ["FAULTS", "Faults", "Scenario"]
+
+MASTER_ID = 1
+HEARTBEAT_MS = 100
+CONSUMER_MS = 250
+SYNC_US = 10_000
+SYNCS = 5  # SYNC cycles of the TPDO step
+TARGET_RPM = 1500
+EMCY_CODE = 0x4310  # CiA 402: excess temperature, drive
+
+
+@dataclass(frozen=True)
+class Faults:
+    """Faults to inject: devices that never power on, the drive's EMCY switched off, the
+    sensor that keeps beating instead of falling silent."""
+
+    never_boots: frozenset[int] = frozenset()
+    emcy_off: bool = False
+    keeps_beating: bool = False
+
+
+#: ``canola demo --fault NAME``.
+FAULTS: dict[str, Faults] = {
+    "sensor-never-boots": Faults(never_boots=frozenset({SENSOR})),
+    "drive-emcy-off": Faults(emcy_off=True),
+    "sensor-keeps-beating": Faults(keeps_beating=True),
+}
+
+
+def _read_int(master: Master, node: int, index: int, sub: int, data_type: str) -> int:
+    value = master.sdo(node).read(index, sub, data_type)
+    if not isinstance(value, int):
+        raise Error(f"0x{index:04X}:{sub:02X} of node {node} is not a number")
+    return value
+
+
+def _nodes(ids: list[int] | set[int]) -> str:
+    ids = sorted(ids)
+    if not ids:
+        return "no node"
+    return ("node " if len(ids) == 1 else "nodes ") + ", ".join(map(str, ids))
+
+
+class Scenario:
+    """The network on ``net``, telling its story on ``trace``."""
+
+    def __init__(self, net: Network, trace: Trace, faults: Faults | None = None, *,
+                 time_scale: int = 1) -> None:
+        if not 1 <= time_scale <= 100:
+            raise Error(f"time scale {time_scale} is outside 1..100")
+        self.net = net
+        self.scale = time_scale
+        self.heartbeat_ms = HEARTBEAT_MS * time_scale
+        self.consumer_ms = CONSUMER_MS * time_scale
+        self.sync_us = SYNC_US * time_scale
+        self.trace = trace
+        self.faults = faults or Faults()
+        self.specs = {spec.node_id: spec for spec in DEVICES}
+        self.obs = Observer(net, trace)
+        # a node that does not answer costs little virtual time, but real buses may be slow
+        self.master = Master(net.node_bus(), MASTER_ID,
+                             sdo_timeout_ms=min(0xFFFF, (300 if net.virtual else 1000)
+                                                * time_scale))
+        self.devices: dict[int, Device] = {}
+        for spec in DEVICES:
+            dev = Device(eds_path(spec), spec.node_id, net.node_bus())
+            attach_application(spec, dev)
+            self.obs.watch_device(spec, dev)
+            self.devices[spec.node_id] = dev
+        self.obs.watch_master(self.master)
+
+    def wait(self, seconds: float) -> None:
+        self.net.wait(seconds, self.obs.tick)
+
+    def wait_until(self, done: Callable[[], bool], at_most: float) -> bool:
+        """Let time pass in 10 ms steps until ``done()`` or ``at_most`` seconds (times the
+        time scale) passed."""
+        end = self.net.now() + at_most * self.scale
+        while not done():
+            if self.net.now() >= end:
+                return False
+            self.wait(0.01)
+        return True
+
+    # ---- the flow
+
+    def run(self) -> list[Step]:
+        steps = [Step(key, title) for key, title in STEPS]
+        actions: dict[str, Callable[[], tuple[bool, str]]] = {
+            "boot-up": self.boot, "pre-operational": self.preop,
+            "heartbeat": self.heartbeat, "pdo-mapping": self.pdo_mapping,
+            "start": self.start, "sync-tpdo": self.sync_tpdo, "rpdo": self.rpdo,
+            "emcy": self.emcy, "heartbeat-loss": self.heartbeat_loss,
+        }
+        try:
+            for n, step in enumerate(steps, 1):
+                self.trace.heading(f"{n}. {step.title}")
+                try:
+                    step.ok, step.detail = actions[step.key]()
+                except Error as exc:
+                    step.ok, step.detail = False, str(exc)
+                self.obs.tick()
+            self.master.stop_sync()
+            self.wait(0.02)
+        finally:
+            self.close()
+        return steps
+
+    def close(self) -> None:
+        for node in (self.master, *self.devices.values()):
+            node.stop()
+
+    def boot(self) -> tuple[bool, str]:
+        self.master.start()
+        for node, dev in self.devices.items():
+            if node not in self.faults.never_boots:
+                dev.start()
+        def all_booted() -> bool:
+            return self.obs.bootups() >= set(self.devices)
+
+        self.wait_until(all_booted, 0.5)
+        booted = self.obs.bootups()
+        missing = set(self.devices) - booted
+        if missing:
+            return False, f"no boot-up from {_nodes(missing)}"
+        return True, f"{_nodes(booted)} booted"
+
+    def preop(self) -> tuple[bool, str]:
+        sent = self._nmt_seen("preop")
+        self.master.nmt(0, "preop")
+        self.wait_until(lambda: self._nmt_seen("preop") > sent and all(
+            d.nmt_state == "PRE-OPERATIONAL" for d in self.devices.values()), 0.2)
+        if self._nmt_seen("preop") == sent:
+            return False, "the NMT command did not reach the bus"
+        wrong = {n: d.nmt_state for n, d in self.devices.items()
+                 if d.nmt_state != "PRE-OPERATIONAL"}
+        if wrong:
+            return False, "; ".join(f"node {n} is {s}" for n, s in sorted(wrong.items()))
+        return True, f"{_nodes(list(self.devices))} pre-operational"
+
+    def _each(self, fn: Callable[[int], None]) -> dict[int, str]:
+        """Run ``fn`` for every device; the errors by node (SDO aborts, time-outs)."""
+        errors = {}
+        for node in self.devices:
+            try:
+                fn(node)
+            except Error as exc:
+                errors[node] = str(exc)
+        return errors
+
+    @staticmethod
+    def _failed(errors: dict[int, str]) -> str:
+        return "; ".join(f"node {n}: {e}" for n, e in sorted(errors.items()))
+
+    def heartbeat(self) -> tuple[bool, str]:
+        def configure(node: int) -> None:
+            sdo = self.master.sdo(node)
+            sdo.write(0x1017, 0, "u16", self.heartbeat_ms)
+            back = _read_int(self.master, node, 0x1017, 0, "u16")
+            if back != self.heartbeat_ms:
+                raise Error(f"0x1017 reads back {back}")
+            self.master.monitor(node, self.consumer_ms)
+
+        errors = self._each(configure)
+        self.obs.tick()
+        self.wait_until(lambda: all(self.master.heartbeat_state(n) == "PRE-OPERATIONAL"
+                                    for n in self.devices), 2.5 * HEARTBEAT_MS / 1000)
+        for node in self.devices:
+            state = self.master.heartbeat_state(node)
+            if node not in errors and state != "PRE-OPERATIONAL":
+                errors[node] = f"heartbeat says {state or 'nothing'}"
+        if errors:
+            return False, self._failed(errors)
+        return True, (f"0x1017 = {self.heartbeat_ms} ms on {_nodes(list(self.devices))}, all "
+                      f"heard PRE-OPERATIONAL (time-out {self.consumer_ms} ms)")
+
+    def _map(self, node: int, comm: int, *, mapping: tuple[Mapped, ...],
+             transmission: int) -> None:
+        mapping_index, cob_id = comm + 0x200, (0x180 if comm >= 0x1800 else 0x200) + node
+        sdo = self.master.sdo(node)
+        sdo.write(comm, 1, "u32", 0x80000000 | cob_id)  # PDO off while it changes
+        sdo.write(mapping_index, 0, "u8", 0)
+        for i, m in enumerate(mapping, 1):
+            sdo.write(mapping_index, i, "u32", m.entry)
+        sdo.write(mapping_index, 0, "u8", len(mapping))
+        sdo.write(comm, 2, "u8", transmission)
+        sdo.write(comm, 1, "u32", cob_id)
+        count = _read_int(self.master, node, mapping_index, 0, "u8")
+        back = [_read_int(self.master, node, mapping_index, i, "u32")
+                for i in range(1, count + 1)]
+        if back != [m.entry for m in mapping]:
+            raise Error(f"0x{mapping_index:04X} reads back "
+                        + ", ".join(f"0x{v:08X}" for v in back))
+
+    def pdo_mapping(self) -> tuple[bool, str]:
+        def configure(node: int) -> None:
+            spec = self.specs[node]
+            self._map(node, 0x1800, mapping=spec.tpdo, transmission=1)  # every SYNC
+            if spec.rpdo:
+                self._map(node, 0x1400, mapping=spec.rpdo, transmission=255)  # at once
+
+        errors = self._each(configure)
+        self.obs.mapped = True
+        if errors:
+            return False, self._failed(errors)
+        rx = [n for n, s in self.specs.items() if s.rpdo]
+        return True, (f"TPDO1 on every SYNC for {_nodes(list(self.devices))}, RPDO1 for "
+                      f"{_nodes(rx)}, read back")
+
+    def start(self) -> tuple[bool, str]:
+        self.master.nmt(0, "start")
+        self.wait_until(lambda: all(self.master.heartbeat_state(n) == "OPERATIONAL"
+                                    for n in self.devices), 2.5 * HEARTBEAT_MS / 1000)
+        wrong = {n: self.master.heartbeat_state(n) for n in self.devices}
+        wrong = {n: s for n, s in wrong.items() if s != "OPERATIONAL"}
+        if wrong:
+            return False, "; ".join(f"node {n} heartbeat says {s or 'nothing'}"
+                                    for n, s in sorted(wrong.items()))
+        return True, f"{_nodes(list(self.devices))} heard OPERATIONAL"
+
+    def _nmt_seen(self, command: str) -> int:
+        """How many NMT ``command`` frames to all nodes the trace has seen."""
+        return sum(1 for _, ev in self.trace.events if ev.kind == "nmt"
+                   and ev.fields.get("command") == command and ev.fields.get("target") == 0)
+
+    def _syncs(self) -> int:
+        return sum(1 for _, ev in self.trace.events if ev.kind == "sync")
+
+    def sync_tpdo(self) -> tuple[bool, str]:
+        syncs0, tpdos0 = self._syncs(), self.obs.tpdo_counts()
+        began = self.net.now()
+        self.master.start_sync(self.sync_us)
+        # five SYNCs; on a busy machine a real-time master may be late, so wait up to 20
+        self.wait_until(lambda: self._syncs() - syncs0 >= SYNCS,
+                        4 * SYNCS * SYNC_US / 1e6)
+        syncs, took_ms = self._syncs() - syncs0, (self.net.now() - began) * 1000
+
+        def answered() -> dict[int, int]:
+            return {n: c - tpdos0[n] for n, c in self.obs.tpdo_counts().items()}
+
+        # the TPDOs of the last SYNC may still be on their way (real buses)
+        self.wait_until(lambda: min(answered().values()) >= syncs, 0.05)
+        tpdos = answered()
+        short = {n: c for n, c in tpdos.items() if c < syncs}
+        if syncs < SYNCS:
+            return False, f"{syncs} SYNCs in {took_ms:.0f} ms (period {self.sync_us} us)"
+        if short:
+            return False, "; ".join(f"node {n}: {c} TPDOs for {syncs} SYNCs"
+                                    for n, c in sorted(short.items()))
+        return True, (f"{syncs} SYNCs in {took_ms:.0f} ms (period {self.sync_us // 1000} ms), "
+                      "TPDOs " + ", ".join(f"node {n} {c}" for n, c in sorted(tpdos.items())))
+
+    def rpdo(self) -> tuple[bool, str]:
+        outputs = 0
+        for cycle in range(25):
+            control = (0x0006, 0x0007)[cycle] if cycle < 2 else 0x000F
+            target = TARGET_RPM if cycle >= 2 else 0
+            self.master.send_pdo(0x200 + DRIVE, control.to_bytes(2, "little")
+                                 + target.to_bytes(4, "little", signed=True))
+            outputs = 1 << (cycle // 5)
+            self.master.send_pdo(0x200 + IO, bytes([outputs]))
+            self.wait(self.sync_us / 1e6)
+        drive, io = self.devices[DRIVE], self.devices[IO]
+        self.wait_until(lambda: self.obs.last_tpdo(IO).get("inputs") == outputs
+                        and self.obs.last_tpdo(DRIVE).get("velocity") == TARGET_RPM, 0.2)
+        problems = []
+        if drive.od[0x60FF, 0] != TARGET_RPM or drive.od[0x6040, 0] != 0x000F:
+            problems.append(f"drive holds target velocity {drive.od[0x60FF, 0]}, "
+                            f"controlword 0x{drive.od[0x6040, 0]:04X}")
+        if io.od[0x6200, 1] != outputs:
+            problems.append(f"I/O module holds outputs 0x{io.od[0x6200, 1]:02X}, "
+                            f"0x{outputs:02X} sent")
+        fed = self.obs.last_tpdo(DRIVE)
+        if fed.get("velocity") != TARGET_RPM or fed.get("statusword") != 0x0237:
+            problems.append(f"drive TPDO says {fed or 'nothing'}")
+        if self.obs.last_tpdo(IO).get("inputs") != outputs:
+            problems.append(f"I/O module TPDO says {self.obs.last_tpdo(IO) or 'nothing'}")
+        if problems:
+            return False, "; ".join(problems)
+        return True, (f"drive enabled (statusword 0x0237), velocity 0 -> {TARGET_RPM} rpm; "
+                      f"I/O outputs 0x{outputs:02X} back as inputs")
+
+    def emcy(self) -> tuple[bool, str]:
+        drive = self.devices[DRIVE]
+        if self.faults.emcy_off:
+            drive.od[0x1014, 0] = 0x80000000 | (0x80 + DRIVE)
+        before = len(self.obs.emcys())
+        self.obs.say(self.obs.name(DRIVE), "over-temperature: raises EMCY 0x4310")
+        drive.emcy_raise(EMCY_CODE, b"\x5a")
+
+        def arrived() -> list[EmcyEvent]:
+            return [e for e in self.obs.emcys(before) if e.node == DRIVE]
+
+        self.wait_until(lambda: bool(arrived()), 0.2)
+        got = arrived()
+        if not any(e.code == EMCY_CODE for e in got):
+            return False, f"no EMCY 0x{EMCY_CODE:04X} from node {DRIVE} reached the master"
+        reg = next(e.register for e in got if e.code == EMCY_CODE)
+        return True, (f"node {DRIVE}: 0x{EMCY_CODE:04X} {emcy_text(EMCY_CODE)}, "
+                      f"error register 0x{reg:02X}")
+
+    def heartbeat_loss(self) -> tuple[bool, str]:
+        sensor = self.devices[SENSOR]
+        before = len(self.obs.heartbeat_events())
+        if not self.faults.keeps_beating:
+            self.obs.say(self.obs.name(SENSOR), "falls silent (no heartbeat, no PDO)")
+            sensor.od[0x1017, 0] = 0
+            if sensor.nmt_state != "INITIALISING":  # else it never spoke at all
+                sensor.nmt_apply("stop")
+        def losses() -> list[HeartbeatEvent]:
+            return [e for e in self.obs.heartbeat_events(before)
+                    if e.node == SENSOR and e.kind == "lost"]
+
+        self.wait_until(lambda: bool(losses()), 2 * CONSUMER_MS / 1000 + 0.1)
+        lost = losses()
+        if not lost:
+            return False, f"the master reported no heartbeat loss of node {SENSOR}"
+        return True, (f"node {SENSOR} lost after {self.consumer_ms} ms, "
+                      f"last state {lost[0].state}")
