@@ -1,7 +1,24 @@
 """canola: the Python side of the canola CANopen stack."""
 
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from canola.errors import Diagnostic, EdsError, Error, SdoAbort
+
+if TYPE_CHECKING:
+    from canola.device import Device
+    from canola.master import Master, SdoTimeout
 
 __version__ = "0.1.0"
 
-__all__ = ["Diagnostic", "EdsError", "Error", "SdoAbort", "__version__"]
+__all__ = ["Device", "Diagnostic", "EdsError", "Error", "Master", "SdoAbort", "SdoTimeout",
+           "__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    # Device and Master load the C core (cffi) on first use, not on `import canola`.
+    module = {"Device": "canola.device", "Master": "canola.master",
+              "SdoTimeout": "canola.master"}.get(name)
+    if module is not None:
+        return getattr(importlib.import_module(module), name)
+    raise AttributeError(f"module 'canola' has no attribute {name!r}")

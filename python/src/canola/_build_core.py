@@ -29,9 +29,24 @@ _SOURCES = [
     *sorted(glob.glob(os.path.join(_ROOT, "src", "*.c"))),
     os.path.join(_ROOT, "port", "sim", "sim.c"),
     os.path.join(_ROOT, "port", "sim", "sim_storage.c"),
+    os.path.join(_ROOT, "port", "linux", "file_storage.c"),
 ]
 _INCLUDES = [os.path.join(_ROOT, "include"), os.path.join(_ROOT, "src"),
-             os.path.join(_ROOT, "port", "sim")]
+             os.path.join(_ROOT, "port", "sim"), os.path.join(_ROOT, "port", "linux")]
+
+# Sizes of the core in the extension: a master watches up to 127 nodes (heartbeat and EMCY
+# consumers), talks SDO to several at once, and devices from real EDS files have many PDOs.
+# Everything in the extension is compiled with the same values.
+_CONFIG = [
+    ("CO_HB_CONSUMERS_MAX", "127"),
+    ("CO_EMCY_CONSUMERS_MAX", "127"),
+    ("CO_SDO_CLIENTS_MAX", "16"),
+    ("CO_RPDO_MAX", "64"),
+    ("CO_TPDO_MAX", "64"),
+    ("CO_TX_QUEUE_LEN", "64"),
+    ("CO_EMCY_QUEUE_LEN", "16"),
+    ("CO_SDO_BUF_SIZE", "4096"),  # values up to 4 KiB downloaded into RAM entries
+]
 
 CDEF = """
 typedef uint32_t co_abort_t;
@@ -85,6 +100,33 @@ typedef void (*co_sim_trace_fn)(void *ctx, const char *line);
 
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
+#define CO_FRAME_EXT ...
+#define CO_FRAME_RTR ...
+#define CO_TIME_NEVER ...
+typedef struct co_frame { uint32_t id; uint8_t flags; uint8_t len; uint8_t data[8]; } co_frame_t;
+typedef struct co_ec_event { int kind; uint8_t node_id; uint8_t state; uint8_t previous;
+                             ...; } co_ec_event_t;
+typedef struct co_emcy_msg { uint32_t cob_id; uint16_t code; uint8_t reg;
+                             uint8_t manufacturer[5]; ...; } co_emcy_msg_t;
+typedef struct co_time_of_day { uint32_t ms; uint16_t days; ...; } co_time_of_day_t;
+typedef enum co_ec_event_kind { CO_EC_BOOT, CO_EC_REMOTE_RESET, CO_EC_STARTED,
+    CO_EC_STATE_CHANGED, CO_EC_HB_TIMEOUT, CO_EC_HB_RESUMED, CO_EC_NOT_BOOTED,
+    CO_EC_GUARD_TIMEOUT, CO_EC_GUARD_TOGGLE, CO_EC_GUARD_RESUMED, CO_EC_LIFE_GUARD,
+    CO_EC_LIFE_GUARD_RESUMED, ... } co_ec_event_kind_t;
+
+void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame);
+uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
+co_err_t co_node_send(co_node_t *node, const co_frame_t *frame);
+co_err_t co_emcy_raise(co_node_t *node, uint16_t code, const uint8_t *manufacturer);
+co_err_t co_emcy_clear(co_node_t *node, uint16_t code);
+bool co_emcy_active(const co_node_t *node, uint16_t code);
+co_err_t co_time_send(co_node_t *node, const co_time_of_day_t *t);
+co_time_of_day_t co_time_from_us(uint64_t us_since_1984);
+uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub);
+co_err_t co_tpdo_request(co_node_t *node, uint8_t n);
+uint8_t co_hb_remote_state(const co_node_t *node, uint8_t node_id);
+co_err_t co_nmt_apply(co_node_t *node, co_nmt_cmd_t cmd);
+
 co_err_t co_node_start(co_node_t *node, uint64_t now_us);
 uint8_t co_node_id(const co_node_t *node);
 co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
@@ -113,6 +155,19 @@ void co_sim_set_trace(co_sim_bus_t *bus, co_sim_trace_fn fn, void *ctx);
 double co_sim_load(const co_sim_bus_t *bus);
 
 /* helpers of the binding (preamble below) */
+typedef struct canola_py_dev canola_py_dev_t;
+canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, co_od_entry_t *entries, uint32_t count,
+                                   uint8_t node_id, uint16_t sdo_timeout_ms,
+                                   const char *store_dir, bool raw_port, void *user,
+                                   co_err_t *err);
+void canola_py_dev_free(canola_py_dev_t *dev);
+co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+void canola_py_dev_touch(canola_py_dev_t *dev);
+co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                              uint32_t cap, uint32_t *len, uint8_t *type);
+co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub,
+                               const uint8_t *data, uint32_t len);
+int canola_py_entry_key(const co_od_entry_t *entry);
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
 void canola_py_bus_free(co_sim_bus_t *bus);
 uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
@@ -125,12 +180,24 @@ co_node_t *canola_py_node_ptr(canola_py_node_t *node);
 extern "Python" void canola_py_trace(void *ctx, const char *line);
 extern "Python" void canola_py_sdo_done(void *ctx, uint8_t channel, co_abort_t abort,
                                         uint32_t len);
+extern "Python" co_err_t canola_py_tx(void *ctx, const co_frame_t *frame);
+extern "Python" void canola_py_on_state(void *user, co_nmt_state_t state);
+extern "Python" void canola_py_on_errctl(void *user, const co_ec_event_t *event);
+extern "Python" void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
+extern "Python" void canola_py_on_sync(void *user, uint8_t counter);
+extern "Python" void canola_py_on_time(void *user, const co_time_of_day_t *time);
+extern "Python" void canola_py_on_rpdo(void *user, uint16_t rpdo);
+extern "Python" void canola_py_written(void *ctx, const co_od_entry_t *entry);
+extern "Python" void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
 """
 
 PREAMBLE = r"""
 #include <stdlib.h>
+#include <string.h>
 #include "canola/canola.h"
 #include "canola/sim.h"
+#include "canola/file_storage.h"
+#include "internal.h"
 
 typedef struct canola_py_node {
     co_node_t node;
@@ -184,6 +251,169 @@ static canola_py_node_t *canola_py_node_new(co_sim_bus_t *bus, const co_od_entry
 static void canola_py_node_free(canola_py_node_t *node) { free(node); }
 
 static co_node_t *canola_py_node_ptr(canola_py_node_t *node) { return &node->node; }
+
+/* canola.Device / canola.Master: a node with every callback routed to Python (`user` is
+ * the Python object's handle), on a simulated bus (`bus`, with an optional raw port that
+ * sees every frame) or on a driver whose tx is Python (bus NULL: python-can). */
+static co_err_t canola_py_tx(void *ctx, const co_frame_t *frame);
+static void canola_py_on_state(void *user, co_nmt_state_t state);
+static void canola_py_on_errctl(void *user, const co_ec_event_t *event);
+static void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
+static void canola_py_on_sync(void *user, uint8_t counter);
+static void canola_py_on_time(void *user, const co_time_of_day_t *time);
+static void canola_py_on_rpdo(void *user, uint16_t rpdo);
+static void canola_py_written(void *ctx, const co_od_entry_t *entry);
+static void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
+
+typedef struct canola_py_dev {
+    co_node_t node;
+    co_sim_port_t port;
+    co_sim_port_t raw;
+    co_file_storage_t fs;
+    co_od_hooks_t hooks;
+    void *user;
+    /* frames this node sent on the simulated bus and its raw port has not seen come back:
+     * the raw port skips them (python-can does not hand a bus its own frames either) */
+    co_frame_t own[64];
+    uint32_t own_head, own_count;
+} canola_py_dev_t;
+
+static co_err_t canola_py_sim_tx(void *ctx, const co_frame_t *frame)
+{
+    canola_py_dev_t *d = ctx;
+    co_err_t err = co_sim_send(&d->port, frame);
+    if (err == CO_OK && d->raw.bus) {
+        if (d->own_count == 64) { /* forget the oldest */
+            d->own_head = (d->own_head + 1) % 64;
+            d->own_count--;
+        }
+        d->own[(d->own_head + d->own_count++) % 64] = *frame;
+    }
+    return err;
+}
+
+static bool same_frame(const co_frame_t *a, const co_frame_t *b)
+{
+    return a->id == b->id && a->flags == b->flags && a->len == b->len &&
+           ((a->flags & CO_FRAME_RTR) || memcmp(a->data, b->data, a->len) == 0);
+}
+
+static void canola_py_sim_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame)
+{
+    canola_py_dev_t *d = ctx;
+    for (uint32_t i = 0; i < d->own_count; i++) {
+        co_frame_t *f = &d->own[(d->own_head + i) % 64];
+        if (same_frame(f, frame)) { /* drop it and everything sent before it */
+            d->own_head = (d->own_head + i + 1) % 64;
+            d->own_count -= i + 1;
+            return;
+        }
+    }
+    canola_py_raw_rx(d->user, now_us, frame);
+}
+
+static canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, co_od_entry_t *entries,
+                                          uint32_t count, uint8_t node_id,
+                                          uint16_t sdo_timeout_ms, const char *store_dir,
+                                          bool raw_port, void *user, co_err_t *err)
+{
+    canola_py_dev_t *d = calloc(1, sizeof *d);
+    if (!d) {
+        *err = CO_ERR_FULL;
+        return NULL;
+    }
+    co_node_config_t cfg = {0};
+    cfg.node_id = node_id;
+    cfg.od.entries = entries;
+    cfg.od.count = count;
+    cfg.od.hook_ctx = user;
+    cfg.sdo_timeout_ms = sdo_timeout_ms;
+    cfg.user = user;
+    cfg.on_state = canola_py_on_state;
+    cfg.on_errctl = canola_py_on_errctl;
+    cfg.on_emcy = canola_py_on_emcy;
+    cfg.on_sync = canola_py_on_sync;
+    cfg.on_time = canola_py_on_time;
+    cfg.on_rpdo = canola_py_on_rpdo;
+    d->hooks.written = canola_py_written;
+    d->user = user;
+    for (uint32_t i = 0; i < count; i++) {
+        if (entries[i].hooks == NULL) {
+            entries[i].hooks = &d->hooks;
+        }
+    }
+    if (store_dir) {
+        *err = co_file_storage_init(&d->fs, store_dir);
+        if (*err != CO_OK) {
+            free(d);
+            return NULL;
+        }
+        cfg.storage = &d->fs.api;
+    }
+    if (bus) {
+        *err = co_sim_port_attach(bus, &d->port);
+        if (*err == CO_OK && raw_port) {
+            *err = co_sim_port_attach_raw(bus, &d->raw, canola_py_sim_raw_rx, d);
+        }
+        if (*err != CO_OK) {
+            return d; /* attached ports stay with the bus: the caller keeps d with it */
+        }
+        cfg.driver.tx = canola_py_sim_tx;
+        cfg.driver.ctx = d;
+    } else {
+        cfg.driver.tx = canola_py_tx;
+        cfg.driver.ctx = user;
+    }
+    *err = co_node_init(&d->node, &cfg);
+    if (*err != CO_OK) {
+        d->port.bus_off = true;
+        return d;
+    }
+    if (bus) {
+        co_sim_port_bind(&d->port, &d->node);
+    }
+    return d;
+}
+
+static void canola_py_dev_free(canola_py_dev_t *dev) { free(dev); }
+
+static co_node_t *canola_py_dev_node(canola_py_dev_t *dev) { return &dev->node; }
+
+/* The application changed the node between two runs of the simulated bus: poll it at the
+ * next instant the bus runs (its deadline may have moved). */
+static void canola_py_dev_touch(canola_py_dev_t *dev) { dev->port.node_due_us = 0; }
+
+/* Application access: no access rights; writes take the node's path (limits, service
+ * checks, event-driven TPDOs mapping the entry). */
+static co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                                     uint32_t cap, uint32_t *len, uint8_t *type)
+{
+    co_abort_t abort;
+    const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, &abort);
+    if (!e) {
+        return abort;
+    }
+    *type = e->type;
+    uint32_t total = 0;
+    abort = co_od_read(&node->cfg.od, e, 0, buf, cap, len, &total);
+    if (abort == CO_ABORT_NONE && total != CO_OD_SIZE_UNKNOWN && total > *len) {
+        return CO_ABORT_LEN_HIGH;
+    }
+    return abort;
+}
+
+static co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub,
+                                      const uint8_t *data, uint32_t len)
+{
+    co_abort_t abort;
+    const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, &abort);
+    return e ? co_node_write_entry(node, e, data, len) : abort;
+}
+
+static int canola_py_entry_key(const co_od_entry_t *entry)
+{
+    return (int)((uint32_t)entry->index << 8 | entry->sub);
+}
 """
 
 ffibuilder = cffi.FFI()
@@ -193,6 +423,7 @@ ffibuilder.set_source(
     PREAMBLE,
     sources=[_rel(p) for p in _SOURCES],
     include_dirs=[_rel(p) for p in _INCLUDES],
+    define_macros=_CONFIG,
 )
 
 if __name__ == "__main__":

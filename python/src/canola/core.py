@@ -139,9 +139,13 @@ class Od:
                 attr = 0
                 for name in e.attr.split("|"):
                     attr |= int(getattr(lib, name.strip()))
-                value, dflt = _storage(gen, var, e.kind, e.ctype, e.size, keep=keep)
+                size = e.size
+                if e.kind == _OSTRING:  # an OCTET_STRING keeps the length of its default
+                    init = gen.octets(var, *gen.value_text(var))
+                    size = len(init) or size
+                value, dflt = _storage(gen, var, e.kind, e.ctype, size, keep=keep)
                 limits = _limits(gen, var, e.kind) if e.limits is not None else ffi.NULL
-                built.append((var, attr, e.size, value, dflt, limits))
+                built.append((var, attr, size, value, dflt, limits))
         count = len(built)
         entries = ffi.new("co_od_entry_t[]", max(count, 1))
         infos = []
@@ -250,7 +254,9 @@ class SimBus:
         self._trace_handle = ffi.new_handle(self.trace)
         lib.co_sim_set_trace(self._bus, lib.canola_py_trace, self._trace_handle)
         # nodes live as long as the bus: their ports stay attached to it
-        self._nodes: list[tuple[Any, Od]] = []
+        self._nodes: list[tuple[Any, Any]] = []
+        # canola.Device / canola.Master engines: their callbacks run after each run
+        self._engines: list[Any] = []
 
     @property
     def now_us(self) -> int:
@@ -264,7 +270,21 @@ class SimBus:
 
     def run_until(self, until_us: int) -> None:
         """Advance virtual time to ``until_us``, delivering frames and polling nodes."""
-        _check(lib.co_sim_run_until(self._bus, until_us), "co_sim_run_until")
+        if until_us < self.now_us:
+            raise Error(f"cannot run back in time (now {self.now_us} us, asked {until_us} us)")
+        while True:  # step to the timers of the Python side (canola.Master's TIME)
+            step = until_us
+            for engine in self._engines:
+                due = engine.next_timer_us()
+                if due is not None and due < step:
+                    step = max(due, self.now_us)
+            _check(lib.co_sim_run_until(self._bus, step), "co_sim_run_until")
+            for engine in self._engines:
+                engine.run_timers(self.now_us)
+            for engine in self._engines:
+                engine.dispatch()
+            if self.now_us >= until_us:
+                break
 
     def run_for(self, us: int) -> None:
         """Advance virtual time by ``us``."""
@@ -281,14 +301,18 @@ class _Transfer:
         self.abort = 0
         self.length = 0
 
+    def notify(self) -> None:
+        """Called (from the C completion) once ``done``, ``abort`` and ``length`` are set."""
+
 
 @ffi.def_extern()  # type: ignore[untyped-decorator]
 def canola_py_sdo_done(ctx: Any, channel: int, abort: int, length: int) -> None:
     del channel
     t: _Transfer = ffi.from_handle(ctx)
-    t.done = True
     t.abort = int(abort)
     t.length = int(length)
+    t.done = True
+    t.notify()
 
 
 class Node:

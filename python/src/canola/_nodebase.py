@@ -1,0 +1,336 @@
+"""What :class:`canola.Device` and :class:`canola.Master` share: an engine, the NMT
+state, start/stop, callbacks, and typed local access to the node's own dictionary."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from canola import eds, values
+from canola._core import ffi, lib
+from canola._engine import Bus, Engine, Frame
+from canola.core import NMT_CMDS, Od, _check
+from canola.errors import Error, SdoAbort
+from canola.odgen import GenerateOptions
+
+__all__ = ["STATE_NAMES", "EmcyEvent", "Frame", "HeartbeatEvent", "LocalOd", "NodeBase"]
+
+#: NMT state value -> the name :attr:`NodeBase.nmt_state` gives.
+STATE_NAMES: dict[int, str] = {
+    0x00: "INITIALISING",
+    0x04: "STOPPED",
+    0x05: "OPERATIONAL",
+    0x7F: "PRE-OPERATIONAL",
+}
+
+#: NMT command names accepted by Master.nmt and Device.nmt_apply (with aliases).
+NMT_NAMES: dict[str, int] = {
+    **NMT_CMDS,
+    "preop": NMT_CMDS["pre-operational"],
+    "pre-op": NMT_CMDS["pre-operational"],
+    "reset": NMT_CMDS["reset-node"],
+    "reset-comm": NMT_CMDS["reset-communication"],
+}
+
+_EC_KINDS = {
+    int(lib.CO_EC_BOOT): "boot",
+    int(lib.CO_EC_REMOTE_RESET): "reset",
+    int(lib.CO_EC_STARTED): "started",
+    int(lib.CO_EC_STATE_CHANGED): "state",
+    int(lib.CO_EC_HB_TIMEOUT): "lost",
+    int(lib.CO_EC_HB_RESUMED): "resumed",
+    int(lib.CO_EC_NOT_BOOTED): "not-booted",
+    int(lib.CO_EC_GUARD_TIMEOUT): "guard-lost",
+    int(lib.CO_EC_GUARD_TOGGLE): "guard-toggle",
+    int(lib.CO_EC_GUARD_RESUMED): "guard-resumed",
+    int(lib.CO_EC_LIFE_GUARD): "life-guard",
+    int(lib.CO_EC_LIFE_GUARD_RESUMED): "life-guard-resumed",
+}
+
+
+def nmt_command(command: str | int) -> int:
+    """The NMT command specifier of a name (start, stop, pre-operational/preop,
+    reset-node, reset-communication) or a specifier."""
+    if isinstance(command, int) and not isinstance(command, bool):
+        if command not in NMT_CMDS.values():
+            raise Error(f"unknown NMT command specifier 0x{command:02X}")
+        return command
+    if isinstance(command, str) and command.strip().lower() in NMT_NAMES:
+        return NMT_NAMES[command.strip().lower()]
+    raise Error(f"unknown NMT command {command!r} (one of {', '.join(NMT_NAMES)})")
+
+
+@dataclass(frozen=True)
+class HeartbeatEvent:
+    """A heartbeat consumer event: ``kind`` is boot, reset, started, state, lost, resumed,
+    not-booted (or a guarding kind); ``state``/``previous`` are state names."""
+
+    node: int
+    kind: str
+    state: str
+    previous: str
+
+
+@dataclass(frozen=True)
+class EmcyEvent:
+    """An EMCY received: sender ``node``, error ``code``, error ``register`` and the five
+    ``manufacturer`` bytes. ``code`` 0 is "error reset / no error"."""
+
+    node: int
+    code: int
+    register: int
+    manufacturer: bytes
+    cob_id: int
+
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def load_od(source: str | os.PathLike[str] | eds.ObjectDictionary, node_id: int,
+            options: GenerateOptions) -> Od:
+    model = source if isinstance(source, eds.ObjectDictionary) else eds.parse(source)
+    return Od.from_eds(model, node_id, options)
+
+
+class NodeBase:
+    """Engine, NMT state, start/stop, callbacks."""
+
+    _kind = "node"
+
+    def __init__(self, bus: Bus, od: Od, node_id: int, *, sdo_timeout_ms: int,
+                 store_dir: str | os.PathLike[str] | None, raw_frames: bool) -> None:
+        if not 1 <= sdo_timeout_ms <= 0xFFFF:
+            raise Error(f"sdo_timeout_ms {sdo_timeout_ms} is outside 1..65535")
+        self.sdo_timeout_ms = sdo_timeout_ms
+        store = os.fspath(store_dir) if store_dir is not None else None
+        if store is not None and not os.path.isdir(store):
+            raise Error(f"store_dir {store!r} is not a folder")
+        self._types = {(i.index, i.sub): (i.type, i.size) for i in od.infos}
+        self._engine = Engine(bus, od, node_id, self, sdo_timeout_ms=sdo_timeout_ms,
+                              store_dir=store, raw_frames=raw_frames,
+                              name=f"canola-{self._kind}-{node_id}")
+        self.node_id = node_id
+        self.od = LocalOd(self)
+        self._state_cbs: list[Callable[[str], None]] = []
+        self._write_cbs: list[Callable[[int, int, values.Value], None]] = []
+        self._sync_cbs: list[Callable[[int], None]] = []
+        self._time_cbs: list[Callable[[values.TimeOfDay], None]] = []
+        self._rpdo_cbs: list[Callable[[int], None]] = []
+        self._hb_cbs: list[Callable[[HeartbeatEvent], None]] = []
+        self._emcy_cbs: list[Callable[[EmcyEvent], None]] = []
+
+    @property
+    def bus(self) -> Bus:
+        return self._engine.bus
+
+    # ---- life cycle
+
+    def start(self) -> None:
+        """Power the node on (boot-up, pre-operational) and, on python-can, start the bus
+        thread. Calling it after :meth:`stop` resumes the thread."""
+        self._engine.start()
+
+    def stop(self) -> None:
+        """Stop the bus thread (python-can; waits up to 2 s). The node keeps its state."""
+        self._engine.stop()
+
+    def __enter__(self) -> NodeBase:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    @property
+    def nmt_state(self) -> str:
+        """INITIALISING, PRE-OPERATIONAL, OPERATIONAL or STOPPED."""
+        with self._engine.locked() as node:
+            state = int(lib.co_nmt_state(node))
+        return STATE_NAMES.get(state, f"0x{state:02X}")
+
+    # ---- callbacks (each returns its function, so they work as decorators)
+
+    def on_state(self, fn: F) -> F:
+        """``fn(state_name)`` after this node's NMT state changed."""
+        self._state_cbs.append(fn)
+        return fn
+
+    def on_write(self, fn: F) -> F:
+        """``fn(index, sub, value)`` after the network (SDO, RPDO) wrote an entry."""
+        self._write_cbs.append(fn)
+        return fn
+
+    def on_sync(self, fn: F) -> F:
+        """``fn(counter)`` on every SYNC (0 when SYNCs carry no counter)."""
+        self._sync_cbs.append(fn)
+        return fn
+
+    def on_time(self, fn: F) -> F:
+        """``fn(TimeOfDay)`` on every TIME consumed (0x1012 bit 31)."""
+        self._time_cbs.append(fn)
+        return fn
+
+    def on_rpdo(self, fn: F) -> F:
+        """``fn(rpdo)`` (0-based) after an RPDO was applied."""
+        self._rpdo_cbs.append(fn)
+        return fn
+
+    def on_heartbeat(self, fn: F) -> F:
+        """``fn(HeartbeatEvent)`` for heartbeat consumer (0x1016) events."""
+        self._hb_cbs.append(fn)
+        return fn
+
+    def on_emcy(self, fn: F) -> F:
+        """``fn(EmcyEvent)`` for every EMCY the consumer (0x1028) receives."""
+        self._emcy_cbs.append(fn)
+        return fn
+
+    # ---- C callbacks (under the lock): queue the work for after
+
+    def _fire(self, cbs: list[Callable[..., None]], *args: Any) -> None:
+        for fn in list(cbs):
+            self._engine.later(lambda fn=fn: fn(*args))  # type: ignore[misc]
+
+    def _on_state(self, state: int) -> None:
+        self._fire(self._state_cbs, STATE_NAMES.get(state, f"0x{state:02X}"))
+
+    def _on_written(self, index: int, sub: int) -> None:
+        if not self._write_cbs:
+            return
+        try:
+            value = self.od._read_locked(index, sub)
+        except Error:
+            return
+        self._fire(self._write_cbs, index, sub, value)
+
+    def _on_sync(self, counter: int) -> None:
+        self._fire(self._sync_cbs, counter)
+
+    def _on_time(self, ms: int, days: int) -> None:
+        self._fire(self._time_cbs, values.TimeOfDay(ms, days))
+
+    def _on_rpdo(self, rpdo: int) -> None:
+        self._fire(self._rpdo_cbs, rpdo)
+
+    def _on_errctl(self, kind: int, node_id: int, state: int, previous: int) -> None:
+        def name(s: int) -> str:
+            return STATE_NAMES.get(s, "unknown")
+        self._fire(self._hb_cbs, HeartbeatEvent(node_id, _EC_KINDS.get(kind, str(kind)),
+                                                name(state), name(previous)))
+
+    def _on_emcy(self, cob_id: int, code: int, reg: int, manufacturer: bytes) -> None:
+        self._fire(self._emcy_cbs, EmcyEvent(cob_id & 0x7F, code, reg, manufacturer, cob_id))
+
+
+class LocalOd:
+    """The node's own dictionary from the application side: ``od[index][sub]`` and
+    ``od[index, sub]`` read and write typed values (see :mod:`canola.values`), without
+    access rights (the application may set read-only entries) but with limits and the
+    node's service rules; a write to a mapped object triggers event-driven TPDOs.
+    Failures raise :class:`~canola.errors.SdoAbort` with the CiA code."""
+
+    def __init__(self, owner: NodeBase) -> None:
+        self._owner = owner
+
+    def _info(self, index: int, sub: int) -> tuple[int, int]:
+        if not (isinstance(index, int) and isinstance(sub, int)):
+            raise Error(f"index and sub-index are integers, not {index!r}, {sub!r}")
+        info = self._owner._types.get((index, sub))
+        if info is None:
+            known = any(i == index for i, _ in self._owner._types)
+            raise SdoAbort(0x06090011 if known else 0x06020000)
+        return info
+
+    def __contains__(self, key: object) -> bool:
+        if isinstance(key, tuple):
+            return key in self._owner._types
+        return any(i == key for i, _ in self._owner._types)
+
+    def __iter__(self) -> Iterator[tuple[int, int]]:
+        return iter(sorted(self._owner._types))
+
+    def type_of(self, index: int, sub: int) -> int:
+        """The CiA 301 data type code of an entry."""
+        return self._info(index, sub)[0]
+
+    def read(self, index: int, sub: int) -> bytes:
+        """The wire bytes of an entry."""
+        _, size = self._info(index, sub)
+        with self._owner._engine.locked() as node:
+            return self._raw_read(node, index, sub, size)
+
+    @staticmethod
+    def _raw_read(node: Any, index: int, sub: int, size: int) -> bytes:
+        cap = max(size, 8)
+        buf = ffi.new("uint8_t[]", cap)
+        n = ffi.new("uint32_t *")
+        kind = ffi.new("uint8_t *")
+        code = int(lib.canola_py_app_read(node, index, sub, buf, cap, n, kind))
+        if code:
+            raise SdoAbort(code)
+        return bytes(ffi.buffer(buf, int(n[0])))
+
+    def _read_locked(self, index: int, sub: int) -> values.Value:
+        data_type, size = self._info(index, sub)
+        data = self._raw_read(self._owner._engine.node, index, sub, size)
+        return values.decode(data_type, data)
+
+    def write(self, index: int, sub: int, data: bytes) -> None:
+        """Write wire bytes to an entry (application write)."""
+        self._info(index, sub)
+        engine = self._owner._engine
+        with engine.locked() as node:
+            engine.app_writing = True
+            try:
+                code = int(lib.canola_py_app_write(node, index, sub, bytes(data), len(data)))
+            finally:
+                engine.app_writing = False
+        if code:
+            raise SdoAbort(code)
+
+    def get(self, index: int, sub: int = 0) -> values.Value:
+        data_type, _ = self._info(index, sub)
+        return values.decode(data_type, self.read(index, sub))
+
+    def set(self, index: int, sub: int, value: values.Value) -> None:
+        data_type, _ = self._info(index, sub)
+        self.write(index, sub, values.encode(data_type, value))
+
+    def __getitem__(self, key: int | tuple[int, int]) -> Any:
+        if isinstance(key, tuple):
+            return self.get(*key)
+        self._info(key, 0) if (key, 0) in self._owner._types else self._info(key, 1)
+        return _ObjectView(self, key)
+
+    def __setitem__(self, key: tuple[int, int], value: values.Value) -> None:
+        if not isinstance(key, tuple):
+            raise Error("write an entry as od[index, sub] = value or od[index][sub] = value")
+        self.set(key[0], key[1], value)
+
+
+class _ObjectView:
+    """``od[index]``: its sub-indices by ``[sub]``; ``.value`` is sub-index 0."""
+
+    def __init__(self, od: LocalOd, index: int) -> None:
+        self._od = od
+        self.index = index
+
+    def __getitem__(self, sub: int) -> values.Value:
+        return self._od.get(self.index, sub)
+
+    def __setitem__(self, sub: int, value: values.Value) -> None:
+        self._od.set(self.index, sub, value)
+
+    @property
+    def value(self) -> values.Value:
+        return self._od.get(self.index, 0)
+
+    @value.setter
+    def value(self, value: values.Value) -> None:
+        self._od.set(self.index, 0, value)
+
+
+def check(err: int, what: str) -> None:
+    _check(err, what)

@@ -1,0 +1,7 @@
+"""``python -m canola.cli``: the ``canola`` command."""
+
+import sys
+
+from canola.cli import main
+
+sys.exit(main())

@@ -1,0 +1,148 @@
+"""What every ``canola`` sub-command shares: the parser class, bus options, argument types,
+and the one-line error convention."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Iterator
+from typing import Any, Literal, NoReturn, overload
+
+import can
+
+from canola.buses import BusError, open_bus
+from canola.candump import LogFrame
+
+__all__ = [
+    "CliError",
+    "Parser",
+    "UsageError",
+    "add_bus_options",
+    "bus_from_args",
+    "emit_json",
+    "live_frames",
+    "node_id",
+    "node_or_all",
+    "object_address",
+    "positive_ms",
+]
+
+
+class CliError(Exception):
+    """A failure the command reports as one line on stderr, exit code 1."""
+
+    def __init__(self, message: str, code: int = 1) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+class UsageError(CliError):
+    """Bad arguments: one line on stderr, exit code 2."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message, 2)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, but a bad argument is one line (``canola sdo read: error: ...``)."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(f"{self.prog}: error: {message} (see {self.prog} --help)")
+
+
+def node_id(text: str) -> int:
+    """A node-ID 1..127 (decimal or 0x-hex)."""
+    try:
+        value = int(text, 0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127") from None
+    if not 1 <= value <= 127:
+        raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127")
+    return value
+
+
+def node_or_all(text: str) -> int:
+    """A node-ID 1..127, or ``all`` (0)."""
+    if text.lower() in ("all", "0"):
+        return 0
+    try:
+        return node_id(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127 or all") from None
+
+
+def object_address(text: str) -> tuple[int, int]:
+    """``INDEX[:SUB]``: the index in hex (``0x1018`` or ``1018``), the sub-index decimal or
+    0x-hex (default 0)."""
+    index_text, _, sub_text = text.partition(":")
+    try:
+        index = int(index_text[2:] if index_text.lower().startswith("0x") else index_text, 16)
+        sub = int(sub_text, 0) if sub_text else 0
+    except ValueError:
+        index = sub = -1
+    if not (0 <= index <= 0xFFFF and 0 <= sub <= 0xFF) or not index_text:
+        raise argparse.ArgumentTypeError(
+            f"bad object {text!r}: INDEX:SUB, e.g. 0x1018:1")
+    return index, sub
+
+
+def positive_ms(text: str) -> int:
+    try:
+        value = int(text, 0)
+    except ValueError:
+        value = -1
+    if not 1 <= value <= 3_600_000:
+        raise argparse.ArgumentTypeError(f"bad time {text!r}: 1..3600000 ms")
+    return value
+
+
+def add_bus_options(parser: argparse.ArgumentParser) -> None:
+    """``--iface IFACE`` | ``--bus URL`` (one required)."""
+    group = parser.add_mutually_exclusive_group(required=True)
+    group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
+    group.add_argument("--bus", metavar="URL",
+                       help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
+                            "virtual://CHANNEL")
+
+
+def bus_from_args(args: argparse.Namespace) -> can.BusABC:
+    try:
+        return open_bus(iface=args.iface, url=args.bus)
+    except BusError as exc:
+        raise CliError(str(exc)) from None
+
+
+def emit_json(obj: Any) -> None:
+    """One JSON document per line on stdout."""
+    sys.stdout.write(json.dumps(obj, sort_keys=True) + "\n")
+    sys.stdout.flush()
+
+
+@overload
+def live_frames(bus: can.BusABC, duration: float | None) -> Iterator[LogFrame]: ...
+
+
+@overload
+def live_frames(bus: can.BusABC, duration: float | None, *,
+                idle: Literal[True]) -> Iterator[LogFrame | None]: ...
+
+
+def live_frames(bus: can.BusABC, duration: float | None, *,
+                idle: bool = False) -> Iterator[LogFrame | None]:
+    """Frames received on ``bus`` until ``duration`` seconds have passed (forever if None);
+    with ``idle``, None whenever 0.2 s pass without a frame."""
+    deadline = None if duration is None else time.monotonic() + duration
+    channel = str(getattr(bus, "channel_info", "bus"))
+    while True:
+        wait = 0.2 if deadline is None else min(0.2, deadline - time.monotonic())
+        if wait <= 0:
+            return
+        msg = bus.recv(wait)
+        if msg is None or msg.is_error_frame:
+            if idle:
+                yield None
+            continue
+        yield LogFrame(msg.timestamp, channel, msg.arbitration_id, bytes(msg.data),
+                       msg.is_extended_id, msg.is_remote_frame)

@@ -1,0 +1,80 @@
+"""``canola device``: run a canola device (canola.Device) from an EDS/DCF on a bus."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import signal
+import threading
+from types import FrameType
+
+from canola.cli.common import (
+    CliError,
+    Parser,
+    add_bus_options,
+    bus_from_args,
+    node_id,
+    positive_ms,
+)
+from canola.device import Device
+from canola.errors import Error
+
+log = logging.getLogger("canola.device")
+
+
+def register(subs: argparse._SubParsersAction[Parser]) -> None:
+    p = subs.add_parser(
+        "device", help="run a device from an EDS/DCF",
+        description="Run a canola device with the dictionary of an EDS/DCF on a bus until "
+                    "SIGINT/SIGTERM; prints its NMT state changes. With --store, 0x1010 "
+                    "'save' writes the parameters to DIR and resets load them.")
+    p.add_argument("--eds", required=True, metavar="FILE", help="EDS or DCF file")
+    p.add_argument("--node-id", type=node_id, required=True, metavar="N", help="1..127")
+    add_bus_options(p)
+    p.add_argument("--store", metavar="DIR", help="parameter storage folder")
+    p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
+                   help="the SDO server's time-out (default 1000 ms; max 65535)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if not os.path.isfile(args.eds):
+        raise CliError(f"cannot read {args.eds}: no such file")
+    if args.sdo_timeout > 0xFFFF:
+        raise CliError(f"canola device: error: --sdo-timeout {args.sdo_timeout}: at most 65535",
+                       2)
+    if args.store is not None and not os.path.isdir(args.store):
+        raise CliError(f"--store {args.store}: not a folder")
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        del signum, frame
+        stop.set()
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    bus = bus_from_args(args)
+    try:
+        try:
+            device = Device(args.eds, args.node_id, bus, store_dir=args.store,
+                            sdo_timeout_ms=args.sdo_timeout)
+        except Error as exc:
+            raise CliError(f"{args.eds}: {exc}") from None
+
+        def on_state(state: str) -> None:
+            print(f"node {args.node_id}: {state}", flush=True)
+
+        device.on_state(on_state)
+        device.start()
+        print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
+        try:
+            while not stop.wait(0.2):
+                pass
+        finally:
+            device.stop()
+        print(f"canola device: node {args.node_id} stopped", flush=True)
+    finally:
+        bus.shutdown()
+        for s, handler in old.items():
+            signal.signal(s, handler)
+    return 0

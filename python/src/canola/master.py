@@ -1,0 +1,475 @@
+"""canola.Master: an NMT master and SDO client run by the C core, on a python-can bus or a
+SimBus.
+
+    master = canola.Master(bus, node_id=127)
+    master.start()
+    master.nmt(5, "start")                      # node 0 = all nodes
+    name = master.sdo(5).upload(0x1008, 0)      # bytes; SdoAbort on an abort code
+    master.sdo(5).download(0x6000, 1, b"\\x2a")
+    value = await master.sdo(5).aupload(0x1018, 1)   # asyncio
+    master.monitor(5, 1500)                      # heartbeat consumer
+    master.on_heartbeat(print); master.on_emcy(print)
+    master.start_sync(10_000)                    # SYNC every 10 ms
+    master.send_pdo(0x205, b"\\x01\\x02")
+
+The master's own dictionary comes from ``canola/data/master.eds`` (shipped in the
+package): 16 SDO client channels (0x1280..0x128F), a heartbeat consumer for every node-ID
+(0x1016 sub N watches node N once :meth:`Master.monitor` writes it), an EMCY consumer for
+every node-ID (0x1028), and the SYNC/TIME producer objects. An EDS rather than entries
+built in code, so the dictionary is inspectable with the same tools as any device's
+(``canola odgen``, a CANopen tool's EDS view) and a user can pass an edited copy.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import datetime as dt
+import os
+import threading
+import time
+from collections.abc import Callable
+from importlib import resources
+from typing import Any, TypeVar
+
+from canola import eds, values
+from canola._core import ffi, lib
+from canola._engine import Bus, Frame, _Timer
+from canola._nodebase import (
+    STATE_NAMES,
+    EmcyEvent,
+    HeartbeatEvent,
+    NodeBase,
+    check,
+    load_od,
+    nmt_command,
+)
+from canola.core import SimBus, _Transfer
+from canola.errors import Error, SdoAbort
+from canola.odgen import GenerateOptions
+
+__all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoClient",
+           "SdoTimeout"]
+
+#: Path of the master's default EDS inside the package.
+MASTER_EDS = str(resources.files("canola") / "data" / "master.eds")
+
+_CHANNELS = 16
+_EPOCH = dt.datetime(1984, 1, 1, tzinfo=dt.UTC)
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+class SdoTimeout(SdoAbort):
+    """The server did not answer: abort code 0x05040000 (SDO protocol timed out)."""
+
+    def __init__(self, node: int, timeout_ms: int) -> None:
+        super().__init__(0x05040000)
+        self.node = node
+        self.timeout_ms = timeout_ms
+        self.args = (f"no response from node {node} (SDO time-out {timeout_ms} ms)",)
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class _SdoTransfer(_Transfer):
+    def __init__(self) -> None:
+        super().__init__()
+        self.event = threading.Event()
+        self.keep: list[Any] = []
+        self.waker: Callable[[], None] | None = None
+
+    def notify(self) -> None:
+        self.event.set()
+        if self.waker is not None:
+            self.waker()
+
+
+class SdoClient:
+    """SDO client of one remote node (one client channel of the master).
+
+    ``upload``/``download`` block until the transfer ends; ``aupload``/``adownload`` are
+    their asyncio forms. ``block=True`` uses block transfer; ``timeout`` (seconds) ends a
+    transfer earlier than the master's SDO time-out. An abort (from either side) raises
+    :class:`~canola.errors.SdoAbort` with its ``code``; no answer raises
+    :class:`SdoTimeout` (code 0x05040000). One transfer at a time per node: a second one
+    waits for the first. On a SimBus every form runs the simulated bus until the transfer
+    ends (the asyncio forms too: virtual time has no other driver).
+    """
+
+    def __init__(self, master: Master, node: int) -> None:
+        self._master = master
+        self.node = node
+        self._busy = threading.Lock()
+
+    # ---- blocking
+
+    def upload(self, index: int, sub: int, *, block: bool = False,
+               timeout: float | None = None, max_size: int = 65536) -> bytes:
+        """Read (index, sub) of the node: its wire bytes."""
+        t = self._run(self._start_upload, (index, sub, block, max_size), timeout)
+        return bytes(ffi.buffer(t.keep[0], t.length))
+
+    def download(self, index: int, sub: int, data: bytes, *, block: bool = False,
+                 timeout: float | None = None) -> None:
+        """Write ``data`` (wire bytes) to (index, sub): expedited up to 4 bytes, else
+        segmented (or block with ``block=True``)."""
+        self._run(self._start_download, (index, sub, bytes(data), block), timeout)
+
+    def read(self, index: int, sub: int, data_type: str | int, **kw: Any) -> values.Value:
+        """upload + :func:`canola.values.decode` as ``data_type`` (e.g. "u16", "vs")."""
+        return values.decode(data_type, self.upload(index, sub, **kw))
+
+    def write(self, index: int, sub: int, data_type: str | int, value: values.Value,
+              **kw: Any) -> None:
+        """:func:`canola.values.encode` as ``data_type`` + download."""
+        self.download(index, sub, values.encode(data_type, value), **kw)
+
+    # ---- asyncio
+
+    async def aupload(self, index: int, sub: int, *, block: bool = False,
+                      timeout: float | None = None, max_size: int = 65536) -> bytes:
+        """:meth:`upload` as a coroutine (the bus thread completes it)."""
+        t = await self._arun(self._start_upload, (index, sub, block, max_size), timeout)
+        return bytes(ffi.buffer(t.keep[0], t.length))
+
+    async def adownload(self, index: int, sub: int, data: bytes, *, block: bool = False,
+                        timeout: float | None = None) -> None:
+        """:meth:`download` as a coroutine."""
+        await self._arun(self._start_download, (index, sub, bytes(data), block), timeout)
+
+    # ---- machinery
+
+    def _start_upload(self, t: _SdoTransfer, index: int, sub: int, block: bool,
+                      max_size: int) -> None:
+        _check_address(index, sub)
+        if not 1 <= max_size <= 0xFFFFFFFF:
+            raise Error(f"max_size {max_size} is outside 1..2**32-1")
+        buf = ffi.new("uint8_t[]", max_size)
+        handle = ffi.new_handle(t)
+        t.keep[:] = [buf, handle]
+        self._master._start(self.node, lambda node, ch: lib.co_sdo_upload(
+            node, ch, index, sub, lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO, buf,
+            max_size, lib.canola_py_sdo_done, handle), f"SDO upload 0x{index:04X} sub {sub}")
+
+    def _start_download(self, t: _SdoTransfer, index: int, sub: int, data: bytes,
+                        block: bool) -> None:
+        _check_address(index, sub)
+        src = ffi.new("uint8_t[]", max(len(data), 1))
+        ffi.memmove(src, data, len(data))
+        handle = ffi.new_handle(t)
+        t.keep[:] = [src, handle]
+        self._master._start(self.node, lambda node, ch: lib.co_sdo_download(
+            node, ch, index, sub, lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO, src,
+            len(data), lib.canola_py_sdo_done, handle), f"SDO download 0x{index:04X} sub {sub}")
+
+    def _timeout_ms(self, timeout: float | None) -> int:
+        if timeout is None:
+            return self._master.sdo_timeout_ms
+        if timeout <= 0:
+            raise Error(f"timeout must be positive, got {timeout}")
+        return round(timeout * 1000)
+
+    def _finish(self, t: _SdoTransfer, timeout: float | None) -> _SdoTransfer:
+        if t.abort == 0x05040000:
+            raise SdoTimeout(self.node, self._timeout_ms(timeout))
+        if t.abort:
+            raise SdoAbort(t.abort)
+        return t
+
+    def _run(self, start: Callable[..., None], args: tuple[Any, ...],
+             timeout: float | None) -> _SdoTransfer:
+        master = self._master
+        engine = master._engine
+        engine.check_may_block()
+        self._timeout_ms(timeout)
+        if not master._engine.running:
+            raise Error("the master is not started: call start() first")
+        if not self._busy.acquire(timeout=600):
+            raise Error(f"SDO client of node {self.node} stays busy")
+        try:
+            t = _SdoTransfer()
+            start(t, *args)
+            bus = engine.bus
+            limit = None if timeout is None else timeout
+            if isinstance(bus, SimBus):
+                begin = bus.now_us
+                while not t.done:
+                    if limit is not None and bus.now_us - begin >= limit * 1e6:
+                        master._abort(self.node)
+                        break
+                    bus.run_until(bus.now_us + 1000)
+            else:
+                end = None if limit is None else time.monotonic() + limit
+                while not t.event.wait(0.05):
+                    if end is not None and time.monotonic() >= end:
+                        master._abort(self.node)  # completes the transfer with 0x05040000
+                        t.event.wait(5.0)
+                        break
+                    if not engine.running:
+                        master._abort(self.node)
+                        raise Error("the master was stopped during an SDO transfer")
+            if not t.done:  # pragma: no cover -- the core always completes on abort
+                raise SdoTimeout(self.node, self._timeout_ms(timeout))
+            return self._finish(t, timeout)
+        finally:
+            self._busy.release()
+
+    async def _arun(self, start: Callable[..., None], args: tuple[Any, ...],
+                    timeout: float | None) -> _SdoTransfer:
+        master = self._master
+        if isinstance(master._engine.bus, SimBus):
+            return self._run(start, args, timeout)  # virtual time: runs the bus here
+        self._timeout_ms(timeout)
+        if not master._engine.running:
+            raise Error("the master is not started: call start() first")
+        loop = asyncio.get_running_loop()
+        while not self._busy.acquire(blocking=False):
+            await asyncio.sleep(0.001)
+        try:
+            fut: asyncio.Future[None] = loop.create_future()
+
+            def resolve() -> None:
+                if not fut.done():
+                    fut.set_result(None)
+
+            def wake() -> None:
+                with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
+                    loop.call_soon_threadsafe(resolve)
+
+            t = _SdoTransfer()
+            t.waker = wake
+            start(t, *args)
+            try:
+                end = None if timeout is None else loop.time() + timeout
+                while not fut.done():
+                    try:
+                        await asyncio.wait_for(asyncio.shield(fut), 0.05)
+                    except TimeoutError:
+                        if end is not None and loop.time() >= end:
+                            master._abort(self.node)  # completes it with 0x05040000
+                            end = None
+                        elif not master._engine.running:
+                            master._abort(self.node)
+                            raise Error("the master was stopped during an SDO transfer") \
+                                from None
+            except asyncio.CancelledError:
+                master._abort(self.node)  # ends the transfer before the channel is reused
+                raise
+            return self._finish(t, timeout)
+        finally:
+            self._busy.release()
+
+
+def _check_address(index: int, sub: int) -> None:
+    if not (isinstance(index, int) and 0 <= index <= 0xFFFF):
+        raise Error(f"index {index!r} is outside 0x0000..0xFFFF")
+    if not (isinstance(sub, int) and 0 <= sub <= 0xFF):
+        raise Error(f"sub-index {sub!r} is outside 0..255")
+
+
+class Master(NodeBase):
+    """An NMT master / SDO client as node ``node_id`` on ``bus`` (python-can or SimBus).
+
+    ``eds``: another dictionary for the master (default :data:`MASTER_EDS`).
+    ``sdo_timeout_ms``: how long an SDO transfer waits for each answer.
+    Call :meth:`start` (or use ``with``).
+    """
+
+    _kind = "master"
+
+    def __init__(self, bus: Bus, node_id: int = 127, *, sdo_timeout_ms: int = 1000,
+                 eds_file: str | os.PathLike[str] | eds.ObjectDictionary | None = None) -> None:
+        if not isinstance(node_id, int) or not 1 <= node_id <= 127:
+            raise Error(f"node-ID {node_id!r} is outside 1..127")
+        od = load_od(eds_file if eds_file is not None else MASTER_EDS, node_id,
+                     GenerateOptions(min_string_size=64))
+        super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms, store_dir=None,
+                         raw_frames=True)
+        self._clients: dict[int, SdoClient] = {}
+        self._channels: dict[int, int] = {}  # node -> client channel
+        self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
+        self._bootup_cbs: list[Callable[[int], None]] = []
+        self._engine.add_frame_listener(self._frame)
+        self._time_timer: _Timer | None = None
+
+    def __enter__(self) -> Master:
+        self.start()
+        return self
+
+    # ---- NMT
+
+    def nmt(self, node: int, command: str | int) -> None:
+        """Send an NMT command to ``node`` (1..127, 0 = all): start, stop,
+        pre-operational (preop), reset-node, reset-communication. The master itself is not
+        affected."""
+        spec = nmt_command(command)
+        if not isinstance(node, int) or not 0 <= node <= 127:
+            raise Error(f"NMT target {node!r} is outside 0..127")
+        self.send(0x000, bytes([spec, node]))
+
+    # ---- SDO
+
+    def sdo(self, node: int) -> SdoClient:
+        """The SDO client of ``node`` (1..127)."""
+        if not isinstance(node, int) or not 1 <= node <= 127:
+            raise Error(f"SDO server node-ID {node!r} is outside 1..127")
+        if node == self.node_id:
+            raise Error(f"node {node} is the master itself")
+        client = self._clients.get(node)
+        if client is None:
+            client = self._clients[node] = SdoClient(self, node)
+        return client
+
+    def _start(self, node_id: int, begin: Callable[[Any, int], int], what: str) -> None:
+        with self._engine.locked() as node:
+            channel = self._channel(node, node_id)
+            err = int(begin(node, channel))
+        check(err, f"{what} of node {node_id}")
+
+    def _channel(self, node: Any, node_id: int) -> int:
+        """The client channel talking to ``node_id`` (under the lock)."""
+        channel = self._channels.get(node_id)
+        if channel is not None:
+            return channel
+        used = set(self._channels.values())
+        free = [c for c in range(_CHANNELS) if c not in used]
+        if not free:  # take the channel of a node that has no transfer open
+            for other, c in list(self._channels.items()):
+                if not lib.co_sdo_client_busy(node, c):
+                    del self._channels[other]
+                    free = [c]
+                    break
+        if not free:
+            raise Error(f"all {_CHANNELS} SDO client channels are busy")
+        channel = free[0]
+        check(int(lib.co_sdo_client_setup(node, channel, node_id)), "co_sdo_client_setup")
+        self._channels[node_id] = channel
+        return channel
+
+    def _abort(self, node_id: int) -> None:
+        channel = self._channels.get(node_id)
+        if channel is None:
+            return
+        with self._engine.locked() as node:
+            if lib.co_sdo_client_busy(node, channel):
+                lib.co_sdo_client_abort(node, channel, 0x05040000)
+
+    # ---- heartbeat consumer, boot-up, EMCY consumer
+
+    def monitor(self, node: int, heartbeat_ms: int) -> None:
+        """Watch ``node``'s heartbeat: an event (:meth:`on_heartbeat`) when it is not heard
+        for ``heartbeat_ms`` (0 stops watching). Monitoring starts with its first
+        heartbeat."""
+        if not isinstance(node, int) or not 1 <= node <= 127 or node == self.node_id:
+            raise Error(f"cannot monitor node {node!r}")
+        if not 0 <= heartbeat_ms <= 0xFFFF:
+            raise Error(f"heartbeat time {heartbeat_ms} ms is outside 0..65535")
+        self.od.set(0x1016, node, (node << 16 | heartbeat_ms) if heartbeat_ms else 0)
+
+    def heartbeat_state(self, node: int) -> str | None:
+        """The state ``node`` last reported to the heartbeat consumer, None if not heard."""
+        with self._engine.locked() as n:
+            state = int(lib.co_hb_remote_state(n, node))
+        return None if state == 0xFF else STATE_NAMES.get(state, f"0x{state:02X}")
+
+    def on_bootup(self, fn: F) -> F:
+        """``fn(node)`` for every boot-up frame (any node, monitored or not)."""
+        self._bootup_cbs.append(fn)
+        return fn
+
+    # ---- frames, PDOs
+
+    def on_frame(self, fn: F, cob_id: int | None = None) -> F:
+        """``fn(Frame)`` for every frame other nodes send (or only those on ``cob_id``):
+        TPDOs of devices, for instance."""
+        self._frame_cbs.append((cob_id, fn))
+        return fn
+
+    def _frame(self, frame: Frame) -> None:  # runs outside the lock, in order
+        if 0x701 <= frame.can_id <= 0x77F and frame.data == b"\x00" and not frame.rtr:
+            for fn in list(self._bootup_cbs):
+                fn(frame.can_id - 0x700)
+        for cob_id, cb in list(self._frame_cbs):
+            if cob_id is None or cob_id == frame.can_id:
+                cb(frame)
+
+    def send(self, can_id: int, data: bytes = b"", *, rtr: bool = False) -> None:
+        """Send a raw frame (11-bit ``can_id``, up to 8 bytes)."""
+        if not isinstance(can_id, int) or not 0 <= can_id <= 0x7FF:
+            raise Error(f"CAN-ID {can_id!r} is outside 0..0x7FF")
+        if len(data) > 8:
+            raise Error(f"a CAN frame holds at most 8 bytes, got {len(data)}")
+        frame = ffi.new("co_frame_t *")
+        frame.id = can_id
+        frame.flags = lib.CO_FRAME_RTR if rtr else 0
+        frame.len = len(data)
+        ffi.memmove(frame.data, bytes(data), len(data))
+        with self._engine.locked() as node:
+            err = int(lib.co_node_send(node, frame))
+        check(err, "send")
+
+    def send_pdo(self, cob_id: int, data: bytes) -> None:
+        """Send process data on ``cob_id`` (an RPDO of a device, e.g. 0x200 + node)."""
+        self.send(cob_id, data)
+
+    # ---- SYNC, TIME
+
+    def start_sync(self, period_us: int, overflow: int = 0) -> None:
+        """Produce SYNC every ``period_us``; ``overflow`` 2..240 adds a counter 1..overflow
+        (0 = no counter)."""
+        if not 1 <= period_us <= 0xFFFFFFFF:
+            raise Error(f"SYNC period {period_us} us is outside 1..2**32-1")
+        if overflow and not 2 <= overflow <= 240:
+            raise Error(f"SYNC counter overflow {overflow} is outside 2..240 (or 0)")
+        self.od.set(0x1006, 0, 0)
+        self.od.set(0x1019, 0, overflow)
+        self.od.set(0x1005, 0, 0x40000080)
+        self.od.set(0x1006, 0, period_us)
+
+    def stop_sync(self) -> None:
+        """Stop producing SYNC."""
+        self.od.set(0x1006, 0, 0)
+        self.od.set(0x1005, 0, 0x80)
+
+    def send_time(self, when: dt.datetime | None = None) -> None:
+        """Send one TIME frame with ``when`` (default now, UTC; naive = UTC)."""
+        moment = when or dt.datetime.now(dt.UTC)
+        if moment.tzinfo is None:
+            moment = moment.replace(tzinfo=dt.UTC)
+        delta = moment - _EPOCH
+        if delta.total_seconds() < 0:
+            raise Error("TIME cannot express moments before 1984-01-01")
+        us = (delta.days * 86400 + delta.seconds) * 1_000_000 + delta.microseconds
+        if self.od.get(0x1012, 0) != 0x40000100:
+            self.od.set(0x1012, 0, 0x40000100)
+        tod = lib.co_time_from_us(us)
+        with self._engine.locked() as node:
+            err = int(lib.co_time_send(node, ffi.new("co_time_of_day_t *", tod)))
+        check(err, "co_time_send")
+
+    def start_time(self, period_ms: int,
+                   clock: Callable[[], dt.datetime] | None = None) -> None:
+        """Produce TIME every ``period_ms``: ``clock()`` (default: now, UTC) each time.
+        Replaces a running TIME production."""
+        if not isinstance(period_ms, int) or not 1 <= period_ms <= 86_400_000:
+            raise Error(f"TIME period {period_ms!r} ms is outside 1..86400000")
+        self.stop_time()
+        self._time_timer = self._engine.add_timer(
+            period_ms * 1000, lambda: self.send_time(clock() if clock else None))
+
+    def stop_time(self) -> None:
+        """Stop producing TIME periodically."""
+        if self._time_timer is not None:
+            self._engine.remove_timer(self._time_timer)
+            self._time_timer = None
+
+    def wait(self, seconds: float) -> None:
+        """Let ``seconds`` pass: virtual time on a SimBus, a sleep on python-can."""
+        bus = self._engine.bus
+        if isinstance(bus, SimBus):
+            bus.run_for(round(seconds * 1e6))
+        else:
+            time.sleep(seconds)
+

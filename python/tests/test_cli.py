@@ -1,0 +1,310 @@
+"""The canola command: help, argument errors, nmt, scan, dump, monitor (in-process through
+canola.cli.main, peers on a hub or a python-can virtual bus)."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import pty
+import re
+import select
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import can
+import canopen
+import pytest
+
+from canola.cli import build_parser, main
+from canola.hub import HubThread
+
+DATA = Path(__file__).parent / "data"
+EDS = DATA / "cli_device.eds"
+
+
+def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line_error(err: str) -> None:
+    assert len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+
+
+@pytest.fixture(scope="module")
+def hub() -> Iterator[HubThread]:
+    with HubThread() as h:
+        yield h
+
+
+@pytest.fixture
+def vbus(request: pytest.FixtureRequest) -> Iterator[tuple[list[str], can.BusABC]]:
+    """The CLI's bus options and a peer bus on the same bus: SocketCAN CANOLA_VCAN when set
+    (the SocketCAN tier), else a python-can virtual channel of this test."""
+    vcan = os.environ.get("CANOLA_VCAN")
+    if vcan:
+        bus = can.Bus(interface="socketcan", channel=vcan)
+        opts = ["--iface", vcan]
+    else:
+        channel = f"t{abs(hash(request.node.name))}"
+        bus = can.Bus(interface="virtual", channel=channel)
+        opts = ["--bus", f"virtual://{channel}"]
+    yield opts, bus
+    bus.shutdown()
+
+
+@contextlib.contextmanager
+def _repeating(bus: can.BusABC, frames: list[tuple[int, bytes]],
+               pause: float = 0.3) -> Iterator[None]:
+    """Send ``frames`` again and again (a pause after each round) while the block runs: the
+    command under test opens its bus at a moment the test does not know (slow under
+    emulation), so it sees some round from its start."""
+    stop = threading.Event()
+
+    def send() -> None:
+        while not stop.wait(pause):
+            for can_id, data in frames:
+                bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
+
+    thread = threading.Thread(target=send, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join(5)
+
+
+@pytest.fixture
+def peers(hub: HubThread) -> Iterator[tuple[str, canopen.Network]]:
+    """python-canopen local nodes 5 and 9 on a fresh hub channel, with heartbeats."""
+    channel = f"p{time.monotonic_ns() % 10**9}"
+    net = canopen.Network()
+    net.connect(interface="socketcand", host="127.0.0.1", port=hub.port, channel=channel)
+    for nid in (5, 9):
+        node = canopen.LocalNode(nid, str(EDS))
+        net.add_node(node)
+        node.nmt.state = "OPERATIONAL" if nid == 5 else "PRE-OPERATIONAL"
+        node.nmt.start_heartbeat(100)
+    time.sleep(0.15)
+    yield f"socketcand://127.0.0.1:{hub.port}/{channel}", net
+    for node in net.nodes.values():
+        node.nmt.stop_heartbeat()
+    net.disconnect()
+
+
+def _all_parsers() -> list[list[str]]:
+    paths: list[list[str]] = [[]]
+    parser = build_parser()
+
+    def walk(p: object, prefix: list[str]) -> None:
+        for action in getattr(p, "_actions", []):
+            choices = getattr(action, "choices", None)
+            if isinstance(choices, dict):
+                for name, sub in choices.items():
+                    if name == "odgen":
+                        continue
+                    paths.append([*prefix, name])
+                    walk(sub, [*prefix, name])
+
+    walk(parser, [])
+    return paths
+
+
+def test_help_on_every_level(capsys: pytest.CaptureFixture[str]) -> None:
+    paths = _all_parsers()
+    assert ["bus", "serve"] in paths and ["dump"] in paths
+    for path in [*paths, ["odgen"]]:
+        code, out, err = cli(capsys, *path, "--help")
+        assert code == 0 and out.startswith("usage:"), path
+        assert err == ""
+
+
+@pytest.mark.parametrize("args", [
+    [], ["frobnicate"], ["nmt", "start", "200", "--bus", "virtual://x"],
+    ["nmt", "start", "abc", "--bus", "virtual://x"], ["nmt", "jump", "5", "--bus", "virtual://x"],
+    ["nmt", "start", "5"], ["nmt", "start", "5", "--iface", "a", "--bus", "virtual://x"],
+    ["scan", "--bus", "virtual://x", "--timeout", "0"],
+    ["scan", "--bus", "virtual://x", "--nodes", "5-200"],
+    ["dump"], ["dump", "f.log", "--bus", "virtual://x"],
+    ["monitor", "--bus", "virtual://x", "--duration", "-1"],
+    ["bus", "serve", "--port", "70000"], ["bus"],
+])
+def test_usage_errors_are_one_line_exit_2(capsys: pytest.CaptureFixture[str],
+                                          args: list[str]) -> None:
+    code, out, err = cli(capsys, *args)
+    assert code == 2, (args, err)
+    one_line_error(err)
+    assert out == ""
+
+
+@pytest.mark.parametrize("url", ["socketcand://127.0.0.1:1/x", "http://x", "socketcand://h:x/c",
+                                 "virtual://"])
+def test_bad_bus_is_one_line_error(capsys: pytest.CaptureFixture[str], url: str) -> None:
+    code, _, err = cli(capsys, "nmt", "start", "5", "--bus", url)
+    assert code == 1
+    one_line_error(err)
+
+
+def test_missing_socketcan_interface(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = cli(capsys, "nmt", "start", "5", "--iface", "nosuchcan7")
+    assert code == 1
+    one_line_error(err)
+
+
+@pytest.mark.vcan
+def test_nmt_frames(capsys: pytest.CaptureFixture[str],
+                    vbus: tuple[list[str], can.BusABC]) -> None:
+    opts, bus = vbus
+    for cmd, target, data in (("start", "5", b"\x01\x05"), ("stop", "all", b"\x02\x00"),
+                              ("preop", "0x7F", b"\x80\x7f"), ("reset-node", "1", b"\x81\x01"),
+                              ("reset-comm", "all", b"\x82\x00")):
+        code, out, err = cli(capsys, "nmt", cmd, target, *opts)
+        assert (code, out, err) == (0, "", "")
+        msg = bus.recv(1)
+        assert msg is not None and msg.arbitration_id == 0 and bytes(msg.data) == data
+    code, out, _ = cli(capsys, "nmt", "start", "all", *opts, "--json")
+    assert json.loads(out) == {"command": "start", "node": "all"}
+
+
+def test_dump_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    log = tmp_path / "can.log"
+    log.write_text("(1.000000) can0 705#05\n(1.100000) can0 605#4018100100000000\n"
+                   "(1.100500) can0 585#4318100104000000\n(1.2) can0 083#1042080000000000\n"
+                   "  can0  080   [0]  \n")
+    code, out, err = cli(capsys, "dump", str(log))
+    assert code == 0 and err == ""
+    lines = out.splitlines()
+    assert lines[0] == "(1.000000) 705#05               node 5 heartbeat OPERATIONAL"
+    assert lines[2].endswith("SDO upload 0x1018:01 = 0x00000004 (node 5)")
+    assert lines[3].endswith("EMCY node 3 0x4210 temperature register 0x08")
+    assert lines[4].endswith(" SYNC")
+    code, out, _ = cli(capsys, "dump", str(log), "--json", "--count", "1")
+    assert json.loads(out) == {"t": 1.0, "id": 0x705, "data": "05", "rtr": False,
+                               "kind": "heartbeat", "node": 5,
+                               "text": "node 5 heartbeat OPERATIONAL", "state": 5,
+                               "state_name": "OPERATIONAL"}
+
+
+def test_dump_file_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    code, _, err = cli(capsys, "dump", str(tmp_path / "missing.log"))
+    assert code == 1
+    one_line_error(err)
+    bad = tmp_path / "bad.log"
+    bad.write_bytes(b"(1.0) can0 705#05\n\xff\xfe garbage\n")
+    code, out, err = cli(capsys, "dump", str(bad))
+    assert code == 1 and f"{bad}:2:" in err
+    one_line_error(err)
+    assert "heartbeat" in out  # what came before the bad line was printed
+
+
+@pytest.mark.vcan
+def test_dump_live(capsys: pytest.CaptureFixture[str],
+                   vbus: tuple[list[str], can.BusABC]) -> None:
+    opts, bus = vbus
+    frames = [(0x705, b"\x7f"), (0x080, b""), (0x185, b"\x01\x02"), (0x000, b"\x01\x00")]
+    meaning = ["node 5 heartbeat PRE-OPERATIONAL", "SYNC", "TPDO1 node 5 01 02",
+               "NMT start all"]
+    with _repeating(bus, frames):
+        code, out, _ = cli(capsys, "dump", *opts, "--duration", "20", "--count", "6")
+    assert code == 0
+    got = [line.split(None, 2)[-1] for line in out.splitlines()]
+    first = meaning.index(got[0])
+    assert got == [meaning[(first + i) % 4] for i in range(6)]  # in order, none lost
+    code, out, _ = cli(capsys, "dump", *opts, "--duration", "0.5")
+    assert (code, out) == (0, "")  # nothing on the bus: nothing printed, ends on time
+
+
+@pytest.mark.vcan
+def test_monitor_live(capsys: pytest.CaptureFixture[str],
+                      vbus: tuple[list[str], can.BusABC]) -> None:
+    opts, bus = vbus
+    frames = [(0x705, b"\x05"), (0x185, b"\x01"), (0x085, b"\x30\x81\x11\0\0\0\0\0"),
+              (0x185, b"\x02"), (0x70A, b"\x04")]
+    with _repeating(bus, frames, 0.2):
+        code, out, _ = cli(capsys, "monitor", *opts, "--json", "--duration", "3", "--window",
+                           "10")
+    assert code == 0
+    view = json.loads(out)
+    assert view["frames"] >= 5
+    five, ten = view["nodes"]
+    assert (five["node"], five["state"], ten["node"], ten["state"]) == (5, "OPERATIONAL", 10,
+                                                                        "STOPPED")
+    assert five["pdo_total"]["TPDO1"] >= 2 and five["pdo_rate"]["TPDO1"] > 0
+    assert five["last_emcy"] == "0x8130 life guard / heartbeat error register 0x11"
+    assert 0.1 < five["heartbeat_gap"] < 3
+
+
+def test_scan_finds_python_canopen_nodes(capsys: pytest.CaptureFixture[str],
+                                         peers: tuple[str, canopen.Network]) -> None:
+    url, _ = peers
+    code, out, err = cli(capsys, "scan", "--bus", url, "--timeout", "800")
+    assert code == 0, err
+    assert out.splitlines() == ["node 5: device type 0x00020192",
+                                "node 9: device type 0x00020192", "2 node(s) found"]
+    code, out, _ = cli(capsys, "scan", "--bus", url, "--json", "--nodes", "6-127")
+    assert json.loads(out) == [{"node": 9, "device_type": 0x20192}]
+
+
+def test_scan_empty_bus(capsys: pytest.CaptureFixture[str], hub: HubThread) -> None:
+    code, out, _ = cli(capsys, "scan", "--bus", f"socketcand://127.0.0.1:{hub.port}/empty",
+                       "--timeout", "200")
+    assert (code, out) == (0, "0 node(s) found\n")
+
+
+def test_monitor_once(capsys: pytest.CaptureFixture[str],
+                      peers: tuple[str, canopen.Network]) -> None:
+    url, net = peers
+    net.send_message(0x085, b"\x10\x42\x08\x00\x00\x00\x00\x00")
+    code, out, _ = cli(capsys, "monitor", "--bus", url, "--json", "--duration", "0.6")
+    assert code == 0
+    view = json.loads(out)
+    nodes = {n["node"]: n for n in view["nodes"]}
+    assert nodes[5]["state"] == "OPERATIONAL" and nodes[9]["state"] == "PRE-OPERATIONAL"
+    assert 0 <= nodes[5]["heartbeat_age"] < 0.5
+    assert 0.05 < nodes[5]["heartbeat_gap"] < 0.5
+    code, out, _ = cli(capsys, "monitor", "--bus", url, "--once", "--duration", "0.3")
+    assert code == 0 and "OPERATIONAL" in out and out.splitlines()[0].split()[0] == "node"
+
+
+def test_module_runs_as_a_program() -> None:
+    proc = subprocess.run([sys.executable, "-m", "canola.cli", "nmt", "start", "0"],
+                          capture_output=True, text=True, timeout=60, check=False,
+                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    assert proc.returncode == 2
+    one_line_error(proc.stderr)
+
+
+def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
+    url = f"socketcand://127.0.0.1:{hub.port}/tty"
+    peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="tty")
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "canola.cli", "monitor", "--bus", url],
+                            stdout=follower, stderr=subprocess.PIPE, text=True)
+    os.close(follower)
+    screen = b""
+    try:
+        with _repeating(peer, [(0x703, b"\x05")], 0.1):
+            deadline = time.monotonic() + 30
+            while b"OPERATIONAL" not in screen and time.monotonic() < deadline:
+                ready, _, _ = select.select([leader], [], [], 0.5)
+                if ready:
+                    screen += os.read(leader, 65536)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(10) == 0
+        assert proc.stderr is not None and proc.stderr.read() == ""
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        os.close(leader)
+        peer.shutdown()
+    assert b"\x1b[H\x1b[2J" in screen  # redrawn in place
+    assert re.search(rb"\n\s+3\s+OPERATIONAL", screen)

@@ -1,0 +1,305 @@
+"""The canola command against real devices: a hub (``canola bus serve``) and two devices
+(``canola device``) in their own processes, the CLI in this process (and a few runs as
+programs), python-canopen as an independent peer on the same hub."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import canopen
+import pytest
+
+from canola.cli import main
+
+DATA = Path(__file__).parent / "data"
+EDS = DATA / "cli_device.eds"
+PY = sys.executable
+
+
+def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line_error(err: str) -> None:
+    assert len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+
+
+class Proc:
+    """A child process whose output lines are collected by a thread."""
+
+    def __init__(self, *args: str) -> None:
+        self.popen = subprocess.Popen([PY, "-m", "canola.cli", *args], stdout=subprocess.PIPE,
+                                      stderr=subprocess.STDOUT, text=True)
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.popen.stdout is not None
+        for line in self.popen.stdout:
+            self.lines.append(line.rstrip("\n"))
+
+    def wait_for(self, pattern: str, timeout: float = 20.0) -> re.Match[str]:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for line in list(self.lines):
+                m = re.search(pattern, line)
+                if m is not None:
+                    return m
+            if self.popen.poll() is not None and not self._reader.is_alive():
+                break
+            time.sleep(0.02)
+        raise AssertionError(f"no {pattern!r} in {self.lines}")
+
+    def stop(self) -> int:
+        if self.popen.poll() is None:
+            self.popen.send_signal(signal.SIGTERM)
+        try:
+            return self.popen.wait(10)
+        except subprocess.TimeoutExpired:
+            self.popen.kill()
+            return self.popen.wait(5)
+
+
+@pytest.fixture(scope="module")
+def net() -> Iterator[tuple[str, list[Proc]]]:
+    hub = Proc("bus", "serve", "--port", "0")
+    port = hub.wait_for(r"127\.0\.0\.1:(\d+)").group(1)
+    url = f"socketcand://127.0.0.1:{port}/net"
+    devices = [Proc("device", "--eds", str(EDS), "--node-id", str(n), "--bus", url)
+               for n in (5, 6)]
+    try:
+        for dev in devices:
+            dev.wait_for("PRE-OPERATIONAL")
+        yield url, devices
+    finally:
+        codes = [dev.stop() for dev in devices]
+        hub.stop()
+        assert codes == [0, 0]  # SIGTERM stops a device cleanly
+
+
+@pytest.fixture
+def remote(net: tuple[str, list[Proc]]) -> Iterator[canopen.RemoteNode]:
+    """python-canopen's view of device 5."""
+    port = re.search(r":(\d+)/", net[0])
+    assert port is not None
+    network = canopen.Network()
+    network.connect(interface="socketcand", host="127.0.0.1", port=int(port.group(1)),
+                    channel="net")
+    node = network.add_node(5, str(EDS))
+    yield node
+    network.disconnect()
+
+
+def test_sdo_read(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    assert cli(capsys, "sdo", "read", "5", "0x1018:1", "--bus", url) == (0, "0x00000CA0\n", "")
+    assert cli(capsys, "sdo", "read", "6", "0x1018:4", "u32", "--bus", url) == (
+        0, f"{0x12345678}\n", "")
+    assert cli(capsys, "sdo", "read", "5", "0x1008", "vs", "--bus", url) == (
+        0, "canola cli test\n", "")
+    assert cli(capsys, "sdo", "read", "5", "0x1008:0", "--bus", url)[1] == (
+        "'canola cli test' (15 bytes)\n")
+    code, out, _ = cli(capsys, "sdo", "read", "5", "0x2001:0", "i16", "--bus", url, "--json")
+    assert code == 0
+    assert json.loads(out) == {"node": 5, "index": 0x2001, "sub": 0, "raw": "fbff",
+                               "type": "i16", "value": -5}
+
+
+def test_sdo_write_read_back_and_python_canopen_agrees(
+        capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]],
+        remote: canopen.RemoteNode) -> None:
+    url = net[0]
+    for index, dtype, text, back in (("0x2000:0", "u32", "0xCAFE0001", str(0xCAFE0001)),
+                                     ("0x2001:0", "i16", "-300", "-300"),
+                                     ("0x2003:0", "r32", "2.25", "2.25"),
+                                     ("0x2002:0", "vs", "hi there", "hi there")):
+        assert cli(capsys, "sdo", "write", "5", index, dtype, text, "--bus", url) == (0, "", "")
+        assert cli(capsys, "sdo", "read", "5", index, dtype, "--bus", url) == (0, back + "\n",
+                                                                               "")
+    assert remote.sdo[0x2000].raw == 0xCAFE0001
+    assert remote.sdo[0x2001].raw == -300
+    remote.sdo[0x2000].raw = 77
+    assert cli(capsys, "sdo", "read", "5", "0x2000:0", "u32", "--bus", url)[1] == "77\n"
+    # device 6 was not touched
+    assert cli(capsys, "sdo", "read", "6", "0x2000:0", "--bus", url)[1] == "0x11111111\n"
+
+
+@pytest.mark.parametrize(("args", "code", "message"), [
+    (["read", "5", "0x1018-1"], 2, "bad object"),
+    (["read", "5", "0x10180:1"], 2, "bad object"),
+    (["read", "5", "0x1018:256"], 2, "bad object"),
+    (["read", "128", "0x1018:1"], 2, "bad node-ID"),
+    (["read", "5", "0x1018:1", "u7"], 2, "unknown type"),
+    (["write", "5", "0x2000:0", "u8", "300"], 2, "UNSIGNED8"),
+    (["write", "5", "0x2000:0", "u32", "lots"], 2, "UNSIGNED32"),
+    (["write", "5", "0x2005:0", "u16", "1"], 1, "SDO abort 0x06010002"),
+    (["write", "5", "0x2000:0", "u16", "1"], 1, "SDO abort 0x0607001"),
+    (["read", "5", "0x5555:0"], 1, "node 5 0x5555:00: SDO abort 0x06020000: Object does not"),
+    (["read", "5", "0x1018:9"], 1, "SDO abort 0x06090011"),
+    (["read", "9", "0x1000:0", "--timeout", "300"], 1,
+     "no response from node 9 (SDO time-out 300 ms)"),
+])
+def test_sdo_errors(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]],
+                    args: list[str], code: int, message: str) -> None:
+    got, out, err = cli(capsys, "sdo", *args, "--bus", net[0])
+    assert (got, out) == (code, "")
+    one_line_error(err)
+    assert message in err
+
+
+@pytest.mark.parametrize("block", [True, False])
+def test_sdo_upload_download_files(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                   net: tuple[str, list[Proc]], remote: canopen.RemoteNode,
+                                   block: bool) -> None:
+    url = net[0]
+    blob = os.urandom(3000)
+    src, dst = tmp_path / "fw.bin", tmp_path / "back.bin"
+    src.write_bytes(blob)
+    mode = [] if block else ["--no-block"]
+    code, out, err = cli(capsys, "sdo", "download", "5", "0x2004:0", str(src), "--bus", url,
+                         "--progress", *mode)
+    assert (code, out) == (0, "")
+    assert "100.0% 3000/3000 B" in err and "Traceback" not in err
+    code, _, err = cli(capsys, "sdo", "upload", "5", "0x2004:0", str(dst), "--bus", url,
+                       "--progress", "--json", *mode)
+    assert code == 0 and "100.0% 3000/3000 B" in err
+    assert dst.read_bytes() == blob
+    assert remote.sdo[0x2004].raw == blob  # python-canopen reads the same bytes
+
+
+def test_sdo_file_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                         net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    big = tmp_path / "big.bin"
+    big.write_bytes(bytes(10000))  # more than the device's DOMAIN room
+    code, _, err = cli(capsys, "sdo", "download", "5", "0x2004:0", str(big), "--bus", url)
+    assert code == 1 and "SDO abort" in err
+    one_line_error(err)
+    code, _, err = cli(capsys, "sdo", "download", "5", "0x2004:0", str(tmp_path / "none"),
+                       "--bus", url)
+    assert code == 1 and "cannot read" in err
+    one_line_error(err)
+    code, _, err = cli(capsys, "sdo", "upload", "5", "0x2004:0", str(tmp_path / "no/such"),
+                       "--bus", url)
+    assert code == 1 and "cannot write" in err
+    one_line_error(err)
+
+
+def test_nmt_scan_monitor(capsys: pytest.CaptureFixture[str],
+                          net: tuple[str, list[Proc]]) -> None:
+    url, devices = net
+    code, out, _ = cli(capsys, "scan", "--bus", url, "--json")
+    assert code == 0
+    assert [n["node"] for n in json.loads(out)] == [5, 6]
+    assert cli(capsys, "nmt", "start", "5", "--bus", url)[0] == 0
+    devices[0].wait_for("node 5: OPERATIONAL")
+    code, out, _ = cli(capsys, "monitor", "--bus", url, "--json", "--duration", "0.5")
+    nodes = {n["node"]: n for n in json.loads(out)["nodes"]}
+    assert nodes[5]["state"] == "OPERATIONAL" and nodes[6]["state"] == "PRE-OPERATIONAL"
+    assert nodes[5]["heartbeat_age"] < 0.3  # 0x1017 = 100 ms
+    assert cli(capsys, "nmt", "preop", "all", "--bus", url)[0] == 0
+    devices[0].wait_for("node 5: PRE-OPERATIONAL", 5)
+    assert cli(capsys, "nmt", "reset-node", "6", "--bus", url)[0] == 0
+    devices[1].wait_for("node 6: INITIALISING|node 6: BOOT", 5)
+
+
+def test_dump_sees_an_sdo_read(capsys: pytest.CaptureFixture[str],
+                               net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    dump = subprocess.Popen([PY, "-m", "canola.cli", "dump", "--bus", url, "--duration", "8",
+                             "--json"], stdout=subprocess.PIPE, text=True)
+    try:
+        time.sleep(1.5)  # the dump process is listening
+        assert cli(capsys, "sdo", "read", "6", "0x1018:2", "--bus", url)[:2] == (
+            0, "0x00000042\n")
+        out, _ = dump.communicate(timeout=20)
+    finally:
+        if dump.poll() is None:
+            dump.kill()
+    texts = [json.loads(line)["text"] for line in out.splitlines()]
+    assert "SDO upload 0x1018:02 request (node 6)" in texts
+    assert "SDO upload 0x1018:02 = 0x00000042 (node 6)" in texts
+
+
+def test_cli_as_programs(net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    ok = subprocess.run([PY, "-m", "canola.cli", "sdo", "read", "6", "0x1000:0", "u32",
+                         "--bus", url], capture_output=True, text=True, timeout=60, check=False)
+    assert (ok.returncode, ok.stdout, ok.stderr) == (0, f"{0x20192}\n", "")
+    bad = subprocess.run([PY, "-m", "canola.cli", "sdo", "read", "99", "0x1000:0", "--bus", url,
+                          "--timeout", "200"], capture_output=True, text=True, timeout=60,
+                         check=False)
+    assert bad.returncode == 1
+    assert bad.stderr == "canola: no response from node 99 (SDO time-out 200 ms)\n"
+
+
+def test_device_errors(tmp_path: Path, net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    broken = tmp_path / "broken.eds"
+    broken.write_text("[1000]\nDataType=0x0007\n")
+    for args in (["--eds", str(tmp_path / "none.eds"), "--node-id", "7"],
+                 ["--eds", str(broken), "--node-id", "7"],
+                 ["--eds", str(EDS), "--node-id", "7", "--store", str(tmp_path / "nodir")]):
+        proc = subprocess.run([PY, "-m", "canola.cli", "device", *args, "--bus", url],
+                              capture_output=True, text=True, timeout=60, check=False)
+        assert proc.returncode == 1, args
+        one_line_error(proc.stderr)
+
+
+CANOPEN_PEER = """
+import sys, canopen
+host, port, channel, eds = sys.argv[1:5]
+net = canopen.Network()
+net.connect(interface="socketcand", host=host, port=int(port), channel=channel)
+node = canopen.LocalNode(9, eds)
+net.add_node(node)
+node.nmt.state = "PRE-OPERATIONAL"
+node.nmt.start_heartbeat(100)
+print("ready", flush=True)
+sys.stdin.read()  # until the test closes stdin
+print("0x2000 =", hex(node.sdo[0x2000].raw), flush=True)
+node.nmt.stop_heartbeat()
+net.disconnect()
+"""
+
+
+def test_python_canopen_process_on_the_same_hub(capsys: pytest.CaptureFixture[str],
+                                                net: tuple[str, list[Proc]]) -> None:
+    url = net[0]
+    m = re.fullmatch(r"socketcand://([\d.]+):(\d+)/(\w+)", url)
+    assert m is not None
+    peer = subprocess.Popen([PY, "-c", CANOPEN_PEER, *m.groups(), str(EDS)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert peer.stdout is not None and peer.stdout.readline() == "ready\n"
+        code, out, _ = cli(capsys, "scan", "--bus", url, "--json")
+        assert code == 0 and [n["node"] for n in json.loads(out)] == [5, 6, 9]
+        assert cli(capsys, "sdo", "read", "9", "0x1008:0", "vs", "--bus", url)[1] == (
+            "canola cli test\n")
+        assert cli(capsys, "sdo", "write", "9", "0x2000:0", "u32", "0xBEEF", "--bus", url)[0] == 0
+        out, _ = peer.communicate("", timeout=20)
+        assert out == "0x2000 = 0xbeef\n"
+    finally:
+        if peer.poll() is None:
+            peer.kill()
+
+
+def test_device_stops_on_sigint(net: tuple[str, list[Proc]]) -> None:
+    dev = Proc("device", "--eds", str(EDS), "--node-id", "20", "--bus", net[0])
+    dev.wait_for("node 20: PRE-OPERATIONAL")
+    dev.popen.send_signal(signal.SIGINT)
+    assert dev.popen.wait(10) == 0
+    dev.wait_for("node 20 stopped")

@@ -1,0 +1,213 @@
+"""The socketcand hub with python-can's own socketcand interface as the clients."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+
+import can
+import pytest
+
+from canola.hub import HubThread
+from canola.socketcand import Frame, parse_server_element, split_elements
+
+
+@pytest.fixture
+def hub() -> Iterator[HubThread]:
+    with HubThread(queue_limit=64) as h:
+        yield h
+
+
+def _bus(port: int, channel: str = "bus0") -> can.BusABC:
+    return can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel=channel)
+
+
+def _recv_all(bus: can.BusABC, count: int, timeout: float = 5.0) -> list[can.Message]:
+    got: list[can.Message] = []
+    deadline = time.monotonic() + timeout
+    while len(got) < count and time.monotonic() < deadline:
+        msg = bus.recv(0.1)
+        if msg is not None:
+            got.append(msg)
+    return got
+
+
+def _settle() -> None:
+    time.sleep(0.15)  # past the hub's rawmode settle delay
+
+
+def _raw(port: int) -> socket.socket:
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    assert s.recv(64) == b"< hi >"
+    return s
+
+
+def _recv_until(s: socket.socket, marker: bytes, timeout: float = 5.0) -> bytes:
+    s.settimeout(timeout)
+    data = b""
+    while marker not in data:
+        chunk = s.recv(4096)
+        if not chunk:
+            break
+        data += chunk
+    return data
+
+
+def test_frames_reach_every_other_client_on_the_channel(hub: HubThread) -> None:
+    a, b, c = _bus(hub.port), _bus(hub.port), _bus(hub.port)
+    other = _bus(hub.port, "bus1")
+    try:
+        _settle()
+        a.send(can.Message(arbitration_id=0x123, data=b"\x11\x22", is_extended_id=False))
+        a.send(can.Message(arbitration_id=0x1ABCDEF0, data=b"", is_extended_id=True))
+        for peer in (b, c):
+            got = _recv_all(peer, 2)
+            assert [(m.arbitration_id, bytes(m.data), m.is_extended_id) for m in got] == [
+                (0x123, b"\x11\x22", False), (0x1ABCDEF0, b"", True)]
+        assert a.recv(0.2) is None  # not to the sender
+        assert other.recv(0.2) is None  # channels are separate buses
+        other.send(can.Message(arbitration_id=0x7FF, data=bytes(8), is_extended_id=False))
+        assert a.recv(0.2) is None
+    finally:
+        for bus in (a, b, c, other):
+            bus.shutdown()
+
+
+def test_handshake_errors_and_echo(hub: HubThread) -> None:
+    s = _raw(hub.port)
+    s.sendall(b"< rawmode >")
+    assert b"< error" in _recv_until(s, b">")
+    assert s.recv(64) == b""  # disconnected
+    s = _raw(hub.port)
+    s.sendall(b"< open x >< echo >< subscribe 0 0 123 >")
+    data = _recv_until(s, b"not offered")
+    assert data.startswith(b"< ok >< echo >< error ")
+    s.sendall(b"< rawmode >")
+    assert _recv_until(s, b"< ok >") == b"< ok >"  # still connected
+    s.close()
+
+
+def test_garbage_and_abrupt_disconnects_do_not_disturb_others(hub: HubThread) -> None:
+    a, b = _bus(hub.port), _bus(hub.port)
+    try:
+        _settle()
+        for junk in (b"GET / HTTP/1.0\r\n\r\n", b"< open bus0 >< rawmode >< send 999 0 >",
+                     b"< open bus0 >< rawmode >< send 12" + b"3" * 500, b"\xff\xfe\x00"):
+            s = _raw(hub.port)
+            s.sendall(junk)
+            reply = _recv_until(s, b"< error")
+            assert b"< error" in reply
+            s.close()
+        for _ in range(5):  # connect, join, vanish mid-element
+            s = _raw(hub.port)
+            s.sendall(b"< open bus0 >< rawmode >< send 12")
+            s.close()
+        a.send(can.Message(arbitration_id=0x181, data=b"\x01", is_extended_id=False))
+        got = _recv_all(b, 1)
+        assert [(m.arbitration_id, bytes(m.data)) for m in got] == [(0x181, b"\x01")]
+        # the junk senders never delivered a frame
+        assert b.recv(0.2) is None
+    finally:
+        a.shutdown()
+        b.shutdown()
+    deadline = time.monotonic() + 5
+    while hub.hub.clients() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert hub.hub.clients() == []
+
+
+def test_slow_client_loses_frames_but_stalls_nobody(hub: HubThread) -> None:
+    slow = _raw(hub.port)
+    slow.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    slow.sendall(b"< open bus0 >< rawmode >")
+    assert _recv_until(slow, b"< ok >< ok >") == b"< ok >< ok >"
+    a, b = _bus(hub.port), _bus(hub.port)
+    try:
+        _settle()
+        count = 20000
+        start = time.monotonic()
+        received = 0
+        for burst in range(0, count, 32):  # a bus has no flow control: pace like a real one
+            for i in range(burst, burst + 32):
+                a.send(can.Message(arbitration_id=0x200, data=i.to_bytes(2, "little"),
+                                   is_extended_id=False))
+            received += len(_recv_all(b, 32))
+        assert received == count  # the fast reader got everything
+        assert time.monotonic() - start < 30
+        stats = {s.peer: s for s in hub.hub.clients()}
+        slow_stats = stats[f"127.0.0.1:{slow.getsockname()[1]}"]
+        assert slow_stats.dropped > 0  # the slow reader lost frames, counted
+        assert slow_stats.delivered + slow_stats.dropped == count
+        # bounded: what the slow client can still read is at most queue + socket buffers
+        slow.setblocking(False)
+        pending = b""
+        time.sleep(0.3)
+        while True:
+            try:
+                chunk = slow.recv(65536)
+            except BlockingIOError:
+                break
+            if not chunk:
+                break
+            pending += chunk
+        assert pending.count(b"< frame") <= slow_stats.delivered
+    finally:
+        a.shutdown()
+        b.shutdown()
+        slow.close()
+
+
+def test_serve_command_in_a_subprocess() -> None:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    proc = subprocess.Popen([sys.executable, "-m", "canola.cli", "bus", "serve", "--port",
+                             str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert f"127.0.0.1:{port}" in line
+        a, b = _bus(port), _bus(port)
+        _settle()
+        a.send(can.Message(arbitration_id=0x701, data=b"\x05", is_extended_id=False))
+        assert [bytes(m.data) for m in _recv_all(b, 1)] == [b"\x05"]
+        a.shutdown()
+        b.shutdown()
+    finally:
+        proc.terminate()
+        assert proc.wait(10) == 0
+
+
+def test_port_in_use_is_one_line_error() -> None:
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        proc = subprocess.run([sys.executable, "-m", "canola.cli", "bus", "serve", "--port",
+                               str(port)], capture_output=True, text=True, timeout=30,
+                              check=False)
+    assert proc.returncode != 0
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in proc.stderr
+
+
+def test_remote_frames_and_raw_clients(hub: HubThread) -> None:
+    a, b = _raw(hub.port), _raw(hub.port)
+    for s in (a, b):
+        s.sendall(b"< open rtr >< rawmode >")
+        assert _recv_until(s, b"< ok >< ok >") == b"< ok >< ok >"
+    time.sleep(0.15)
+    a.sendall(b"< sendrtr 70C 1 >< send 1FFFFFFF 1 AA >\n< send 0 0 >")
+    data = _recv_until(b, b"  >")  # the last one, with no data
+    elements, rest = split_elements(data)
+    assert rest == b""
+    got = [parse_server_element(e)[:2] for e in elements]
+    assert got == [("rtr", Frame(0x70C, rtr=True, dlc=1)),
+                   ("frame", Frame(0x1FFFFFFF, b"\xaa", extended=True)),
+                   ("frame", Frame(0, b""))]
+    a.close()
+    b.close()

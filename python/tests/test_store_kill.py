@@ -1,0 +1,158 @@
+"""Parameter storage survives SIGKILL during a save.
+
+A device (canola.Device with a store folder, on a hub) gets new parameter values over SDO,
+then the "save" signature on 0x1010:1; it is killed with SIGKILL at a random moment around
+the save. Afterwards a fresh device loads the folder: every file must load and hold either
+the previous generation of values or the new one, never defaults, a mix inside one file, or
+an error. CANOLA_STORE_LOOPS sets the number of rounds (default 200).
+
+To keep a round cheap the devices are forked from a driver process that has canola
+imported already (a fork takes milliseconds, a fresh interpreter about a second).
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import can
+import pytest
+
+from canola import eds
+from canola.core import SimBus
+from canola.device import Device
+from canola.hub import HubThread
+from canola.master import Master
+
+EDS = Path(__file__).parent / "data" / "cli_device.eds"
+LOOPS = int(os.environ.get("CANOLA_STORE_LOOPS", "200"))
+
+DRIVER = textwrap.dedent("""
+    import os, sys, time
+    from canola import eds
+    from canola.buses import open_bus
+    from canola.device import Device
+    model = eds.parse(sys.argv[1])
+    for line in sys.stdin:
+        url, store = line.split()
+        pid = os.fork()
+        if pid == 0:
+            bus = open_bus(url=url)
+            dev = Device(model, 5, bus, store_dir=store)
+            dev.start()
+            print(f"ready {os.getpid()}", flush=True)
+            while True:
+                time.sleep(10)
+        while True:  # reap the children killed so far
+            try:
+                done, _ = os.waitpid(-1, os.WNOHANG)
+            except ChildProcessError:
+                break
+            if done == 0:
+                break
+""")
+
+SAVE = bytes([0x23, 0x10, 0x10, 0x01]) + b"save"
+
+
+def _values(gen: int) -> tuple[int, int, int]:
+    """Generation ``gen``'s values: (0x2000 u32, 0x2001 i16) in the application file and
+    0x1017 (u16) in the communication file; never the EDS defaults."""
+    return 0x5A000000 + gen, -1000 - gen, 2000 + gen
+
+
+def _loaded(model: eds.ObjectDictionary, store: Path) -> tuple[int, int, int]:
+    bus = SimBus()
+    dev = Device(model, 5, bus, store_dir=store)
+    dev.start()
+    bus.run_for(1000)
+    got = (dev.od.get(0x2000, 0), dev.od.get(0x2001, 0), dev.od.get(0x1017, 0))
+    assert all(isinstance(v, int) for v in got)
+    return got  # type: ignore[return-value]
+
+
+@pytest.fixture
+def driver() -> Iterator[subprocess.Popen[str]]:
+    proc = subprocess.Popen([sys.executable, "-c", DRIVER, str(EDS)], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    yield proc
+    assert proc.stdin is not None
+    proc.stdin.close()
+    proc.wait(10)
+
+
+def test_sigkill_during_save_keeps_old_or_new(tmp_path: Path,
+                                              driver: subprocess.Popen[str]) -> None:
+    model = eds.parse(EDS)
+    store = tmp_path / "store"
+    store.mkdir()
+    rng = random.Random(2026)
+    outcomes = {"old": 0, "new": 0, "mid-save": 0}
+    assert driver.stdin is not None and driver.stdout is not None
+    with HubThread() as hub:
+        url = f"socketcand://127.0.0.1:{hub.port}/store"
+        bus = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="store")
+        master = Master(bus, 127, sdo_timeout_ms=2000)
+        master.start()
+        try:
+            app_gen = comm_gen = 0
+
+            def spawn() -> int:
+                driver.stdin.write(f"{url} {store}\n")  # type: ignore[union-attr]
+                driver.stdin.flush()  # type: ignore[union-attr]
+                line = driver.stdout.readline()  # type: ignore[union-attr]
+                assert line.startswith("ready "), line
+                return int(line.split()[1])
+
+            def write(gen: int) -> None:
+                u32, i16, hb = _values(gen)
+                sdo = master.sdo(5)
+                sdo.write(0x2000, 0, "u32", u32)
+                sdo.write(0x2001, 0, "i16", i16)
+                sdo.write(0x1017, 0, "u16", hb)
+
+            # generation 0 saved properly; and how long a save takes, to aim the kills
+            pid = spawn()
+            write(0)
+            start = time.monotonic()
+            master.sdo(5).download(0x1010, 1, b"save")
+            save_s = time.monotonic() - start
+            os.kill(pid, signal.SIGKILL)
+            assert _loaded(model, store) == _values(0)
+            started = time.monotonic()
+            for gen in range(1, LOOPS + 1):
+                for leftover in store.glob("*.tmp"):  # so that a .tmp below is this round's
+                    leftover.unlink()
+                pid = spawn()
+                write(gen)
+                master.send(0x605, SAVE)  # no waiting for the answer
+                time.sleep(rng.uniform(0, 2 * save_s))
+                os.kill(pid, signal.SIGKILL)
+                time.sleep(0.005)  # the kernel has finished the process
+                if any(store.glob("*.tmp")):  # killed between writing and renaming
+                    outcomes["mid-save"] += 1
+                got = _loaded(model, store)
+                old = (*_values(app_gen)[:2], _values(comm_gen)[2])
+                new = _values(gen)
+                assert got[:2] in (old[:2], new[:2]), (gen, got, old, new)
+                assert got[2] in (old[2], new[2]), (gen, got, old, new)
+                if got[:2] == new[:2]:
+                    app_gen = gen
+                if got[2] == new[2]:
+                    comm_gen = gen
+                outcomes["new" if got == new else "old"] += 1
+            elapsed = time.monotonic() - started
+        finally:
+            master.stop()
+            bus.shutdown()
+    print(f"\n{LOOPS} kills in {elapsed:.1f} s (save took {save_s * 1000:.1f} ms): {outcomes}")
+    assert outcomes["old"] + outcomes["new"] == LOOPS
+    if LOOPS >= 50:  # the kills really land inside saves, and on both sides of them
+        assert outcomes["mid-save"] > 0 and outcomes["old"] > 0 and outcomes["new"] > 0
