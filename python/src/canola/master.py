@@ -28,11 +28,14 @@ import datetime as dt
 import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from importlib import resources
 from typing import Any, TypeVar
 
 from canola import eds, values
+from canola import flash as _flash
+from canola import manager as _manager
+from canola import network as _network
 from canola._core import ffi, lib
 from canola._engine import Bus, Frame, _Timer
 from canola._nodebase import (
@@ -46,6 +49,10 @@ from canola._nodebase import (
 )
 from canola.core import SimBus, _Transfer
 from canola.errors import Error, SdoAbort
+from canola.flash import FlashResult
+from canola.lss import Lss
+from canola.manager import BootEvent, NetworkManager
+from canola.network import Network
 from canola.odgen import GenerateOptions
 
 __all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoClient",
@@ -464,6 +471,37 @@ class Master(NodeBase):
         if self._time_timer is not None:
             self._engine.remove_timer(self._time_timer)
             self._time_timer = None
+
+    # ---- CiA 302 manager, LSS, program download (canola.manager, .lss, .flash do the work)
+
+    def boot(self, network: Network | str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
+             *, on_event: Callable[[BootEvent], None] | None = None, wait: bool = True,
+             timeout: float | None = None) -> NetworkManager:
+        """Boot the network (CiA 302-2) described by ``network``: a
+        :class:`canola.network.Network`, a YAML file, or DCF files. Blocks until the boot
+        settled (unless ``wait=False``) and returns the manager: ``started``, ``slaves()``,
+        ``events``. ``on_event(BootEvent)`` for every report. See :mod:`canola.manager`."""
+        if not isinstance(network, Network):
+            paths = [network] if isinstance(network, str | os.PathLike) else list(network)
+            network = _network.from_files(paths, node_id_of_master=self.node_id)
+        return _manager.boot(self, network, on_event=on_event, wait=wait, timeout=timeout)
+
+    @property
+    def lss(self) -> Lss:
+        """The LSS master (CiA 305): fastscan, set_node_id, inquire. See :mod:`canola.lss`."""
+        lss: Lss | None = getattr(self, "_lss", None)
+        if lss is None:
+            lss = self._lss = Lss(self)
+        return lss
+
+    def flash(self, node: int, data: bytes, *, progress: Callable[[int, int], None] | None
+              = None, program: int = 1, clear: bool = True, ident: int | None = None,
+              timeout: float | None = None) -> FlashResult:
+        """Download program ``data`` to ``node`` (CiA 302-3); ``progress(done, total)``.
+        Raises :class:`canola.flash.FlashError` with the stage and abort code. See
+        :mod:`canola.flash`."""
+        return _flash.flash(self, node, data, progress=progress, program=program, clear=clear,
+                     ident=ident, timeout=timeout)
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` pass: virtual time on a SimBus, a sleep on python-can."""
