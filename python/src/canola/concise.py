@@ -13,7 +13,7 @@ import struct
 from collections.abc import Iterable
 
 from canola import eds, values
-from canola.datatypes import DATA_TYPES
+from canola.datatypes import DATA_TYPES, INTEGER_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
 __all__ = ["Record", "build", "from_dcf", "parse"]
@@ -56,26 +56,30 @@ def parse(data: bytes) -> list[Record]:
     return records
 
 
-def _wire(var: eds.Variable, file: str, section: str) -> bytes:
+def _wire(var: eds.Variable, node_id: int | None) -> bytes:
+    """The wire bytes of the variable's ParameterValue; ValueError when it has none."""
     code = var.data_type
     text = var.parameter_value or ""
+    if code in _STRINGS:
+        return text.encode(_STRINGS[code])
+    if code in _OCTETS:
+        digits = "".join(text.split())
+        if digits.lower().startswith("0x"):
+            digits = digits[2:]
+        return bytes.fromhex(digits)
+    if code is None or code not in DATA_TYPES:
+        raise ValueError("unknown data type")
     try:
-        if code in _STRINGS:
-            return text.encode(_STRINGS[code])
-        if code in _OCTETS:
-            digits = "".join(text.split())
-            if digits.lower().startswith("0x"):
-                digits = digits[2:]
-            return bytes.fromhex(digits)
-        if code is None or code not in DATA_TYPES or var.value is None:
-            raise ValueError(f"ParameterValue {text!r} cannot be used")
-        value = var.value
-        if isinstance(value, int) and code in (0x08, 0x11):
-            value = float(value)
-        return values.encode(code, value)
-    except (ValueError, UnicodeEncodeError) as exc:
-        raise EdsError(f"ParameterValue: {exc}", file=file, line=var.line,
-                       section=section, key="ParameterValue") from None
+        value = parse_value(text, code, node_id)
+    except NumberError as exc:
+        raise ValueError(str(exc)) from None
+    if value is None:
+        raise ValueError("$NODEID without a node-ID" if text.strip() else "empty")
+    if isinstance(value, int) and code in INTEGER_TYPES:
+        value = fit_signed(value, text, code)
+    elif isinstance(value, int):
+        value = float(value)
+    return values.encode(code, value)
 
 
 def from_dcf(model: eds.ObjectDictionary) -> list[Record]:
@@ -90,5 +94,11 @@ def from_dcf(model: eds.ObjectDictionary) -> list[Record]:
                 continue
             section = (f"{index:04X}" if obj.object_type == eds.ObjectType.VAR
                        else f"{index:04X}sub{sub:X}")
-            records.append((index, sub, _wire(var, model.file, section)))
+            try:
+                data = _wire(var, model.node_id)
+            except (ValueError, UnicodeEncodeError) as exc:
+                raise EdsError(f"{var.parameter_value!r} cannot be downloaded: {exc}",
+                               file=model.file, line=var.line, section=section,
+                               key="ParameterValue") from None
+            records.append((index, sub, data))
     return records
