@@ -56,6 +56,7 @@ def test_plant_boot(plant: Path) -> None:
     master = Master(bus, node_id=1)
     master.start()
     devices = _network(bus, 2, 3, 5, 6)
+    assert master.sdo(2).read(0x1018, 4, "u32") == 2  # the master talked to it before
     seen: list[BootEvent] = []
     mgr = master.boot(plant, on_event=seen.append)
     assert mgr.started
@@ -94,6 +95,10 @@ def test_plant_boot(plant: Path) -> None:
     assert devices[5].od[0x1017, 0] == 40  # the entry before it was written
     assert devices[5].od[0x2001, 0] == 0  # the one after it was not
     assert devices[5].nmt_state == "PRE-OPERATIONAL"
+
+    # the master's SDO client reaches the slaves after the boot, the last one booted too
+    assert master.sdo(6).read(0x1018, 4, "u32") == 6
+    assert master.sdo(2).read(0x2001, 0, "u32") == 0x12345678
 
     kinds = [(e.node, e.kind) for e in mgr.events]
     assert (3, "failed") in kinds and (0, "network-started") in kinds

@@ -152,6 +152,16 @@ def canola_py_mgr_event(ctx: Any, event: Any) -> None:
         value=int(event.value)))
 
 
+_INVALID = (0x80000000).to_bytes(4, "little")
+
+
+def _unset_channel(node: Any, channel: int) -> None:
+    """Point SDO client channel ``channel`` at no server (0x1280 + channel), under the
+    lock; co_sdo_client_setup() gives it one again."""
+    for sub, data in ((1, _INVALID), (2, _INVALID), (3, b"\x00")):
+        lib.canola_py_app_write(node, 0x1280 + channel, sub, data, len(data))
+
+
 class NetworkManager:
     """The manager of ``master`` for ``network`` (:meth:`canola.Master.boot` makes one).
 
@@ -174,6 +184,7 @@ class NetworkManager:
         self._last_failure: dict[int, BootEvent] = {}
         self._callbacks: list[Callable[[BootEvent], None]] = []
         self._started = False
+        self._channel = 0
         self._keep: list[Any] = []
         self._slaves = ffi.new("co_mgr_slave_t[127]")
         for spec in network.slaves:
@@ -209,6 +220,8 @@ class NetworkManager:
         self.events.append(event)
         if event.kind in ("failed", "lost"):
             self._last_failure[event.node] = event
+        if event.kind in ("booted", "failed", "network-started", "network-halted"):
+            self._engine.later(self._idle)
         for fn in list(self._callbacks):
             self._engine.later(lambda fn=fn: fn(event))  # type: ignore[misc]
         self._waiter.wake()
@@ -223,7 +236,9 @@ class NetworkManager:
         if not self.network.master_start:
             startup |= lib.CO_MGR_NO_SELF_START
         with self._engine.locked() as node:
+            self._release_clients(node)
             channel = self._reserve_channel()
+            self._channel = channel
             config = ffi.new("co_manager_config_t *", {
                 "nmt_startup": startup, "slaves": self._slaves, "sdo_channel": channel,
                 "reset_slaves": self.network.reset_slaves,
@@ -231,6 +246,27 @@ class NetworkManager:
             _check(int(lib.co_manager_init(self._mgr, node, config)), "co_manager_init")
             _check(int(lib.co_manager_start(self._mgr)), "co_manager_start")
         self._started = True
+
+    def _release_clients(self, node: Any) -> None:
+        """Free the master's SDO client channels to the slaves (under the lock): a server
+        is talked to by one client channel at a time, and the manager needs its own."""
+        channels: dict[int, int] = self.master._channels
+        for spec in self.network.slaves:
+            channel = channels.get(spec.node_id)
+            if channel is None:
+                continue
+            if lib.co_sdo_client_busy(node, channel):
+                raise Error(f"an SDO transfer to node {spec.node_id} is in progress")
+            _unset_channel(node, channel)
+            del channels[spec.node_id]
+
+    def _idle(self) -> None:
+        """After a boot settled: the manager's channel lets go of the last slave, so that
+        master.sdo() may talk to it (the manager sets the channel up again for the next
+        boot)."""
+        with self._engine.locked() as node:
+            if self._settled_locked() and not lib.co_sdo_client_busy(node, self._channel):
+                _unset_channel(node, self._channel)
 
     def _reserve_channel(self) -> int:
         """An SDO client channel of the master for the manager (under the lock): the one
