@@ -303,3 +303,18 @@ def test_device_stops_on_sigint(net: tuple[str, list[Proc]]) -> None:
     dev.popen.send_signal(signal.SIGINT)
     assert dev.popen.wait(10) == 0
     dev.wait_for("node 20 stopped")
+
+
+def test_commands_end_when_the_hub_goes_away() -> None:
+    hub = Proc("bus", "serve", "--port", "0")
+    port = hub.wait_for(r"127\.0\.0\.1:(\d+)").group(1)
+    url = f"socketcand://127.0.0.1:{port}/gone"
+    device = Proc("device", "--eds", str(EDS), "--node-id", "7", "--bus", url)
+    device.wait_for("node 7: PRE-OPERATIONAL")
+    dump = Proc("dump", "--bus", url)  # no duration: runs until the bus goes
+    monitor = Proc("monitor", "--bus", url, "--once", "--duration", "60")
+    dump.wait_for("node 7 heartbeat")
+    assert hub.stop() == 0
+    for proc in (device, dump, monitor):
+        assert proc.popen.wait(15) == 1
+        proc.wait_for("^canola: the bus connection was closed by the server$")

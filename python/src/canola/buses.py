@@ -14,6 +14,7 @@ Failures are :class:`BusError` with a one-line message; nothing waits longer tha
 from __future__ import annotations
 
 import logging
+import select
 import socket
 import urllib.parse
 
@@ -21,7 +22,7 @@ import can
 
 from canola.errors import Error
 
-__all__ = ["BusError", "open_bus", "parse_bus_url"]
+__all__ = ["BusError", "connection_lost", "open_bus", "parse_bus_url"]
 
 DEFAULT_SOCKETCAND_PORT = 29536
 
@@ -96,3 +97,21 @@ def _open_socketcand(host: str, port: int, channel: str, timeout: float) -> can.
         raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
     finally:
         socket.setdefaulttimeout(previous)
+
+
+def connection_lost(bus: can.BusABC) -> bool:
+    """True when ``bus`` is a socketcand connection the server has closed.
+
+    python-can's socketcand client does not report a closed connection (its receive just
+    returns nothing, at once, forever): peek at its socket.
+    """
+    sock = getattr(bus, "_SocketCanDaemonBus__socket", None)
+    if not isinstance(sock, socket.socket):
+        return False
+    try:
+        readable, _, _ = select.select([sock], [], [], 0)
+        return bool(readable) and sock.recv(1, socket.MSG_PEEK) == b""
+    except (BlockingIOError, InterruptedError, TimeoutError):
+        return False
+    except (OSError, ValueError):  # reset, or closed here
+        return True

@@ -16,7 +16,7 @@ Robustness rules:
   bounded amount of memory and never delays the others.
 - Input is read in bounded chunks and an element is at most
   :data:`canola.socketcand.MAX_ELEMENT` characters.
-- Clients that do not finish the handshake within ``handshake_timeout`` seconds are closed.
+- Clients that do not open a channel within ``handshake_timeout`` seconds are closed.
 
 :class:`Hub` runs on an asyncio loop; :class:`HubThread` runs one in a background thread
 (tests, embedding); :func:`serve` is the command's blocking entry point.
@@ -191,7 +191,8 @@ class Hub:
         pending = b""
         deadline = time.monotonic() + self.handshake_timeout
         while True:
-            timeout = None if client.raw else max(deadline - time.monotonic(), 0.0)
+            timeout = (None if client.stats.channel
+                       else max(deadline - time.monotonic(), 0.0))
             try:
                 chunk = await asyncio.wait_for(reader.read(self.read_chunk), timeout)
             except TimeoutError as exc:

@@ -21,7 +21,7 @@ import logging
 import sys
 from collections.abc import Callable, Sequence
 
-from canola import odgen
+from canola import __version__, odgen
 from canola.cli import bus_cmd, device_cmd, dump_cmd, monitor_cmd, nmt_cmd, scan_cmd, sdo_cmd
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
@@ -39,6 +39,7 @@ def build_parser() -> Parser:
                     epilog="canola COMMAND --help tells more.")
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log more (repeat for debug)")
+    parser.add_argument("--version", action="version", version=f"canola {__version__}")
     subs = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     subs.required = True
     subs.add_parser("odgen", help="C object dictionary from an EDS/DCF (canola odgen --help)",
@@ -59,7 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser.parse_args(args_list)
         level = logging.WARNING - 10 * min(args.verbose, 2)
-        logging.basicConfig(level=level, format="canola: %(name)s: %(message)s")
+        logging.basicConfig(level=level, format="%(name)s: %(message)s")
         code: int = args.func(args)
         return code
     except SystemExit as exc:  # --help

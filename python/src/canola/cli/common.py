@@ -12,7 +12,7 @@ from typing import Any, Literal, NoReturn, overload
 
 import can
 
-from canola.buses import BusError, open_bus
+from canola.buses import BusError, connection_lost, open_bus
 from canola.candump import LogFrame
 
 __all__ = [
@@ -140,6 +140,8 @@ def live_frames(bus: can.BusABC, duration: float | None, *,
         if wait <= 0:
             return
         msg = bus.recv(wait)
+        if msg is None and connection_lost(bus):
+            raise CliError("the bus connection was closed by the server")
         if msg is None or msg.is_error_frame:
             if idle:
                 yield None

@@ -9,6 +9,7 @@ import signal
 import threading
 from types import FrameType
 
+from canola.buses import connection_lost
 from canola.cli.common import (
     CliError,
     Parser,
@@ -69,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
         try:
             while not stop.wait(0.2):
-                pass
+                if connection_lost(bus):
+                    raise CliError("the bus connection was closed by the server")
         finally:
             device.stop()
         print(f"canola device: node {args.node_id} stopped", flush=True)
