@@ -499,7 +499,7 @@ typedef struct co_flash_request { uint8_t channel; uint8_t server; uint8_t progr
     void (*progress)(void *ctx, uint32_t done, uint32_t total);
     void (*done)(void *ctx, const co_flash_result_t *result); void *ctx; ...; }
     co_flash_request_t;
-typedef struct co_flash { ...; } co_flash_t;
+typedef struct co_flash { uint8_t stage; ...; } co_flash_t;
 co_err_t co_flash_start(co_flash_t *flash, co_node_t *node, const co_flash_request_t *request);
 const char *co_flash_stage_name(uint8_t stage);
 
@@ -512,6 +512,7 @@ void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident);
 uint32_t canola_py_prog_ident(const canola_py_prog_t *p);
 uint32_t canola_py_prog_status(const canola_py_prog_t *p);
 uint8_t canola_py_prog_state(const canola_py_prog_t *p);
+uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel);
 
 extern "Python" void canola_py_mgr_event(void *ctx, const co_mgr_event_t *event);
 extern "Python" void canola_py_lss_done(void *ctx, const co_lss_result_t *result);
@@ -639,6 +640,13 @@ static void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident)
 static uint32_t canola_py_prog_ident(const canola_py_prog_t *p) { return p->prog.ident; }
 static uint32_t canola_py_prog_status(const canola_py_prog_t *p) { return p->prog.status; }
 static uint8_t canola_py_prog_state(const canola_py_prog_t *p) { return p->prog.state; }
+
+/* Bytes a client channel's transfer has moved so far (the server acknowledged, for a block
+ * download): program download progress sampled by the waiting thread. */
+static uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel)
+{
+    return channel < CO_SDO_CLIENTS_MAX ? node->sdo_clients[channel].done : 0;
+}
 """
 # ---- end of the issue 7 block
 

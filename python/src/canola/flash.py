@@ -58,10 +58,12 @@ class FlashError(Error):
 
 
 class _Download:
-    def __init__(self, waiter: Waiter, engine: Any, progress: Progress | None) -> None:
+    def __init__(self, waiter: Waiter, progress: Progress | None, total: int) -> None:
         self.waiter = waiter
-        self.engine = engine
         self.progress = progress
+        self.total = total
+        self.latest = 0  # acknowledged bytes, as the core or a sample last said
+        self.reported = 0
         self.done = False
         self.stage = 0
         self.abort = 0
@@ -73,10 +75,8 @@ class _Download:
 @ffi.def_extern()  # type: ignore[untyped-decorator]
 def canola_py_flash_progress(ctx: Any, done: int, total: int) -> None:
     d: _Download = ffi.from_handle(ctx)
-    fn = d.progress
-    if fn is not None:
-        sent, whole = int(done), int(total)
-        d.engine.later(lambda: fn(sent, whole))
+    del total
+    d.latest = max(d.latest, int(done))
 
 
 @ffi.def_extern()  # type: ignore[untyped-decorator]
@@ -95,7 +95,8 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
           program: int = 1, clear: bool = True, ident: int | None = None,
           timeout: float | None = None) -> FlashResult:
     """Download ``data`` as program ``program`` of ``node`` (see the module doc).
-    ``progress(done, total)`` runs as acknowledged bytes grow (outside the node's lock).
+    ``progress(done, total)`` runs in the calling thread as the acknowledged bytes grow
+    (sampled while waiting; the last call has ``done == total`` when the data went through).
     ``timeout`` (seconds, virtual on a SimBus) bounds the whole download; without it each
     SDO step is bounded by the master's SDO time-out."""
     if isinstance(node, bool) or not isinstance(node, int) or not 1 <= node <= 127:
@@ -120,7 +121,7 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
     if not client._busy.acquire(timeout=600):
         raise Error(f"SDO client of node {node} stays busy")
     try:
-        d = _Download(waiter, engine, progress)
+        d = _Download(waiter, progress, len(image))
         handle = ffi.new_handle(d)
         buf = ffi.new("uint8_t[]", len(image))
         ffi.memmove(buf, image, len(image))
@@ -136,7 +137,19 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
         if err == lib.CO_ERR_BUSY:
             raise Error("another program download is in progress")
         _check(err, f"program download to node {node}")
-        if not waiter.wait(lambda: d.done, timeout):
+
+        def finished() -> bool:  # and report progress, in this thread, growing
+            if not d.done:
+                with engine.locked() as c_node:
+                    if state.stage == lib.CO_FLASH_STAGE_DATA:
+                        d.latest = max(d.latest, int(lib.canola_py_sdo_client_done(
+                            c_node, channel)))
+            if d.progress is not None and d.latest > d.reported:
+                d.reported = min(d.latest, d.total)
+                d.progress(d.reported, d.total)
+            return d.done
+
+        if not waiter.wait(finished, timeout):
             master._abort(node)  # ends the step in progress: done runs with the abort
             waiter.wait(lambda: d.done, 5.0)
         if not d.done:  # pragma: no cover -- the core always completes on abort
