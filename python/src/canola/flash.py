@@ -157,7 +157,6 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
         stage = ffi.string(lib.co_flash_stage_name(d.stage)).decode()
         if d.stage != lib.CO_FLASH_STAGE_DONE:
             raise FlashError(node, stage, d.abort, d.ident, d.bytes)
-        del handle, buf, state
         return FlashResult(node, d.bytes, d.ident)
     finally:
         client._busy.release()
