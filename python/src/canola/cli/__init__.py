@@ -8,6 +8,9 @@
     canola dump [FILE]                        traffic decoded into CANopen meaning
     canola monitor                            live view of every node
     canola device --eds FILE --node-id N      run a canola device
+    canola boot NETWORK.yaml|DCF...           boot a network (CiA 302-2 manager)
+    canola flash NODE FILE                    program download (CiA 302-3)
+    canola lss scan|set-id|inquire            layer setting services (CiA 305)
 
 Every bus command takes ``--iface IFACE`` or ``--bus URL``. A bad argument is one line on
 stderr and exit code 2; a failure (no answer, SDO abort, bus missing) one line and exit
@@ -23,7 +26,10 @@ from collections.abc import Callable, Sequence
 
 from canola import __version__, odgen
 from canola.cli import bus_cmd, device_cmd, dump_cmd, monitor_cmd, nmt_cmd, scan_cmd, sdo_cmd
+from canola.cli.boot_cmd import register as register_boot
 from canola.cli.common import CliError, Parser
+from canola.cli.flash_cmd import register as register_flash
+from canola.cli.lss_cmd import register as register_lss
 from canola.errors import Error
 
 __all__ = ["build_parser", "main"]
@@ -31,6 +37,7 @@ __all__ = ["build_parser", "main"]
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
     dump_cmd.register, monitor_cmd.register, device_cmd.register,
+    register_boot, register_flash, register_lss,
 )
 
 
