@@ -30,12 +30,9 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from importlib import resources
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
-from canola import flash as _flash
-from canola import manager as _manager
-from canola import network as _network
 from canola._core import ffi, lib
 from canola._engine import Bus, Frame, _Timer
 from canola._nodebase import (
@@ -49,11 +46,13 @@ from canola._nodebase import (
 )
 from canola.core import SimBus, _Transfer
 from canola.errors import Error, SdoAbort
-from canola.flash import FlashResult
-from canola.lss import Lss
-from canola.manager import BootEvent, NetworkManager
-from canola.network import Network
 from canola.odgen import GenerateOptions
+
+if TYPE_CHECKING:  # loaded on first use (the command line starts faster without them)
+    from canola.flash import FlashResult
+    from canola.lss import Lss
+    from canola.manager import BootEvent, NetworkManager
+    from canola.network import Network
 
 __all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoClient",
            "SdoTimeout"]
@@ -481,14 +480,19 @@ class Master(NodeBase):
         :class:`canola.network.Network`, a YAML file, or DCF files. Blocks until the boot
         settled (unless ``wait=False``) and returns the manager: ``started``, ``slaves()``,
         ``events``. ``on_event(BootEvent)`` for every report. See :mod:`canola.manager`."""
-        if not isinstance(network, Network):
+        from canola import manager  # noqa: PLC0415 -- on first use
+        from canola import network as net  # noqa: PLC0415
+
+        if not isinstance(network, net.Network):
             paths = [network] if isinstance(network, str | os.PathLike) else list(network)
-            network = _network.from_files(paths, node_id_of_master=self.node_id)
-        return _manager.boot(self, network, on_event=on_event, wait=wait, timeout=timeout)
+            network = net.from_files(paths, node_id_of_master=self.node_id)
+        return manager.boot(self, network, on_event=on_event, wait=wait, timeout=timeout)
 
     @property
     def lss(self) -> Lss:
         """The LSS master (CiA 305): fastscan, set_node_id, inquire. See :mod:`canola.lss`."""
+        from canola.lss import Lss  # noqa: PLC0415
+
         lss: Lss | None = getattr(self, "_lss", None)
         if lss is None:
             lss = self._lss = Lss(self)
@@ -500,7 +504,9 @@ class Master(NodeBase):
         """Download program ``data`` to ``node`` (CiA 302-3); ``progress(done, total)``.
         Raises :class:`canola.flash.FlashError` with the stage and abort code. See
         :mod:`canola.flash`."""
-        return _flash.flash(self, node, data, progress=progress, program=program, clear=clear,
+        from canola.flash import flash  # noqa: PLC0415
+
+        return flash(self, node, data, progress=progress, program=program, clear=clear,
                      ident=ident, timeout=timeout)
 
     def wait(self, seconds: float) -> None:

@@ -37,8 +37,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
-
 from canola import concise, eds
 from canola.errors import EdsError, Error
 
@@ -153,6 +151,8 @@ class _Reader:
 def load_yaml(text: str, file: str = "<yaml>", *, base: str | os.PathLike[str] = ".",
               node_id_of_master: int | None = None) -> Network:
     """A network from YAML ``text``; DCF paths are relative to ``base``."""
+    import yaml  # noqa: PLC0415 -- loaded on first use
+
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:
