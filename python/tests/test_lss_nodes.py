@@ -129,7 +129,6 @@ def test_refused_node_id() -> None:
     assert device.node_id == 6
 
 
-@pytest.mark.vcan
 def test_fastscan_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
     master = Master(can_bus(), node_id=1)
     devices = [Device(model(serial=s), UNCONFIGURED, can_bus()) for s in SERIALS[:2]]

@@ -271,11 +271,13 @@ class NetworkManager:
     def _reserve_channel(self) -> int:
         """An SDO client channel of the master for the manager (under the lock): the one
         kept under key 0 (no SDO server has node-ID 0), else a free one."""
+        from canola.master import _CHANNELS  # noqa: PLC0415 -- master imports this module
+
         channels: dict[int, int] = self.master._channels
         if 0 in channels:
             return channels[0]
         used = set(channels.values())
-        free = [c for c in range(16) if c not in used]
+        free = [c for c in range(_CHANNELS) if c not in used]
         if not free:
             raise Error("no free SDO client channel for the manager")
         channels[0] = free[-1]
