@@ -116,4 +116,5 @@ def test_flash_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
     with master, device:
         result = master.flash(5, image, progress=lambda done, total: seen.append(done))
     assert result.ident == zlib.crc32(image) and slot.image == image
-    assert seen[-1] == len(image) and len(seen) > 5
+    # sampled while waiting (20 times a second): a few steps, growing, ending whole
+    assert len(seen) >= 2 and seen == sorted(set(seen)) and seen[-1] == len(image)
