@@ -1,7 +1,7 @@
 # canola -- the commands of the README. Everything builds out of tree with CMake.
 #   make demo    the demo network on the simulated bus
 #   make test    every test: normal build, ASan+UBSan build, format check
-#   make bench   instruction counts (valgrind) as a Markdown table
+#   make bench   instruction counts (valgrind) as a Markdown table (BENCH_QUICK=1: quick)
 #   make format  rewrite the sources with clang-format
 
 BUILD      ?= build
@@ -10,7 +10,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz coverage py-env clean
+.PHONY: all demo test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-gateway coverage py-env clean
 
 all: $(BUILD)/build.stamp
 
@@ -82,6 +82,13 @@ fuzz:
 	  build-fuzz/corpus-node fuzz/corpus/node > build-fuzz/fuzz.log 2>&1; rc=$$?; \
 	  tail -n 8 build-fuzz/fuzz.log; echo "fuzz_node: exit $$rc"; exit $$rc
 
+# atheris on the CiA 309-3 gateway's line parser (the 'fuzz' extra of the Python package).
+fuzz-gateway: py-env
+	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]'
+	@mkdir -p build-fuzz/corpus-gateway
+	$(PY_VENV)/bin/python fuzz/fuzz_gateway_parser.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-gateway
+
 # The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
 # candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
 # one canvm run (../shared/tools/canvm), else reported NOT RUN.
@@ -100,8 +107,9 @@ format-check:
 format:
 	clang-format -i $(FORMAT_SRC)
 
+# BENCH_QUICK=1: every row with a fraction of the work (CI checks that the bench runs).
 bench:
-	./bench/run
+	BENCH_QUICK=$(BENCH_QUICK) ./bench/run
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan

@@ -50,7 +50,8 @@ static void start(bench_t *b, uint8_t id, co_od_t od, uint16_t hb_ms)
 
 static void setup(bench_t *b, uint8_t id, uint16_t hb_ms)
 {
-    start(b, id, example_od_init(&b->od, hb_ms), hb_ms);
+    /* keyed, as the generator (canola.odgen) emits dictionaries */
+    start(b, id, example_od_keyed(&b->od, example_od_init(&b->od, hb_ms)), hb_ms);
 }
 
 static void setup_big(bench_t *b)

@@ -189,3 +189,12 @@ co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms)
     co_od_reset(&od, 0x1000, 0xFFFF, 0);
     return od;
 }
+
+co_od_t example_od_keyed(example_od_t *x, co_od_t od)
+{
+    for (uint32_t i = 0; i < od.count; i++) {
+        x->keys[i] = CO_OD_KEY(od.entries[i].index, od.entries[i].sub);
+    }
+    od.keys = x->keys;
+    return od;
+}

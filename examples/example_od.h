@@ -79,10 +79,15 @@ typedef struct example_od {
     uint8_t outputs_count; /* 0x6200 sub0 */
     uint8_t outputs[4];    /* 0x6200 sub1..4, rww, PDO-mappable */
     co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES];
+    uint32_t keys[EXAMPLE_OD_MAX_ENTRIES]; /* co_od_t.keys, as the generator emits them */
 } example_od_t;
 
 /** Fill `x` (values at their power-on defaults) and return its dictionary. The
  *  heartbeat producer default is `hb_period_ms`; consumer entries default to 0. */
 co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms);
+
+/** `od` (from example_od_init, entries final) with its dense key array (co_od_t.keys)
+ *  filled, as generated dictionaries have it. A table edited afterwards needs it again. */
+co_od_t example_od_keyed(example_od_t *x, co_od_t od);
 
 #endif /* CANOLA_EXAMPLE_OD_H */

@@ -25,6 +25,9 @@ void co_guard_reset_comm(co_node_t *node)
 
 void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
 {
+    if (!CO_CONFIG_GUARDING) {
+        return; /* not routed without guarding; kept for the dispatch table */
+    }
     if (!(frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++; /* a data frame on our own error-control ID */
         return;
@@ -52,7 +55,7 @@ void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
 
 void co_guard_written(co_node_t *node)
 {
-    if (!node->life_guarding || node->life_lost) {
+    if (!CO_CONFIG_GUARDING || !node->life_guarding || node->life_lost) {
         return;
     }
     uint64_t life_us = life_time_us(node);
@@ -85,6 +88,9 @@ static uint64_t watch_life_us(const co_guard_watch_t *w)
 
 co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)
 {
+    if (!CO_CONFIG_GUARDING) {
+        return CO_ERR_STATE;
+    }
     if (node_id < 1 || node_id > 127 || node_id == node->node_id ||
         (guard_ms != 0 && factor == 0)) {
         return CO_ERR_ARG;
@@ -126,6 +132,9 @@ co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uin
 
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    if (!CO_CONFIG_GUARDING) {
+        return; /* no watch is ever routed */
+    }
     if (frame->flags & CO_FRAME_RTR) {
         return; /* our own request, as another master would see it */
     }
@@ -178,6 +187,9 @@ static uint64_t watch_poll(co_node_t *node, co_guard_watch_t *w, uint64_t now_us
 
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
 {
+    if (!CO_CONFIG_GUARDING) {
+        return CO_TIME_NEVER;
+    }
     uint64_t next = life_poll(node, now_us);
     for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         if (node->guard_watch[i].guard_ms != 0) {

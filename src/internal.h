@@ -80,13 +80,52 @@ static inline uint64_t co_sdo_timeout_us(const co_node_t *node)
 /* Integer value of an optional entry (0 when the OD lacks it). */
 static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
 {
-    return entry ? co_od_entry_uint(entry) : 0;
+    if (entry == NULL) {
+        return 0;
+    }
+    /* The communication objects read on every SYNC or poll are u8/u16/u32 in storage:
+     * read them in place; any other type takes the general path. */
+    if (entry->value != NULL) {
+        switch (entry->type) {
+        case CO_TYPE_UNSIGNED8:
+            return *(const uint8_t *)entry->value;
+        case CO_TYPE_UNSIGNED16:
+            return *(const uint16_t *)entry->value;
+        case CO_TYPE_UNSIGNED32:
+            return *(const uint32_t *)entry->value;
+        default:
+            break;
+        }
+    }
+    return co_od_entry_uint(entry);
 }
 
 /* Route key: the identifier, bit 31 marking 29-bit identifiers. */
 static inline uint32_t co_route_key(const co_frame_t *frame)
 {
     return frame->id | ((frame->flags & CO_FRAME_EXT) ? 0x80000000u : 0u);
+}
+
+/* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
+ * compilers without the attribute just decide for themselves). */
+#if defined(__GNUC__) || defined(__clang__)
+#define CO_NOINLINE __attribute__((noinline))
+#else
+#define CO_NOINLINE
+#endif
+
+/* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
+static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
+
+/* co_sync_in_window, inline for the PDO paths that ask at every SYNC and synchronous RPDO. */
+static inline bool co_sync_window_open(const co_node_t *node, uint64_t now_us)
+{
+    uint64_t last = node->sync.last_us;
+    if (last == CO_TIME_NEVER || now_us < last) {
+        return false;
+    }
+    uint32_t window = (uint32_t)co_entry_uint(node->sync.window);
+    return window == 0 || now_us - last < window;
 }
 
 /* node.c */
@@ -227,7 +266,7 @@ void co_time_ingest(co_node_t *node, const co_frame_t *frame);
 void co_time_written(co_node_t *node, const co_od_entry_t *entry);
 
 /* lss_slave.c, lss_master.c: no-ops when left out of the build. */
-#if CO_LSS_SLAVE
+#if CO_CONFIG_LSS_SLAVE
 void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame);
 uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us);
 /* At every reset: the node-ID the node runs with from now on (CiA 305 pending node-ID). */
@@ -250,7 +289,7 @@ static inline void co_lss_slave_reset(co_node_t *node, bool application)
     (void)application;
 }
 #endif
-#if CO_LSS_MASTER
+#if CO_CONFIG_LSS_MASTER
 void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame);
 uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us);
 static inline bool co_lss_master_listening(const co_node_t *node)
@@ -277,7 +316,7 @@ static inline bool co_lss_master_listening(const co_node_t *node)
 #endif
 
 /* manager.c: no-ops when left out of the build. */
-#if CO_MANAGER
+#if CO_CONFIG_MANAGER
 uint64_t co_manager_poll(co_node_t *node, uint64_t now_us);
 void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame);
 void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev);

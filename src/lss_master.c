@@ -4,7 +4,7 @@
  */
 #include "internal.h"
 
-#if CO_LSS_MASTER
+#if CO_CONFIG_LSS_MASTER
 
 #define DEFAULT_TIMEOUT_MS 100u
 #define SCAN_RESET_PART 0xFFu /* fastscan: the reset step, before part 0 */

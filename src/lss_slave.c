@@ -4,7 +4,7 @@
  */
 #include "internal.h"
 
-#if CO_LSS_SLAVE
+#if CO_CONFIG_LSS_SLAVE
 
 #define NO_BIT_TIMING 0xFFu
 #define FASTSCAN_RESET 0x80u

@@ -9,7 +9,7 @@
  */
 #include "internal.h"
 
-#if CO_MANAGER
+#if CO_CONFIG_MANAGER
 
 enum step {
     STEP_TYPE = 1, /* read 0x1000 */

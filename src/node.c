@@ -313,8 +313,11 @@ co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, cons
                                uint32_t len)
 {
     const co_od_t *od = &node->cfg.od;
+    /* The services own objects of the communication profile area only (0x1000..0x1FFF):
+     * an application object needs neither their checks nor their effects. */
+    bool comm = entry->index < 0x2000u;
     co_abort_t abort = co_od_check(od, entry, data, len);
-    if (abort == CO_ABORT_NONE) {
+    if (abort == CO_ABORT_NONE && comm) {
         abort = service_check(node, entry, data, len);
     }
     if (abort == CO_ABORT_NONE) {
@@ -323,7 +326,9 @@ co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, cons
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    service_apply(node, entry);
+    if (comm) {
+        service_apply(node, entry);
+    }
     co_pdo_changed(node, entry); /* change of state: event-driven TPDOs mapping it */
     if (entry->hooks && entry->hooks->written) {
         entry->hooks->written(od->hook_ctx, entry);

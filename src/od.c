@@ -8,6 +8,8 @@
  */
 #include "canola/od.h"
 
+#include "canola/config.h"
+
 #include <string.h>
 
 /* REAL32/REAL64 are copied bit for bit through uint32_t/uint64_t. */
@@ -224,14 +226,19 @@ static bool entry_ok(const co_od_entry_t *e)
     if (t->kind == K_USTRING && (e->size & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && e->limits != NULL) {
+        return false; /* REAL limits are left out of this build */
+    }
     return storage_ok(e, t);
 }
 
 /* Entry i is well formed and comes strictly after entry i - 1. */
-static bool entry_fits(const co_od_entry_t *entries, uint32_t i)
+static bool entry_fits(const co_od_t *od, uint32_t i)
 {
+    const co_od_entry_t *entries = od->entries;
     bool sorted = i == 0 || entry_key(&entries[i]) > entry_key(&entries[i - 1u]);
-    return sorted && entry_ok(&entries[i]);
+    bool keyed = od->keys == NULL || od->keys[i] == entry_key(&entries[i]);
+    return sorted && keyed && entry_ok(&entries[i]);
 }
 
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
@@ -240,7 +247,7 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
         return CO_ERR_ARG;
     }
     uint32_t i = 0;
-    while (od->entries != NULL && i < od->count && entry_fits(od->entries, i)) {
+    while (od->entries != NULL && i < od->count && entry_fits(od, i)) {
         i++;
     }
     if (i == od->count) {
@@ -254,10 +261,26 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 
 /* Position of the first entry whose key is >= key (count when there is none). The
  * halving has no data-dependent branch, so it costs the same few instructions per step. */
+/* lower_bound over the dense key array (co_od_t.keys). */
+static uint32_t lower_bound_keys(const uint32_t *keys, uint32_t count, uint32_t key)
+{
+    const uint32_t *base = keys;
+    uint32_t n = count;
+    while (n > 1u) {
+        uint32_t half = n / 2u;
+        base = base[half] < key ? &base[half] : base;
+        n -= half;
+    }
+    return (uint32_t)(base - keys) + (*base < key ? 1u : 0u);
+}
+
 static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 {
     if (od->count == 0) {
         return 0;
+    }
+    if (od->keys != NULL) {
+        return lower_bound_keys(od->keys, od->count, key);
     }
     const co_od_entry_t *base = od->entries;
     uint32_t n = od->count;
@@ -430,7 +453,7 @@ static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, 
         int64_t v = to_signed(bits);
         low = v < lim->low.i;
         high = v > lim->high.i;
-    } else if (t->kind == K_REAL) {
+    } else if (CO_CONFIG_REAL_LIMITS && t->kind == K_REAL) {
         double v = real_value(t, bits);
         if (v != v) {
             return CO_ABORT_VALUE; /* NaN lies within no range */

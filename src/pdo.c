@@ -89,7 +89,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t bits = (uint8_t)value;
     item->entry = NULL;
-    item->direct = NULL;
+    item->direct = false;
     item->bits = bits;
     if (bits == 0) {
         return CO_ABORT_NO_MAP;
@@ -110,8 +110,20 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     uint32_t size = co_type_size((co_type_t)e->type);
     bool whole = bits == 8u * size && size != 0;
     bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
-    item->direct = whole && plain ? e->value : NULL;
+    item->direct = whole && plain;
     return CO_ABORT_NONE;
+}
+
+/* Every item is copied straight between the frame and storage (no dummy entry, no bit
+ * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
+static bool all_direct(const co_pdo_t *p)
+{
+    for (uint8_t i = 0; i < p->count; i++) {
+        if (!p->items[i].direct || p->items[i].bits % 8u != 0) {
+            return false;
+        }
+    }
+    return true;
 }
 
 /* Resolve entries 1..n of mapping object `index` into out's items, count and bits. */
@@ -120,6 +132,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
 {
     out->count = 0;
     out->bits = 0;
+    out->plain = false;
     if (n == 0) {
         return CO_ABORT_NONE;
     }
@@ -146,6 +159,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
+    out->plain = n > 0 && all_direct(out);
     return CO_ABORT_NONE;
 }
 
@@ -172,6 +186,7 @@ static void load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     if (resolve_mapping(&node->cfg.od, idx, n, tpdo, p) != CO_ABORT_NONE) {
         p->count = 0;
         p->bits = 0;
+        p->plain = false;
     }
 }
 
@@ -211,25 +226,46 @@ co_err_t co_pdo_bind(co_node_t *node)
     return CO_OK;
 }
 
+/* After parameters or mapping loaded (NMT states do not change it): may a frame of this
+ * RPDO take co_pdo_rx's short path? */
+static void decide_fast(co_pdo_t *p, bool tpdo)
+{
+    p->rx_fast = !tpdo && pdo_active(p) && p->plain && p->type > 240 && p->event_ms == 0;
+}
+
 static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     load_comm(node, p, tpdo, num);
     load_mapping(node, p, tpdo, num);
+    decide_fast(p, tpdo);
     restart(node, p, tpdo);
 }
 
 /* How many TPDOs an object change can trigger (active, type 0 or event-driven): when
- * none, a changed value costs no search. Counted again whenever a TPDO changes. */
+ * none, a changed value costs no search; and how far a SYNC needs to look among TPDOs and
+ * RPDOs. Counted again whenever a PDO changes. */
 static void count_listeners(co_node_t *node)
 {
     uint16_t listeners = 0;
+    uint16_t sync_end = 0;
     for (uint16_t n = 0; n < node->tpdo_count; n++) {
         const co_pdo_t *p = &node->tpdo[n];
         if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
             listeners++;
         }
+        if (pdo_active(p) && (p->type <= 240 || p->type == 252)) {
+            sync_end = (uint16_t)(n + 1u);
+        }
     }
     node->tpdo_listeners = listeners;
+    node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
+    uint16_t rx_end = 0;
+    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+        if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
+            rx_end = (uint16_t)(n + 1u);
+        }
+    }
+    node->rpdo_sync_end = rx_end; /* nor at an RPDO past this one */
 }
 
 void co_pdo_reset_comm(co_node_t *node)
@@ -272,11 +308,16 @@ void co_pdo_state_entered(co_node_t *node)
 
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
-    bool in_window = co_sync_in_window(node, node->now_us);
-    for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
-        rpdo_sync(node, (uint8_t)n, in_window);
+    if (!pdo_running(node)) {
+        return;
     }
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    bool in_window = co_sync_window_open(node, node->now_us);
+    for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
+        if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
+            rpdo_sync(node, (uint8_t)n, in_window);
+        }
+    }
+    for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
         tpdo_sync(node, &node->tpdo[n], counter, in_window);
     }
 }
@@ -406,6 +447,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         load_comm(node, p, r.tpdo, r.num);
         p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
+    decide_fast(p, r.tpdo);
     restart(node, p, r.tpdo);
     count_listeners(node);
     if (p->cob_id != old_cob || p->type != old_type || pdo_active(p) != was_active) {

@@ -21,8 +21,8 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
 {
     const co_od_t *od = &node->cfg.od;
     const co_od_entry_t *e = item->entry;
-    if (item->direct != NULL && pos % 8u == 0) { /* the common case: bytes into storage */
-        pdo_copy_value(item->direct, data + pos / 8u, item->bits / 8u);
+    if (item->direct && pos % 8u == 0) { /* the common case: bytes into storage */
+        pdo_copy_value(e->value, data + pos / 8u, item->bits / 8u);
         co_pdo_changed(node, e);
         return;
     }
@@ -45,15 +45,37 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
     co_pdo_changed(node, e);
 }
 
+/* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
+ * told when some TPDO listens to changes. */
+static inline void apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+{
+    const co_pdo_item_t *item = p->items;
+    const co_pdo_item_t *end = item + p->count;
+    for (; item < end; item++) {
+        uint32_t bytes = item->bits / 8u;
+        pdo_copy_value(item->entry->value, data, bytes);
+        data += bytes;
+    }
+    if (node->tpdo_listeners != 0) {
+        for (item = p->items; item < end; item++) {
+            co_pdo_changed(node, item->entry);
+        }
+    }
+}
+
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    uint32_t pos = 0;
-    for (uint8_t i = 0; i < p->count; i++) {
-        if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
-            store_item(node, &p->items[i], data, pos);
+    if (p->plain) {
+        apply_plain(node, p, data);
+    } else {
+        uint32_t pos = 0;
+        for (uint8_t i = 0; i < p->count; i++) {
+            if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
+                store_item(node, &p->items[i], data, pos);
+            }
+            pos += p->items[i].bits;
         }
-        pos += p->items[i].bits;
     }
     if (node->cfg.on_rpdo) {
         node->cfg.on_rpdo(node->cfg.user, n);
@@ -119,7 +141,7 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
 static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
 {
     bool synced = node->sync.last_us != CO_TIME_NEVER;
-    if (synced && !co_sync_in_window(node, node->now_us)) {
+    if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
     memcpy(p->data, frame->data, frame->len);
@@ -127,15 +149,10 @@ static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
     pdo_set(p, PDO_F_WAITING);
 }
 
-void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+/* Every frame of an active RPDO that is not the usual one (see co_pdo_rx). Kept out of
+ * line so that the usual frame does not pay for this path's registers. */
+static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
-    if (frame->flags & CO_FRAME_RTR) {
-        node->stats.rx_malformed++; /* RPDOs are not requested */
-        return;
-    }
-    if (rpdo >= node->rpdo_count || !pdo_active(&node->rpdo[rpdo])) {
-        return;
-    }
     co_pdo_t *p = &node->rpdo[rpdo];
     if (8u * frame->len < p->bits) {
         length_error(node, p, EMCY_PDO_LENGTH);
@@ -151,6 +168,31 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
         length_error(node, p, EMCY_PDO_EXCEEDED);
     } else {
         length_ok(node, p);
+    }
+}
+
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+{
+    if (frame->flags & CO_FRAME_RTR) {
+        node->stats.rx_malformed++; /* RPDOs are not requested */
+        return;
+    }
+    if (rpdo >= node->rpdo_count) {
+        return;
+    }
+    const co_pdo_t *p = &node->rpdo[rpdo];
+    if (p->rx_fast && frame->len == pdo_bytes(p) &&
+        !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
+        /* The usual frame: asynchronous, exactly the mapped length, no deadline, nothing
+         * reported that it could clear. Applied at once, as rx_general would. */
+        apply_plain(node, p, frame->data);
+        if (node->cfg.on_rpdo) {
+            node->cfg.on_rpdo(node->cfg.user, rpdo);
+        }
+        return;
+    }
+    if (pdo_active(p)) {
+        rx_general(node, rpdo, frame);
     }
 }
 

@@ -13,8 +13,8 @@ static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
-    if (item->direct != NULL && pos % 8u == 0) { /* the common case: bytes from storage */
-        pdo_copy_value(out + pos / 8u, item->direct, item->bits / 8u);
+    if (item->direct && pos % 8u == 0) { /* the common case: bytes from storage */
+        pdo_copy_value(out + pos / 8u, item->entry->value, item->bits / 8u);
         return;
     }
     if (pos % 8u == 0 && item->bits % 8u == 0) {
@@ -29,6 +29,15 @@ static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 {
     memset(out, 0, 8);
+    if (p->plain) { /* whole values as stored: one copy each */
+        uint8_t *at = out;
+        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
+            uint32_t bytes = item->bits / 8u;
+            pdo_copy_value(at, item->entry->value, bytes);
+            at += bytes;
+        }
+        return;
+    }
     uint32_t pos = 0;
     for (uint8_t i = 0; i < p->count; i++) {
         pack_item(&node->cfg.od, &p->items[i], out, pos);
@@ -45,9 +54,9 @@ static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 
 static void send_fresh(co_node_t *node, const co_pdo_t *p)
 {
-    uint8_t data[8];
-    pack(node, p, data);
-    send_data(node, p, data);
+    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
+    pack(node, p, f.data); /* straight into the frame: no second copy */
+    (void)co_node_send_as(node, &f, CO_SVC_PDO);
 }
 
 /* An event-driven transmission: the inhibit time and the event timer count from it. */

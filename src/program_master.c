@@ -4,7 +4,7 @@
  */
 #include "internal.h"
 
-#if CO_MANAGER
+#if CO_CONFIG_MANAGER
 
 static void finish(co_flash_t *f, uint8_t stage, co_abort_t abort)
 {

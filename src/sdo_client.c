@@ -600,7 +600,8 @@ co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t b
 /* Checks common to uploads and downloads. */
 static co_err_t can_start(const co_node_t *node, uint8_t channel, co_sdo_mode_t mode)
 {
-    if (node == NULL || channel >= co_sdo_clients_max() || (unsigned)mode > CO_SDO_BLOCK) {
+    if (node == NULL || channel >= co_sdo_clients_max() || (unsigned)mode > CO_SDO_BLOCK ||
+        (!CO_CONFIG_SDO_BLOCK && mode == CO_SDO_BLOCK)) {
         return CO_ERR_ARG;
     }
     const co_sdo_client_t *c = &node->sdo_clients[channel];

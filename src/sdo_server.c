@@ -117,12 +117,19 @@ static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
     co_node_send_as(node, &f, CO_SVC_SDO);
 }
 
-/* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`. */
+/* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`
+ * (built in the frame itself: the expedited answers are the hot ones). */
 static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
-    uint8_t d[8] = {cmd, (uint8_t)s->index, (uint8_t)(s->index >> 8), s->sub};
-    co_put_u32(&d[4], tail);
-    send(node, s, d);
+    if (s->cob_tx & CO_COB_INVALID) {
+        return; /* never on a COB-ID marked not valid */
+    }
+    co_frame_t f = co_cob_frame(s->cob_tx, 8);
+    f.data[0] = cmd;
+    co_put_u16(&f.data[1], s->index);
+    f.data[3] = s->sub;
+    co_put_u32(&f.data[4], tail);
+    co_node_send_as(node, &f, CO_SVC_SDO);
 }
 
 static void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
@@ -187,7 +194,7 @@ static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *da
                        ? CO_ABORT_LEN_HIGH
                        : CO_ABORT_OUT_OF_MEMORY;
         }
-        if (s->crc_on) { /* the CRC covers data as it leaves the buffer */
+        if (CO_CONFIG_SDO_BLOCK && s->crc_on) { /* the CRC covers data as it leaves the buffer */
             s->crc = co_crc16(s->crc, s->buf, s->buf_len);
         }
         co_abort_t abort = flush(node, s, false);
@@ -310,6 +317,14 @@ static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
     uint8_t first[4] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
+    const uint8_t *wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    if (wire != NULL && total >= 1 && total <= 4) { /* stored in wire form: answer from it */
+        for (uint32_t i = 0; i < total; i++) {
+            first[i] = wire[i]; /* at most 4 bytes: no call to memcpy */
+        }
+        respond(node, s, (uint8_t)(0x43u | ((4u - total) << 2)), co_get_u32(first));
+        return;
+    }
     co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
@@ -583,6 +598,10 @@ static void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
         abort_transfer(node, s, abort);
         return;
     }
+    if (!CO_CONFIG_SDO_BLOCK && (cs == 5 || cs == 6)) {
+        abort_transfer(node, s, CO_ABORT_COMMAND); /* block transfer is left out */
+        return;
+    }
     switch (cs) {
     case 1:
         initiate_download(node, s, d);
@@ -602,6 +621,10 @@ static void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 /* A frame inside an open transfer. */
 static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
+    if (!CO_CONFIG_SDO_BLOCK && s->state >= BLOCK_DOWN) {
+        abort_transfer(node, s, CO_ABORT_COMMAND); /* unreachable: no block state is entered */
+        return;
+    }
     switch (s->state) {
     case DOWN_SEGMENTED:
         download_segment(node, s, d);
@@ -663,7 +686,8 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 /* One request of an open or new transfer. */
 static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    if (s->state == BLOCK_DOWN) { /* every frame of a sub-block is a segment */
+    if (CO_CONFIG_SDO_BLOCK &&
+        s->state == BLOCK_DOWN) { /* every frame of a sub-block is a segment */
         block_segment(node, s, d);
     } else if (is_initiate(d[0])) {
         initiate(node, s, d);
@@ -690,7 +714,7 @@ uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
         if (now_us >= s->deadline_us) {
             abort_transfer(node, s, CO_ABORT_TIMEOUT);
         } else {
-            if (s->state == BLOCK_UP) {
+            if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_UP) {
                 pump_sub_block(node, s);
             }
             next = co_min_u64(next, s->deadline_us);

@@ -3,6 +3,13 @@
  */
 #include "internal.h"
 
+/* The storage given, or none when the feature is left out (CO_CONFIG_STORAGE 0): every
+ * path below then is the "no storage" one, and the compiler drops the rest. */
+static inline const co_storage_t *storage_of(const co_node_t *node)
+{
+    return CO_CONFIG_STORAGE ? node->cfg.storage : NULL;
+}
+
 #define RECORD_HEAD 4u /* index (2), sub-index (1), length (1) */
 
 static const uint16_t k_first[3] = {0, 0x1000, 0x2000};
@@ -23,7 +30,7 @@ static bool is_parameter(const co_od_entry_t *e)
 
 static co_err_t save_group(co_node_t *node, co_param_group_t group)
 {
-    const co_storage_t *st = node->cfg.storage;
+    const co_storage_t *st = storage_of(node);
     const co_od_t *od = &node->cfg.od;
     co_err_t err = st->begin(st->ctx, group);
     for (uint32_t i = 0; i < od->count && err == CO_OK; i++) {
@@ -48,7 +55,7 @@ static co_err_t save_group(co_node_t *node, co_param_group_t group)
 
 co_err_t co_storage_save(co_node_t *node, uint8_t which)
 {
-    if (node->cfg.storage == NULL) {
+    if (storage_of(node) == NULL) {
         return CO_ERR_STATE;
     }
     if (which < 1 || which > 3) {
@@ -66,7 +73,7 @@ co_err_t co_storage_save(co_node_t *node, uint8_t which)
 
 static co_err_t restore_defaults(co_node_t *node, uint8_t which)
 {
-    const co_storage_t *st = node->cfg.storage;
+    const co_storage_t *st = storage_of(node);
     co_err_t err = CO_OK;
     if (which != 3) {
         err = st->erase(st->ctx, CO_PARAMS_COMMUNICATION);
@@ -81,7 +88,7 @@ static co_err_t restore_defaults(co_node_t *node, uint8_t which)
 
 void co_storage_load(co_node_t *node, co_param_group_t group)
 {
-    const co_storage_t *st = node->cfg.storage;
+    const co_storage_t *st = storage_of(node);
     if (st == NULL) {
         return;
     }
@@ -118,7 +125,7 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
     }
     bool store = entry->index == 0x1010;
     uint32_t want = store ? CO_STORE_SIGNATURE : CO_RESTORE_SIGNATURE;
-    if (node->cfg.storage == NULL || entry->sub > 3 || co_get_u32(data) != want) {
+    if (storage_of(node) == NULL || entry->sub > 3 || co_get_u32(data) != want) {
         return CO_ABORT_DATA_STORE;
     }
     co_err_t err = store ? co_storage_save(node, entry->sub) : restore_defaults(node, entry->sub);
@@ -130,7 +137,7 @@ void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry)
 {
     if (entry->sub != 0 && entry->value != NULL) {
         (void)co_od_set_uint(&node->cfg.od, entry->index, entry->sub,
-                             node->cfg.storage != NULL ? 1u : 0u);
+                             storage_of(node) != NULL ? 1u : 0u);
     }
 }
 

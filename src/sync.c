@@ -59,12 +59,7 @@ void co_sync_ingest(co_node_t *node, const co_frame_t *frame)
 
 bool co_sync_in_window(const co_node_t *node, uint64_t now_us)
 {
-    uint64_t last = node->sync.last_us;
-    if (last == CO_TIME_NEVER || now_us < last) {
-        return false;
-    }
-    uint32_t window = (uint32_t)co_entry_uint(node->sync.window);
-    return window == 0 || now_us - last < window;
+    return co_sync_window_open(node, now_us);
 }
 
 uint8_t co_sync_counter(const co_node_t *node) { return node->sync.last_counter; }

@@ -82,16 +82,16 @@
 
 /** LSS (CiA 305, canola/lss.h): the slave (every node answers on 0x7E5) and the master.
  *  0 leaves them out of the build. */
-#ifndef CO_LSS_SLAVE
-#define CO_LSS_SLAVE 1
+#ifndef CO_CONFIG_LSS_SLAVE
+#define CO_CONFIG_LSS_SLAVE 1
 #endif
-#ifndef CO_LSS_MASTER
-#define CO_LSS_MASTER 1
+#ifndef CO_CONFIG_LSS_MASTER
+#define CO_CONFIG_LSS_MASTER 1
 #endif
 
 /** The CANopen manager (CiA 302-2, canola/manager.h). 0 leaves it out of the build. */
-#ifndef CO_MANAGER
-#define CO_MANAGER 1
+#ifndef CO_CONFIG_MANAGER
+#define CO_CONFIG_MANAGER 1
 #endif
 
 /** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
@@ -100,15 +100,59 @@
 #ifndef CO_RX_ROUTES_MAX
 #define CO_RX_ROUTES_MAX                                                                           \
     (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +      \
-     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_MANAGER ? 127 : 0))
+     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_CONFIG_MANAGER ? 127 : 0))
 #endif
 
-#if (CO_LSS_SLAVE != 0 && CO_LSS_SLAVE != 1) || (CO_LSS_MASTER != 0 && CO_LSS_MASTER != 1)
-#error "CO_LSS_SLAVE and CO_LSS_MASTER must be 0 or 1"
+#if (CO_CONFIG_LSS_SLAVE != 0 && CO_CONFIG_LSS_SLAVE != 1) ||                                      \
+    (CO_CONFIG_LSS_MASTER != 0 && CO_CONFIG_LSS_MASTER != 1)
+#error "CO_CONFIG_LSS_SLAVE and CO_CONFIG_LSS_MASTER must be 0 or 1"
 #endif
-#if CO_MANAGER != 0 && CO_MANAGER != 1
-#error "CO_MANAGER must be 0 or 1"
+#if CO_CONFIG_MANAGER != 0 && CO_CONFIG_MANAGER != 1
+#error "CO_CONFIG_MANAGER must be 0 or 1"
 #endif
+/* ---- Feature switches: 1 builds the feature in, 0 leaves it out, so that a device pays
+ * (in flash) only for what it uses. A feature left out behaves as a dictionary or
+ * configuration without it would: its objects have no effect, its frames are not routed,
+ * its API functions return CO_ERR_STATE (or CO_ERR_ARG for an SDO block request). The
+ * number of SDO clients is its own switch: CO_SDO_CLIENTS_MAX 0. */
+
+/** SDO block transfer (CiA 301 7.2.4.3.9..): the server answers block requests with abort
+ *  0x05040001 without it, and the client refuses CO_SDO_BLOCK; the CRC-16 tables go too. */
+#ifndef CO_CONFIG_SDO_BLOCK
+#define CO_CONFIG_SDO_BLOCK 1
+#endif
+
+/** Node guarding and life guarding (0x100C, 0x100D, co_guard_watch). Without it the node
+ *  does not answer guarding RTRs: heartbeat is the error control protocol. */
+#ifndef CO_CONFIG_GUARDING
+#define CO_CONFIG_GUARDING 1
+#endif
+
+/** TIME producer and consumer (0x1012). */
+#ifndef CO_CONFIG_TIME
+#define CO_CONFIG_TIME 1
+#endif
+
+/** Store and restore parameters (0x1010, 0x1011) through co_node_config_t.storage; without
+ *  it the node behaves as with no storage given. */
+#ifndef CO_CONFIG_STORAGE
+#define CO_CONFIG_STORAGE 1
+#endif
+
+/** Limits on REAL32/REAL64 entries (double comparisons: soft-float code on MCUs without
+ *  an FPU). Without it a dictionary giving a REAL entry limits fails co_od_validate. */
+#ifndef CO_CONFIG_REAL_LIMITS
+#define CO_CONFIG_REAL_LIMITS 1
+#endif
+
+#if (CO_CONFIG_SDO_BLOCK != 0 && CO_CONFIG_SDO_BLOCK != 1) ||                                      \
+    (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
+    (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
+    (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
+    (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1)
+#error "CO_CONFIG_* feature switches are 0 or 1"
+#endif
+
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
 #error "CO_TX_QUEUE_LEN must be 1..255"
 #endif

@@ -25,7 +25,7 @@
  *   0x5A..0x5D inquire vendor/product/revision/serial  same cs, u32
  *   0x5E  inquire node-ID                        0x5E [active node-ID]
  *
- * Slave. Built in with CO_LSS_SLAVE (default 1): every node answers on 0x7E5. Its
+ * Slave. Built in with CO_CONFIG_LSS_SLAVE (default 1): every node answers on 0x7E5. Its
  * LSS address is 0x1018 sub1..4 (vendor, product, revision, serial) of its dictionary.
  * It is in the LSS waiting state until a switch state command puts it in
  * configuration; the configure, inquire and store commands only work there (ignored in
@@ -47,7 +47,7 @@
  * are also in waiting; a fastscan that completes the 128-bit match (bit checked 0,
  * sub 3 -> next 0) puts that slave in configuration.
  *
- * Master. Built in with CO_LSS_MASTER (default 1). One request at a time, asynchronous
+ * Master. Built in with CO_CONFIG_LSS_MASTER (default 1). One request at a time, asynchronous
  * like the SDO client: start it, the node's ingest/poll drive it, a completion callback
  * gets a co_lss_result_t. Every request with an answer times out after the master's
  * time-out (co_lss_master_set_timeout, default 100 ms); requests whose answer may come

@@ -49,7 +49,7 @@
  *
  * Memory: co_manager_t (336 bytes on x86-64) and the description table (127 records)
  * belong to the caller; the node keeps a pointer. With a manager the node routes 0x700 + n of every
- * listed slave (CO_RX_ROUTES_MAX grows by 127 when CO_MANAGER is 1). Threading and
+ * listed slave (CO_RX_ROUTES_MAX grows by 127 when CO_CONFIG_MANAGER is 1). Threading and
  * callbacks as the node's (canola/node.h).
  */
 #ifndef CANOLA_MANAGER_H
@@ -170,7 +170,7 @@ typedef struct co_manager {
 
 /** Attach `mgr` to `node` with `config` (copied; the slave table is not). Returns CO_ERR_ARG
  *  for NULL arguments, a missing table or a bad SDO channel, CO_ERR_CONFIG when 0x1F80
- *  bit 0 is clear, CO_ERR_STATE when the manager is not built in (CO_MANAGER 0). */
+ *  bit 0 is clear, CO_ERR_STATE when the manager is not built in (CO_CONFIG_MANAGER 0). */
 co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_config_t *config);
 
 /** Fill a network description (`slaves`: 127 records) and `*nmt_startup` from a master's

@@ -133,7 +133,8 @@ struct co_node {
     /* Receive routes, sorted by key. */
     co_route_t routes[CO_RX_ROUTES_MAX];
     uint16_t route_count;
-    uint16_t route_hint; /**< the route found last */
+    uint16_t route_hint;   /**< the route found last */
+    uint32_t route_groups; /**< bit (key >> 6) % 32 set for every route: a quick "no" */
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
     co_tx_item_t txq[CO_TX_QUEUE_LEN];
@@ -168,6 +169,8 @@ struct co_node {
     uint16_t rpdo_count;
     uint16_t tpdo_count;
     uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
+    uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
+    uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
 
     co_emcy_t emcy;
     co_sync_t sync;
@@ -176,13 +179,13 @@ struct co_node {
     bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
     bool sdo_reload;  /**< a server channel waits to take new COB-IDs */
 
-#if CO_LSS_SLAVE
+#if CO_CONFIG_LSS_SLAVE
     co_lss_slave_t lss_slave;
 #endif
-#if CO_LSS_MASTER
+#if CO_CONFIG_LSS_MASTER
     co_lss_master_t lss_master;
 #endif
-#if CO_MANAGER
+#if CO_CONFIG_MANAGER
     co_manager_t *manager; /**< attached by co_manager_init, or NULL */
     co_flash_t *flash;     /**< program download in progress, or NULL */
 #endif

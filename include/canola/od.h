@@ -35,9 +35,9 @@ extern "C" {
 #endif
 
 /** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
- *  refuse to compile against a library whose layout differs. */
+ *  refuse to compile against a library whose layout differs. 2: co_od_t.keys. */
 #ifndef CO_OD_FORMAT
-#define CO_OD_FORMAT 1
+#define CO_OD_FORMAT 2
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
@@ -142,16 +142,24 @@ struct co_od_entry {
     const co_od_hooks_t *hooks;   /**< application hooks, or NULL */
 };
 
+/** Key of (index, sub) in co_od_t.keys. */
+#define CO_OD_KEY(index, sub) (((uint32_t)(index) << 8) | (uint32_t)(sub))
+
 /** An object dictionary: the entry table and the context its hooks receive. */
 typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;
     void *hook_ctx;
+    /** Optional (NULL: look-up searches the entries): keys[i] = CO_OD_KEY of entries[i].
+     *  A dense array of 4 bytes per entry that the binary search walks instead of the
+     *  28/48-byte entries: about a third of the instructions per look-up, and fewer cache
+     *  lines. The generator (canola.odgen) emits it; co_od_validate checks it. */
+    const uint32_t *keys;
 } co_od_t;
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
- *  replaces it. Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's
- *  position when `bad` is not NULL). O(n). */
+ *  replaces it, keys (when given) equal to the entries'. Returns CO_OK or CO_ERR_CONFIG (with
+ * `*bad` set to the offending entry's position when `bad` is not NULL). O(n). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Find an entry. On failure returns NULL and sets `*abort` (when not NULL) to

@@ -66,8 +66,8 @@ typedef struct co_node co_node_t;
 /** One resolved mapping entry (internal). */
 typedef struct co_pdo_item {
     const co_od_entry_t *entry; /**< NULL for a dummy entry */
-    void *direct;               /**< the storage, when the value travels as it is stored */
     uint8_t bits;               /**< bits mapped */
+    bool direct; /**< the value travels as it is stored: copied to/from entry->value */
 } co_pdo_item_t;
 
 /** One PDO's resolved mapping and state (embedded in the node; fields are internal). */
@@ -85,6 +85,8 @@ typedef struct co_pdo {
     uint8_t sync_count; /**< SYNCs counted towards the next transmission */
     uint8_t flags;      /**< internal state bits */
     uint8_t len;        /**< RPDO: bytes of the frame waiting for the next SYNC */
+    bool plain;         /**< every item a whole byte-aligned value copied as stored */
+    bool rx_fast;       /**< RPDO: active, plain, asynchronous, no deadline (co_pdo_rx) */
     uint8_t data[8];    /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 } co_pdo_t;
 

@@ -27,7 +27,7 @@
  * as the bytes the server acknowledged); 0x1F51 = 1 (start); read 0x1F56 and compare it
  * with the expected identification. Asynchronous: the node's ingest/poll drive it and
  * `done` runs once with the stage reached and the SDO abort code, if any. Built with
- * CO_MANAGER; the co_flash_t belongs to the caller and must stay put until `done`.
+ * CO_CONFIG_MANAGER; the co_flash_t belongs to the caller and must stay put until `done`.
  */
 #ifndef CANOLA_PROGRAM_H
 #define CANOLA_PROGRAM_H

@@ -202,6 +202,16 @@ co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_r
 
 static co_err_t port_tx(void *ctx, const co_frame_t *frame) { return co_sim_send(ctx, frame); }
 
+/* A node's next poll; the bus keeps a lower bound of them all, so that instants with no
+ * poll due skip the scan of every port (a big network has one frame per instant). */
+static void set_due(co_sim_port_t *port, uint64_t due_us)
+{
+    port->node_due_us = due_us;
+    if (due_us < port->bus->due_min_us) {
+        port->bus->due_min_us = due_us;
+    }
+}
+
 co_driver_t co_sim_port_driver(co_sim_port_t *port)
 {
     co_driver_t d = {.tx = port_tx, .on_routes_changed = NULL, .ctx = port};
@@ -211,7 +221,7 @@ co_driver_t co_sim_port_driver(co_sim_port_t *port)
 void co_sim_port_bind(co_sim_port_t *port, co_node_t *node)
 {
     port->node = node;
-    port->node_due_us = 0; /* unknown: poll at the next instant the bus runs */
+    set_due(port, 0); /* unknown: poll at the next instant the bus runs */
 }
 
 co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
@@ -236,6 +246,7 @@ co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
     p->frame = *frame;
     p->ready_us = bus->now_us + bus->delay_us;
     p->seq = bus->seq++;
+    p->bits = co_sim_frame_bits(frame); /* arbitration and completion both need it */
     p->port = port->index;
     port->in_flight++;
     return CO_OK;
@@ -285,7 +296,7 @@ static void receive(co_sim_port_t *port, uint64_t t, const co_frame_t *f)
     if (port->node) {
         if (co_node_accepts(port->node, f)) { /* the controller's acceptance filter */
             co_node_ingest(port->node, t, f);
-            port->node_due_us = co_node_poll(port->node, t);
+            set_due(port, co_node_poll(port->node, t));
         }
     } else if (port->rx) {
         port->rx(port->rx_ctx, t, f);
@@ -298,7 +309,7 @@ static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
 {
     co_frame_t frame = p->frame;
     bus->stats.frames++;
-    bus->stats.bits += co_sim_frame_bits(&frame);
+    bus->stats.bits += p->bits;
     if (bus->bitrate) {
         bus->stats.busy_us = bits_to_us(bus->stats.bits, bus->bitrate);
     }
@@ -316,7 +327,7 @@ static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
     co_sim_port_t *sender = bus->ports[p->port];
     sender->in_flight--;
     if (sender->node) {
-        sender->node_due_us = co_node_poll(sender->node, t);
+        set_due(sender, co_node_poll(sender->node, t));
     }
 }
 
@@ -390,7 +401,7 @@ static void start_transmission(co_sim_bus_t *bus, uint64_t t)
     }
     bus->on_bus = pending_take(bus, best);
     bus->transmitting = true;
-    exact_t end = exact_add_bits(start, co_sim_frame_bits(&bus->on_bus.frame), bus->bitrate);
+    exact_t end = exact_add_bits(start, bus->on_bus.bits, bus->bitrate);
     bus->idle_at_us = end.us;
     bus->idle_rem = end.rem;
 }
@@ -411,6 +422,10 @@ static co_err_t run_instant(co_sim_bus_t *bus, uint64_t t)
             complete(bus, t, &p);
             busy = true;
         }
+        if (bus->due_min_us > t) {
+            continue; /* no node has a poll due: no scan (busy says whether to go on) */
+        }
+        uint64_t due_min = CO_TIME_NEVER;
         for (uint32_t i = 0; i < bus->port_count; i++) {
             co_sim_port_t *port = bus->ports[i];
             if (port->node && port->node_due_us <= t) {
@@ -420,7 +435,11 @@ static co_err_t run_instant(co_sim_bus_t *bus, uint64_t t)
                 port->node_due_us = co_node_poll(port->node, t);
                 busy = true;
             }
+            if (port->node && port->node_due_us < due_min) {
+                due_min = port->node_due_us;
+            }
         }
+        bus->due_min_us = due_min; /* exact again: polls only change their own node's */
     } while (busy);
     if (bus->bitrate) {
         start_transmission(bus, t);
@@ -431,13 +450,8 @@ static co_err_t run_instant(co_sim_bus_t *bus, uint64_t t)
 /* The next instant at which something happens, CO_TIME_NEVER if none. */
 static uint64_t next_event(const co_sim_bus_t *bus)
 {
-    uint64_t next = CO_TIME_NEVER;
-    for (uint32_t i = 0; i < bus->port_count; i++) {
-        const co_sim_port_t *port = bus->ports[i];
-        if (port->node && port->node_due_us < next) {
-            next = port->node_due_us;
-        }
-    }
+    /* A lower bound: at worst an instant with nothing due, which only rescans. */
+    uint64_t next = bus->due_min_us;
     /* With nothing on the wire the bus has been idle since the latest instant handled, so
      * the next frame starts when it is ready. */
     exact_t end = {bus->idle_at_us, bus->idle_rem};
@@ -457,7 +471,7 @@ co_err_t co_sim_run_until(co_sim_bus_t *bus, uint64_t until_us)
      * queued): poll each once at the start. */
     for (uint32_t i = 0; i < bus->port_count; i++) {
         if (bus->ports[i]->node && bus->ports[i]->node_due_us > bus->now_us) {
-            bus->ports[i]->node_due_us = bus->now_us;
+            set_due(bus->ports[i], bus->now_us);
         }
     }
     for (uint64_t t = bus->now_us;;) {
@@ -477,7 +491,7 @@ co_err_t co_sim_run_until(co_sim_bus_t *bus, uint64_t until_us)
     for (uint32_t i = 0; i < bus->port_count; i++) {
         co_sim_port_t *port = bus->ports[i];
         if (port->node) {
-            port->node_due_us = co_node_poll(port->node, until_us);
+            set_due(port, co_node_poll(port->node, until_us));
         }
     }
     return CO_OK;

@@ -283,7 +283,7 @@ def test_generated_header_refuses_another_dictionary_format(tmp_path: Path) -> N
     ok = compile_c(cc, probe, tmp_path)
     assert ok.returncode == 0, ok.stderr
     other = subprocess.run(
-        [cc, *WARNINGS, "-DCO_OD_FORMAT=2", f"-I{INCLUDE}", f"-I{tmp_path}", "-c", str(probe),
+        [cc, *WARNINGS, "-DCO_OD_FORMAT=1", f"-I{INCLUDE}", f"-I{tmp_path}", "-c", str(probe),
          "-o", str(tmp_path / "probe2.o")], capture_output=True, text=True, check=False)
     assert other.returncode != 0
     assert "regenerate it with the odgen of this canola" in other.stderr

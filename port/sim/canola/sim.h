@@ -78,6 +78,7 @@ typedef struct co_sim_pending {
     co_frame_t frame;
     uint64_t ready_us; /**< earliest start of transmission */
     uint32_t seq;      /**< send order, breaks ties */
+    uint32_t bits;     /**< co_sim_frame_bits of the frame, computed once when sent */
     uint8_t port;
 } co_sim_pending_t;
 
@@ -101,6 +102,7 @@ struct co_sim_bus {
     co_sim_pending_t on_bus; /**< the frame on the wire (its mailbox is still taken) */
     co_sim_port_t *ports[CO_SIM_PORTS_MAX];
     uint32_t port_count;
+    uint64_t due_min_us; /**< at most every node's node_due_us: "no poll due" in one test */
     co_sim_pending_t pending[CO_SIM_PENDING_MAX];
     uint32_t pending_count;
     uint32_t seq;

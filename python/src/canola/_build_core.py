@@ -420,7 +420,7 @@ static int canola_py_entry_key(const co_od_entry_t *entry)
 # Issue 7 (py302 branch): LSS master (CiA 305), CANopen manager (CiA 302-2) and program
 # download (CiA 302-3). One self-contained block: cdefs of lss.h, manager.h, program.h and
 # the helpers canola.lss / canola.manager / canola.program use. The core builds them with
-# CO_LSS_MASTER, CO_LSS_SLAVE and CO_MANAGER (all 1 by default).
+# CO_CONFIG_LSS_MASTER, CO_CONFIG_LSS_SLAVE and CO_CONFIG_MANAGER (all 1 by default).
 
 CDEF += """
 typedef struct co_lss_address { uint32_t vendor; uint32_t product; uint32_t revision;

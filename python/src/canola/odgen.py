@@ -59,7 +59,7 @@ from canola.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 1
+OD_FORMAT = 2  # 2: co_od_t.keys, the dense key array
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -535,8 +535,15 @@ def _source_text(name: str, source: str, entries: list[_Entry],
                 f".limits = {lim}, .hooks = NULL}},")
         out.append("};")
         out.append("")
+        # The dense key array the look-up searches (co_od_t.keys): 4 bytes per entry.
+        out.append("static const uint32_t k_keys[] = {")
+        keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]
+        for i in range(0, len(keys), 8):
+            out.append("    " + ", ".join(keys[i:i + 8]) + ",")
+        out.append("};")
+        out.append("")
         out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
-                   ".hook_ctx = NULL};")
+                   ".hook_ctx = NULL, .keys = k_keys};")
     else:
         out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
     out.append("")

@@ -112,4 +112,13 @@ static const co_od_entry_t k_entries[] = {
     {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.mode, .dflt = &k_defaults.mode, .limits = NULL, .hooks = NULL},
 };
 
-const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL};
+static const uint32_t k_keys[] = {
+    0x100000u, 0x100100u, 0x100800u, 0x101400u, 0x101700u, 0x101800u, 0x101801u, 0x101802u,
+    0x101803u, 0x101804u, 0x180000u, 0x180001u, 0x180002u, 0x200000u, 0x200100u, 0x200200u,
+    0x200300u, 0x200400u, 0x200500u, 0x200600u, 0x200700u, 0x200800u, 0x200900u, 0x200A00u,
+    0x200B00u, 0x200C00u, 0x200D00u, 0x200E00u, 0x200F00u, 0x201000u, 0x201100u, 0x201200u,
+    0x201300u, 0x201400u, 0x201500u, 0x210000u, 0x210001u, 0x210002u, 0x210003u, 0x230000u,
+    0x230001u, 0x230002u, 0x600000u,
+};
+
+const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL, .keys = k_keys};

@@ -8,6 +8,7 @@
     canola dump [FILE]                        traffic decoded into CANopen meaning
     canola monitor                            live view of every node
     canola device --eds FILE --node-id N      run a canola device
+    canola gateway --iface IFACE [--listen W] CiA 309-3 ASCII gateway
     canola boot NETWORK.yaml|DCF...           boot a network (CiA 302-2 manager)
     canola flash NODE FILE                    program download (CiA 302-3)
     canola lss scan|set-id|inquire            layer setting services (CiA 305)
@@ -25,7 +26,16 @@ import sys
 from collections.abc import Callable, Sequence
 
 from canola import __version__, odgen
-from canola.cli import bus_cmd, device_cmd, dump_cmd, monitor_cmd, nmt_cmd, scan_cmd, sdo_cmd
+from canola.cli import (
+    bus_cmd,
+    device_cmd,
+    dump_cmd,
+    gateway_cmd,
+    monitor_cmd,
+    nmt_cmd,
+    scan_cmd,
+    sdo_cmd,
+)
 from canola.cli.boot_cmd import register as register_boot
 from canola.cli.common import CliError, Parser
 from canola.cli.flash_cmd import register as register_flash
@@ -36,7 +46,7 @@ __all__ = ["build_parser", "main"]
 
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
-    dump_cmd.register, monitor_cmd.register, device_cmd.register,
+    dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
     register_boot, register_flash, register_lss,
 )
 

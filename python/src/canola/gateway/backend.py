@@ -1,0 +1,96 @@
+"""What the gateway needs from a CANopen master: a small interface, and the events.
+
+:class:`Backend` is the whole contract between the executor and the master it drives;
+:mod:`canola.gateway.masterbackend` and :mod:`canola.gateway.simbackend` implement it
+(canola.Master; a canola.core node on a simulated bus). Tests use a fake.
+
+SDO failures are :class:`canola.errors.SdoAbort` (an SDO time-out is abort 0x05040000);
+cancelling an SDO coroutine must abort the transfer on the bus before it returns.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+from canola.gateway.requests import NmtCommand
+
+__all__ = ["Backend", "BootUp", "Emcy", "Event", "Heartbeat", "HeartbeatLost", "Listener",
+           "Rpdo"]
+
+
+@dataclass(frozen=True)
+class BootUp:
+    node: int
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    node: int
+    state: int
+
+
+@dataclass(frozen=True)
+class HeartbeatLost:
+    node: int
+
+
+@dataclass(frozen=True)
+class Emcy:
+    node: int
+    code: int
+    register: int
+    data: bytes  # the 5 manufacturer-specific bytes
+
+
+@dataclass(frozen=True)
+class Rpdo:
+    """The gateway's own RPDO ``num`` (1-based) received: its mapped values."""
+
+    num: int
+    values: tuple[int, ...]
+
+
+Event = BootUp | Heartbeat | HeartbeatLost | Emcy | Rpdo
+Listener = Callable[[Event], None]
+
+
+class Backend(Protocol):
+    """A master node on one CAN network."""
+
+    @property
+    def node_id(self) -> int:
+        """The master's own node-ID."""
+        ...
+
+    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
+                         timeout_ms: int) -> bytes:
+        """Read (index, sub) of ``node`` over SDO (``block``: block transfer)."""
+        ...
+
+    async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
+                           block: bool, timeout_ms: int) -> None:
+        """Write ``data`` to (index, sub) of ``node`` over SDO."""
+        ...
+
+    def local_read(self, index: int, sub: int) -> bytes:
+        """Read the master's own dictionary as an SDO client would (raises SdoAbort)."""
+        ...
+
+    def local_write(self, index: int, sub: int, data: bytes) -> None:
+        """Write the master's own dictionary as an SDO client would (raises SdoAbort)."""
+        ...
+
+    async def nmt(self, node: int, command: NmtCommand) -> None:
+        """Send an NMT command to ``node`` (0: all nodes) on the bus."""
+        ...
+
+    async def local_nmt(self, command: NmtCommand) -> None:
+        """Apply an NMT command to the master itself (nothing on the bus but its
+        boot-up after a reset)."""
+        ...
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener`` with every network event; returns the unsubscribe function."""
+        ...

@@ -1,0 +1,241 @@
+"""Values in CiA 309-3 text form: one parser and one formatter per gateway data type.
+
+The type names are those of CiA 309-3 (``b``, ``i8``..``i64``, ``u8``..``u64``, ``r32``,
+``r64``, ``t``, ``td``, ``vs``, ``os``, ``us``, ``d``) plus the two that CANopenNode's
+``cocomm`` users know: ``x8``..``x64`` (unsigned, shown in hexadecimal) and ``hex`` (raw
+bytes as hexadecimal pairs).
+
+- Integers are read as C writes them: decimal, ``0x`` hexadecimal or ``0`` octal, with a
+  sign for the signed types; they are shown in decimal (``x*``: ``0x`` and hex digits).
+- ``vs`` is shown between double quotes; a double quote inside is doubled, and control
+  characters and the backslash are escaped (``\\n``, ``\\r``, ``\\t``, ``\\\\``,
+  ``\\xHH``), so that no value can break the line protocol. A single word may be written
+  without quotes.
+- ``os``, ``us`` (the UTF-16LE bytes) and ``d`` are base64 (RFC 2045 alphabet, one line).
+- ``t`` and ``td`` (TIME_OF_DAY / TIME_DIFFERENCE) are ``<ms> <days>``: milliseconds
+  after midnight and days since 1984-01-01, in the order of the wire.
+
+:func:`parse_value` raises :class:`ValueError` for text that is not a value of the type;
+:func:`format_value` raises :class:`ValueError` when the byte count does not fit the type.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import math
+import re
+import struct
+from dataclasses import dataclass
+
+__all__ = ["TYPES", "TypeSpec", "format_value", "parse_int", "parse_value"]
+
+
+@dataclass(frozen=True)
+class TypeSpec:
+    """One gateway data type: CiA 301 type code, size in bytes (0: any), kind."""
+
+    name: str
+    code: int
+    size: int
+    kind: str  # "bool", "int", "uint", "hex", "real", "time", "vs", "b64", "raw"
+
+
+def _ints() -> dict[str, TypeSpec]:
+    codes_signed = {8: 0x02, 16: 0x03, 24: 0x10, 32: 0x04, 40: 0x12, 48: 0x13, 56: 0x14,
+                    64: 0x15}
+    codes_unsigned = {8: 0x05, 16: 0x06, 24: 0x16, 32: 0x07, 40: 0x18, 48: 0x19, 56: 0x1A,
+                      64: 0x1B}
+    out: dict[str, TypeSpec] = {}
+    for bits, code in codes_signed.items():
+        out[f"i{bits}"] = TypeSpec(f"i{bits}", code, bits // 8, "int")
+    for bits, code in codes_unsigned.items():
+        out[f"u{bits}"] = TypeSpec(f"u{bits}", code, bits // 8, "uint")
+        out[f"x{bits}"] = TypeSpec(f"x{bits}", code, bits // 8, "hex")
+    return out
+
+
+#: Every type name the gateway knows.
+TYPES: dict[str, TypeSpec] = {
+    "b": TypeSpec("b", 0x01, 1, "bool"),
+    **_ints(),
+    "r32": TypeSpec("r32", 0x08, 4, "real"),
+    "r64": TypeSpec("r64", 0x11, 8, "real"),
+    "t": TypeSpec("t", 0x0C, 6, "time"),
+    "td": TypeSpec("td", 0x0D, 6, "time"),
+    "vs": TypeSpec("vs", 0x09, 0, "vs"),
+    "os": TypeSpec("os", 0x0A, 0, "b64"),
+    "us": TypeSpec("us", 0x0B, 0, "b64"),
+    "d": TypeSpec("d", 0x0F, 0, "b64"),
+    "hex": TypeSpec("hex", 0x0F, 0, "raw"),
+}
+
+_INT_RE = re.compile(r"([+-]?)(0[xX][0-9a-fA-F]+|0[0-7]*|[1-9][0-9]*)\Z")
+
+
+def parse_int(text: str) -> int:
+    """An integer in C syntax (decimal, 0x hexadecimal, 0 octal), optionally signed."""
+    m = _INT_RE.match(text)
+    if m is None:
+        raise ValueError(f"not an integer: {text!r}")
+    sign, digits = m.groups()
+    if digits[:2] in ("0x", "0X"):
+        value = int(digits[2:], 16)
+    elif digits.startswith("0"):
+        value = int(digits, 8)
+    else:
+        value = int(digits, 10)
+    return -value if sign == "-" else value
+
+
+_ESCAPES = {"\\": "\\\\", "\n": "\\n", "\r": "\\r", "\t": "\\t"}
+_UNESCAPES = {"\\": "\\", "n": "\n", "r": "\r", "t": "\t", '"': '"'}
+
+
+def _quote(text: str) -> str:
+    out = ['"']
+    for ch in text:
+        if ch == '"':
+            out.append('""')
+        elif ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\x{ord(ch):02X}")
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+def _unquote(text: str) -> str:
+    if not text.startswith('"'):
+        if not text or any(ch.isspace() or ch == '"' for ch in text):
+            raise ValueError("a string with blanks or quotes must be between double quotes")
+        body, closed = text, True
+    else:
+        body, closed = text[1:], False
+    out: list[str] = []
+    i = 0
+    while i < len(body):
+        ch = body[i]
+        if ch == '"' and text.startswith('"'):
+            if body[i + 1:i + 2] == '"':
+                out.append('"')
+                i += 2
+                continue
+            if i != len(body) - 1:
+                raise ValueError("text after the closing double quote")
+            closed = True
+            break
+        if ch == "\\":
+            nxt = body[i + 1:i + 2]
+            if nxt in _UNESCAPES:
+                out.append(_UNESCAPES[nxt])
+                i += 2
+                continue
+            if nxt == "x" and re.fullmatch(r"[0-9a-fA-F]{2}", body[i + 2:i + 4]):
+                out.append(chr(int(body[i + 2:i + 4], 16)))
+                i += 4
+                continue
+            raise ValueError("unknown escape sequence")
+        out.append(ch)
+        i += 1
+    if not closed:
+        raise ValueError("missing closing double quote")
+    return "".join(out)
+
+
+def _b64decode(text: str) -> bytes:
+    try:
+        return base64.b64decode(text, validate=True)
+    except binascii.Error as exc:
+        raise ValueError(f"not base64: {exc}") from None
+
+
+def parse_value(type_name: str, text: str) -> bytes:
+    """The wire bytes (little-endian) of ``text`` read as a value of ``type_name``."""
+    spec = TYPES.get(type_name.lower())
+    if spec is None:
+        raise ValueError(f"unknown data type {type_name!r}")
+    text = text.strip()
+    kind = spec.kind
+    if kind in ("bool", "int", "uint", "hex"):
+        value = parse_int(text)
+        if kind == "bool":
+            if value not in (0, 1):
+                raise ValueError("a boolean is 0 or 1")
+            return bytes([value])
+        bits = spec.size * 8
+        if kind == "int":
+            lo, hi = -(1 << (bits - 1)), (1 << (bits - 1)) - 1
+        else:
+            lo, hi = 0, (1 << bits) - 1
+        if not lo <= value <= hi:
+            raise ValueError(f"{value} is out of range for {spec.name}")
+        return value.to_bytes(spec.size, "little", signed=kind == "int")
+    if kind == "real":
+        if not re.fullmatch(r"[+-]?(inf|infinity|nan|[0-9]*\.?[0-9]*([eE][+-]?[0-9]+)?)", text,
+                            re.IGNORECASE) or not any(c.isdigit() or c in "nN" for c in text):
+            raise ValueError(f"not a real number: {text!r}")
+        number = float(text)
+        if spec.size == 4:
+            if math.isfinite(number) and abs(number) > 3.4028235677973366e38:
+                raise ValueError(f"{text} is out of range for r32")
+            return struct.pack("<f", number)
+        return struct.pack("<d", number)
+    if kind == "time":
+        parts = text.split()
+        if len(parts) != 2:
+            raise ValueError("a time is '<ms> <days>'")
+        ms, days = parse_int(parts[0]), parse_int(parts[1])
+        if not 0 <= ms < (1 << 28) or not 0 <= days <= 0xFFFF:
+            raise ValueError("time out of range (ms < 2^28, days < 65536)")
+        return ms.to_bytes(4, "little") + days.to_bytes(2, "little")
+    if kind == "vs":
+        return _unquote(text).encode("utf-8")
+    if kind == "b64":
+        return _b64decode(text)
+    # raw hexadecimal pairs, blanks allowed between bytes
+    digits = "".join(text.split())
+    if len(digits) % 2 or not re.fullmatch(r"[0-9a-fA-F]*", digits):
+        raise ValueError("hex data is pairs of hexadecimal digits")
+    return bytes.fromhex(digits)
+
+
+def _format_real(data: bytes, size: int) -> str:
+    if size == 8:
+        return repr(struct.unpack("<d", data)[0])
+    value = struct.unpack("<f", data)[0]
+    if not math.isfinite(value):
+        return repr(value)
+    for digits in range(1, 10):  # the shortest text that reads back as the same r32
+        text = f"{value:.{digits}g}"
+        if struct.pack("<f", float(text)) == data:
+            return text
+    return repr(value)
+
+
+def format_value(type_name: str | None, data: bytes) -> str:
+    """The text of ``data`` as a value of ``type_name`` (None: ``hex``)."""
+    spec = TYPES.get((type_name or "hex").lower())
+    if spec is None:
+        raise ValueError(f"unknown data type {type_name!r}")
+    if spec.size and len(data) != spec.size:
+        raise ValueError(f"{len(data)} bytes for {spec.name} ({spec.size} bytes)")
+    kind = spec.kind
+    if kind == "bool":
+        return str(data[0])
+    if kind in ("int", "uint"):
+        return str(int.from_bytes(data, "little", signed=kind == "int"))
+    if kind == "hex":
+        return f"0x{int.from_bytes(data, 'little'):0{spec.size * 2}X}"
+    if kind == "real":
+        return _format_real(data, spec.size)
+    if kind == "time":
+        ms = int.from_bytes(data[:4], "little") & 0x0FFFFFFF
+        return f"{ms} {int.from_bytes(data[4:6], 'little')}"
+    if kind == "vs":
+        return _quote(data.decode("utf-8", "replace"))
+    if kind == "b64":
+        return base64.b64encode(data).decode("ascii")
+    return " ".join(f"{b:02X}" for b in data)

@@ -1,0 +1,177 @@
+"""A :class:`~canola.gateway.backend.Backend` over :class:`canola.Master` (python-can bus
+or simulated bus).
+
+- SDO: the master's asyncio client (one client channel per node, so transfers to
+  different nodes run at the same time); cancelling aborts the transfer on the bus. The
+  time-out per answer is the master's ``sdo_timeout_ms`` (``canola gateway
+  --sdo-timeout``); a client's ``set sdo_timeout`` does not change it (canola.Master has
+  no per-transfer answer time-out). The whole transfer is not bounded (a 1 MiB block
+  transfer takes seconds on a real bus).
+- The gateway's own dictionary is read and written as the network would (access rights,
+  lengths, limits), NMT commands to its own node-ID are applied to itself: both through
+  the C core directly (canola.Master has no public call for either yet).
+- Events: boot-ups, heartbeats (from the frames), EMCY (the master's EMCY consumer),
+  the master's own heartbeat-consumer losses and its RPDOs (their mapped values).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+from collections.abc import Callable
+
+from canola._core import ffi, lib
+from canola._nodebase import EmcyEvent, HeartbeatEvent, nmt_command
+from canola.core import SimBus
+from canola.errors import SdoAbort
+from canola.gateway.backend import (
+    BootUp,
+    Emcy,
+    Event,
+    Heartbeat,
+    HeartbeatLost,
+    Listener,
+    Rpdo,
+)
+from canola.gateway.pdo import mapped_values
+from canola.gateway.requests import NmtCommand
+from canola.gateway.simbackend import NMT_NAMES
+from canola.master import Frame, Master
+
+__all__ = ["MasterBackend", "open_master"]
+
+
+class MasterBackend:
+    """The gateway's master: a started :class:`canola.Master`."""
+
+    def __init__(self, master: Master, *, upload_cap: int = 2 * 1024 * 1024,
+                 on_close: Callable[[], None] | None = None) -> None:
+        self.master = master
+        self.upload_cap = upload_cap
+        self._on_close = on_close
+        self._listeners: list[Listener] = []
+        master.on_bootup(self._bootup)
+        master.on_frame(self._frame)
+        master.on_emcy(self._emcy)
+        master.on_heartbeat(self._heartbeat)
+        master.on_rpdo(self._rpdo)
+
+    @property
+    def node_id(self) -> int:
+        return self.master.node_id
+
+    # ---- SDO
+
+    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
+                         timeout_ms: int) -> bytes:
+        del timeout_ms  # the master's time-out per answer applies
+        return await self.master.sdo(node).aupload(index, sub, block=block,
+                                                   max_size=self.upload_cap)
+
+    async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
+                           block: bool, timeout_ms: int) -> None:
+        del timeout_ms
+        await self.master.sdo(node).adownload(index, sub, data, block=block)
+
+    def local_read(self, index: int, sub: int) -> bytes:
+        buf = ffi.new("uint8_t[]", self.upload_cap)
+        n = ffi.new("uint32_t *")
+        with self.master._engine.locked() as node:
+            code = int(lib.co_node_read_net(node, index, sub, buf, self.upload_cap, n))
+        if code:
+            raise SdoAbort(code)
+        return bytes(ffi.buffer(buf, int(n[0])))
+
+    def local_write(self, index: int, sub: int, data: bytes) -> None:
+        with self.master._engine.locked() as node:
+            code = int(lib.co_node_write_net(node, index, sub, bytes(data), len(data)))
+        if code:
+            raise SdoAbort(code)
+
+    async def pdo_send(self, num: int) -> None:
+        """Send the gateway's TPDO ``num`` (1-based) now, if it is event-driven."""
+        with self.master._engine.locked() as node:
+            lib.co_tpdo_request(node, num - 1)
+
+    # ---- NMT
+
+    async def nmt(self, node: int, command: NmtCommand) -> None:
+        self.master.nmt(node, NMT_NAMES[command])
+
+    async def local_nmt(self, command: NmtCommand) -> None:
+        spec = nmt_command(NMT_NAMES[command])
+        with self.master._engine.locked() as node:
+            lib.co_nmt_apply(node, spec)
+
+    # ---- events
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
+
+        return unsubscribe
+
+    def _emit(self, event: Event) -> None:
+        for listener in list(self._listeners):
+            listener(event)
+
+    def _bootup(self, node: int) -> None:
+        self._emit(BootUp(node))
+
+    def _frame(self, frame: Frame) -> None:
+        if 0x701 <= frame.can_id <= 0x77F and len(frame.data) == 1 and frame.data[0] \
+                and not frame.rtr:
+            self._emit(Heartbeat(frame.can_id - 0x700, frame.data[0] & 0x7F))
+
+    def _emcy(self, event: EmcyEvent) -> None:
+        self._emit(Emcy(event.node, event.code, event.register, event.manufacturer))
+
+    def _heartbeat(self, event: HeartbeatEvent) -> None:
+        if event.kind == "lost":
+            self._emit(HeartbeatLost(event.node))
+
+    def _rpdo(self, rpdo: int) -> None:  # 0-based
+        try:
+            values = mapped_values(self.local_read, 0x1600 + rpdo)
+        except SdoAbort:
+            return
+        self._emit(Rpdo(rpdo + 1, tuple(values)))
+
+    # ---- simulated bus, life cycle
+
+    async def run(self, tick_s: float = 0.005, speed: float = 1.0) -> None:
+        """On a simulated bus: keep virtual time moving with wall time (until cancelled).
+        On python-can the master's own thread does that; this returns at once."""
+        bus = self.master.bus
+        if not isinstance(bus, SimBus):
+            return
+        loop = asyncio.get_running_loop()
+        last = loop.time()
+        while True:
+            await asyncio.sleep(tick_s)
+            now = loop.time()
+            bus.run_for(max(1, int((now - last) * 1e6 * speed)))
+            last = now
+
+    def close(self) -> None:
+        self.master.stop()
+        if self._on_close is not None:
+            self._on_close()
+
+
+def open_master(args: argparse.Namespace) -> MasterBackend:
+    """The gateway's master on ``--iface`` / ``--bus`` (``--node-id``, ``--eds``)."""
+    from canola.buses import open_bus  # noqa: PLC0415 -- python-can only when used
+
+    bus = open_bus(iface=args.iface, url=args.bus)
+    try:
+        master = Master(bus, node_id=args.node_id or 127, eds_file=args.eds,
+                        sdo_timeout_ms=getattr(args, "sdo_timeout", 1000))
+        master.start()
+    except BaseException:
+        bus.shutdown()
+        raise
+    return MasterBackend(master, on_close=bus.shutdown)

@@ -1,0 +1,146 @@
+"""Shared pieces of the gateway tests: a fake master and a line client with time-outs."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import Awaitable, Callable
+from typing import TypeVar
+
+from canola.errors import SdoAbort
+from canola.gateway.backend import Event, Listener
+from canola.gateway.requests import NmtCommand
+
+T = TypeVar("T")
+TIMEOUT = 20.0
+
+
+def run(coro: Awaitable[T], timeout: float = 60.0) -> T:
+    """Run a test coroutine with an overall time limit (never a hang)."""
+
+    async def bounded() -> T:
+        return await asyncio.wait_for(coro, timeout)
+
+    return asyncio.run(bounded())
+
+
+class FakeMaster:
+    """Objects in a dict; nodes in ``gates`` answer only when their event is set."""
+
+    def __init__(self, node_id: int = 1) -> None:
+        self._node_id = node_id
+        self.objects: dict[tuple[int, int, int], bytes] = {}
+        self.gates: dict[int, asyncio.Event] = {}
+        self.started: dict[int, asyncio.Event] = {}
+        self.aborted: list[tuple[int, int, int]] = []
+        self.nmt_sent: list[tuple[int, str]] = []
+        self.local_nmt_done: list[str] = []
+        self.calls: list[tuple[str, int, bool, int]] = []
+        self._listeners: list[Listener] = []
+
+    @property
+    def node_id(self) -> int:
+        return self._node_id
+
+    async def _gate(self, node: int, index: int, sub: int) -> None:
+        if node in self.gates:
+            self.started.setdefault(node, asyncio.Event()).set()
+            try:
+                await self.gates[node].wait()
+            except asyncio.CancelledError:
+                self.aborted.append((node, index, sub))  # "abort frame sent"
+                raise
+
+    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
+                         timeout_ms: int) -> bytes:
+        self.calls.append(("up", node, block, timeout_ms))
+        await self._gate(node, index, sub)
+        if node == 99:
+            raise TimeoutError
+        if (node, index, sub) not in self.objects:
+            raise SdoAbort(0x06020000)
+        return self.objects[node, index, sub]
+
+    async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
+                           block: bool, timeout_ms: int) -> None:
+        self.calls.append(("down", node, block, timeout_ms))
+        await self._gate(node, index, sub)
+        self.objects[node, index, sub] = data
+
+    def local_read(self, index: int, sub: int) -> bytes:
+        try:
+            return self.objects[self._node_id, index, sub]
+        except KeyError:
+            raise SdoAbort(0x06020000) from None
+
+    def local_write(self, index: int, sub: int, data: bytes) -> None:
+        if (self._node_id, index, sub) not in self.objects:
+            raise SdoAbort(0x06020000)
+        self.objects[self._node_id, index, sub] = data
+
+    async def nmt(self, node: int, command: NmtCommand) -> None:
+        self.nmt_sent.append((node, command))
+
+    async def local_nmt(self, command: NmtCommand) -> None:
+        self.local_nmt_done.append(command)
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        self._listeners.append(listener)
+        return lambda: self._listeners.remove(listener)
+
+    def emit(self, event: Event) -> None:
+        for listener in list(self._listeners):
+            listener(event)
+
+
+class Client:
+    """A line client of the gateway; every read has a time-out."""
+
+    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        self.reader = reader
+        self.writer = writer
+
+    @classmethod
+    async def connect(cls, address: str) -> Client:
+        kind, _, rest = address.partition(":")
+        if kind == "unix":
+            reader, writer = await asyncio.open_unix_connection(rest, limit=8 * 1024 * 1024)
+        else:
+            host, _, port = rest.rpartition(":")
+            reader, writer = await asyncio.open_connection(host, int(port),
+                                                           limit=8 * 1024 * 1024)
+        return cls(reader, writer)
+
+    async def send(self, line: str) -> None:
+        self.writer.write(line.encode() + b"\r\n")
+        await self.writer.drain()
+
+    async def line(self, timeout: float = TIMEOUT) -> str:
+        data = await asyncio.wait_for(self.reader.readline(), timeout)
+        assert data.endswith(b"\r\n"), data[:80]
+        return data[:-2].decode()
+
+    async def ask(self, line: str, timeout: float = TIMEOUT) -> str:
+        await self.send(line)
+        return await self.line(timeout)
+
+    async def reply(self, line: str, timeout: float = TIMEOUT) -> tuple[str, list[str]]:
+        """Send ``line``; its reply and the event lines that came before it."""
+        await self.send(line)
+        seq = line.split("]", 1)[0] + "]"
+        events: list[str] = []
+        while not (got := await self.line(timeout)).startswith(seq):
+            events.append(got)
+        return got, events
+
+    async def close(self) -> None:
+        self.writer.close()
+        with contextlib.suppress(ConnectionError, TimeoutError):
+            await asyncio.wait_for(self.writer.wait_closed(), TIMEOUT)
+
+
+async def eventually(check: Callable[[], bool], timeout: float = TIMEOUT) -> None:
+    """Wait until ``check()`` holds (polling), or fail after ``timeout`` seconds."""
+    async with asyncio.timeout(timeout):
+        while not check():
+            await asyncio.sleep(0.005)
