@@ -192,3 +192,17 @@ def test_boot_without_waiting_and_errors(tmp_path: Path) -> None:
         mgr.status(9)
     again = master.boot(Network((SlaveSpec(2),)))  # a settled boot may be replaced
     assert again.started and again is not mgr
+
+
+def test_reset_slaves_first() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    devices = _network(bus, 2, 3, vendor3=VENDOR)
+    devices[3].od[0x2001, 0] = 99  # reset communication keeps application values
+    net = Network((SlaveSpec(2), SlaveSpec(3, keep_alive=True)), reset_slaves=True)
+    mgr = master.boot(net)
+    assert mgr.started
+    frames = [line.split()[-1] for line in bus.trace]
+    assert "000#8202" in frames and "000#8203" not in frames  # keep-alive spared
+    assert devices[3].od[0x2001, 0] == 99

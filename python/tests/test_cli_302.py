@@ -286,3 +286,14 @@ def test_help(capsys: pytest.CaptureFixture[str]) -> None:
                  ["lss", "set-id", "--help"], ["lss", "inquire", "--help"]):
         code, out, _ = cli(capsys, *args)
         assert code == 0 and "usage: canola" in out
+
+
+def test_boot_gives_up_at_the_timeout(capsys: pytest.CaptureFixture[str], net: Net,
+                                      tmp_path: Path) -> None:
+    opts, _ = net
+    dcf = write_dcf(tmp_path / "n.dcf", 5, {})  # nobody answers as node 5
+    code, out, err = cli(capsys, "boot", str(dcf), *opts, "--timeout", "0.3")
+    assert (code, err) == (1, "")
+    assert out.splitlines()[-1] == "network not started: the boot did not end within 0.3 s"
+    code, out, _ = cli(capsys, "boot", str(dcf), *opts, "--timeout", "0.3", "--json")
+    assert code == 1 and json.loads(out)["settled"] is False

@@ -11,6 +11,9 @@ SimBus.
     master.on_heartbeat(print); master.on_emcy(print)
     master.start_sync(10_000)                    # SYNC every 10 ms
     master.send_pdo(0x205, b"\\x01\\x02")
+    mgr = master.boot("plant.yaml")              # CiA 302-2 manager: canola.manager
+    ids = master.lss.fastscan()                  # CiA 305: canola.lss
+    master.flash(5, image, progress=print)       # CiA 302-3: canola.flash
 
 The master's own dictionary comes from ``canola/data/master.eds`` (shipped in the
 package): 16 SDO client channels (0x1280..0x128F), a heartbeat consumer for every node-ID
