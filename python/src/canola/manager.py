@@ -303,7 +303,8 @@ class NetworkManager:
     def wait(self, timeout: float | None = None) -> bool:
         """Block until :meth:`settled` (or ``timeout`` seconds, virtual on a SimBus);
         returns :attr:`started`. Every boot step ends with an SDO or heartbeat time-out,
-        so the wait ends without a ``timeout`` too."""
+        so the wait ends without a ``timeout`` too, unless slaves keep sending boot-ups
+        (each one starts their boot again)."""
         if not self._started:
             raise Error("the manager is not started")
         self._waiter.check()

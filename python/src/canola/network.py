@@ -15,7 +15,9 @@ From a YAML file::
         dcf: drive2.dcf     # its ParameterValues become the concise DCF (path relative
                             # to the YAML file); with no identity given, the DCF's 0x1000
                             # and 0x1018 values are expected
-        heartbeat_ms: 500   # the master watches its heartbeat (0x1016) with this time
+        heartbeat_ms: 500   # the master watches its heartbeat (0x1016) with this time;
+                            # the slave must produce one (0x1017, e.g. from its DCF),
+                            # else its boot fails with K
         boot_on_bootup: true   # boot it again when it sends a boot-up later (default)
         keep_alive: false      # spared by reset_slaves
       - id: 3
