@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 from canola.cli.common import (
     CliError,
@@ -19,7 +20,9 @@ from canola.cli.common import (
     positive_ms,
 )
 from canola.master import Master
-from canola.network import Network, NetworkError, from_files
+
+if TYPE_CHECKING:
+    from canola.network import Network
 
 #: Longest one slave's boot may take, per SDO time-out (reads, DCF records, retries).
 _STEPS_PER_SLAVE = 16
@@ -77,6 +80,8 @@ def _limit(args: argparse.Namespace, network: Network) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
+    from canola.network import NetworkError, from_files  # noqa: PLC0415 -- on first use
+
     try:
         network = from_files(args.files, node_id_of_master=args.master_id)
     except NetworkError as exc:

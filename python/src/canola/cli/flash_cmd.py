@@ -9,7 +9,6 @@ from typing import TextIO
 
 from canola.cli.boot_cmd import add_master_options, master_from_args
 from canola.cli.common import CliError, Parser, add_bus_options, emit_json, node_id
-from canola.flash import FlashError
 
 
 class ProgressBar:
@@ -87,6 +86,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from canola.flash import FlashError  # noqa: PLC0415 -- on first use
+
     try:
         with open(args.file, "rb") as src:
             image = src.read()

@@ -8,14 +8,19 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from canola.cli.boot_cmd import add_master_options, master_from_args
 from canola.cli.common import Parser, add_bus_options, emit_json, node_id
 from canola.errors import Error
-from canola.lss import LssAddress
+
+if TYPE_CHECKING:
+    from canola.lss import LssAddress
 
 
 def _address(text: str) -> LssAddress:
+    from canola.lss import LssAddress  # noqa: PLC0415 -- on first use
+
     try:
         return LssAddress.parse(text)
     except Error as exc:
