@@ -416,6 +416,240 @@ static int canola_py_entry_key(const co_od_entry_t *entry)
 }
 """
 
+# ---------------------------------------------------------------------------------------
+# Issue 7 (py302 branch): LSS master (CiA 305), CANopen manager (CiA 302-2) and program
+# download (CiA 302-3). One self-contained block: cdefs of lss.h, manager.h, program.h and
+# the helpers canola.lss / canola.manager / canola.program use. The core builds them with
+# CO_CONFIG_LSS_MASTER, CO_CONFIG_LSS_SLAVE and CO_CONFIG_MANAGER (all 1 by default).
+
+CDEF += """
+typedef struct co_lss_address { uint32_t vendor; uint32_t product; uint32_t revision;
+                                uint32_t serial; } co_lss_address_t;
+typedef struct co_lss_result { uint8_t cs; uint8_t status; uint8_t error; uint8_t spec_error;
+                               uint32_t value; uint16_t answers; co_lss_address_t address;
+                               ...; } co_lss_result_t;
+typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; ...; }
+    co_lss_fastscan_t;
+typedef void (*co_lss_done_fn)(void *ctx, const co_lss_result_t *result);
+typedef enum co_lss_mode { CO_LSS_WAITING, CO_LSS_CONFIGURATION, ... } co_lss_mode_t;
+typedef enum co_lss_status { CO_LSS_OK, CO_LSS_TIMEOUT, CO_LSS_REFUSED, CO_LSS_SCAN_FAILED,
+                             CO_LSS_CANCELLED, ... } co_lss_status_t;
+#define CO_LSS_CS_INQUIRE_VENDOR ...
+#define CO_LSS_CS_INQUIRE_PRODUCT ...
+#define CO_LSS_CS_INQUIRE_REVISION ...
+#define CO_LSS_CS_INQUIRE_SERIAL ...
+#define CO_LSS_CS_INQUIRE_NODE_ID ...
+#define CO_NODE_ID_UNCONFIGURED ...
+co_err_t co_lss_master_set_timeout(co_node_t *node, uint32_t timeout_ms);
+bool co_lss_master_busy(const co_node_t *node);
+co_err_t co_lss_master_cancel(co_node_t *node);
+co_err_t co_lss_switch_global(co_node_t *node, co_lss_mode_t mode);
+co_err_t co_lss_switch_selective(co_node_t *node, const co_lss_address_t *address,
+                                 co_lss_done_fn done, void *ctx);
+co_err_t co_lss_configure_node_id(co_node_t *node, uint8_t node_id, co_lss_done_fn done,
+                                  void *ctx);
+co_err_t co_lss_store(co_node_t *node, co_lss_done_fn done, void *ctx);
+co_err_t co_lss_inquire(co_node_t *node, uint8_t cs, co_lss_done_fn done, void *ctx);
+co_err_t co_lss_identify_non_configured(co_node_t *node, co_lss_done_fn done, void *ctx);
+co_err_t co_lss_fastscan(co_node_t *node, const co_lss_fastscan_t *scan, co_lss_done_fn done,
+                         void *ctx);
+const char *co_lss_status_name(uint8_t status);
+co_lss_mode_t co_lss_slave_mode(const co_node_t *node);
+
+#define CO_MGR_NMT_MASTER ...
+#define CO_MGR_START_ALL ...
+#define CO_MGR_NO_SELF_START ...
+#define CO_MGR_NO_SLAVE_START ...
+#define CO_MGR_SLAVE ...
+#define CO_MGR_BOOT_ON_BOOTUP ...
+#define CO_MGR_MANDATORY ...
+#define CO_MGR_KEEP_ALIVE ...
+typedef enum co_mgr_event_kind { CO_MGR_BOOTED = 1, CO_MGR_STARTED, CO_MGR_FAILED,
+    CO_MGR_LOST, CO_MGR_NETWORK_STARTED, CO_MGR_NETWORK_HALTED, ... } co_mgr_event_kind_t;
+typedef enum co_mgr_slave_state { CO_MGR_UNLISTED, CO_MGR_WAITING, CO_MGR_BOOTING,
+    CO_MGR_CONFIGURED, CO_MGR_RUNNING, CO_MGR_FAILED_STATE, CO_MGR_MISSING,
+    ... } co_mgr_slave_state_t;
+typedef struct co_mgr_event { uint8_t node_id; uint8_t kind; uint8_t reason; uint8_t sub;
+                              uint16_t index; uint32_t abort; uint32_t value; ...; }
+    co_mgr_event_t;
+typedef struct co_mgr_slave { uint32_t assignment; uint32_t device_type; uint32_t vendor;
+    uint32_t product; uint32_t revision; uint32_t serial; const uint8_t *dcf; uint32_t dcf_len;
+    uint32_t config_date; uint32_t config_time; uint16_t heartbeat_ms; ...; } co_mgr_slave_t;
+typedef struct co_manager_config { uint32_t nmt_startup; const co_mgr_slave_t *slaves;
+    uint8_t sdo_channel; bool reset_slaves;
+    void (*on_event)(void *ctx, const co_mgr_event_t *event); void *ctx; ...; }
+    co_manager_config_t;
+typedef struct co_manager { ...; } co_manager_t;
+co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_config_t *config);
+co_err_t co_manager_start(co_manager_t *mgr);
+int co_manager_slave_state(const co_manager_t *mgr, uint8_t node_id);
+int co_manager_slave_reason(const co_manager_t *mgr, uint8_t node_id);
+bool co_manager_network_started(const co_manager_t *mgr);
+const char *co_boot_reason_text(uint8_t reason);
+const char *co_mgr_event_name(uint8_t kind);
+co_err_t co_dcf_check(const uint8_t *dcf, uint32_t len);
+
+typedef enum co_flash_stage { CO_FLASH_STAGE_STOP = 1, CO_FLASH_STAGE_CLEAR,
+    CO_FLASH_STAGE_DATA, CO_FLASH_STAGE_START, CO_FLASH_STAGE_VERIFY, CO_FLASH_STAGE_DONE,
+    ... } co_flash_stage_t;
+typedef struct co_flash_result { uint8_t stage; bool ident_ok; co_abort_t abort; uint32_t ident;
+                                 uint32_t bytes; ...; } co_flash_result_t;
+typedef struct co_flash_request { uint8_t channel; uint8_t server; uint8_t program; bool clear;
+    bool check_ident; uint32_t ident; const uint8_t *data; uint32_t len;
+    void (*progress)(void *ctx, uint32_t done, uint32_t total);
+    void (*done)(void *ctx, const co_flash_result_t *result); void *ctx; ...; }
+    co_flash_request_t;
+typedef struct co_flash { uint8_t stage; ...; } co_flash_t;
+co_err_t co_flash_start(co_flash_t *flash, co_node_t *node, const co_flash_request_t *request);
+const char *co_flash_stage_name(uint8_t stage);
+
+/* helpers: the device side of program download on a canola.Device (preamble below) */
+typedef struct canola_py_prog canola_py_prog_t;
+canola_py_prog_t *canola_py_prog_new(co_od_entry_t *entries, uint32_t count, uint8_t program,
+                                     bool running, uint32_t ident, void *handle);
+void canola_py_prog_free(canola_py_prog_t *p);
+void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident);
+uint32_t canola_py_prog_ident(const canola_py_prog_t *p);
+uint32_t canola_py_prog_status(const canola_py_prog_t *p);
+uint8_t canola_py_prog_state(const canola_py_prog_t *p);
+uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel);
+
+extern "Python" void canola_py_mgr_event(void *ctx, const co_mgr_event_t *event);
+extern "Python" void canola_py_lss_done(void *ctx, const co_lss_result_t *result);
+extern "Python" void canola_py_flash_progress(void *ctx, uint32_t done, uint32_t total);
+extern "Python" void canola_py_flash_done(void *ctx, const co_flash_result_t *result);
+extern "Python" co_abort_t canola_py_prog_write(void *ctx, uint32_t offset, const uint8_t *data,
+                                                uint32_t n, uint32_t total, bool last);
+extern "Python" co_abort_t canola_py_prog_control(void *ctx, uint8_t command);
+"""
+
+PREAMBLE += r"""
+#include <stddef.h>
+
+/* Program download, device side, on a canola.Device: the node's hook_ctx is the Python
+ * engine, so the entries 0x1F50/51/56/57 get hooks of their own that find their
+ * co_program_t from the hooks pointer, and the program's callbacks go to Python. */
+static co_abort_t canola_py_prog_write(void *ctx, uint32_t offset, const uint8_t *data,
+                                       uint32_t n, uint32_t total, bool last);
+static co_abort_t canola_py_prog_control(void *ctx, uint8_t command);
+
+typedef struct canola_py_prog {
+    co_od_hooks_t data, control, ident, status;
+    co_program_t prog;
+} canola_py_prog_t;
+
+#define CANOLA_PY_PROG(entry, member) \
+    ((canola_py_prog_t *)(void *)((char *)(entry)->hooks - offsetof(canola_py_prog_t, member)))
+
+static co_abort_t canola_py_prog_data_w(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                                        const uint8_t *data, uint32_t n, uint32_t total,
+                                        bool last)
+{
+    (void)ctx;
+    return co_program_data_hooks.write(&CANOLA_PY_PROG(e, data)->prog, e, offset, data, n,
+                                       total, last);
+}
+
+static co_abort_t canola_py_prog_control_w(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                                           const uint8_t *data, uint32_t n, uint32_t total,
+                                           bool last)
+{
+    (void)ctx;
+    return co_program_control_hooks.write(&CANOLA_PY_PROG(e, control)->prog, e, offset, data,
+                                          n, total, last);
+}
+
+static co_abort_t canola_py_prog_control_r(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                                           uint8_t *buf, uint32_t cap, uint32_t *n,
+                                           uint32_t *total)
+{
+    (void)ctx;
+    return co_program_control_hooks.read(&CANOLA_PY_PROG(e, control)->prog, e, offset, buf,
+                                         cap, n, total);
+}
+
+static co_abort_t canola_py_prog_ident_r(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                                         uint8_t *buf, uint32_t cap, uint32_t *n,
+                                         uint32_t *total)
+{
+    (void)ctx;
+    return co_program_ident_hooks.read(&CANOLA_PY_PROG(e, ident)->prog, e, offset, buf, cap,
+                                       n, total);
+}
+
+static co_abort_t canola_py_prog_status_r(void *ctx, const co_od_entry_t *e, uint32_t offset,
+                                          uint8_t *buf, uint32_t cap, uint32_t *n,
+                                          uint32_t *total)
+{
+    (void)ctx;
+    return co_program_status_hooks.read(&CANOLA_PY_PROG(e, status)->prog, e, offset, buf, cap,
+                                        n, total);
+}
+
+/* Hook program `program` (sub-index of 0x1F50/51/56/57) of the entries; NULL when 0x1F50
+ * or 0x1F51 lacks that sub-index (or no memory). The entries keep pointing to the result:
+ * free it only with them. */
+static canola_py_prog_t *canola_py_prog_new(co_od_entry_t *entries, uint32_t count,
+                                            uint8_t program, bool running, uint32_t ident,
+                                            void *handle)
+{
+    bool data = false, control = false;
+    for (uint32_t i = 0; i < count; i++) {
+        if (entries[i].sub == program) {
+            data = data || entries[i].index == 0x1F50;
+            control = control || entries[i].index == 0x1F51;
+        }
+    }
+    canola_py_prog_t *p = data && control ? calloc(1, sizeof *p) : NULL;
+    if (!p) {
+        return NULL;
+    }
+    co_program_app_t app = {.write = canola_py_prog_write, .control = canola_py_prog_control,
+                            .ctx = handle};
+    co_program_init(&p->prog, &app, running, ident);
+    p->data.write = canola_py_prog_data_w;
+    p->control.read = canola_py_prog_control_r;
+    p->control.write = canola_py_prog_control_w;
+    p->ident.read = canola_py_prog_ident_r;
+    p->status.read = canola_py_prog_status_r;
+    for (uint32_t i = 0; i < count; i++) {
+        co_od_entry_t *e = &entries[i];
+        const co_od_hooks_t *h = NULL;
+        if (e->sub != program) {
+            continue;
+        }
+        switch (e->index) {
+        case 0x1F50: h = &p->data; e->size = 0xFFFFFFFFu; break; /* streamed, any size */
+        case 0x1F51: h = &p->control; break;
+        case 0x1F56: h = &p->ident; break;
+        case 0x1F57: h = &p->status; break;
+        default: continue;
+        }
+        e->hooks = h;
+        e->value = NULL;
+        e->dflt = NULL;
+    }
+    return p;
+}
+
+static void canola_py_prog_free(canola_py_prog_t *p) { free(p); }
+static void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident)
+{
+    co_program_set_ident(&p->prog, ident);
+}
+static uint32_t canola_py_prog_ident(const canola_py_prog_t *p) { return p->prog.ident; }
+static uint32_t canola_py_prog_status(const canola_py_prog_t *p) { return p->prog.status; }
+static uint8_t canola_py_prog_state(const canola_py_prog_t *p) { return p->prog.state; }
+
+/* Bytes a client channel's transfer has moved so far (the server acknowledged, for a block
+ * download): program download progress sampled by the waiting thread. */
+static uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel)
+{
+    return channel < CO_SDO_CLIENTS_MAX ? node->sdo_clients[channel].done : 0;
+}
+"""
+# ---- end of the issue 7 block
+
 ffibuilder = cffi.FFI()
 ffibuilder.cdef(CDEF)
 ffibuilder.set_source(

@@ -82,7 +82,7 @@ class Engine:
         if not isinstance(bus, SimBus | can.BusABC):
             raise Error(f"bus must be a canola.core.SimBus or a python-can BusABC, not "
                         f"{type(bus).__name__}")
-        if not 1 <= node_id <= 127:
+        if not 1 <= node_id <= 127 and node_id != 0xFF:  # 0xFF: none yet (LSS)
             raise Error(f"node-ID {node_id} is outside 1..127")
         self.bus = bus
         self.od = od

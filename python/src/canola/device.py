@@ -43,8 +43,8 @@ class Device(NodeBase):
                  node_id: int, bus: Bus, *, store_dir: str | os.PathLike[str] | None = None,
                  string_size: int = 256, domain_size: int = 4096,
                  sdo_timeout_ms: int = 1000) -> None:
-        if not isinstance(node_id, int) or not 1 <= node_id <= 127:
-            raise Error(f"node-ID {node_id!r} is outside 1..127")
+        if not isinstance(node_id, int) or not (1 <= node_id <= 127 or node_id == 0xFF):
+            raise Error(f"node-ID {node_id!r} is outside 1..127 (or 0xFF: none, for LSS)")
         od = load_od(eds_or_dcf, node_id, GenerateOptions(domain_size=domain_size,
                                                           min_string_size=string_size))
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms,
@@ -53,6 +53,11 @@ class Device(NodeBase):
     def __enter__(self) -> Device:
         self.start()
         return self
+
+    def _on_state(self, state: int) -> None:
+        # an LSS master may have given the node its (new) node-ID at this reset
+        self.node_id = int(lib.co_node_id(self._engine.node))
+        super()._on_state(state)
 
     def emcy_raise(self, code: int, manufacturer: bytes = b"") -> None:
         """Raise error ``code`` (1..0xFFFF): EMCY frame, 0x1001 and 0x1003 updated.

@@ -11,6 +11,9 @@ SimBus.
     master.on_heartbeat(print); master.on_emcy(print)
     master.start_sync(10_000)                    # SYNC every 10 ms
     master.send_pdo(0x205, b"\\x01\\x02")
+    mgr = master.boot("plant.yaml")              # CiA 302-2 manager: canola.manager
+    ids = master.lss.fastscan()                  # CiA 305: canola.lss
+    master.flash(5, image, progress=print)       # CiA 302-3: canola.flash
 
 The master's own dictionary comes from ``canola/data/master.eds`` (shipped in the
 package): 16 SDO client channels (0x1280..0x128F), a heartbeat consumer for every node-ID
@@ -28,9 +31,9 @@ import datetime as dt
 import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from importlib import resources
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
 from canola._core import ffi, lib
@@ -47,6 +50,12 @@ from canola._nodebase import (
 from canola.core import SimBus, _Transfer
 from canola.errors import Error, SdoAbort
 from canola.odgen import GenerateOptions
+
+if TYPE_CHECKING:  # loaded on first use (the command line starts faster without them)
+    from canola.flash import FlashResult
+    from canola.lss import Lss
+    from canola.manager import BootEvent, NetworkManager
+    from canola.network import Network
 
 __all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoClient",
            "SdoTimeout"]
@@ -464,6 +473,44 @@ class Master(NodeBase):
         if self._time_timer is not None:
             self._engine.remove_timer(self._time_timer)
             self._time_timer = None
+
+    # ---- CiA 302 manager, LSS, program download (canola.manager, .lss, .flash do the work)
+
+    def boot(self, network: Network | str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
+             *, on_event: Callable[[BootEvent], None] | None = None, wait: bool = True,
+             timeout: float | None = None) -> NetworkManager:
+        """Boot the network (CiA 302-2) described by ``network``: a
+        :class:`canola.network.Network`, a YAML file, or DCF files. Blocks until the boot
+        settled (unless ``wait=False``) and returns the manager: ``started``, ``slaves()``,
+        ``events``. ``on_event(BootEvent)`` for every report. See :mod:`canola.manager`."""
+        from canola import manager  # noqa: PLC0415 -- on first use
+        from canola import network as net  # noqa: PLC0415
+
+        if not isinstance(network, net.Network):
+            paths = [network] if isinstance(network, str | os.PathLike) else list(network)
+            network = net.from_files(paths, node_id_of_master=self.node_id)
+        return manager.boot(self, network, on_event=on_event, wait=wait, timeout=timeout)
+
+    @property
+    def lss(self) -> Lss:
+        """The LSS master (CiA 305): fastscan, set_node_id, inquire. See :mod:`canola.lss`."""
+        from canola.lss import Lss  # noqa: PLC0415
+
+        lss: Lss | None = getattr(self, "_lss", None)
+        if lss is None:
+            lss = self._lss = Lss(self)
+        return lss
+
+    def flash(self, node: int, data: bytes, *, progress: Callable[[int, int], None] | None
+              = None, program: int = 1, clear: bool = True, ident: int | None = None,
+              timeout: float | None = None) -> FlashResult:
+        """Download program ``data`` to ``node`` (CiA 302-3); ``progress(done, total)``.
+        Raises :class:`canola.flash.FlashError` with the stage and abort code. See
+        :mod:`canola.flash`."""
+        from canola.flash import flash  # noqa: PLC0415
+
+        return flash(self, node, data, progress=progress, program=program, clear=clear,
+                     ident=ident, timeout=timeout)
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` pass: virtual time on a SimBus, a sleep on python-can."""

@@ -8,7 +8,11 @@
     canola dump [FILE]                        traffic decoded into CANopen meaning
     canola monitor                            live view of every node
     canola device --eds FILE --node-id N      run a canola device
+    canola demo                               the demo network (a master, three devices)
     canola gateway --iface IFACE [--listen W] CiA 309-3 ASCII gateway
+    canola boot NETWORK.yaml|DCF...           boot a network (CiA 302-2 manager)
+    canola flash NODE FILE                    program download (CiA 302-3)
+    canola lss scan|set-id|inquire            layer setting services (CiA 305)
 
 Every bus command takes ``--iface IFACE`` or ``--bus URL``. A bad argument is one line on
 stderr and exit code 2; a failure (no answer, SDO abort, bus missing) one line and exit
@@ -24,11 +28,14 @@ from collections.abc import Callable, Sequence
 
 from canola import __version__, odgen
 from canola.cli import (
+    boot_cmd,
     bus_cmd,
     demo_cmd,
     device_cmd,
     dump_cmd,
+    flash_cmd,
     gateway_cmd,
+    lss_cmd,
     monitor_cmd,
     nmt_cmd,
     scan_cmd,
@@ -42,7 +49,7 @@ __all__ = ["build_parser", "main"]
 _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
     dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
-    demo_cmd.register,
+    demo_cmd.register, boot_cmd.register, flash_cmd.register, lss_cmd.register,
 )
 
 

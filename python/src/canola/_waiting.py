@@ -1,0 +1,59 @@
+"""Waiting for work the C node does on its own (an LSS request, a network boot, a program
+download): on a SimBus by running the bus in virtual time, on python-can by sleeping on an
+event the C callbacks set. Shared by canola.lss, canola.manager and canola.flash."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from canola._engine import Engine
+from canola.core import SimBus
+from canola.errors import Error
+
+__all__ = ["Waiter"]
+
+#: Virtual time the simulated bus advances between two checks (us).
+SIM_STEP_US = 1000
+
+
+class Waiter:
+    """``wake()`` from a callback; ``wait(done, limit_s)`` until ``done()`` or the limit."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self._event = threading.Event()
+
+    def wake(self) -> None:
+        self._event.set()
+
+    def check(self) -> None:
+        """Raise when a blocking wait cannot work: not started, or called from a callback
+        that the bus thread runs (it would wait for itself)."""
+        self.engine.check_may_block()
+        if not self.engine.running:
+            raise Error("the master is not started: call start() first")
+
+    def wait(self, done: Callable[[], bool], limit_s: float | None) -> bool:
+        """True once ``done()``; False when ``limit_s`` (virtual seconds on a SimBus) passed
+        first. Raises Error when the master is stopped meanwhile."""
+        bus = self.engine.bus
+        if isinstance(bus, SimBus):
+            end = None if limit_s is None else bus.now_us + round(limit_s * 1e6)
+            while not done():
+                if end is not None and bus.now_us >= end:
+                    return False
+                step = bus.now_us + SIM_STEP_US
+                bus.run_until(step if end is None else min(step, end))
+            return True
+        deadline = None if limit_s is None else time.monotonic() + limit_s
+        while not done():
+            left = 0.05 if deadline is None else min(0.05, deadline - time.monotonic())
+            if left <= 0:
+                return False
+            self._event.wait(left)
+            self._event.clear()
+            if not self.engine.running:
+                raise Error("the master was stopped")
+        return True

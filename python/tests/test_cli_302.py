@@ -1,0 +1,305 @@
+"""canola boot, canola flash, canola lss: the CLI against canola.Devices on a python-can
+virtual bus in this process (each command opens its own bus on the channel)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import time
+import zlib
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import can
+import pytest
+from managed import PRODUCT, REVISION, VENDOR, model, write_dcf
+
+from canola import Device
+from canola.cli import main
+from canola.lss import UNCONFIGURED
+from canola.program import ProgramSlot
+
+_channels = itertools.count()
+
+Net = tuple[list[str], Callable[..., Device]]
+
+
+@pytest.fixture
+def net() -> Iterator[Net]:
+    """Bus options for the CLI, and a maker of started devices on that channel."""
+    channel = f"canola-cli302-{os.getpid()}-{next(_channels)}"
+    devices: list[Device] = []
+    buses: list[can.BusABC] = []
+
+    def device(node_id: int, *, vendor: int = VENDOR, serial: int = 1,
+               program: bool = False) -> Device:
+        bus = can.Bus(interface="virtual", channel=channel)
+        buses.append(bus)
+        dev = Device(model(vendor=vendor, serial=serial), node_id, bus)
+        if program:
+            ProgramSlot(dev)
+        dev.start()
+        devices.append(dev)
+        return dev
+
+    yield ["--bus", f"virtual://{channel}"], device
+    for dev in devices:
+        dev.stop()
+    for bus in buses:
+        bus.shutdown()
+
+
+def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line_error(err: str) -> None:
+    assert len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+
+
+# ---- canola boot
+
+
+@pytest.fixture
+def plant(tmp_path: Path) -> Path:
+    write_dcf(tmp_path / "node2.dcf", 2, {(0x1017, 0): "100", (0x2001, 0): "0x2A"},
+              serial=2)
+    path = tmp_path / "plant.yaml"
+    path.write_text("""
+nodes:
+  - {id: 2, dcf: node2.dcf, heartbeat_ms: 500}
+  - {id: 3, optional: true, identity: {vendor: 0xCA0}}
+  - {id: 4, optional: true}
+""")
+    return path
+
+
+def test_boot_yaml(capsys: pytest.CaptureFixture[str], net: Net, plant: Path) -> None:
+    opts, device = net
+    two = device(2, serial=2)
+    device(3, vendor=0xBAD)
+    code, out, err = cli(capsys, "boot", str(plant), *opts, "--sdo-timeout", "300")
+    assert (code, err) == (0, "")
+    assert out.splitlines() == [
+        "node 2 (mandatory): running",
+        "node 3 (optional): failed: D: vendor-ID does not match (0x1018:01 is 0x00000BAD)",
+        "node 4 (optional): failed: B: no answer to the read of the device type (SDO abort "
+        "0x05040000 (SDO protocol timed out))",
+        "network started",
+    ]
+    assert two.od[0x2001, 0] == 0x2A and two.nmt_state == "OPERATIONAL"
+
+
+def test_boot_json_and_halted(capsys: pytest.CaptureFixture[str], net: Net, plant: Path
+                              ) -> None:
+    opts, device = net
+    device(2, serial=2)
+    device(3, vendor=0xBAD)
+    code, out, _ = cli(capsys, "boot", str(plant), *opts, "--sdo-timeout", "300", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["started"] and doc["settled"]
+    three = next(n for n in doc["nodes"] if n["node"] == 3)
+    assert (three["state"], three["reason"], three["value"]) == ("failed", "D", 0xBAD)
+    assert {"node": 0, "kind": "network-started"}.items() <= doc["events"][-1].items()
+    # the same network with node 3 mandatory does not start: exit 1
+    strict = plant.with_name("strict.yaml")
+    strict.write_text(plant.read_text().replace("{id: 3, optional: true,", "{id: 3,"))
+    code, out, err = cli(capsys, "boot", str(strict), *opts, "--sdo-timeout", "300")
+    assert (code, err) == (1, "")
+    assert out.splitlines()[-1] == "network not started: mandatory node(s) 3 failed"
+
+
+def test_boot_dcf_files(capsys: pytest.CaptureFixture[str], net: Net, tmp_path: Path) -> None:
+    opts, device = net
+    dev = device(6, serial=6)
+    dcf = write_dcf(tmp_path / "six.dcf", 6, {(0x2000, 0): "300"}, serial=6)
+    code, out, _ = cli(capsys, "boot", str(dcf), *opts)
+    assert code == 0 and out.splitlines() == ["node 6 (mandatory): running", "network started"]
+    assert dev.od[0x2000, 0] == 300
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ("nodes: [", "plant.yaml: line 1, column 9: not valid YAML"),
+    ("nodes: [{id: 2, speed: 1}]", "plant.yaml: nodes[0].speed: unknown key"),
+    ("nodes: [{id: 127}]", "plant.yaml: nodes[0].id: node 127 is the master itself"),
+])
+def test_boot_bad_description(capsys: pytest.CaptureFixture[str], tmp_path: Path, text: str,
+                              expected: str) -> None:
+    path = tmp_path / "plant.yaml"
+    path.write_text(text)
+    code, out, err = cli(capsys, "boot", str(path), "--bus", "virtual://unused")
+    assert (code, out) == (2, "")
+    one_line_error(err)
+    assert err.startswith("canola boot: error: ") and expected in err
+
+
+@pytest.mark.parametrize("args", [
+    ["boot", "--bus", "virtual://x"],
+    ["boot", "none.yaml", "--bus", "virtual://x"],
+    ["boot", "a.yaml", "b.dcf", "--bus", "virtual://x"],
+    ["boot", "n.dcf", "--bus", "virtual://x", "--sdo-timeout", "0"],
+    ["boot", "n.dcf", "--bus", "virtual://x", "--master-id", "0"],
+    ["boot", "n.dcf"],
+])
+def test_boot_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str]) -> None:
+    code, out, err = cli(capsys, *args)
+    assert (code, out) == (2, "")
+    one_line_error(err)
+
+
+def test_boot_bad_timeout(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    dcf = write_dcf(tmp_path / "n.dcf", 5, {})
+    code, _, err = cli(capsys, "boot", str(dcf), "--bus", "virtual://x", "--timeout", "-1")
+    assert code == 2 and "bad --timeout -1" in err
+    one_line_error(err)
+
+
+# ---- canola flash
+
+
+def test_flash(capsys: pytest.CaptureFixture[str], net: Net, tmp_path: Path) -> None:
+    opts, device = net
+    device(5, program=True)
+    image = bytes(range(256)) * 80  # 20 KiB
+    (tmp_path / "fw.bin").write_bytes(image)
+    code, out, err = cli(capsys, "flash", "5", str(tmp_path / "fw.bin"), *opts, "--progress")
+    assert code == 0
+    assert out == (f"node 5: {len(image)} bytes, program started, identification "
+                   f"0x{zlib.crc32(image):08X}\n")
+    assert err.endswith("\n") and "100.0%" in err and f"{len(image)}/{len(image)} B" in err
+    assert err.count("\r") >= 2  # redrawn as it went
+    code, out, err = cli(capsys, "flash", "5", str(tmp_path / "fw.bin"), *opts, "--json",
+                         "--ident", f"{zlib.crc32(image):x}", "--no-clear")
+    assert (code, err) == (0, "")
+    assert json.loads(out) == {"node": 5, "bytes": len(image), "ident": zlib.crc32(image)}
+
+
+def test_flash_failures(capsys: pytest.CaptureFixture[str], net: Net, tmp_path: Path) -> None:
+    opts, device = net
+    device(5, program=True)
+    fw = tmp_path / "fw.bin"
+    fw.write_bytes(b"abc")
+    code, _, err = cli(capsys, "flash", "5", str(fw), *opts, "--ident", "1234")
+    assert code == 1
+    one_line_error(err)
+    assert "failed at verify: the device reports software identification" in err
+    code, _, err = cli(capsys, "flash", "9", str(fw), *opts, "--sdo-timeout", "100")
+    assert code == 1 and "node 9 failed at stop: SDO abort 0x05040000" in err
+    one_line_error(err)
+    code, _, err = cli(capsys, "flash", "5", str(tmp_path / "none.bin"), *opts)
+    assert code == 1 and "cannot read" in err
+    (tmp_path / "empty.bin").write_bytes(b"")
+    code, _, err = cli(capsys, "flash", "5", str(tmp_path / "empty.bin"), *opts)
+    assert code == 1 and "is empty" in err
+    one_line_error(err)
+
+
+@pytest.mark.parametrize("args", [
+    ["flash", "200", "f.bin", "--bus", "virtual://x"],
+    ["flash", "5", "--bus", "virtual://x"],
+    ["flash", "5", "f.bin", "--bus", "virtual://x", "--ident", "xyz"],
+    ["flash", "5", "f.bin", "--bus", "virtual://x", "--program", "0"],
+    ["flash", "5", "f.bin"],
+])
+def test_flash_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str]) -> None:
+    code, out, err = cli(capsys, *args)
+    assert (code, out) == (2, "")
+    one_line_error(err)
+
+
+# ---- canola lss
+
+
+#: LSS time-out of the CLI tests (ms): python-can threads under load answer late, and a
+#: fastscan costs 133 of them per device.
+LSS_MS = "50"
+
+
+def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str], net: Net) -> None:
+    opts, device = net
+    dev = device(UNCONFIGURED, serial=0x11)
+    device(9, serial=0x22)  # has a node-ID: fastscan does not find it
+    address = f"{VENDOR:08X}:{PRODUCT:08X}:{REVISION:08X}:00000011"
+    code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS)
+    assert (code, err) == (0, "")
+    assert out.splitlines() == [address, "1 device(s) without node-ID"]
+
+    code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--timeout", LSS_MS)
+    assert code == 0
+    assert out == (f"vendor 0x{VENDOR:08X} product 0x{PRODUCT:08X} revision "
+                   f"0x{REVISION:08X} serial 0x00000011 node-ID none\n")
+
+    code, out, err = cli(capsys, "lss", "set-id", "ca0:302:10000:11", "40", *opts,
+                         "--timeout", LSS_MS)
+    assert (code, err) == (0, "")
+    assert out == f"{address}: node-ID 40\n"
+    for _ in range(200):
+        if dev.nmt_state == "PRE-OPERATIONAL":
+            break
+        time.sleep(0.01)
+    assert dev.node_id == 40 and dev.nmt_state == "PRE-OPERATIONAL"
+
+    other = f"{VENDOR:X}:{PRODUCT:X}:{REVISION:X}:22"
+    code, out, _ = cli(capsys, "lss", "set-id", other, "41", *opts, "--timeout", LSS_MS,
+                       "--json")
+    assert json.loads(out) == {"address": f"{VENDOR:08X}:{PRODUCT:08X}:{REVISION:08X}:00000022",
+                               "node_id": 41, "stored": False}
+    code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--timeout", LSS_MS,
+                       "--json")
+    assert json.loads(out)["node_id"] == 40
+    code, out, _ = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS, "--json")
+    assert (code, json.loads(out)) == (0, [])
+
+
+def test_lss_failures(capsys: pytest.CaptureFixture[str], net: Net) -> None:
+    opts, device = net
+    device(7, serial=0x77)
+    code, _, err = cli(capsys, "lss", "set-id", "1:2:3:4", "5", *opts, "--timeout", LSS_MS)
+    assert code == 1 and "no device with address 00000001:00000002:00000003:00000004" in err
+    one_line_error(err)
+    address = f"{VENDOR:X}:{PRODUCT:X}:{REVISION:X}:77"
+    code, _, err = cli(capsys, "lss", "set-id", address, "8", *opts, "--timeout", "10",
+                       "--store")
+    assert code == 1 and "store configuration: refused" in err
+    one_line_error(err)
+
+
+@pytest.mark.parametrize("args", [
+    ["lss"],
+    ["lss", "scan"],
+    ["lss", "scan", "--bus", "virtual://x", "--timeout", "0"],
+    ["lss", "set-id", "1:2:3", "5", "--bus", "virtual://x"],
+    ["lss", "set-id", "1:2:3:4:5", "5", "--bus", "virtual://x"],
+    ["lss", "set-id", "1:2:3:g", "5", "--bus", "virtual://x"],
+    ["lss", "set-id", "1:2:3:4", "128", "--bus", "virtual://x"],
+    ["lss", "set-id", "1:2:3:4", "--bus", "virtual://x"],
+    ["lss", "inquire", "--bus", "virtual://x"],
+    ["lss", "jump", "--bus", "virtual://x"],
+])
+def test_lss_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str]) -> None:
+    code, out, err = cli(capsys, *args)
+    assert (code, out) == (2, "")
+    one_line_error(err)
+
+
+def test_help(capsys: pytest.CaptureFixture[str]) -> None:
+    for args in (["boot", "--help"], ["flash", "--help"], ["lss", "scan", "--help"],
+                 ["lss", "set-id", "--help"], ["lss", "inquire", "--help"]):
+        code, out, _ = cli(capsys, *args)
+        assert code == 0 and "usage: canola" in out
+
+
+def test_boot_gives_up_at_the_timeout(capsys: pytest.CaptureFixture[str], net: Net,
+                                      tmp_path: Path) -> None:
+    opts, _ = net
+    dcf = write_dcf(tmp_path / "n.dcf", 5, {})  # nobody answers as node 5
+    code, out, err = cli(capsys, "boot", str(dcf), *opts, "--timeout", "0.3")
+    assert (code, err) == (1, "")
+    assert out.splitlines()[-1] == "network not started: the boot did not end within 0.3 s"
+    code, out, _ = cli(capsys, "boot", str(dcf), *opts, "--timeout", "0.3", "--json")
+    assert code == 1 and json.loads(out)["settled"] is False

@@ -1,0 +1,145 @@
+"""master.lss (CiA 305) with canola.Devices that have no node-ID (0xFF): fastscan, node-IDs
+given, the devices boot; on the simulated bus (virtual time) and on python-can."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import can
+import pytest
+from managed import PRODUCT, REVISION, VENDOR, model
+
+from canola import Device, Error, Master
+from canola.core import SimBus
+from canola.lss import UNCONFIGURED, LssAddress, LssError
+from canola.network import Identity, Network, SlaveSpec
+
+SERIALS = (0x300, 0x100, 0x200)
+
+
+def _unconfigured(bus: SimBus | can.BusABC) -> list[Device]:
+    devices = [Device(model(serial=s), UNCONFIGURED, bus) for s in SERIALS]
+    for device in devices:
+        device.start()
+    return devices
+
+
+def test_fastscan_assign_and_boot() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    devices = _unconfigured(bus)
+    bus.run_for(10_000)
+    assert all(d.nmt_state == "INITIALISING" and d.node_id == UNCONFIGURED for d in devices)
+    assert [f for f in (line.split()[-1] for line in bus.trace) if f.startswith("7")] == [
+        "701#00"]  # the master's boot-up only
+    master.lss.timeout_ms = 20
+    assert master.lss.count_unconfigured() == 3
+
+    found = master.lss.fastscan()
+    assert found == [LssAddress(VENDOR, PRODUCT, REVISION, s) for s in sorted(SERIALS)]
+    assert str(found[0]) == "00000CA0:00000302:00010000:00000100"
+
+    for address, node_id in zip(found, (10, 11, 12), strict=True):
+        master.lss.set_node_id(address, node_id)
+    bus.run_for(10_000)
+    by_serial = {d.od[0x1018, 4]: d for d in devices}
+    assert [by_serial[s].node_id for s in (0x100, 0x200, 0x300)] == [10, 11, 12]
+    assert all(d.nmt_state == "PRE-OPERATIONAL" for d in devices)
+    frames = [line.split()[-1] for line in bus.trace]
+    assert {"70A#00", "70B#00", "70C#00"} <= set(frames)
+    assert master.lss.count_unconfigured() == 0
+    assert master.lss.fastscan() == []
+
+    # inquire through the selected device, and the configured devices answer SDO
+    assert master.lss.inquire(found[1]) == {"vendor": VENDOR, "product": PRODUCT,
+                                            "revision": REVISION, "serial": 0x200,
+                                            "node_id": 11}
+    assert master.sdo(11).read(0x1018, 4, "u32") == 0x200
+
+    # the manager boots them now that they have node-IDs
+    mgr = master.boot(Network(tuple(SlaveSpec(n, identity=Identity(serial=s)) for n, s in
+                                    ((10, 0x100), (11, 0x200), (12, 0x300)))))
+    assert mgr.started, [str(s) for s in mgr.slaves()]
+
+
+def test_assign_ids_as_they_are_found() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    devices = _unconfigured(bus)
+    master.lss.timeout_ms = 10
+    given = master.lss.assign([20, 21, 22, 23])
+    assert sorted(given.values()) == [20, 21, 22]
+    assert given[LssAddress(VENDOR, PRODUCT, REVISION, 0x100)] == 20
+    bus.run_for(10_000)
+    assert sorted(d.node_id for d in devices) == [20, 21, 22]
+
+
+def test_lss_errors() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    lss = master.lss
+    with pytest.raises(Error, match="not started"):
+        lss.fastscan()
+    master.start()
+    lss.timeout_ms = 10
+    nobody = LssAddress(1, 2, 3, 4)
+    with pytest.raises(Error, match="no device with address 00000001:00000002"):
+        lss.set_node_id(nobody, 5)
+    with pytest.raises(LssError, match="LSS inquire vendor: no answer") as info:
+        lss.inquire_value("vendor")
+    assert info.value.status == "time-out"
+    for bad in (0, 128, True):
+        with pytest.raises(Error, match=r"outside 1\.\.127"):
+            lss.set_node_id(nobody, bad)
+    with pytest.raises(Error, match=r"outside 1\.\.65535"):
+        lss.timeout_ms = 0
+    with pytest.raises(Error, match="cannot inquire"):
+        lss.inquire_value("colour")
+    with pytest.raises(Error, match="waiting or configuration"):
+        lss.switch_global("asleep")
+    with pytest.raises(Error, match="LssAddress is needed"):
+        lss.select("1:2:3:4")  # type: ignore[arg-type]
+    for text in ("1:2:3", "1:2:3:x", "123456789:1:1:1", ""):
+        with pytest.raises(Error, match="bad LSS address"):
+            LssAddress.parse(text)
+    assert LssAddress.parse("0xCA0:302:10000:0x2a") == LssAddress(VENDOR, PRODUCT, REVISION, 42)
+    with pytest.raises(Error, match=r"outside 1\.\.127 \(or 0xFF"):
+        Device(model(), 0, bus)
+
+
+def test_refused_node_id() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    device = Device(model(serial=9), 5, bus)  # configured: LSS may still renumber it
+    device.start()
+    master.lss.timeout_ms = 10
+    address = LssAddress(VENDOR, PRODUCT, REVISION, 9)
+    master.lss.select(address)
+    with pytest.raises(LssError, match="store configuration: refused with error 1") as info:
+        master.lss.store()  # the device has no storage for it
+    assert info.value.status == "refused by the slave" and info.value.error == 1
+    master.lss.switch_global("waiting")
+    master.lss.set_node_id(address, 6)  # taken at the next reset communication
+    assert device.node_id == 5
+    master.nmt(5, "reset-communication")
+    bus.run_for(10_000)
+    assert device.node_id == 6
+
+
+def test_fastscan_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
+    master = Master(can_bus(), node_id=1)
+    device = Device(model(serial=0x100), UNCONFIGURED, can_bus())
+    with master, device:
+        master.lss.timeout_ms = 50  # threads under load answer late: 133 of these
+        found = master.lss.fastscan()
+        assert found == [LssAddress(VENDOR, PRODUCT, REVISION, 0x100)]
+        master.lss.set_node_id(found[0], 30)
+        for _ in range(100):
+            if device.nmt_state == "PRE-OPERATIONAL":
+                break
+            master.wait(0.02)
+        assert device.node_id == 30
+        assert master.sdo(30).read(0x1018, 4, "u32") == 0x100
