@@ -306,7 +306,7 @@ def test_device_stops_on_sigint(net: tuple[str, list[Proc]]) -> None:
 
 
 def test_commands_end_when_the_hub_goes_away() -> None:
-    hub = Proc("bus", "serve", "--port", "0")
+    hub = Proc("-v", "bus", "serve", "--port", "0")  # -v: the hub logs who joins
     port = hub.wait_for(r"127\.0\.0\.1:(\d+)").group(1)
     url = f"socketcand://127.0.0.1:{port}/gone"
     device = Proc("device", "--eds", str(EDS), "--node-id", "7", "--bus", url)
@@ -314,6 +314,11 @@ def test_commands_end_when_the_hub_goes_away() -> None:
     dump = Proc("dump", "--bus", url)  # no duration: runs until the bus goes
     monitor = Proc("monitor", "--bus", url, "--once", "--duration", "60")
     dump.wait_for("node 7 heartbeat")
+    # all three on the bus before it goes (else one meets a refused connection instead)
+    deadline = time.monotonic() + 20
+    while sum(" joined gone" in line for line in list(hub.lines)) < 3:
+        assert time.monotonic() < deadline, hub.lines
+        time.sleep(0.02)
     assert hub.stop() == 0
     for proc in (device, dump, monitor):
         assert proc.popen.wait(15) == 1

@@ -209,6 +209,7 @@ class Hub:
             if client.stats.channel:
                 raise ProtocolError("a channel is already open")
             client.stats.channel = cmd.channel
+            log.info("%s joined %s", client.stats.peer, cmd.channel)
             client.push("< ok >", control=True)
             return
         if not client.stats.channel:
