@@ -8,7 +8,8 @@ from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
 from canola.errors import SdoAbort
-from canola.gateway.backend import Event, Listener
+from canola.gateway.backend import Event, Listener, LssOp
+from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.requests import NmtCommand
 
 T = TypeVar("T")
@@ -87,6 +88,9 @@ class FakeMaster:
     def subscribe(self, listener: Listener) -> Callable[[], None]:
         self._listeners.append(listener)
         return lambda: self._listeners.remove(listener)
+
+    async def lss(self, op: LssOp, args: tuple[int, ...] = ()) -> tuple[int, ...]:
+        raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"LSS {op} {args}")
 
     def emit(self, event: Event) -> None:
         for listener in list(self._listeners):

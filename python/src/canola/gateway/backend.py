@@ -12,12 +12,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Literal, Protocol
 
 from canola.gateway.requests import NmtCommand
 
 __all__ = ["Backend", "BootUp", "Emcy", "Event", "Heartbeat", "HeartbeatLost", "Listener",
-           "Rpdo"]
+           "LssOp", "Rpdo"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +54,9 @@ class Rpdo:
 
 Event = BootUp | Heartbeat | HeartbeatLost | Emcy | Rpdo
 Listener = Callable[[Event], None]
+
+#: One LSS master request (CiA 305), see :meth:`Backend.lss`.
+LssOp = Literal["switch_global", "select", "set_node", "store", "inquire", "fastscan"]
 
 
 class Backend(Protocol):
@@ -93,4 +96,13 @@ class Backend(Protocol):
 
     def subscribe(self, listener: Listener) -> Callable[[], None]:
         """Call ``listener`` with every network event; returns the unsubscribe function."""
+        ...
+
+    async def lss(self, op: LssOp, args: tuple[int, ...] = ()) -> tuple[int, ...]:
+        """One LSS master request: ``switch_global`` (1: configuration, 0: waiting),
+        ``select`` (vendor, product, revision, serial), ``set_node`` (node-ID), ``store``,
+        ``inquire`` (0..3: vendor, product, revision, serial; 4: node-ID) -> (value,),
+        ``fastscan`` (time-out ms) -> the address found (that device is in configuration)
+        or () when none answered. Fails with GatewayFailure (100 when the master has no
+        LSS, 103 on no answer, 501/502/504 when the device refused)."""
         ...

@@ -87,9 +87,22 @@ as '<ms> <days>'; vs visible string ("quoted", "" for a quote); os us d octet st
 unicode string, domain as base64; hex raw bytes as hex pairs."""
 
 HELP_LSS = """\
-lss_switch_glob lss_switch_sel lss_set_node lss_conf_bitrate lss_activate_bitrate
-lss_store lss_inquire_addr lss_get_node lss_identity lss_ident_nonconf lss_allnodes:
-not supported yet (ERROR:100)."""
+LSS (CiA 305) through the gateway's LSS master; all start with [<seq>] [<net>]:
+  lss_switch_glob 0|1                     switch state global (0 waiting, 1 configuration)
+  lss_switch_sel <vendor> <product> <revision> <serial>   switch state selective
+  lss_set_node <node>                     configure node-ID (1..127, 255: none)
+  lss_store                               store configuration
+  lss_inquire_addr [0..3]                 inquire vendor, product, revision, serial (all 4)
+  lss_get_node                            inquire node-ID
+  _lss_fastscan [<timeout ms>]            fastscan one device without node-ID: its address
+                                          (it stays in configuration)
+  lss_allnodes [<timeout ms> [<first node> <store 0|1> [0 <v> 0 <p> 0 <r> 0 <s>]]]
+                                          give every device without node-ID the next one
+  lss_conf_bitrate, lss_activate_bitrate, lss_identity, lss_ident_nonconf: ERROR:100
+Errors: 103 no answer, 501 refused, 502 node-ID refused, 504 store refused."""
+
+#: Default time-out (ms) per LSS answer of ``_lss_fastscan`` and ``lss_allnodes``.
+LSS_SCAN_TIMEOUT_MS = 100
 
 
 def error_reply(seq: int | None, code: int, *, abort: bool = False) -> str:
@@ -274,7 +287,7 @@ class Executor:
             raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "init")
         if isinstance(request, Lss):
             self._net(session, request)
-            raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "no LSS master yet")
+            return await self._lss(request)
         raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, type(request).__name__)
 
     def _set(self, session: Session, request: Set) -> list[str]:
@@ -305,6 +318,95 @@ class Executor:
         else:  # "id": the master's node-ID is fixed at start-up
             raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"set {what}")
         return ok
+
+    async def _lss(self, request: Lss) -> list[str]:
+        seq, args, command = request.seq, request.args, request.command
+        lss = self.backend.lss
+
+        def arity(*counts: int) -> None:
+            if len(args) not in counts:
+                raise GatewayFailure(GatewayError.SYNTAX, f"{command}: {len(args)} arguments")
+
+        if command == "lss_switch_glob":
+            arity(1)
+            if args[0] > 1:
+                raise GatewayFailure(GatewayError.SYNTAX, "lss_switch_glob 0|1")
+            await lss("switch_global", args)
+        elif command == "lss_switch_sel":
+            arity(4)
+            await lss("select", args)
+        elif command == "lss_set_node":
+            arity(1)
+            if not (1 <= args[0] <= 127 or args[0] == 0xFF):
+                raise GatewayFailure(GatewayError.LSS_NODE_ID_NOT_SUPPORTED, f"{args[0]}")
+            await lss("set_node", args)
+        elif command == "lss_store":
+            arity(0)
+            await lss("store")
+        elif command == "lss_inquire_addr":
+            arity(0, 1)
+            if args and args[0] > 3:
+                raise GatewayFailure(GatewayError.SYNTAX, "lss_inquire_addr 0..3")
+            values = [(await lss("inquire", (sub,)))[0] for sub in (args or (0, 1, 2, 3))]
+            return [f"[{seq}] " + " ".join(f"0x{v:08X}" for v in values)]
+        elif command == "lss_get_node":
+            arity(0)
+            (node,) = await lss("inquire", (4,))
+            return [f"[{seq}] 0x{node & 0xFF:02X}"]
+        elif command == "_lss_fastscan":
+            arity(0, 1)
+            found = await lss("fastscan", (self._scan_timeout(args),))
+            if not found:
+                raise GatewayFailure(GatewayError.TIMEOUT, "no device without node-ID")
+            return [f"[{seq}] " + " ".join(f"0x{v:08X}" for v in found)]
+        elif command == "lss_allnodes":
+            return await self._lss_allnodes(request)
+        else:  # bit timing (not exposed by the LSS master), identify, slowscan
+            raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, command)
+        return [f"[{seq}] OK"]
+
+    @staticmethod
+    def _scan_timeout(args: tuple[int, ...]) -> int:
+        timeout = args[0] if args else LSS_SCAN_TIMEOUT_MS
+        if not 1 <= timeout <= 0xFFFF:
+            raise GatewayFailure(GatewayError.SYNTAX, f"LSS time-out {timeout} ms")
+        return timeout
+
+    async def _lss_allnodes(self, request: Lss) -> list[str]:
+        """Fastscan, configure the next node-ID (skipping the gateway's), store if asked,
+        switch to waiting (the device boots); until no device without node-ID answers."""
+        args, lss = request.args, self.backend.lss
+        if len(args) not in (0, 1, 3, 11):
+            raise GatewayFailure(GatewayError.SYNTAX, f"lss_allnodes: {len(args)} arguments")
+        timeout = self._scan_timeout(args)
+        node, store = (args[1], args[2]) if len(args) >= 3 else (1, 0)
+        if not 1 <= node <= 127 or store > 1:
+            raise GatewayFailure(GatewayError.SYNTAX, "lss_allnodes: node 1..127, store 0|1")
+        if len(args) == 11 and any(args[i] for i in (3, 5, 7, 9)):
+            raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "scan types other than 0")
+        lines: list[str] = []
+        count = 0
+        while True:
+            if node == self.backend.node_id:
+                node += 1
+            if node > 127:
+                lines.append("# Not all nodes scanned!")
+                break
+            found = await lss("fastscan", (timeout,))
+            if not found:
+                lines.append(f"# Found {count} nodes, search finished.")
+                break
+            try:
+                await lss("set_node", (node,))
+                if store:
+                    await lss("store")
+            finally:
+                await lss("switch_global", (0,))
+            lines.append(f"# Node-ID {node} assigned to: "
+                         + " ".join(f"0x{v:08X}" for v in found))
+            count += 1
+            node += 1
+        return [*lines, f"[{request.seq}] OK"]
 
     def _version(self) -> str:
         ident = []

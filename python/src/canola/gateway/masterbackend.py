@@ -10,6 +10,9 @@ or simulated bus).
 - The gateway's own dictionary is read and written as the network would (access rights,
   lengths, limits), NMT commands to its own node-ID are applied to itself: both through
   the C core directly (canola.Master has no public call for either yet).
+- LSS (CiA 305): ``master.lss``; a request blocks until the devices answered (on a SimBus
+  it runs the bus in virtual time in the event loop's thread, on python-can it waits in a
+  worker thread).
 - Events: boot-ups, heartbeats (from the frames), EMCY (the master's EMCY consumer),
   the master's own heartbeat-consumer losses and its RPDOs (their mapped values).
 """
@@ -23,7 +26,7 @@ from collections.abc import Callable
 from canola._core import ffi, lib
 from canola._nodebase import EmcyEvent, HeartbeatEvent, nmt_command
 from canola.core import SimBus
-from canola.errors import SdoAbort
+from canola.errors import Error, SdoAbort
 from canola.gateway.backend import (
     BootUp,
     Emcy,
@@ -31,14 +34,18 @@ from canola.gateway.backend import (
     Heartbeat,
     HeartbeatLost,
     Listener,
+    LssOp,
     Rpdo,
 )
+from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.pdo import mapped_values
 from canola.gateway.requests import NmtCommand
 from canola.gateway.simbackend import NMT_NAMES
 from canola.master import Frame, Master
 
 __all__ = ["MasterBackend", "open_master"]
+
+_INQUIRE = ("vendor", "product", "revision", "serial", "node_id")
 
 
 class MasterBackend:
@@ -102,6 +109,62 @@ class MasterBackend:
         spec = nmt_command(NMT_NAMES[command])
         with self.master._engine.locked() as node:
             lib.co_nmt_apply(node, spec)
+
+    # ---- LSS
+
+    async def lss(self, op: LssOp, args: tuple[int, ...] = ()) -> tuple[int, ...]:
+        if isinstance(self.master.bus, SimBus):
+            return self._lss(op, args)  # virtual time: the bus runs in this thread
+        return await asyncio.to_thread(self._lss, op, args)
+
+    def _lss(self, op: LssOp, args: tuple[int, ...]) -> tuple[int, ...]:
+        from canola.lss import LssAddress, LssError  # noqa: PLC0415 -- loaded on first use
+
+        lss = self.master.lss
+        try:
+            if op == "switch_global":
+                lss.switch_global("configuration" if args[0] else "waiting")
+            elif op == "select":
+                try:
+                    lss.select(LssAddress(*args[:4]))
+                except LssError:
+                    raise
+                except Error as exc:  # no device with that address answered
+                    raise GatewayFailure(GatewayError.TIMEOUT, str(exc)) from None
+            elif op == "set_node":
+                try:
+                    lss.configure_node_id(args[0])
+                except LssError as exc:
+                    if exc.status.startswith("refused"):
+                        raise GatewayFailure(GatewayError.LSS_NODE_ID_NOT_SUPPORTED,
+                                             str(exc)) from None
+                    raise
+            elif op == "store":
+                try:
+                    lss.store()
+                except LssError as exc:
+                    if exc.status.startswith("refused"):
+                        raise GatewayFailure(GatewayError.LSS_STORE_FAILED, str(exc)) from None
+                    raise
+            elif op == "inquire":
+                return (lss.inquire_value(_INQUIRE[args[0]]),)
+            elif op == "fastscan":
+                before = lss.timeout_ms
+                lss.timeout_ms = args[0]
+                try:
+                    found = lss.fastscan_one()
+                finally:
+                    lss.timeout_ms = before
+                if found is None:
+                    return ()
+                return (found.vendor, found.product, found.revision, found.serial)
+            else:
+                raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"LSS {op}")
+        except LssError as exc:
+            code = GatewayError.TIMEOUT if exc.status == "time-out" \
+                else GatewayError.LSS_MANUFACTURER
+            raise GatewayFailure(code, str(exc)) from None
+        return ()
 
     # ---- events
 

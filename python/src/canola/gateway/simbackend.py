@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 from canola.core import Node, SimBus
 from canola.errors import Error, SdoAbort
-from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener
+from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener, LssOp
 from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.requests import NmtCommand
 
@@ -99,6 +99,12 @@ class SimBackend:
     async def local_nmt(self, command: NmtCommand) -> None:
         del command  # canola.core has no binding for co_nmt_apply yet
         raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "NMT to the gateway itself")
+
+    # ---- LSS
+
+    async def lss(self, op: LssOp, args: tuple[int, ...] = ()) -> tuple[int, ...]:
+        del args  # canola.core's Node has no LSS master binding
+        raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"LSS {op}")
 
     # ---- events
 

@@ -1,0 +1,98 @@
+"""The gateway's lss_* commands (CiA 309-3) through canola.Master's LSS master, against
+canola.Devices without node-ID (0xFF) on a simulated bus (virtual time)."""
+
+from __future__ import annotations
+
+from gateway_helpers import Client, run
+from managed import PRODUCT, REVISION, VENDOR, model
+from test_gateway_master import serve
+
+from canola import Device, Master
+from canola.core import SimBus
+from canola.lss import UNCONFIGURED
+
+GW = 127
+SERIALS = (0x300, 0x100)
+
+
+def _network() -> tuple[SimBus, Master, list[Device]]:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=GW)
+    master.start()
+    master.lss.timeout_ms = 20
+    devices = [Device(model(serial=s), UNCONFIGURED, bus) for s in SERIALS]
+    for device in devices:
+        device.start()
+    bus.run_for(10_000)
+    return bus, master, devices
+
+
+def _addr(serial: int) -> str:
+    return f"0x{VENDOR:08X} 0x{PRODUCT:08X} 0x{REVISION:08X} 0x{serial:08X}"
+
+
+def test_fastscan_set_node_store_and_boot() -> None:
+    async def main() -> None:
+        bus, master, devices = _network()
+        by_serial = {d.od[0x1018, 4]: d for d in devices}
+        async with serve(master) as (address, _):
+            c = await Client.connect(address)
+            assert await c.ask("[1] lss_get_node") == "[1] ERROR:103"  # none selected
+            assert await c.ask("[2] _lss_fastscan 20") == f"[2] {_addr(0x100)}"
+            assert await c.ask("[3] lss_get_node") == "[3] 0xFF"
+            assert await c.ask("[4] lss_inquire_addr 3") == "[4] 0x00000100"
+            assert await c.ask("[5] lss_inquire_addr") == f"[5] {_addr(0x100)}"
+            assert await c.ask("[6] lss_set_node 10") == "[6] OK"
+            # a canola.Device has no storage for LSS: it refuses (the ID still applies)
+            assert await c.ask("[7] lss_store") == "[7] ERROR:504"
+            assert await c.ask("[8] lss_get_node") == "[8] 0xFF"  # the active one
+            assert by_serial[0x100].node_id == UNCONFIGURED  # not before waiting
+            assert await c.ask("[9] lss_switch_glob 0") == "[9] OK"
+            bus.run_for(10_000)
+            assert by_serial[0x100].node_id == 10
+            assert by_serial[0x100].nmt_state == "PRE-OPERATIONAL"
+            assert "70A#00" in {line.split()[-1] for line in bus.trace}
+            assert await c.ask("[10] 10 r 0x1018 4 u32") == "[10] 256"
+            # selective switch of the other one, by its address
+            assert await c.ask(f"[11] lss_switch_sel {_addr(0x300)}") == "[11] OK"
+            assert await c.ask("[12] lss_inquire_addr 3") == "[12] 0x00000300"
+            assert await c.ask("[13] lss_set_node 11") == "[13] OK"
+            assert await c.ask("[14] lss_switch_glob 0") == "[14] OK"
+            bus.run_for(10_000)
+            assert by_serial[0x300].node_id == 11
+            assert await c.ask("[15] _lss_fastscan 20") == "[15] ERROR:103"  # none left
+            assert await c.ask(f"[16] lss_switch_sel {_addr(0x999)}") == "[16] ERROR:103"
+            assert await c.ask("[17] lss_switch_glob 2") == "[17] ERROR:101"
+            assert await c.ask("[18] lss_set_node 128") == "[18] ERROR:502"
+            assert await c.ask("[19] lss_conf_bitrate 0 2") == "[19] ERROR:100"
+            assert await c.ask("[20] lss_activate_bitrate 100") == "[20] ERROR:100"
+            assert await c.ask("[21] 2 lss_store") == "[21] ERROR:106"  # network 2
+            await c.close()
+
+    run(main())
+
+
+def test_allnodes() -> None:
+    async def main() -> None:
+        bus, master, devices = _network()
+        async with serve(master) as (address, _):
+            c = await Client.connect(address)
+            reply, lines = await c.reply("[1] lss_allnodes 20 126 0")
+            assert reply == "[1] OK"
+            # 127 is the gateway's own node-ID: no node-ID left for the second device
+            assert lines == [f"# Node-ID 126 assigned to: {_addr(0x100)}",
+                             "# Not all nodes scanned!"]
+            bus.run_for(10_000)
+            assert sorted(d.node_id for d in devices) == [126, UNCONFIGURED]
+            # store 1: the device refuses (no LSS storage): 504, its node-ID applies
+            assert await c.ask("[2] lss_allnodes 20 5 1 0 0 0 0 0 0 0 0") == "[2] ERROR:504"
+            bus.run_for(10_000)
+            assert sorted(d.node_id for d in devices) == [5, 126]
+            reply, lines = await c.reply("[5] lss_allnodes 20")
+            assert (reply, lines) == ("[5] OK", ["# Found 0 nodes, search finished."])
+            assert await c.ask("[3] lss_allnodes 20 5 0 1 0 0 0 0 0 0 0") == "[3] ERROR:100"
+            assert await c.ask("[4] lss_allnodes 20 5") == "[4] ERROR:101"
+            await c.close()
+
+    run(main())
+
