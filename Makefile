@@ -11,7 +11,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo demo-c test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds fuzz-gateway coverage py-env lint cortex-m test-m32 test-clang analyse clean
+.PHONY: all demo demo-c test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 test-clang analyse clean
 
 all: $(BUILD)/build.stamp
 
@@ -76,16 +76,17 @@ coverage: py-env
 	$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary build-cov | tail -n 3
 
 # libFuzzer (clang): the frame input path (node) and the SDO client against a hostile server
-# (sdo_client); atheris on the EDS/DCF parser (fuzz/fuzz_eds.py) and the CiA 309-3 gateway's
-# line parser (fuzz/fuzz_gateway_parser.py) in the Python environment (the package's 'fuzz'
-# extra pins atheris).
+# (sdo_client); atheris on the EDS/DCF parser (fuzz/fuzz_eds.py), the CiA 309-3 gateway's
+# line parser (fuzz/fuzz_gateway_parser.py) and the socketcand protocol parser of the hub
+# (fuzz/fuzz_socketcand.py) in the Python environment (the package's 'fuzz' extra pins
+# atheris).
 # Each target replays its seed corpus (fuzz/corpus/<target>/), then fuzzes for FUZZ_SECONDS.
 # New inputs go to build-fuzz/corpus-<target>/; a finding is a crash file in build-fuzz/
 # (turn it into a regression test). For hours: see docs/security.md.
 FUZZ_SECONDS ?= 30
 FUZZ_TARGETS = node sdo_client
 FUZZ_FLAGS = -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
-fuzz: fuzz-c fuzz-eds fuzz-gateway
+fuzz: fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand
 
 fuzz-c:
 	@for t in $(FUZZ_TARGETS); do \
@@ -121,6 +122,18 @@ fuzz-gateway: py-env
 	  $(PY_VENV)/bin/python fuzz/fuzz_gateway_parser.py -artifact_prefix=build-fuzz/ \
 	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-gateway > build-fuzz/fuzz-gateway.log 2>&1; \
 	  rc=$$?; tail -n 4 build-fuzz/fuzz-gateway.log; echo "fuzz_gateway: exit $$rc"; exit $$rc
+
+fuzz-socketcand: py-env
+	@mkdir -p build-fuzz/corpus-socketcand
+	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
+	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' >/dev/null 2>&1; \
+	  if ! $(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null; then \
+	    echo "fuzz_socketcand: NOT RUN (atheris not installable; tests/test_socketcand.py covers the parser)"; \
+	    exit 0; fi; \
+	  $(PY_VENV)/bin/python fuzz/fuzz_socketcand.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-socketcand fuzz/corpus/socketcand \
+	  > build-fuzz/fuzz-socketcand.log 2>&1; \
+	  rc=$$?; tail -n 4 build-fuzz/fuzz-socketcand.log; echo "fuzz_socketcand: exit $$rc"; exit $$rc
 
 # Static analysis of the core (src/, include/), warnings as errors: cppcheck (default and
 # multi-channel configuration) and clang-tidy (.clang-tidy). .ci/run installs both.
