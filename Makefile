@@ -56,7 +56,7 @@ py-env:
 	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)
 	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[test]'
 
-# The README's main command: a master and three devices through boot-up, SDO configuration,
+# The README's main command: a master and three devices through boot-up, the CiA 302-2 manager,
 # SYNC and PDOs, EMCY and heartbeat loss, decoded and checked (canola demo --help).
 demo:
 	@test -x $(PY_VENV)/bin/canola || $(MAKE) --no-print-directory py-env

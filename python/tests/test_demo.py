@@ -19,14 +19,14 @@ from collections.abc import Iterator
 import can
 import pytest
 
-from canola import eds
+from canola import concise, eds
 from canola.buses import open_bus
 from canola.cli import main
 from canola.decode import Event
-from canola.demo.devices import DEVICES, eds_path
-from canola.demo.network import TraceFrame
+from canola.demo.devices import DEVICES, configuration, eds_path
+from canola.demo.network import SimNetwork, TraceFrame
 from canola.demo.report import STEPS
-from canola.demo.scenario import FAULTS
+from canola.demo.scenario import FAULTS, Scenario
 from canola.demo.trace import Trace
 
 PY = sys.executable
@@ -43,7 +43,7 @@ def summary_marks(out: str) -> dict[str, str]:
     marks = {}
     summary = out[out.index("== summary"):]
     for _, title in STEPS:
-        m = re.search(r"^\s*(\S+) \d\. " + re.escape(title), summary, re.MULTILINE)
+        m = re.search(r"^\s*(\S+) \d+\. " + re.escape(title), summary, re.MULTILINE)
         assert m is not None, f"{title!r} missing from the summary:\n{summary}"
         marks[title] = m.group(1)
     return marks
@@ -53,14 +53,23 @@ def test_every_step_passes(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = demo(capsys)
     assert (code, err) == (0, "")
     assert set(summary_marks(out).values()) == {"\u2713"}
-    assert "9/9 steps passed" in out
+    assert "10/10 steps passed" in out
     for line in (
         "702#00               node 2 boot-up",
         "NMT preop all",
+        # the manager: identity, concise DCF, heartbeat watch, network start
+        "SDO upload 0x1000:00 = 0x00020192 (node 3)",
+        "SDO upload 0x1018:01 = 0x00000CA0 (node 3)",
         "SDO download 0x1017:00 = 0x0064 (node 2)",
         "SDO download 0x1A00:02 = 0x606C0020 (node 3)",  # the drive's TPDO mapping
         "master: heartbeat of node 4 (sensor) monitored, PRE-OPERATIONAL",
+        "manager: node 3 (drive) booted",
         "NMT start all",
+        "manager: node 4 (sensor) started",
+        "manager: network started",
+        "nodes 2, 3, 4 booted (identity checked, 35 entries downloaded), network started",
+        "0x1017 = 100 ms on nodes 2, 3, 4 (read back), heard every 100 ms",
+        "SDO upload 0x1A00:02 = 0x606C0020 (node 3)",  # the mapping read back
         "node 3 heartbeat OPERATIONAL",
         "080#                 SYNC",
         "[statusword 0x0237, velocity 1500]",  # the drive's TPDO, decoded by its mapping
@@ -72,10 +81,52 @@ def test_every_step_passes(capsys: pytest.CaptureFixture[str]) -> None:
     ):
         assert line in out, line
     # the flow in its order
-    marks = [out.index(s) for s in ("node 4 boot-up", "NMT preop all", "0x1017:00 = 0x0064",
-                                    "NMT start all", "SYNC", "RPDO applied", "EMCY node 3",
-                                    "HEARTBEAT LOST")]
+    marks = [out.index(s) for s in ("node 4 boot-up", "NMT preop all", "0x1000:00",
+                                    "0x1017:00 = 0x0064", "manager: node 3 (drive) booted",
+                                    "NMT start all", "manager: network started", "SYNC",
+                                    "RPDO applied", "EMCY node 3", "HEARTBEAT LOST")]
     assert marks == sorted(marks)
+    assert "manager:" not in out[out.index("== 4."):out.index("== 10.")]  # no failure
+
+
+def test_manager_configures_in_the_cia301_order(capsys: pytest.CaptureFixture[str]) -> None:
+    """The drive's concise DCF, as the manager downloads it: heartbeat producer, then each
+    PDO off, its mapping emptied, filled, counted, its transmission type, on."""
+    code, out, _ = demo(capsys)
+    assert code == 0
+    downloads = re.findall(r"SDO download (0x\S+ = 0x[0-9A-F]+) \(node 3\)", out)
+    assert downloads == [
+        "0x1017:00 = 0x0064",
+        "0x1800:01 = 0x80000183", "0x1A00:00 = 0x00", "0x1A00:01 = 0x60410010",
+        "0x1A00:02 = 0x606C0020", "0x1A00:00 = 0x02", "0x1800:02 = 0x01",
+        "0x1800:01 = 0x00000183",
+        "0x1400:01 = 0x80000203", "0x1600:00 = 0x00", "0x1600:01 = 0x60400010",
+        "0x1600:02 = 0x60FF0020", "0x1600:00 = 0x02", "0x1400:02 = 0xFF",
+        "0x1400:01 = 0x00000203",
+    ]
+    assert "manager: node 3 (drive) booted" in out.split("== 4.")[0]
+
+
+def test_network_description_comes_from_the_eds_files() -> None:
+    scenario = Scenario(SimNetwork(), Trace(None))
+    try:
+        net = scenario.network()
+    finally:
+        scenario.close()
+    assert [s.node_id for s in net.slaves] == [2, 3, 4]
+    assert net.start == "all"
+    for slave, spec in zip(net.slaves, DEVICES, strict=True):
+        od = eds.parse(eds_path(spec))
+        assert slave.mandatory
+        assert slave.heartbeat_ms == 250
+        assert slave.identity.device_type == od.objects[0x1000].subs[0].default
+        assert [slave.identity.vendor, slave.identity.product, slave.identity.revision,
+                slave.identity.serial] == [od.objects[0x1018].subs[i].default
+                                           for i in (1, 2, 3, 4)]
+        assert slave.config is not None
+        records = concise.parse(slave.config)
+        assert records == configuration(spec, 100)
+        assert records[0] == (0x1017, 0, b"\x64\x00")
 
 
 def test_virtual_time_is_deterministic(capsys: pytest.CaptureFixture[str]) -> None:
@@ -88,6 +139,9 @@ def test_virtual_time_is_deterministic(capsys: pytest.CaptureFixture[str]) -> No
 BROKEN = [
     ("sensor-never-boots", "boot-up", "no boot-up from node 4"),
     ("drive-emcy-off", "emcy", "no EMCY 0x4310 from node 3 reached the master"),
+    ("drive-wrong-vendor", "manager",
+     "node 3 (drive) failed: D: vendor-ID does not match (0x1018:01 is 0x00000BAD); "
+     "the network was not started"),
     ("sensor-keeps-beating", "heartbeat-loss", "no heartbeat loss of node 4"),
 ]
 
@@ -114,9 +168,32 @@ def test_never_booted_device_fails_what_depends_on_it(
     assert code == 1
     marks = summary_marks(out)
     assert marks[dict(STEPS)["boot-up"]] == "\u2717"
+    assert marks[dict(STEPS)["manager"]] == "\u2717"
     assert marks[dict(STEPS)["heartbeat"]] == "\u2717"  # SDO time-out, not a hang
     assert marks[dict(STEPS)["emcy"]] == "\u2713"  # the others go on
-    assert "also failed: pre-operational" in err
+    assert "also failed: pre-operational, manager" in err
+    assert ("node 4 (sensor) failed: B: no answer to the read of the device type" in
+            out[out.index("== summary"):])
+
+
+def test_manager_refuses_a_device_of_another_vendor(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = demo(capsys, "--fault", "drive-wrong-vendor")
+    assert code == 1
+    assert err.startswith("canola demo: step 'manager' failed: node 3 (drive) failed: D: ")
+    step3 = out[out.index("== 3."):out.index("== 4.")]
+    for line in ("583#43181001AD0B0000 SDO upload 0x1018:01 = 0x00000BAD (node 3)",
+                 "manager: node 3 (drive) failed: D: vendor-ID does not match "
+                 "(0x1018:01 is 0x00000BAD)",
+                 "manager: network halted: mandatory node 3 (drive) failed",
+                 "manager: node 2 (I/O module) booted", "manager: node 4 (sensor) booted"):
+        assert line in step3, line
+    assert "(node 3)" not in step3.split("0x00000BAD (node 3)")[1]  # nothing downloaded
+    assert "NMT start all" not in out and "manager: network started" not in out
+    assert "the manager sent no NMT start" in out
+    marks = summary_marks(out)
+    assert marks[dict(STEPS)["start"]] == "\u2717"
+    assert marks[dict(STEPS)["emcy"]] == "\u2713"  # the others go on
 
 
 def test_quiet_and_json(capsys: pytest.CaptureFixture[str]) -> None:
@@ -152,7 +229,7 @@ def test_bad_input_is_one_line(capsys: pytest.CaptureFixture[str], args: list[st
 def test_realtime_is_paced(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = demo(capsys, "--realtime", "--quiet")
     assert code == 0
-    assert "9/9 steps passed" in out
+    assert "10/10 steps passed" in out
 
 
 def test_eds_files_are_strict_cia306() -> None:

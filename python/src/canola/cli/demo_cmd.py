@@ -19,7 +19,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         "demo", help="a master and three devices: boot, configure, PDOs, EMCY, loss",
         description="A master (node 1) and three devices (an I/O module, a drive, a sensor) "
                     "go through the life of a CANopen network: boot-ups, NMT "
-                    "pre-operational, heartbeat and PDO configuration by SDO, NMT start, "
+                    "pre-operational, the CiA 302-2 manager checking each device's "
+                    "identity, configuring its heartbeat and PDOs by SDO and starting it, "
                     "SYNC every 10 ms with TPDOs and RPDOs, an EMCY and a heartbeat loss. "
                     "Prints every frame decoded and a summary; exits 0 only when every step "
                     "was seen. Runs on the simulated bus in virtual time unless --bus or "

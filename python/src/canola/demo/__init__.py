@@ -1,6 +1,6 @@
 """``canola demo``: a master and three devices walking through the life of a CANopen network
-(boot-up, NMT, SDO configuration, SYNC and PDOs, EMCY, heartbeat loss), every frame decoded
-and every step checked.
+(boot-up, NMT, the CiA 302-2 manager's configuration and start, SYNC and PDOs, EMCY,
+heartbeat loss), every frame decoded and every step checked.
 
 - :mod:`canola.demo.devices`: the devices (EDS files in ``canola/data/demo``) and their
   applications;

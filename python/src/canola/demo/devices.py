@@ -8,6 +8,10 @@ master gives them, and the small application each one runs.
   the target velocity by at most 500 rpm per SYNC.
 - node 4, a sensor (CiA 404, ``sensor.eds``): a temperature in 0.01 degC that rises by
   0.25 degC every 100 ms.
+
+:func:`configuration` is what the CANopen manager downloads to a device (its concise DCF):
+the heartbeat producer time and the PDO mappings in the CiA 301 order; :func:`identity` is
+what the manager expects it to answer (0x1000 and 0x1018 of its EDS).
 """
 
 from __future__ import annotations
@@ -16,9 +20,13 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from canola import eds
+from canola.concise import Record
 from canola.device import Device
+from canola.network import Identity, identity_of
 
-__all__ = ["DEVICES", "DeviceSpec", "Mapped", "attach_application", "eds_path"]
+__all__ = ["DEVICES", "DeviceSpec", "Mapped", "attach_application", "configuration",
+           "eds_path", "identity"]
 
 
 @dataclass(frozen=True)
@@ -70,6 +78,41 @@ DEVICES: tuple[DeviceSpec, ...] = (
 def eds_path(spec: DeviceSpec) -> Path:
     """The EDS file of ``spec`` inside the package (``canola/data/demo``)."""
     return Path(str(resources.files("canola") / "data" / "demo" / spec.eds))
+
+
+def identity(spec: DeviceSpec) -> Identity:
+    """What ``spec``'s device answers if it is the one its EDS describes: 0x1000 and 0x1018
+    sub1..4 (DefaultValue)."""
+    return identity_of(eds.parse(eds_path(spec)))
+
+
+#: Transmission types: TPDO1 on every SYNC, RPDO1 applied at once.
+TPDO_TRANSMISSION, RPDO_TRANSMISSION = 1, 255
+
+
+def _pdo(comm: int, node: int, mapping: tuple[Mapped, ...], transmission: int
+         ) -> list[Record]:
+    """The CiA 301 procedure for one PDO: off (COB-ID bit 31), mapping count 0, the
+    entries, the count, the transmission type, on."""
+    mapping_index = comm + 0x200
+    cob_id = (0x180 if comm >= 0x1800 else 0x200) + node
+    return [(comm, 1, (0x80000000 | cob_id).to_bytes(4, "little")),
+            (mapping_index, 0, b"\x00"),
+            *((mapping_index, i, m.entry.to_bytes(4, "little"))
+              for i, m in enumerate(mapping, 1)),
+            (mapping_index, 0, bytes([len(mapping)])),
+            (comm, 2, bytes([transmission])),
+            (comm, 1, cob_id.to_bytes(4, "little"))]
+
+
+def configuration(spec: DeviceSpec, heartbeat_ms: int) -> list[Record]:
+    """The entries the manager writes to ``spec``'s device, in order: 0x1017 (heartbeat
+    producer time), TPDO1 and, when it has one, RPDO1."""
+    records: list[Record] = [(0x1017, 0, heartbeat_ms.to_bytes(2, "little"))]
+    records += _pdo(0x1800, spec.node_id, spec.tpdo, TPDO_TRANSMISSION)
+    if spec.rpdo:
+        records += _pdo(0x1400, spec.node_id, spec.rpdo, RPDO_TRANSMISSION)
+    return records
 
 
 def unpack(mapping: tuple[Mapped, ...], data: bytes) -> dict[str, int] | None:

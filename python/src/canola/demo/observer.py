@@ -1,6 +1,6 @@
 """What the demo's nodes report while it runs: the master's boot-up, heartbeat and EMCY
-events and the TPDOs it receives (kept for the checks), the RPDO values the devices apply,
-all turned into lines of the trace at the time they happened.
+events, the CANopen manager's reports and the TPDOs it receives (kept for the checks), the
+RPDO values the devices apply, all turned into lines of the trace at the time they happened.
 
 Callbacks run in the nodes' bus threads on python-can, so the data is kept under a lock and
 the lines wait in a queue until :meth:`Observer.tick` prints them, in time order with the
@@ -18,6 +18,7 @@ from canola.demo.devices import DEVICES, DeviceSpec, unpack
 from canola.demo.network import Network, TraceFrame
 from canola.demo.trace import Trace
 from canola.device import Device
+from canola.manager import BootEvent
 from canola.master import EmcyEvent, Frame, HeartbeatEvent, Master
 
 __all__ = ["Observer", "Seen"]
@@ -75,6 +76,19 @@ class Observer:
                 self.trace.note(*item)
 
     # ---- the master
+
+    def manager_event(self, ev: BootEvent) -> None:
+        """A report of the CANopen manager (its ``on_event``)."""
+        if ev.kind == "network-started":
+            text = "network started"
+        elif ev.kind == "network-halted":
+            text = f"network halted: mandatory {self.name(ev.node)} failed"
+        else:
+            text = f"{self.name(ev.node)} {ev.kind}"
+            detail = str(ev).split(f": {ev.kind}", 1)[1]
+            if detail:
+                text += detail
+        self.note("manager", text)
 
     def watch_master(self, master: Master) -> None:
         seen = self.seen

@@ -12,6 +12,7 @@ __all__ = ["STEPS", "Step", "failure_line", "summary_json", "summary_table"]
 STEPS: tuple[tuple[str, str], ...] = (
     ("boot-up", "boot-ups seen by the master"),
     ("pre-operational", "NMT enter pre-operational"),
+    ("manager", "the CANopen manager boots the network (CiA 302-2)"),
     ("heartbeat", "heartbeat producer configured by SDO and monitored"),
     ("pdo-mapping", "PDO mapping configured by SDO"),
     ("start", "NMT start: every node operational"),
@@ -36,10 +37,11 @@ class Step:
 def summary_table(steps: list[Step], *, unicode: bool = True) -> str:
     """The summary as text: a line per step with its mark, title and detail."""
     good, bad = ("\u2713", "\u2717") if unicode else ("ok", "FAIL")
-    width = max(len(s.title) for s in steps)
+    labels = [f"{n}. {s.title}" for n, s in enumerate(steps, 1)]
+    width = max(map(len, labels))
     lines = ["== summary"]
-    for n, s in enumerate(steps, 1):
-        lines.append(f" {good if s.ok else bad:>4} {n}. {s.title:<{width}}  {s.detail}")
+    for label, s in zip(labels, steps, strict=True):
+        lines.append(f" {good if s.ok else bad:>4} {label:<{width}}  {s.detail}")
     passed = sum(s.ok for s in steps)
     lines.append(f"{passed}/{len(steps)} steps passed")
     return "\n".join(lines)

@@ -5,17 +5,22 @@ A master (node 1, :class:`canola.Master`) and the three devices of
 
 1. the devices power on; the master sees their boot-ups (0x700 + node, data 00);
 2. the master sends NMT "enter pre-operational" to all;
-3. it configures each heartbeat producer by SDO (0x1017 = 100 ms), reads it back and
-   watches the heartbeats (time-out 250 ms);
-4. it maps the first TPDO (synchronous) and RPDO of each device by SDO, with the CiA 301
-   procedure (PDO off, mapping count 0, entries, count, transmission type, PDO on), and
-   reads the mappings back;
-5. NMT start: every heartbeat must then say OPERATIONAL;
-6. SYNC every 10 ms: every device answers each SYNC with its TPDO;
-7. the master sends RPDOs (drive: controlword, target velocity; I/O module: outputs): the
+3. the CANopen manager (CiA 302-2, :meth:`canola.Master.boot`) boots the network from its
+   description: for each device it reads 0x1000 and 0x1018 (the identity its EDS gives),
+   downloads its concise DCF (0x1017 = 100 ms, then the first TPDO (synchronous) and
+   RPDO with the CiA 301 procedure: PDO off, mapping count 0, entries, count,
+   transmission type, PDO on), watches its heartbeat (time-out 250 ms); once every device
+   booted it starts the network (0x1F80: NMT start all). The step passes on the
+   manager's verdict: every node booted, the network started;
+4. the heartbeats: 0x1017 reads back 100 ms on each device, its heartbeats come every
+   100 ms, the master watches them;
+5. the PDO mappings read back from each device;
+6. every heartbeat says OPERATIONAL after the manager's NMT start;
+7. SYNC every 10 ms: every device answers each SYNC with its TPDO;
+8. the master sends RPDOs (drive: controlword, target velocity; I/O module: outputs): the
    devices apply them and the new values come back in their TPDOs;
-8. the drive raises an EMCY (0x4310, excess temperature); the master reports it;
-9. the sensor falls silent; the master reports the heartbeat loss.
+9. the drive raises an EMCY (0x4310, excess temperature); the master reports it;
+10. the sensor falls silent; the master reports the heartbeat loss.
 
 A step passes on what the master observes (and, for RPDOs, on the device's dictionary).
 A failing step does not stop the demo: the next steps run and say what they see.
@@ -27,15 +32,20 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from canola import concise
 from canola.decode import emcy_text
 from canola.demo.devices import (
     DEVICES,
     DRIVE,
     IO,
+    RPDO_TRANSMISSION,
     SENSOR,
+    TPDO_TRANSMISSION,
     Mapped,
     attach_application,
+    configuration,
     eds_path,
+    identity,
 )
 from canola.demo.network import Network
 from canola.demo.observer import Observer
@@ -43,7 +53,10 @@ from canola.demo.report import STEPS, Step
 from canola.demo.trace import Trace
 from canola.device import Device
 from canola.errors import Error
+from canola.manager import NetworkManager
 from canola.master import EmcyEvent, HeartbeatEvent, Master
+from canola.network import Network as NetworkDescription
+from canola.network import SlaveSpec
 
 __all__ = ["FAULTS", "Faults", "Scenario"]
 
@@ -58,10 +71,12 @@ EMCY_CODE = 0x4310  # CiA 402: excess temperature, drive
 
 @dataclass(frozen=True)
 class Faults:
-    """Faults to inject: devices that never power on, the drive's EMCY switched off, the
-    sensor that keeps beating instead of falling silent."""
+    """Faults to inject: devices that never power on, devices that answer another
+    vendor-ID than their EDS gives (the manager refuses them), the drive's EMCY switched
+    off, the sensor that keeps beating instead of falling silent."""
 
     never_boots: frozenset[int] = frozenset()
+    wrong_vendor: frozenset[int] = frozenset()
     emcy_off: bool = False
     keeps_beating: bool = False
 
@@ -70,8 +85,12 @@ class Faults:
 FAULTS: dict[str, Faults] = {
     "sensor-never-boots": Faults(never_boots=frozenset({SENSOR})),
     "drive-emcy-off": Faults(emcy_off=True),
+    "drive-wrong-vendor": Faults(wrong_vendor=frozenset({DRIVE})),
     "sensor-keeps-beating": Faults(keeps_beating=True),
 }
+
+#: What a device answers as its vendor-ID with the fault ``drive-wrong-vendor``.
+WRONG_VENDOR = 0x00000BAD
 
 
 def _read_int(master: Master, node: int, index: int, sub: int, data_type: str) -> int:
@@ -105,9 +124,10 @@ class Scenario:
         self.specs = {spec.node_id: spec for spec in DEVICES}
         self.obs = Observer(net, trace)
         # a node that does not answer costs little virtual time, but real buses may be slow
+        self.sdo_timeout_ms = 300 if net.virtual else 1000
         self.master = Master(net.node_bus(), MASTER_ID,
-                             sdo_timeout_ms=min(0xFFFF, (300 if net.virtual else 1000)
-                                                * time_scale))
+                             sdo_timeout_ms=min(0xFFFF, self.sdo_timeout_ms * time_scale))
+        self.manager: NetworkManager | None = None
         self.devices: dict[int, Device] = {}
         for spec in DEVICES:
             dev = Device(eds_path(spec), spec.node_id, net.node_bus())
@@ -135,7 +155,7 @@ class Scenario:
         steps = [Step(key, title) for key, title in STEPS]
         actions: dict[str, Callable[[], tuple[bool, str]]] = {
             "boot-up": self.boot, "pre-operational": self.preop,
-            "heartbeat": self.heartbeat, "pdo-mapping": self.pdo_mapping,
+            "manager": self.manage, "heartbeat": self.heartbeat, "pdo-mapping": self.pdo_mapping,
             "start": self.start, "sync-tpdo": self.sync_tpdo, "rpdo": self.rpdo,
             "emcy": self.emcy, "heartbeat-loss": self.heartbeat_loss,
         }
@@ -162,6 +182,8 @@ class Scenario:
         for node, dev in self.devices.items():
             if node not in self.faults.never_boots:
                 dev.start()
+            if node in self.faults.wrong_vendor:  # after its reset, which loads the EDS's
+                dev.od[0x1018, 1] = WRONG_VENDOR
         def all_booted() -> bool:
             return self.obs.bootups() >= set(self.devices)
 
@@ -199,55 +221,99 @@ class Scenario:
     def _failed(errors: dict[int, str]) -> str:
         return "; ".join(f"node {n}: {e}" for n, e in sorted(errors.items()))
 
+    def network(self) -> NetworkDescription:
+        """The network description the manager boots: every device mandatory, expected to
+        be what its EDS says (0x1000, 0x1018), configured by its concise DCF, its
+        heartbeat watched; the network started with one NMT command (0x1F80 bit 1)."""
+        return NetworkDescription(tuple(
+            SlaveSpec(node_id=spec.node_id, mandatory=True, identity=identity(spec),
+                      config=concise.build(configuration(spec, self.heartbeat_ms)),
+                      heartbeat_ms=self.consumer_ms)
+            for spec in DEVICES), start="all", source="canola demo")
+
+    def manage(self) -> tuple[bool, str]:
+        network = self.network()
+        mgr = self.manager = self.master.boot(network, on_event=self.obs.manager_event,
+                                              wait=False)
+        # each boot ends within an SDO time-out and a heartbeat time-out
+        self.wait_until(mgr.settled, len(network.slaves)
+                        * (self.sdo_timeout_ms + CONSUMER_MS) / 1000 + 0.5)
+        self.wait(0.01)  # the manager's reports and the NMT start reach the trace
+        self.obs.mapped = True
+        statuses = mgr.slaves()
+        booted = {e.node for e in mgr.events if e.kind == "booted"}
+        problems = [f"{self.obs.name(s.node)} {str(s).split(': ', 1)[1]}"
+                    for s in statuses if not s.ok or s.node not in booted]
+        if not mgr.settled():
+            problems.append("the boot did not settle")
+        if not mgr.started:
+            problems.append("the network was not started")
+        if problems:
+            return False, "; ".join(problems)
+        entries = sum(len(concise.parse(s.config or b"\0\0\0\0")) for s in network.slaves)
+        return True, (f"{_nodes(booted)} booted (identity checked, {entries} entries "
+                      "downloaded), network started")
+
+    def _heartbeat_times(self, node: int, since: float) -> list[float]:
+        return [frame.t for frame, ev in self.trace.events
+                if ev.kind == "heartbeat" and ev.node == node and frame.t >= since]
+
     def heartbeat(self) -> tuple[bool, str]:
-        def configure(node: int) -> None:
-            sdo = self.master.sdo(node)
-            sdo.write(0x1017, 0, "u16", self.heartbeat_ms)
+        since = self.net.now()
+
+        def configured(node: int) -> None:
             back = _read_int(self.master, node, 0x1017, 0, "u16")
             if back != self.heartbeat_ms:
                 raise Error(f"0x1017 reads back {back}")
-            self.master.monitor(node, self.consumer_ms)
 
-        errors = self._each(configure)
+        errors = self._each(configured)
+        self.wait(3.5 * self.heartbeat_ms / 1000)  # three heartbeats of each node or more
         self.obs.tick()
-        self.wait_until(lambda: all(self.master.heartbeat_state(n) == "PRE-OPERATIONAL"
-                                    for n in self.devices), 2.5 * HEARTBEAT_MS / 1000)
+        periods = {}
         for node in self.devices:
-            state = self.master.heartbeat_state(node)
-            if node not in errors and state != "PRE-OPERATIONAL":
-                errors[node] = f"heartbeat says {state or 'nothing'}"
+            times = self._heartbeat_times(node, since)
+            if len(times) < 2:
+                errors.setdefault(node, f"{len(times)} heartbeat(s) in "
+                                        f"{self.net.now() - since:.3f} s")
+                continue
+            period_ms = (times[-1] - times[0]) / (len(times) - 1) * 1000
+            periods[node] = period_ms
+            if not 0.5 * self.heartbeat_ms <= period_ms <= 1.5 * self.heartbeat_ms:
+                errors.setdefault(node, f"heartbeats every {period_ms:.0f} ms")
+            elif self.master.heartbeat_state(node) is None:
+                errors.setdefault(node, "the master does not watch its heartbeat")
         if errors:
             return False, self._failed(errors)
-        return True, (f"0x1017 = {self.heartbeat_ms} ms on {_nodes(list(self.devices))}, all "
-                      f"heard PRE-OPERATIONAL (time-out {self.consumer_ms} ms)")
+        heard = sorted({round(p) for p in periods.values()})
+        return True, (f"0x1017 = {self.heartbeat_ms} ms on {_nodes(list(self.devices))} "
+                      f"(read back), heard every {'/'.join(map(str, heard))} ms, watched "
+                      f"by the master (time-out {self.consumer_ms} ms)")
 
-    def _map(self, node: int, comm: int, *, mapping: tuple[Mapped, ...],
-             transmission: int) -> None:
+    def _check_pdo(self, node: int, comm: int, *, mapping: tuple[Mapped, ...],
+                   transmission: int) -> None:
         mapping_index, cob_id = comm + 0x200, (0x180 if comm >= 0x1800 else 0x200) + node
-        sdo = self.master.sdo(node)
-        sdo.write(comm, 1, "u32", 0x80000000 | cob_id)  # PDO off while it changes
-        sdo.write(mapping_index, 0, "u8", 0)
-        for i, m in enumerate(mapping, 1):
-            sdo.write(mapping_index, i, "u32", m.entry)
-        sdo.write(mapping_index, 0, "u8", len(mapping))
-        sdo.write(comm, 2, "u8", transmission)
-        sdo.write(comm, 1, "u32", cob_id)
+        got_cob = _read_int(self.master, node, comm, 1, "u32")
+        if got_cob != cob_id:
+            raise Error(f"0x{comm:04X}:01 reads back 0x{got_cob:08X}")
+        got_type = _read_int(self.master, node, comm, 2, "u8")
+        if got_type != transmission:
+            raise Error(f"0x{comm:04X}:02 reads back {got_type}")
         count = _read_int(self.master, node, mapping_index, 0, "u8")
         back = [_read_int(self.master, node, mapping_index, i, "u32")
                 for i in range(1, count + 1)]
         if back != [m.entry for m in mapping]:
             raise Error(f"0x{mapping_index:04X} reads back "
-                        + ", ".join(f"0x{v:08X}" for v in back))
+                        + (", ".join(f"0x{v:08X}" for v in back) or "no entry"))
 
     def pdo_mapping(self) -> tuple[bool, str]:
-        def configure(node: int) -> None:
+        def check(node: int) -> None:
             spec = self.specs[node]
-            self._map(node, 0x1800, mapping=spec.tpdo, transmission=1)  # every SYNC
+            self._check_pdo(node, 0x1800, mapping=spec.tpdo, transmission=TPDO_TRANSMISSION)
             if spec.rpdo:
-                self._map(node, 0x1400, mapping=spec.rpdo, transmission=255)  # at once
+                self._check_pdo(node, 0x1400, mapping=spec.rpdo,
+                                transmission=RPDO_TRANSMISSION)
 
-        errors = self._each(configure)
-        self.obs.mapped = True
+        errors = self._each(check)
         if errors:
             return False, self._failed(errors)
         rx = [n for n, s in self.specs.items() if s.rpdo]
@@ -255,7 +321,10 @@ class Scenario:
                       f"{_nodes(rx)}, read back")
 
     def start(self) -> tuple[bool, str]:
-        self.master.nmt(0, "start")
+        starts = [ev.fields.get("target") for _, ev in self.trace.events
+                  if ev.kind == "nmt" and ev.fields.get("command") == "start"]
+        if not starts:
+            return False, "the manager sent no NMT start"
         self.wait_until(lambda: all(self.master.heartbeat_state(n) == "OPERATIONAL"
                                     for n in self.devices), 2.5 * HEARTBEAT_MS / 1000)
         wrong = {n: self.master.heartbeat_state(n) for n in self.devices}
@@ -263,7 +332,9 @@ class Scenario:
         if wrong:
             return False, "; ".join(f"node {n} heartbeat says {s or 'nothing'}"
                                     for n, s in sorted(wrong.items()))
-        return True, f"{_nodes(list(self.devices))} heard OPERATIONAL"
+        how = ("NMT start all" if 0 in starts
+               else "NMT start " + ", ".join(str(t) for t in starts))
+        return True, f"{_nodes(list(self.devices))} heard OPERATIONAL ({how} by the manager)"
 
     def _nmt_seen(self, command: str) -> int:
         """How many NMT ``command`` frames to all nodes the trace has seen."""
