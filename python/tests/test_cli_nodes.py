@@ -73,11 +73,29 @@ class Proc:
             return self.popen.wait(5)
 
 
+_HUBS: dict[str, Proc] = {}  # the hub behind each net URL (it logs who joins: -v)
+
+
+def wait_joined(url: str, count: int, timeout: float = 30.0) -> None:
+    """Wait until ``count`` clients have joined the hub behind ``url``."""
+    hub, channel = _HUBS[url], url.rsplit("/", 1)[1]
+    deadline = time.monotonic() + timeout
+    while sum(line.endswith(f" joined {channel}") for line in list(hub.lines)) < count:
+        assert time.monotonic() < deadline, hub.lines
+        time.sleep(0.02)
+
+
+def joined(url: str) -> int:
+    channel = url.rsplit("/", 1)[1]
+    return sum(line.endswith(f" joined {channel}") for line in list(_HUBS[url].lines))
+
+
 @pytest.fixture(scope="module")
 def net() -> Iterator[tuple[str, list[Proc]]]:
-    hub = Proc("bus", "serve", "--port", "0")
+    hub = Proc("-v", "bus", "serve", "--port", "0")
     port = hub.wait_for(r"127\.0\.0\.1:(\d+)").group(1)
     url = f"socketcand://127.0.0.1:{port}/net"
+    _HUBS[url] = hub
     devices = [Proc("device", "--eds", str(EDS), "--node-id", str(n), "--bus", url)
                for n in (5, 6)]
     try:
@@ -219,10 +237,11 @@ def test_nmt_scan_monitor(capsys: pytest.CaptureFixture[str],
 def test_dump_sees_an_sdo_read(capsys: pytest.CaptureFixture[str],
                                net: tuple[str, list[Proc]]) -> None:
     url = net[0]
+    before = joined(url)
     dump = subprocess.Popen([PY, "-m", "canola.cli", "dump", "--bus", url, "--duration", "8",
                              "--json"], stdout=subprocess.PIPE, text=True)
     try:
-        time.sleep(1.5)  # the dump process is listening
+        wait_joined(url, before + 1)  # the dump process is listening
         assert cli(capsys, "sdo", "read", "6", "0x1018:2", "--bus", url)[:2] == (
             0, "0x00000042\n")
         out, _ = dump.communicate(timeout=20)

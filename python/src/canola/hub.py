@@ -209,7 +209,6 @@ class Hub:
             if client.stats.channel:
                 raise ProtocolError("a channel is already open")
             client.stats.channel = cmd.channel
-            log.info("%s joined %s", client.stats.peer, cmd.channel)
             client.push("< ok >", control=True)
             return
         if not client.stats.channel:
@@ -218,6 +217,7 @@ class Hub:
             if not client.raw:
                 client.raw = True
                 self._channels.setdefault(client.stats.channel, set()).add(client)
+                log.info("%s joined %s", client.stats.peer, client.stats.channel)  # gets frames
             client.push("< ok >", control=True)
             client.push("", control=True)  # marker: settle before frames (RAW_SETTLE_S)
         elif cmd.verb == "bcmmode":
