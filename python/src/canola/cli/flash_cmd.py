@@ -7,8 +7,15 @@ import sys
 import time
 from typing import TextIO
 
-from canola.cli.boot_cmd import add_master_options, master_from_args
-from canola.cli.common import CliError, Parser, add_bus_options, emit_json, node_id
+from canola.cli.common import (
+    CliError,
+    Parser,
+    add_bus_options,
+    add_master_options,
+    emit_json,
+    master_from_args,
+    node_id,
+)
 
 
 class ProgressBar:
