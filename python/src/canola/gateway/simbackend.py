@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 from canola.core import Node, SimBus
 from canola.errors import Error, SdoAbort
-from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener
+from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener, Listeners
 from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.requests import NmtCommand
 
@@ -50,7 +50,7 @@ class SimBackend:
         self.node = node
         self.upload_cap = upload_cap
         self.speed = speed
-        self._listeners: list[Listener] = []
+        self._listeners = Listeners()
         self._seen = len(bus.trace)
 
     @property
@@ -103,13 +103,7 @@ class SimBackend:
     # ---- events
 
     def subscribe(self, listener: Listener) -> Callable[[], None]:
-        self._listeners.append(listener)
-
-        def unsubscribe() -> None:
-            if listener in self._listeners:
-                self._listeners.remove(listener)
-
-        return unsubscribe
+        return self._listeners.subscribe(listener)
 
     def advance(self, us: int) -> None:
         """Run the simulated network for ``us`` of virtual time; report its events."""
@@ -139,5 +133,4 @@ class SimBackend:
             except ValueError:
                 continue
             if event is not None:
-                for listener in list(self._listeners):
-                    listener(event)
+                self._listeners.emit(event)
