@@ -10,8 +10,9 @@ continuously, at ``speed`` times wall-clock time, for a live simulated network.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 from canola.core import Node, SimBus
 from canola.errors import Error, SdoAbort
@@ -59,30 +60,30 @@ class SimBackend:
 
     # ---- SDO
 
-    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
-                         timeout_ms: int) -> bytes:
+    @contextlib.contextmanager
+    def _sdo_transfer(self) -> Iterator[None]:
+        """Around one SDO transfer: a failure that is not an abort is a time-out (abort
+        0x05040000); the events of the transfer are reported after, whatever the outcome."""
         try:
-            data = self.node.sdo_upload(node, index, sub, "block" if block else "auto",
-                                        cap=self.upload_cap, timeout_us=timeout_ms * 1000)
+            yield
         except SdoAbort:
             raise
         except Error:
             raise SdoAbort(0x05040000) from None
         finally:
             self._report()
-        return data
+
+    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
+                         timeout_ms: int) -> bytes:
+        with self._sdo_transfer():
+            return self.node.sdo_upload(node, index, sub, "block" if block else "auto",
+                                        cap=self.upload_cap, timeout_us=timeout_ms * 1000)
 
     async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
                            block: bool, timeout_ms: int) -> None:
-        try:
+        with self._sdo_transfer():
             self.node.sdo_download(node, index, sub, data, "block" if block else "auto",
                                    timeout_us=timeout_ms * 1000)
-        except SdoAbort:
-            raise
-        except Error:
-            raise SdoAbort(0x05040000) from None
-        finally:
-            self._report()
 
     def local_read(self, index: int, sub: int) -> bytes:
         return self.node.read(index, sub, cap=self.upload_cap)
