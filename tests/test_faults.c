@@ -10,6 +10,7 @@
 
 #include "canola/sim.h"
 #include "check.h"
+#include "example_od_domain.h"
 #include "harness.h"
 #include "pattern_domain.h"
 
@@ -67,15 +68,7 @@ static uint32_t count_emcy(const station_t *s, uint32_t cob, uint16_t code)
 
 static void station_init(co_sim_bus_t *bus, station_t *s, uint8_t id, uint16_t hb_ms)
 {
-    co_od_t base = example_od_init(&s->od, hb_ms);
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x3000 && n == i) {
-            s->entries[n++] = pattern_domain_entry(0x3000);
-        }
-        s->entries[n++] = base.entries[i];
-    }
-    co_node_config_t cfg = {.node_id = id, .od = {.entries = s->entries, .count = n}};
+    co_node_config_t cfg = {.node_id = id, .od = example_od_with_domain(&s->od, hb_ms, s->entries)};
     cfg.od.hook_ctx = &s->obj;
     cfg.user = s;
     cfg.on_errctl = on_event;

@@ -10,6 +10,7 @@
 
 #include "canola/sim.h"
 #include "check.h"
+#include "example_od_domain.h"
 #include "harness.h"
 #include "pattern_domain.h"
 
@@ -50,16 +51,7 @@ static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
 
 static void server_start(co_sim_bus_t *bus, server_t *s, uint8_t id)
 {
-    co_od_t base = example_od_init(&s->od, 0);
-    /* Copy the example table and append 0x3000 (it sorts after 0x2006, before 0x6200). */
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x3000 && n == i) {
-            s->entries[n++] = pattern_domain_entry(0x3000);
-        }
-        s->entries[n++] = base.entries[i];
-    }
-    co_node_config_t cfg = {.node_id = id, .od = {.entries = s->entries, .count = n}};
+    co_node_config_t cfg = {.node_id = id, .od = example_od_with_domain(&s->od, 0, s->entries)};
     cfg.od.hook_ctx = &s->obj;
     CHECK_EQ(co_sim_port_attach(bus, &s->port), CO_OK);
     cfg.driver = co_sim_port_driver(&s->port);
