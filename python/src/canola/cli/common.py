@@ -102,9 +102,9 @@ def positive_ms(text: str) -> int:
     return value
 
 
-def add_bus_options(parser: argparse.ArgumentParser) -> None:
-    """``--iface IFACE`` | ``--bus URL`` (one required)."""
-    group = parser.add_mutually_exclusive_group(required=True)
+def add_bus_options(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
+    """``--iface IFACE`` | ``--bus URL`` (one of them ``required``, else at most one)."""
+    group = parser.add_mutually_exclusive_group(required=required)
     group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
     group.add_argument("--bus", metavar="URL",
                        help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
