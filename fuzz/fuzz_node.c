@@ -27,6 +27,7 @@
 
 #include "canola/canola.h"
 #include "example_od.h"
+#include "fuzz_reader.h"
 
 typedef struct rig {
     example_od_t od;
@@ -44,20 +45,6 @@ static co_err_t capture(void *ctx, const co_frame_t *frame)
     r->heartbeats +=
         frame->id == 0x705 && frame->len == 1 && frame->data[0] == CO_NMT_PRE_OPERATIONAL;
     return CO_OK;
-}
-
-typedef struct reader {
-    const uint8_t *p;
-    size_t n;
-} reader_t;
-
-static uint8_t take(reader_t *in)
-{
-    if (in->n == 0) {
-        return 0;
-    }
-    in->n--;
-    return *in->p++;
 }
 
 static void feed_frame(rig_t *r, reader_t *in, uint64_t now)

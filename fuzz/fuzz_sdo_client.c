@@ -26,6 +26,7 @@
 
 #include "canola/canola.h"
 #include "example_od.h"
+#include "fuzz_reader.h"
 
 #define CAP_MAX 1024u
 #define TIMEOUT_US 1000000u /* the default SDO time-out (sdo_timeout_ms = 0) */
@@ -64,20 +65,6 @@ static void on_done(void *ctx, uint8_t channel, co_abort_t code, uint32_t len)
     r->completed++;
     r->last_abort = code;
     check(r->completed == r->started);
-}
-
-typedef struct reader {
-    const uint8_t *p;
-    size_t n;
-} reader_t;
-
-static uint8_t take(reader_t *in)
-{
-    if (in->n == 0) {
-        return 0;
-    }
-    in->n--;
-    return *in->p++;
 }
 
 static void start(rig_t *r, reader_t *in)

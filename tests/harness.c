@@ -176,3 +176,18 @@ co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v)
     co_put_u32(b, v);
     return co_node_write_net(&t->node, idx, sub, b, 4);
 }
+
+void sdo_result_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
+{
+    sdo_result_t *r = ctx;
+    r->calls++;
+    r->channel = channel;
+    r->abort = abort;
+    r->len = len;
+}
+
+void sdo_result_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len)
+{
+    sdo_result_done(ctx, channel, abort, len);
+    ((sdo_result_t *)ctx)->value = value;
+}

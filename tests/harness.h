@@ -57,6 +57,20 @@ co_abort_t write_u8(test_node_t *t, uint16_t idx, uint8_t sub, uint8_t v);
 co_abort_t write_u16(test_node_t *t, uint16_t idx, uint8_t sub, uint16_t v);
 co_abort_t write_u32(test_node_t *t, uint16_t idx, uint8_t sub, uint32_t v);
 
+/** What an SDO client transfer reported: the context of sdo_result_done (co_sdo_done_fn)
+ *  and sdo_result_value (co_sdo_value_fn), which count the calls and keep the last one's
+ *  arguments (`value` only sdo_result_value). */
+typedef struct sdo_result {
+    int calls;
+    uint8_t channel;
+    co_abort_t abort;
+    uint32_t len;
+    uint64_t value;
+} sdo_result_t;
+
+void sdo_result_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
+void sdo_result_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len);
+
 /** 0x1016 value for consuming `node_id` with `time_ms`. */
 static inline uint32_t hb_consumer_value(uint8_t node_id, uint16_t time_ms)
 {

@@ -83,20 +83,6 @@ static void client_params(co_od_entry_t extra[3])
         (co_od_entry_t){0x1280, 3, CO_TYPE_UNSIGNED8, CO_OD_RW, 1, &g_server, NULL, NULL, NULL};
 }
 
-typedef struct result {
-    int calls;
-    co_abort_t abort;
-} result_t;
-
-static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
-{
-    (void)channel;
-    (void)len;
-    result_t *r = ctx;
-    r->calls++;
-    r->abort = abort;
-}
-
 static void test_client_parameters_in_the_dictionary(void)
 {
     co_od_entry_t extra[3];
@@ -111,9 +97,10 @@ static void test_client_parameters_in_the_dictionary(void)
     CHECK_EQ(write_u32(&g.t, 0x1280, 2, 0x588), CO_ABORT_NONE);
     CHECK_EQ(write_u8(&g.t, 0x1280, 3, 8), CO_ABORT_NONE);
     uint8_t buf[4];
-    result_t r = {0};
+    sdo_result_t r = {0};
     fake_clear(&g.t.bus);
-    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &r),
+             CO_OK);
     CHECK_EQ(fake_count_id(&g.t.bus, 0x608), 1);
     /* Changing the server under an open transfer ends it, with an abort to the old one. */
     CHECK_EQ(write_u8(&g.t, 0x1280, 3, 9), CO_ABORT_NONE);
@@ -124,7 +111,8 @@ static void test_client_parameters_in_the_dictionary(void)
     CHECK_EQ(write_u8(&g.t, 0x1280, 3, 5), CO_ABORT_NONE);
     r.calls = 0;
     fake_clear(&g.t.bus);
-    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &r),
+             CO_OK);
     CHECK_EQ(r.calls, 1);
     CHECK_EQ(r.abort, CO_ABORT_NONE);
     CHECK_EQ(co_get_u32(buf), g.t.od.device_type);
@@ -141,9 +129,10 @@ static void test_incomplete_client_parameters_are_ignored(void)
     CHECK_EQ(co_sdo_client_setup(&g.t.node, 0, 7), CO_OK);
     co_nmt_apply(&g.t.node, CO_NMT_CMD_RESET_COMMUNICATION);
     uint8_t buf[4];
-    result_t r = {0};
+    sdo_result_t r = {0};
     fake_clear(&g.t.bus);
-    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &r),
+             CO_OK);
     CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
 }
 
@@ -380,8 +369,9 @@ static void test_parameters_of_channels_the_node_lacks(void)
     ingest(&g.t, 0, 0x605, "40 00 10 00 00 00 00 00");
     CHECK_EQ(fake_count_id(&g.t.bus, 0x585), 1);
     uint8_t buf[4];
-    result_t r = {0};
-    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, on_done, &r), CO_OK);
+    sdo_result_t r = {0};
+    CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &r),
+             CO_OK);
     CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
     /* A TIME_DIFFERENCE is not read as an integer. */
     uint64_t v = 0;

@@ -10,6 +10,7 @@
 
 #include "canola/sim.h"
 #include "check.h"
+#include "example_od_domain.h"
 #include "harness.h"
 #include "pattern_domain.h"
 
@@ -67,15 +68,7 @@ static uint32_t count_emcy(const station_t *s, uint32_t cob, uint16_t code)
 
 static void station_init(co_sim_bus_t *bus, station_t *s, uint8_t id, uint16_t hb_ms)
 {
-    co_od_t base = example_od_init(&s->od, hb_ms);
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x3000 && n == i) {
-            s->entries[n++] = pattern_domain_entry(0x3000);
-        }
-        s->entries[n++] = base.entries[i];
-    }
-    co_node_config_t cfg = {.node_id = id, .od = {.entries = s->entries, .count = n}};
+    co_node_config_t cfg = {.node_id = id, .od = example_od_with_domain(&s->od, hb_ms, s->entries)};
     cfg.od.hook_ctx = &s->obj;
     cfg.user = s;
     cfg.on_errctl = on_event;
@@ -144,21 +137,6 @@ static void send_raw(tap_t *t, uint32_t id, const char *hex)
 
 /* ---- SDO through loss and corruption */
 
-typedef struct result {
-    int calls;
-    co_abort_t abort;
-    uint32_t len;
-} result_t;
-
-static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
-{
-    (void)channel;
-    result_t *r = ctx;
-    r->calls++;
-    r->abort = abort;
-    r->len = len;
-}
-
 /* Codes a lossy bus may legitimately end a transfer with: a frame that never came (the
  * time-out) or one that came out of place (the protocol's own checks). */
 static bool loss_code(co_abort_t code)
@@ -197,14 +175,14 @@ static void sdo_under_faults(uint64_t seed, double drop_p, double corrupt_p, uin
         co_sdo_mode_t mode = (i / 2) % 2 ? CO_SDO_BLOCK : CO_SDO_SEGMENTED;
         uint32_t pattern = (uint32_t)(seed * 1000u + i);
         srv->obj = (pattern_domain_t){.length = size, .up_seed = pattern, .down_seed = pattern};
-        result_t r = {0};
+        sdo_result_t r = {0};
         co_err_t err;
         if (upload) {
             memset(buf, 0, cap);
-            err = co_sdo_upload(&cli->node, 0, 0x3000, 0, mode, buf, cap, on_done, &r);
+            err = co_sdo_upload(&cli->node, 0, 0x3000, 0, mode, buf, cap, sdo_result_done, &r);
         } else {
             pattern_fill(buf, pattern, size);
-            err = co_sdo_download(&cli->node, 0, 0x3000, 0, mode, buf, size, on_done, &r);
+            err = co_sdo_download(&cli->node, 0, 0x3000, 0, mode, buf, size, sdo_result_done, &r);
         }
         CHECK_EQ(err, CO_OK);
         /* ~200 frames of ~0.13 ms, then at most one time-out: 2 s is plenty. */
@@ -239,8 +217,9 @@ static void sdo_under_faults(uint64_t seed, double drop_p, double corrupt_p, uin
     co_sim_drop_probability(bus, 0);
     co_sim_corrupt_probability(bus, 0);
     srv->obj = (pattern_domain_t){.length = 100, .up_seed = 1};
-    result_t r = {0};
-    CHECK_EQ(co_sdo_upload(&cli->node, 0, 0x3000, 0, CO_SDO_BLOCK, buf, cap, on_done, &r), CO_OK);
+    sdo_result_t r = {0};
+    CHECK_EQ(co_sdo_upload(&cli->node, 0, 0x3000, 0, CO_SDO_BLOCK, buf, cap, sdo_result_done, &r),
+             CO_OK);
     co_sim_run_until(bus, bus->now_us + 100 * MS);
     CHECK_EQ(r.calls, 1);
     CHECK_EQ(r.abort, CO_ABORT_NONE);

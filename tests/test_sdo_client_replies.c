@@ -4,30 +4,8 @@
 #include "check.h"
 #include "harness.h"
 
-typedef struct result {
-    int calls;
-    co_abort_t abort;
-    uint32_t len;
-    uint64_t value;
-} result_t;
-
 static test_node_t g_t; /* large: static */
-static result_t g_r;
-
-static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
-{
-    (void)channel;
-    result_t *r = ctx;
-    r->calls++;
-    r->abort = abort;
-    r->len = len;
-}
-
-static void on_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len)
-{
-    on_done(ctx, channel, abort, len);
-    ((result_t *)ctx)->value = value;
-}
+static sdo_result_t g_r;
 
 static co_node_t *client(void)
 {
@@ -55,7 +33,8 @@ static uint8_t g_data[64];
 
 static void start_download(co_sdo_mode_t mode, uint32_t len)
 {
-    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, mode, g_data, len, on_done, &g_r), CO_OK);
+    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, mode, g_data, len, sdo_result_done, &g_r),
+             CO_OK);
 }
 
 /* The transfer ended with `code`, and told the server so. */
@@ -72,7 +51,7 @@ static void test_response_for_another_sub_index(void)
 {
     client();
     uint8_t buf[4];
-    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r);
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &g_r);
     reply("43 00 20 01 01 02 03 04");
     check_aborted(CO_ABORT_GENERAL, "605#8000200000000008");
 }
@@ -143,7 +122,7 @@ static void test_block_upload_segments_out_of_range_are_ignored(void)
     client();
     uint8_t buf[32];
     CHECK_EQ(co_sdo_client_block_options(&g_t.node, 0, 4, false, 0), CO_OK);
-    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, buf, sizeof buf, on_done, &g_r);
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, buf, sizeof buf, sdo_result_done, &g_r);
     reply("C2 00 20 00 0E 00 00 00"); /* 14 bytes, no CRC */
     uint32_t before = g_t.bus.count;
     reply("00 01 02 03 04 05 06 07"); /* seqno 0 */
@@ -165,7 +144,7 @@ static void test_block_upload_end_longer_than_indicated(void)
     client();
     uint8_t buf[32];
     CHECK_EQ(co_sdo_client_block_options(&g_t.node, 0, 4, false, 0), CO_OK);
-    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, buf, sizeof buf, on_done, &g_r);
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, buf, sizeof buf, sdo_result_done, &g_r);
     reply("C2 00 20 00 0A 00 00 00"); /* 10 bytes indicated */
     reply("01 01 02 03 04 05 06 07");
     reply("82 08 09 0A 0B 0C 0D 0E");
@@ -177,7 +156,7 @@ static void test_rtr_on_the_response_id_is_malformed(void)
 {
     client();
     uint8_t buf[4];
-    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r);
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &g_r);
     reply("R8");
     CHECK_EQ(co_node_stats(&g_t.node)->rx_malformed, 1);
     CHECK(co_sdo_client_busy(&g_t.node, 0)); /* still waiting for the real answer */
@@ -211,10 +190,14 @@ static void test_start_refused_by_state_and_arguments(void)
 {
     co_node_t *n = client();
     uint8_t buf[4];
-    CHECK_EQ(co_sdo_upload(NULL, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, (co_sdo_mode_t)4, buf, 4, on_done, &g_r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 4, on_done, &g_r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_download(n, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 4, on_done, &g_r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_upload(NULL, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &g_r),
+             CO_ERR_ARG);
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, (co_sdo_mode_t)4, buf, 4, sdo_result_done, &g_r),
+             CO_ERR_ARG);
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 4, sdo_result_done, &g_r),
+             CO_ERR_ARG);
+    CHECK_EQ(co_sdo_download(n, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 4, sdo_result_done, &g_r),
+             CO_ERR_ARG);
     CHECK_EQ(co_sdo_client_block_options(NULL, 0, 4, true, 0), CO_ERR_ARG);
     CHECK_EQ(co_sdo_client_block_options(n, CO_SDO_CLIENTS_MAX, 4, true, 0), CO_ERR_ARG);
     CHECK_EQ(co_sdo_client_block_options(n, 0, 128, true, 0), CO_ERR_ARG);
@@ -223,11 +206,12 @@ static void test_start_refused_by_state_and_arguments(void)
     CHECK(!co_sdo_client_busy(n, CO_SDO_CLIENTS_MAX));
     /* Stopped: SDO may not be sent. */
     ingest(&g_t, 0, 0x000, "02 01");
-    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r), CO_ERR_STATE);
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &g_r),
+             CO_ERR_STATE);
     /* A node not started yet. */
     CHECK_EQ(test_node_init(&g_t, 1, 0), CO_OK);
     CHECK_EQ(co_sdo_client_setup(&g_t.node, 0, 5), CO_OK);
-    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r),
+    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &g_r),
              CO_ERR_STATE);
 }
 
@@ -236,7 +220,8 @@ static void test_local_channel_without_buffers_or_callbacks(void)
 {
     client();
     CHECK_EQ(co_sdo_client_setup(&g_t.node, 0, 1), CO_OK);
-    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 0, on_done, &g_r), CO_OK);
+    CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, NULL, 0, sdo_result_done, &g_r),
+             CO_OK);
     CHECK_EQ(g_r.calls, 1);
     CHECK_EQ(g_r.abort, CO_ABORT_OUT_OF_MEMORY); /* 4 bytes do not fit 0 */
     uint8_t v[4] = {1, 2, 3, 4};
@@ -245,8 +230,9 @@ static void test_local_channel_without_buffers_or_callbacks(void)
     uint8_t out[4];
     CHECK_EQ(co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, out, 4, NULL, NULL), CO_OK);
     CHECK_EQ(out[0], 1);
-    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, CO_SDO_SEGMENTED, NULL, 0, on_done, &g_r),
-             CO_OK);
+    CHECK_EQ(
+        co_sdo_download(&g_t.node, 0, 0x2000, 0, CO_SDO_SEGMENTED, NULL, 0, sdo_result_done, &g_r),
+        CO_OK);
     CHECK_EQ(g_r.abort, CO_ABORT_LEN_LOW);
     CHECK_EQ(g_t.bus.count, 0); /* no frames */
 }
@@ -254,15 +240,15 @@ static void test_local_channel_without_buffers_or_callbacks(void)
 static void test_typed_access_arguments(void)
 {
     co_node_t *n = client();
-    result_t r = {0};
-    CHECK_EQ(co_sdo_read_value(NULL, 0, 0x2000, 0, on_value, &r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_read_value(n, CO_SDO_CLIENTS_MAX, 0x2000, 0, on_value, &r), CO_ERR_ARG);
+    sdo_result_t r = {0};
+    CHECK_EQ(co_sdo_read_value(NULL, 0, 0x2000, 0, sdo_result_value, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_read_value(n, CO_SDO_CLIENTS_MAX, 0x2000, 0, sdo_result_value, &r), CO_ERR_ARG);
     CHECK_EQ(co_sdo_read_value(n, 0, 0x2000, 0, NULL, &r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_write_value(NULL, 0, 0x2000, 0, 1, 4, on_done, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_write_value(NULL, 0, 0x2000, 0, 1, 4, sdo_result_done, &r), CO_ERR_ARG);
     CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 4, NULL, &r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 0, on_done, &r), CO_ERR_ARG);
-    CHECK_EQ(co_sdo_read_value(n, 0, 0x2000, 0, on_value, &r), CO_OK);
-    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 4, on_done, &r), CO_ERR_BUSY);
+    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 0, sdo_result_done, &r), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_read_value(n, 0, 0x2000, 0, sdo_result_value, &r), CO_OK);
+    CHECK_EQ(co_sdo_write_value(n, 0, 0x2000, 0, 1, 4, sdo_result_done, &r), CO_ERR_BUSY);
     /* A failed read reports value 0 and length 0. */
     reply("80 00 20 00 00 00 02 06");
     CHECK_EQ(r.calls, 1);

@@ -10,6 +10,7 @@
 
 #include "canola/sim.h"
 #include "check.h"
+#include "example_od_domain.h"
 #include "harness.h"
 #include "pattern_domain.h"
 
@@ -50,16 +51,7 @@ static void on_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
 
 static void server_start(co_sim_bus_t *bus, server_t *s, uint8_t id)
 {
-    co_od_t base = example_od_init(&s->od, 0);
-    /* Copy the example table and append 0x3000 (it sorts after 0x2006, before 0x6200). */
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x3000 && n == i) {
-            s->entries[n++] = pattern_domain_entry(0x3000);
-        }
-        s->entries[n++] = base.entries[i];
-    }
-    co_node_config_t cfg = {.node_id = id, .od = {.entries = s->entries, .count = n}};
+    co_node_config_t cfg = {.node_id = id, .od = example_od_with_domain(&s->od, 0, s->entries)};
     cfg.od.hook_ctx = &s->obj;
     CHECK_EQ(co_sim_port_attach(bus, &s->port), CO_OK);
     cfg.driver = co_sim_port_driver(&s->port);
@@ -311,26 +303,9 @@ static void test_thousand_transfers_on_a_lossy_bus(void)
     pair_free(pair);
 }
 
-typedef struct value_result {
-    int calls;
-    co_abort_t abort;
-    uint64_t value;
-    uint32_t len;
-} value_result_t;
-
-static void on_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t value, uint32_t len)
-{
-    (void)channel;
-    value_result_t *r = ctx;
-    r->calls++;
-    r->abort = abort;
-    r->value = value;
-    r->len = len;
-}
-
 static void on_written(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
 {
-    on_value(ctx, channel, abort, 0, len);
+    sdo_result_value(ctx, channel, abort, 0, len);
 }
 
 /* One call reads or writes a typed value of a remote node. */
@@ -340,42 +315,42 @@ static void test_typed_values_in_one_call(void)
     co_sim_bus_t *bus = &pair->bus;
     server_t *srv = &pair->srv;
     client_t *cli = &pair->cli;
-    value_result_t r = {0};
-    CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, on_value, &r), CO_OK);
-    CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, on_value, &r), CO_ERR_BUSY);
+    sdo_result_t r = {0};
+    CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, sdo_result_value, &r), CO_OK);
+    CHECK_EQ(co_sdo_read_value(&cli->node, 0, 0x2000, 0, sdo_result_value, &r), CO_ERR_BUSY);
     co_sim_run_until(bus, 10 * MS);
     CHECK_EQ(r.calls, 1);
     CHECK_EQ(r.abort, CO_ABORT_NONE);
     CHECK_EQ(r.value, 0x12345678);
     CHECK_EQ(r.len, 4);
 
-    r = (value_result_t){0};
+    r = (sdo_result_t){0};
     CHECK_EQ(co_sdo_write_value(&cli->node, 0, 0x2001, 0, (uint64_t)(int64_t)-5, 2, on_written, &r),
              CO_OK);
     co_sim_run_until(bus, 20 * MS);
     CHECK_EQ(r.abort, CO_ABORT_NONE);
     CHECK_EQ(srv->od.app_i16, -5);
 
-    r = (value_result_t){0};
+    r = (sdo_result_t){0};
     co_sdo_write_value(&cli->node, 0, 0x2001, 0, 500, 2, on_written, &r);
     co_sim_run_until(bus, 30 * MS);
     CHECK_EQ(r.abort, CO_ABORT_VALUE_HIGH); /* the server's abort code, passed on */
     CHECK_EQ(srv->od.app_i16, -5);
 
     /* 8 bytes: segmented, still one call. */
-    r = (value_result_t){0};
+    r = (sdo_result_t){0};
     co_sdo_write_value(&cli->node, 0, 0x2005, 0, 0x8877665544332211ull, 8, on_written, &r);
     co_sim_run_until(bus, 40 * MS);
     CHECK_EQ(r.abort, CO_ABORT_NONE);
-    r = (value_result_t){0};
-    co_sdo_read_value(&cli->node, 0, 0x2005, 0, on_value, &r);
+    r = (sdo_result_t){0};
+    co_sdo_read_value(&cli->node, 0, 0x2005, 0, sdo_result_value, &r);
     co_sim_run_until(bus, 50 * MS);
     CHECK_EQ(r.value, 0x8877665544332211ull);
     CHECK_EQ(r.len, 8);
 
     /* A 14-byte string does not fit a value. */
-    r = (value_result_t){0};
-    co_sdo_read_value(&cli->node, 0, 0x1008, 0, on_value, &r);
+    r = (sdo_result_t){0};
+    co_sdo_read_value(&cli->node, 0, 0x1008, 0, sdo_result_value, &r);
     co_sim_run_until(bus, 60 * MS);
     CHECK_EQ(r.calls, 1);
     CHECK_EQ(r.abort, CO_ABORT_OUT_OF_MEMORY);

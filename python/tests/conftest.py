@@ -4,12 +4,14 @@
 channel of the test's own by default; SocketCAN on the interface named by the environment
 variable ``CANOLA_VCAN`` (e.g. ``vcan0``) when it is set, as the SocketCAN tier does
 (``CANOLA_VCAN=vcan0 pytest -m vcan``). Every bus made is shut down after the test.
+``wait_until`` polls a condition of such a test for a while.
 """
 
 from __future__ import annotations
 
 import itertools
 import os
+import time
 from collections.abc import Callable, Iterator
 
 import can
@@ -43,3 +45,14 @@ def can_bus() -> Iterator[Callable[[], can.BusABC]]:
     yield make
     for bus in made:
         bus.shutdown()
+
+
+def wait_until(check: Callable[[], bool], timeout: float = 3.0) -> bool:
+    """Poll ``check`` every 5 ms until it is true or ``timeout`` seconds have passed; its
+    last answer."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if check():
+            return True
+        time.sleep(0.005)
+    return check()

@@ -1,16 +1,21 @@
-"""Shared pieces of the gateway tests: a fake master and a line client with time-outs."""
+"""Shared pieces of the gateway tests: a fake master, a line client with time-outs, and a
+gateway served on a real backend."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import TypeVar
 
 from canola.errors import SdoAbort
+from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import Event, Listener, LssOp
 from canola.gateway.codes import GatewayError, GatewayFailure
+from canola.gateway.events import EventHub
+from canola.gateway.masterbackend import MasterBackend
 from canola.gateway.requests import NmtCommand
+from canola.gateway.simbackend import SimBackend
 
 T = TypeVar("T")
 TIMEOUT = 20.0
@@ -148,3 +153,21 @@ async def eventually(check: Callable[[], bool], timeout: float = TIMEOUT) -> Non
     async with asyncio.timeout(timeout):
         while not check():
             await asyncio.sleep(0.005)
+
+
+@contextlib.asynccontextmanager
+async def serving(backend: MasterBackend | SimBackend) -> AsyncIterator[str]:
+    """The gateway on ``backend``, listening on a free TCP port of 127.0.0.1, with the
+    backend's event pump running: its address; pump, server and event hub closed after."""
+    hub = EventHub(backend)
+    server = GatewayServer(Executor(backend, hub), hub)
+    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+    pump = asyncio.create_task(backend.run())
+    try:
+        yield GatewayServer.address(srv)
+    finally:
+        pump.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await pump
+        await server.close()
+        hub.close()

@@ -20,23 +20,13 @@ from pathlib import Path
 import can
 import canopen
 import pytest
+from cli_helpers import cli, one_line_error
 
-from canola.cli import build_parser, main
+from canola.cli import build_parser
 from canola.hub import HubThread
 
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "cli_device.eds"
-
-
-def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line_error(err: str) -> None:
-    assert len(err.strip().splitlines()) == 1, err
-    assert "Traceback" not in err
 
 
 @pytest.fixture(scope="module")

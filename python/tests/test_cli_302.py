@@ -13,10 +13,10 @@ from pathlib import Path
 
 import can
 import pytest
+from cli_helpers import cli, one_line_error
 from managed import PRODUCT, REVISION, VENDOR, model, write_dcf
 
 from canola import Device
-from canola.cli import main
 from canola.lss import UNCONFIGURED
 from canola.program import ProgramSlot
 
@@ -48,17 +48,6 @@ def net() -> Iterator[Net]:
         dev.stop()
     for bus in buses:
         bus.shutdown()
-
-
-def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line_error(err: str) -> None:
-    assert len(err.strip().splitlines()) == 1, err
-    assert "Traceback" not in err
 
 
 # ---- canola boot

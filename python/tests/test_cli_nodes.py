@@ -17,23 +17,11 @@ from pathlib import Path
 
 import canopen
 import pytest
-
-from canola.cli import main
+from cli_helpers import cli, one_line_error
 
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "cli_device.eds"
 PY = sys.executable
-
-
-def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line_error(err: str) -> None:
-    assert len(err.strip().splitlines()) == 1, err
-    assert "Traceback" not in err
 
 
 class Proc:

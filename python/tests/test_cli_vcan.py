@@ -15,17 +15,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-
-from canola.cli import main
+from cli_helpers import cli
 
 EDS = Path(__file__).parent / "data" / "cli_device.eds"
 PY = sys.executable
-
-
-def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _wait_line(proc: subprocess.Popen[str], pattern: str, timeout: float = 90) -> str:

@@ -12,12 +12,10 @@ from collections.abc import AsyncIterator, Callable
 from pathlib import Path
 
 import can
-from gateway_helpers import Client, run
+from gateway_helpers import Client, run, serving
 
 from canola import Device, Master
 from canola.core import SimBus
-from canola.gateway import Executor, GatewayServer, parse_listen
-from canola.gateway.events import EventHub
 from canola.gateway.masterbackend import MasterBackend
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
@@ -27,18 +25,8 @@ GW = 127
 @contextlib.asynccontextmanager
 async def serve(master: Master) -> AsyncIterator[tuple[str, MasterBackend]]:
     backend = MasterBackend(master)
-    hub = EventHub(backend)
-    server = GatewayServer(Executor(backend, hub), hub)
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    pump = asyncio.create_task(backend.run())
-    try:
-        yield GatewayServer.address(srv), backend
-    finally:
-        pump.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await pump
-        await server.close()
-        hub.close()
+    async with serving(backend) as address:
+        yield address, backend
 
 
 def _sim() -> tuple[SimBus, Master, dict[int, Device]]:

@@ -10,13 +10,12 @@ import struct
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-from gateway_helpers import Client, run
+from gateway_helpers import Client, run, serving
 
 from canola import eds
 from canola.core import Node, Od, SimBus
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import BootUp, Emcy, Heartbeat
-from canola.gateway.events import EventHub
 from canola.gateway.simbackend import SimBackend, frame_event
 from canola.odgen import GenerateOptions
 
@@ -37,18 +36,8 @@ async def gateway(devices: tuple[int, ...] = (2, 3)) -> AsyncIterator[tuple[str,
         node.start()
     bus.run_for(10_000)
     backend = SimBackend(bus, master)
-    hub = EventHub(backend)
-    server = GatewayServer(Executor(backend, hub), hub)
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    pump = asyncio.create_task(backend.run())
-    try:
-        yield GatewayServer.address(srv), backend, nodes
-    finally:
-        pump.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await pump
-        await server.close()
-        hub.close()
+    async with serving(backend) as address:
+        yield address, backend, nodes
 
 
 def test_every_type_over_sdo() -> None:

@@ -16,8 +16,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from cli_helpers import cli
 
-from canola.cli import main
 from canola.hub import HubThread
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -25,12 +25,6 @@ NODE_BIN = Path(os.environ.get("CANOLA_NODE_BIN", ROOT / "build" / "canola-node"
 
 pytestmark = pytest.mark.skipif(not NODE_BIN.is_file(),
                                 reason=f"no canola-node program at {NODE_BIN}")
-
-
-def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture

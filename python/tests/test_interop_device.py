@@ -18,7 +18,7 @@ import can
 import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
-from conftest import SDO_TIMEOUT_MS
+from conftest import SDO_TIMEOUT_MS, wait_until
 
 from canola import Device
 from canola.values import TimeOfDay
@@ -49,15 +49,6 @@ def peer(can_bus: Callable[[], can.BusABC]) -> Iterator[Peer]:
     finally:
         network.disconnect()
         device.stop()
-
-
-def wait_until(check: Callable[[], bool], timeout: float = 3.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if check():
-            return True
-        time.sleep(0.005)
-    return check()
 
 
 # ---- SDO: every data type

@@ -14,6 +14,7 @@ from typing import Any
 import can
 import canopen
 import pytest
+from conftest import wait_until
 
 from canola import Device, Master, SdoAbort, SdoTimeout
 from canola.master import EmcyEvent, Frame, HeartbeatEvent
@@ -45,15 +46,6 @@ def net(can_bus: Callable[[], can.BusABC]) -> Iterator[Net]:
         master.stop()
         local.nmt.stop_heartbeat()
         network.disconnect()
-
-
-def wait_until(check: Callable[[], bool], timeout: float = 3.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if check():
-            return True
-        time.sleep(0.005)
-    return check()
 
 
 def test_sdo_expedited_and_segmented(net: Net) -> None:

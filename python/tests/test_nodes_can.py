@@ -9,19 +9,11 @@ from pathlib import Path
 
 import can
 import pytest
+from conftest import wait_until
 
 from canola import Device, Error, Master
 
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
-
-
-def wait_until(check: Callable[[], bool], timeout: float = 3.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if check():
-            return True
-        time.sleep(0.005)
-    return check()
 
 
 def _threads() -> set[str]:

@@ -12,6 +12,7 @@
 #define _GNU_SOURCE
 
 #include "check.h"
+#include "tcp_loopback.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -126,18 +127,6 @@ static long wait_text(conn_t *k, size_t from, const char *text, int ms)
 static void send_text(conn_t *k, const char *text)
 {
     CHECK(write(k->fd, text, strlen(text)) == (ssize_t)strlen(text));
-}
-
-static int listen_loopback(unsigned *port)
-{
-    int ls = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t al = sizeof a;
-    CHECK(bind(ls, (struct sockaddr *)&a, sizeof a) == 0);
-    CHECK(listen(ls, 1) == 0);
-    CHECK(getsockname(ls, (struct sockaddr *)&a, &al) == 0);
-    *port = ntohs(a.sin_port);
-    return ls;
 }
 
 static int accept_within(int ls, int ms)

@@ -15,6 +15,7 @@
 #include "canola/socketcand.h"
 #include "check.h"
 #include "example_od.h"
+#include "tcp_loopback.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -548,13 +549,8 @@ static int serve_one(int lsock)
 
 static void test_tcp_loopback(void)
 {
-    int ls = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t al = sizeof a;
-    CHECK(bind(ls, (struct sockaddr *)&a, sizeof a) == 0);
-    CHECK(listen(ls, 1) == 0);
-    CHECK(getsockname(ls, (struct sockaddr *)&a, &al) == 0);
-    unsigned port = ntohs(a.sin_port);
+    unsigned port = 0;
+    int ls = listen_loopback(&port);
     pid_t child = fork();
     if (child == 0) {
         _exit(serve_one(ls));

@@ -226,18 +226,24 @@ class Decoder:
                         f"{ABORT_TEXT.get(code, 'unknown abort code')} by {by}",
                         index=index, sub=sub, abort=code)
 
+    def _expedited(self, node: int, data: bytes, direction: str, index: int,
+                   sub: int) -> Event:
+        """An expedited initiate frame (download request, upload response): its data (the
+        size in the command byte, else all 4 bytes) is the whole transfer, which ends."""
+        cmd = data[0]
+        n = 4 - ((cmd >> 2) & 3) if cmd & 0x01 else 4
+        value = data[4:4 + n]
+        self._sdo.pop(node, None)
+        return self._ev(node, f"SDO {direction} 0x{index:04X}:{sub:02X} = "
+                        f"{format_value(value)}", index=index, sub=sub, value=value.hex())
+
     def _client(self, node: int, data: bytes, ccs: int) -> Event:
         cmd = data[0]
         t = self._sdo.get(node)
         if ccs == 1:  # initiate download
             index, sub = self._where(data)
             if cmd & 0x02:  # expedited
-                n = 4 - ((cmd >> 2) & 3) if cmd & 0x01 else 4
-                value = data[4:4 + n]
-                self._sdo.pop(node, None)
-                return self._ev(node, f"SDO download 0x{index:04X}:{sub:02X} = "
-                                f"{format_value(value)}", index=index, sub=sub,
-                                value=value.hex())
+                return self._expedited(node, data, "download", index, sub)
             size = int.from_bytes(data[4:8], "little") if cmd & 0x01 else None
             self._sdo[node] = _Sdo(False, index, sub, size)
             return self._ev(node, f"SDO download 0x{index:04X}:{sub:02X} start"
@@ -295,12 +301,7 @@ class Decoder:
         if scs == 2:  # initiate upload response
             index, sub = self._where(data)
             if cmd & 0x02:
-                n = 4 - ((cmd >> 2) & 3) if cmd & 0x01 else 4
-                value = data[4:4 + n]
-                self._sdo.pop(node, None)
-                return self._ev(node, f"SDO upload 0x{index:04X}:{sub:02X} = "
-                                f"{format_value(value)}", index=index, sub=sub,
-                                value=value.hex())
+                return self._expedited(node, data, "upload", index, sub)
             size = int.from_bytes(data[4:8], "little") if cmd & 0x01 else None
             if t is None or t.block:  # also: a block upload switched to segmented
                 t = self._sdo[node] = _Sdo(True, index, sub)

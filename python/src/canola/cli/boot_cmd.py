@@ -6,49 +6,22 @@ network description included."""
 from __future__ import annotations
 
 import argparse
-import contextlib
-from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 from canola.cli.common import (
     CliError,
     Parser,
     add_bus_options,
-    bus_from_args,
+    add_master_options,
     emit_json,
-    node_id,
-    positive_ms,
+    master_from_args,
 )
-from canola.master import Master
 
 if TYPE_CHECKING:
     from canola.network import Network
 
 #: Longest one slave's boot may take, per SDO time-out (reads, DCF records, retries).
 _STEPS_PER_SLAVE = 16
-
-
-def add_master_options(p: argparse.ArgumentParser) -> None:
-    """``--master-id`` and ``--sdo-timeout`` of the commands that run a canola.Master."""
-    p.add_argument("--master-id", type=node_id, default=127, metavar="N",
-                   help="node-ID the master uses (default 127)")
-    p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
-                   help="SDO time-out (default 1000 ms)")
-
-
-@contextlib.contextmanager
-def master_from_args(args: argparse.Namespace) -> Iterator[Master]:
-    """A started canola.Master on the bus of ``args``; stopped and closed after."""
-    bus = bus_from_args(args)
-    try:
-        master = Master(bus, args.master_id, sdo_timeout_ms=args.sdo_timeout)
-        master.start()
-        try:
-            yield master
-        finally:
-            master.stop()
-    finally:
-        bus.shutdown()
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:

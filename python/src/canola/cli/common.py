@@ -4,6 +4,7 @@ and the one-line error convention."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
@@ -14,15 +15,18 @@ import can
 
 from canola.buses import BusError, connection_lost, open_bus
 from canola.candump import LogFrame
+from canola.master import Master
 
 __all__ = [
     "CliError",
     "Parser",
     "UsageError",
     "add_bus_options",
+    "add_master_options",
     "bus_from_args",
     "emit_json",
     "live_frames",
+    "master_from_args",
     "node_id",
     "node_or_all",
     "object_address",
@@ -98,9 +102,9 @@ def positive_ms(text: str) -> int:
     return value
 
 
-def add_bus_options(parser: argparse.ArgumentParser) -> None:
-    """``--iface IFACE`` | ``--bus URL`` (one required)."""
-    group = parser.add_mutually_exclusive_group(required=True)
+def add_bus_options(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
+    """``--iface IFACE`` | ``--bus URL`` (one of them ``required``, else at most one)."""
+    group = parser.add_mutually_exclusive_group(required=required)
     group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
     group.add_argument("--bus", metavar="URL",
                        help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
@@ -112,6 +116,33 @@ def bus_from_args(args: argparse.Namespace) -> can.BusABC:
         return open_bus(iface=args.iface, url=args.bus)
     except BusError as exc:
         raise CliError(str(exc)) from None
+
+
+def add_master_options(p: argparse.ArgumentParser) -> None:
+    """``--master-id`` and ``--sdo-timeout`` of the commands that run a canola.Master."""
+    p.add_argument("--master-id", type=node_id, default=127, metavar="N",
+                   help="node-ID the master uses (default 127)")
+    p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
+                   help="SDO time-out (default 1000 ms)")
+
+
+@contextlib.contextmanager
+def master_from_args(args: argparse.Namespace,
+                     sdo_timeout_ms: int | None = None) -> Iterator[Master]:
+    """A started canola.Master (node-ID ``args.master_id``) on the bus of ``args``; stopped
+    and the bus shut down after. The SDO time-out is ``sdo_timeout_ms``, by default
+    ``args.sdo_timeout`` (:func:`add_master_options`)."""
+    bus = bus_from_args(args)
+    try:
+        timeout = args.sdo_timeout if sdo_timeout_ms is None else sdo_timeout_ms
+        master = Master(bus, args.master_id, sdo_timeout_ms=timeout)
+        master.start()
+        try:
+            yield master
+        finally:
+            master.stop()
+    finally:
+        bus.shutdown()
 
 
 def emit_json(obj: Any) -> None:

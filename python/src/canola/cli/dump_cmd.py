@@ -11,6 +11,7 @@ from canola.candump import CandumpError, LogFrame, read_log
 from canola.cli.common import (
     CliError,
     Parser,
+    add_bus_options,
     bus_from_args,
     emit_json,
     live_frames,
@@ -25,11 +26,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "heartbeat, PDO by COB-ID, SDO transfers with their values), live from a "
                     "bus or from a candump file (log or screen format; - is stdin).")
     p.add_argument("file", nargs="?", metavar="FILE", help="candump file instead of a bus")
-    group = p.add_mutually_exclusive_group()
-    group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
-    group.add_argument("--bus", metavar="URL",
-                       help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
-                            "virtual://CHANNEL")
+    add_bus_options(p, required=False)
     p.add_argument("--count", type=int, metavar="N", help="stop after N frames")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (live)")
     p.add_argument("--json", action="store_true", help="one JSON object per frame")

@@ -4,45 +4,37 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from typing import TextIO
 
-from canola.cli.boot_cmd import add_master_options, master_from_args
-from canola.cli.common import CliError, Parser, add_bus_options, emit_json, node_id
+from canola.cli.common import (
+    CliError,
+    Parser,
+    add_bus_options,
+    add_master_options,
+    emit_json,
+    master_from_args,
+    node_id,
+)
+from canola.cli.progress import ProgressLine, bar_text
 
 
-class ProgressBar:
+class ProgressBar(ProgressLine):
     """``[#####     ]  52.0% 53248/102400 B 11.2 kB/s`` on one line of ``stream``, drawn
     at most ten times a second (and at the end)."""
 
     def __init__(self, total: int, *, enabled: bool, stream: TextIO | None = None) -> None:
+        super().__init__(enabled=enabled, stream=stream)
         self.total = total
-        self.done = 0
-        self.enabled = enabled
-        self.stream = stream if stream is not None else sys.stderr
-        self._started = time.monotonic()
-        self._drawn = 0.0
 
     def update(self, done: int, total: int) -> None:
         self.done, self.total = done, total
         self._draw(force=done >= total)
 
     def finish(self) -> None:
-        if self.enabled:
-            self._draw(force=True)
-            self.stream.write("\n")
-            self.stream.flush()
+        self._end()
 
-    def _draw(self, *, force: bool) -> None:
-        now = time.monotonic()
-        if not self.enabled or (not force and now - self._drawn < 0.1):
-            return
-        self._drawn = now
-        share = self.done / self.total if self.total else 1.0
-        rate = self.done / max(now - self._started, 1e-6) / 1000
-        self.stream.write(f"\r[{'#' * int(share * 30):<30}] {share * 100:5.1f}% "
-                          f"{self.done}/{self.total} B {rate:.1f} kB/s")
-        self.stream.flush()
+    def _text(self, rate: float) -> str:
+        return bar_text(self.done, self.total, rate)
 
 
 def _ident(text: str) -> int:

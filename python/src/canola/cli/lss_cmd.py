@@ -10,8 +10,14 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from canola.cli.boot_cmd import add_master_options, master_from_args
-from canola.cli.common import Parser, add_bus_options, emit_json, node_id
+from canola.cli.common import (
+    Parser,
+    add_bus_options,
+    add_master_options,
+    emit_json,
+    master_from_args,
+    node_id,
+)
 from canola.errors import Error
 
 if TYPE_CHECKING:

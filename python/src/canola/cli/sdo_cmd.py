@@ -19,8 +19,8 @@ from canola.cli.common import (
     CliError,
     Parser,
     add_bus_options,
-    bus_from_args,
     emit_json,
+    master_from_args,
     node_id,
     object_address,
     positive_ms,
@@ -28,7 +28,7 @@ from canola.cli.common import (
 from canola.cli.progress import SdoProgress
 from canola.decode import format_value
 from canola.errors import SdoAbort
-from canola.master import Master, SdoTimeout
+from canola.master import SdoTimeout
 
 
 def _type(text: str) -> int:
@@ -89,20 +89,6 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         f.set_defaults(func=func)
 
 
-@contextlib.contextmanager
-def _master(args: argparse.Namespace) -> Iterator[Master]:
-    bus = bus_from_args(args)
-    try:
-        master = Master(bus, args.master_id, sdo_timeout_ms=args.timeout)
-        master.start()
-        try:
-            yield master
-        finally:
-            master.stop()
-    finally:
-        bus.shutdown()
-
-
 def _where(args: argparse.Namespace) -> str:
     index, sub = args.address
     return f"node {args.node} 0x{index:04X}:{sub:02X}"
@@ -121,7 +107,7 @@ def _sdo_errors(args: argparse.Namespace) -> Iterator[None]:
 
 def run_read(args: argparse.Namespace) -> int:
     index, sub = args.address
-    with _master(args) as master, _sdo_errors(args):
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
         data = master.sdo(args.node).upload(index, sub, timeout=args.timeout / 1000)
     result: dict[str, object] = {"node": args.node, "index": index, "sub": sub,
                                  "raw": data.hex()}
@@ -148,7 +134,7 @@ def run_write(args: argparse.Namespace) -> int:
         data = values.encode(args.type, values.from_text(args.type, args.value))
     except values.ValueFormatError as exc:
         raise CliError(f"canola sdo write: error: {exc}", 2) from None
-    with _master(args) as master, _sdo_errors(args):
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
         master.sdo(args.node).download(index, sub, data, timeout=args.timeout / 1000)
     if args.json:
         emit_json({"node": args.node, "index": index, "sub": sub, "raw": data.hex()})
@@ -161,7 +147,7 @@ def run_upload(args: argparse.Namespace) -> int:
         raise CliError(f"canola sdo upload: error: bad --max-size {args.max_size}", 2)
     progress = SdoProgress(upload=True, total=None,
                            enabled=args.progress or sys.stderr.isatty())
-    with _master(args) as master, _sdo_errors(args):
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
         master.on_frame(progress.frame, cob_id=0x580 + args.node)
         data = master.sdo(args.node).upload(index, sub, block=not args.no_block,
                                             max_size=args.max_size)
@@ -189,7 +175,7 @@ def run_download(args: argparse.Namespace) -> int:
         raise CliError(f"cannot read {args.file}: {exc.strerror or exc}") from None
     progress = SdoProgress(upload=False, total=len(data),
                            enabled=args.progress or sys.stderr.isatty())
-    with _master(args) as master, _sdo_errors(args):
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
         master.on_frame(progress.frame, cob_id=0x580 + args.node)
         master.sdo(args.node).download(index, sub, data, block=not args.no_block)
     progress.finish()

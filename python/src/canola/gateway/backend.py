@@ -17,7 +17,7 @@ from typing import Literal, Protocol
 from canola.gateway.requests import NmtCommand
 
 __all__ = ["Backend", "BootUp", "Emcy", "Event", "Heartbeat", "HeartbeatLost", "Listener",
-           "LssOp", "Rpdo"]
+           "Listeners", "LssOp", "Rpdo"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +57,29 @@ Listener = Callable[[Event], None]
 
 #: One LSS master request (CiA 305), see :meth:`Backend.lss`.
 LssOp = Literal["switch_global", "select", "set_node", "store", "inquire", "fastscan"]
+
+
+class Listeners:
+    """The listeners a backend reports its events to (what :meth:`Backend.subscribe` needs)."""
+
+    def __init__(self) -> None:
+        self._listeners: list[Listener] = []
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Add ``listener``; returns the function that removes it (a second call: nothing)."""
+        self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
+
+        return unsubscribe
+
+    def emit(self, event: Event) -> None:
+        """Call every listener with ``event`` (one that unsubscribes meanwhile: still this
+        time)."""
+        for listener in list(self._listeners):
+            listener(event)
 
 
 class Backend(Protocol):

@@ -34,6 +34,7 @@ from canola.gateway.backend import (
     Heartbeat,
     HeartbeatLost,
     Listener,
+    Listeners,
     LssOp,
     Rpdo,
 )
@@ -56,7 +57,7 @@ class MasterBackend:
         self.master = master
         self.upload_cap = upload_cap
         self._on_close = on_close
-        self._listeners: list[Listener] = []
+        self._listeners = Listeners()
         master.on_bootup(self._bootup)
         master.on_frame(self._frame)
         master.on_emcy(self._emcy)
@@ -169,17 +170,10 @@ class MasterBackend:
     # ---- events
 
     def subscribe(self, listener: Listener) -> Callable[[], None]:
-        self._listeners.append(listener)
-
-        def unsubscribe() -> None:
-            if listener in self._listeners:
-                self._listeners.remove(listener)
-
-        return unsubscribe
+        return self._listeners.subscribe(listener)
 
     def _emit(self, event: Event) -> None:
-        for listener in list(self._listeners):
-            listener(event)
+        self._listeners.emit(event)
 
     def _bootup(self, node: int) -> None:
         self._emit(BootUp(node))

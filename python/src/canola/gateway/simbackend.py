@@ -10,12 +10,13 @@ continuously, at ``speed`` times wall-clock time, for a live simulated network.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 from canola.core import Node, SimBus
 from canola.errors import Error, SdoAbort
-from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener, LssOp
+from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener, Listeners, LssOp
 from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.requests import NmtCommand
 
@@ -50,7 +51,7 @@ class SimBackend:
         self.node = node
         self.upload_cap = upload_cap
         self.speed = speed
-        self._listeners: list[Listener] = []
+        self._listeners = Listeners()
         self._seen = len(bus.trace)
 
     @property
@@ -59,30 +60,30 @@ class SimBackend:
 
     # ---- SDO
 
-    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
-                         timeout_ms: int) -> bytes:
+    @contextlib.contextmanager
+    def _sdo_transfer(self) -> Iterator[None]:
+        """Around one SDO transfer: a failure that is not an abort is a time-out (abort
+        0x05040000); the events of the transfer are reported after, whatever the outcome."""
         try:
-            data = self.node.sdo_upload(node, index, sub, "block" if block else "auto",
-                                        cap=self.upload_cap, timeout_us=timeout_ms * 1000)
+            yield
         except SdoAbort:
             raise
         except Error:
             raise SdoAbort(0x05040000) from None
         finally:
             self._report()
-        return data
+
+    async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
+                         timeout_ms: int) -> bytes:
+        with self._sdo_transfer():
+            return self.node.sdo_upload(node, index, sub, "block" if block else "auto",
+                                        cap=self.upload_cap, timeout_us=timeout_ms * 1000)
 
     async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
                            block: bool, timeout_ms: int) -> None:
-        try:
+        with self._sdo_transfer():
             self.node.sdo_download(node, index, sub, data, "block" if block else "auto",
                                    timeout_us=timeout_ms * 1000)
-        except SdoAbort:
-            raise
-        except Error:
-            raise SdoAbort(0x05040000) from None
-        finally:
-            self._report()
 
     def local_read(self, index: int, sub: int) -> bytes:
         return self.node.read(index, sub, cap=self.upload_cap)
@@ -109,13 +110,7 @@ class SimBackend:
     # ---- events
 
     def subscribe(self, listener: Listener) -> Callable[[], None]:
-        self._listeners.append(listener)
-
-        def unsubscribe() -> None:
-            if listener in self._listeners:
-                self._listeners.remove(listener)
-
-        return unsubscribe
+        return self._listeners.subscribe(listener)
 
     def advance(self, us: int) -> None:
         """Run the simulated network for ``us`` of virtual time; report its events."""
@@ -145,5 +140,4 @@ class SimBackend:
             except ValueError:
                 continue
             if event is not None:
-                for listener in list(self._listeners):
-                    listener(event)
+                self._listeners.emit(event)
