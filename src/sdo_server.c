@@ -114,12 +114,12 @@ static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
     }
     co_frame_t f = co_cob_frame(s->cob_tx, 8);
     memcpy(f.data, data, 8);
-    co_node_send_as(node, &f, CO_SVC_SDO);
+    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
 }
 
 /* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`
  * (built in the frame itself: the expedited answers are the hot ones). */
-static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
+static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
@@ -129,10 +129,10 @@ static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t t
     co_put_u16(&f.data[1], s->index);
     f.data[3] = s->sub;
     co_put_u32(&f.data[4], tail);
-    co_node_send_as(node, &f, CO_SVC_SDO);
+    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
 }
 
-static void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
+static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
 {
     respond(node, s, 0x80, code);
     s->state = IDLE;
