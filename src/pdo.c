@@ -329,11 +329,9 @@ void co_pdo_state_entered(co_node_t *node)
 
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
-    if (!pdo_running(node)) {
-        return;
-    }
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
-     * open whatever 0x1007 says, so there is nothing to read. */
+     * open whatever 0x1007 says, so there is nothing to read. Both loops test the NMT
+     * state first (an application callback may change it). */
     const bool in_window = true;
     for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
