@@ -114,6 +114,14 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
 #define CO_NOINLINE
 #endif
 
+/* The opposite hint: a small hot helper that the compiler's size heuristics would keep
+ * out of line. Not when compiling for size (-Os): there flash counts more than cycles. */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
+#define CO_INLINE inline __attribute__((always_inline))
+#else
+#define CO_INLINE inline
+#endif
+
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
 
@@ -174,6 +182,27 @@ void co_txq_purge(co_node_t *node);
  * with CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue
  * if the state stops allowing it before the driver takes it. */
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service);
+/* The driver did not take a frame handed to it directly (co_node_send_hot): queue it
+ * (CO_ERR_BUSY) or count it dropped, as co_node_send_as does. */
+co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t service, co_err_t err);
+/* co_node_send_as for the per-frame paths (PDO, SDO): with the queue empty, the driver
+ * is called from here, without a call into txq.c. `service` is not 0. */
+static inline co_err_t co_node_send_hot(co_node_t *node, const co_frame_t *frame, uint16_t service)
+{
+#if defined(__OPTIMIZE_SIZE__)
+    return co_node_send_as(node, frame, service); /* -Os: one copy of the send path */
+#else
+    if (node->txq_count != 0 || !(node->services & service)) {
+        return co_node_send_as(node, frame, service);
+    }
+    co_err_t err = node->cfg.driver.tx(node->cfg.driver.ctx, frame);
+    if (err != CO_OK) {
+        return co_txq_refused(node, frame, service, err);
+    }
+    node->stats.tx_frames++;
+    return CO_OK;
+#endif
+}
 /* True when nothing waits in the transmit queue: a sender of many frames (block
  * transfer) sends only then, so it never floods the queue; poll resumes it. */
 static inline bool co_txq_idle(const co_node_t *node) { return node->txq_count == 0; }
@@ -244,7 +273,8 @@ void co_pdo_reset_comm(co_node_t *node);
 void co_pdo_add_routes(co_node_t *node);
 void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame);
 void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame);
-void co_pdo_sync(co_node_t *node, uint8_t counter); /* every SYNC handled (own or received) */
+/* Every SYNC handled (own or received), once sync.last_us is the SYNC's time. */
+void co_pdo_sync(co_node_t *node, uint8_t counter);
 uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us);
 co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                               uint32_t len);

@@ -57,14 +57,20 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
     node->stats.rx_frames++;
-    bool ext = frame->flags & CO_FRAME_EXT;
-    if (frame->len > 8 || frame->id > (ext ? CO_ID_EXT_MAX : CO_ID_STD_MAX)) {
+    /* Above 29 bits or 8 bytes: malformed. An identifier of 12..29 bits without the EXT
+     * flag is malformed too, but matches no route (routes hold valid keys only), so it is
+     * told apart from the unrouted ones off the common path. */
+    if (frame->len > 8 || frame->id > CO_ID_EXT_MAX) {
         node->stats.rx_malformed++; /* no controller delivers this: never let it match */
         return;
     }
     const co_route_t *route = co_routes_lookup(node, co_route_key(frame));
     if (route == NULL) {
-        node->stats.rx_unrouted++;
+        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
+            node->stats.rx_malformed++;
+        } else {
+            node->stats.rx_unrouted++;
+        }
         return;
     }
     if (!(node->services & route->service)) {

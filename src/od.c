@@ -262,17 +262,31 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 
 /* Position of the first entry whose key is >= key (count when there is none). The
  * halving has no data-dependent branch, so it costs the same few instructions per step. */
-/* lower_bound over the dense key array (co_od_t.keys). */
+/* The largest power of two <= n (n >= 1). */
+static inline uint32_t pow2_floor(uint32_t n)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return 1u << (31 - __builtin_clz(n));
+#else
+    uint32_t p = 1;
+    while (p <= n / 2u) {
+        p *= 2u;
+    }
+    return p;
+#endif
+}
+
+/* lower_bound over the dense key array (co_od_t.keys), count >= 1: the first probe leaves
+ * a power-of-two range, then each halving is a load, a compare and a conditional add
+ * (the answer stays in [lb, lb + step]). */
 static uint32_t lower_bound_keys(const uint32_t *keys, uint32_t count, uint32_t key)
 {
-    const uint32_t *base = keys;
-    uint32_t n = count;
-    while (n > 1u) {
-        uint32_t half = n / 2u;
-        base = base[half] < key ? &base[half] : base;
-        n -= half;
+    uint32_t step = pow2_floor(count);
+    uint32_t lb = keys[step - 1u] < key ? count - step : 0;
+    for (step /= 2u; step > 0; step /= 2u) {
+        lb = keys[lb + step - 1u] < key ? lb + step : lb;
     }
-    return (uint32_t)(base - keys) + (*base < key ? 1u : 0u);
+    return lb + (keys[lb] < key ? 1u : 0u);
 }
 
 static uint32_t lower_bound(const co_od_t *od, uint32_t key)

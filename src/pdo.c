@@ -227,10 +227,31 @@ co_err_t co_pdo_bind(co_node_t *node)
 }
 
 /* After parameters or mapping loaded (NMT states do not change it): may a frame of this
- * RPDO take co_pdo_rx's short path? */
+ * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
+static bool fast_widths(const co_pdo_t *p)
+{
+    for (uint8_t i = 0; i < p->count; i++) {
+        uint8_t b = p->items[i].bits;
+        if (b != 8 && b != 16 && b != 32 && b != 64) {
+            return false; /* pdo_copy_fast copies 1, 2, 4 or 8 bytes */
+        }
+    }
+    return true;
+}
+
 static void decide_fast(co_pdo_t *p, bool tpdo)
 {
-    p->rx_fast = !tpdo && pdo_active(p) && p->plain && p->type > 240 && p->event_ms == 0;
+    bool plain = p->plain && fast_widths(p);
+    if (tpdo) {
+        bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
+        co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p)); /* the header, built once */
+        p->fast = pdo_active(p) && plain && cyclic ? f.len : 0;
+        p->frame_id = f.id;
+        p->frame_flags = f.flags;
+        return;
+    }
+    bool fast = pdo_active(p) && plain && p->type > 240 && p->event_ms == 0;
+    p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
 }
 
 static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
@@ -308,17 +329,23 @@ void co_pdo_state_entered(co_node_t *node)
 
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
-    if (!pdo_running(node)) {
-        return;
-    }
-    bool in_window = co_sync_window_open(node, node->now_us);
+    /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
+     * open whatever 0x1007 says, so there is nothing to read. Both loops test the NMT
+     * state first (an application callback may change it). */
+    const bool in_window = true;
     for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n, in_window);
         }
     }
     for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
-        tpdo_sync(node, &node->tpdo[n], counter, in_window);
+        co_pdo_t *p = &node->tpdo[n];
+        if (!p->fast) {
+            tpdo_sync(node, p, counter, in_window);
+        } else if (++p->sync_count >= p->type) { /* the usual one: cyclic, whole values */
+            p->sync_count = 0;
+            tpdo_send_plain(node, p);
+        }
     }
 }
 

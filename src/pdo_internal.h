@@ -59,8 +59,46 @@ static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
     }
 }
 
+/* pdo_copy_value for the short paths (co_pdo_t.fast), whose items are 1, 2, 4 or 8 bytes:
+ * no library call, so the copy loop needs no saved registers. */
+static inline void pdo_copy_fast(void *dst, const void *src, uint32_t bytes)
+{
+    switch (bytes) {
+    case 1:
+        memcpy(dst, src, 1);
+        break;
+    case 2:
+        memcpy(dst, src, 2);
+        break;
+    case 4:
+        memcpy(dst, src, 4);
+        break;
+    default:
+        memcpy(dst, src, 8);
+        break;
+    }
+}
+
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
+
+/* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
+ * told when some TPDO listens to changes. */
+static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+{
+    const co_pdo_item_t *item = p->items;
+    const co_pdo_item_t *end = item + p->count;
+    for (; item < end; item++) {
+        uint32_t bytes = item->bits / 8u;
+        pdo_copy_value(item->entry->value, data, bytes);
+        data += bytes;
+    }
+    if (node->tpdo_listeners != 0) {
+        for (item = p->items; item < end; item++) {
+            co_pdo_changed(node, item->entry);
+        }
+    }
+}
 
 /* pdo.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n);
@@ -69,6 +107,7 @@ void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spo
 void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter, bool in_window);
+void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* p->plain: pack, send */
 uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
 
 /* pdo_rx.c */

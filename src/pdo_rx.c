@@ -45,29 +45,11 @@ static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t
     co_pdo_changed(node, e);
 }
 
-/* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
- * told when some TPDO listens to changes. */
-static inline void apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
-{
-    const co_pdo_item_t *item = p->items;
-    const co_pdo_item_t *end = item + p->count;
-    for (; item < end; item++) {
-        uint32_t bytes = item->bits / 8u;
-        pdo_copy_value(item->entry->value, data, bytes);
-        data += bytes;
-    }
-    if (node->tpdo_listeners != 0) {
-        for (item = p->items; item < end; item++) {
-            co_pdo_changed(node, item->entry);
-        }
-    }
-}
-
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
     if (p->plain) {
-        apply_plain(node, p, data);
+        pdo_apply_plain(node, p, data);
     } else {
         uint32_t pos = 0;
         for (uint8_t i = 0; i < p->count; i++) {
@@ -171,7 +153,23 @@ static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame
     }
 }
 
-void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+/* After the short path's copies: the TPDOs that listen, the application. Out of line so
+ * that the copies need no saved registers. */
+static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
+{
+    const co_pdo_t *p = &node->rpdo[rpdo];
+    if (node->tpdo_listeners != 0) {
+        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
+            co_pdo_changed(node, item->entry);
+        }
+    }
+    if (node->cfg.on_rpdo) {
+        node->cfg.on_rpdo(node->cfg.user, rpdo);
+    }
+}
+
+/* Every frame the short path does not take. */
+static CO_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
     if (frame->flags & CO_FRAME_RTR) {
         node->stats.rx_malformed++; /* RPDOs are not requested */
@@ -180,20 +178,32 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
     if (rpdo >= node->rpdo_count) {
         return;
     }
-    const co_pdo_t *p = &node->rpdo[rpdo];
-    if (p->rx_fast && frame->len == pdo_bytes(p) &&
+    if (pdo_active(&node->rpdo[rpdo])) {
+        rx_general(node, rpdo, frame);
+    }
+}
+
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+{
+    /* The usual frame: asynchronous, exactly the mapped length (`fast`), data, nothing
+     * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
+     * a route; the bound is checked all the same before the array is read. */
+    const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
+    if (p != NULL && p->fast != 0 && p->fast == frame->len && !(frame->flags & CO_FRAME_RTR) &&
         !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
-        /* The usual frame: asynchronous, exactly the mapped length, no deadline, nothing
-         * reported that it could clear. Applied at once, as rx_general would. */
-        apply_plain(node, p, frame->data);
-        if (node->cfg.on_rpdo) {
-            node->cfg.on_rpdo(node->cfg.user, rpdo);
+        const uint8_t *data = frame->data;
+        const co_pdo_item_t *end = p->items + p->count;
+        for (const co_pdo_item_t *item = p->items; item < end; item++) {
+            uint32_t bytes = item->bits / 8u;
+            pdo_copy_fast(item->entry->value, data, bytes);
+            data += bytes;
+        }
+        if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {
+            rx_fast_tell(node, rpdo);
         }
         return;
     }
-    if (pdo_active(p)) {
-        rx_general(node, rpdo, frame);
-    }
+    rx_other(node, rpdo, frame);
 }
 
 void rpdo_sync(co_node_t *node, uint8_t n, bool in_window)

@@ -59,6 +59,19 @@ static void send_fresh(co_node_t *node, const co_pdo_t *p)
     (void)co_node_send_as(node, &f, CO_SVC_PDO);
 }
 
+/* A TPDO with `fast` set: its frame header is precomputed. */
+void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
+{
+    co_frame_t f = {.id = p->frame_id, .flags = p->frame_flags, .len = p->fast}; /* data zeroed */
+    uint8_t *at = f.data;
+    for (const co_pdo_item_t *item = p->items, *end = item + p->count; item < end; item++) {
+        uint32_t bytes = item->bits / 8u;
+        pdo_copy_fast(at, item->entry->value, bytes);
+        at += bytes;
+    }
+    (void)co_node_send_hot(node, &f, CO_SVC_PDO);
+}
+
 /* An event-driven transmission: the inhibit time and the event timer count from it. */
 static void send_event(co_node_t *node, co_pdo_t *p)
 {

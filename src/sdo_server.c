@@ -107,19 +107,19 @@ static void refresh(co_node_t *node, co_sdo_server_t *s)
     co_node_schedule(node, s->deadline_us);
 }
 
-static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
+static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
     }
     co_frame_t f = co_cob_frame(s->cob_tx, 8);
     memcpy(f.data, data, 8);
-    co_node_send_as(node, &f, CO_SVC_SDO);
+    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
 }
 
 /* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`
  * (built in the frame itself: the expedited answers are the hot ones). */
-static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
+static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
@@ -129,10 +129,10 @@ static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t t
     co_put_u16(&f.data[1], s->index);
     f.data[3] = s->sub;
     co_put_u32(&f.data[4], tail);
-    co_node_send_as(node, &f, CO_SVC_SDO);
+    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
 }
 
-static void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
+static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
 {
     respond(node, s, 0x80, code);
     s->state = IDLE;
@@ -269,7 +269,10 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
     }
-    if (abort == CO_ABORT_NONE) {
+    if (abort == CO_ABORT_NONE && s->buf_len + SEG_BYTES <= CO_SDO_BUF_SIZE) {
+        memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
+        s->buf_len += n;
+    } else if (abort == CO_ABORT_NONE) {
         abort = collect(node, s, &d[1], n);
     }
     if (abort == CO_ABORT_NONE && last) {
@@ -357,7 +360,11 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d
     const uint8_t *wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
     if (wire != NULL && s->done <= total) { /* stored in wire form: copy the piece */
         n = total - s->done < SEG_BYTES ? total - s->done : SEG_BYTES;
-        memcpy(&r[1], wire + s->done, n);
+        if (n == SEG_BYTES) {
+            memcpy(&r[1], wire + s->done, SEG_BYTES); /* the usual case, copied inline */
+        } else {
+            memcpy(&r[1], wire + s->done, n);
+        }
     } else {
         co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
         if (abort != CO_ABORT_NONE) {
@@ -625,13 +632,7 @@ static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t
         abort_transfer(node, s, CO_ABORT_COMMAND); /* unreachable: no block state is entered */
         return;
     }
-    switch (s->state) {
-    case DOWN_SEGMENTED:
-        download_segment(node, s, d);
-        break;
-    case UP_SEGMENTED:
-        upload_segment(node, s, d);
-        break;
+    switch (s->state) { /* the segmented states are served before (serve) */
     case BLOCK_DOWN_END:
         block_download_end(node, s, d);
         break;
@@ -686,8 +687,7 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 /* One request of an open or new transfer. */
 static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    if (CO_CONFIG_SDO_BLOCK &&
-        s->state == BLOCK_DOWN) { /* every frame of a sub-block is a segment */
+    if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_DOWN) { /* every frame a segment */
         block_segment(node, s, d);
     } else if (is_initiate(d[0])) {
         initiate(node, s, d);
@@ -695,6 +695,10 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
         s->index = 0;
         s->sub = 0;
         abort_transfer(node, s, CO_ABORT_COMMAND);
+    } else if (s->state == DOWN_SEGMENTED) { /* the usual segments: no state switch */
+        download_segment(node, s, d);
+    } else if (s->state == UP_SEGMENTED) {
+        upload_segment(node, s, d);
     } else {
         continue_transfer(node, s, d);
     }

@@ -20,6 +20,15 @@ static uint32_t priority(const co_frame_t *frame)
     return (frame->id & CO_ID_STD_MAX) << 19;
 }
 
+/* The driver refused a frame for good. */
+static void dropped(co_node_t *node)
+{
+    node->stats.tx_dropped++;
+    if (node->cfg.on_error) {
+        node->cfg.on_error(node->cfg.user, CO_NODE_ERR_TX_DRIVER);
+    }
+}
+
 /* Hand one frame to the driver; true when it is gone (sent or refused for good). */
 static bool driver_take(co_node_t *node, const co_frame_t *frame)
 {
@@ -30,10 +39,7 @@ static bool driver_take(co_node_t *node, const co_frame_t *frame)
     if (err == CO_OK) {
         node->stats.tx_frames++;
     } else {
-        node->stats.tx_dropped++;
-        if (node->cfg.on_error) {
-            node->cfg.on_error(node->cfg.user, CO_NODE_ERR_TX_DRIVER);
-        }
+        dropped(node);
     }
     return true;
 }
@@ -96,6 +102,17 @@ static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t servi
     return CO_OK;
 }
 
+co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t service, co_err_t err)
+{
+    if (err != CO_ERR_BUSY) {
+        dropped(node);
+        return CO_OK; /* gone for good: the frame is not the caller's problem any more */
+    }
+    err = enqueue(node, frame, service);
+    co_txq_flush(node);
+    return err;
+}
+
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
     if (service != 0 && !(node->services & service)) {
@@ -105,9 +122,7 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
     if (node->txq_count == 0 && driver_take(node, frame)) {
         return CO_OK;
     }
-    co_err_t err = enqueue(node, frame, service);
-    co_txq_flush(node);
-    return err;
+    return co_txq_refused(node, frame, service, CO_ERR_BUSY); /* queued */
 }
 
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame)

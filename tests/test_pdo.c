@@ -326,6 +326,21 @@ static void test_rpdo_synchronous(void)
     CHECK_EQ(rpdos.count, 2);
 }
 
+/* An empty frame for an RPDO off the short path (here synchronous) is too short, and
+ * never taken as a frame of the short path's length (co_pdo_t.fast is 0 there). */
+static void test_rpdo_empty_frame_off_short_path(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    CHECK_EQ(write_u8(&t, 0x1400, 2, 0), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x205, "");
+    CHECK_EQ(rpdos.count, 0);
+    CHECK(co_emcy_active(&t.node, 0x8210));
+    ingest(&t, 2 * MS, 0x080, "");
+    CHECK_EQ(t.od.outputs[0], 0);
+    CHECK_EQ(rpdos.count, 0);
+}
+
 static void test_rpdo_deadline(void)
 {
     test_node_t t;
@@ -565,6 +580,7 @@ int main(void)
     RUN(test_rpdo_too_short);
     RUN(test_rpdo_too_long);
     RUN(test_rpdo_synchronous);
+    RUN(test_rpdo_empty_frame_off_short_path);
     RUN(test_rpdo_deadline);
     RUN(test_rpdo_deadline_error_behaviour_none);
     RUN(test_remapping_procedure);

@@ -76,18 +76,22 @@ typedef struct co_pdo {
     uint64_t next_us; /**< TPDO: event timer / inhibit end; RPDO: deadline */
     uint64_t inhibit_until_us;
     uint32_t cob_id;
-    uint16_t event_ms;  /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
-    uint16_t inhibit;   /**< TPDO sub3: inhibit time, 100 us */
-    uint8_t sync_start; /**< TPDO sub6: SYNC start value */
-    uint8_t count;      /**< mapped entries */
-    uint8_t bits;       /**< mapped bits in all */
-    uint8_t type;       /**< transmission type */
-    uint8_t sync_count; /**< SYNCs counted towards the next transmission */
-    uint8_t flags;      /**< internal state bits */
-    uint8_t len;        /**< RPDO: bytes of the frame waiting for the next SYNC */
-    bool plain;         /**< every item a whole byte-aligned value copied as stored */
-    bool rx_fast;       /**< RPDO: active, plain, asynchronous, no deadline (co_pdo_rx) */
-    uint8_t data[8];    /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+    uint32_t frame_id;   /**< TPDO with `fast`: the identifier of its frames, from cob_id */
+    uint16_t event_ms;   /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
+    uint16_t inhibit;    /**< TPDO sub3: inhibit time, 100 us */
+    uint8_t sync_start;  /**< TPDO sub6: SYNC start value */
+    uint8_t count;       /**< mapped entries */
+    uint8_t bits;        /**< mapped bits in all */
+    uint8_t type;        /**< transmission type */
+    uint8_t sync_count;  /**< SYNCs counted towards the next transmission */
+    uint8_t flags;       /**< internal state bits */
+    uint8_t len;         /**< RPDO: bytes of the frame waiting for the next SYNC */
+    bool plain;          /**< every item a whole byte-aligned value copied as stored */
+    uint8_t fast;        /**< the short path's frame length, else 0. RPDO: active, plain,
+                            asynchronous, no deadline; TPDO: active, plain, type 1..240,
+                            no SYNC start value */
+    uint8_t frame_flags; /**< TPDO with `fast`: the flags of its frames */
+    uint8_t data[8];     /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 } co_pdo_t;
 
 /** Mark the TPDOs mapping (index, sub) as having an event (as a change of a mapped value
