@@ -4,6 +4,7 @@ programs), python-canopen as an independent peer on the same hub."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -96,17 +97,20 @@ def net() -> Iterator[tuple[str, list[Proc]]]:
         assert codes == [0, 0]  # SIGTERM stops a device cleanly
 
 
-@pytest.fixture
-def remote(net: tuple[str, list[Proc]]) -> Iterator[canopen.RemoteNode]:
-    """python-canopen's view of device 5."""
-    port = re.search(r":(\d+)/", net[0])
+@contextlib.contextmanager
+def python_canopen(url: str) -> Iterator[canopen.RemoteNode]:
+    """python-canopen's view of device 5, connected now: a client that joins the hub after
+    the CLI's transfers cannot receive their last frames late (which python-canopen's SDO
+    client would take for answers)."""
+    port = re.search(r":(\d+)/", url)
     assert port is not None
     network = canopen.Network()
     network.connect(interface="socketcand", host="127.0.0.1", port=int(port.group(1)),
                     channel="net")
-    node = network.add_node(5, str(EDS))
-    yield node
-    network.disconnect()
+    try:
+        yield network.add_node(5, str(EDS))
+    finally:
+        network.disconnect()
 
 
 def test_sdo_read(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]]) -> None:
@@ -125,8 +129,7 @@ def test_sdo_read(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]
 
 
 def test_sdo_write_read_back_and_python_canopen_agrees(
-        capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]],
-        remote: canopen.RemoteNode) -> None:
+        capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]]) -> None:
     url = net[0]
     for index, dtype, text, back in (("0x2000:0", "u32", "0xCAFE0001", str(0xCAFE0001)),
                                      ("0x2001:0", "i16", "-300", "-300"),
@@ -135,9 +138,10 @@ def test_sdo_write_read_back_and_python_canopen_agrees(
         assert cli(capsys, "sdo", "write", "5", index, dtype, text, "--bus", url) == (0, "", "")
         assert cli(capsys, "sdo", "read", "5", index, dtype, "--bus", url) == (0, back + "\n",
                                                                                "")
-    assert remote.sdo[0x2000].raw == 0xCAFE0001
-    assert remote.sdo[0x2001].raw == -300
-    remote.sdo[0x2000].raw = 77
+    with python_canopen(url) as remote:
+        assert remote.sdo[0x2000].raw == 0xCAFE0001
+        assert remote.sdo[0x2001].raw == -300
+        remote.sdo[0x2000].raw = 77
     assert cli(capsys, "sdo", "read", "5", "0x2000:0", "u32", "--bus", url)[1] == "77\n"
     # device 6 was not touched
     assert cli(capsys, "sdo", "read", "6", "0x2000:0", "--bus", url)[1] == "0x11111111\n"
@@ -168,8 +172,7 @@ def test_sdo_errors(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Pro
 
 @pytest.mark.parametrize("block", [True, False])
 def test_sdo_upload_download_files(capsys: pytest.CaptureFixture[str], tmp_path: Path,
-                                   net: tuple[str, list[Proc]], remote: canopen.RemoteNode,
-                                   block: bool) -> None:
+                                   net: tuple[str, list[Proc]], block: bool) -> None:
     url = net[0]
     blob = os.urandom(3000)
     src, dst = tmp_path / "fw.bin", tmp_path / "back.bin"
@@ -183,7 +186,8 @@ def test_sdo_upload_download_files(capsys: pytest.CaptureFixture[str], tmp_path:
                        "--progress", "--json", *mode)
     assert code == 0 and "100.0% 3000/3000 B" in err
     assert dst.read_bytes() == blob
-    assert remote.sdo[0x2004].raw == blob  # python-canopen reads the same bytes
+    with python_canopen(url) as remote:
+        assert remote.sdo[0x2004].raw == blob  # python-canopen reads the same bytes
 
 
 def test_sdo_file_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path,
