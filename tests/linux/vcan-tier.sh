@@ -6,7 +6,10 @@
 #      loop on vcan0);
 #   2. canola-node on vcan0 with can-utils as the outside world: candump sees its boot-up
 #      and heartbeats, `cansend vcan0 000#0105` starts it, SIGTERM stops it (exit 0);
-#   3. Python: `pytest -m vcan` with CANOLA_VCAN=vcan0 when the venv (build-py/venv)
+#   3. the device daemon `canola device` (the Python package over the C core) on vcan0, the
+#      same way: boot-up seen by candump, heartbeat switched on by an SDO write from
+#      cansend, started by `cansend vcan0 000#0105`, SIGTERM stops it (exit 0);
+#   4. Python: `pytest -m vcan` with CANOLA_VCAN=vcan0 when the venv (build-py/venv)
 #      exists; pytest's "no tests ran" (exit 5) counts as success.
 #
 # Each part prints one summary line; the exit status is 0 only when none failed.
@@ -50,6 +53,21 @@ wait_for() {
         sleep 0.1
     done
 }
+# stop_by_sigterm PID TENTHS: SIGTERM, then wait; sets stop_why to why it failed (empty
+# when it stopped in time with exit 0). Not in a subshell: only this shell can wait for PID.
+stop_by_sigterm() {
+    local pid=$1 waited=0 rc=0
+    stop_why=""
+    kill -TERM "$pid" 2>/dev/null
+    while kill -0 "$pid" 2>/dev/null && ((waited < $2)); do sleep 0.1; waited=$((waited + 1)); done
+    if kill -0 "$pid" 2>/dev/null; then
+        kill -KILL "$pid"
+        stop_why="did not stop on SIGTERM"
+        return
+    fi
+    wait "$pid" 2>/dev/null || rc=$?
+    ((rc == 0)) || stop_why="exit $rc after SIGTERM"
+}
 node_part() {
     if ! command -v candump >/dev/null || ! command -v cansend >/dev/null; then
         summary "canola-node on vcan0" FAIL "can-utils (candump, cansend) not installed"
@@ -66,15 +84,8 @@ node_part() {
     [[ -z $why ]] && { wait_for "$tmp/candump.log" " 705#7F" 10 || why="no heartbeat 705#7F"; }
     [[ -z $why ]] && { cansend vcan0 000#0105 || why="cansend failed"; }
     [[ -z $why ]] && { wait_for "$tmp/candump.log" " 705#05" 10 || why="no 705#05 after 000#0105"; }
-    kill -TERM "$node" 2>/dev/null
-    local rc=0 waited=0
-    while kill -0 "$node" 2>/dev/null && ((waited < 50)); do sleep 0.1; waited=$((waited + 1)); done
-    if kill -0 "$node" 2>/dev/null; then
-        kill -KILL "$node"
-        [[ -z $why ]] && why="did not stop on SIGTERM"
-    fi
-    wait "$node" 2>/dev/null || rc=$?
-    [[ -z $why && $rc != 0 ]] && why="exit $rc after SIGTERM"
+    stop_by_sigterm "$node" 50
+    [[ -z $why ]] && why=$stop_why
     [[ -z $why ]] && { grep -q ": operational" "$tmp/node.err" || why="no state change on stderr"; }
     [[ -z $why ]] && { grep -q "stopped by SIGTERM" "$tmp/node.err" || why="no stop message"; }
     local beats
@@ -89,7 +100,43 @@ node_part() {
 }
 node_part
 
-# ---- 3. the Python tests marked vcan
+# ---- 3. the device daemon (canola device, Python over the C core) on vcan0
+daemon_part() {
+    local canola=$root/build-py/venv/bin/canola
+    if [[ ! -x $canola ]]; then
+        summary "canola device on vcan0" "NOT RUN" "no build-py/venv: make py-env"
+        return
+    fi
+    candump -L vcan0 >"$tmp/candump-dev.log" 2>&1 &
+    pids+=($!)
+    sleep 0.3
+    "$canola" device --eds "$root/python/src/canola/data/demo/sensor.eds" --node-id 5 \
+        --iface vcan0 >"$tmp/device.out" 2>&1 &
+    local dev=$!
+    pids+=("$dev")
+    local why="" log=$tmp/candump-dev.log
+    wait_for "$log" " 705#00" 60 || why="no boot-up 705#00 in candump"
+    # SDO expedited download 0x1017:00 = 100 ms from cansend, then heartbeats
+    [[ -z $why ]] && { cansend vcan0 605#2B17100064000000 || why="cansend failed"; }
+    [[ -z $why ]] && { wait_for "$log" " 585#6017100000000000" 10 || why="no SDO download response"; }
+    [[ -z $why ]] && { wait_for "$log" " 705#7F" 10 || why="no heartbeat 705#7F"; }
+    [[ -z $why ]] && { cansend vcan0 000#0105 || why="cansend failed"; }
+    [[ -z $why ]] && { wait_for "$log" " 705#05" 10 || why="no 705#05 after 000#0105"; }
+    [[ -z $why ]] && { wait_for "$tmp/device.out" "node 5: OPERATIONAL" 10 || why="no state change printed"; }
+    stop_by_sigterm "$dev" 100
+    [[ -z $why ]] && why=$stop_why
+    [[ -z $why ]] && { grep -q "stopped" "$tmp/device.out" || why="no stop message"; }
+    if [[ -z $why ]]; then
+        summary "canola device on vcan0" PASS "boot-up, SDO from cansend, heartbeats, started by cansend, exit 0 on SIGTERM"
+    else
+        echo "  candump:"; sed 's/^/    /' "$log" | tail -n 20
+        echo "  canola device output:"; sed 's/^/    /' "$tmp/device.out"
+        summary "canola device on vcan0" FAIL "$why"
+    fi
+}
+daemon_part
+
+# ---- 4. the Python tests marked vcan
 py=$root/build-py/venv/bin/python
 if [[ -x $py ]]; then
     rc=0
