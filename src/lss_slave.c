@@ -166,8 +166,8 @@ static void configure(co_node_t *node, const uint8_t *d)
         break;
     }
     case CO_LSS_CS_INQUIRE_NODE_ID: {
-        uint8_t id = node->node_id;
-        answer(node, d[0], &id, 1);
+        uint8_t id[1] = {node->node_id};
+        answer(node, d[0], id, 1);
         break;
     }
     default: /* inquire vendor .. serial */

@@ -167,18 +167,17 @@ static void on_downloaded(void *ctx, uint8_t channel, co_abort_t abort, uint32_t
     co_manager_t *m = ctx;
     if (abort != CO_ABORT_NONE) {
         fail(m, CO_BOOT_CONFIG, abort, 0);
+    } else if (m->dcf_left == 0) {
+        next_step(m);
     } else {
         download_next(m);
     }
 }
 
+/* The next record of the concise DCF (dcf_left > 0); on_downloaded carries on. */
 static void download_next(co_manager_t *m)
 {
     const co_mgr_slave_t *d = slave(m, m->current);
-    if (m->dcf_left == 0) {
-        next_step(m);
-        return;
-    }
     const uint8_t *p = d->dcf + m->dcf_off;
     uint32_t size = co_get_u32(p + 3);
     m->index = co_get_u16(p);
@@ -200,7 +199,8 @@ static bool watch_heartbeat(co_manager_t *m, uint8_t n, uint16_t ms)
         return false;
     }
     uint8_t free_sub = 0;
-    for (uint8_t sub = 1; sub <= count; sub++) {
+    for (uint32_t i = 1; i <= count && i <= 0xFF; i++) { /* 32 bits: 255 entries end the loop */
+        uint8_t sub = (uint8_t)i;
         uint64_t v = 0;
         (void)co_node_get_uint(m->node, 0x1016, sub, &v);
         if (((v >> 16) & 0xFF) == n) {
@@ -256,8 +256,10 @@ static void run_step(co_manager_t *m)
                 }
                 m->dcf_off = 4;
                 m->dcf_left = co_get_u32(d->dcf);
-                download_next(m);
-                return;
+                if (m->dcf_left != 0) {
+                    download_next(m);
+                    return;
+                }
             }
             break;
         case STEP_EC:

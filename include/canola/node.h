@@ -120,8 +120,9 @@ typedef struct co_route {
     uint8_t slot;
 } co_route_t;
 
-/** The node. Fields are internal; read them through the functions below. */
-struct co_node {
+/** The node. Fields are internal; read them through the functions below. Grouped by
+ *  service, not by size: that costs about 32 bytes of padding of several KB. */
+struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_node_config_t cfg;
     uint64_t now_us;      /**< time of the latest ingest/poll */
     uint64_t next_due_us; /**< earliest deadline of any service */
