@@ -631,6 +631,145 @@ static void test_eight_devices_found_by_fastscan_then_boot(void)
     free(f);
 }
 
+/* ---- master: arguments, busy, wrong answers and time-outs for every request */
+
+typedef co_err_t (*lss_request_fn)(co_node_t *node, co_lss_done_fn done, void *ctx);
+
+static co_err_t rq_selective(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    static const co_lss_address_t a = {1, 2, 3, 4};
+    return co_lss_switch_selective(n, &a, d, c);
+}
+static co_err_t rq_node_id(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_configure_node_id(n, CO_NODE_ID_UNCONFIGURED, d, c);
+}
+static co_err_t rq_bit_timing(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_configure_bit_timing(n, 0, 4, d, c);
+}
+static co_err_t rq_store(co_node_t *n, co_lss_done_fn d, void *c) { return co_lss_store(n, d, c); }
+static co_err_t rq_inquire_vendor(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_inquire(n, CO_LSS_CS_INQUIRE_VENDOR, d, c);
+}
+static co_err_t rq_identify(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    static const co_lss_address_t lo = {1, 2, 0, 0}, hi = {1, 2, 9, 9};
+    return co_lss_identify_remote(n, &lo, &hi, d, c);
+}
+static co_err_t rq_non_configured(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_identify_non_configured(n, d, c);
+}
+static co_err_t rq_fastscan(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_fastscan(n, NULL, d, c);
+}
+
+static void test_master_arguments(void)
+{
+    test_node_t *m = slave(1);
+    done_log_t log = {0};
+    co_lss_address_t a = {0};
+    CHECK_EQ(co_lss_master_set_timeout(&m->node, 65536), CO_ERR_ARG);
+    CHECK_EQ(co_lss_master_set_timeout(&m->node, 65535), CO_OK);
+    CHECK_EQ(co_lss_switch_selective(&m->node, NULL, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_configure_node_id(&m->node, 128, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_configure_node_id(&m->node, 0xFE, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_inquire(&m->node, CO_LSS_CS_INQUIRE_VENDOR - 1, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_identify_remote(&m->node, NULL, &a, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_identify_remote(&m->node, &a, NULL, on_done, &log), CO_ERR_ARG);
+    CHECK(!co_lss_master_busy(&m->node));
+    CHECK_STR(BUS(m), ""); /* nothing sent */
+    CHECK_EQ(log.n, 0);
+    CHECK_STR(co_lss_status_name(CO_LSS_OK), "ok");
+    CHECK_STR(co_lss_status_name(CO_LSS_TIMEOUT), "time-out");
+    CHECK_STR(co_lss_status_name(CO_LSS_SCAN_FAILED), "fastscan lost the slave");
+    CHECK_STR(co_lss_status_name(CO_LSS_CANCELLED), "cancelled");
+    CHECK_STR(co_lss_status_name(99), "unknown");
+    free(m);
+}
+
+static void test_master_every_request_busy_and_timed_out(void)
+{
+    static const lss_request_fn requests[] = {rq_selective,      rq_node_id,        rq_bit_timing,
+                                              rq_store,          rq_inquire_vendor, rq_identify,
+                                              rq_non_configured, rq_fastscan};
+    /* An answer of the wrong kind for each: another request's answer. */
+    static const char *wrong[] = {"43 00 00 00 00 00 00 00", "13 00 00 00 00 00 00 00",
+                                  "11 00 00 00 00 00 00 00", "5E 00 00 00 00 00 00 00",
+                                  "5B 00 00 00 00 00 00 00", "50 00 00 00 00 00 00 00",
+                                  "4F 00 00 00 00 00 00 00", "50 00 00 00 00 00 00 00"};
+    const uint32_t count = sizeof requests / sizeof requests[0];
+    test_node_t *m = slave(1);
+    CHECK_EQ(co_lss_master_set_timeout(&m->node, 10), CO_OK);
+    uint64_t now = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        done_log_t log = {0};
+        fake_clear(&m->bus);
+        CHECK_EQ(requests[i](&m->node, on_done, &log), CO_OK);
+        uint32_t sent = m->bus.count;
+        CHECK(sent >= 1);
+        /* While it runs every other request is refused and sends nothing. */
+        for (uint32_t j = 0; j < count; j++) {
+            CHECK_EQ(requests[j](&m->node, on_done, &log), CO_ERR_BUSY);
+        }
+        CHECK_EQ(m->bus.count, sent);
+        /* A wrong answer, and a remote frame, are not the answer. */
+        ingest(m, now + 1 * MS, 0x7E4, wrong[i]);
+        co_frame_t rtr = frm(0x7E4, "R8");
+        co_node_ingest(&m->node, now + 1 * MS, &rtr);
+        CHECK_EQ(log.n, 0);
+        CHECK(co_lss_master_busy(&m->node));
+        /* Nobody answers: a time-out after 10 ms (fastscan: after its reset step). */
+        co_node_poll(&m->node, now + 10 * MS);
+        CHECK_EQ(log.n, 1);
+        CHECK_EQ(log.r[0].status, CO_LSS_TIMEOUT);
+        CHECK_EQ(log.r[0].answers, 0);
+        CHECK(!co_lss_master_busy(&m->node));
+        now += 20 * MS;
+        co_node_poll(&m->node, now);
+    }
+    CHECK(m->node.stats.rx_malformed >= count);
+    /* Without a callback a request still ends, and the master is free again. */
+    for (uint32_t i = 0; i < count; i++) {
+        CHECK_EQ(requests[i](&m->node, NULL, NULL), CO_OK);
+        co_node_poll(&m->node, now + 10 * MS);
+        CHECK(!co_lss_master_busy(&m->node));
+        now += 20 * MS;
+    }
+    free(m);
+}
+
+static void test_master_answers_without_callback(void)
+{
+    test_node_t *m = slave(1);
+    CHECK_EQ(co_lss_inquire(&m->node, CO_LSS_CS_INQUIRE_PRODUCT, NULL, NULL), CO_OK);
+    ingest(m, 1 * MS, 0x7E4, "5B 01 02 03 04 00 00 00");
+    CHECK(!co_lss_master_busy(&m->node));
+    /* Identify non-configured: the answers are counted until the time-out. */
+    done_log_t log = {0};
+    CHECK_EQ(co_lss_identify_non_configured(&m->node, on_done, &log), CO_OK);
+    ingest(m, 2 * MS, 0x7E4, "4F 00 00 00 00 00 00 00"); /* identify answer: not this one */
+    ingest(m, 3 * MS, 0x7E4, "50 00 00 00 00 00 00 00");
+    ingest(m, 4 * MS, 0x7E4, "50 00 00 00 00 00 00 00");
+    ingest(m, 5 * MS, 0x7E4, "50 00 00 00 00 00 00 00");
+    CHECK_EQ(log.n, 0);
+    co_node_poll(&m->node, 200 * MS);
+    CHECK_EQ(log.n, 1);
+    CHECK_EQ(log.r[0].status, CO_LSS_OK);
+    CHECK_EQ(log.r[0].answers, 3);
+    CHECK_EQ(log.r[0].cs, CO_LSS_CS_IDENT_NON_CONFIGURED);
+    /* Store refused by the slave (error 1: not supported). */
+    CHECK_EQ(co_lss_store(&m->node, on_done, &log), CO_OK);
+    ingest(m, 300 * MS, 0x7E4, "17 01 00 00 00 00 00 00");
+    CHECK_EQ(log.n, 2);
+    CHECK_EQ(log.r[1].status, CO_LSS_REFUSED);
+    CHECK_EQ(log.r[1].error, 1);
+    free(m);
+}
+
 int main(void)
 {
     RUN(test_unconfigured_node_sends_nothing_and_waits);
@@ -652,5 +791,8 @@ int main(void)
     RUN(test_master_fastscan_frames);
     RUN(test_fastscan_finds_the_slave);
     RUN(test_eight_devices_found_by_fastscan_then_boot);
+    RUN(test_master_arguments);
+    RUN(test_master_every_request_busy_and_timed_out);
+    RUN(test_master_answers_without_callback);
     return check_summary();
 }
