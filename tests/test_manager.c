@@ -1048,6 +1048,81 @@ static void test_sdo_channel_taken(void)
     free(n);
 }
 
+/* ---- co_manager_load_od: the entries it takes, and the ones it leaves */
+
+static void test_load_od_edges(void)
+{
+    static uint32_t startup = CO_MGR_NMT_MASTER | CO_MGR_START_ALL;
+    static uint8_t count = 200; /* more than 127 entries claimed */
+    static uint32_t dcf_u32_value = 0x12345678;
+    static uint8_t dcf_bytes[4 + 7 + 1] = {1, 0, 0, 0, 0x00, 0x20, 0, 1, 0, 0, 0, 9};
+    static co_od_domain_t empty_domain = {.data = dcf_bytes, .len = 0};
+    static co_od_domain_t full_domain = {.data = dcf_bytes, .len = sizeof dcf_bytes};
+    static uint32_t hb[6] = {
+        (2u << 16) | 0,     /* names node 2 but time 0: not watched */
+        (0u << 16) | 500,   /* node 0 */
+        (200u << 16) | 500, /* no node-ID */
+        (5u << 16) | 700,   /* node 5, 700 ms */
+        (6u << 16) | 800,   /* node 6 */
+        (7u << 16) | 900,   /* sub 127 */
+    };
+    static uint32_t assign[5] = {CO_MGR_SLAVE, CO_MGR_SLAVE, CO_MGR_SLAVE, CO_MGR_SLAVE,
+                                 CO_MGR_SLAVE | CO_MGR_MANDATORY};
+    co_od_entry_t e[] = {
+        {0x1016, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &count, NULL, NULL, NULL},
+        {0x1016, 1, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[0], NULL, NULL, NULL},
+        {0x1016, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[1], NULL, NULL, NULL},
+        {0x1016, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[2], NULL, NULL, NULL},
+        {0x1016, 4, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[3], NULL, NULL, NULL},
+        {0x1016, 5, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[4], NULL, NULL, NULL},
+        {0x1016, 127, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[5], NULL, NULL, NULL},
+        /* 0x1F22: sub2 not a DOMAIN, sub3 a DOMAIN without storage, sub4 an empty one,
+         * sub5 a real one. */
+        {0x1F22, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &dcf_u32_value, NULL, NULL, NULL},
+        {0x1F22, 3, CO_TYPE_DOMAIN, CO_OD_RW, 64, NULL, NULL, NULL, NULL},
+        {0x1F22, 4, CO_TYPE_DOMAIN, CO_OD_RW, 64, &empty_domain, NULL, NULL, NULL},
+        {0x1F22, 5, CO_TYPE_DOMAIN, CO_OD_RW, 64, &full_domain, NULL, NULL, NULL},
+        {0x1F80, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &startup, NULL, NULL, NULL},
+        {0x1F81, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[0], NULL, NULL, NULL},
+        {0x1F81, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[1], NULL, NULL, NULL},
+        {0x1F81, 4, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[2], NULL, NULL, NULL},
+        {0x1F81, 5, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[3], NULL, NULL, NULL},
+        {0x1F81, 6, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[4], NULL, NULL, NULL},
+    };
+    co_od_t od = {.entries = e, .count = sizeof e / sizeof e[0]};
+    co_mgr_slave_t *slaves = calloc(127, sizeof *slaves);
+    uint32_t got = 0;
+    CHECK_EQ(co_manager_load_od(NULL, slaves, &got), CO_ERR_ARG);
+    CHECK_EQ(co_manager_load_od(&od, NULL, &got), CO_ERR_ARG);
+    CHECK_EQ(co_manager_load_od(&od, slaves, NULL), CO_ERR_ARG);
+    CHECK_EQ(got, 0);
+    CHECK_EQ(co_manager_load_od(&od, slaves, &got), CO_OK);
+    CHECK_EQ(got, startup);
+    for (uint8_t n = 2; n <= 4; n++) {
+        CHECK(slaves[n - 1].dcf == NULL);
+        CHECK_EQ(slaves[n - 1].dcf_len, 0);
+    }
+    CHECK(slaves[5 - 1].dcf == dcf_bytes);
+    CHECK_EQ(slaves[5 - 1].dcf_len, sizeof dcf_bytes);
+    CHECK_EQ(co_dcf_check(slaves[5 - 1].dcf, slaves[5 - 1].dcf_len), CO_OK);
+    CHECK_EQ(slaves[2 - 1].heartbeat_ms, 0);
+    CHECK_EQ(slaves[5 - 1].heartbeat_ms, 700);
+    CHECK_EQ(slaves[6 - 1].heartbeat_ms, 800);
+    CHECK_EQ(slaves[7 - 1].heartbeat_ms, 900); /* sub 127, read under a count of 200 */
+    CHECK_EQ(slaves[6 - 1].assignment, CO_MGR_SLAVE | CO_MGR_MANDATORY);
+    CHECK_EQ(slaves[7 - 1].assignment, 0);
+    for (uint8_t n = 8; n <= 127; n++) {
+        CHECK_EQ(slaves[n - 1].heartbeat_ms, 0);
+    }
+    /* A small count limits what is read. */
+    count = 4;
+    CHECK_EQ(co_manager_load_od(&od, slaves, &got), CO_OK);
+    CHECK_EQ(slaves[5 - 1].heartbeat_ms, 700);
+    CHECK_EQ(slaves[6 - 1].heartbeat_ms, 0);
+    CHECK_EQ(slaves[7 - 1].heartbeat_ms, 0);
+    free(slaves);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
@@ -1071,5 +1146,6 @@ int main(void)
     RUN(test_mandatory_failure_after_start_does_not_halt);
     RUN(test_frames_that_are_not_boot_ups);
     RUN(test_sdo_channel_taken);
+    RUN(test_load_od_edges);
     return check_summary();
 }
