@@ -547,6 +547,47 @@ static void test_bit_level_dummy_skips(void)
     CHECK_EQ(rx.od.u16, 0x0123);
 }
 
+/* ---- TPDO: whole values at odd bit positions, an event-driven TPDO at SYNC */
+
+static void test_tpdo_whole_value_at_odd_bit_position(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    /* TPDO1: 0x1001 low 4 bits, 0x2000 whole (32 bits) from bit 4, 0x1001 low 4 bits. */
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A00, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 1, 0x10010004u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 2, 0x20000020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 3, 0x10010004u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A00, 0, 3), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x185u), CO_ABORT_NONE);
+    t.od.error_register = 0x0B;
+    fake_clear(&t.bus);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 0x11223344), CO_ABORT_NONE);
+    /* 0xB | 0x11223344 << 4 | 0xB << 36 = 0xB11223344B, 5 bytes little-endian. */
+    CHECK_STR(bus(&t), "185#4B342312B1");
+}
+
+static void test_event_driven_tpdo_not_sent_at_sync(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    /* TPDO2: 0x2007, every SYNC; TPDO1 stays event-driven. */
+    CHECK_EQ(write_u32(&t, 0x1801, 1, 0x80000285u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A01, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A01, 1, 0x20070020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A01, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1801, 2, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1801, 1, 0x285u), CO_ABORT_NONE);
+    co_node_poll(&t.node, 1 * MS);
+    fake_clear(&t.bus);
+    t.od.app_u32b = 0xA5;
+    ingest(&t, 10 * MS, 0x080, "");
+    ingest(&t, 20 * MS, 0x080, "");
+    CHECK_STR(bus(&t), "285#A5000000 285#A5000000");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 0);
+}
+
 int main(void)
 {
     RUN(test_tpdo_sent_on_change);
@@ -571,5 +612,7 @@ int main(void)
     RUN(test_rpdo_remapping_with_dummy);
     RUN(test_bit_level_round_trip);
     RUN(test_bit_level_dummy_skips);
+    RUN(test_tpdo_whole_value_at_odd_bit_position);
+    RUN(test_event_driven_tpdo_not_sent_at_sync);
     return check_summary();
 }
