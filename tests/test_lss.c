@@ -770,6 +770,65 @@ static void test_master_answers_without_callback(void)
     free(m);
 }
 
+/* ---- slave: arguments and the requests it must not answer */
+
+static void test_slave_setup_arguments(void)
+{
+    test_node_t *t = slave(5);
+    co_lss_slave_config_t lc = {.bit_timings = 1u << 3};
+    CHECK_EQ(co_lss_slave_setup(NULL, &lc), CO_ERR_ARG);
+    CHECK_EQ(co_lss_slave_setup(&t->node, NULL), CO_ERR_ARG);
+    /* Nothing was taken: bit timing 3 is still unsupported. */
+    to_config(t);
+    ingest(t, 0, LSS, "13 00 03 00 00 00 00 00");
+    CHECK_STR(BUS(t), "7E4#1301000000000000");
+    free(t);
+}
+
+static void test_slave_bit_timing_edges(void)
+{
+    test_node_t *t = slave(5);
+    /* Every table-0 index supported, but no callback to switch the controller. */
+    co_lss_slave_config_t lc = {.bit_timings = 0xFFFF};
+    CHECK_EQ(co_lss_slave_setup(&t->node, &lc), CO_OK);
+    to_config(t);
+    ingest(t, 0, LSS, "13 00 10 00 00 00 00 00"); /* index 16: beyond the table */
+    ingest(t, 0, LSS, "13 00 0F 00 00 00 00 00");
+    CHECK_STR(BUS(t), "7E4#1301000000000000 7E4#1300000000000000");
+    fake_clear(&t->bus);
+    ingest(t, 100 * MS, LSS, "15 0A 00 00 00 00 00 00"); /* switch after 10 ms */
+    CHECK_EQ(co_node_poll(&t->node, 100 * MS), 110 * MS);
+    CHECK_EQ(co_node_poll(&t->node, 105 * MS), 110 * MS);
+    CHECK_EQ(co_node_poll(&t->node, 110 * MS), CO_TIME_NEVER); /* done, nothing to call */
+    CHECK_EQ(co_lss_slave_mode(&t->node), CO_LSS_CONFIGURATION);
+    ingest(t, 120 * MS, LSS, "5E 00 00 00 00 00 00 00");
+    CHECK_STR(BUS(t), "7E4#5E05000000000000");
+    free(t);
+}
+
+static void test_slave_ignores_out_of_place_requests(void)
+{
+    test_node_t *t = slave(0xFF);
+    /* Fastscan: after the reset, a frame naming part 4 as the next is not answered. */
+    ingest(t, 0, LSS, "51 00 00 00 00 80 00 00");
+    CHECK_STR(BUS(t), "7E4#4F00000000000000");
+    fake_clear(&t->bus);
+    ingest(t, 0, LSS, "51 00 00 00 00 1F 00 04");
+    CHECK_STR(BUS(t), "");
+    ingest(t, 0, LSS, "51 00 00 00 00 1F 00 00"); /* the same with next 0: answered */
+    CHECK_STR(BUS(t), "7E4#4F00000000000000");
+    /* Switch selective is for slaves waiting: one in configuration does not answer. */
+    to_config(t);
+    fake_clear(&t->bus);
+    ingest(t, 0, LSS, "40 A0 0C 00 00 00 00 00");
+    ingest(t, 0, LSS, "41 01 00 00 00 00 00 00");
+    ingest(t, 0, LSS, "42 00 00 01 00 00 00 00");
+    ingest(t, 0, LSS, "43 00 00 00 00 00 00 00");
+    CHECK_STR(BUS(t), "");
+    CHECK_EQ(co_lss_slave_mode(&t->node), CO_LSS_CONFIGURATION);
+    free(t);
+}
+
 int main(void)
 {
     RUN(test_unconfigured_node_sends_nothing_and_waits);
@@ -794,5 +853,8 @@ int main(void)
     RUN(test_master_arguments);
     RUN(test_master_every_request_busy_and_timed_out);
     RUN(test_master_answers_without_callback);
+    RUN(test_slave_setup_arguments);
+    RUN(test_slave_bit_timing_edges);
+    RUN(test_slave_ignores_out_of_place_requests);
     return check_summary();
 }
