@@ -1123,6 +1123,83 @@ static void test_load_od_edges(void)
     free(slaves);
 }
 
+static void set_attr(station_t *s, uint16_t index, uint8_t sub, uint8_t attr)
+{
+    for (uint32_t e = 0; e < s->node.cfg.od.count; e++) {
+        if (s->od.entries[e].index == index && s->od.entries[e].sub == sub) {
+            s->od.entries[e].attr = attr;
+        }
+    }
+}
+
+static void test_configuration_date_cannot_be_compared(void)
+{
+    net_t *n = small_net(4);
+    static dated_t d3, d4;
+    memset(&d3, 0, sizeof d3);
+    memset(&d4, 0, sizeof d4);
+    add_1020(&n->dev[3 - FIRST], &d3);
+    add_1020(&n->dev[4 - FIRST], &d4);
+    set_attr(&n->dev[4 - FIRST], 0x1020, 2, CO_OD_WO); /* its time cannot be read */
+    /* Node 5 cannot tell its product code. */
+    set_attr(&n->dev[5 - FIRST], 0x1018, 2, CO_OD_WO);
+    n->slaves[5 - 1].product = 0x105;
+    uint32_t off = 0;
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0xC0FFEE);
+    for (uint8_t id = 2; id <= 4; id++) {
+        n->slaves[id - 1].dcf = n->dcf[0];
+        n->slaves[id - 1].dcf_len = off;
+        n->slaves[id - 1].config_date = 0x1234;
+        n->slaves[id - 1].config_time = 0x5678;
+    }
+    n->slaves[4 - 1].config_date = 0; /* a time only */
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 4);
+    d3.date = 0x1233; /* another date, the same time */
+    d3.time = 0x5678;
+    d4.date = 0;
+    d4.time = 0x5678;
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    /* Node 2 has no 0x1020, node 3 another date, node 4 no readable time: all three get
+     * the configuration. */
+    for (uint8_t id = 2; id <= 4; id++) {
+        CHECK(find(n, id, CO_MGR_BOOTED) != NULL);
+        CHECK_EQ(n->dev[id - FIRST].od.app_u32, 0xC0FFEE);
+    }
+    /* Node 5: the refused read is a failed check, with the abort code. */
+    const co_mgr_event_t *e = find(n, 5, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_PRODUCT);
+        CHECK_EQ(e->abort, CO_ABORT_WRITE_ONLY);
+        CHECK_EQ(e->index, 0x1018);
+        CHECK_EQ(e->sub, 2);
+    }
+    free(n);
+}
+
+static void test_heartbeat_entry_without_time_is_free(void)
+{
+    net_t *n = small_net(1);
+    n->slaves[2 - 1].heartbeat_ms = 250;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 1);
+    /* Entry 1 watches node 50, entry 2 names node 51 with time 0 (not watching). */
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, hb_consumer_value(50, 1000)),
+             CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 2, hb_consumer_value(51, 0)), CO_ABORT_NONE);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK(find(n, 2, CO_MGR_BOOTED) != NULL);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 2, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(2, 250));
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 1, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(50, 1000));
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
@@ -1147,5 +1224,7 @@ int main(void)
     RUN(test_frames_that_are_not_boot_ups);
     RUN(test_sdo_channel_taken);
     RUN(test_load_od_edges);
+    RUN(test_configuration_date_cannot_be_compared);
+    RUN(test_heartbeat_entry_without_time_is_free);
     return check_summary();
 }
