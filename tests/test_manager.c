@@ -961,6 +961,7 @@ static void test_mandatory_failure_after_start_does_not_halt(void)
     net_t *n = small_net(2);
     n->slaves[2 - 1].assignment |= CO_MGR_MANDATORY | CO_MGR_BOOT_ON_BOOTUP;
     n->slaves[2 - 1].vendor = 0xCA0;
+    n->slaves[2 - 1].heartbeat_ms = 300;
     small_init(n, CO_MGR_NMT_MASTER);
     small_start_all(n, 2);
     co_manager_start(&n->mgr);
@@ -980,6 +981,17 @@ static void test_mandatory_failure_after_start_does_not_halt(void)
     CHECK(find(n, 2, CO_MGR_NETWORK_HALTED) == NULL); /* the network runs already */
     CHECK(co_manager_network_started(&n->mgr));
     CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_PRE_OPERATIONAL);
+    /* The master still watches its heartbeat: silence, then heartbeats again. A slave
+     * that failed is not "lost", and its heartbeat coming back does not boot it. */
+    uint32_t before = n->event_count;
+    co_sim_set_bus_off(&n->dev[0].port, true);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    co_sim_set_bus_off(&n->dev[0].port, false);
+    co_sim_run_until(&n->bus, 6000 * MS);
+    CHECK_EQ(n->event_count, before);
+    CHECK(find(n, 2, CO_MGR_LOST) == NULL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_FAILED_STATE);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 2), CO_BOOT_VENDOR);
     free(n);
 }
 
@@ -1181,10 +1193,11 @@ static void test_configuration_date_cannot_be_compared(void)
 
 static void test_heartbeat_entry_without_time_is_free(void)
 {
-    net_t *n = small_net(1);
+    net_t *n = small_net(2);
     n->slaves[2 - 1].heartbeat_ms = 250;
+    n->slaves[3 - 1].assignment = 0; /* node 3 is on the bus, not in the list */
     small_init(n, CO_MGR_NMT_MASTER);
-    small_start_all(n, 1);
+    small_start_all(n, 2);
     /* Entry 1 watches node 50, entry 2 names node 51 with time 0 (not watching). */
     CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, hb_consumer_value(50, 1000)),
              CO_ABORT_NONE);
@@ -1197,6 +1210,16 @@ static void test_heartbeat_entry_without_time_is_free(void)
     CHECK_EQ(v, hb_consumer_value(2, 250));
     CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 1, &v), CO_OK);
     CHECK_EQ(v, hb_consumer_value(50, 1000));
+    /* The master watches unlisted node 3 too: its boot-up and heartbeat are none of the
+     * manager's business. */
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 3, hb_consumer_value(3, 1000)),
+             CO_ABORT_NONE);
+    uint32_t before = n->event_count;
+    co_nmt_apply(&n->dev[3 - FIRST].node, CO_NMT_CMD_RESET_COMMUNICATION);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    CHECK_EQ(n->event_count, before);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 3), CO_MGR_UNLISTED);
+    CHECK_EQ(co_nmt_state(&n->dev[3 - FIRST].node), CO_NMT_PRE_OPERATIONAL);
     free(n);
 }
 

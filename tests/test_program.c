@@ -466,16 +466,16 @@ static void test_no_callbacks_no_check_other_program(void)
     /* No done, no progress, no identification check: the download still runs to the end,
      * and the master is free for the next one afterwards. */
     co_flash_request_t r = request(b, 0);
-    r.len = 5000;
+    r.len = 200000; /* long enough to be polled in the data stage */
     r.done = NULL;
     r.progress = NULL;
     r.check_ident = false;
     r.clear = false;
     CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
-    co_sim_run_until(&b->bus, 2000 * MS);
+    co_sim_run_until(&b->bus, 20000 * MS);
     CHECK_EQ(b->results, 0);
-    CHECK_EQ(b->app.bytes, 5000);
-    CHECK_EQ(b->app.sum, checksum(5381, b->image, 5000));
+    CHECK_EQ(b->app.bytes, 200000);
+    CHECK_EQ(b->app.sum, checksum(5381, b->image, 200000));
     CHECK_EQ(b->app.prog.state, CO_PROGRAM_START);
     static const uint8_t want[] = {CO_PROGRAM_STOP, CO_PROGRAM_START};
     CHECK_EQ(b->app.command_count, 2);
@@ -485,7 +485,7 @@ static void test_no_callbacks_no_check_other_program(void)
     r.len = 10;
     r.check_ident = false;
     CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
-    co_sim_run_until(&b->bus, 3000 * MS);
+    co_sim_run_until(&b->bus, 21000 * MS);
     CHECK_EQ(b->results, 1);
     CHECK_EQ(b->result.stage, CO_FLASH_STAGE_DONE);
     CHECK(b->result.ident_ok);
@@ -493,7 +493,7 @@ static void test_no_callbacks_no_check_other_program(void)
     /* Program 2 does not exist on the device: the stop of 0x1F51 sub2 fails. */
     r.program = 2;
     CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
-    co_sim_run_until(&b->bus, 4000 * MS);
+    co_sim_run_until(&b->bus, 22000 * MS);
     CHECK_EQ(b->results, 2);
     CHECK_EQ(b->result.stage, CO_FLASH_STAGE_STOP);
     CHECK_EQ(b->result.abort, CO_ABORT_NO_SUB);
