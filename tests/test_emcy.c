@@ -474,6 +474,62 @@ static void test_raised_before_start_sent_after_boot_up(void)
     CHECK_STR(bus(&t), "705#00 085#0050010000000000");
 }
 
+static void test_producer_invalidated_behind_the_nodes_back(void)
+{
+    test_node_t t;
+    start(&t, 5);
+    CHECK_EQ(write_u16(&t, 0x1015, 0, 100), CO_ABORT_NONE); /* 10 ms */
+    co_emcy_raise(&t.node, 0x5001, NULL);
+    co_emcy_raise(&t.node, 0x5002, NULL); /* waits for the inhibit time */
+    CHECK_STR(bus(&t), "085#0150010000000000");
+    /* The application makes 0x1014 not valid in storage, not through the node: the
+     * waiting frame is dropped, not sent. */
+    t.od.emcy_cob_id |= 0x80000000u;
+    co_node_poll(&t.node, 20 * MS);
+    CHECK_EQ(t.bus.count, 1);
+    /* Valid again: the dropped frame does not come back. */
+    t.od.emcy_cob_id &= ~0x80000000u;
+    co_node_poll(&t.node, 40 * MS);
+    CHECK_EQ(t.bus.count, 1);
+    CHECK(co_emcy_active(&t.node, 0x5002)); /* still an active error */
+    co_emcy_raise(&t.node, 0x5003, NULL);
+    CHECK_STR(bus(&t), "085#0150010000000000 085#0350010000000000");
+}
+
+static void test_unknown_bus_event_ignored(void)
+{
+    test_node_t t;
+    start(&t, 5);
+    co_node_bus_event(&t.node, (co_bus_event_t)99);
+    CHECK_STR(bus(&t), "");
+    CHECK_EQ(t.od.error_register, 0);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
+}
+
+static void test_history_entry_written_locally_keeps_history(void)
+{
+    test_node_t t;
+    start(&t, 5);
+    co_emcy_raise(&t.node, 0x5001, NULL);
+    co_emcy_raise(&t.node, 0x5002, NULL);
+    uint64_t count = 0;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1003, 0, &count), CO_OK);
+    CHECK_EQ(count, 2);
+    /* Writing an entry (not sub0) is no clear. */
+    CHECK_EQ(co_node_set_uint(&t.node, 0x1003, 2, 0x1234), CO_ABORT_NONE);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1003, 0, &count), CO_OK);
+    CHECK_EQ(count, 2);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1003, 1, &v), CO_OK);
+    CHECK_EQ(v & 0xFFFF, 0x5002);
+    /* Sub0 = 0 clears it. */
+    CHECK_EQ(co_node_set_uint(&t.node, 0x1003, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1003, 0, &count), CO_OK);
+    CHECK_EQ(count, 0);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1003, 1, &v), CO_OK);
+    CHECK_EQ(v, 0);
+}
+
 int main(void)
 {
     RUN(test_register_bit_of_each_group);
@@ -494,5 +550,8 @@ int main(void)
     RUN(test_reset_communication_keeps_errors_and_ends_0x8130);
     RUN(test_error_reset_after_0x8130_follows_boot_up);
     RUN(test_raised_before_start_sent_after_boot_up);
+    RUN(test_producer_invalidated_behind_the_nodes_back);
+    RUN(test_unknown_bus_event_ignored);
+    RUN(test_history_entry_written_locally_keeps_history);
     return check_summary();
 }

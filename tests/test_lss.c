@@ -631,6 +631,204 @@ static void test_eight_devices_found_by_fastscan_then_boot(void)
     free(f);
 }
 
+/* ---- master: arguments, busy, wrong answers and time-outs for every request */
+
+typedef co_err_t (*lss_request_fn)(co_node_t *node, co_lss_done_fn done, void *ctx);
+
+static co_err_t rq_selective(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    static const co_lss_address_t a = {1, 2, 3, 4};
+    return co_lss_switch_selective(n, &a, d, c);
+}
+static co_err_t rq_node_id(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_configure_node_id(n, CO_NODE_ID_UNCONFIGURED, d, c);
+}
+static co_err_t rq_bit_timing(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_configure_bit_timing(n, 0, 4, d, c);
+}
+static co_err_t rq_store(co_node_t *n, co_lss_done_fn d, void *c) { return co_lss_store(n, d, c); }
+static co_err_t rq_inquire_vendor(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_inquire(n, CO_LSS_CS_INQUIRE_VENDOR, d, c);
+}
+static co_err_t rq_identify(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    static const co_lss_address_t lo = {1, 2, 0, 0}, hi = {1, 2, 9, 9};
+    return co_lss_identify_remote(n, &lo, &hi, d, c);
+}
+static co_err_t rq_non_configured(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_identify_non_configured(n, d, c);
+}
+static co_err_t rq_fastscan(co_node_t *n, co_lss_done_fn d, void *c)
+{
+    return co_lss_fastscan(n, NULL, d, c);
+}
+
+static void test_master_arguments(void)
+{
+    test_node_t *m = slave(1);
+    done_log_t log = {0};
+    co_lss_address_t a = {0};
+    CHECK_EQ(co_lss_master_set_timeout(&m->node, 65536), CO_ERR_ARG);
+    CHECK_EQ(co_lss_master_set_timeout(&m->node, 65535), CO_OK);
+    CHECK_EQ(co_lss_switch_selective(&m->node, NULL, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_configure_node_id(&m->node, 128, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_configure_node_id(&m->node, 0xFE, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_inquire(&m->node, CO_LSS_CS_INQUIRE_VENDOR - 1, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_identify_remote(&m->node, NULL, &a, on_done, &log), CO_ERR_ARG);
+    CHECK_EQ(co_lss_identify_remote(&m->node, &a, NULL, on_done, &log), CO_ERR_ARG);
+    CHECK(!co_lss_master_busy(&m->node));
+    CHECK_STR(BUS(m), ""); /* nothing sent */
+    CHECK_EQ(log.n, 0);
+    CHECK_STR(co_lss_status_name(CO_LSS_OK), "ok");
+    CHECK_STR(co_lss_status_name(CO_LSS_TIMEOUT), "time-out");
+    CHECK_STR(co_lss_status_name(CO_LSS_SCAN_FAILED), "fastscan lost the slave");
+    CHECK_STR(co_lss_status_name(CO_LSS_CANCELLED), "cancelled");
+    CHECK_STR(co_lss_status_name(99), "unknown");
+    free(m);
+}
+
+static void test_master_every_request_busy_and_timed_out(void)
+{
+    static const lss_request_fn requests[] = {rq_selective,      rq_node_id,        rq_bit_timing,
+                                              rq_store,          rq_inquire_vendor, rq_identify,
+                                              rq_non_configured, rq_fastscan};
+    /* An answer of the wrong kind for each: another request's answer. */
+    static const char *wrong[] = {"43 00 00 00 00 00 00 00", "13 00 00 00 00 00 00 00",
+                                  "11 00 00 00 00 00 00 00", "5E 00 00 00 00 00 00 00",
+                                  "5B 00 00 00 00 00 00 00", "50 00 00 00 00 00 00 00",
+                                  "4F 00 00 00 00 00 00 00", "50 00 00 00 00 00 00 00"};
+    const uint32_t count = sizeof requests / sizeof requests[0];
+    test_node_t *m = slave(1);
+    CHECK_EQ(co_lss_master_set_timeout(&m->node, 10), CO_OK);
+    uint64_t now = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        done_log_t log = {0};
+        fake_clear(&m->bus);
+        CHECK_EQ(requests[i](&m->node, on_done, &log), CO_OK);
+        uint32_t sent = m->bus.count;
+        CHECK(sent >= 1);
+        /* While it runs every other request is refused and sends nothing. */
+        for (uint32_t j = 0; j < count; j++) {
+            CHECK_EQ(requests[j](&m->node, on_done, &log), CO_ERR_BUSY);
+        }
+        CHECK_EQ(m->bus.count, sent);
+        /* A wrong answer, and a remote frame, are not the answer. */
+        ingest(m, now + 1 * MS, 0x7E4, wrong[i]);
+        co_frame_t rtr = frm(0x7E4, "R8");
+        co_node_ingest(&m->node, now + 1 * MS, &rtr);
+        CHECK_EQ(log.n, 0);
+        CHECK(co_lss_master_busy(&m->node));
+        /* Nobody answers: a time-out after 10 ms (fastscan: after its reset step). */
+        co_node_poll(&m->node, now + 10 * MS);
+        CHECK_EQ(log.n, 1);
+        CHECK_EQ(log.r[0].status, CO_LSS_TIMEOUT);
+        CHECK_EQ(log.r[0].answers, 0);
+        CHECK(!co_lss_master_busy(&m->node));
+        now += 20 * MS;
+        co_node_poll(&m->node, now);
+    }
+    CHECK(m->node.stats.rx_malformed >= count);
+    /* Without a callback a request still ends, and the master is free again. */
+    for (uint32_t i = 0; i < count; i++) {
+        CHECK_EQ(requests[i](&m->node, NULL, NULL), CO_OK);
+        co_node_poll(&m->node, now + 10 * MS);
+        CHECK(!co_lss_master_busy(&m->node));
+        now += 20 * MS;
+    }
+    free(m);
+}
+
+static void test_master_answers_without_callback(void)
+{
+    test_node_t *m = slave(1);
+    CHECK_EQ(co_lss_inquire(&m->node, CO_LSS_CS_INQUIRE_PRODUCT, NULL, NULL), CO_OK);
+    ingest(m, 1 * MS, 0x7E4, "5B 01 02 03 04 00 00 00");
+    CHECK(!co_lss_master_busy(&m->node));
+    /* Identify non-configured: the answers are counted until the time-out. */
+    done_log_t log = {0};
+    CHECK_EQ(co_lss_identify_non_configured(&m->node, on_done, &log), CO_OK);
+    ingest(m, 2 * MS, 0x7E4, "4F 00 00 00 00 00 00 00"); /* identify answer: not this one */
+    ingest(m, 3 * MS, 0x7E4, "50 00 00 00 00 00 00 00");
+    ingest(m, 4 * MS, 0x7E4, "50 00 00 00 00 00 00 00");
+    ingest(m, 5 * MS, 0x7E4, "50 00 00 00 00 00 00 00");
+    CHECK_EQ(log.n, 0);
+    co_node_poll(&m->node, 200 * MS);
+    CHECK_EQ(log.n, 1);
+    CHECK_EQ(log.r[0].status, CO_LSS_OK);
+    CHECK_EQ(log.r[0].answers, 3);
+    CHECK_EQ(log.r[0].cs, CO_LSS_CS_IDENT_NON_CONFIGURED);
+    /* Store refused by the slave (error 1: not supported). */
+    CHECK_EQ(co_lss_store(&m->node, on_done, &log), CO_OK);
+    ingest(m, 300 * MS, 0x7E4, "17 01 00 00 00 00 00 00");
+    CHECK_EQ(log.n, 2);
+    CHECK_EQ(log.r[1].status, CO_LSS_REFUSED);
+    CHECK_EQ(log.r[1].error, 1);
+    free(m);
+}
+
+/* ---- slave: arguments and the requests it must not answer */
+
+static void test_slave_setup_arguments(void)
+{
+    test_node_t *t = slave(5);
+    co_lss_slave_config_t lc = {.bit_timings = 1u << 3};
+    CHECK_EQ(co_lss_slave_setup(NULL, &lc), CO_ERR_ARG);
+    CHECK_EQ(co_lss_slave_setup(&t->node, NULL), CO_ERR_ARG);
+    /* Nothing was taken: bit timing 3 is still unsupported. */
+    to_config(t);
+    ingest(t, 0, LSS, "13 00 03 00 00 00 00 00");
+    CHECK_STR(BUS(t), "7E4#1301000000000000");
+    free(t);
+}
+
+static void test_slave_bit_timing_edges(void)
+{
+    test_node_t *t = slave(5);
+    /* Every table-0 index supported, but no callback to switch the controller. */
+    co_lss_slave_config_t lc = {.bit_timings = 0xFFFF};
+    CHECK_EQ(co_lss_slave_setup(&t->node, &lc), CO_OK);
+    to_config(t);
+    ingest(t, 0, LSS, "13 00 10 00 00 00 00 00"); /* index 16: beyond the table */
+    ingest(t, 0, LSS, "13 00 0F 00 00 00 00 00");
+    CHECK_STR(BUS(t), "7E4#1301000000000000 7E4#1300000000000000");
+    fake_clear(&t->bus);
+    ingest(t, 100 * MS, LSS, "15 0A 00 00 00 00 00 00"); /* switch after 10 ms */
+    CHECK_EQ(co_node_poll(&t->node, 100 * MS), 110 * MS);
+    CHECK_EQ(co_node_poll(&t->node, 105 * MS), 110 * MS);
+    CHECK_EQ(co_node_poll(&t->node, 110 * MS), CO_TIME_NEVER); /* done, nothing to call */
+    CHECK_EQ(co_lss_slave_mode(&t->node), CO_LSS_CONFIGURATION);
+    ingest(t, 120 * MS, LSS, "5E 00 00 00 00 00 00 00");
+    CHECK_STR(BUS(t), "7E4#5E05000000000000");
+    free(t);
+}
+
+static void test_slave_ignores_out_of_place_requests(void)
+{
+    test_node_t *t = slave(0xFF);
+    /* Fastscan: after the reset, a frame naming part 4 as the next is not answered. */
+    ingest(t, 0, LSS, "51 00 00 00 00 80 00 00");
+    CHECK_STR(BUS(t), "7E4#4F00000000000000");
+    fake_clear(&t->bus);
+    ingest(t, 0, LSS, "51 00 00 00 00 1F 00 04");
+    CHECK_STR(BUS(t), "");
+    ingest(t, 0, LSS, "51 00 00 00 00 1F 00 00"); /* the same with next 0: answered */
+    CHECK_STR(BUS(t), "7E4#4F00000000000000");
+    /* Switch selective is for slaves waiting: one in configuration does not answer. */
+    to_config(t);
+    fake_clear(&t->bus);
+    ingest(t, 0, LSS, "40 A0 0C 00 00 00 00 00");
+    ingest(t, 0, LSS, "41 01 00 00 00 00 00 00");
+    ingest(t, 0, LSS, "42 00 00 01 00 00 00 00");
+    ingest(t, 0, LSS, "43 00 00 00 00 00 00 00");
+    CHECK_STR(BUS(t), "");
+    CHECK_EQ(co_lss_slave_mode(&t->node), CO_LSS_CONFIGURATION);
+    free(t);
+}
+
 int main(void)
 {
     RUN(test_unconfigured_node_sends_nothing_and_waits);
@@ -652,5 +850,11 @@ int main(void)
     RUN(test_master_fastscan_frames);
     RUN(test_fastscan_finds_the_slave);
     RUN(test_eight_devices_found_by_fastscan_then_boot);
+    RUN(test_master_arguments);
+    RUN(test_master_every_request_busy_and_timed_out);
+    RUN(test_master_answers_without_callback);
+    RUN(test_slave_setup_arguments);
+    RUN(test_slave_bit_timing_edges);
+    RUN(test_slave_ignores_out_of_place_requests);
     return check_summary();
 }

@@ -642,6 +642,587 @@ static void test_description_from_the_master_dictionary(void)
     free(n);
 }
 
+/* ---- edges: arguments, each identity check, malformed DCFs, heartbeat set-up, start modes */
+
+static void test_arguments_and_texts(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 0);
+    station(n, &n->master, 1, 0, NULL);
+    co_manager_config_t mc = {.nmt_startup = CO_MGR_NMT_MASTER, .slaves = n->slaves};
+    CHECK_EQ(co_manager_init(NULL, &n->master.node, &mc), CO_ERR_ARG);
+    CHECK_EQ(co_manager_init(&n->mgr, NULL, &mc), CO_ERR_ARG);
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, NULL), CO_ERR_ARG);
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    /* Node-IDs outside 1..127 are never slaves. */
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 0), CO_MGR_UNLISTED);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 128), CO_MGR_UNLISTED);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 0), CO_BOOT_NOT_LISTED);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 200), CO_BOOT_NOT_LISTED);
+    CHECK(!co_manager_network_started(&n->mgr));
+    /* Every reason and event kind has its text. */
+    static const struct {
+        uint8_t r;
+        const char *text;
+    } reasons[] = {
+        {CO_BOOT_NOT_LISTED, "A: not in the network list"},
+        {CO_BOOT_DEVICE_TYPE, "C: device type does not match"},
+        {CO_BOOT_HEARTBEAT, "E: heartbeat lost"},
+        {CO_BOOT_GUARDING, "F: no answer to node guarding"},
+        {CO_BOOT_HEARTBEAT_START, "K: no heartbeat when error control started"},
+        {CO_BOOT_WAS_OPERATIONAL, "L: the slave was operational already"},
+        {CO_BOOT_PRODUCT, "M: product code does not match"},
+        {CO_BOOT_REVISION, "N: revision number does not match"},
+        {CO_BOOT_SERIAL, "O: serial number does not match"},
+    };
+    for (uint32_t i = 0; i < sizeof reasons / sizeof reasons[0]; i++) {
+        CHECK_STR(co_boot_reason_text(reasons[i].r), reasons[i].text);
+    }
+    CHECK_STR(co_mgr_event_name(CO_MGR_BOOTED), "booted");
+    CHECK_STR(co_mgr_event_name(CO_MGR_STARTED), "started");
+    CHECK_STR(co_mgr_event_name(CO_MGR_FAILED), "failed");
+    CHECK_STR(co_mgr_event_name(CO_MGR_LOST), "lost");
+    CHECK_STR(co_mgr_event_name(CO_MGR_NETWORK_STARTED), "network started");
+    CHECK_STR(co_mgr_event_name(0), "unknown");
+    CHECK_STR(co_mgr_event_name(99), "unknown");
+    free(n);
+}
+
+static void test_dcf_put_arguments(void)
+{
+    uint8_t buf[16];
+    uint8_t v[1] = {7};
+    uint32_t off = 0;
+    CHECK_EQ(co_dcf_put(NULL, sizeof buf, &off, 0x2000, 0, v, 1), CO_ERR_ARG);
+    CHECK_EQ(co_dcf_put(buf, sizeof buf, NULL, 0x2000, 0, v, 1), CO_ERR_ARG);
+    CHECK_EQ(co_dcf_put(buf, sizeof buf, &off, 0x2000, 0, NULL, 1), CO_ERR_ARG);
+    CHECK_EQ(off, 0);
+    /* Not even room for the count. */
+    CHECK_EQ(co_dcf_put(buf, 3, &off, 0x2000, 0, v, 1), CO_ERR_FULL);
+    CHECK_EQ(off, 0);
+    /* The count fits, the record header does not. */
+    CHECK_EQ(co_dcf_put(buf, 10, &off, 0x2000, 0, v, 1), CO_ERR_FULL);
+    CHECK_EQ(co_get_u32(buf), 0);
+    /* An empty record (no data) is a record. */
+    off = 0;
+    CHECK_EQ(co_dcf_put(buf, sizeof buf, &off, 0x2000, 1, NULL, 0), CO_OK);
+    CHECK_EQ(off, 4 + 7);
+    CHECK_EQ(co_get_u32(buf), 1);
+    CHECK_EQ(co_dcf_check(buf, off), CO_OK);
+    /* `off` past the capacity: refused, nothing written. */
+    off = 20;
+    CHECK_EQ(co_dcf_put(buf, sizeof buf, &off, 0x2000, 0, v, 1), CO_ERR_FULL);
+    CHECK_EQ(co_get_u32(buf), 1);
+    /* Checks: NULL, empty DCF, a header cut short. */
+    CHECK_EQ(co_dcf_check(NULL, 4), CO_ERR_CONFIG);
+    static const uint8_t empty[4] = {0};
+    CHECK_EQ(co_dcf_check(empty, 4), CO_OK);
+    static const uint8_t cut[8] = {1, 0, 0, 0, 0x00, 0x20, 0, 1};
+    CHECK_EQ(co_dcf_check(cut, sizeof cut), CO_ERR_CONFIG);
+}
+
+/* Devices 2..1+count (identity {0xCA0, 0x100 + id, 0x10000, 5000 + id}, heartbeat 100 ms),
+ * each listed as a plain slave without checks. */
+static net_t *small_net(uint8_t count)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    co_sim_set_trace(&n->bus, on_trace, n);
+    station(n, &n->master, 1, 0, NULL);
+    for (uint8_t i = 0; i < count; i++) {
+        uint8_t id = (uint8_t)(FIRST + i);
+        uint32_t ident[4] = {0xCA0u, 0x100u + id, 0x00010000u, 5000u + id};
+        station(n, &n->dev[i], id, 100, ident);
+        n->slaves[id - 1].assignment = CO_MGR_SLAVE;
+    }
+    return n;
+}
+
+static void small_init(net_t *n, uint32_t startup)
+{
+    co_manager_config_t mc = {
+        .nmt_startup = startup, .slaves = n->slaves, .on_event = on_event, .ctx = n};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+}
+
+static void small_start_all(net_t *n, uint8_t count)
+{
+    co_node_start(&n->master.node, 0);
+    for (uint8_t i = 0; i < count; i++) {
+        co_node_start(&n->dev[i].node, 0);
+    }
+    co_sim_run_until(&n->bus, 10 * MS);
+}
+
+static void check_failed(const net_t *n, uint8_t id, uint8_t reason, uint16_t index, uint8_t sub,
+                         uint32_t value)
+{
+    const co_mgr_event_t *e = find(n, id, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, reason);
+        CHECK_EQ(e->index, index);
+        CHECK_EQ(e->sub, sub);
+        CHECK_EQ(e->value, value);
+    }
+    CHECK_EQ(co_manager_slave_state(&n->mgr, id), CO_MGR_FAILED_STATE);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, id), reason);
+    CHECK(find(n, id, CO_MGR_BOOTED) == NULL);
+}
+
+static void test_each_identity_check(void)
+{
+    net_t *n = small_net(6);
+    n->slaves[2 - 1].device_type = 0x192; /* C */
+    n->slaves[3 - 1].product = 0x999;     /* M */
+    n->slaves[4 - 1].product = 0x104;     /* right */
+    n->slaves[4 - 1].revision = 0x20000;  /* N */
+    n->slaves[5 - 1].serial = 1;          /* O */
+    n->slaves[6 - 1].device_type = 0x191; /* all right */
+    n->slaves[6 - 1].vendor = 0xCA0;
+    n->slaves[6 - 1].product = 0x106;
+    n->slaves[6 - 1].revision = 0x10000;
+    n->slaves[6 - 1].serial = 5006;
+    n->slaves[7 - 1].assignment |= CO_MGR_MANDATORY; /* C, and the network waits */
+    n->slaves[7 - 1].device_type = 0x1234;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 6);
+    CHECK_EQ(co_manager_start(&n->mgr), CO_OK);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    check_failed(n, 2, CO_BOOT_DEVICE_TYPE, 0x1000, 0, 0x191);
+    check_failed(n, 3, CO_BOOT_PRODUCT, 0x1018, 2, 0x103);
+    check_failed(n, 4, CO_BOOT_REVISION, 0x1018, 3, 0x10000);
+    check_failed(n, 5, CO_BOOT_SERIAL, 0x1018, 4, 5005);
+    check_failed(n, 7, CO_BOOT_DEVICE_TYPE, 0x1000, 0, 0x191);
+    const co_mgr_event_t *h = find(n, 7, CO_MGR_NETWORK_HALTED);
+    CHECK(h != NULL);
+    if (h) {
+        CHECK_EQ(h->reason, CO_BOOT_DEVICE_TYPE);
+    }
+    CHECK(find(n, 6, CO_MGR_BOOTED) != NULL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 6), CO_MGR_CONFIGURED);
+    CHECK(!co_manager_network_started(&n->mgr));
+    CHECK_EQ(n->start_frames, 0);
+    CHECK_EQ(co_nmt_state(&n->dev[6 - FIRST].node), CO_NMT_PRE_OPERATIONAL);
+    /* Node 7 boots again (a mandatory slave the network waits for) and still fails. */
+    uint32_t before = n->event_count;
+    co_nmt_apply(&n->dev[7 - FIRST].node, CO_NMT_CMD_RESET_COMMUNICATION);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    uint32_t again = 0;
+    for (uint32_t i = before; i < n->event_count; i++) {
+        again += n->events[i].node_id == 7 && n->events[i].kind == CO_MGR_FAILED;
+    }
+    CHECK_EQ(again, 1);
+    /* Node 2 is not mandatory and has no bit 2: its boot-up changes nothing. */
+    before = n->event_count;
+    co_nmt_apply(&n->dev[2 - FIRST].node, CO_NMT_CMD_RESET_COMMUNICATION);
+    co_sim_run_until(&n->bus, 4000 * MS);
+    CHECK_EQ(n->event_count, before);
+    free(n);
+}
+
+static void test_malformed_and_empty_dcf(void)
+{
+    net_t *n = small_net(3);
+    /* Node 2: a DCF cut in its second record: J with abort 0, nothing downloaded. */
+    uint32_t off = 0;
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0x11);
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0x22);
+    n->slaves[2 - 1].dcf = n->dcf[0];
+    n->slaves[2 - 1].dcf_len = off - 1;
+    /* Node 3: a record without data, which the device refuses. */
+    off = 0;
+    CHECK_EQ(co_dcf_put(n->dcf[1], 128, &off, 0x2000, 0, NULL, 0), CO_OK);
+    n->slaves[3 - 1].dcf = n->dcf[1];
+    n->slaves[3 - 1].dcf_len = off;
+    /* Node 4: a DCF of no records: nothing to do, booted. */
+    off = 0;
+    CHECK_EQ(co_dcf_put(n->dcf[2], 128, &off, 0x2000, 0, NULL, 0), CO_OK);
+    n->dcf[2][0] = 0;
+    n->slaves[4 - 1].dcf = n->dcf[2];
+    n->slaves[4 - 1].dcf_len = 4;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 3);
+    uint32_t app2 = n->dev[0].od.app_u32;
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_CONFIG);
+        CHECK_EQ(e->abort, 0);
+        CHECK_EQ(e->index, 0);
+        CHECK_EQ(e->sub, 0);
+    }
+    CHECK_EQ(n->dev[0].od.app_u32, app2);
+    e = find(n, 3, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_CONFIG);
+        CHECK(e->abort != 0);
+        CHECK_EQ(e->index, 0x2000);
+        CHECK_EQ(e->sub, 0);
+    }
+    CHECK(find(n, 4, CO_MGR_BOOTED) != NULL);
+    CHECK(find(n, 4, CO_MGR_STARTED) != NULL);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->dev[4 - FIRST].node), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(&n->dev[2 - FIRST].node), CO_NMT_PRE_OPERATIONAL);
+    free(n);
+}
+
+static void test_no_event_callback(void)
+{
+    net_t *n = small_net(2);
+    n->slaves[3 - 1].vendor = 0xBAD;
+    co_manager_config_t mc = {.nmt_startup = CO_MGR_NMT_MASTER, .slaves = n->slaves};
+    CHECK_EQ(co_manager_init(&n->mgr, &n->master.node, &mc), CO_OK);
+    small_start_all(n, 2);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK_EQ(n->event_count, 0);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_RUNNING);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 3), CO_BOOT_VENDOR);
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(&n->dev[1].node), CO_NMT_PRE_OPERATIONAL);
+    free(n);
+}
+
+static void test_no_free_heartbeat_entry(void)
+{
+    net_t *n = small_net(2);
+    n->slaves[2 - 1].heartbeat_ms = 300;
+    n->slaves[3 - 1].heartbeat_ms = 300;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 2);
+    /* Every 0x1016 entry of the master watches someone else, one of them node 3. */
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, hb_consumer_value(50, 1000)),
+             CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 2, hb_consumer_value(51, 1000)),
+             CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 3, hb_consumer_value(3, 1000)),
+             CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 4, hb_consumer_value(52, 1000)),
+             CO_ABORT_NONE);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_HEARTBEAT_START);
+        CHECK_EQ(e->index, 0x1016);
+    }
+    /* Node 3: its own entry is reused with the described time. */
+    CHECK(find(n, 3, CO_MGR_BOOTED) != NULL);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 3, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(3, 300));
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 1, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(50, 1000));
+    free(n);
+}
+
+static void test_no_slave_start_and_late_slave(void)
+{
+    net_t *n = small_net(3);
+    n->slaves[4 - 1].assignment |= CO_MGR_BOOT_ON_BOOTUP;
+    /* The master itself in the list: it is no slave of its own. */
+    n->slaves[1 - 1].assignment = CO_MGR_SLAVE | CO_MGR_MANDATORY;
+    small_init(n, CO_MGR_NMT_MASTER | CO_MGR_NO_SLAVE_START | CO_MGR_START_ALL);
+    co_node_start(&n->master.node, 0);
+    co_node_start(&n->dev[0].node, 0);
+    co_node_start(&n->dev[1].node, 0);
+    co_sim_run_until(&n->bus, 10 * MS);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 1), CO_MGR_UNLISTED);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK(find(n, 0, CO_MGR_NETWORK_STARTED) != NULL);
+    CHECK_EQ(n->start_frames, 0); /* bit 3: the application starts the slaves */
+    CHECK(find(n, 2, CO_MGR_STARTED) == NULL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_CONFIGURED);
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 4), CO_MGR_FAILED_STATE);
+    /* Node 4 comes late: booted, and still not started. */
+    co_node_start(&n->dev[2].node, n->bus.now_us);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    CHECK(find(n, 4, CO_MGR_BOOTED) != NULL);
+    CHECK(find(n, 4, CO_MGR_STARTED) == NULL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 4), CO_MGR_CONFIGURED);
+    CHECK_EQ(co_nmt_state(&n->dev[2].node), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(n->start_frames, 0);
+    free(n);
+}
+
+static void test_mandatory_failure_after_start_does_not_halt(void)
+{
+    net_t *n = small_net(2);
+    n->slaves[2 - 1].assignment |= CO_MGR_MANDATORY | CO_MGR_BOOT_ON_BOOTUP;
+    n->slaves[2 - 1].vendor = 0xCA0;
+    n->slaves[2 - 1].heartbeat_ms = 300;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 2);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_OPERATIONAL);
+    /* Node 2 is replaced by one of another vendor, which boots up. */
+    n->dev[0].ident[0] = 0xBAD;
+    co_nmt_apply(&n->dev[0].node, CO_NMT_CMD_RESET_NODE);
+    co_sim_run_until(&n->bus, 4000 * MS);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_VENDOR);
+        CHECK_EQ(e->value, 0xBAD);
+    }
+    CHECK(find(n, 2, CO_MGR_NETWORK_HALTED) == NULL); /* the network runs already */
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_PRE_OPERATIONAL);
+    /* The master still watches its heartbeat: silence, then heartbeats again. A slave
+     * that failed is not "lost", and its heartbeat coming back does not boot it. */
+    uint32_t before = n->event_count;
+    co_sim_set_bus_off(&n->dev[0].port, true);
+    co_sim_run_until(&n->bus, 5000 * MS);
+    co_sim_set_bus_off(&n->dev[0].port, false);
+    co_sim_run_until(&n->bus, 6000 * MS);
+    CHECK_EQ(n->event_count, before);
+    CHECK(find(n, 2, CO_MGR_LOST) == NULL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_FAILED_STATE);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 2), CO_BOOT_VENDOR);
+    free(n);
+}
+
+static void test_frames_that_are_not_boot_ups(void)
+{
+    net_t *n = small_net(1);
+    n->slaves[2 - 1].assignment |= CO_MGR_BOOT_ON_BOOTUP;
+    n->slaves[2 - 1].vendor = 0xBAD;
+    small_init(n, CO_MGR_NMT_MASTER);
+    co_node_start(&n->master.node, 0);
+    /* Before co_manager_start a boot-up boots nobody. */
+    co_frame_t boot = frm(0x702, "00");
+    co_node_ingest(&n->master.node, 1 * MS, &boot);
+    co_sim_run_until(&n->bus, 500 * MS);
+    CHECK_EQ(n->event_count, 0);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_UNLISTED);
+    co_node_start(&n->dev[0].node, n->bus.now_us);
+    co_sim_run_until(&n->bus, 600 * MS);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 2), CO_BOOT_VENDOR);
+    uint32_t before = n->event_count;
+    /* A heartbeat (state 0x7F), a two-byte frame and a remote request are no boot-ups. */
+    static const char *not_boot[] = {"7F", "00 00", "R1"};
+    for (uint32_t i = 0; i < 3; i++) {
+        co_frame_t f = frm(0x702, not_boot[i]);
+        co_node_ingest(&n->master.node, n->bus.now_us, &f);
+        co_sim_run_until(&n->bus, n->bus.now_us + 500 * MS);
+    }
+    CHECK_EQ(n->event_count, before);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_FAILED_STATE);
+    /* The real one boots it again. */
+    co_node_ingest(&n->master.node, n->bus.now_us, &boot);
+    co_sim_run_until(&n->bus, n->bus.now_us + 500 * MS);
+    CHECK_EQ(n->event_count, before + 1);
+    CHECK_EQ(n->events[before].kind, CO_MGR_FAILED);
+    free(n);
+}
+
+static void on_sdo_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
+{
+    (void)channel;
+    (void)len;
+    *(co_abort_t *)ctx = abort;
+}
+
+static void test_sdo_channel_taken(void)
+{
+    net_t *n = small_net(2);
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 2);
+    /* The application holds the manager's channel in a transfer when the boot begins. */
+    co_abort_t done = 1;
+    CHECK_EQ(co_sdo_client_setup(&n->master.node, 0, 3), CO_OK);
+    CHECK_EQ(co_sdo_write_value(&n->master.node, 0, 0x2000, 0, 0x77, 4, on_sdo_done, &done), CO_OK);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK_EQ(done, CO_ABORT_NONE);
+    CHECK_EQ(n->dev[1].od.app_u32, 0x77);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_NO_ANSWER);
+        CHECK_EQ(e->abort, CO_ABORT_GENERAL);
+    }
+    free(n);
+}
+
+/* ---- co_manager_load_od: the entries it takes, and the ones it leaves */
+
+static void test_load_od_edges(void)
+{
+    static uint32_t startup = CO_MGR_NMT_MASTER | CO_MGR_START_ALL;
+    static uint8_t count = 200; /* more than 127 entries claimed */
+    static uint32_t dcf_u32_value = 0x12345678;
+    static uint8_t dcf_bytes[4 + 7 + 1] = {1, 0, 0, 0, 0x00, 0x20, 0, 1, 0, 0, 0, 9};
+    static co_od_domain_t empty_domain = {.data = dcf_bytes, .len = 0};
+    static co_od_domain_t full_domain = {.data = dcf_bytes, .len = sizeof dcf_bytes};
+    static uint32_t hb[6] = {
+        (2u << 16) | 0,     /* names node 2 but time 0: not watched */
+        (0u << 16) | 500,   /* node 0 */
+        (200u << 16) | 500, /* no node-ID */
+        (5u << 16) | 700,   /* node 5, 700 ms */
+        (6u << 16) | 800,   /* node 6 */
+        (7u << 16) | 900,   /* sub 127 */
+    };
+    static uint32_t assign[5] = {CO_MGR_SLAVE, CO_MGR_SLAVE, CO_MGR_SLAVE, CO_MGR_SLAVE,
+                                 CO_MGR_SLAVE | CO_MGR_MANDATORY};
+    co_od_entry_t e[] = {
+        {0x1016, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &count, NULL, NULL, NULL},
+        {0x1016, 1, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[0], NULL, NULL, NULL},
+        {0x1016, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[1], NULL, NULL, NULL},
+        {0x1016, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[2], NULL, NULL, NULL},
+        {0x1016, 4, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[3], NULL, NULL, NULL},
+        {0x1016, 5, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[4], NULL, NULL, NULL},
+        {0x1016, 127, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &hb[5], NULL, NULL, NULL},
+        /* 0x1F22: sub2 not a DOMAIN, sub3 a DOMAIN without storage, sub4 an empty one,
+         * sub5 a real one. */
+        {0x1F22, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &dcf_u32_value, NULL, NULL, NULL},
+        {0x1F22, 3, CO_TYPE_DOMAIN, CO_OD_RW, 64, NULL, NULL, NULL, NULL},
+        {0x1F22, 4, CO_TYPE_DOMAIN, CO_OD_RW, 64, &empty_domain, NULL, NULL, NULL},
+        {0x1F22, 5, CO_TYPE_DOMAIN, CO_OD_RW, 64, &full_domain, NULL, NULL, NULL},
+        {0x1F80, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &startup, NULL, NULL, NULL},
+        {0x1F81, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[0], NULL, NULL, NULL},
+        {0x1F81, 3, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[1], NULL, NULL, NULL},
+        {0x1F81, 4, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[2], NULL, NULL, NULL},
+        {0x1F81, 5, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[3], NULL, NULL, NULL},
+        {0x1F81, 6, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &assign[4], NULL, NULL, NULL},
+    };
+    co_od_t od = {.entries = e, .count = sizeof e / sizeof e[0]};
+    co_mgr_slave_t *slaves = calloc(127, sizeof *slaves);
+    uint32_t got = 0;
+    CHECK_EQ(co_manager_load_od(NULL, slaves, &got), CO_ERR_ARG);
+    CHECK_EQ(co_manager_load_od(&od, NULL, &got), CO_ERR_ARG);
+    CHECK_EQ(co_manager_load_od(&od, slaves, NULL), CO_ERR_ARG);
+    CHECK_EQ(got, 0);
+    CHECK_EQ(co_manager_load_od(&od, slaves, &got), CO_OK);
+    CHECK_EQ(got, startup);
+    for (uint8_t n = 2; n <= 4; n++) {
+        CHECK(slaves[n - 1].dcf == NULL);
+        CHECK_EQ(slaves[n - 1].dcf_len, 0);
+    }
+    CHECK(slaves[5 - 1].dcf == dcf_bytes);
+    CHECK_EQ(slaves[5 - 1].dcf_len, sizeof dcf_bytes);
+    CHECK_EQ(co_dcf_check(slaves[5 - 1].dcf, slaves[5 - 1].dcf_len), CO_OK);
+    CHECK_EQ(slaves[2 - 1].heartbeat_ms, 0);
+    CHECK_EQ(slaves[5 - 1].heartbeat_ms, 700);
+    CHECK_EQ(slaves[6 - 1].heartbeat_ms, 800);
+    CHECK_EQ(slaves[7 - 1].heartbeat_ms, 900); /* sub 127, read under a count of 200 */
+    CHECK_EQ(slaves[6 - 1].assignment, CO_MGR_SLAVE | CO_MGR_MANDATORY);
+    CHECK_EQ(slaves[7 - 1].assignment, 0);
+    for (uint8_t n = 8; n <= 127; n++) {
+        CHECK_EQ(slaves[n - 1].heartbeat_ms, 0);
+    }
+    /* A small count limits what is read. */
+    count = 4;
+    CHECK_EQ(co_manager_load_od(&od, slaves, &got), CO_OK);
+    CHECK_EQ(slaves[5 - 1].heartbeat_ms, 700);
+    CHECK_EQ(slaves[6 - 1].heartbeat_ms, 0);
+    CHECK_EQ(slaves[7 - 1].heartbeat_ms, 0);
+    free(slaves);
+}
+
+static void set_attr(station_t *s, uint16_t index, uint8_t sub, uint8_t attr)
+{
+    for (uint32_t e = 0; e < s->node.cfg.od.count; e++) {
+        if (s->od.entries[e].index == index && s->od.entries[e].sub == sub) {
+            s->od.entries[e].attr = attr;
+        }
+    }
+}
+
+static void test_configuration_date_cannot_be_compared(void)
+{
+    net_t *n = small_net(4);
+    static dated_t d3, d4;
+    memset(&d3, 0, sizeof d3);
+    memset(&d4, 0, sizeof d4);
+    add_1020(&n->dev[3 - FIRST], &d3);
+    add_1020(&n->dev[4 - FIRST], &d4);
+    set_attr(&n->dev[4 - FIRST], 0x1020, 2, CO_OD_WO); /* its time cannot be read */
+    /* Node 5 cannot tell its product code. */
+    set_attr(&n->dev[5 - FIRST], 0x1018, 2, CO_OD_WO);
+    n->slaves[5 - 1].product = 0x105;
+    uint32_t off = 0;
+    dcf_u32(n->dcf[0], &off, 0x2000, 0, 0xC0FFEE);
+    for (uint8_t id = 2; id <= 4; id++) {
+        n->slaves[id - 1].dcf = n->dcf[0];
+        n->slaves[id - 1].dcf_len = off;
+        n->slaves[id - 1].config_date = 0x1234;
+        n->slaves[id - 1].config_time = 0x5678;
+    }
+    n->slaves[4 - 1].config_date = 0; /* a time only */
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 4);
+    d3.date = 0x1233; /* another date, the same time */
+    d3.time = 0x5678;
+    d4.date = 0;
+    d4.time = 0x5678;
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    /* Node 2 has no 0x1020, node 3 another date, node 4 no readable time: all three get
+     * the configuration. */
+    for (uint8_t id = 2; id <= 4; id++) {
+        CHECK(find(n, id, CO_MGR_BOOTED) != NULL);
+        CHECK_EQ(n->dev[id - FIRST].od.app_u32, 0xC0FFEE);
+    }
+    /* Node 5: the refused read is a failed check, with the abort code. */
+    const co_mgr_event_t *e = find(n, 5, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_PRODUCT);
+        CHECK_EQ(e->abort, CO_ABORT_WRITE_ONLY);
+        CHECK_EQ(e->index, 0x1018);
+        CHECK_EQ(e->sub, 2);
+    }
+    free(n);
+}
+
+static void test_heartbeat_entry_without_time_is_free(void)
+{
+    net_t *n = small_net(2);
+    n->slaves[2 - 1].heartbeat_ms = 250;
+    n->slaves[3 - 1].assignment = 0; /* node 3 is on the bus, not in the list */
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 2);
+    /* Entry 1 watches node 50, entry 2 names node 51 with time 0 (not watching). */
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, hb_consumer_value(50, 1000)),
+             CO_ABORT_NONE);
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 2, hb_consumer_value(51, 0)), CO_ABORT_NONE);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK(find(n, 2, CO_MGR_BOOTED) != NULL);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 2, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(2, 250));
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 1, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(50, 1000));
+    /* The master watches unlisted node 3 too: its boot-up and heartbeat are none of the
+     * manager's business. */
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 3, hb_consumer_value(3, 1000)),
+             CO_ABORT_NONE);
+    uint32_t before = n->event_count;
+    co_nmt_apply(&n->dev[3 - FIRST].node, CO_NMT_CMD_RESET_COMMUNICATION);
+    co_sim_run_until(&n->bus, 3000 * MS);
+    CHECK_EQ(n->event_count, before);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 3), CO_MGR_UNLISTED);
+    CHECK_EQ(co_nmt_state(&n->dev[3 - FIRST].node), CO_NMT_PRE_OPERATIONAL);
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
@@ -655,5 +1236,18 @@ int main(void)
     RUN(test_lss_assigned_devices_are_booted_by_the_manager);
     RUN(test_configuration_skipped_when_date_matches);
     RUN(test_start_all_with_a_failure_starts_one_by_one);
+    RUN(test_arguments_and_texts);
+    RUN(test_dcf_put_arguments);
+    RUN(test_each_identity_check);
+    RUN(test_malformed_and_empty_dcf);
+    RUN(test_no_event_callback);
+    RUN(test_no_free_heartbeat_entry);
+    RUN(test_no_slave_start_and_late_slave);
+    RUN(test_mandatory_failure_after_start_does_not_halt);
+    RUN(test_frames_that_are_not_boot_ups);
+    RUN(test_sdo_channel_taken);
+    RUN(test_load_od_edges);
+    RUN(test_configuration_date_cannot_be_compared);
+    RUN(test_heartbeat_entry_without_time_is_free);
     return check_summary();
 }

@@ -179,6 +179,12 @@ static void test_od_access_through_node(void)
     CHECK_EQ(v, 0x11);
     CHECK_EQ(co_node_set_uint(&t.node, 0x2002, 0, 1), CO_ABORT_TYPE_MISMATCH);
     CHECK_EQ(co_node_set_uint(&t.node, 0x2001, 0, 500), CO_ABORT_VALUE_HIGH);
+    /* An integer is no REAL32; entries that do not exist are named as such. */
+    float real_before = t.od.app_real;
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2006, 0, 1), CO_ABORT_TYPE_MISMATCH);
+    CHECK(memcmp(&t.od.app_real, &real_before, sizeof real_before) == 0);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2FFF, 0, 1), CO_ABORT_NO_OBJECT);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x1000, 7, 1), CO_ABORT_NO_SUB);
 }
 
 int main(void)

@@ -1207,6 +1207,56 @@ static void test_get_set_uint(void)
     CHECK_EQ(x.hb_consumer[1], 0x00050064u);
 }
 
+/* ---- the dense key array (co_od_t.keys): the same look-ups, and validated */
+
+static void test_key_array_lookups(void)
+{
+    static example_od_t x;
+    co_od_t plain = example_od_init(&x, 0);
+    static uint32_t keys[512];
+    CHECK(plain.count <= 512);
+    for (uint32_t i = 0; i < plain.count; i++) {
+        keys[i] = CO_OD_KEY(plain.entries[i].index, plain.entries[i].sub);
+    }
+    co_od_t keyed = plain;
+    keyed.keys = keys;
+    uint32_t bad = 0xFFFF;
+    CHECK_EQ(co_od_validate(&keyed, &bad), CO_OK);
+    CHECK_EQ(bad, 0xFFFF);
+    /* Every entry is found, and it is the same entry either way. */
+    for (uint32_t i = 0; i < plain.count; i++) {
+        const co_od_entry_t *e = &plain.entries[i];
+        co_abort_t abort = 1;
+        CHECK(co_od_find(&keyed, e->index, e->sub, &abort) == e);
+        CHECK(co_od_find(&plain, e->index, e->sub, NULL) == e);
+    }
+    /* What is not there: before the first, an unknown sub-index, between, after the last. */
+    co_abort_t abort = 0;
+    CHECK(co_od_find(&keyed, 0x0001, 0, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    CHECK(co_od_find(&keyed, 0x1000, 1, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_SUB);
+    CHECK(co_od_find(&keyed, 0x1002, 0, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    CHECK(co_od_find(&keyed, 0xFFFF, 0xFF, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    /* One entry, and none. */
+    co_od_t one = keyed;
+    one.count = 1;
+    CHECK(co_od_find(&one, plain.entries[0].index, plain.entries[0].sub, NULL) ==
+          &plain.entries[0]);
+    CHECK(co_od_find(&one, 0xFFFF, 0, &abort) == NULL);
+    one.count = 0;
+    CHECK(co_od_find(&one, plain.entries[0].index, plain.entries[0].sub, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    /* A key that is not its entry's: the table is refused, at that entry. */
+    keys[5] ^= 1u;
+    CHECK_EQ(co_od_validate(&keyed, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 5);
+    keys[5] ^= 1u;
+    CHECK_EQ(co_od_validate(&keyed, NULL), CO_OK);
+}
+
 int main(void)
 {
     RUN(test_type_size);
@@ -1242,5 +1292,6 @@ int main(void)
     RUN(test_reset_ranges);
     RUN(test_reset_example);
     RUN(test_get_set_uint);
+    RUN(test_key_array_lookups);
     return check_summary();
 }

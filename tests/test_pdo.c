@@ -562,6 +562,103 @@ static void test_bit_level_dummy_skips(void)
     CHECK_EQ(rx.od.u16, 0x0123);
 }
 
+/* ---- TPDO: whole values at odd bit positions, an event-driven TPDO at SYNC */
+
+static void test_tpdo_whole_value_at_odd_bit_position(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    /* TPDO1: 0x1001 low 4 bits, 0x2000 whole (32 bits) from bit 4, 0x1001 low 4 bits. */
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A00, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 1, 0x10010004u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 2, 0x20000020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 3, 0x10010004u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A00, 0, 3), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x185u), CO_ABORT_NONE);
+    t.od.error_register = 0x0B;
+    fake_clear(&t.bus);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 0x11223344), CO_ABORT_NONE);
+    /* 0xB | 0x11223344 << 4 | 0xB << 36 = 0xB11223344B, 5 bytes little-endian. */
+    CHECK_STR(bus(&t), "185#4B342312B1");
+}
+
+static void test_event_driven_tpdo_not_sent_at_sync(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    /* TPDO2: 0x2007, every SYNC; TPDO1 stays event-driven. */
+    CHECK_EQ(write_u32(&t, 0x1801, 1, 0x80000285u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A01, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A01, 1, 0x20070020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A01, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1801, 2, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1801, 1, 0x285u), CO_ABORT_NONE);
+    co_node_poll(&t.node, 1 * MS);
+    fake_clear(&t.bus);
+    t.od.app_u32b = 0xA5;
+    ingest(&t, 10 * MS, 0x080, "");
+    ingest(&t, 20 * MS, 0x080, "");
+    CHECK_STR(bus(&t), "285#A5000000 285#A5000000");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 0);
+}
+
+/* ---- an RPDO that writes an object a TPDO maps */
+
+static void map_rpdo2_to_0x2000(test_node_t *t)
+{
+    CHECK_EQ(write_u32(t, 0x1401, 1, 0x80000305u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(t, 0x1601, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1601, 1, 0x20000020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(t, 0x1601, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(t, 0x1401, 2, 254), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1401, 1, 0x305u), CO_ABORT_NONE);
+}
+
+static void test_rpdo_into_a_tpdo_mapped_object(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    map_rpdo2_to_0x2000(&t);
+    co_node_poll(&t.node, 1 * MS);
+    fake_clear(&t.bus);
+    /* Received into 0x2000, which event-driven TPDO1 maps: the change sends TPDO1. */
+    ingest(&t, 10 * MS, 0x305, "44 33 22 11");
+    CHECK_EQ(t.od.app_u32, 0x11223344);
+    CHECK_EQ(rpdos.count, 1);
+    CHECK_EQ(rpdos.rpdo[0], 1);
+    CHECK_STR(bus(&t), "185#44332211");
+    /* Without on_rpdo the same. */
+    t.node.cfg.on_rpdo = NULL;
+    ingest(&t, 20 * MS, 0x305, "88 77 66 55");
+    CHECK_EQ(t.od.app_u32, 0x55667788);
+    CHECK_EQ(rpdos.count, 1);
+    CHECK_STR(bus(&t), "185#44332211 185#88776655");
+}
+
+static void test_rpdo_without_listeners(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    t.node.cfg.on_rpdo = NULL;
+    /* TPDO1 maps 0x2007 instead: nothing listens to RPDO1's outputs or to 0x2000. */
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A00, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1A00, 1, 0x20070020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1A00, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x185u), CO_ABORT_NONE);
+    map_rpdo2_to_0x2000(&t);
+    co_node_poll(&t.node, 1 * MS);
+    fake_clear(&t.bus);
+    ingest(&t, 10 * MS, 0x205, "01 02 03 04");
+    ingest(&t, 11 * MS, 0x305, "04 03 02 01");
+    CHECK_EQ(t.od.outputs[0], 1);
+    CHECK_EQ(t.od.outputs[3], 4);
+    CHECK_EQ(t.od.app_u32, 0x01020304);
+    CHECK_EQ(rpdos.count, 0);
+    CHECK_STR(bus(&t), ""); /* no TPDO maps what changed */
+}
+
 int main(void)
 {
     RUN(test_tpdo_sent_on_change);
@@ -587,5 +684,9 @@ int main(void)
     RUN(test_rpdo_remapping_with_dummy);
     RUN(test_bit_level_round_trip);
     RUN(test_bit_level_dummy_skips);
+    RUN(test_tpdo_whole_value_at_odd_bit_position);
+    RUN(test_event_driven_tpdo_not_sent_at_sync);
+    RUN(test_rpdo_into_a_tpdo_mapped_object);
+    RUN(test_rpdo_without_listeners);
     return check_summary();
 }

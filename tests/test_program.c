@@ -20,6 +20,7 @@ typedef struct flash_app {
     uint32_t pieces;
     bool broken; /* every write fails */
     bool refuse_start;
+    uint8_t refuse_mask; /* bit c: refuse command c with CO_ABORT_DATA_LOCAL */
     uint8_t commands[8];
     uint32_t command_count;
     uint8_t count1, count2, count3, count4; /* sub0 values */
@@ -62,6 +63,9 @@ static co_abort_t app_control(void *ctx, uint8_t command)
     flash_app_t *a = ctx;
     if (a->command_count < 8) {
         a->commands[a->command_count++] = command;
+    }
+    if (a->refuse_mask & (1u << command)) {
+        return CO_ABORT_DATA_LOCAL;
     }
     return (a->refuse_start && command == CO_PROGRAM_START) ? CO_ABORT_DATA_LOCAL : CO_ABORT_NONE;
 }
@@ -306,10 +310,235 @@ static void test_download_failures_name_their_stage(void)
     free(b);
 }
 
+/* ---- device side without an application, and the hooks called directly */
+
+static void test_device_without_application(void)
+{
+    co_program_t p;
+    co_program_init(&p, NULL, false, 0x42);
+    CHECK_EQ(p.state, CO_PROGRAM_STOP);
+    CHECK_EQ(p.ident, 0x42);
+    CHECK_EQ(p.status, 0);
+    uint8_t piece[2] = {1, 2};
+    /* No write callback: nowhere to put the image. */
+    CHECK_EQ(co_program_data_write(&p, 0, piece, 2, 2, true), CO_ABORT_UNSUPPORTED);
+    CHECK_EQ(p.status, 0);
+    /* No control callback: the commands are taken as they are. */
+    CHECK_EQ(co_program_control_write(&p, CO_PROGRAM_CLEAR), CO_ABORT_NONE);
+    CHECK_EQ(p.status, CO_FLASH_STATUS_NO_PROGRAM << 1);
+    CHECK_EQ(co_program_control_write(&p, CO_PROGRAM_START), CO_ABORT_NONE);
+    CHECK_EQ(p.state, CO_PROGRAM_START);
+    CHECK_EQ(co_program_control_write(&p, CO_PROGRAM_STOP), CO_ABORT_NONE);
+    CHECK_EQ(p.state, CO_PROGRAM_STOP);
+    CHECK_EQ(co_program_control_write(&p, 0xFF), CO_ABORT_VALUE);
+    CHECK_EQ(p.state, CO_PROGRAM_STOP);
+}
+
+static void test_hooks_called_directly(void)
+{
+    flash_app_t a;
+    memset(&a, 0, sizeof a);
+    co_program_app_t app = {.write = app_write, .control = app_control, .ctx = &a};
+    co_program_init(&a.prog, &app, false, 0xA1B2C3D4);
+    uint8_t cmd = CO_PROGRAM_START;
+    /* 0x1F51 takes one byte in one piece at offset 0, nothing else. */
+    CHECK_EQ(co_program_control_hooks.write(&a.prog, NULL, 1, &cmd, 1, 2, true),
+             CO_ABORT_TYPE_MISMATCH);
+    CHECK_EQ(co_program_control_hooks.write(&a.prog, NULL, 0, &cmd, 2, 2, true),
+             CO_ABORT_TYPE_MISMATCH);
+    CHECK_EQ(co_program_control_hooks.write(&a.prog, NULL, 0, &cmd, 1, 2, false),
+             CO_ABORT_TYPE_MISMATCH);
+    CHECK_EQ(a.command_count, 0);
+    CHECK_EQ(a.prog.state, CO_PROGRAM_STOP);
+    CHECK_EQ(co_program_control_hooks.write(&a.prog, NULL, 0, &cmd, 1, 1, true), CO_ABORT_NONE);
+    CHECK_EQ(a.prog.state, CO_PROGRAM_START);
+    /* Reads in pieces: the little-endian bytes from `offset`, at most `cap` of them. */
+    uint8_t buf[4] = {0};
+    uint32_t n = 99, total = 0;
+    CHECK_EQ(co_program_ident_hooks.read(&a.prog, NULL, 0, buf, 2, &n, &total), CO_ABORT_NONE);
+    CHECK_EQ(n, 2);
+    CHECK_EQ(total, 4);
+    CHECK_EQ(buf[0], 0xD4);
+    CHECK_EQ(buf[1], 0xC3);
+    CHECK_EQ(co_program_ident_hooks.read(&a.prog, NULL, 2, buf, 4, &n, &total), CO_ABORT_NONE);
+    CHECK_EQ(n, 2);
+    CHECK_EQ(buf[0], 0xB2);
+    CHECK_EQ(buf[1], 0xA1);
+    CHECK_EQ(co_program_control_hooks.read(&a.prog, NULL, 0, buf, 4, &n, &total), CO_ABORT_NONE);
+    CHECK_EQ(n, 1);
+    CHECK_EQ(total, 1);
+    CHECK_EQ(buf[0], CO_PROGRAM_START);
+    CHECK_EQ(co_program_status_hooks.read(&a.prog, NULL, 4, buf, 4, &n, &total), CO_ABORT_NONE);
+    CHECK_EQ(n, 0); /* past the end: nothing */
+    CHECK_EQ(total, 4);
+    /* Data through the hook goes to the application; in pieces, the last one ends it. */
+    CHECK_EQ(co_program_control_write(&a.prog, CO_PROGRAM_STOP), CO_ABORT_NONE);
+    uint8_t img[4] = {9, 8, 7, 6};
+    CHECK_EQ(co_program_data_hooks.write(&a.prog, NULL, 0, img, 2, 4, false), CO_ABORT_NONE);
+    CHECK_EQ(a.prog.status, CO_FLASH_STATUS_BUSY); /* a download runs */
+    CHECK_EQ(co_program_data_hooks.write(&a.prog, NULL, 2, img + 2, 2, 4, true), CO_ABORT_NONE);
+    CHECK_EQ(a.prog.status, 0);
+    CHECK_EQ(a.bytes, 4);
+    CHECK_EQ(a.prog.ident, checksum(5381, img, 4));
+}
+
+/* ---- master: argument errors, each stage refused, no callbacks */
+
+static void on_written(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len)
+{
+    (void)channel;
+    (void)len;
+    *(co_abort_t *)ctx = abort;
+}
+
+static void test_flash_start_arguments(void)
+{
+    bench_t *b = bench_up();
+    co_flash_request_t r = request(b, 0);
+    r.len = 16;
+    co_flash_request_t bad = r;
+    CHECK_EQ(co_flash_start(NULL, &b->master, &r), CO_ERR_ARG);
+    CHECK_EQ(co_flash_start(&b->flash, NULL, &r), CO_ERR_ARG);
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, NULL), CO_ERR_ARG);
+    bad.data = NULL;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &bad), CO_ERR_ARG);
+    bad = r;
+    bad.server = 0;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &bad), CO_ERR_ARG);
+    bad.server = 128;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &bad), CO_ERR_ARG);
+    bad = r;
+    bad.channel = 1; /* one client channel in this build */
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &bad), CO_ERR_ARG);
+    CHECK_EQ(b->results, 0);
+    CHECK_EQ(b->app.command_count, 0);
+    /* The channel busy with another transfer: no download begins. */
+    CHECK_EQ(co_sdo_client_setup(&b->master, 0, 2), CO_OK);
+    co_abort_t written = 1;
+    CHECK_EQ(co_sdo_write_value(&b->master, 0, 0x2000, 0, 5, 4, on_written, &written), CO_OK);
+    CHECK(co_sdo_client_busy(&b->master, 0));
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_ERR_BUSY);
+    co_sim_run_until(&b->bus, 100 * MS);
+    CHECK(!co_sdo_client_busy(&b->master, 0));
+    CHECK_EQ(written, CO_ABORT_NONE);
+    CHECK_EQ(b->dod.app_u32, 5);
+    CHECK_EQ(b->app.command_count, 0);
+    CHECK_EQ(b->results, 0);
+    free(b);
+}
+
+static void test_stop_and_clear_refused(void)
+{
+    bench_t *b = bench_up();
+    co_sim_run_until(&b->bus, 10 * MS);
+    co_flash_request_t r = request(b, 0);
+    r.len = 100;
+    b->app.refuse_mask = 1u << CO_PROGRAM_STOP;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 1000 * MS);
+    CHECK_EQ(b->results, 1);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_STOP);
+    CHECK_EQ(b->result.abort, CO_ABORT_DATA_LOCAL);
+    CHECK_STR(co_flash_stage_name(b->result.stage), "stop");
+    CHECK_EQ(b->app.bytes, 0);
+    CHECK_EQ(b->app.prog.state, CO_PROGRAM_START); /* still runs the old program */
+    /* Stop taken, clear refused: nothing downloaded. */
+    b->app.refuse_mask = 1u << CO_PROGRAM_CLEAR;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 2000 * MS);
+    CHECK_EQ(b->results, 2);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_CLEAR);
+    CHECK_EQ(b->result.abort, CO_ABORT_DATA_LOCAL);
+    CHECK_STR(co_flash_stage_name(b->result.stage), "clear");
+    CHECK_EQ(b->app.bytes, 0);
+    CHECK_EQ(b->app.prog.state, CO_PROGRAM_STOP);
+    CHECK_STR(co_flash_stage_name(CO_FLASH_STAGE_DATA), "data");
+    CHECK_STR(co_flash_stage_name(CO_FLASH_STAGE_START), "start");
+    CHECK_STR(co_flash_stage_name(CO_FLASH_STAGE_VERIFY), "verify");
+    CHECK_STR(co_flash_stage_name(0), "unknown");
+    free(b);
+}
+
+static void test_no_callbacks_no_check_other_program(void)
+{
+    bench_t *b = bench_up();
+    co_sim_run_until(&b->bus, 10 * MS);
+    /* No done, no progress, no identification check: the download still runs to the end,
+     * and the master is free for the next one afterwards. */
+    co_flash_request_t r = request(b, 0);
+    r.len = 200000; /* long enough to be polled in the data stage */
+    r.done = NULL;
+    r.progress = NULL;
+    r.check_ident = false;
+    r.clear = false;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 20000 * MS);
+    CHECK_EQ(b->results, 0);
+    CHECK_EQ(b->app.bytes, 200000);
+    CHECK_EQ(b->app.sum, checksum(5381, b->image, 200000));
+    CHECK_EQ(b->app.prog.state, CO_PROGRAM_START);
+    static const uint8_t want[] = {CO_PROGRAM_STOP, CO_PROGRAM_START};
+    CHECK_EQ(b->app.command_count, 2);
+    CHECK(memcmp(b->app.commands, want, 2) == 0);
+    /* Without a check any identification is fine. */
+    r = request(b, 0x12345678);
+    r.len = 10;
+    r.check_ident = false;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 21000 * MS);
+    CHECK_EQ(b->results, 1);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_DONE);
+    CHECK(b->result.ident_ok);
+    CHECK_EQ(b->result.ident, checksum(5381, b->image, 10));
+    /* Program 2 does not exist on the device: the stop of 0x1F51 sub2 fails. */
+    r.program = 2;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 22000 * MS);
+    CHECK_EQ(b->results, 2);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_STOP);
+    CHECK_EQ(b->result.abort, CO_ABORT_NO_SUB);
+    free(b);
+}
+
+static void test_verify_read_refused(void)
+{
+    bench_t *b = bench_up();
+    co_sim_run_until(&b->bus, 10 * MS);
+    /* 0x1F56 sub1 made unreadable: the verify stage fails with the device's abort. */
+    for (uint32_t e = 0; e < b->dev.cfg.od.count; e++) {
+        co_od_entry_t *en = &b->dod.entries[e];
+        if (en->index == 0x1F56 && en->sub == 1) {
+            en->attr = CO_OD_WO;
+        }
+    }
+    co_flash_request_t r = request(b, 0);
+    r.len = 10;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 2000 * MS);
+    CHECK_EQ(b->results, 1);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_VERIFY);
+    CHECK_EQ(b->result.abort, CO_ABORT_WRITE_ONLY);
+    CHECK(!b->result.ident_ok);
+    CHECK_EQ(b->app.bytes, 10);
+    /* A node flashing itself (no program objects): the stop fails at once. */
+    r.server = 1;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    CHECK_EQ(b->results, 2);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_STOP);
+    CHECK_EQ(b->result.abort, CO_ABORT_NO_OBJECT);
+    free(b);
+}
+
 int main(void)
 {
     RUN(test_device_objects);
     RUN(test_one_mebibyte_download_verified);
     RUN(test_download_failures_name_their_stage);
+    RUN(test_device_without_application);
+    RUN(test_hooks_called_directly);
+    RUN(test_flash_start_arguments);
+    RUN(test_stop_and_clear_refused);
+    RUN(test_no_callbacks_no_check_other_program);
+    RUN(test_verify_read_refused);
     return check_summary();
 }
