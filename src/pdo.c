@@ -330,18 +330,17 @@ void co_pdo_state_entered(co_node_t *node)
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
-     * open whatever 0x1007 says, so there is nothing to read. Both loops test the NMT
-     * state first (an application callback may change it). */
-    const bool in_window = true;
+     * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
+     * Both loops test the NMT state first (an application callback may change it). */
     for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
-            rpdo_sync(node, (uint8_t)n, in_window);
+            rpdo_sync(node, (uint8_t)n);
         }
     }
     for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (!p->fast) {
-            tpdo_sync(node, p, counter, in_window);
+            tpdo_sync(node, p, counter);
         } else if (++p->sync_count >= p->type) { /* the usual one: cyclic, whole values */
             p->sync_count = 0;
             tpdo_send_plain(node, p);

@@ -106,12 +106,12 @@ void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spo
 /* pdo_tx.c */
 void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
-void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter, bool in_window);
+void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
 void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* p->plain: pack, send */
 uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
 
 /* pdo_rx.c */
-void rpdo_sync(co_node_t *node, uint8_t n, bool in_window);
+void rpdo_sync(co_node_t *node, uint8_t n);
 uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
 
 #endif /* CANOLA_PDO_INTERNAL_H */

@@ -206,14 +206,14 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
     rx_other(node, rpdo, frame);
 }
 
-void rpdo_sync(co_node_t *node, uint8_t n, bool in_window)
+void rpdo_sync(co_node_t *node, uint8_t n)
 {
     co_pdo_t *p = &node->rpdo[n];
     if (!pdo_has(p, PDO_F_WAITING)) {
         return;
     }
     pdo_clear(p, PDO_F_WAITING);
-    if (in_window && pdo_active(p)) {
+    if (pdo_active(p)) {
         apply(node, n, p->data);
     }
 }

@@ -126,18 +126,18 @@ static bool cyclic_due(co_pdo_t *p, uint8_t counter)
     return true;
 }
 
-void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter, bool in_window)
+void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter)
 {
     if (!pdo_active(p)) {
         return;
     }
     if (p->type == 0) {
-        if (pdo_has(p, PDO_F_PENDING) && in_window) {
+        if (pdo_has(p, PDO_F_PENDING)) {
             pdo_clear(p, PDO_F_PENDING);
             send_fresh(node, p);
         }
     } else if (p->type <= 240) {
-        if (cyclic_due(p, counter) && in_window) {
+        if (cyclic_due(p, counter)) {
             send_fresh(node, p);
         }
     } else if (p->type == 252) {

@@ -640,6 +640,7 @@ static void test_rpdo_without_listeners(void)
 {
     test_node_t t;
     setup(&t, true);
+    void (*on_rpdo)(void *, uint16_t) = t.node.cfg.on_rpdo;
     t.node.cfg.on_rpdo = NULL;
     /* TPDO1 maps 0x2007 instead: nothing listens to RPDO1's outputs or to 0x2000. */
     CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
@@ -657,6 +658,23 @@ static void test_rpdo_without_listeners(void)
     CHECK_EQ(t.od.app_u32, 0x01020304);
     CHECK_EQ(rpdos.count, 0);
     CHECK_STR(bus(&t), ""); /* no TPDO maps what changed */
+    /* The application listening, no TPDO: it hears of the frame, nothing is sent. */
+    t.node.cfg.on_rpdo = on_rpdo;
+    ingest(&t, 12 * MS, 0x305, "05 06 07 08");
+    CHECK_EQ(t.od.app_u32, 0x08070605);
+    CHECK_EQ(rpdos.count, 1);
+    CHECK_EQ(rpdos.rpdo[0], 1);
+    CHECK_STR(bus(&t), "");
+    /* No event-driven TPDO at all (TPDO1 off): values still applied, the application told. */
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    ingest(&t, 13 * MS, 0x305, "0A 0B 0C 0D");
+    CHECK_EQ(t.od.app_u32, 0x0D0C0B0A);
+    CHECK_EQ(rpdos.count, 2);
+    t.node.cfg.on_rpdo = NULL;
+    ingest(&t, 14 * MS, 0x305, "01 00 00 00");
+    CHECK_EQ(t.od.app_u32, 1);
+    CHECK_EQ(rpdos.count, 2);
+    CHECK_STR(bus(&t), "");
 }
 
 int main(void)
