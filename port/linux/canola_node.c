@@ -131,7 +131,7 @@ static void on_state(void *user, co_nmt_state_t state)
 {
     app_t *a = user;
     fprintf(stderr, PROG ": node %u on %s: %s\n", co_node_id(&a->node), a->where,
-            co_nmt_state_name(state));
+            co_nmt_state_name((uint8_t)state));
 }
 
 static void on_error(void *user, co_node_error_t error)
