@@ -10,6 +10,7 @@ what it shares with ``canola flash``'s bar.
 
 from __future__ import annotations
 
+import abc
 import sys
 import threading
 import time
@@ -26,7 +27,7 @@ def bar_text(done: int, total: int, rate: float) -> str:
             f"{rate:.1f} kB/s")
 
 
-class ProgressLine:
+class ProgressLine(abc.ABC):
     """One line of progress on ``stream`` (stderr by default), drawn only when ``enabled``,
     at most ten times a second unless forced; a subclass says what the line reads."""
 
@@ -37,6 +38,7 @@ class ProgressLine:
         self._started = time.monotonic()
         self._drawn = 0.0
 
+    @abc.abstractmethod
     def _text(self, rate: float) -> str:
         """The line for ``self.done`` bytes at ``rate`` kB/s."""
         raise NotImplementedError

@@ -13,6 +13,7 @@ since the last call, in order, with their time in seconds since the start) and `
 
 from __future__ import annotations
 
+import abc
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -39,26 +40,30 @@ class TraceFrame:
     rtr: bool = False
 
 
-class Network:
+class Network(abc.ABC):
     """What the scenario needs from a transport (see the module text)."""
 
     virtual = False
     description = ""
 
+    @abc.abstractmethod
     def node_bus(self) -> SimBus | can.BusABC:
         raise NotImplementedError
 
+    @abc.abstractmethod
     def now(self) -> float:
         raise NotImplementedError
 
+    @abc.abstractmethod
     def drain(self) -> list[TraceFrame]:
         raise NotImplementedError
 
+    @abc.abstractmethod
     def wait(self, seconds: float, tick: Callable[[], None]) -> None:
         """Let ``seconds`` pass, calling ``tick`` often (it prints what happened)."""
         raise NotImplementedError
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 (a default: most networks hold nothing)
         """Release the buses (python-can)."""
 
 
