@@ -56,15 +56,22 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: error: {message} (see {self.prog} --help)")
 
 
-def node_id(text: str) -> int:
-    """A node-ID 1..127 (decimal or 0x-hex)."""
+def int_in_range(text: str, low: int, high: int, what: str, unit: str = "") -> int:
+    """``text`` as an integer (decimal or 0x-hex) in ``low..high``, else the one-line
+    argparse error "bad WHAT 'TEXT': LOW..HIGH[ UNIT]"."""
     try:
         value = int(text, 0)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127") from None
-    if not 1 <= value <= 127:
-        raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127")
+        value = low - 1
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(
+            f"bad {what} {text!r}: {low}..{high}{' ' + unit if unit else ''}")
     return value
+
+
+def node_id(text: str) -> int:
+    """A node-ID 1..127 (decimal or 0x-hex)."""
+    return int_in_range(text, 1, 127, "node-ID")
 
 
 def node_or_all(text: str) -> int:
@@ -93,13 +100,7 @@ def object_address(text: str) -> tuple[int, int]:
 
 
 def positive_ms(text: str) -> int:
-    try:
-        value = int(text, 0)
-    except ValueError:
-        value = -1
-    if not 1 <= value <= 3_600_000:
-        raise argparse.ArgumentTypeError(f"bad time {text!r}: 1..3600000 ms")
-    return value
+    return int_in_range(text, 1, 3_600_000, "time", "ms")
 
 
 def add_bus_options(parser: argparse.ArgumentParser, *, required: bool = True) -> None:

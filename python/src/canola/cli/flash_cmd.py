@@ -12,6 +12,7 @@ from canola.cli.common import (
     add_bus_options,
     add_master_options,
     emit_json,
+    int_in_range,
     master_from_args,
     node_id,
 )
@@ -48,13 +49,7 @@ def _ident(text: str) -> int:
 
 
 def _program(text: str) -> int:
-    try:
-        value = int(text, 0)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= 254:
-        raise argparse.ArgumentTypeError(f"bad program number {text!r}: 1..254")
-    return value
+    return int_in_range(text, 1, 254, "program number")
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:

@@ -15,6 +15,7 @@ from canola.cli.common import (
     add_bus_options,
     add_master_options,
     emit_json,
+    int_in_range,
     master_from_args,
     node_id,
 )
@@ -34,13 +35,7 @@ def _address(text: str) -> LssAddress:
 
 
 def _lss_timeout(text: str) -> int:
-    try:
-        value = int(text, 0)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"bad time {text!r}: 1..65535 ms")
-    return value
+    return int_in_range(text, 1, 65535, "time", "ms")
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
