@@ -114,10 +114,17 @@ static void check_alive(rig_t *r, uint64_t now)
     r->sent = 0;
     co_nmt_apply(&r->node, CO_NMT_CMD_RESET_NODE);
     co_node_poll(&r->node, now);
+    uint8_t id = co_node_id(&r->node);
+    if (id == CO_NODE_ID_UNCONFIGURED) {
+        /* LSS set the ID to 0xFF: CiA 305 wants LSS-only operation, silent, no boot-up. */
+        if (r->sent != 0 || r->node.nmt_state != CO_NMT_INITIALISING) {
+            abort();
+        }
+        return;
+    }
     if (r->sent == 0 || r->node.nmt_state != CO_NMT_PRE_OPERATIONAL) {
         abort();
     }
-    uint8_t id = co_node_id(&r->node);
     co_frame_t req = {.id = 0x600u + id, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
     r->sent = 0;
     co_node_ingest(&r->node, now, &req);
