@@ -378,6 +378,71 @@ static void test_parameters_of_channels_the_node_lacks(void)
     CHECK_EQ(co_node_get_uint(&g.t.node, 0x2100, 0, &v), CO_ERR_ARG);
 }
 
+/* ---- EMCY without an error history, and more consumer entries than the node binds */
+
+static co_emcy_msg_t g_emcy[4];
+static uint32_t g_emcy_count;
+
+static void rec_emcy(void *user, const co_emcy_msg_t *msg)
+{
+    (void)user;
+    if (g_emcy_count < 4) {
+        g_emcy[g_emcy_count] = *msg;
+    }
+    g_emcy_count++;
+}
+
+static void test_emcy_without_error_history(void)
+{
+    CHECK_EQ(build(0, 0x1003, NULL, 0), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    fake_clear(&g.t.bus);
+    /* Nothing to record in, but the error is active, registered and sent. */
+    CHECK_EQ(co_emcy_raise(&g.t.node, 0x4210, NULL), CO_OK);
+    CHECK(co_emcy_active(&g.t.node, 0x4210));
+    CHECK_EQ(g.t.od.error_register, 0x09);
+    CHECK_EQ(g.t.od.error_count, 0);
+    CHECK_EQ(g.t.od.error_history[0], 0);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&g.t.node, 0x1003, 0, &v), CO_ERR_NOT_FOUND);
+    CHECK_EQ(co_emcy_clear(&g.t.node, 0x4210), CO_OK);
+    char dump[128];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "085#1042090000000000 085#0000000000000000");
+}
+
+static void test_more_emcy_consumer_entries_than_the_node_binds(void)
+{
+    /* 0x1028 sub5..sub(CO_EMCY_CONSUMERS_MAX + 1) next to the example's sub1..4. */
+    co_od_entry_t extra[CO_EMCY_CONSUMERS_MAX];
+    uint32_t n = 0;
+    for (uint8_t sub = EXAMPLE_EMCY_CONSUMERS + 1; sub <= CO_EMCY_CONSUMERS_MAX + 1; sub++) {
+        g.extra_u32[n] = 0x80000000u;
+        extra[n] = u32_entry(0x1028, sub, &g.extra_u32[n]);
+        n++;
+    }
+    CHECK_EQ(build(0, 0, extra, n), CO_OK);
+    for (uint32_t i = 0; i < n; i++) {
+        g.extra_u32[i] = 0x80000000u; /* no default: unused from the start */
+    }
+    g.t.node.cfg.on_emcy = rec_emcy;
+    g_emcy_count = 0;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(g.t.node.emcy.consumer_count, CO_EMCY_CONSUMERS_MAX);
+    /* The last bound entry consumes; the one past it is a plain value. */
+    CHECK_EQ(write_u32(&g.t, 0x1028, CO_EMCY_CONSUMERS_MAX, 0x0A1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, 0x1028, CO_EMCY_CONSUMERS_MAX + 1, 0x0A2), CO_ABORT_NONE);
+    co_frame_t bound = frm(0x0A1, "30 81 11 00 00 00 00 00");
+    co_frame_t past = frm(0x0A2, "30 81 11 00 00 00 00 00");
+    CHECK(co_node_accepts(&g.t.node, &bound));
+    CHECK(!co_node_accepts(&g.t.node, &past));
+    co_node_ingest(&g.t.node, 1 * MS, &past);
+    CHECK_EQ(g_emcy_count, 0);
+    co_node_ingest(&g.t.node, 2 * MS, &bound);
+    CHECK_EQ(g_emcy_count, 1);
+    CHECK_EQ(g_emcy[0].cob_id, 0x0A1);
+    CHECK_EQ(g_emcy[0].code, 0x8130);
+}
+
 int main(void)
 {
     RUN(test_more_consumer_entries_than_the_node_watches);
@@ -388,5 +453,7 @@ int main(void)
     RUN(test_streamed_values);
     RUN(test_store_sub_index_beyond_the_groups);
     RUN(test_parameters_of_channels_the_node_lacks);
+    RUN(test_emcy_without_error_history);
+    RUN(test_more_emcy_consumer_entries_than_the_node_binds);
     return check_summary();
 }

@@ -530,6 +530,46 @@ static void test_history_entry_written_locally_keeps_history(void)
     CHECK_EQ(v, 0);
 }
 
+/* A power-on value of 0x1014 with bit 31 set: what waited (held back while stopped) is
+ * dropped by reset communication, which makes EMCY not valid again; enabling it
+ * afterwards brings back nothing stale. */
+static void test_reset_communication_to_an_invalid_cob_id_drops_the_queue(void)
+{
+    static const uint32_t off = 0x80000080u; /* + $NODEID */
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    for (uint32_t e = 0; e < t.cfg.od.count; e++) {
+        if (t.od.entries[e].index == 0x1014) {
+            t.od.entries[e].dflt = &off;
+        }
+    }
+    t.cfg.on_emcy = rec_emcy;
+    co_node_init(&t.node, &t.cfg);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(t.od.emcy_cob_id, 0x80000085u);
+    CHECK_EQ(co_emcy_raise(&t.node, 0x5001, NULL), CO_OK); /* off: recorded, not sent */
+    CHECK_STR(bus(&t), "705#00");
+    CHECK_EQ(t.node.emcy.queue_count, 0);
+    /* Enabled by the application, then stopped: the next one waits. */
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x85), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x000, "02 05");
+    CHECK_EQ(co_emcy_raise(&t.node, 0x5002, NULL), CO_OK);
+    CHECK_EQ(t.node.emcy.queue_count, 1);
+    fake_clear(&t.bus);
+    ingest(&t, 2 * MS, 0x000, "82 05");
+    CHECK_EQ(t.od.emcy_cob_id, 0x80000085u);
+    CHECK_EQ(t.node.emcy.queue_count, 0);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x85), CO_ABORT_NONE);
+    CHECK_EQ(co_node_poll(&t.node, 10 * MS), CO_TIME_NEVER);
+    CHECK_STR(bus(&t), "705#00");
+    /* The errors themselves are still active. */
+    CHECK(co_emcy_active(&t.node, 0x5001));
+    CHECK(co_emcy_active(&t.node, 0x5002));
+    co_emcy_raise(&t.node, 0x5003, NULL);
+    CHECK_STR(bus(&t), "705#00 085#0350010000000000");
+}
+
 int main(void)
 {
     RUN(test_register_bit_of_each_group);
@@ -553,5 +593,6 @@ int main(void)
     RUN(test_producer_invalidated_behind_the_nodes_back);
     RUN(test_unknown_bus_event_ignored);
     RUN(test_history_entry_written_locally_keeps_history);
+    RUN(test_reset_communication_to_an_invalid_cob_id_drops_the_queue);
     return check_summary();
 }

@@ -78,6 +78,15 @@ static void test_life_guarding_event_and_error_behaviour(void)
     CHECK_EQ(t.events[0].kind, CO_EC_LIFE_GUARD);
     CHECK_EQ(t.events[0].node_id, 5);
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL); /* 0x1029 sub1 = 0 */
+    /* Reported once: polled on (a SYNC producer keeps the node busy) with still no
+     * guarding RTR, there is no new event. */
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x40000080u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 100000), CO_ABORT_NONE);
+    for (uint64_t at = 5500 * MS; at <= 5900 * MS; at += 100 * MS) {
+        co_node_poll(&t.node, at);
+    }
+    CHECK(fake_count_id(&t.bus, 0x080) >= 4);
+    CHECK_EQ(t.event_count, 1);
     ingest(&t, 6000 * MS, 0x705, "R1");
     CHECK_EQ(t.events[1].kind, CO_EC_LIFE_GUARD_RESUMED);
 }

@@ -31,6 +31,7 @@ typedef struct net {
     uint8_t dcf[4][128];
     uint32_t start_frames; /* NMT start commands seen on the bus */
     uint32_t reset_frames; /* NMT reset communication commands */
+    uint32_t sdo_requests; /* frames on 0x601..0x67F */
 } net_t;
 
 static void on_event(void *ctx, const co_mgr_event_t *ev)
@@ -47,6 +48,8 @@ static void on_trace(void *ctx, const char *line)
     net_t *n = ctx;
     n->start_frames += strstr(line, " 000#01") != NULL;
     n->reset_frames += strstr(line, " 000#82") != NULL;
+    const char *hash = strchr(line, '#');
+    n->sdo_requests += hash != NULL && hash - line >= 4 && hash[-4] == ' ' && hash[-3] == '6';
 }
 
 static const co_mgr_event_t *find(const net_t *n, uint8_t node, co_mgr_event_kind_t kind)
@@ -59,9 +62,18 @@ static const co_mgr_event_t *find(const net_t *n, uint8_t node, co_mgr_event_kin
     return NULL;
 }
 
-static void station(net_t *n, station_t *s, uint8_t id, uint16_t hb_ms, const uint32_t ident[4])
+/* A station on the example dictionary, without the entries of index `drop` (0: none). */
+static void station_without(net_t *n, station_t *s, uint8_t id, uint16_t hb_ms,
+                            const uint32_t ident[4], uint16_t drop)
 {
     co_node_config_t cfg = {.node_id = id, .od = example_od_init(&s->od, hb_ms)};
+    uint32_t kept = 0;
+    for (uint32_t e = 0; e < cfg.od.count; e++) {
+        if (s->od.entries[e].index != drop) {
+            s->od.entries[kept++] = s->od.entries[e];
+        }
+    }
+    cfg.od.count = kept;
     if (ident) {
         memcpy(s->ident, ident, sizeof s->ident);
         for (uint32_t e = 0; e < cfg.od.count; e++) {
@@ -75,6 +87,11 @@ static void station(net_t *n, station_t *s, uint8_t id, uint16_t hb_ms, const ui
     cfg.driver = co_sim_port_driver(&s->port);
     CHECK_EQ(co_node_init(&s->node, &cfg), CO_OK);
     co_sim_port_bind(&s->port, &s->node);
+}
+
+static void station(net_t *n, station_t *s, uint8_t id, uint16_t hb_ms, const uint32_t ident[4])
+{
+    station_without(n, s, id, hb_ms, ident, 0);
 }
 
 static co_node_t *dev(net_t *n, uint8_t id) { return &n->dev[id - FIRST].node; }
@@ -1223,6 +1240,196 @@ static void test_heartbeat_entry_without_time_is_free(void)
     free(n);
 }
 
+/* ---- the manager's own failures: no SDO, no heartbeat entry, and events it ignores */
+
+static void test_stopped_master_fails_each_boot(void)
+{
+    net_t *n = small_net(2);
+    small_init(n, CO_MGR_NMT_MASTER | CO_MGR_NO_SELF_START);
+    small_start_all(n, 2);
+    /* A stopped master may not use SDO: each boot fails at its first read, unsent. */
+    CHECK_EQ(co_nmt_apply(&n->master.node, CO_NMT_CMD_STOP), CO_OK);
+    CHECK_EQ(co_manager_start(&n->mgr), CO_OK);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    for (uint8_t id = 2; id <= 3; id++) {
+        const co_mgr_event_t *e = find(n, id, CO_MGR_FAILED);
+        CHECK(e != NULL);
+        if (e) {
+            CHECK_EQ(e->reason, CO_BOOT_NO_ANSWER);
+            CHECK_EQ(e->abort, CO_ABORT_GENERAL);
+            CHECK_EQ(e->index, 0x1000);
+            CHECK_EQ(e->sub, 0);
+        }
+    }
+    CHECK_EQ(n->sdo_requests, 0);
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_STOPPED);
+    free(n);
+}
+
+static void test_master_without_heartbeat_consumers(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    co_sim_set_trace(&n->bus, on_trace, n);
+    station_without(n, &n->master, 1, 0, NULL, 0x1016);
+    uint32_t ident[4] = {0xCA0u, 0x102u, 0x00010000u, 5002u};
+    station(n, &n->dev[0], 2, 100, ident);
+    n->slaves[2 - 1].assignment = CO_MGR_SLAVE;
+    n->slaves[2 - 1].heartbeat_ms = 300;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 1);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    /* Checks passed, but there is no 0x1016 to watch its heartbeat with. */
+    CHECK(n->sdo_requests > 0);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_HEARTBEAT_START);
+        CHECK_EQ(e->index, 0x1016);
+        CHECK_EQ(e->sub, 0);
+    }
+    CHECK(find(n, 2, CO_MGR_BOOTED) == NULL);
+    free(n);
+}
+
+static void test_guarded_slave_gets_no_heartbeat_watch(void)
+{
+    net_t *n = small_net(1);
+    n->slaves[2 - 1].heartbeat_ms = 300;
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 1);
+    /* The application guards node 2 already: one error control per node, so the
+     * manager's heartbeat entry for it is refused. */
+    CHECK_EQ(co_guard_watch(&n->master.node, 2, 1000, 3), CO_OK);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 500 * MS);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_HEARTBEAT_START);
+        CHECK_EQ(e->index, 0x1016);
+    }
+    for (uint8_t sub = 1; sub <= EXAMPLE_HB_CONSUMERS; sub++) {
+        uint64_t v = 1;
+        CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, sub, &v), CO_OK);
+        CHECK_EQ(v, 0);
+    }
+    free(n);
+}
+
+static void test_nothing_happens_before_the_manager_starts(void)
+{
+    net_t *n = calloc(1, sizeof *n);
+    co_sim_bus_init(&n->bus, 500000);
+    co_sim_set_trace(&n->bus, on_trace, n);
+    station(n, &n->master, 1, 50, NULL); /* the master's heartbeat keeps it polled */
+    uint32_t ident[4] = {0xCA0u, 0x102u, 0x00010000u, 5002u};
+    station(n, &n->dev[0], 2, 100, ident);
+    n->slaves[2 - 1].assignment = CO_MGR_SLAVE | CO_MGR_BOOT_ON_BOOTUP | CO_MGR_MANDATORY;
+    small_init(n, CO_MGR_NMT_MASTER);
+    co_node_start(&n->master.node, 0);
+    /* The master watches node 2's heartbeat: its boot-up and first heartbeat are events. */
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, hb_consumer_value(2, 500)),
+             CO_ABORT_NONE);
+    co_node_start(&n->dev[0].node, 10 * MS);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    CHECK_EQ(n->event_count, 0);
+    CHECK_EQ(n->sdo_requests, 0);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_UNLISTED);
+    CHECK(!co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_hb_remote_state(&n->master.node, 2), CO_NMT_PRE_OPERATIONAL);
+    /* Started, it boots the slave and the network. */
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK(find(n, 2, CO_MGR_BOOTED) != NULL);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_OPERATIONAL);
+    free(n);
+}
+
+static void test_mandatory_boot_up_after_network_start_changes_nothing(void)
+{
+    net_t *n = small_net(1);
+    n->slaves[2 - 1].assignment |= CO_MGR_MANDATORY; /* without bit 2 */
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 1);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_OPERATIONAL);
+    /* The network runs: a mandatory slave's boot-up no longer boots it. */
+    uint32_t before = n->event_count;
+    uint32_t requests = n->sdo_requests;
+    co_nmt_apply(&n->dev[0].node, CO_NMT_CMD_RESET_COMMUNICATION);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    CHECK_EQ(n->event_count, before);
+    CHECK_EQ(n->sdo_requests, requests);
+    CHECK_EQ(co_nmt_state(&n->dev[0].node), CO_NMT_PRE_OPERATIONAL);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_RUNNING);
+    free(n);
+}
+
+static void test_configured_slave_that_falls_silent_is_lost(void)
+{
+    net_t *n = small_net(1);
+    n->slaves[2 - 1].heartbeat_ms = 300;
+    small_init(n, CO_MGR_NMT_MASTER | CO_MGR_NO_SLAVE_START);
+    small_start_all(n, 1);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_CONFIGURED);
+    /* Booted, never started (bit 3): its silence is a loss all the same. */
+    co_sim_set_bus_off(&n->dev[0].port, true);
+    co_sim_run_until(&n->bus, 2000 * MS);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_LOST);
+    CHECK(e != NULL);
+    if (e) {
+        CHECK_EQ(e->reason, CO_BOOT_HEARTBEAT);
+    }
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_MISSING);
+    CHECK_EQ(co_manager_slave_reason(&n->mgr, 2), CO_BOOT_HEARTBEAT);
+    free(n);
+}
+
+/* The configuration turns the slave's heartbeat on while the master watches it already:
+ * heartbeats that arrive during the download do not end the boot early. */
+static void test_heartbeat_during_configuration_does_not_end_the_boot(void)
+{
+    net_t *n = small_net(1);
+    co_node_set_uint(&n->dev[0].node, 0x1017, 0, 0); /* silent until configured */
+    uint32_t off = 0;
+    dcf_u16(n->dcf[0], &off, 0x1017, 0, 1);
+    for (uint32_t v = 1; v <= 8; v++) {
+        dcf_u32(n->dcf[0], &off, 0x2000, 0, v);
+    }
+    n->slaves[2 - 1].dcf = n->dcf[0];
+    n->slaves[2 - 1].dcf_len = off;
+    n->slaves[2 - 1].heartbeat_ms = 50;
+    small_init(n, CO_MGR_NMT_MASTER | CO_MGR_NO_SLAVE_START);
+    co_node_start(&n->master.node, 0);
+    co_node_start(&n->dev[0].node, 0);
+    co_node_set_uint(&n->dev[0].node, 0x1017, 0, 0);
+    CHECK_EQ(co_node_set_uint(&n->master.node, 0x1016, 1, hb_consumer_value(2, 1000)),
+             CO_ABORT_NONE);
+    co_sim_run_until(&n->bus, 10 * MS);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    const co_mgr_event_t *e = find(n, 2, CO_MGR_BOOTED);
+    CHECK(e != NULL);
+    CHECK_EQ(n->dev[0].od.app_u32, 8); /* the whole configuration */
+    uint32_t booted = 0;
+    for (uint32_t i = 0; i < n->event_count; i++) {
+        booted += n->events[i].node_id == 2 && n->events[i].kind == CO_MGR_BOOTED;
+    }
+    CHECK_EQ(booted, 1);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&n->master.node, 0x1016, 1, &v), CO_OK);
+    CHECK_EQ(v, hb_consumer_value(2, 50));
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
@@ -1249,5 +1456,12 @@ int main(void)
     RUN(test_load_od_edges);
     RUN(test_configuration_date_cannot_be_compared);
     RUN(test_heartbeat_entry_without_time_is_free);
+    RUN(test_stopped_master_fails_each_boot);
+    RUN(test_master_without_heartbeat_consumers);
+    RUN(test_guarded_slave_gets_no_heartbeat_watch);
+    RUN(test_nothing_happens_before_the_manager_starts);
+    RUN(test_mandatory_boot_up_after_network_start_changes_nothing);
+    RUN(test_configured_slave_that_falls_silent_is_lost);
+    RUN(test_heartbeat_during_configuration_does_not_end_the_boot);
     return check_summary();
 }

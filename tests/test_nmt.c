@@ -130,6 +130,11 @@ static void test_unconfigured_node_stays_initialising(void)
     CHECK_EQ(co_node_stats(&t.node)->rx_gated, 1);
     co_node_poll(&t.node, 1000000);
     CHECK_EQ(t.bus.count, 0); /* no heartbeat either */
+    /* Not even when the application sets a heartbeat time while it waits. */
+    CHECK_EQ(co_node_set_uint(&t.node, 0x1017, 0, 50), CO_ABORT_NONE);
+    CHECK_EQ(co_node_poll(&t.node, 1000000), CO_TIME_NEVER);
+    CHECK_EQ(co_node_poll(&t.node, 2000000), CO_TIME_NEVER);
+    CHECK_EQ(t.bus.count, 0);
     CHECK_EQ(co_nmt_apply(&t.node, CO_NMT_CMD_START), CO_ERR_STATE);
 }
 
