@@ -529,6 +529,55 @@ static void test_verify_read_refused(void)
     free(b);
 }
 
+/* A stopped master may not use SDO: the download ends at once, at the stop, and the
+ * master is free for the next one. */
+static void test_stopped_master_cannot_download(void)
+{
+    bench_t *b = bench_up();
+    co_sim_run_until(&b->bus, 10 * MS);
+    CHECK_EQ(co_nmt_apply(&b->master, CO_NMT_CMD_STOP), CO_OK);
+    co_flash_request_t r = request(b, 0);
+    r.len = 100;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    CHECK_EQ(b->results, 1);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_STOP);
+    CHECK_EQ(b->result.abort, CO_ABORT_GENERAL);
+    co_sim_run_until(&b->bus, 100 * MS);
+    CHECK_EQ(b->app.command_count, 0);
+    CHECK_EQ(b->progress_calls, 0);
+    CHECK_EQ(co_nmt_apply(&b->master, CO_NMT_CMD_ENTER_PRE_OPERATIONAL), CO_OK);
+    r.check_ident = false;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 1000 * MS);
+    CHECK_EQ(b->results, 2);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_DONE);
+    CHECK_EQ(b->app.bytes, 100);
+    free(b);
+}
+
+/* A master polled all along (its heartbeat, every millisecond) on a slow bus: progress
+ * comes from the data stage only, never goes back, and ends at the image length. */
+static void test_progress_of_a_master_polled_in_every_stage(void)
+{
+    bench_t *b = bench_up();
+    co_sim_delay(&b->bus, 2000); /* every frame leaves 2 ms after it was sent */
+    CHECK_EQ(co_node_set_uint(&b->master, 0x1017, 0, 1), CO_ABORT_NONE);
+    co_sim_run_until(&b->bus, 10 * MS);
+    co_flash_request_t r = request(b, 0);
+    r.len = 2000;
+    r.check_ident = false;
+    CHECK_EQ(co_flash_start(&b->flash, &b->master, &r), CO_OK);
+    co_sim_run_until(&b->bus, 5000 * MS);
+    CHECK_EQ(b->results, 1);
+    CHECK_EQ(b->result.stage, CO_FLASH_STAGE_DONE);
+    CHECK_EQ(b->app.bytes, 2000);
+    CHECK(b->progress_calls > 2);
+    CHECK(b->progress_monotonic);
+    CHECK_EQ(b->last_progress, 2000);
+    CHECK_EQ(b->last_total, 2000);
+    free(b);
+}
+
 int main(void)
 {
     RUN(test_device_objects);
@@ -540,5 +589,7 @@ int main(void)
     RUN(test_stop_and_clear_refused);
     RUN(test_no_callbacks_no_check_other_program);
     RUN(test_verify_read_refused);
+    RUN(test_stopped_master_cannot_download);
+    RUN(test_progress_of_a_master_polled_in_every_stage);
     return check_summary();
 }

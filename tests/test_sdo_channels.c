@@ -774,6 +774,71 @@ static void test_reset_communication_and_channels_set_up_by_the_application(void
     free(w);
 }
 
+static void on_flashed(void *ctx, const co_flash_result_t *r)
+{
+    (void)r;
+    (*(int *)ctx)++;
+}
+
+/* Two client channels to one server would both take its responses: refused, by the
+ * setup and by a program download that would set a channel up so. Channels served by
+ * the node itself use no frames and may share it. */
+static void test_two_client_channels_to_one_server_refused(void)
+{
+    world_t *w = world_new();
+    device_join(w, 0, 5);
+    master_t *m = master_join(w, 0, 1);
+    run_ms(w, 1);
+    CHECK_EQ(co_sdo_client_setup(&m->node, 0, 5), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&m->node, 1, 5), CO_ERR_STATE);
+    CHECK_EQ(get_uint(&m->node, 0x1281, 3), 0); /* left as it was */
+    static const uint8_t image[16] = {1, 2, 3};
+    int flashed = 0;
+    co_flash_t flash;
+    co_flash_request_t req = {.channel = 1,
+                              .server = 5,
+                              .data = image,
+                              .len = sizeof image,
+                              .done = on_flashed,
+                              .ctx = &flashed};
+    CHECK_EQ(co_flash_start(&flash, &m->node, &req), CO_ERR_STATE);
+    run_ms(w, 10);
+    CHECK_EQ(flashed, 0);
+    CHECK_EQ(w->sniffer.count[0x605], 0);
+    /* The node itself, on two channels at once. */
+    CHECK_EQ(co_sdo_client_setup(&m->node, 1, 1), CO_OK);
+    CHECK_EQ(co_sdo_client_setup(&m->node, 2, 1), CO_OK);
+    CHECK_EQ(start_upload(m, 1, 0x1000, 0, CO_SDO_AUTO), CO_OK);
+    CHECK(xfer_ok(&m->xfer[1], 4));
+    CHECK_EQ(start_upload(m, 2, 0x1018, 1, CO_SDO_AUTO), CO_OK);
+    CHECK(xfer_ok(&m->xfer[2], 4));
+    CHECK_EQ(co_get_u32(m->xfer[1].buf), m->od.device_type);
+    CHECK_EQ(w->sniffer.count[0x601], 0);
+    free(w);
+}
+
+/* A channel whose client -> server COB-ID has bit 31 set is off: no transfer starts. */
+static void test_client_channel_with_an_invalid_cob_id_does_not_start(void)
+{
+    world_t *w = world_new();
+    device_join(w, 0, 5);
+    master_t *m = master_join(w, 0, 1);
+    run_ms(w, 1);
+    configure_client(m, 1, COB_OFF | 0x605, 0x585, 5);
+    CHECK_EQ(start_upload(m, 1, 0x1000, 0, CO_SDO_AUTO), CO_ERR_STATE);
+    configure_client(m, 1, 0x605, COB_OFF | 0x585, 5);
+    CHECK_EQ(start_upload(m, 1, 0x1000, 0, CO_SDO_AUTO), CO_ERR_STATE);
+    run_ms(w, 10);
+    CHECK_EQ(w->sniffer.count[0x605], 0);
+    CHECK_EQ(m->xfer[1].done_calls, 0);
+    configure_client(m, 1, 0x605, 0x585, 5);
+    CHECK_EQ(start_upload(m, 1, 0x1000, 0, CO_SDO_AUTO), CO_OK);
+    run_one(w, m, 1);
+    CHECK(xfer_ok(&m->xfer[1], 4));
+    CHECK_EQ(w->sniffer.count[0x605], 1);
+    free(w);
+}
+
 int main(void)
 {
     RUN(test_server_channel_1_is_off_at_power_on);
@@ -790,5 +855,7 @@ int main(void)
     RUN(test_client_channel_configured_through_0x1281);
     RUN(test_reset_communication_reloads_0x1281_power_on_values);
     RUN(test_reset_communication_and_channels_set_up_by_the_application);
+    RUN(test_two_client_channels_to_one_server_refused);
+    RUN(test_client_channel_with_an_invalid_cob_id_does_not_start);
     return check_summary();
 }
