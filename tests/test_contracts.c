@@ -330,6 +330,11 @@ static void test_queue_overflow_and_driver_errors_without_callback(void)
     CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
     co_node_start(&node, 0);
     CHECK_EQ(co_node_stats(&node)->tx_dropped, 1);
+    /* An SDO answer the driver refuses for good is dropped as well, not queued. */
+    co_frame_t read = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    co_node_ingest(&node, 0, &read);
+    CHECK_EQ(co_node_stats(&node)->tx_dropped, 2);
+    CHECK_EQ(co_node_stats(&node)->tx_queued, 0);
     /* The application's own frames carry no service: a state change does not purge them,
      * while a service's frame the new state forbids is dropped. */
     cfg.driver.tx = busy_tx;

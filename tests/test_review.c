@@ -165,6 +165,26 @@ static void test_sdo_response_queued_before_stop_is_not_sent_when_stopped(void)
     CHECK_EQ(fake_count_id(&t.bus, 0x585), 0);
 }
 
+/* The other way round: an SDO response that waited when an NMT start arrived may still
+ * leave, as operational allows SDO. */
+static void test_sdo_response_queued_before_start_is_sent_when_operational(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    t.bus.busy = true;
+    co_frame_t req = frm(0x605, "40 00 10 00 00 00 00 00");
+    co_node_ingest(&t.node, 1 * MS, &req);
+    co_frame_t start = frm(0x000, "01 05");
+    co_node_ingest(&t.node, 2 * MS, &start);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_OPERATIONAL);
+    t.bus.busy = false;
+    (void)co_node_poll(&t.node, 3 * MS);
+    CHECK_EQ(fake_count_id(&t.bus, 0x585), 1);
+    CHECK_EQ(co_node_stats(&t.node)->tx_gated, 0);
+}
+
 /* ---- Follow-ups of the same review */
 
 /* A heartbeat left waiting by a busy driver must not leave after the boot-up that a reset
@@ -228,6 +248,7 @@ int main(void)
     RUN(test_block_upload_sends_segments_when_read_hook_gives_short_pieces);
     RUN(test_client_cob_id_with_bits_above_11_bit_id_is_refused);
     RUN(test_sdo_response_queued_before_stop_is_not_sent_when_stopped);
+    RUN(test_sdo_response_queued_before_start_is_sent_when_operational);
     RUN(test_reset_drops_a_heartbeat_left_waiting);
     RUN(test_standard_frame_with_an_oversized_id_is_malformed);
     RUN(test_unconfigured_node_keeps_node_id_defaults_at_base);

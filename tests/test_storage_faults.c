@@ -157,6 +157,7 @@ static void test_load_applies_only_valid_records(void)
     add_record(CO_PARAMS_APPLICATION, 0x1017, 0, big, 2);   /* not of this group */
     add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 3);   /* wrong length */
     add_record(CO_PARAMS_COMMUNICATION, 0x1000, 0, u32, 4); /* device type: not a parameter */
+    add_record(CO_PARAMS_COMMUNICATION, 0x2007, 0, u32, 4); /* not of this group either */
     uint8_t hb[2];
     co_put_u16(hb, 300);
     add_record(CO_PARAMS_COMMUNICATION, 0x1017, 0, hb, 2); /* good */
