@@ -249,6 +249,10 @@ static void test_save_records_parameters_only(void)
     CHECK(!saved(0x2102)); /* longer than CO_STORE_VALUE_MAX */
     CHECK(!saved(0x2103)); /* constant */
     CHECK(!saved(0x2003)); /* a DOMAIN */
+    /* A read of the unreadable one gets its hook's abort code. */
+    uint8_t buf[4];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&g.t.node, 0x2101, 0, buf, sizeof buf, &len), CO_ABORT_HARDWARE);
 }
 
 /* ---- streamed values */
@@ -373,9 +377,12 @@ static void test_parameters_of_channels_the_node_lacks(void)
     CHECK_EQ(co_sdo_upload(&g.t.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, 4, sdo_result_done, &r),
              CO_OK);
     CHECK_EQ(fake_count_id(&g.t.bus, 0x607), 1);
-    /* A TIME_DIFFERENCE is not read as an integer. */
+    /* A TIME_DIFFERENCE is not read as an integer, nor set as one. */
     uint64_t v = 0;
     CHECK_EQ(co_node_get_uint(&g.t.node, 0x2100, 0, &v), CO_ERR_ARG);
+    diff[0] = 0x5A;
+    CHECK_EQ(co_node_set_uint(&g.t.node, 0x2100, 0, 1), CO_ABORT_TYPE_MISMATCH);
+    CHECK_EQ(diff[0], 0x5A);
 }
 
 /* ---- EMCY without an error history, and more consumer entries than the node binds */
@@ -443,6 +450,55 @@ static void test_more_emcy_consumer_entries_than_the_node_binds(void)
     CHECK_EQ(g_emcy[0].code, 0x8130);
 }
 
+/* ---- PDO parameters: a gap, more than the node has, more mapping entries than allowed */
+
+static void test_tpdo_parameters_with_a_gap(void)
+{
+    CHECK_EQ(build(0, 0x1801, NULL, 0), CO_OK); /* no TPDO2 communication parameters */
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(co_nmt_apply(&g.t.node, CO_NMT_CMD_START), CO_OK);
+    fake_clear(&g.t.bus);
+    CHECK_EQ(co_tpdo_request(&g.t.node, 1), CO_ERR_ARG);   /* not there at all */
+    CHECK_EQ(co_tpdo_request(&g.t.node, 2), CO_ERR_STATE); /* there, mapping nothing */
+    CHECK_EQ(co_tpdo_request(&g.t.node, 0), CO_OK);
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#78563412");
+}
+
+static void test_pdo_parameters_beyond_the_pdos_the_node_has(void)
+{
+    static uint32_t rcob = 0x80000000u, tcob = 0x80000000u;
+    const co_od_entry_t extra[] = {
+        u32_entry((uint16_t)(0x1400 + CO_RPDO_MAX), 1, &rcob),
+        u32_entry((uint16_t)(0x1800 + CO_TPDO_MAX), 1, &tcob),
+    };
+    CHECK_EQ(build(0, 0, extra, 2), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(co_nmt_apply(&g.t.node, CO_NMT_CMD_START), CO_OK);
+    /* Plain values: written, but no PDO of the node takes them. */
+    CHECK_EQ(write_u32(&g.t, (uint16_t)(0x1400 + CO_RPDO_MAX), 1, 0x606), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&g.t, (uint16_t)(0x1800 + CO_TPDO_MAX), 1, 0x586), CO_ABORT_NONE);
+    CHECK_EQ(rcob, 0x606);
+    CHECK_EQ(tcob, 0x586);
+    co_frame_t f = frm(0x606, "01");
+    CHECK(!co_node_accepts(&g.t.node, &f));
+    CHECK_EQ(co_tpdo_request(&g.t.node, CO_TPDO_MAX), CO_ERR_ARG);
+}
+
+static void test_more_mapping_entries_than_a_pdo_takes(void)
+{
+    static uint32_t ninth = 0x62000108u;
+    const co_od_entry_t extra[] = {u32_entry(0x1600, CO_PDO_MAP_MAX + 1, &ninth)};
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(write_u32(&g.t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&g.t, 0x1600, 0, 0), CO_ABORT_NONE);
+    /* The entry exists, but a PDO takes CO_PDO_MAP_MAX entries at most. */
+    CHECK_EQ(write_u8(&g.t, 0x1600, 0, CO_PDO_MAP_MAX + 1), CO_ABORT_MAP_LEN);
+    CHECK_EQ(write_u8(&g.t, 0x1600, 0, CO_PDO_MAP_MAX + 2), CO_ABORT_VALUE_HIGH);
+    CHECK_EQ(g.t.od.rpdo[0].map_count, 0);
+}
+
 int main(void)
 {
     RUN(test_more_consumer_entries_than_the_node_watches);
@@ -455,5 +511,8 @@ int main(void)
     RUN(test_parameters_of_channels_the_node_lacks);
     RUN(test_emcy_without_error_history);
     RUN(test_more_emcy_consumer_entries_than_the_node_binds);
+    RUN(test_tpdo_parameters_with_a_gap);
+    RUN(test_pdo_parameters_beyond_the_pdos_the_node_has);
+    RUN(test_more_mapping_entries_than_a_pdo_takes);
     return check_summary();
 }

@@ -34,6 +34,17 @@ static void test_poll_before_start_and_when_idle(void)
     co_node_ingest(&t.node, 0, &nmt); /* a node not started listens to nothing */
     CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 1);
     CHECK_EQ(t.bus.count, 0);
+    /* The application's own frame, left waiting by a busy driver before the start: poll
+     * hands it over, and runs no service. */
+    t.bus.busy = true;
+    co_frame_t own = frm(0x123, "AA");
+    CHECK_EQ(co_node_send(&t.node, &own), CO_OK);
+    CHECK_EQ(t.bus.count, 0);
+    t.bus.busy = false;
+    CHECK_EQ(co_node_poll(&t.node, 0), CO_TIME_NEVER);
+    CHECK_EQ(t.bus.count, 1);
+    CHECK_EQ(t.bus.frames[0].id, 0x123);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_INITIALISING);
     co_node_start(&t.node, 0);
     CHECK_EQ(co_node_poll(&t.node, 1), CO_TIME_NEVER);
     CHECK_EQ(co_node_poll(&t.node, 2), CO_TIME_NEVER);

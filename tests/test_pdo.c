@@ -432,6 +432,8 @@ static void test_rpdo_remapping_with_dummy(void)
     setup(&t, false);
     CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE);
     CHECK_EQ(write_u8(&t, 0x1600, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1600, 1, 0x00000008), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1600, 0, 1), CO_ABORT_NO_MAP);         /* index 0 is no dummy */
     CHECK_EQ(write_u32(&t, 0x1600, 1, 0x00050008), CO_ABORT_NONE); /* skip a byte */
     CHECK_EQ(write_u32(&t, 0x1600, 2, 0x62000208), CO_ABORT_NONE);
     CHECK_EQ(write_u32(&t, 0x1600, 3, 0x20000020), CO_ABORT_NONE);
@@ -583,6 +585,55 @@ static void test_tpdo_whole_value_at_odd_bit_position(void)
     CHECK_STR(bus(&t), "185#4B342312B1");
 }
 
+/* The other way: a whole value received from bit 4 on, after a 4-bit dummy. */
+static void test_rpdo_whole_value_at_odd_bit_position(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1600, 0, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1600, 1, 0x00050004u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1600, 2, 0x20000020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1600, 0, 2), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x205u), CO_ABORT_NONE);
+    /* 0x5 | 0x12345678 << 4 = 0x123456785, 5 bytes little-endian. */
+    ingest(&t, 1 * MS, 0x205, "85 67 45 23 01");
+    CHECK_EQ(t.od.app_u32, 0x12345678u);
+    CHECK_EQ(rpdos.count, 1);
+}
+
+/* An application that stops the node from on_rpdo, as a SYNC applies an RPDO: the rest of
+ * that SYNC's PDOs is neither applied nor sent. */
+static void stop_on_rpdo(void *user, uint16_t rpdo)
+{
+    test_node_t *t = user;
+    rec_rpdo(user, rpdo);
+    (void)co_nmt_apply(&t->node, CO_NMT_CMD_STOP);
+}
+
+static void test_node_stopped_by_on_rpdo_at_a_sync(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    CHECK_EQ(write_u8(&t, 0x1400, 2, 0), CO_ABORT_NONE); /* RPDO1: at the next SYNC */
+    /* RPDO2 (0x305): 0x2007, at the next SYNC too. */
+    CHECK_EQ(write_u32(&t, 0x1401, 1, 0x80000305u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1601, 1, 0x20070020u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1601, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1401, 1, 0x305u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1401, 2, 0), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 1), CO_ABORT_NONE); /* TPDO1: every SYNC */
+    ingest(&t, 1 * MS, 0x205, "01 02 03 04");
+    ingest(&t, 1 * MS, 0x305, "05 06 07 08");
+    t.node.cfg.on_rpdo = stop_on_rpdo;
+    ingest(&t, 2 * MS, 0x080, "");
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_STOPPED);
+    CHECK_EQ(t.od.outputs[0], 1); /* RPDO1, whose callback stopped the node */
+    CHECK_EQ(t.od.app_u32b, 0);   /* RPDO2 not applied */
+    CHECK_EQ(rpdos.count, 1);
+    CHECK_STR(bus(&t), ""); /* TPDO1 not sent */
+}
+
 static void test_event_driven_tpdo_not_sent_at_sync(void)
 {
     test_node_t t;
@@ -704,6 +755,8 @@ int main(void)
     RUN(test_bit_level_dummy_skips);
     RUN(test_tpdo_whole_value_at_odd_bit_position);
     RUN(test_event_driven_tpdo_not_sent_at_sync);
+    RUN(test_rpdo_whole_value_at_odd_bit_position);
+    RUN(test_node_stopped_by_on_rpdo_at_a_sync);
     RUN(test_rpdo_into_a_tpdo_mapped_object);
     RUN(test_rpdo_without_listeners);
     return check_summary();

@@ -21,6 +21,7 @@ typedef struct rig {
     uint8_t taken[8];
     uint32_t taken_len;
     int writes, checks, written;
+    bool refuse; /* the write hook refuses what it is given */
 } rig_t;
 
 static rig_t g; /* the hooks' context */
@@ -48,6 +49,9 @@ static co_abort_t h_write(void *ctx, const co_od_entry_t *e, uint32_t offset, co
     (void)last;
     rig_t *r = ctx;
     r->writes++;
+    if (r->refuse) {
+        return CO_ABORT_DATA_LOCAL;
+    }
     memcpy(&r->taken[offset], data, n);
     r->taken_len = offset + n;
     return CO_ABORT_NONE;
@@ -181,6 +185,66 @@ static void test_plain_values_of_every_width(void)
     CHECK_EQ(write_u8(&g.t, 0x1A00, 0, 1), CO_ABORT_NO_MAP);
 }
 
+/* A value the write hook refuses is not taken: it is no change, so the event-driven TPDO
+ * mapping the object stays silent. */
+static void test_rpdo_value_refused_by_the_write_hook(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21000020};
+    remap(0x1400, 0x1600, 0x205, m, 1);
+    remap(0x1800, 0x1A00, 0x185, m, 1);
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
+    g.refuse = true;
+    ingest(&g.t, 1000, 0x205, "11 22 33 44");
+    CHECK_EQ(g.writes, 1);
+    CHECK_EQ(g.taken_len, 0);
+    CHECK_EQ(g.t.bus.count, 0);
+    g.refuse = false;
+    g.produced = 0x55667788u;
+    ingest(&g.t, 2000, 0x205, "11 22 33 44");
+    CHECK_EQ(g.writes, 2);
+    CHECK_EQ(co_get_u32(g.taken), 0x44332211u);
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#88776655");
+}
+
+/* A cyclic TPDO that is not all plain values (a hook-served one first) counts its SYNCs
+ * all the same, and samples each value when it is due. */
+static void test_cyclic_tpdo_with_a_hooked_object(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21000020, 0x21020010};
+    remap(0x1800, 0x1A00, 0x185, m, 2);
+    CHECK_EQ(write_u8(&g.t, 0x1800, 2, 2), CO_ABORT_NONE); /* every second SYNC */
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
+    for (uint32_t i = 1; i <= 4; i++) {
+        g.produced = 0x01020300u + i;
+        g.plain16 = (uint16_t)(0xA0 + i);
+        ingest(&g.t, i * 1000, 0x080, "");
+    }
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#02030201A200 185#04030201A400");
+}
+
+/* A 16-bit value alone takes the short paths: received at once, sent at every SYNC. */
+static void test_plain_16_bit_value_on_the_short_paths(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21020010};
+    remap(0x1400, 0x1600, 0x205, m, 1);
+    remap(0x1800, 0x1A00, 0x185, m, 1);
+    CHECK_EQ(write_u8(&g.t, 0x1800, 2, 1), CO_ABORT_NONE);
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 1000, 0x205, "34 12");
+    CHECK_EQ(g.plain16, 0x1234);
+    ingest(&g.t, 2000, 0x080, "");
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#3412");
+}
+
 /* Local access to entries that are not plain integers, and hooks on local writes. */
 static void test_local_access_to_other_kinds(void)
 {
@@ -190,6 +254,13 @@ static void test_local_access_to_other_kinds(void)
     CHECK_EQ(co_node_get_uint(&g.t.node, 0x2105, 0, &v), CO_ERR_ARG); /* TIME_OF_DAY */
     CHECK_EQ(co_node_get_uint(&g.t.node, 0x2100, 0, &v), CO_ERR_ARG); /* no storage */
     CHECK_EQ(co_node_get_uint(&g.t.node, 0x2103, 0, &v), CO_OK);
+    /* Nor are they set as one. */
+    double real_before = g.real64;
+    CHECK_EQ(co_node_set_uint(&g.t.node, 0x2104, 0, 1), CO_ABORT_TYPE_MISMATCH);
+    CHECK(memcmp(&g.real64, &real_before, sizeof real_before) == 0);
+    g.tod[0] = 0x5A;
+    CHECK_EQ(co_node_set_uint(&g.t.node, 0x2105, 0, 1), CO_ABORT_TYPE_MISMATCH);
+    CHECK_EQ(g.tod[0], 0x5A);
     CHECK_EQ(co_node_set_uint(&g.t.node, 0x2101, 0, 7), CO_ABORT_NONE);
     CHECK_EQ(g.checks, 1);
     CHECK_EQ(g.written, 1);
@@ -205,5 +276,8 @@ int main(void)
     RUN(test_tpdo_from_hooked_objects);
     RUN(test_plain_values_of_every_width);
     RUN(test_local_access_to_other_kinds);
+    RUN(test_rpdo_value_refused_by_the_write_hook);
+    RUN(test_cyclic_tpdo_with_a_hooked_object);
+    RUN(test_plain_16_bit_value_on_the_short_paths);
     return check_summary();
 }
