@@ -67,13 +67,19 @@ test-python: py-env
 	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src
 
 # Coverage of the core by the C tests (gcovr from the Python environment's pinned tools).
+# Prints the summary lines; fails when branch coverage of src/ is below COV_BRANCH_MIN %.
+COV_BRANCH_MIN ?= 95
 coverage: py-env
 	cmake -S . -B build-cov $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS="--coverage -O0" \
 	  -DCMAKE_EXE_LINKER_FLAGS=--coverage >/dev/null
 	cmake --build build-cov >/dev/null
 	find build-cov -name '*.gcda' -delete
 	cd build-cov && ctest >/dev/null
-	$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary build-cov | tail -n 3
+	@$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary \
+	  --fail-under-branch $(COV_BRANCH_MIN) build-cov > build-cov/coverage.txt; rc=$$?; \
+	  tail -n 3 build-cov/coverage.txt; \
+	  if [ $$rc -ne 0 ]; then echo "coverage: branches below $(COV_BRANCH_MIN) % (gcovr exit $$rc)"; fi; \
+	  exit $$rc
 
 # libFuzzer (clang): the frame input path (node) and the SDO client against a hostile server
 # (sdo_client); atheris on the EDS/DCF parser (fuzz/fuzz_eds.py), the CiA 309-3 gateway's
