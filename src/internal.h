@@ -301,7 +301,16 @@ void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame);
 uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us);
 /* At every reset: the node-ID the node runs with from now on (CiA 305 pending node-ID). */
 void co_lss_slave_reset(co_node_t *node, bool application);
+/* A frame of `service` arrived while the services are off: true when that was the quiet
+ * time after a bit rate switch, it is over now (services back), and `service` may run. */
+bool co_lss_slave_resume(co_node_t *node, uint16_t service);
 #else
+static inline bool co_lss_slave_resume(co_node_t *node, uint16_t service)
+{
+    (void)node;
+    (void)service;
+    return false;
+}
 static inline void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame)
 {
     (void)node;

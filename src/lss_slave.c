@@ -21,9 +21,6 @@ static uint32_t address_part(const co_node_t *node, uint8_t part)
 
 static void answer(co_node_t *node, uint8_t cs, const uint8_t *payload, uint8_t n)
 {
-    if (node->now_us < node->lss_slave.quiet_until_us) {
-        return; /* the bus may still run at the old bit rate */
-    }
     co_frame_t f = {.id = CO_LSS_COB_SLAVE, .len = 8, .data = {cs}};
     for (uint8_t i = 0; i < n && i < 7; i++) {
         f.data[1 + i] = payload[i];
@@ -151,6 +148,10 @@ static void configure(co_node_t *node, const uint8_t *d)
             s->bit_timing_due_us = node->now_us + delay;
             s->quiet_until_us = node->now_us + 2 * delay;
             s->bit_timing_armed = true;
+            /* CiA 305: no service sends (or takes) a frame until the second delay has
+             * passed; what waits in the queue would leave at the wrong bit rate. */
+            node->services = 0;
+            co_txq_purge(node);
             co_node_schedule(node, s->bit_timing_due_us);
         }
         break;
@@ -236,20 +237,40 @@ void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame)
     }
 }
 
+/* The quiet time after a bit rate switch ends: the NMT state's services again. */
+static bool end_quiet_time(co_node_t *node)
+{
+    co_lss_slave_t *s = &node->lss_slave;
+    if (node->now_us < s->quiet_until_us) {
+        return false;
+    }
+    s->quiet_until_us = 0;
+    node->services = co_nmt_services((co_nmt_state_t)node->nmt_state);
+    return true;
+}
+
 uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us)
 {
     co_lss_slave_t *s = &node->lss_slave;
-    if (!s->bit_timing_armed) {
-        return CO_TIME_NEVER;
+    if (s->bit_timing_armed) {
+        if (now_us < s->bit_timing_due_us) {
+            return s->bit_timing_due_us;
+        }
+        s->bit_timing_armed = false;
+        if (s->cfg.on_bit_timing) {
+            s->cfg.on_bit_timing(s->cfg.ctx, s->bit_timing);
+        }
     }
-    if (now_us < s->bit_timing_due_us) {
-        return s->bit_timing_due_us;
-    }
-    s->bit_timing_armed = false;
-    if (s->cfg.on_bit_timing) {
-        s->cfg.on_bit_timing(s->cfg.ctx, s->bit_timing);
+    if (s->quiet_until_us != 0 && !end_quiet_time(node)) {
+        return s->quiet_until_us;
     }
     return CO_TIME_NEVER;
+}
+
+bool co_lss_slave_resume(co_node_t *node, uint16_t service)
+{
+    return node->lss_slave.quiet_until_us != 0 && end_quiet_time(node) &&
+           (node->services & service);
 }
 
 /* Reset application brings back the stored node-ID; every reset communication takes the

@@ -73,7 +73,7 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         }
         return;
     }
-    if (!(node->services & route->service)) {
+    if (!(node->services & route->service) && !co_lss_slave_resume(node, route->service)) {
         node->stats.rx_gated++;
         return;
     }
@@ -147,14 +147,14 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
     /* Services may schedule work while they run (a reset, a new watch): start from
      * "never" and let co_node_schedule lower it, then add what the services return. */
     node->next_due_us = CO_TIME_NEVER;
-    uint64_t next = co_hb_poll(node, now_us);
+    uint64_t next = co_lss_slave_poll(node, now_us); /* first: it may end a quiet time */
+    next = co_min_u64(next, co_hb_poll(node, now_us));
     next = co_min_u64(next, co_guard_poll(node, now_us));
     next = co_min_u64(next, co_sdo_server_poll(node, now_us));
     next = co_min_u64(next, co_sdo_client_poll(node, now_us));
     next = co_min_u64(next, co_sync_poll(node, now_us));
     next = co_min_u64(next, co_emcy_poll(node, now_us));
     next = co_min_u64(next, co_pdo_poll(node, now_us));
-    next = co_min_u64(next, co_lss_slave_poll(node, now_us));
     next = co_min_u64(next, co_lss_master_poll(node, now_us));
     next = co_min_u64(next, co_manager_poll(node, now_us));
     next = co_min_u64(next, co_flash_poll(node, now_us));

@@ -40,11 +40,12 @@
  * node_id the node was initialised with, or the last one stored by 0x17).
  * Bit timing: table 0 only (CiA 301 rates: index 0 = 1000, 1 = 800, 2 = 500, 3 = 250,
  * 4 = 125, 6 = 50, 7 = 20, 8 = 10 kbit/s); a rate is accepted when its bit is set in
- * co_lss_slave_config_t.bit_timings. Activate: after `delay` ms the slave calls
- * on_bit_timing (the application switches its controller), and sends nothing for
- * another `delay` ms. Store: through the application's store callback; none = error 1.
- * 0x4C is answered by every slave without node-ID (0xFF), fastscan only by those that
- * are also in waiting; a fastscan that completes the 128-bit match (bit checked 0,
+ * co_lss_slave_config_t.bit_timings. Activate: no service of the node sends or takes a
+ * frame for 2 x `delay` ms (frames waiting in the queue are dropped; the application's
+ * own co_node_send frames are its business); after the first `delay` the slave calls
+ * on_bit_timing (the application switches its controller). Store: through the application's store
+ * callback; none = error 1. 0x4C is answered by every slave without node-ID (0xFF), fastscan only
+ * by those that are also in waiting; a fastscan that completes the 128-bit match (bit checked 0,
  * sub 3 -> next 0) puts that slave in configuration.
  *
  * Master. Built in with CO_CONFIG_LSS_MASTER (default 1). One request at a time, asynchronous
