@@ -3,6 +3,9 @@
 
 #include <string.h>
 
+_Static_assert(EXAMPLE_OD_HASH_SLOTS >= 2 * EXAMPLE_OD_MAX_ENTRIES,
+               "room for co_od_hash_bits(EXAMPLE_OD_MAX_ENTRIES)");
+
 /* Power-on values live in const data; reset copies them into the values. */
 static const uint32_t k_device_type = 0x00000191u; /* CiA 401-like generic I/O */
 static const uint8_t k_zero_u8 = 0;
@@ -196,5 +199,10 @@ co_od_t example_od_keyed(example_od_t *x, co_od_t od)
         x->keys[i] = CO_OD_KEY(od.entries[i].index, od.entries[i].sub);
     }
     od.keys = x->keys;
+    uint8_t bits = co_od_hash_bits(od.count);
+    if (co_od_hash_build(&od, x->hash, bits) == CO_OK) { /* fits: 2^bits <= 512 slots */
+        od.hash = x->hash;
+        od.hash_bits = bits;
+    }
     return od;
 }

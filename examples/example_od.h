@@ -17,6 +17,7 @@
 
 #define EXAMPLE_HB_CONSUMERS 4
 #define EXAMPLE_OD_MAX_ENTRIES 200
+#define EXAMPLE_OD_HASH_SLOTS 512 /* 2^co_od_hash_bits(EXAMPLE_OD_MAX_ENTRIES) */
 #define EXAMPLE_PDOS 4 /* RPDO1..4 and TPDO1..4 */
 #define EXAMPLE_PDO_ENTRIES 8
 #define EXAMPLE_EMCY_HISTORY 8
@@ -80,6 +81,7 @@ typedef struct example_od {
     uint8_t outputs[4];    /* 0x6200 sub1..4, rww, PDO-mappable */
     co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES];
     uint32_t keys[EXAMPLE_OD_MAX_ENTRIES]; /* co_od_t.keys, as the generator emits them */
+    uint16_t hash[EXAMPLE_OD_HASH_SLOTS];  /* co_od_t.hash, likewise */
 } example_od_t;
 
 /** Fill `x` (values at their power-on defaults) and return its dictionary. The
@@ -87,7 +89,8 @@ typedef struct example_od {
 co_od_t example_od_init(example_od_t *x, uint16_t hb_period_ms);
 
 /** `od` (from example_od_init, entries final) with its dense key array (co_od_t.keys)
- *  filled, as generated dictionaries have it. A table edited afterwards needs it again. */
+ *  and its hash (co_od_t.hash) filled, as generated dictionaries have them. A table
+ *  edited afterwards needs them again. */
 co_od_t example_od_keyed(example_od_t *x, co_od_t od);
 
 #endif /* CANOLA_EXAMPLE_OD_H */

@@ -100,6 +100,35 @@ static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
     return co_od_entry_uint(entry);
 }
 
+/* The types whose native storage is their wire form (as in od.c: numbers as wide as their
+ * wire form, on a little-endian host; BOOLEAN is left to the general paths, which check
+ * that a written value is 0 or 1), as bits of a mask indexed by type code. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define CO_WIRE_NATIVE_TYPES                                                                       \
+    ((1u << CO_TYPE_INTEGER8) | (1u << CO_TYPE_INTEGER16) | (1u << CO_TYPE_INTEGER32) |           \
+     (1u << CO_TYPE_UNSIGNED8) | (1u << CO_TYPE_UNSIGNED16) | (1u << CO_TYPE_UNSIGNED32) |        \
+     (1u << CO_TYPE_REAL32) | (1u << CO_TYPE_REAL64) | (1u << CO_TYPE_INTEGER64) |                 \
+     (1u << CO_TYPE_UNSIGNED64))
+#else
+#define CO_WIRE_NATIVE_TYPES 0u
+#endif
+
+/* A readable entry of a validated table whose storage is its wire value (`size` bytes at
+ * `value`): the SDO server answers from it without co_od_read. */
+static inline bool co_od_reads_plain(const co_od_entry_t *e)
+{
+    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && (e->hooks == NULL || e->hooks->read == NULL);
+}
+
+/* A writable entry whose new value is just its `size` wire bytes copied into storage: no
+ * hook, no limits (co_od_check would accept any value of the right length, co_od_store
+ * would copy it). */
+static inline bool co_od_writes_plain(const co_od_entry_t *e)
+{
+    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && e->hooks == NULL &&
+           e->limits == NULL && e->value != NULL;
+}
+
 /* Route key: the identifier, bit 31 marking 29-bit identifiers. */
 static inline uint32_t co_route_key(const co_frame_t *frame)
 {

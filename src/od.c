@@ -57,6 +57,13 @@ static const type_info_t k_types[] = {
 
 static const type_info_t k_unknown = {0, 0, K_NONE};
 
+/* Keeps the slow look-up out of the fast one (a hint; other compilers decide). */
+#if defined(__GNUC__) || defined(__clang__)
+#define CO_OD_NOINLINE __attribute__((noinline))
+#else
+#define CO_OD_NOINLINE
+#endif
+
 static const type_info_t *type_info(unsigned type)
 {
     return type < sizeof k_types / sizeof k_types[0] ? &k_types[type] : &k_unknown;
@@ -242,6 +249,35 @@ static bool entry_fits(const co_od_t *od, uint32_t i)
     return sorted && keyed && entry_ok(&entries[i]);
 }
 
+/* The hash (when given) leads every key to its own entry and cannot loop (checked after
+ * the entries, whose keys it compares). */
+static bool hash_fits(const co_od_t *od)
+{
+    if (od->hash == NULL) {
+        return true;
+    }
+    if (od->keys == NULL || od->hash_bits < 1 || od->hash_bits > 16) {
+        return false;
+    }
+    uint32_t slots = 1u << od->hash_bits;
+    uint32_t empty = 0;
+    for (uint32_t i = 0; i < slots; i++) {
+        empty += od->hash[i] == 0 ? 1u : 0u;
+        if (od->hash[i] > od->count) {
+            return false;
+        }
+    }
+    if (empty == 0) {
+        return false; /* a missing key would probe forever */
+    }
+    for (uint32_t i = 0; i < od->count; i++) {
+        if (co_od_find(od, od->entries[i].index, od->entries[i].sub, NULL) != &od->entries[i]) {
+            return false;
+        }
+    }
+    return true;
+}
+
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 {
     if (od == NULL) {
@@ -251,11 +287,11 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     while (od->entries != NULL && i < od->count && entry_fits(od, i)) {
         i++;
     }
-    if (i == od->count) {
+    if (i == od->count && hash_fits(od)) {
         return CO_OK;
     }
     if (bad != NULL) {
-        *bad = i;
+        *bad = i; /* count: the entries are fine, the hash is not */
     }
     return CO_ERR_CONFIG;
 }
@@ -307,7 +343,9 @@ static uint32_t lower_bound(const co_od_t *od, uint32_t key)
     return (uint32_t)(base - od->entries) + (entry_key(base) < key ? 1u : 0u);
 }
 
-const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort)
+/* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
+static CO_OD_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint16_t index,
+                                                      uint8_t sub, co_abort_t *abort)
 {
     uint32_t pos = lower_bound(od, key_of(index, sub));
     const co_od_entry_t *e = od->entries;
@@ -321,6 +359,24 @@ const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, 
         *abort = known ? CO_ABORT_NO_SUB : CO_ABORT_NO_OBJECT;
     }
     return NULL;
+}
+
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort)
+{
+    if (od->hash != NULL) { /* validated: keys exist, a slot is empty, slots point into it */
+        uint32_t key = key_of(index, sub);
+        uint32_t mask = (1u << od->hash_bits) - 1u;
+        uint32_t slot = CO_OD_HASH_HOME(key, od->hash_bits);
+        for (uint32_t at; (at = od->hash[slot]) != 0; slot = (slot + 1u) & mask) {
+            if (od->keys[at - 1u] == key) {
+                return &od->entries[at - 1u];
+            }
+        }
+        if (abort == NULL) {
+            return NULL; /* a miss: the search only tells which abort code */
+        }
+    }
+    return find_sorted(od, index, sub, abort);
 }
 
 uint32_t co_type_size(co_type_t type) { return type_info((unsigned)type)->wire; }

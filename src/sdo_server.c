@@ -6,6 +6,13 @@
  * are stored whole at the end, unless the entry streams through a write hook;
  * uploads read the dictionary piece by piece at an offset, so a retransmission
  * in block upload simply reads the same offset again.
+ *
+ * The frames that make up nearly all traffic take short paths: an expedited
+ * request, a segment of an open segmented transfer and a segment of a block
+ * download are told apart by one test of the state and one of the command byte
+ * (co_sdo_server_ingest); everything else goes through serve_other. The time-out
+ * of a transfer is the time of its last frame (last_us) plus the SDO time-out:
+ * a frame only stores the time, and poll works out the deadline.
  */
 #include <string.h>
 
@@ -23,6 +30,7 @@ enum server_state {
 };
 
 #define SEG_BYTES 7u
+#define TOGGLE 0x10u /* the toggle bit of segment commands, where s->toggle keeps it */
 #define BLOCK_SIZE_MAX (CO_SDO_BUF_SIZE / SEG_BYTES < 127 ? CO_SDO_BUF_SIZE / SEG_BYTES : 127)
 
 /* ---- channels and their COB-IDs */
@@ -47,6 +55,9 @@ static void load_channel(co_node_t *node, uint8_t ch)
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
+    co_frame_t head = co_cob_frame(s->cob_tx, 8);
+    s->tx_id = head.id;
+    s->tx_flags = head.flags;
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -99,43 +110,72 @@ void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
     }
 }
 
-/* ---- sending */
-
-static void refresh(co_node_t *node, co_sdo_server_t *s)
+/* A whole value from the network into the dictionary, with the services' effects; a
+ * new COB-ID of a server channel waits until the request is answered (apply_reloads). */
+static co_abort_t write_value(co_node_t *node, const co_sdo_server_t *s, const uint8_t *data,
+                              uint32_t len)
 {
-    s->deadline_us = node->now_us + co_sdo_timeout_us(node);
-    co_node_schedule(node, s->deadline_us);
+    node->sdo_serving = true;
+    co_abort_t abort = co_node_write_entry(node, s->entry, data, len);
+    node->sdo_serving = false;
+    return abort;
 }
 
-static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
+/* ---- sending */
+
+/* A transfer opens (or goes on in a new state): poll must look at it by the time-out. */
+static void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
+{
+    s->state = state;
+    co_node_schedule(node, s->last_us + co_sdo_timeout_us(node));
+}
+
+/* A frame of 8 bytes to the client, in the channel's frame header. */
+static CO_INLINE void send(co_node_t *node, const co_sdo_server_t *s, const uint8_t data[8])
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
     }
-    co_frame_t f = co_cob_frame(s->cob_tx, 8);
+    co_frame_t f = {.id = s->tx_id, .flags = s->tx_flags, .len = 8};
     memcpy(f.data, data, 8);
     (void)co_node_send_hot(node, &f, CO_SVC_SDO);
 }
 
-/* A response carrying the transfer's index and sub-index: cmd, index, sub, then `tail`
- * (built in the frame itself: the expedited answers are the hot ones). */
-static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
+/* A frame of two little-endian words: bytes 0..3 and 4..7 (built in the frame itself:
+ * the expedited answers are the hot ones). */
+static CO_INLINE void send_words(co_node_t *node, const co_sdo_server_t *s, uint32_t head,
+                                 uint32_t tail)
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
     }
-    co_frame_t f = co_cob_frame(s->cob_tx, 8);
-    f.data[0] = cmd;
-    co_put_u16(&f.data[1], s->index);
-    f.data[3] = s->sub;
+    co_frame_t f = {.id = s->tx_id, .flags = s->tx_flags, .len = 8};
+    co_put_u32(&f.data[0], head);
     co_put_u32(&f.data[4], tail);
     (void)co_node_send_hot(node, &f, CO_SVC_SDO);
+}
+
+/* A response naming the transfer's object: cmd, index, sub-index, then `tail`. */
+static CO_INLINE void respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd,
+                              uint32_t tail)
+{
+    send_words(node, s, cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24), tail);
 }
 
 static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
 {
     respond(node, s, 0x80, code);
     s->state = IDLE;
+}
+
+/* The first bytes of a new transfer's bookkeeping (expedited requests need none). */
+static void begin(co_sdo_server_t *s)
+{
+    s->done = 0;
+    s->buf_len = 0;
+    s->toggle = 0;
+    s->crc = 0;
+    s->wire = NULL;
 }
 
 /* ---- download */
@@ -167,23 +207,20 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
 /* Pass the buffered bytes on: to the write hook as a piece, or (last) store them whole. */
 static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 {
-    co_abort_t abort = CO_ABORT_NONE;
-    if (streams(s)) {
-        uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
-        abort =
-            co_od_write_piece(&node->cfg.od, s->entry, s->done, s->buf, s->buf_len, total, last);
-    } else if (last) {
-        abort = co_node_write_entry(node, s->entry, s->buf, s->buf_len);
+    if (!streams(s)) {
+        return last ? write_value(node, s, s->buf, s->buf_len) : CO_ABORT_NONE;
     }
-    if (streams(s)) {
-        s->done += s->buf_len;
-        s->buf_len = 0;
-    }
+    uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
+    co_abort_t abort =
+        co_od_write_piece(&node->cfg.od, s->entry, s->done, s->buf, s->buf_len, total, last);
+    s->done += s->buf_len;
+    s->buf_len = 0;
     return abort;
 }
 
 /* Append received bytes; when the buffer is full, stream it on or fail. */
-static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t n)
+static CO_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
+                                      uint32_t n)
 {
     /* a block's last segment may carry up to 6 bytes of padding past the value */
     uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
@@ -202,33 +239,40 @@ static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *da
             return abort;
         }
     }
-    if (n == SEG_BYTES) {
-        memcpy(&s->buf[s->buf_len], data, SEG_BYTES); /* the usual case, copied inline */
-    } else {
-        memcpy(&s->buf[s->buf_len], data, n);
-    }
+    memcpy(&s->buf[s->buf_len], data, n);
     s->buf_len += n;
     return CO_ABORT_NONE;
 }
 
 static uint32_t received(const co_sdo_server_t *s) { return s->done + s->buf_len; }
 
+/* The length of an expedited download that does not indicate it: the type's, else 4. */
+static uint32_t unsized_length(const co_od_entry_t *e)
+{
+    uint32_t fixed = co_type_size((co_type_t)e->type);
+    return fixed && fixed < 4 ? fixed : 4u;
+}
+
 static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    bool expedited = d[0] & 0x02u;
-    bool sized = d[0] & 0x01u;
-    if (expedited) {
-        uint32_t fixed = co_type_size((co_type_t)s->entry->type);
-        uint32_t len = sized ? 4u - ((d[0] >> 2) & 3u) : (fixed && fixed < 4 ? fixed : 4u);
-        co_abort_t abort = co_node_write_entry(node, s->entry, &d[4], len);
+    uint8_t cmd = d[0];
+    if (cmd & 0x02u) { /* expedited */
+        uint32_t len = (cmd & 0x01u) ? 4u - ((cmd >> 2) & 3u) : unsized_length(s->entry);
+        co_abort_t abort = write_value(node, s, &d[4], len);
         if (abort != CO_ABORT_NONE) {
             abort_transfer(node, s, abort);
             return;
         }
         respond(node, s, 0x60, 0);
+        apply_reloads(node);
         return;
     }
-    s->size_known = sized;
+    if (!CO_CONFIG_SDO_SEGMENTED) {
+        abort_transfer(node, s, CO_ABORT_COMMAND); /* segmented transfer is left out */
+        return;
+    }
+    begin(s);
+    s->size_known = cmd & 0x01u;
     s->size = co_get_u32(&d[4]);
     s->crc_on = false;
     co_abort_t abort = check_download_size(s);
@@ -236,7 +280,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
         abort_transfer(node, s, abort);
         return;
     }
-    s->state = DOWN_SEGMENTED;
+    enter(node, s, DOWN_SEGMENTED);
     respond(node, s, 0x60, 0);
 }
 
@@ -252,29 +296,26 @@ static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
     return flush(node, s, true);
 }
 
+/* A download segment (command 000t nnnc) of an open segmented download. */
 static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    uint8_t toggle = (d[0] >> 4) & 1u;
-    if ((d[0] & 0xE0u) != 0x00) {
-        abort_transfer(node, s, CO_ABORT_COMMAND);
-        return;
-    }
+    uint8_t cmd = d[0];
+    uint8_t toggle = cmd & TOGGLE;
     if (toggle != s->toggle) {
         abort_transfer(node, s, CO_ABORT_TOGGLE);
         return;
     }
-    uint32_t n = SEG_BYTES - ((d[0] >> 1) & 7u);
-    bool last = d[0] & 0x01u;
+    uint32_t n = SEG_BYTES - ((cmd >> 1) & 7u);
     co_abort_t abort = CO_ABORT_NONE;
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
-    }
-    if (abort == CO_ABORT_NONE && s->buf_len + SEG_BYTES <= CO_SDO_BUF_SIZE) {
+    } else if (s->buf_len + SEG_BYTES <= CO_SDO_BUF_SIZE) {
         memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
         s->buf_len += n;
-    } else if (abort == CO_ABORT_NONE) {
+    } else {
         abort = collect(node, s, &d[1], n);
     }
+    bool last = cmd & 0x01u;
     if (abort == CO_ABORT_NONE && last) {
         abort = finish_download(node, s);
     }
@@ -282,17 +323,16 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         abort_transfer(node, s, abort);
         return;
     }
-    s->toggle ^= 1u;
-    uint8_t r[8] = {(uint8_t)(0x20u | ((unsigned)toggle << 4))};
-    send(node, s, r);
+    s->toggle = (uint8_t)(toggle ^ TOGGLE);
+    send_words(node, s, 0x20u | toggle, 0);
     if (last) {
         s->state = IDLE;
+        apply_reloads(node);
     }
 }
 
 /* ---- upload */
 
-/* Read the value from `offset`: up to `cap` bytes into `buf`; `*total` is its size. */
 /* Read the value from `offset` until `cap` bytes or its end: a read hook may hand out
  * fewer bytes per call than asked (an empty piece ends a value of unknown size). */
 static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, uint8_t *buf,
@@ -315,55 +355,98 @@ static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, 
     return CO_ABORT_NONE;
 }
 
-static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
+/* The expedited answer: 1..4 bytes of value, little-endian in the frame's last word. */
+static CO_INLINE void answer_expedited(co_node_t *node, co_sdo_server_t *s, uint32_t value,
+                                       uint32_t len)
+{
+    respond(node, s, (uint8_t)(0x43u | ((4u - len) << 2)), value);
+}
+
+/* Up to 4 bytes of wire value as a little-endian word (no call to memcpy). */
+static uint32_t small_value(const uint8_t *wire, uint32_t len)
+{
+    uint32_t v = 0;
+    for (uint32_t i = 0; i < len; i++) {
+        v |= (uint32_t)wire[i] << (8u * i);
+    }
+    return v;
+}
+
+/* A plain number of 1, 2 or 4 bytes, read in place. */
+static CO_INLINE uint32_t plain_value(const co_od_entry_t *e)
+{
+    if (e->size == 4) {
+        uint32_t v;
+        memcpy(&v, e->value, 4);
+        return v;
+    }
+    if (e->size == 2) {
+        uint16_t v;
+        memcpy(&v, e->value, 2);
+        return v;
+    }
+    return *(const uint8_t *)e->value;
+}
+
+/* Any other upload: through the dictionary's wire view or its read hook. */
+static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
 {
     uint8_t first[4] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
-    const uint8_t *wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
-    if (wire != NULL && total >= 1 && total <= 4) { /* stored in wire form: answer from it */
-        for (uint32_t i = 0; i < total; i++) {
-            first[i] = wire[i]; /* at most 4 bytes: no call to memcpy */
+    begin(s);
+    s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    if (s->wire == NULL) {
+        co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
+        if (abort != CO_ABORT_NONE) {
+            abort_transfer(node, s, abort);
+            return;
         }
-        respond(node, s, (uint8_t)(0x43u | ((4u - total) << 2)), co_get_u32(first));
-        return;
-    }
-    co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
-    if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+    } else {
+        n = total < 4 ? total : 4;
+        memcpy(first, s->wire, n);
     }
     if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= 4) {
-        respond(node, s, (uint8_t)(0x43u | ((4u - total) << 2)), co_get_u32(first));
+        answer_expedited(node, s, small_value(first, total), total);
+        return;
+    }
+    if (!CO_CONFIG_SDO_SEGMENTED) {
+        abort_transfer(node, s, CO_ABORT_UNSUPPORTED); /* too long without segments */
         return;
     }
     s->size_known = total != CO_OD_SIZE_UNKNOWN;
     s->size = s->size_known ? total : 0;
-    s->state = UP_SEGMENTED;
+    enter(node, s, UP_SEGMENTED);
     respond(node, s, s->size_known ? 0x41 : 0x40, s->size);
 }
 
-static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 {
-    uint8_t toggle = (d[0] >> 4) & 1u;
-    if ((d[0] & 0xEFu) != 0x60) {
-        abort_transfer(node, s, CO_ABORT_COMMAND);
+    const co_od_entry_t *e = s->entry;
+    if (co_od_reads_plain(e) && e->size <= 4) { /* a number stored as it travels */
+        answer_expedited(node, s, plain_value(e), e->size);
         return;
     }
+    initiate_upload_general(node, s);
+}
+
+/* An upload segment request (command 011t 0000) of an open segmented upload. */
+static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
+    uint8_t toggle = d[0] & TOGGLE;
     if (toggle != s->toggle) {
         abort_transfer(node, s, CO_ABORT_TOGGLE);
         return;
     }
     uint8_t r[8] = {0};
     uint32_t n = 0;
-    uint32_t total = 0;
-    const uint8_t *wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
-    if (wire != NULL && s->done <= total) { /* stored in wire form: copy the piece */
+    uint32_t total = s->size;
+    if (s->wire != NULL) { /* stored in wire form: copy the piece */
         n = total - s->done < SEG_BYTES ? total - s->done : SEG_BYTES;
         if (n == SEG_BYTES) {
-            memcpy(&r[1], wire + s->done, SEG_BYTES); /* the usual case, copied inline */
+            memcpy(&r[1], s->wire + s->done, SEG_BYTES); /* the usual case, copied inline */
         } else {
-            memcpy(&r[1], wire + s->done, n);
+            memcpy(&r[1], s->wire + s->done, n);
         }
     } else {
         co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
@@ -374,8 +457,8 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d
     }
     s->done += n;
     bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < SEG_BYTES;
-    r[0] = (uint8_t)(((unsigned)toggle << 4) | ((SEG_BYTES - n) << 1) | (last ? 1u : 0u));
-    s->toggle ^= 1u;
+    r[0] = (uint8_t)(toggle | ((SEG_BYTES - n) << 1) | (last ? 1u : 0u));
+    s->toggle = (uint8_t)(toggle ^ TOGGLE);
     send(node, s, r);
     if (last) {
         s->state = IDLE;
@@ -386,6 +469,7 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d
 
 static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
+    begin(s);
     s->crc_on = d[0] & 0x04u;
     s->size_known = d[0] & 0x02u;
     s->size = co_get_u32(&d[4]);
@@ -396,7 +480,7 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
     }
     s->blksize = BLOCK_SIZE_MAX;
     s->seq = 0;
-    s->state = BLOCK_DOWN;
+    enter(node, s, BLOCK_DOWN);
     respond(node, s, 0xA4, s->blksize); /* sc = 1: this server checks CRCs */
 }
 
@@ -459,6 +543,7 @@ static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_
     uint8_t r[8] = {0xA1};
     send(node, s, r);
     s->state = IDLE;
+    apply_reloads(node);
 }
 
 /* ---- block upload */
@@ -506,7 +591,7 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
             s->last_len = (uint8_t)n;
         }
         send(node, s, d);
-        refresh(node, s);
+        s->last_us = node->now_us; /* the time-out counts from the last frame sent too */
     }
 }
 
@@ -518,9 +603,9 @@ static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uin
         abort_transfer(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
+    begin(s);
     s->crc_on = d[0] & 0x04u;
     s->blksize = blksize <= BLOCK_SIZE_MAX ? blksize : (uint8_t)BLOCK_SIZE_MAX;
-    s->done = 0;
     uint32_t total = 0;
     co_abort_t abort = load_sub_block(node, s, &total);
     if (abort != CO_ABORT_NONE) {
@@ -533,7 +618,7 @@ static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uin
     }
     s->size_known = total != CO_OD_SIZE_UNKNOWN;
     s->size = s->size_known ? total : 0;
-    s->state = BLOCK_UP_START;
+    enter(node, s, BLOCK_UP_START);
     respond(node, s, s->size_known ? 0xC6 : 0xC4, s->size);
 }
 
@@ -578,61 +663,49 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
 
 /* ---- dispatch */
 
-static bool is_initiate(uint8_t cmd)
+/* co_od_access's rule, as a test (which co_od_access then turns into the abort code). */
+static CO_INLINE bool may_access(const co_od_entry_t *e, bool write)
 {
-    uint8_t cs = cmd >> 5;
-    return cs == 1 || cs == 2 || (cs == 6 && (cmd & 0x01u) == 0) || (cs == 5 && (cmd & 0x03u) == 0);
+    return write ? (e->attr & (CO_OD_WRITE | CO_OD_CONST)) == CO_OD_WRITE : (e->attr & CO_OD_READ);
 }
 
-/* A new transfer: find the entry, check the access, and hand over to its initiator. */
-static void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+/* A new transfer's object: found and accessible in that direction, or the request is
+ * answered with the abort code (NULL). */
+static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, const uint8_t *d,
+                                       bool write)
 {
-    uint8_t cs = d[0] >> 5;
-    bool write = cs == 1 || cs == 6;
-    s->state = IDLE;
+    s->state = IDLE; /* a transfer still open ends here */
     s->index = co_get_u16(&d[1]);
     s->sub = d[3];
-    s->done = 0;
-    s->buf_len = 0;
-    s->toggle = 0;
-    s->crc = 0;
     co_abort_t abort = CO_ABORT_NO_OBJECT;
-    s->entry = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
-    if (s->entry != NULL) {
-        abort = co_od_access(s->entry, write);
+    const co_od_entry_t *e = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
+    if (e != NULL && !may_access(e, write)) {
+        abort = co_od_access(e, write);
+        e = NULL;
     }
-    if (s->entry == NULL || abort != CO_ABORT_NONE) { /* no entry is never served */
+    if (e == NULL) { /* no entry is never served */
         abort_transfer(node, s, abort);
-        return;
+        return NULL;
     }
-    if (!CO_CONFIG_SDO_BLOCK && (cs == 5 || cs == 6)) {
-        abort_transfer(node, s, CO_ABORT_COMMAND); /* block transfer is left out */
-        return;
-    }
-    switch (cs) {
-    case 1:
-        initiate_download(node, s, d);
-        break;
-    case 2:
-        initiate_upload(node, s);
-        break;
-    case 6:
-        initiate_block_download(node, s, d);
-        break;
-    default:
-        initiate_block_upload(node, s, d);
-        break;
-    }
+    s->entry = e;
+    return e;
 }
 
-/* A frame inside an open transfer. */
+/* Block initiate requests: 110x x0x0 download, 101x x000 upload. */
+static bool is_block_initiate(uint8_t cmd)
+{
+    uint8_t cs = cmd >> 5;
+    return (cs == 6 && (cmd & 0x01u) == 0) || (cs == 5 && (cmd & 0x03u) == 0);
+}
+
+/* A frame inside an open block transfer, or one that does not fit the state. */
 static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    if (!CO_CONFIG_SDO_BLOCK && s->state >= BLOCK_DOWN) {
-        abort_transfer(node, s, CO_ABORT_COMMAND); /* unreachable: no block state is entered */
+    if (!CO_CONFIG_SDO_BLOCK) {
+        abort_transfer(node, s, CO_ABORT_COMMAND); /* only block states come here */
         return;
     }
-    switch (s->state) { /* the segmented states are served before (serve) */
+    switch (s->state) {
     case BLOCK_DOWN_END:
         block_download_end(node, s, d);
         break;
@@ -658,13 +731,42 @@ static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t
         }
         s->state = IDLE;
         break;
-    default:
+    default: /* a segmented transfer's request of another kind */
         abort_transfer(node, s, CO_ABORT_COMMAND);
         break;
     }
 }
 
-static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d);
+/* Whatever the short paths of co_sdo_server_ingest do not take. */
+static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
+    uint8_t cmd = d[0];
+    if (cmd == 0x80) { /* abort from the client: end silently */
+        s->state = IDLE;
+        return;
+    }
+    if (is_block_initiate(cmd)) {
+        bool write = (cmd >> 5) == 6;
+        if (open_entry(node, s, d, write) == NULL) {
+            return;
+        }
+        if (!CO_CONFIG_SDO_BLOCK) {
+            abort_transfer(node, s, CO_ABORT_COMMAND); /* block transfer is left out */
+        } else if (write) {
+            initiate_block_download(node, s, d);
+        } else {
+            initiate_block_upload(node, s, d);
+        }
+        return;
+    }
+    if (s->state == IDLE) {
+        s->index = 0;
+        s->sub = 0;
+        abort_transfer(node, s, CO_ABORT_COMMAND);
+        return;
+    }
+    continue_transfer(node, s, d);
+}
 
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
 {
@@ -674,37 +776,44 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     }
     co_sdo_server_t *s = &node->sdo_servers[channel];
     const uint8_t *d = frame->data;
-    if (d[0] == 0x80) { /* abort from the client: end silently */
-        s->state = IDLE;
+    uint8_t cmd = d[0];
+    s->last_us = node->now_us; /* the time-out counts from the last frame */
+    switch (s->state) {
+    case IDLE:
+        break;
+    case DOWN_SEGMENTED:
+        if (CO_CONFIG_SDO_SEGMENTED && (cmd & 0xE0u) == 0x00) {
+            download_segment(node, s, d);
+            return;
+        }
+        break;
+    case UP_SEGMENTED:
+        if (CO_CONFIG_SDO_SEGMENTED && (cmd & 0xEFu) == 0x60) {
+            upload_segment(node, s, d);
+            return;
+        }
+        break;
+    case BLOCK_DOWN:
+        if (CO_CONFIG_SDO_BLOCK && cmd != 0x80) { /* in a sub-block every frame is a segment */
+            block_segment(node, s, d);
+            return;
+        }
+        break;
+    default:
+        break;
+    }
+    uint8_t cs = cmd >> 5;
+    if (cs == 1 || cs == 2) { /* initiate download / upload */
+        if (open_entry(node, s, d, cs == 1) != NULL) {
+            if (cs == 1) {
+                initiate_download(node, s, d);
+            } else {
+                initiate_upload(node, s);
+            }
+        }
         return;
     }
-    node->sdo_serving = true;
-    serve(node, s, d);
-    node->sdo_serving = false;
-    apply_reloads(node);
-}
-
-/* One request of an open or new transfer. */
-static void serve(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
-{
-    if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_DOWN) { /* every frame a segment */
-        block_segment(node, s, d);
-    } else if (is_initiate(d[0])) {
-        initiate(node, s, d);
-    } else if (s->state == IDLE) {
-        s->index = 0;
-        s->sub = 0;
-        abort_transfer(node, s, CO_ABORT_COMMAND);
-    } else if (s->state == DOWN_SEGMENTED) { /* the usual segments: no state switch */
-        download_segment(node, s, d);
-    } else if (s->state == UP_SEGMENTED) {
-        upload_segment(node, s, d);
-    } else {
-        continue_transfer(node, s, d);
-    }
-    if (s->state != IDLE) {
-        refresh(node, s);
-    }
+    serve_other(node, s, d);
 }
 
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
@@ -715,14 +824,14 @@ uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
         if (s->state == IDLE) {
             continue;
         }
-        if (now_us >= s->deadline_us) {
+        if (now_us >= s->last_us + co_sdo_timeout_us(node)) {
             abort_transfer(node, s, CO_ABORT_TIMEOUT);
-        } else {
-            if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_UP) {
-                pump_sub_block(node, s);
-            }
-            next = co_min_u64(next, s->deadline_us);
+            continue;
         }
+        if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_UP) {
+            pump_sub_block(node, s);
+        }
+        next = co_min_u64(next, s->last_us + co_sdo_timeout_us(node));
     }
     return next;
 }

@@ -1257,6 +1257,123 @@ static void test_key_array_lookups(void)
     CHECK_EQ(co_od_validate(&keyed, NULL), CO_OK);
 }
 
+/* ---- the hash (co_od_t.hash): every key found, misses told apart, bad tables refused */
+
+/* Misses through the hash give the binary search's abort codes. */
+static void check_misses(const co_od_t *od)
+{
+    co_abort_t abort = 0;
+    CHECK(co_od_find(od, 0x0001, 0, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    CHECK(co_od_find(od, 0x1000, 1, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_SUB);
+    CHECK(co_od_find(od, 0x1002, 0, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    CHECK(co_od_find(od, 0xFFFF, 0xFF, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+    CHECK(co_od_find(od, 0x1018, 0x7F, NULL) == NULL);
+}
+
+static void test_hash_lookups(void)
+{
+    static example_od_t x;
+    co_od_t od = example_od_keyed(&x, example_od_init(&x, 0));
+    CHECK(od.hash != NULL);
+    CHECK_EQ(od.hash_bits, 9); /* 190 entries: 512 slots */
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    for (uint32_t i = 0; i < od.count; i++) {
+        CHECK(co_od_find(&od, od.entries[i].index, od.entries[i].sub, NULL) == &od.entries[i]);
+    }
+    check_misses(&od);
+    /* Fuller (190 entries in 256 slots): longer probe runs, still exact. */
+    static uint16_t slots[256];
+    co_od_t full = od;
+    CHECK_EQ(co_od_hash_build(&full, slots, 8), CO_OK);
+    full.hash = slots;
+    full.hash_bits = 8;
+    CHECK_EQ(co_od_validate(&full, NULL), CO_OK);
+    for (uint32_t i = 0; i < full.count; i++) {
+        CHECK(co_od_find(&full, od.entries[i].index, od.entries[i].sub, NULL) == &od.entries[i]);
+    }
+    check_misses(&full);
+    /* As full as a hash may be: 7 entries in 8 slots, probes wrapping around the end. */
+    static uint16_t eight[8];
+    co_od_t seven = od;
+    seven.count = 7;
+    CHECK_EQ(co_od_hash_build(&seven, eight, 3), CO_OK);
+    seven.hash = eight;
+    seven.hash_bits = 3;
+    CHECK_EQ(co_od_validate(&seven, NULL), CO_OK);
+    for (uint32_t i = 0; i < seven.count; i++) {
+        CHECK(co_od_find(&seven, od.entries[i].index, od.entries[i].sub, NULL) ==
+              &od.entries[i]);
+    }
+    check_misses(&seven);
+    CHECK_EQ(co_od_hash_build(&seven, eight, 2), CO_ERR_ARG); /* 4 slots for 7 */
+}
+
+static void test_hash_refused(void)
+{
+    static example_od_t x;
+    co_od_t od = example_od_keyed(&x, example_od_init(&x, 0));
+    uint32_t bad = 0;
+    /* The builder: no keys, too few slots, bits out of range. */
+    static uint16_t slots[512];
+    co_od_t unkeyed = od;
+    unkeyed.keys = NULL;
+    CHECK_EQ(co_od_hash_build(&unkeyed, slots, 9), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_build(&od, slots, 7), CO_ERR_ARG); /* 128 slots, 190 entries */
+    CHECK_EQ(co_od_hash_build(&od, slots, 0), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_build(&od, slots, 17), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_build(NULL, slots, 9), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_build(&od, NULL, 9), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_bits(0), 1);
+    CHECK_EQ(co_od_hash_bits(1), 1);
+    CHECK_EQ(co_od_hash_bits(2), 2);
+    CHECK_EQ(co_od_hash_bits(190), 9);
+    CHECK_EQ(co_od_hash_bits(256), 9);
+    CHECK_EQ(co_od_hash_bits(257), 10);
+    CHECK_EQ(co_od_hash_bits(32767), 16);
+    CHECK_EQ(co_od_hash_bits(32768), 0);
+    /* Validation: a hash without keys, bits out of range, a slot past the entries, no
+     * empty slot, an entry its probe does not reach. `bad` names count: the entries
+     * are fine. */
+    co_od_t h = unkeyed;
+    h.hash = od.hash;
+    h.hash_bits = od.hash_bits;
+    CHECK_EQ(co_od_validate(&h, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, od.count);
+    h = od;
+    h.hash_bits = 0;
+    CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
+    h.hash_bits = 17;
+    CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
+    CHECK_EQ(co_od_hash_build(&od, slots, 9), CO_OK);
+    h = od;
+    h.hash = slots;
+    uint32_t empty = 0;
+    while (slots[empty] != 0) {
+        empty++;
+    }
+    slots[empty] = (uint16_t)(od.count + 1u); /* past the last entry */
+    CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
+    for (uint32_t i = 0; i < 512; i++) {
+        slots[i] = slots[i] ? slots[i] : 1; /* every slot taken */
+    }
+    CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
+    CHECK_EQ(co_od_hash_build(&od, slots, 9), CO_OK);
+    uint32_t home = CO_OD_HASH_HOME(od.keys[0], 9);
+    uint32_t at = home;
+    while (slots[at] != 1) {
+        at = (at + 1u) & 511u;
+    }
+    slots[at] = 0; /* entry 0 lost: found by nothing */
+    CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
+    CHECK(co_od_find(&h, od.entries[0].index, od.entries[0].sub, NULL) == NULL);
+    CHECK_EQ(co_od_hash_build(&od, slots, 9), CO_OK);
+    CHECK_EQ(co_od_validate(&h, NULL), CO_OK);
+}
+
 int main(void)
 {
     RUN(test_type_size);
@@ -1293,5 +1410,7 @@ int main(void)
     RUN(test_reset_example);
     RUN(test_get_set_uint);
     RUN(test_key_array_lookups);
+    RUN(test_hash_lookups);
+    RUN(test_hash_refused);
     return check_summary();
 }

@@ -122,6 +122,13 @@
 #define CO_CONFIG_SDO_BLOCK 1
 #endif
 
+/** SDO segmented transfer (CiA 301 7.2.4.3.3..): without it the server is expedited only;
+ *  it answers a segmented download with abort 0x05040001 and the upload of a value longer
+ *  than 4 bytes with 0x06010000. */
+#ifndef CO_CONFIG_SDO_SEGMENTED
+#define CO_CONFIG_SDO_SEGMENTED 1
+#endif
+
 /** Node guarding and life guarding (0x100C, 0x100D, co_guard_watch). Without it the node
  *  does not answer guarding RTRs: heartbeat is the error control protocol. */
 #ifndef CO_CONFIG_GUARDING
@@ -146,6 +153,7 @@
 #endif
 
 #if (CO_CONFIG_SDO_BLOCK != 0 && CO_CONFIG_SDO_BLOCK != 1) ||                                      \
+    (CO_CONFIG_SDO_SEGMENTED != 0 && CO_CONFIG_SDO_SEGMENTED != 1) ||                              \
     (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
     (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
     (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \

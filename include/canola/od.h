@@ -4,7 +4,8 @@
  * Purpose: every value a CANopen device exposes lives in one table of entries
  * addressed by (index, sub-index). The table itself is const (it can live in
  * flash); each entry points at the RAM that holds its value and at a const
- * default (its power-on value). Look-up is a binary search: O(log n).
+ * default (its power-on value). Look-up is a binary search, O(log n), or with the
+ * optional hash table (co_od_t.hash) O(1) expected.
  *
  * Values are stored in native form (uint16_t, float, ...); reads and writes
  * through this API speak wire form: little-endian bytes, as SDO and PDO carry
@@ -35,9 +36,10 @@ extern "C" {
 #endif
 
 /** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
- *  refuse to compile against a library whose layout differs. 2: co_od_t.keys. */
+ *  refuse to compile against a library whose layout differs. 2: co_od_t.keys;
+ *  3: co_od_t.hash. */
 #ifndef CO_OD_FORMAT
-#define CO_OD_FORMAT 2
+#define CO_OD_FORMAT 3
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
@@ -145,6 +147,10 @@ struct co_od_entry {
 /** Key of (index, sub) in co_od_t.keys. */
 #define CO_OD_KEY(index, sub) (((uint32_t)(index) << 8) | (uint32_t)(sub))
 
+/** Home slot of a key in a hash of 2^bits slots (co_od_t.hash, 1 <= bits <= 16): the top
+ *  `bits` bits of key * 0x9E3779B1 (Fibonacci hashing), taken modulo 2^32. */
+#define CO_OD_HASH_HOME(key, bits) ((uint32_t)((uint32_t)(key) * 0x9E3779B1u) >> (32u - (bits)))
+
 /** An object dictionary: the entry table and the context its hooks receive. */
 typedef struct co_od {
     const co_od_entry_t *entries;
@@ -155,12 +161,33 @@ typedef struct co_od {
      *  28/48-byte entries: about a third of the instructions per look-up, and fewer cache
      *  lines. The generator (canola.odgen) emits it; co_od_validate checks it. */
     const uint32_t *keys;
+    /** Optional (NULL: no hash; needs `keys`): an open-addressing hash table of 2^hash_bits
+     *  slots, each 0 (empty) or 1 + the position of an entry. An entry sits in the first
+     *  slot that is free from its home (CO_OD_HASH_HOME) on, wrapping around; at least one
+     *  slot is empty. With about twice as many slots as entries a look-up reads one or two
+     *  slots instead of log2(count) keys: ~20 instructions instead of ~95 for 190 entries,
+     *  for 2 bytes per slot. The generator (canola.odgen) emits it; co_od_hash_build
+     *  builds one at run time; co_od_validate checks it. */
+    const uint16_t *hash;
+    uint8_t hash_bits; /**< 1..16 */
 } co_od_t;
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
- *  replaces it, keys (when given) equal to the entries'. Returns CO_OK or CO_ERR_CONFIG (with
- * `*bad` set to the offending entry's position when `bad` is not NULL). O(n). */
+ *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
+ *  every entry with an empty slot left. Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
+ *  to the offending entry's position, or to `count` for a bad hash, when `bad` is not
+ *  NULL). O(n) plus O(2^hash_bits). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
+
+/** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),
+ *  or 0 when `count` is too large for a hash (more than 32767 entries). */
+uint8_t co_od_hash_bits(uint32_t count);
+
+/** Build the hash of `od` (whose entries and keys are final) into `slots`, 2^bits of them
+ *  (bits as co_od_hash_bits gives, or more). Then set od->hash = slots and od->hash_bits =
+ *  bits. Returns CO_ERR_ARG when `od` has no keys or 2^bits slots cannot hold its entries
+ *  with one left empty. O(count) expected. */
+co_err_t co_od_hash_build(const co_od_t *od, uint16_t *slots, uint8_t bits);
 
 /** Find an entry. On failure returns NULL and sets `*abort` (when not NULL) to
  *  CO_ABORT_NO_OBJECT (index unknown) or CO_ABORT_NO_SUB (index known, sub-index not).

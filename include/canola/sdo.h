@@ -74,9 +74,11 @@ typedef void (*co_sdo_done_fn)(void *ctx, uint8_t channel, co_abort_t abort, uin
 /** One SDO server channel (embedded in the node; fields are internal). */
 typedef struct co_sdo_server {
     const co_od_entry_t *entry;
-    uint64_t deadline_us;
+    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
+    uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
     uint32_t cob_rx; /**< client -> server; bit 31 = off */
     uint32_t cob_tx; /**< server -> client */
+    uint32_t tx_id;  /**< the identifier of cob_tx, with tx_flags its frame header */
     uint32_t size;   /**< indicated or known total size */
     uint32_t done;   /**< bytes transferred so far */
     uint32_t buf_len;
@@ -84,6 +86,7 @@ typedef struct co_sdo_server {
     uint16_t crc;
     uint8_t sub;
     uint8_t state;
+    uint8_t tx_flags;
     uint8_t toggle;
     uint8_t blksize;
     uint8_t seq;      /**< block: last in-order sequence number (download) / sent (upload) */

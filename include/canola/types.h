@@ -14,6 +14,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -85,7 +86,25 @@ typedef uint32_t co_abort_t;
 #define CO_ABORT_NO_OD 0x08000023u         /**< object dictionary not present */
 #define CO_ABORT_NO_DATA 0x08000024u       /**< no data available */
 
-/* ---- Little-endian helpers for byte buffers (safe for any alignment). */
+/* ---- Little-endian helpers for byte buffers (safe for any alignment). On a little-endian
+ * host they are one (unaligned) load or store: memcpy of a fixed size, which compilers
+ * turn into a move; elsewhere they go byte by byte. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+static inline uint16_t co_get_u16(const uint8_t *p)
+{
+    uint16_t v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static inline uint32_t co_get_u32(const uint8_t *p)
+{
+    uint32_t v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static inline void co_put_u16(uint8_t *p, uint16_t v) { memcpy(p, &v, sizeof v); }
+static inline void co_put_u32(uint8_t *p, uint32_t v) { memcpy(p, &v, sizeof v); }
+#else
 static inline uint16_t co_get_u16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }
 static inline uint32_t co_get_u32(const uint8_t *p)
 {
@@ -103,6 +122,7 @@ static inline void co_put_u32(uint8_t *p, uint32_t v)
     p[2] = (uint8_t)(v >> 16);
     p[3] = (uint8_t)(v >> 24);
 }
+#endif
 
 #ifdef __cplusplus
 }
