@@ -147,6 +147,13 @@ int main(void)
         sample_values.log_data.len != 4) {
         return 17;
     }
+    /* The generated hash is the one the core builds (same function, same order). */
+    static uint16_t slots[1u << 16];
+    if (sample_od.hash == NULL || sample_od.hash_bits != co_od_hash_bits(sample_od.count) ||
+        co_od_hash_build(&sample_od, slots, sample_od.hash_bits) != CO_OK ||
+        memcmp(slots, sample_od.hash, sizeof slots[0] << sample_od.hash_bits) != 0) {
+        return 18;
+    }
     return 0;
 }
 """

@@ -59,7 +59,7 @@ from canola.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 2  # 2: co_od_t.keys, the dense key array
+OD_FORMAT = 3  # 2: co_od_t.keys, the dense key array; 3: co_od_t.hash
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -542,12 +542,42 @@ def _source_text(name: str, source: str, entries: list[_Entry],
             out.append("    " + ", ".join(keys[i:i + 8]) + ",")
         out.append("};")
         out.append("")
+        bits, slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
+        hashed = ""
+        if slots:
+            # The look-up's hash (co_od_t.hash): entry position + 1 per slot, 0 = empty.
+            out.append(f"static const uint16_t k_hash[{len(slots)}] = {{")
+            for i in range(0, len(slots), 16):
+                out.append("    " + ", ".join(str(v) for v in slots[i:i + 16]) + ",")
+            out.append("};")
+            out.append("")
+            hashed = f", .hash = k_hash, .hash_bits = {bits}"
         out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
-                   ".hook_ctx = NULL, .keys = k_keys};")
+                   f".hook_ctx = NULL, .keys = k_keys{hashed}}};")
     else:
         out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
     out.append("")
     return "\n".join(out)
+
+
+def _hash_table(keys: list[int]) -> tuple[int, list[int]]:
+    """The hash of co_od_t (canola/od.h, as co_od_hash_build makes it): 2^bits slots with
+    2^bits >= 2 * len(keys), each key at the first free slot from its home
+    (CO_OD_HASH_HOME) on; a slot holds 1 + the key's position, 0 when empty. No hash
+    (0, []) for more than 32767 keys."""
+    if len(keys) > 32767:
+        return 0, []
+    bits = 1
+    while (1 << bits) < 2 * len(keys):
+        bits += 1
+    mask = (1 << bits) - 1
+    slots = [0] * (1 << bits)
+    for pos, key in enumerate(keys):
+        slot = ((key * 0x9E3779B1) & 0xFFFFFFFF) >> (32 - bits)
+        while slots[slot]:
+            slot = (slot + 1) & mask
+        slots[slot] = pos + 1
+    return bits, slots
 
 
 def _limits_name(e: _Entry) -> str:

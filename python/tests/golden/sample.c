@@ -121,4 +121,15 @@ static const uint32_t k_keys[] = {
     0x230001u, 0x230002u, 0x600000u,
 };
 
-const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL, .keys = k_keys};
+static const uint16_t k_hash[128] = {
+    0, 0, 0, 12, 27, 8, 0, 0, 0, 0, 18, 0, 0, 0, 32, 0,
+    0, 0, 0, 0, 23, 0, 0, 0, 0, 0, 0, 14, 0, 0, 0, 28,
+    41, 0, 0, 10, 0, 19, 0, 37, 0, 0, 33, 3, 0, 0, 0, 0,
+    24, 0, 0, 0, 11, 0, 7, 15, 0, 0, 0, 29, 0, 0, 0, 0,
+    0, 20, 0, 0, 0, 34, 39, 0, 0, 0, 0, 5, 25, 1, 0, 0,
+    0, 40, 13, 16, 9, 43, 30, 36, 0, 0, 0, 0, 0, 21, 0, 0,
+    0, 35, 0, 0, 0, 0, 0, 6, 26, 2, 0, 0, 0, 0, 17, 42,
+    0, 0, 31, 0, 0, 0, 38, 0, 4, 22, 0, 0, 0, 0, 0, 0,
+};
+
+const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL, .keys = k_keys, .hash = k_hash, .hash_bits = 7};
