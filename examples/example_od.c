@@ -199,10 +199,6 @@ co_od_t example_od_keyed(example_od_t *x, co_od_t od)
         x->keys[i] = CO_OD_KEY(od.entries[i].index, od.entries[i].sub);
     }
     od.keys = x->keys;
-    uint8_t bits = co_od_hash_bits(od.count);
-    if (co_od_hash_build(&od, x->hash, bits) == CO_OK) { /* fits: 2^bits <= 512 slots */
-        od.hash = x->hash;
-        od.hash_bits = bits;
-    }
+    (void)co_od_hash_build(&od, x->hash, co_od_hash_bits(od.count)); /* 512 slots: it fits */
     return od;
 }

@@ -129,6 +129,26 @@ static inline bool co_od_writes_plain(const co_od_entry_t *e)
            e->limits == NULL && e->value != NULL;
 }
 
+/* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no
+ * library call. */
+static inline void co_copy_number(void *dst, const void *src, uint32_t bytes)
+{
+    switch (bytes) {
+    case 1:
+        memcpy(dst, src, 1);
+        break;
+    case 2:
+        memcpy(dst, src, 2);
+        break;
+    case 4:
+        memcpy(dst, src, 4);
+        break;
+    default:
+        memcpy(dst, src, 8);
+        break;
+    }
+}
+
 /* Route key: the identifier, bit 31 marking 29-bit identifiers. */
 static inline uint32_t co_route_key(const co_frame_t *frame)
 {

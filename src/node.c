@@ -315,13 +315,14 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
     }
 }
 
-co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                               uint32_t len)
+/* co_node_write_entry of anything but a plain application number. */
+static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_entry_t *entry,
+                                                 const uint8_t *data, uint32_t len)
 {
-    const co_od_t *od = &node->cfg.od;
     /* The services own objects of the communication profile area only (0x1000..0x1FFF):
      * an application object needs neither their checks nor their effects. */
     bool comm = entry->index < 0x2000u;
+    const co_od_t *od = &node->cfg.od;
     co_abort_t abort = co_od_check(od, entry, data, len);
     if (abort == CO_ABORT_NONE && comm) {
         abort = service_check(node, entry, data, len);
@@ -340,6 +341,17 @@ co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, cons
         entry->hooks->written(od->hook_ctx, entry);
     }
     return CO_ABORT_NONE;
+}
+
+co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len)
+{
+    if (entry->index >= 0x2000u && co_od_writes_plain(entry) && len == entry->size) {
+        co_copy_number(entry->value, data, len); /* what check + store would come to */
+        co_pdo_changed(node, entry);             /* change of state, as below */
+        return CO_ABORT_NONE;
+    }
+    return write_entry_general(node, entry, data, len);
 }
 
 co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,

@@ -256,10 +256,10 @@ static bool hash_fits(const co_od_t *od)
     if (od->hash == NULL) {
         return true;
     }
-    if (od->keys == NULL || od->hash_bits < 1 || od->hash_bits > 16) {
-        return false;
+    uint32_t slots = (uint32_t)od->hash_mask + 1u;
+    if (od->keys == NULL || (slots & (slots - 1u)) != 0 || slots < 2u) {
+        return false; /* the mask must be 2^bits - 1, bits >= 1 */
     }
-    uint32_t slots = 1u << od->hash_bits;
     uint32_t empty = 0;
     for (uint32_t i = 0; i < slots; i++) {
         empty += od->hash[i] == 0 ? 1u : 0u;
@@ -344,12 +344,13 @@ static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 }
 
 /* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
-static CO_OD_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint16_t index,
-                                                      uint8_t sub, co_abort_t *abort)
+static CO_OD_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint32_t key,
+                                                      co_abort_t *abort)
 {
-    uint32_t pos = lower_bound(od, key_of(index, sub));
+    uint16_t index = (uint16_t)(key >> 8);
+    uint32_t pos = lower_bound(od, key);
     const co_od_entry_t *e = od->entries;
-    if (pos < od->count && e[pos].index == index && e[pos].sub == sub) {
+    if (pos < od->count && entry_key(&e[pos]) == key) {
         return &e[pos];
     }
     if (abort != NULL) {
@@ -363,10 +364,10 @@ static CO_OD_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint16
 
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort)
 {
+    uint32_t key = key_of(index, sub);
     if (od->hash != NULL) { /* validated: keys exist, a slot is empty, slots point into it */
-        uint32_t key = key_of(index, sub);
-        uint32_t mask = (1u << od->hash_bits) - 1u;
-        uint32_t slot = CO_OD_HASH_HOME(key, od->hash_bits);
+        uint32_t mask = od->hash_mask;
+        uint32_t slot = CO_OD_HASH_HOME(key, mask);
         for (uint32_t at; (at = od->hash[slot]) != 0; slot = (slot + 1u) & mask) {
             if (od->keys[at - 1u] == key) {
                 return &od->entries[at - 1u];
@@ -376,7 +377,7 @@ const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, 
             return NULL; /* a miss: the search only tells which abort code */
         }
     }
-    return find_sorted(od, index, sub, abort);
+    return find_sorted(od, key, abort);
 }
 
 uint32_t co_type_size(co_type_t type) { return type_info((unsigned)type)->wire; }

@@ -16,7 +16,7 @@ uint8_t co_od_hash_bits(uint32_t count)
     return bits;
 }
 
-co_err_t co_od_hash_build(const co_od_t *od, uint16_t *slots, uint8_t bits)
+co_err_t co_od_hash_build(co_od_t *od, uint16_t *slots, uint8_t bits)
 {
     if (od == NULL || slots == NULL || od->keys == NULL || bits < 1 || bits > 16 ||
         od->count >= (1u << bits)) {
@@ -27,11 +27,13 @@ co_err_t co_od_hash_build(const co_od_t *od, uint16_t *slots, uint8_t bits)
         slots[i] = 0;
     }
     for (uint32_t i = 0; i < od->count; i++) {
-        uint32_t slot = CO_OD_HASH_HOME(od->keys[i], bits);
+        uint32_t slot = CO_OD_HASH_HOME(od->keys[i], mask);
         while (slots[slot] != 0) {
             slot = (slot + 1u) & mask;
         }
         slots[slot] = (uint16_t)(i + 1u);
     }
+    od->hash = slots;
+    od->hash_mask = (uint16_t)mask;
     return CO_OK;
 }

@@ -297,7 +297,7 @@ static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
 }
 
 /* A download segment (command 000t nnnc) of an open segmented download. */
-static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
     uint8_t toggle = cmd & TOGGLE;
@@ -431,7 +431,7 @@ static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 }
 
 /* An upload segment request (command 011t 0000) of an open segmented upload. */
-static void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t toggle = d[0] & TOGGLE;
     if (toggle != s->toggle) {
@@ -486,7 +486,7 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
 
 /* One segment of a sub-block. Only the next in-order sequence number is taken; the
  * acknowledgement names the last one taken, so the client repeats what was lost. */
-static void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_NOINLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t seqno = d[0] & 0x7Fu;
     bool last = d[0] & 0x80u;
@@ -691,6 +691,19 @@ static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, cons
     return e;
 }
 
+/* An initiate download or upload request (expedited or segmented). */
+static CO_NOINLINE void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d, bool write)
+{
+    if (open_entry(node, s, d, write) == NULL) {
+        return;
+    }
+    if (write) {
+        initiate_download(node, s, d);
+    } else {
+        initiate_upload(node, s);
+    }
+}
+
 /* Block initiate requests: 110x x0x0 download, 101x x000 upload. */
 static bool is_block_initiate(uint8_t cmd)
 {
@@ -803,14 +816,8 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         break;
     }
     uint8_t cs = cmd >> 5;
-    if (cs == 1 || cs == 2) { /* initiate download / upload */
-        if (open_entry(node, s, d, cs == 1) != NULL) {
-            if (cs == 1) {
-                initiate_download(node, s, d);
-            } else {
-                initiate_upload(node, s);
-            }
-        }
+    if (cs == 1 || cs == 2) {
+        initiate(node, s, d, cs == 1);
         return;
     }
     serve_other(node, s, d);

@@ -1274,42 +1274,42 @@ static void check_misses(const co_od_t *od)
     CHECK(co_od_find(od, 0x1018, 0x7F, NULL) == NULL);
 }
 
+static void check_all_found(const co_od_t *od, const co_od_entry_t *entries)
+{
+    for (uint32_t i = 0; i < od->count; i++) {
+        CHECK(co_od_find(od, entries[i].index, entries[i].sub, NULL) == &entries[i]);
+    }
+}
+
 static void test_hash_lookups(void)
 {
     static example_od_t x;
     co_od_t od = example_od_keyed(&x, example_od_init(&x, 0));
-    CHECK(od.hash != NULL);
-    CHECK_EQ(od.hash_bits, 9); /* 190 entries: 512 slots */
+    CHECK(od.hash == x.hash);
+    CHECK_EQ(od.hash_mask, 511); /* 172 entries: 512 slots */
     CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
-    for (uint32_t i = 0; i < od.count; i++) {
-        CHECK(co_od_find(&od, od.entries[i].index, od.entries[i].sub, NULL) == &od.entries[i]);
-    }
+    check_all_found(&od, od.entries);
     check_misses(&od);
-    /* Fuller (190 entries in 256 slots): longer probe runs, still exact. */
+    /* Fuller (172 entries in 256 slots): longer probe runs, still exact. */
     static uint16_t slots[256];
     co_od_t full = od;
     CHECK_EQ(co_od_hash_build(&full, slots, 8), CO_OK);
-    full.hash = slots;
-    full.hash_bits = 8;
+    CHECK(full.hash == slots);
+    CHECK_EQ(full.hash_mask, 255);
     CHECK_EQ(co_od_validate(&full, NULL), CO_OK);
-    for (uint32_t i = 0; i < full.count; i++) {
-        CHECK(co_od_find(&full, od.entries[i].index, od.entries[i].sub, NULL) == &od.entries[i]);
-    }
+    check_all_found(&full, od.entries);
     check_misses(&full);
     /* As full as a hash may be: 7 entries in 8 slots, probes wrapping around the end. */
     static uint16_t eight[8];
     co_od_t seven = od;
     seven.count = 7;
     CHECK_EQ(co_od_hash_build(&seven, eight, 3), CO_OK);
-    seven.hash = eight;
-    seven.hash_bits = 3;
     CHECK_EQ(co_od_validate(&seven, NULL), CO_OK);
-    for (uint32_t i = 0; i < seven.count; i++) {
-        CHECK(co_od_find(&seven, od.entries[i].index, od.entries[i].sub, NULL) ==
-              &od.entries[i]);
-    }
+    check_all_found(&seven, od.entries);
     check_misses(&seven);
-    CHECK_EQ(co_od_hash_build(&seven, eight, 2), CO_ERR_ARG); /* 4 slots for 7 */
+    co_od_t before = seven;
+    CHECK_EQ(co_od_hash_build(&seven, slots, 2), CO_ERR_ARG); /* 4 slots for 7 */
+    CHECK(seven.hash == before.hash && seven.hash_mask == before.hash_mask);
 }
 
 static void test_hash_refused(void)
@@ -1319,14 +1319,16 @@ static void test_hash_refused(void)
     uint32_t bad = 0;
     /* The builder: no keys, too few slots, bits out of range. */
     static uint16_t slots[512];
-    co_od_t unkeyed = od;
-    unkeyed.keys = NULL;
+    static example_od_t y; /* example_od_init clears x's keys and hash too */
+    co_od_t unkeyed = example_od_init(&y, 0);
+    CHECK(unkeyed.keys == NULL && unkeyed.hash == NULL);
     CHECK_EQ(co_od_hash_build(&unkeyed, slots, 9), CO_ERR_ARG);
-    CHECK_EQ(co_od_hash_build(&od, slots, 7), CO_ERR_ARG); /* 128 slots, 190 entries */
-    CHECK_EQ(co_od_hash_build(&od, slots, 0), CO_ERR_ARG);
-    CHECK_EQ(co_od_hash_build(&od, slots, 17), CO_ERR_ARG);
+    co_od_t copy = od;
+    CHECK_EQ(co_od_hash_build(&copy, slots, 7), CO_ERR_ARG); /* 128 slots, 172 entries */
+    CHECK_EQ(co_od_hash_build(&copy, slots, 0), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_build(&copy, slots, 17), CO_ERR_ARG);
     CHECK_EQ(co_od_hash_build(NULL, slots, 9), CO_ERR_ARG);
-    CHECK_EQ(co_od_hash_build(&od, NULL, 9), CO_ERR_ARG);
+    CHECK_EQ(co_od_hash_build(&copy, NULL, 9), CO_ERR_ARG);
     CHECK_EQ(co_od_hash_bits(0), 1);
     CHECK_EQ(co_od_hash_bits(1), 1);
     CHECK_EQ(co_od_hash_bits(2), 2);
@@ -1335,22 +1337,21 @@ static void test_hash_refused(void)
     CHECK_EQ(co_od_hash_bits(257), 10);
     CHECK_EQ(co_od_hash_bits(32767), 16);
     CHECK_EQ(co_od_hash_bits(32768), 0);
-    /* Validation: a hash without keys, bits out of range, a slot past the entries, no
-     * empty slot, an entry its probe does not reach. `bad` names count: the entries
-     * are fine. */
+    /* Validation: a hash without keys, a mask that is not 2^bits - 1, a slot past the
+     * entries, no empty slot, an entry its probe does not reach. `bad` names count: the
+     * entries are fine. */
     co_od_t h = unkeyed;
     h.hash = od.hash;
-    h.hash_bits = od.hash_bits;
+    h.hash_mask = od.hash_mask;
     CHECK_EQ(co_od_validate(&h, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, od.count);
     h = od;
-    h.hash_bits = 0;
+    h.hash_mask = 0; /* one slot */
     CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
-    h.hash_bits = 17;
+    h.hash_mask = 500;
     CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
-    CHECK_EQ(co_od_hash_build(&od, slots, 9), CO_OK);
     h = od;
-    h.hash = slots;
+    CHECK_EQ(co_od_hash_build(&h, slots, 9), CO_OK);
     uint32_t empty = 0;
     while (slots[empty] != 0) {
         empty++;
@@ -1361,16 +1362,15 @@ static void test_hash_refused(void)
         slots[i] = slots[i] ? slots[i] : 1; /* every slot taken */
     }
     CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
-    CHECK_EQ(co_od_hash_build(&od, slots, 9), CO_OK);
-    uint32_t home = CO_OD_HASH_HOME(od.keys[0], 9);
-    uint32_t at = home;
+    CHECK_EQ(co_od_hash_build(&h, slots, 9), CO_OK);
+    uint32_t at = CO_OD_HASH_HOME(od.keys[0], 511u);
     while (slots[at] != 1) {
         at = (at + 1u) & 511u;
     }
     slots[at] = 0; /* entry 0 lost: found by nothing */
     CHECK_EQ(co_od_validate(&h, NULL), CO_ERR_CONFIG);
     CHECK(co_od_find(&h, od.entries[0].index, od.entries[0].sub, NULL) == NULL);
-    CHECK_EQ(co_od_hash_build(&od, slots, 9), CO_OK);
+    CHECK_EQ(co_od_hash_build(&h, slots, 9), CO_OK);
     CHECK_EQ(co_od_validate(&h, NULL), CO_OK);
 }
 

@@ -147,9 +147,9 @@ struct co_od_entry {
 /** Key of (index, sub) in co_od_t.keys. */
 #define CO_OD_KEY(index, sub) (((uint32_t)(index) << 8) | (uint32_t)(sub))
 
-/** Home slot of a key in a hash of 2^bits slots (co_od_t.hash, 1 <= bits <= 16): the top
- *  `bits` bits of key * 0x9E3779B1 (Fibonacci hashing), taken modulo 2^32. */
-#define CO_OD_HASH_HOME(key, bits) ((uint32_t)((uint32_t)(key) * 0x9E3779B1u) >> (32u - (bits)))
+/** Home slot of a key in a hash of mask + 1 slots (co_od_t.hash): bits 16.. of
+ *  key * 0x9E3779B1 (Fibonacci hashing, modulo 2^32), as many as the mask has. */
+#define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key) * 0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
 /** An object dictionary: the entry table and the context its hooks receive. */
 typedef struct co_od {
@@ -161,22 +161,22 @@ typedef struct co_od {
      *  28/48-byte entries: about a third of the instructions per look-up, and fewer cache
      *  lines. The generator (canola.odgen) emits it; co_od_validate checks it. */
     const uint32_t *keys;
-    /** Optional (NULL: no hash; needs `keys`): an open-addressing hash table of 2^hash_bits
-     *  slots, each 0 (empty) or 1 + the position of an entry. An entry sits in the first
+    /** Optional (NULL: no hash; needs `keys`): an open-addressing hash table of
+     *  hash_mask + 1 slots, each 0 (empty) or 1 + the position of an entry. An entry sits in the first
      *  slot that is free from its home (CO_OD_HASH_HOME) on, wrapping around; at least one
      *  slot is empty. With about twice as many slots as entries a look-up reads one or two
      *  slots instead of log2(count) keys: ~20 instructions instead of ~95 for 190 entries,
      *  for 2 bytes per slot. The generator (canola.odgen) emits it; co_od_hash_build
      *  builds one at run time; co_od_validate checks it. */
     const uint16_t *hash;
-    uint8_t hash_bits; /**< 1..16 */
+    uint16_t hash_mask; /**< slots - 1: 2^bits - 1 with 1 <= bits <= 16 */
 } co_od_t;
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
  *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
  *  every entry with an empty slot left. Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
  *  to the offending entry's position, or to `count` for a bad hash, when `bad` is not
- *  NULL). O(n) plus O(2^hash_bits). */
+ *  NULL). O(n) plus O(slots). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),
@@ -184,10 +184,11 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 uint8_t co_od_hash_bits(uint32_t count);
 
 /** Build the hash of `od` (whose entries and keys are final) into `slots`, 2^bits of them
- *  (bits as co_od_hash_bits gives, or more). Then set od->hash = slots and od->hash_bits =
- *  bits. Returns CO_ERR_ARG when `od` has no keys or 2^bits slots cannot hold its entries
- *  with one left empty. O(count) expected. */
-co_err_t co_od_hash_build(const co_od_t *od, uint16_t *slots, uint8_t bits);
+ *  (bits as co_od_hash_bits gives, or more), and attach it: od->hash = slots,
+ *  od->hash_mask = 2^bits - 1. Returns CO_ERR_ARG (and leaves `od` as it was) when `od`
+ *  has no keys or 2^bits slots cannot hold its entries with one left empty. O(count)
+ *  expected. */
+co_err_t co_od_hash_build(co_od_t *od, uint16_t *slots, uint8_t bits);
 
 /** Find an entry. On failure returns NULL and sets `*abort` (when not NULL) to
  *  CO_ABORT_NO_OBJECT (index unknown) or CO_ABORT_NO_SUB (index known, sub-index not).

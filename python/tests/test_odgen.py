@@ -149,9 +149,11 @@ int main(void)
     }
     /* The generated hash is the one the core builds (same function, same order). */
     static uint16_t slots[1u << 16];
-    if (sample_od.hash == NULL || sample_od.hash_bits != co_od_hash_bits(sample_od.count) ||
-        co_od_hash_build(&sample_od, slots, sample_od.hash_bits) != CO_OK ||
-        memcmp(slots, sample_od.hash, sizeof slots[0] << sample_od.hash_bits) != 0) {
+    co_od_t rebuilt = sample_od;
+    if (sample_od.hash == NULL ||
+        co_od_hash_build(&rebuilt, slots, co_od_hash_bits(sample_od.count)) != CO_OK ||
+        rebuilt.hash_mask != sample_od.hash_mask ||
+        memcmp(slots, sample_od.hash, sizeof slots[0] * (sample_od.hash_mask + 1u)) != 0) {
         return 18;
     }
     return 0;

@@ -542,7 +542,7 @@ def _source_text(name: str, source: str, entries: list[_Entry],
             out.append("    " + ", ".join(keys[i:i + 8]) + ",")
         out.append("};")
         out.append("")
-        bits, slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
+        slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
         hashed = ""
         if slots:
             # The look-up's hash (co_od_t.hash): entry position + 1 per slot, 0 = empty.
@@ -551,7 +551,7 @@ def _source_text(name: str, source: str, entries: list[_Entry],
                 out.append("    " + ", ".join(str(v) for v in slots[i:i + 16]) + ",")
             out.append("};")
             out.append("")
-            hashed = f", .hash = k_hash, .hash_bits = {bits}"
+            hashed = f", .hash = k_hash, .hash_mask = {len(slots) - 1}u"
         out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
                    f".hook_ctx = NULL, .keys = k_keys{hashed}}};")
     else:
@@ -560,24 +560,24 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     return "\n".join(out)
 
 
-def _hash_table(keys: list[int]) -> tuple[int, list[int]]:
+def _hash_table(keys: list[int]) -> list[int]:
     """The hash of co_od_t (canola/od.h, as co_od_hash_build makes it): 2^bits slots with
     2^bits >= 2 * len(keys), each key at the first free slot from its home
-    (CO_OD_HASH_HOME) on; a slot holds 1 + the key's position, 0 when empty. No hash
-    (0, []) for more than 32767 keys."""
+    (CO_OD_HASH_HOME) on; a slot holds 1 + the key's position, 0 when empty. No hash ([])
+    for more than 32767 keys."""
     if len(keys) > 32767:
-        return 0, []
+        return []
     bits = 1
     while (1 << bits) < 2 * len(keys):
         bits += 1
     mask = (1 << bits) - 1
     slots = [0] * (1 << bits)
     for pos, key in enumerate(keys):
-        slot = ((key * 0x9E3779B1) & 0xFFFFFFFF) >> (32 - bits)
+        slot = (((key * 0x9E3779B1) & 0xFFFFFFFF) >> 16) & mask
         while slots[slot]:
             slot = (slot + 1) & mask
         slots[slot] = pos + 1
-    return bits, slots
+    return slots
 
 
 def _limits_name(e: _Entry) -> str:
