@@ -55,9 +55,7 @@ static void load_channel(co_node_t *node, uint8_t ch)
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
-    co_frame_t head = co_cob_frame(s->cob_tx, 8);
-    s->tx_id = head.id;
-    s->tx_flags = head.flags;
+    s->reply = co_cob_frame(s->cob_tx, 8);
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -130,33 +128,33 @@ static void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
     co_node_schedule(node, s->last_us + co_sdo_timeout_us(node));
 }
 
-/* A frame of 8 bytes to the client, in the channel's frame header. */
-static CO_INLINE void send(co_node_t *node, const co_sdo_server_t *s, const uint8_t data[8])
+/* The response in s->reply to the client (its data filled by the caller). */
+static CO_INLINE void send_reply(co_node_t *node, co_sdo_server_t *s)
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
     }
-    co_frame_t f = {.id = s->tx_id, .flags = s->tx_flags, .len = 8};
-    memcpy(f.data, data, 8);
-    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
+    (void)co_node_send_hot(node, &s->reply, CO_SVC_SDO);
+}
+
+/* A frame of 8 bytes to the client. */
+static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
+{
+    memcpy(s->reply.data, data, 8);
+    send_reply(node, s);
 }
 
 /* A frame of two little-endian words: bytes 0..3 and 4..7 (built in the frame itself:
  * the expedited answers are the hot ones). */
-static CO_INLINE void send_words(co_node_t *node, const co_sdo_server_t *s, uint32_t head,
-                                 uint32_t tail)
+static CO_INLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t head, uint32_t tail)
 {
-    if (s->cob_tx & CO_COB_INVALID) {
-        return; /* never on a COB-ID marked not valid */
-    }
-    co_frame_t f = {.id = s->tx_id, .flags = s->tx_flags, .len = 8};
-    co_put_u32(&f.data[0], head);
-    co_put_u32(&f.data[4], tail);
-    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
+    co_put_u32(&s->reply.data[0], head);
+    co_put_u32(&s->reply.data[4], tail);
+    send_reply(node, s);
 }
 
 /* A response naming the transfer's object: cmd, index, sub-index, then `tail`. */
-static CO_INLINE void respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd,
+static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd,
                               uint32_t tail)
 {
     send_words(node, s, cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24), tail);
@@ -296,8 +294,9 @@ static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
     return flush(node, s, true);
 }
 
-/* A download segment (command 000t nnnc) of an open segmented download. */
-static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+/* A download segment (command 000t nnnc) of an open segmented download: any case. */
+static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_t *s,
+                                                 const uint8_t *d)
 {
     uint8_t cmd = d[0];
     uint8_t toggle = cmd & TOGGLE;
@@ -329,6 +328,24 @@ static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, co
         s->state = IDLE;
         apply_reloads(node);
     }
+}
+
+/* A download segment: the usual one (more to come, the right toggle, room for 7 bytes in
+ * the buffer and in the indicated size) here, the others in download_segment_general. */
+static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
+    uint8_t cmd = d[0];
+    if ((cmd & (TOGGLE | 0x01u)) != s->toggle || s->buf_len + SEG_BYTES > CO_SDO_BUF_SIZE ||
+        (s->size_known && received(s) + SEG_BYTES > s->size)) {
+        download_segment_general(node, s, d);
+        return;
+    }
+    memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES);
+    s->buf_len += SEG_BYTES - ((cmd >> 1) & 7u);
+    s->toggle ^= TOGGLE;
+    co_put_u32(&s->reply.data[0], 0x20u | (cmd & TOGGLE));
+    co_put_u32(&s->reply.data[4], 0);
+    send_reply(node, s);
 }
 
 /* ---- upload */
@@ -430,8 +447,9 @@ static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
     initiate_upload_general(node, s);
 }
 
-/* An upload segment request (command 011t 0000) of an open segmented upload. */
-static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+/* An upload segment request (command 011t 0000) of an open segmented upload: any case. */
+static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t *s,
+                                               const uint8_t *d)
 {
     uint8_t toggle = d[0] & TOGGLE;
     if (toggle != s->toggle) {
@@ -463,6 +481,22 @@ static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, cons
     if (last) {
         s->state = IDLE;
     }
+}
+
+/* An upload segment request: the usual one (the right toggle, a value in storage with
+ * more than 7 bytes to go) here, the others in upload_segment_general. */
+static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
+    uint8_t toggle = d[0] & TOGGLE;
+    if (toggle != s->toggle || s->wire == NULL || s->size - s->done <= SEG_BYTES) {
+        upload_segment_general(node, s, d);
+        return;
+    }
+    s->reply.data[0] = toggle; /* 7 bytes, more to come */
+    memcpy(&s->reply.data[1], s->wire + s->done, SEG_BYTES);
+    s->done += SEG_BYTES;
+    s->toggle ^= TOGGLE;
+    send_reply(node, s);
 }
 
 /* ---- block download */

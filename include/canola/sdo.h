@@ -76,9 +76,9 @@ typedef struct co_sdo_server {
     const co_od_entry_t *entry;
     const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
     uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
+    co_frame_t reply;    /**< the next response, its header (cob_tx, 8 bytes) set at load */
     uint32_t cob_rx; /**< client -> server; bit 31 = off */
     uint32_t cob_tx; /**< server -> client */
-    uint32_t tx_id;  /**< the identifier of cob_tx, with tx_flags its frame header */
     uint32_t size;   /**< indicated or known total size */
     uint32_t done;   /**< bytes transferred so far */
     uint32_t buf_len;
@@ -86,7 +86,6 @@ typedef struct co_sdo_server {
     uint16_t crc;
     uint8_t sub;
     uint8_t state;
-    uint8_t tx_flags;
     uint8_t toggle;
     uint8_t blksize;
     uint8_t seq;      /**< block: last in-order sequence number (download) / sent (upload) */
