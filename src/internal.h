@@ -234,14 +234,14 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
 /* The driver did not take a frame handed to it directly (co_node_send_hot): queue it
  * (CO_ERR_BUSY) or count it dropped, as co_node_send_as does. */
 co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t service, co_err_t err);
-/* co_node_send_as for the per-frame paths (PDO, SDO): with the queue empty, the driver
- * is called from here, without a call into txq.c. `service` is not 0. */
-static inline co_err_t co_node_send_hot(co_node_t *node, const co_frame_t *frame, uint16_t service)
+/* co_node_send_hot for a sender that knows the queue is empty (co_txq_idle): a run of
+ * frames (block transfer) tests the queue once per frame, not twice. */
+static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
 #if defined(__OPTIMIZE_SIZE__)
     return co_node_send_as(node, frame, service); /* -Os: one copy of the send path */
 #else
-    if (node->txq_count != 0 || !(node->services & service)) {
+    if (!(node->services & service)) {
         return co_node_send_as(node, frame, service);
     }
     co_err_t err = node->cfg.driver.tx(node->cfg.driver.ctx, frame);
@@ -251,6 +251,16 @@ static inline co_err_t co_node_send_hot(co_node_t *node, const co_frame_t *frame
     node->stats.tx_frames++;
     return CO_OK;
 #endif
+}
+
+/* co_node_send_as for the per-frame paths (PDO, SDO): with the queue empty, the driver
+ * is called from here, without a call into txq.c. `service` is not 0. */
+static inline co_err_t co_node_send_hot(co_node_t *node, const co_frame_t *frame, uint16_t service)
+{
+    if (node->txq_count != 0) {
+        return co_node_send_as(node, frame, service);
+    }
+    return co_node_send_idle(node, frame, service);
 }
 /* True when nothing waits in the transmit queue: a sender of many frames (block
  * transfer) sends only then, so it never floods the queue; poll resumes it. */

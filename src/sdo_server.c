@@ -610,23 +610,33 @@ static uint8_t sub_block_segments(const co_sdo_server_t *s)
     return (uint8_t)n;
 }
 
-/* Send the sub-block's segments while the transmit queue is idle; poll resumes. */
+/* Send the sub-block's segments while the transmit queue is idle; poll resumes. The
+ * full segments before the final one go out from a short loop. */
 static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
 {
     uint8_t segments = sub_block_segments(s);
-    while (s->seq < segments && co_txq_idle(node)) {
-        uint32_t offset = (uint32_t)s->seq * SEG_BYTES;
-        uint32_t n = s->buf_len - offset < SEG_BYTES ? s->buf_len - offset : SEG_BYTES;
-        s->seq++;
-        bool final = s->last_sent && s->seq == segments;
-        uint8_t d[8] = {(uint8_t)((final ? 0x80u : 0u) | s->seq)};
-        memcpy(&d[1], &s->buf[offset], n);
-        if (final) {
-            s->last_len = (uint8_t)n;
-        }
-        send(node, s, d);
-        s->last_us = node->now_us; /* the time-out counts from the last frame sent too */
+    uint8_t plain = s->last_sent ? (uint8_t)(segments - 1u) : segments; /* 7 bytes, not final */
+    uint8_t seq = s->seq;
+    if (seq >= segments || (s->cob_tx & CO_COB_INVALID)) {
+        return; /* (a channel without a valid COB-ID is never in a transfer) */
     }
+    const uint8_t *next = &s->buf[(uint32_t)seq * SEG_BYTES];
+    while (seq < plain && co_txq_idle(node)) {
+        s->reply.data[0] = ++seq;
+        memcpy(&s->reply.data[1], next, SEG_BYTES);
+        next += SEG_BYTES;
+        (void)co_node_send_idle(node, &s->reply, CO_SVC_SDO);
+    }
+    if (seq == plain && seq < segments && co_txq_idle(node)) { /* the final segment */
+        uint32_t offset = (uint32_t)seq * SEG_BYTES;
+        uint32_t n = s->buf_len - offset;
+        uint8_t d[8] = {(uint8_t)(0x80u | ++seq)};
+        memcpy(&d[1], &s->buf[offset], n);
+        s->last_len = (uint8_t)n;
+        send(node, s, d);
+    }
+    s->seq = seq;
+    s->last_us = node->now_us; /* the time-out counts from the last frame sent too */
 }
 
 static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
