@@ -207,21 +207,6 @@ void co_routes_rebuild(co_node_t *node);
 void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot);
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
 
-/* co_routes_find with a one-entry memory: a stream of frames on one COB-ID (an SDO
- * transfer, a busy PDO) skips the search. */
-static inline const co_route_t *co_routes_lookup(co_node_t *node, uint32_t key)
-{
-    const co_route_t *hint = &node->routes[node->route_hint];
-    if (node->route_hint < node->route_count && hint->key == key) {
-        return hint;
-    }
-    const co_route_t *found = co_routes_find(node, key);
-    if (found != NULL) {
-        node->route_hint = (uint16_t)(found - node->routes);
-    }
-    return found;
-}
-
 /* txq.c */
 void co_txq_flush(co_node_t *node);
 /* Drop the waiting frames of services the current NMT state does not allow (at every state

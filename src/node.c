@@ -53,30 +53,9 @@ const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stat
 
 /* ---- dispatch */
 
-void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
+/* Hand a frame to the service its route names. */
+static CO_INLINE void dispatch(co_node_t *node, const co_route_t *route, const co_frame_t *frame)
 {
-    node->now_us = now_us;
-    node->stats.rx_frames++;
-    /* Above 29 bits or 8 bytes: malformed. An identifier of 12..29 bits without the EXT
-     * flag is malformed too, but matches no route (routes hold valid keys only), so it is
-     * told apart from the unrouted ones off the common path. */
-    if (frame->len > 8 || frame->id > CO_ID_EXT_MAX) {
-        node->stats.rx_malformed++; /* no controller delivers this: never let it match */
-        return;
-    }
-    const co_route_t *route = co_routes_lookup(node, co_route_key(frame));
-    if (route == NULL) {
-        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
-            node->stats.rx_malformed++;
-        } else {
-            node->stats.rx_unrouted++;
-        }
-        return;
-    }
-    if (!(node->services & route->service) && !co_lss_slave_resume(node, route->service)) {
-        node->stats.rx_gated++;
-        return;
-    }
     uint8_t slot = route->slot;
     switch (route->kind) {
     case CO_ROUTE_NMT:
@@ -124,6 +103,64 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
     default:
         break;
     }
+}
+
+/* A frame whose service the NMT state does not allow now: dropped and counted, unless
+ * it is the one that ends an LSS quiet time. */
+static CO_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
+                                     const co_frame_t *frame)
+{
+    if (co_lss_slave_resume(node, route->service)) {
+        dispatch(node, route, frame);
+    } else {
+        node->stats.rx_gated++;
+    }
+}
+
+/* A frame on another COB-ID than the last one routed: the search, then as below. */
+static CO_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
+{
+    const co_route_t *route = co_routes_find(node, key);
+    if (route == NULL) {
+        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
+            node->stats.rx_malformed++;
+        } else {
+            node->stats.rx_unrouted++;
+        }
+        return;
+    }
+    node->route_hint = (uint16_t)(route - node->routes);
+    if (!(node->services & route->service)) {
+        ingest_gated(node, route, frame);
+        return;
+    }
+    dispatch(node, route, frame);
+}
+
+void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
+{
+    node->now_us = now_us;
+    node->stats.rx_frames++;
+    /* Above 29 bits or 8 bytes: malformed. An identifier of 12..29 bits without the EXT
+     * flag is malformed too, but matches no route (routes hold valid keys only), so it is
+     * told apart from the unrouted ones off the common path. */
+    if (frame->len > 8 || frame->id > CO_ID_EXT_MAX) {
+        node->stats.rx_malformed++; /* no controller delivers this: never let it match */
+        return;
+    }
+    /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
+     * the one the last frame took; this path makes no call but the service's. */
+    uint32_t key = co_route_key(frame);
+    const co_route_t *route = &node->routes[node->route_hint];
+    if (node->route_hint >= node->route_count || route->key != key) {
+        ingest_searched(node, frame, key);
+        return;
+    }
+    if (!(node->services & route->service)) {
+        ingest_gated(node, route, frame);
+        return;
+    }
+    dispatch(node, route, frame);
 }
 
 /* ---- time */

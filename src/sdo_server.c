@@ -520,7 +520,8 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
 
 /* One segment of a sub-block. Only the next in-order sequence number is taken; the
  * acknowledgement names the last one taken, so the client repeats what was lost. */
-static CO_NOINLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *s,
+                                              const uint8_t *d)
 {
     uint8_t seqno = d[0] & 0x7Fu;
     bool last = d[0] & 0x80u;
@@ -551,6 +552,20 @@ static CO_NOINLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const
     if (last && in_order) {
         s->state = BLOCK_DOWN_END;
     }
+}
+
+/* A segment of a sub-block: the usual one (the next in order, neither the sub-block's
+ * last nor the transfer's, room in the buffer) here, the others in block_segment_general. */
+static CO_INLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
+    uint8_t cmd = d[0]; /* below blksize (<= 127): bit 7, "last", is clear */
+    if (cmd != s->seq + 1u || cmd >= s->blksize || s->buf_len + SEG_BYTES > sizeof s->buf) {
+        block_segment_general(node, s, d);
+        return;
+    }
+    memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES);
+    s->buf_len += SEG_BYTES;
+    s->seq = cmd;
 }
 
 static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
