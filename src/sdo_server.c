@@ -635,7 +635,7 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
     if (seq >= segments || (s->cob_tx & CO_COB_INVALID)) {
         return; /* (a channel without a valid COB-ID is never in a transfer) */
     }
-    const uint8_t *next = &s->buf[(uint32_t)seq * SEG_BYTES];
+    const uint8_t *next = &s->buf[(size_t)seq * SEG_BYTES];
     while (seq < plain && co_txq_idle(node)) {
         s->reply.data[0] = ++seq;
         memcpy(&s->reply.data[1], next, SEG_BYTES);
