@@ -105,8 +105,8 @@ static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
  * that a written value is 0 or 1), as bits of a mask indexed by type code. */
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 #define CO_WIRE_NATIVE_TYPES                                                                       \
-    ((1u << CO_TYPE_INTEGER8) | (1u << CO_TYPE_INTEGER16) | (1u << CO_TYPE_INTEGER32) |           \
-     (1u << CO_TYPE_UNSIGNED8) | (1u << CO_TYPE_UNSIGNED16) | (1u << CO_TYPE_UNSIGNED32) |        \
+    ((1u << CO_TYPE_INTEGER8) | (1u << CO_TYPE_INTEGER16) | (1u << CO_TYPE_INTEGER32) |            \
+     (1u << CO_TYPE_UNSIGNED8) | (1u << CO_TYPE_UNSIGNED16) | (1u << CO_TYPE_UNSIGNED32) |         \
      (1u << CO_TYPE_REAL32) | (1u << CO_TYPE_REAL64) | (1u << CO_TYPE_INTEGER64) |                 \
      (1u << CO_TYPE_UNSIGNED64))
 #else
@@ -117,7 +117,8 @@ static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
  * `value`): the SDO server answers from it without co_od_read. */
 static inline bool co_od_reads_plain(const co_od_entry_t *e)
 {
-    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && (e->hooks == NULL || e->hooks->read == NULL);
+    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) &&
+           (e->hooks == NULL || e->hooks->read == NULL);
 }
 
 /* A writable entry whose new value is just its `size` wire bytes copied into storage: no

@@ -354,7 +354,7 @@ static void service_apply(co_node_t *node, const co_od_entry_t *entry)
 
 /* co_node_write_entry of anything but a plain application number. */
 static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_entry_t *entry,
-                                                 const uint8_t *data, uint32_t len)
+                                                  const uint8_t *data, uint32_t len)
 {
     /* The services own objects of the communication profile area only (0x1000..0x1FFF):
      * an application object needs neither their checks nor their effects. */

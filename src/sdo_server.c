@@ -154,8 +154,7 @@ static CO_INLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t h
 }
 
 /* A response naming the transfer's object: cmd, index, sub-index, then `tail`. */
-static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd,
-                              uint32_t tail)
+static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
     send_words(node, s, cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24), tail);
 }
@@ -520,8 +519,7 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
 
 /* One segment of a sub-block. Only the next in-order sequence number is taken; the
  * acknowledgement names the last one taken, so the client repeats what was lost. */
-static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *s,
-                                              const uint8_t *d)
+static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t seqno = d[0] & 0x7Fu;
     bool last = d[0] & 0x80u;

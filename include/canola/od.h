@@ -149,7 +149,7 @@ struct co_od_entry {
 
 /** Home slot of a key in a hash of mask + 1 slots (co_od_t.hash): bits 16.. of
  *  key * 0x9E3779B1 (Fibonacci hashing, modulo 2^32), as many as the mask has. */
-#define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key) * 0x9E3779B1u) >> 16) & (uint32_t)(mask))
+#define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key)*0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
 /** An object dictionary: the entry table and the context its hooks receive. */
 typedef struct co_od {
@@ -162,12 +162,12 @@ typedef struct co_od {
      *  lines. The generator (canola.odgen) emits it; co_od_validate checks it. */
     const uint32_t *keys;
     /** Optional (NULL: no hash; needs `keys`): an open-addressing hash table of
-     *  hash_mask + 1 slots, each 0 (empty) or 1 + the position of an entry. An entry sits in the first
-     *  slot that is free from its home (CO_OD_HASH_HOME) on, wrapping around; at least one
+     *  hash_mask + 1 slots, each 0 (empty) or 1 + the position of an entry. An entry sits in the
+     * first slot that is free from its home (CO_OD_HASH_HOME) on, wrapping around; at least one
      *  slot is empty. With about twice as many slots as entries a look-up reads one or two
      *  slots instead of log2(count) keys: ~25 instructions instead of ~95 (x86-64, the
-     *  172 entries of examples/example_od.c), for 2 bytes per slot. The generator (canola.odgen) emits it; co_od_hash_build
-     *  builds one at run time; co_od_validate checks it. */
+     *  172 entries of examples/example_od.c), for 2 bytes per slot. The generator (canola.odgen)
+     * emits it; co_od_hash_build builds one at run time; co_od_validate checks it. */
     const uint16_t *hash;
     uint16_t hash_mask; /**< slots - 1: 2^bits - 1 with 1 <= bits <= 16 */
 } co_od_t;

@@ -79,10 +79,10 @@ typedef struct co_sdo_server {
     const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
     uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
     co_frame_t reply;    /**< the next response, its header (cob_tx, 8 bytes) set at load */
-    uint32_t cob_rx; /**< client -> server; bit 31 = off */
-    uint32_t cob_tx; /**< server -> client */
-    uint32_t size;   /**< indicated or known total size */
-    uint32_t done;   /**< bytes transferred so far */
+    uint32_t cob_rx;     /**< client -> server; bit 31 = off */
+    uint32_t cob_tx;     /**< server -> client */
+    uint32_t size;       /**< indicated or known total size */
+    uint32_t done;       /**< bytes transferred so far */
     uint32_t buf_len;
     uint16_t index;
     uint16_t crc;
