@@ -383,7 +383,8 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
 co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                uint32_t len)
 {
-    if (entry->index >= 0x2000u && co_od_writes_plain(entry) && len == entry->size) {
+    if (CO_SHORT_PATHS && entry->index >= 0x2000u && co_od_writes_plain(entry) &&
+        len == entry->size) {
         co_copy_number(entry->value, data, len); /* what check + store would come to */
         co_pdo_changed(node, entry);             /* change of state, as below */
         return CO_ABORT_NONE;

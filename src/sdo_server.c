@@ -334,7 +334,8 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
 static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
-    if ((cmd & (TOGGLE | 0x01u)) != s->toggle || s->buf_len + SEG_BYTES > CO_SDO_BUF_SIZE ||
+    if (!CO_SHORT_PATHS || (cmd & (TOGGLE | 0x01u)) != s->toggle ||
+        s->buf_len + SEG_BYTES > CO_SDO_BUF_SIZE ||
         (s->size_known && received(s) + SEG_BYTES > s->size)) {
         download_segment_general(node, s, d);
         return;
@@ -439,7 +440,7 @@ static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t
 static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 {
     const co_od_entry_t *e = s->entry;
-    if (co_od_reads_plain(e) && e->size <= 4) { /* a number stored as it travels */
+    if (CO_SHORT_PATHS && co_od_reads_plain(e) && e->size <= 4) { /* stored as it travels */
         answer_expedited(node, s, plain_value(e), e->size);
         return;
     }
@@ -487,7 +488,8 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
 static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t toggle = d[0] & TOGGLE;
-    if (toggle != s->toggle || s->wire == NULL || s->size - s->done <= SEG_BYTES) {
+    if (!CO_SHORT_PATHS || toggle != s->toggle || s->wire == NULL ||
+        s->size - s->done <= SEG_BYTES) {
         upload_segment_general(node, s, d);
         return;
     }
@@ -557,7 +559,8 @@ static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *
 static CO_INLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0]; /* below blksize (<= 127): bit 7, "last", is clear */
-    if (cmd != s->seq + 1u || cmd >= s->blksize || s->buf_len + SEG_BYTES > sizeof s->buf) {
+    if (!CO_SHORT_PATHS || cmd != s->seq + 1u || cmd >= s->blksize ||
+        s->buf_len + SEG_BYTES > sizeof s->buf) {
         block_segment_general(node, s, d);
         return;
     }
