@@ -73,7 +73,8 @@ static void finish(co_node_t *node, co_sdo_client_t *c, co_abort_t code, uint32_
 /* Restart the time-out: it runs from the last frame sent or received. */
 static void touch(co_node_t *node, co_sdo_client_t *c)
 {
-    c->deadline_us = node->now_us + co_sdo_timeout_us(node);
+    uint64_t timeout = c->timeout_ms ? co_ms_to_us(c->timeout_ms) : co_sdo_timeout_us(node);
+    c->deadline_us = node->now_us + timeout;
     co_node_schedule(node, c->deadline_us);
 }
 
@@ -594,6 +595,15 @@ co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t b
     c->want_blksize = blksize;
     c->use_crc = crc;
     c->pst = pst;
+    return CO_OK;
+}
+
+co_err_t co_sdo_client_set_timeout(co_node_t *node, uint8_t channel, uint16_t timeout_ms)
+{
+    if (node == NULL || channel >= co_sdo_clients_max()) {
+        return CO_ERR_ARG;
+    }
+    node->sdo_clients[channel].timeout_ms = timeout_ms;
     return CO_OK;
 }
 

@@ -435,6 +435,37 @@ static void test_timeout_exact(void)
     CHECK_EQ(g_r.abort, CO_ABORT_TIMEOUT);
 }
 
+/* A channel's own time-out per answer, and back to the node's. */
+static void test_timeout_per_channel(void)
+{
+    co_node_t *n = client(); /* the node's time-out: 1000 ms */
+    uint8_t buf[32];
+    CHECK_EQ(co_sdo_client_set_timeout(n, 0, 50), CO_OK);
+    CHECK_EQ(co_sdo_client_set_timeout(n, CO_SDO_CLIENTS_MAX, 50), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_client_set_timeout(NULL, 0, 50), CO_ERR_ARG);
+    CHECK_EQ(co_sdo_upload(n, 0, 0x2003, 0, CO_SDO_AUTO, buf, sizeof buf, on_done, &g_r), CO_OK);
+    CHECK_STR(sent(), "605#4003200000000000");
+    CHECK_EQ(co_node_poll(n, 1000), 51000);
+    g_now = 30000; /* an answer restarts it */
+    reply("41 03 20 00 14 00 00 00");
+    CHECK_STR(sent(), "605#6000000000000000");
+    CHECK_EQ(co_node_poll(n, 51000), 80000);
+    CHECK_EQ(g_r.calls, 0);
+    CHECK_EQ(co_node_poll(n, 80000), CO_TIME_NEVER);
+    CHECK_STR(sent(), "605#8003200000000405");
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_TIMEOUT);
+    /* kept by a new setup; 0 is the node's again */
+    CHECK_EQ(co_sdo_client_setup(n, 0, 5), CO_OK);
+    CHECK_EQ(co_sdo_download(n, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r), CO_OK);
+    CHECK_EQ(co_node_poll(n, 80000), 130000);
+    CHECK_EQ(co_node_poll(n, 130000), CO_TIME_NEVER);
+    CHECK_EQ(g_r.calls, 2);
+    CHECK_EQ(co_sdo_client_set_timeout(n, 0, 0), CO_OK);
+    CHECK_EQ(co_sdo_download(n, 0, 0x2000, 0, CO_SDO_AUTO, buf, 4, on_done, &g_r), CO_OK);
+    CHECK_EQ(co_node_poll(n, 130000), 1130000);
+}
+
 static void test_client_abort(void)
 {
     uint8_t buf[8];
@@ -1236,6 +1267,7 @@ int main(void)
     RUN(test_server_abort);
     RUN(test_protocol_errors);
     RUN(test_timeout_exact);
+    RUN(test_timeout_per_channel);
     RUN(test_client_abort);
     RUN(test_block_download);
     RUN(test_block_download_no_crc_offered);

@@ -124,6 +124,7 @@ typedef struct co_sdo_client {
     bool use_crc;         /**< offer CRC in block transfers (default true) */
     uint8_t want_blksize; /**< block size to ask for, 1..127 (default 127) */
     uint8_t pst;          /**< protocol switch threshold for block uploads (default 0) */
+    uint16_t timeout_ms;  /**< time-out per answer; 0: the node's (co_node_config_t) */
     /* co_sdo_read_value / co_sdo_write_value */
     co_sdo_value_fn value_fn;
     co_sdo_done_fn value_done_fn;
@@ -143,6 +144,12 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
  *  switch threshold for uploads (0 = never switch). Returns CO_ERR_ARG on a bad value. */
 co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize, bool crc,
                                      uint8_t pst);
+
+/** The channel's time-out per answer: a transfer whose server stays silent `timeout_ms`
+ *  after the last frame is aborted with 0x05040000 (also sent to the server). 0 returns to
+ *  the node's co_node_config_t.sdo_timeout_ms. Takes effect with the next frame; kept
+ *  across setups and resets. Returns CO_ERR_ARG for a bad channel. */
+co_err_t co_sdo_client_set_timeout(co_node_t *node, uint8_t channel, uint16_t timeout_ms);
 
 /** Start reading (index, sub) of the channel's server into `buf` (capacity `cap`; must stay
  *  valid until `done` runs). A value longer than `cap` aborts with 0x05040005 (also sent to

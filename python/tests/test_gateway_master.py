@@ -79,6 +79,28 @@ def test_sim_sdo_nmt_and_local_node() -> None:
     run(main())
 
 
+def test_sim_sdo_timeout_per_client() -> None:
+    """A client's ``set sdo_timeout`` is the master's time-out per answer for its requests;
+    another client keeps the master's own (1000 ms)."""
+    async def main() -> None:
+        bus, master, _ = _sim()
+        async with serve(master) as (address, _):
+            quick = await Client.connect(address)
+            plain = await Client.connect(address)
+            assert await quick.ask("[1] set sdo_timeout 50") == "[1] OK"
+            began = bus.now_us
+            assert await quick.ask("[2] 42 r 0x1000 0") == "[2] ERROR:0x05040000"
+            assert 50_000 <= bus.now_us - began < 100_000  # virtual time
+            began = bus.now_us
+            assert await plain.ask("[1] 42 r 0x1000 0") == "[1] ERROR:0x05040000"
+            assert 1_000_000 <= bus.now_us - began < 1_100_000
+            assert await quick.ask("[3] 2 r 0x1018 1 u32") == "[3] 3232"
+            await quick.close()
+            await plain.close()
+
+    run(main())
+
+
 def test_sim_events() -> None:
     async def main() -> None:
         _, master, devices = _sim()

@@ -100,6 +100,28 @@ def test_sdo_aborts_and_timeout(net: tuple[SimBus, Master, Device]) -> None:
     assert master.sdo(5).upload(0x1000, 0) == (0x191).to_bytes(4, "little")  # still usable
 
 
+def test_sdo_answer_timeout(net: tuple[SimBus, Master, Device]) -> None:
+    bus, master, _ = net
+    began = bus.now_us
+    with pytest.raises(SdoTimeout, match=r"SDO time-out 50 ms"):  # not the master's 1000
+        master.sdo(9).upload(0x1000, 0, answer_timeout=0.05)
+    assert 50_000 <= bus.now_us - began < 52_000  # virtual time: the core's own time-out
+    trace = [f for f in _frames(bus) if f.startswith("609#")]
+    assert trace[-1] == "609#8000100000000405"  # the abort went out to the node
+    began = bus.now_us
+    with pytest.raises(SdoTimeout, match=r"SDO time-out 1000 ms"):  # the next: the master's
+        master.sdo(9).download(0x2000, 0, b"\x01")
+    assert 1_000_000 <= bus.now_us - began < 1_002_000
+    began = bus.now_us
+    with pytest.raises(SdoTimeout, match=r"SDO time-out 20 ms"):
+        asyncio.run(master.sdo(9).adownload(0x2000, 0, b"\x01", answer_timeout=0.02))
+    assert 20_000 <= bus.now_us - began < 22_000
+    for bad in (0, 0.0004, 65.536, -1):
+        with pytest.raises(Error, match="answer_timeout"):
+            master.sdo(5).upload(0x1000, 0, answer_timeout=bad)
+    assert master.sdo(5).upload(0x1000, 0, answer_timeout=0.01) == (0x191).to_bytes(4, "little")
+
+
 def test_async_on_simbus(net: tuple[SimBus, Master, Device]) -> None:
     _, master, _ = net
 

@@ -141,6 +141,7 @@ const char *co_nmt_state_name(uint8_t state);
 co_err_t co_nmt_send(co_node_t *node, co_nmt_cmd_t cmd, uint8_t target);
 
 co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id);
+co_err_t co_sdo_client_set_timeout(co_node_t *node, uint8_t channel, uint16_t timeout_ms);
 co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
                        co_sdo_mode_t mode, uint8_t *buf, uint32_t cap, co_sdo_done_fn done,
                        void *ctx);

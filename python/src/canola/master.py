@@ -83,8 +83,9 @@ class SdoTimeout(SdoAbort):
 
 
 class _SdoTransfer(_Transfer):
-    def __init__(self) -> None:
+    def __init__(self, answer_ms: int) -> None:
         super().__init__()
+        self.answer_ms = answer_ms  # time-out per answer; 0: the master's
         self.event = threading.Event()
         self.keep: list[Any] = []
         self.waker: Callable[[], None] | None = None
@@ -99,9 +100,10 @@ class SdoClient:
     """SDO client of one remote node (one client channel of the master).
 
     ``upload``/``download`` block until the transfer ends; ``aupload``/``adownload`` are
-    their asyncio forms. ``block=True`` uses block transfer; ``timeout`` (seconds) ends a
-    transfer earlier than the master's SDO time-out. An abort (from either side) raises
-    :class:`~canola.errors.SdoAbort` with its ``code``; no answer raises
+    their asyncio forms. ``block=True`` uses block transfer; ``timeout`` (seconds) bounds
+    the whole transfer; ``answer_timeout`` (seconds, up to 65.535) is how long each answer
+    may take in this transfer (default: the master's ``sdo_timeout_ms``). An abort (from
+    either side) raises :class:`~canola.errors.SdoAbort` with its ``code``; no answer raises
     :class:`SdoTimeout` (code 0x05040000). One transfer at a time per node: a second one
     waits for the first. On a SimBus every form runs the simulated bus until the transfer
     ends (the asyncio forms too: virtual time has no other driver).
@@ -115,16 +117,19 @@ class SdoClient:
     # ---- blocking
 
     def upload(self, index: int, sub: int, *, block: bool = False,
-               timeout: float | None = None, max_size: int = 65536) -> bytes:
+               timeout: float | None = None, max_size: int = 65536,
+               answer_timeout: float | None = None) -> bytes:
         """Read (index, sub) of the node: its wire bytes."""
-        t = self._run(self._start_upload, (index, sub, block, max_size), timeout)
+        t = self._run(self._start_upload, (index, sub, block, max_size), timeout,
+                      self._answer_ms(answer_timeout))
         return bytes(ffi.buffer(t.keep[0], t.length))
 
     def download(self, index: int, sub: int, data: bytes, *, block: bool = False,
-                 timeout: float | None = None) -> None:
+                 timeout: float | None = None, answer_timeout: float | None = None) -> None:
         """Write ``data`` (wire bytes) to (index, sub): expedited up to 4 bytes, else
         segmented (or block with ``block=True``)."""
-        self._run(self._start_download, (index, sub, bytes(data), block), timeout)
+        self._run(self._start_download, (index, sub, bytes(data), block), timeout,
+                  self._answer_ms(answer_timeout))
 
     def read(self, index: int, sub: int, data_type: str | int, **kw: Any) -> values.Value:
         """upload + :func:`canola.values.decode` as ``data_type`` (e.g. "u16", "vs")."""
@@ -138,15 +143,19 @@ class SdoClient:
     # ---- asyncio
 
     async def aupload(self, index: int, sub: int, *, block: bool = False,
-                      timeout: float | None = None, max_size: int = 65536) -> bytes:
+                      timeout: float | None = None, max_size: int = 65536,
+                      answer_timeout: float | None = None) -> bytes:
         """:meth:`upload` as a coroutine (the bus thread completes it)."""
-        t = await self._arun(self._start_upload, (index, sub, block, max_size), timeout)
+        t = await self._arun(self._start_upload, (index, sub, block, max_size), timeout,
+                             self._answer_ms(answer_timeout))
         return bytes(ffi.buffer(t.keep[0], t.length))
 
     async def adownload(self, index: int, sub: int, data: bytes, *, block: bool = False,
-                        timeout: float | None = None) -> None:
+                        timeout: float | None = None,
+                        answer_timeout: float | None = None) -> None:
         """:meth:`download` as a coroutine."""
-        await self._arun(self._start_download, (index, sub, bytes(data), block), timeout)
+        await self._arun(self._start_download, (index, sub, bytes(data), block), timeout,
+                         self._answer_ms(answer_timeout))
 
     # ---- machinery
 
@@ -160,7 +169,8 @@ class SdoClient:
         t.keep[:] = [buf, handle]
         self._master._start(self.node, lambda node, ch: lib.co_sdo_upload(
             node, ch, index, sub, lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO, buf,
-            max_size, lib.canola_py_sdo_done, handle), f"SDO upload 0x{index:04X} sub {sub}")
+            max_size, lib.canola_py_sdo_done, handle), f"SDO upload 0x{index:04X} sub {sub}",
+            t.answer_ms)
 
     def _start_download(self, t: _SdoTransfer, index: int, sub: int, data: bytes,
                         block: bool) -> None:
@@ -171,24 +181,36 @@ class SdoClient:
         t.keep[:] = [src, handle]
         self._master._start(self.node, lambda node, ch: lib.co_sdo_download(
             node, ch, index, sub, lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO, src,
-            len(data), lib.canola_py_sdo_done, handle), f"SDO download 0x{index:04X} sub {sub}")
+            len(data), lib.canola_py_sdo_done, handle), f"SDO download 0x{index:04X} sub {sub}",
+            t.answer_ms)
 
-    def _timeout_ms(self, timeout: float | None) -> int:
+    def _timeout_ms(self, timeout: float | None, answer_ms: int = 0) -> int:
+        """The time-out a silent node ran into: the transfer's bound, else the answer's."""
         if timeout is None:
-            return self._master.sdo_timeout_ms
+            return answer_ms or self._master.sdo_timeout_ms
         if timeout <= 0:
             raise Error(f"timeout must be positive, got {timeout}")
         return round(timeout * 1000)
 
+    @staticmethod
+    def _answer_ms(answer_timeout: float | None) -> int:
+        """``answer_timeout`` in ms for co_sdo_client_set_timeout (0: the master's)."""
+        if answer_timeout is None:
+            return 0
+        ms = round(answer_timeout * 1000)
+        if not 1 <= ms <= 0xFFFF:
+            raise Error(f"answer_timeout must be 0.001..65.535 s, got {answer_timeout}")
+        return ms
+
     def _finish(self, t: _SdoTransfer, timeout: float | None) -> _SdoTransfer:
         if t.abort == 0x05040000:
-            raise SdoTimeout(self.node, self._timeout_ms(timeout))
+            raise SdoTimeout(self.node, self._timeout_ms(timeout, t.answer_ms))
         if t.abort:
             raise SdoAbort(t.abort)
         return t
 
     def _run(self, start: Callable[..., None], args: tuple[Any, ...],
-             timeout: float | None) -> _SdoTransfer:
+             timeout: float | None, answer_ms: int) -> _SdoTransfer:
         master = self._master
         engine = master._engine
         engine.check_may_block()
@@ -198,7 +220,7 @@ class SdoClient:
         if not self._busy.acquire(timeout=600):
             raise Error(f"SDO client of node {self.node} stays busy")
         try:
-            t = _SdoTransfer()
+            t = _SdoTransfer(answer_ms)
             start(t, *args)
             bus = engine.bus
             limit = None if timeout is None else timeout
@@ -220,16 +242,16 @@ class SdoClient:
                         master._abort(self.node)
                         raise Error("the master was stopped during an SDO transfer")
             if not t.done:  # pragma: no cover -- the core always completes on abort
-                raise SdoTimeout(self.node, self._timeout_ms(timeout))
+                raise SdoTimeout(self.node, self._timeout_ms(timeout, answer_ms))
             return self._finish(t, timeout)
         finally:
             self._busy.release()
 
     async def _arun(self, start: Callable[..., None], args: tuple[Any, ...],
-                    timeout: float | None) -> _SdoTransfer:
+                    timeout: float | None, answer_ms: int) -> _SdoTransfer:
         master = self._master
         if isinstance(master._engine.bus, SimBus):
-            return self._run(start, args, timeout)  # virtual time: runs the bus here
+            return self._run(start, args, timeout, answer_ms)  # virtual time: the bus runs here
         self._timeout_ms(timeout)
         if not master._engine.running:
             raise Error("the master is not started: call start() first")
@@ -247,7 +269,7 @@ class SdoClient:
                 with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
                     loop.call_soon_threadsafe(resolve)
 
-            t = _SdoTransfer()
+            t = _SdoTransfer(answer_ms)
             t.waker = wake
             start(t, *args)
             try:
@@ -331,9 +353,14 @@ class Master(NodeBase):
             client = self._clients[node] = SdoClient(self, node)
         return client
 
-    def _start(self, node_id: int, begin: Callable[[Any, int], int], what: str) -> None:
+    def _start(self, node_id: int, begin: Callable[[Any, int], int], what: str,
+               answer_ms: int = 0) -> None:
+        """Start a transfer on the channel of ``node_id``, whose time-out per answer is
+        ``answer_ms`` (0: ``sdo_timeout_ms``)."""
         with self._engine.locked() as node:
             channel = self._channel(node, node_id)
+            check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
+                  "co_sdo_client_set_timeout")
             err = int(begin(node, channel))
         check(err, f"{what} of node {node_id}")
 

@@ -92,7 +92,8 @@ class Backend(Protocol):
 
     async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
                          timeout_ms: int) -> bytes:
-        """Read (index, sub) of ``node`` over SDO (``block``: block transfer)."""
+        """Read (index, sub) of ``node`` over SDO (``block``: block transfer; ``timeout_ms``:
+        the client's ``set sdo_timeout``, 0 for the backend's own)."""
         ...
 
     async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,

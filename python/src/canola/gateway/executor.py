@@ -68,7 +68,7 @@ canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
   reset node | reset comm[unication]      NMT
   enable heartbeat <ms> | disable heartbeat   watch a node's heartbeat
   [<net>] set network|node <n>            defaults of this connection
-  [<net>] set sdo_timeout <ms>            SDO time-out (where the master takes one)
+  [<net>] set sdo_timeout <ms>            SDO time-out per answer (default: --sdo-timeout)
   [<net>] set sdo_block 0|1               SDO block transfer
   [<net>] set heartbeat <ms>              the gateway's own heartbeat
   [<net>] set events 0|1                  all events to this connection
@@ -117,7 +117,7 @@ class Session:
 
     net: int = 1
     node: int | None = None
-    sdo_timeout_ms: int = 500
+    sdo_timeout_ms: int = 0  # 0: the gateway's own (canola gateway --sdo-timeout)
     sdo_block: bool = False
     command_timeout_ms: int = 0
     command_size: int = 0

@@ -3,10 +3,9 @@ or simulated bus).
 
 - SDO: the master's asyncio client (one client channel per node, so transfers to
   different nodes run at the same time); cancelling aborts the transfer on the bus. The
-  time-out per answer is the master's ``sdo_timeout_ms`` (``canola gateway
-  --sdo-timeout``); a client's ``set sdo_timeout`` does not change it (canola.Master has
-  no per-transfer answer time-out). The whole transfer is not bounded (a 1 MiB block
-  transfer takes seconds on a real bus).
+  time-out per answer is the client's ``set sdo_timeout`` (up to 65535 ms), else the
+  master's ``sdo_timeout_ms`` (``canola gateway --sdo-timeout``). The whole transfer is
+  not bounded (a 1 MiB block transfer takes seconds on a real bus).
 - The gateway's own dictionary is read and written as the network would (access rights,
   lengths, limits), NMT commands to its own node-ID are applied to itself: both through
   the C core directly (canola.Master has no public call for either yet).
@@ -46,6 +45,12 @@ from canola.master import Frame, Master
 
 __all__ = ["MasterBackend", "open_master"]
 
+
+def _answer_s(timeout_ms: int) -> float | None:
+    """A client's ``set sdo_timeout`` as canola.Master's ``answer_timeout`` (None: the
+    master's own; above 65535 ms, 65.535 s: the longest the C client takes)."""
+    return min(timeout_ms, 0xFFFF) / 1000 if timeout_ms else None
+
 _INQUIRE = ("vendor", "product", "revision", "serial", "node_id")
 
 
@@ -72,14 +77,14 @@ class MasterBackend:
 
     async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
                          timeout_ms: int) -> bytes:
-        del timeout_ms  # the master's time-out per answer applies
         return await self.master.sdo(node).aupload(index, sub, block=block,
-                                                   max_size=self.upload_cap)
+                                                   max_size=self.upload_cap,
+                                                   answer_timeout=_answer_s(timeout_ms))
 
     async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
                            block: bool, timeout_ms: int) -> None:
-        del timeout_ms
-        await self.master.sdo(node).adownload(index, sub, data, block=block)
+        await self.master.sdo(node).adownload(index, sub, data, block=block,
+                                              answer_timeout=_answer_s(timeout_ms))
 
     def local_read(self, index: int, sub: int) -> bytes:
         buf = ffi.new("uint8_t[]", self.upload_cap)

@@ -22,6 +22,14 @@ from canola.gateway.requests import NmtCommand
 
 __all__ = ["NMT_NAMES", "SimBackend", "frame_event"]
 
+#: Simulated time a transfer may take when the client set no time-out.
+DEFAULT_LIMIT_US = 10_000_000
+
+
+def _limit_us(timeout_ms: int) -> int:
+    """A client's ``set sdo_timeout`` as the simulated transfer's bound (0: the default)."""
+    return timeout_ms * 1000 if timeout_ms else DEFAULT_LIMIT_US
+
 #: Gateway NMT command -> canola.core NMT command name.
 NMT_NAMES: dict[str, str] = {
     "start": "start",
@@ -77,13 +85,13 @@ class SimBackend:
                          timeout_ms: int) -> bytes:
         with self._sdo_transfer():
             return self.node.sdo_upload(node, index, sub, "block" if block else "auto",
-                                        cap=self.upload_cap, timeout_us=timeout_ms * 1000)
+                                        cap=self.upload_cap, timeout_us=_limit_us(timeout_ms))
 
     async def sdo_download(self, node: int, index: int, sub: int, data: bytes, *,
                            block: bool, timeout_ms: int) -> None:
         with self._sdo_transfer():
             self.node.sdo_download(node, index, sub, data, "block" if block else "auto",
-                                   timeout_us=timeout_ms * 1000)
+                                   timeout_us=_limit_us(timeout_ms))
 
     def local_read(self, index: int, sub: int) -> bytes:
         return self.node.read(index, sub, cap=self.upload_cap)
