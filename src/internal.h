@@ -65,7 +65,6 @@ enum co_hb_watch {
 static inline uint8_t co_guard_watch_max(void) { return CO_GUARD_WATCH_MAX; }
 static inline uint8_t co_sdo_servers_max(void) { return CO_SDO_SERVERS_MAX; }
 static inline uint8_t co_sdo_clients_max(void) { return CO_SDO_CLIENTS_MAX; }
-static inline uint8_t co_emcy_consumers_max(void) { return CO_EMCY_CONSUMERS_MAX; }
 
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 static inline uint64_t co_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
@@ -249,13 +248,73 @@ void co_guard_written(co_node_t *node);
 
 /* emcy.c */
 void co_emcy_reset_comm(co_node_t *node);
-void co_emcy_add_routes(co_node_t *node);
-void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+void co_emcy_written(co_node_t *node, const co_od_entry_t *entry);
+bool co_emcy_producer_off(const co_node_t *node); /* 0x1014 bit 31 */
+void co_emcy_frame_send(co_node_t *node, const uint8_t data[8]);
+
+/* emcy_queue.c: the inhibit time (CO_EMCY_QUEUE_LEN > 0); without it frames leave at once. */
+#if CO_EMCY_QUEUE_LEN > 0
+void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8]);
+void co_emcy_queue_reset(co_node_t *node);
+void co_emcy_queue_clear(co_node_t *node);
 uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us);
+void co_emcy_state_entered(co_node_t *node);
+#else
+static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
+{
+    co_emcy_frame_send(node, data);
+}
+static inline void co_emcy_queue_reset(co_node_t *node) { (void)node; }
+static inline void co_emcy_queue_clear(co_node_t *node) { (void)node; }
+static inline uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_emcy_state_entered(co_node_t *node) { (void)node; }
+#endif
+
+/* emcy_history.c: 0x1003 (CO_CONFIG_EMCY_HISTORY). */
+#if CO_CONFIG_EMCY_HISTORY
+void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5]);
+void co_emcy_history_clear(co_node_t *node);
 co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
                                const uint8_t *data, uint32_t len);
-void co_emcy_written(co_node_t *node, const co_od_entry_t *entry);
-void co_emcy_state_entered(co_node_t *node);
+#else
+static inline void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5])
+{
+    (void)node;
+    (void)code;
+    (void)mfr;
+}
+static inline void co_emcy_history_clear(co_node_t *node) { (void)node; }
+static inline co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
+                                             const uint8_t *data, uint32_t len)
+{
+    (void)node;
+    (void)entry;
+    (void)data;
+    (void)len;
+    return CO_ABORT_NONE;
+}
+#endif
+
+/* emcy_consumer.c: 0x1028 (CO_EMCY_CONSUMERS_MAX > 0). */
+#if CO_EMCY_CONSUMERS_MAX > 0
+void co_emcy_consumers_bind(co_node_t *node);
+void co_emcy_add_routes(co_node_t *node);
+void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+#else
+static inline void co_emcy_consumers_bind(co_node_t *node) { (void)node; }
+static inline void co_emcy_add_routes(co_node_t *node) { (void)node; }
+static inline void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
+{
+    (void)node;
+    (void)slot;
+    (void)frame;
+}
+#endif
 
 /* sync.c */
 void co_sync_reset_comm(co_node_t *node);
