@@ -102,11 +102,8 @@ co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uin
         (guard_ms != 0 && factor == 0)) {
         return CO_ERR_ARG;
     }
-    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
-        const co_hb_consumer_t *c = &node->hb_consumers[i];
-        if (guard_ms != 0 && c->watch != CO_HB_WATCH_UNUSED && c->node_id == node_id) {
-            return CO_ERR_STATE;
-        }
+    if (guard_ms != 0 && co_hb_consumes(node, node_id)) {
+        return CO_ERR_STATE;
     }
     co_guard_watch_t *slot = NULL;
     for (uint8_t i = 0; i < co_guard_watch_max(); i++) {

@@ -229,15 +229,71 @@ uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);
 void co_nmt_ingest(co_node_t *node, const co_frame_t *frame);
 void co_nmt_reset(co_node_t *node, bool application);
 
-/* heartbeat.c */
+/* heartbeat.c: the producer (0x1017), and what the consumer's files need. */
 void co_hb_reset_comm(co_node_t *node);
 void co_hb_state_entered(co_node_t *node);
-void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_hb_poll(co_node_t *node, uint64_t now_us);
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                             uint32_t len);
 void co_hb_written(co_node_t *node, const co_od_entry_t *entry);
 co_err_t co_hb_bind(co_node_t *node);
+
+/* hb_consumer.c: the consumer (0x1016), CO_HB_CONSUMERS_MAX > 0. */
+#if CO_HB_CONSUMERS_MAX > 0
+co_err_t co_hb_consumers_bind(co_node_t *node);
+void co_hb_consumers_reset(co_node_t *node);
+void co_hb_consumers_add_routes(co_node_t *node);
+void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us);
+co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                             uint32_t len);
+void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry);
+bool co_hb_consumer_lost(const co_node_t *node); /* some consumed heartbeat is lost */
+bool co_hb_consumes(const co_node_t *node, uint8_t node_id); /* an entry watches it */
+#else
+static inline co_err_t co_hb_consumers_bind(co_node_t *node)
+{
+    (void)node;
+    return CO_OK; /* 0x1016, if any, is a plain entry */
+}
+static inline void co_hb_consumers_reset(co_node_t *node) { (void)node; }
+static inline void co_hb_consumers_add_routes(co_node_t *node) { (void)node; }
+static inline void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
+{
+    (void)node;
+    (void)slot;
+    (void)frame;
+}
+static inline uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry,
+                                           const uint8_t *data, uint32_t len)
+{
+    (void)node;
+    (void)entry;
+    (void)data;
+    (void)len;
+    return CO_ABORT_NONE;
+}
+static inline void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry)
+{
+    (void)node;
+    (void)entry;
+}
+static inline bool co_hb_consumer_lost(const co_node_t *node)
+{
+    (void)node;
+    return false;
+}
+static inline bool co_hb_consumes(const co_node_t *node, uint8_t node_id)
+{
+    (void)node;
+    (void)node_id;
+    return false;
+}
+#endif
 
 /* guarding.c */
 void co_guard_reset_comm(co_node_t *node);

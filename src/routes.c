@@ -59,12 +59,7 @@ void co_routes_rebuild(co_node_t *node)
     if (CO_CONFIG_GUARDING && node->node_id >= 1 && node->node_id <= 127) {
         co_routes_add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);
     }
-    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
-        const co_hb_consumer_t *c = &node->hb_consumers[i];
-        if (c->watch != CO_HB_WATCH_UNUSED) {
-            co_routes_add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
-        }
-    }
+    co_hb_consumers_add_routes(node);
     for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         const co_guard_watch_t *w = &node->guard_watch[i];
         if (w->guard_ms != 0) {

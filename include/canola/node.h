@@ -145,10 +145,12 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     const co_od_entry_t *hb_period; /**< 0x1017 or NULL */
     uint64_t hb_next_us;
 
+#if CO_HB_CONSUMERS_MAX > 0
     /* Heartbeat consumer (0x1016). */
-    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX > 0 ? CO_HB_CONSUMERS_MAX : 1];
+    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX];
     uint8_t hb_consumer_count; /**< sub-indices of 0x1016 bound (<= CO_HB_CONSUMERS_MAX) */
     uint64_t boot_deadline_us; /**< CO_EC_NOT_BOOTED check, CO_TIME_NEVER when done */
+#endif
 
     /* Node guarding, slave side (0x100C, 0x100D) and master side. */
     const co_od_entry_t *guard_time;
