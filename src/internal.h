@@ -390,7 +390,16 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame);
 void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame);
 /* Every SYNC handled (own or received), once sync.last_us is the SYNC's time. */
 void co_pdo_sync(co_node_t *node, uint8_t counter);
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us);
+#if CO_CONFIG_PDO_TIMERS
+uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
+#else
+static inline uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER; /* without timers PDOs have nothing to wait for */
+}
+#endif
 co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                               uint32_t len);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *entry);

@@ -172,8 +172,7 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     p->flags = cob ? PDO_F_PRESENT : 0;
     p->cob_id = cob ? (uint32_t)co_od_entry_uint(cob) : CO_COB_INVALID;
     p->type = (uint8_t)od_uint(node, idx, 2, 255);
-    p->event_ms = (uint16_t)od_uint(node, idx, 5, 0);
-    p->inhibit = tpdo ? (uint16_t)od_uint(node, idx, 3, 0) : 0;
+    pdo_timers_load(node, p, tpdo, idx);
     p->sync_start = tpdo ? (uint8_t)od_uint(node, idx, 6, 0) : 0;
 }
 
@@ -196,8 +195,7 @@ static void load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 {
     pdo_clear(p, PDO_F_PENDING | PDO_F_SAMPLED | PDO_F_STARTED | PDO_F_WAITING);
-    p->next_us = CO_TIME_NEVER;
-    p->inhibit_until_us = 0;
+    pdo_timers_restart(p);
     p->sync_count = 0;
     p->len = 0;
     if (tpdo) {
@@ -250,7 +248,7 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
         p->frame_flags = f.flags;
         return;
     }
-    bool fast = pdo_active(p) && plain && p->type > 240 && p->event_ms == 0;
+    bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
     p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
 }
 
@@ -346,18 +344,6 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
             tpdo_send_plain(node, p);
         }
     }
-}
-
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
-{
-    uint64_t next = CO_TIME_NEVER;
-    for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
-        next = co_min_u64(next, rpdo_poll(node, &node->rpdo[n], now_us));
-    }
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
-        next = co_min_u64(next, tpdo_poll(node, &node->tpdo[n], now_us));
-    }
-    return pdo_running(node) ? next : CO_TIME_NEVER;
 }
 
 /* ---- events */

@@ -104,14 +104,61 @@ static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uin
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n);
 
 /* pdo_tx.c */
-void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
 void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* p->plain: pack, send */
-uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
 
 /* pdo_rx.c */
 void rpdo_sync(co_node_t *node, uint8_t n);
-uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
+void pdo_clear_emcy(co_node_t *node, uint16_t code); /* co_emcy_clear if active */
+
+/* pdo_timers.c: inhibit time, event timer, RPDO deadline (CO_CONFIG_PDO_TIMERS). */
+#if CO_CONFIG_PDO_TIMERS
+void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
+void pdo_timers_restart(co_pdo_t *p);
+void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
+/* Inside the inhibit time: true, and a poll is scheduled for its end. */
+bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
+void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
+void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
+static inline bool rpdo_monitored(const co_pdo_t *p) { return p->event_ms != 0; }
+#else
+static inline void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
+{
+    (void)node;
+    (void)p;
+    (void)tpdo;
+    (void)comm_index;
+}
+static inline void pdo_timers_restart(co_pdo_t *p) { (void)p; }
+static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+    return false;
+}
+static inline void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline void rpdo_received(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline bool rpdo_monitored(const co_pdo_t *p)
+{
+    (void)p;
+    return false;
+}
+#endif
 
 #endif /* CANOLA_PDO_INTERNAL_H */

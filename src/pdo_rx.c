@@ -12,7 +12,6 @@
 
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
-#define EMCY_RPDO_TIMEOUT 0x8250u
 
 /* One mapped value from the frame at bit `pos`. A whole value is stored as it comes; a
  * value mapped with fewer bits keeps the bits the frame does not carry. */
@@ -65,7 +64,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 }
 
 /* Another RPDO than `self` has `flag` set. */
-static bool other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
+bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
 {
     for (uint16_t n = 0; n < node->rpdo_count; n++) {
         const co_pdo_t *p = &node->rpdo[n];
@@ -76,25 +75,10 @@ static bool other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag
     return false;
 }
 
-static void clear_if_active(co_node_t *node, uint16_t code)
+void pdo_clear_emcy(co_node_t *node, uint16_t code)
 {
     if (co_emcy_active(node, code)) {
         (void)co_emcy_clear(node, code);
-    }
-}
-
-/* A frame of usable length arrived: the deadline restarts, a missed one is over. */
-static void received(co_node_t *node, co_pdo_t *p)
-{
-    if (p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
-    if (pdo_has(p, PDO_F_TIMED_OUT)) {
-        pdo_clear(p, PDO_F_TIMED_OUT);
-        if (!other_has(node, p, PDO_F_TIMED_OUT)) {
-            clear_if_active(node, EMCY_RPDO_TIMEOUT);
-        }
     }
 }
 
@@ -112,9 +96,9 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
         return;
     }
     pdo_clear(p, PDO_F_LEN_ERROR);
-    if (!other_has(node, p, PDO_F_LEN_ERROR)) {
-        clear_if_active(node, EMCY_PDO_LENGTH);
-        clear_if_active(node, EMCY_PDO_EXCEEDED);
+    if (!rpdo_other_has(node, p, PDO_F_LEN_ERROR)) {
+        pdo_clear_emcy(node, EMCY_PDO_LENGTH);
+        pdo_clear_emcy(node, EMCY_PDO_EXCEEDED);
     }
 }
 
@@ -140,7 +124,7 @@ static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame
         length_error(node, p, EMCY_PDO_LENGTH);
         return;
     }
-    received(node, p);
+    rpdo_received(node, p);
     if (p->type <= 240) {
         hold_for_sync(node, p, frame);
     } else {
@@ -216,16 +200,4 @@ void rpdo_sync(co_node_t *node, uint8_t n)
     if (pdo_active(p)) {
         apply(node, n, p->data);
     }
-}
-
-uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
-{
-    if (now_us < p->next_us) {
-        return p->next_us;
-    }
-    p->next_us = CO_TIME_NEVER; /* reported once, until the next RPDO */
-    pdo_set(p, PDO_F_TIMED_OUT);
-    (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
-    co_node_error_behaviour(node);
-    return CO_TIME_NEVER;
 }

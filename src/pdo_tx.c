@@ -73,21 +73,11 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
 }
 
 /* An event-driven transmission: the inhibit time and the event timer count from it. */
-static void send_event(co_node_t *node, co_pdo_t *p)
+void tpdo_send_event(co_node_t *node, co_pdo_t *p)
 {
     pdo_clear(p, PDO_F_PENDING);
     send_fresh(node, p);
-    p->inhibit_until_us = node->now_us + (uint64_t)p->inhibit * 100u;
-    tpdo_start(node, p);
-}
-
-void tpdo_start(co_node_t *node, co_pdo_t *p)
-{
-    p->next_us = CO_TIME_NEVER;
-    if (pdo_active(p) && pdo_running(node) && event_driven(p) && p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
+    tpdo_event_sent(node, p);
 }
 
 bool tpdo_event(co_node_t *node, co_pdo_t *p)
@@ -96,12 +86,8 @@ bool tpdo_event(co_node_t *node, co_pdo_t *p)
         return false;
     }
     pdo_set(p, PDO_F_PENDING); /* type 0: goes at the next SYNC */
-    if (event_driven(p)) {
-        if (node->now_us >= p->inhibit_until_us) {
-            send_event(node, p);
-        } else {
-            co_node_schedule(node, p->inhibit_until_us);
-        }
+    if (event_driven(p) && !tpdo_inhibited(node, p)) {
+        tpdo_send_event(node, p);
     }
     return true;
 }
@@ -161,24 +147,6 @@ void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
     } else if (p->type == 252 && pdo_has(p, PDO_F_SAMPLED)) {
         send_data(node, p, p->data); /* before the first SYNC there is nothing to send */
     }
-}
-
-uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
-{
-    if (!pdo_active(p) || !event_driven(p)) {
-        return CO_TIME_NEVER;
-    }
-    if (now_us >= p->next_us) { /* the event timer is an event */
-        p->next_us = CO_TIME_NEVER;
-        pdo_set(p, PDO_F_PENDING);
-    }
-    if (pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us) {
-        send_event(node, p);
-    }
-    if (pdo_has(p, PDO_F_PENDING)) {
-        return co_min_u64(p->next_us, p->inhibit_until_us);
-    }
-    return p->next_us;
 }
 
 co_err_t co_tpdo_request(co_node_t *node, uint8_t n)

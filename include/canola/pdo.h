@@ -73,12 +73,16 @@ typedef struct co_pdo_item {
 /** One PDO's resolved mapping and state (embedded in the node; fields are internal). */
 typedef struct co_pdo {
     co_pdo_item_t items[CO_PDO_MAP_MAX];
-    uint64_t next_us; /**< TPDO: event timer / inhibit end; RPDO: deadline */
+#if CO_CONFIG_PDO_TIMERS
+    uint64_t next_us; /**< TPDO: event timer; RPDO: deadline */
     uint64_t inhibit_until_us;
+#endif
     uint32_t cob_id;
-    uint32_t frame_id;   /**< TPDO with `fast`: the identifier of its frames, from cob_id */
-    uint16_t event_ms;   /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
-    uint16_t inhibit;    /**< TPDO sub3: inhibit time, 100 us */
+    uint32_t frame_id; /**< TPDO with `fast`: the identifier of its frames, from cob_id */
+#if CO_CONFIG_PDO_TIMERS
+    uint16_t event_ms; /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
+    uint16_t inhibit;  /**< TPDO sub3: inhibit time, 100 us */
+#endif
     uint8_t sync_start;  /**< TPDO sub6: SYNC start value */
     uint8_t count;       /**< mapped entries */
     uint8_t bits;        /**< mapped bits in all */
