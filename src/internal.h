@@ -372,15 +372,51 @@ static inline void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_
 }
 #endif
 
-/* sync.c */
+/* sync.c: the consumer. */
 void co_sync_reset_comm(co_node_t *node);
 void co_sync_add_routes(co_node_t *node);
 void co_sync_ingest(co_node_t *node, const co_frame_t *frame);
-uint64_t co_sync_poll(co_node_t *node, uint64_t now_us);
 co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
                                const uint8_t *data, uint32_t len);
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
+/* A SYNC taken (received, or sent by this node's producer). */
+void co_sync_handled(co_node_t *node, uint8_t counter);
+
+/* Overflow value when SYNCs carry a counter, 0 when they carry no data (0x1019 is 0, or
+ * the refused value 1 set natively). */
+static inline uint8_t co_sync_overflow(const co_node_t *node)
+{
+    uint8_t n = (uint8_t)co_entry_uint(node->sync.overflow);
+    return n >= 2 ? n : 0;
+}
+
+/* sync_producer.c: the producer (CO_CONFIG_SYNC_PRODUCER). */
+#if CO_CONFIG_SYNC_PRODUCER
+uint64_t co_sync_poll(co_node_t *node, uint64_t now_us);
 void co_sync_state_entered(co_node_t *node);
+void co_sync_producer_reset(co_node_t *node);
+void co_sync_producer_written(co_node_t *node, uint16_t index);
+uint32_t co_sync_producer_period(const co_node_t *node); /* 0x1006, us */
+#else
+static inline uint64_t co_sync_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_sync_state_entered(co_node_t *node) { (void)node; }
+static inline void co_sync_producer_reset(co_node_t *node) { (void)node; }
+static inline void co_sync_producer_written(co_node_t *node, uint16_t index)
+{
+    (void)node;
+    (void)index;
+}
+static inline uint32_t co_sync_producer_period(const co_node_t *node)
+{
+    (void)node;
+    return 0; /* 0x1006 has no effect: 0x1019 may always change */
+}
+#endif
 
 /* pdo.c */
 co_err_t co_pdo_bind(co_node_t *node); /* at init: count the PDOs the dictionary has */
