@@ -117,8 +117,20 @@ void pdo_clear_emcy(co_node_t *node, uint16_t code); /* co_emcy_clear if active 
 /* pdo_timers.c: inhibit time, event timer, RPDO deadline (CO_CONFIG_PDO_TIMERS). */
 #if CO_CONFIG_PDO_TIMERS
 void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
-void pdo_timers_restart(co_pdo_t *p);
-void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
+static inline void pdo_timers_restart(co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    p->inhibit_until_us = 0;
+}
+/* Entering operational / new parameters: an event-driven TPDO's event timer starts. */
+static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
 /* Inside the inhibit time: true, and a poll is scheduled for its end. */
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
