@@ -82,26 +82,71 @@ static inline void pdo_copy_fast(void *dst, const void *src, uint32_t bytes)
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
 
+/* Slot i of the mapping is copied straight between frame and storage. */
+static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
+{
+    return (p->map_direct[i / 8u] >> (i % 8u)) & 1u;
+}
+
+/* The per-frame short paths (the usual RPDO in co_pdo_rx, the cyclic TPDO in co_pdo_sync)
+ * do what the general paths do, with fewer instructions. A size build (-Os) keeps only the
+ * general paths: flash counts more than cycles there. */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_FAST_PATHS 0
+#else
+#define PDO_FAST_PATHS 1
+#endif
+
 /* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
  * told when some TPDO listens to changes. */
 static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
-    const co_pdo_item_t *item = p->items;
-    const co_pdo_item_t *end = item + p->count;
-    for (; item < end; item++) {
-        uint32_t bytes = item->bits / 8u;
-        pdo_copy_value(item->entry->value, data, bytes);
+    for (uint8_t i = 0; i < p->count; i++) {
+        uint32_t bytes = p->map_bits[i] / 8u;
+        pdo_copy_value(p->map_entry[i]->value, data, bytes);
         data += bytes;
     }
     if (node->tpdo_listeners != 0) {
-        for (item = p->items; item < end; item++) {
-            co_pdo_changed(node, item->entry);
+        for (uint8_t i = 0; i < p->count; i++) {
+            co_pdo_changed(node, p->map_entry[i]);
         }
     }
 }
 
-/* pdo.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
+#if CO_CONFIG_PDO_BIT_MAPPING
+/* pdo_map.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n);
+#endif
+
+/* pdo_map.c: resolving mappings into co_pdo_t, checking a new one. */
+void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num);
+#if CO_CONFIG_PDO_DYNAMIC
+/* A write to mapping object sub `sub` of PDO `num` (the re-mapping procedure). */
+co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uint8_t sub,
+                             const uint8_t *data, uint32_t len);
+#else
+static inline co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num,
+                                           uint8_t sub, const uint8_t *data, uint32_t len)
+{
+    (void)node;
+    (void)tpdo;
+    (void)num;
+    (void)sub;
+    (void)data;
+    (void)len;
+    return CO_ABORT_READ_ONLY; /* the dictionary's mapping is fixed in this build */
+}
+#endif
+/* The dictionary's value of an optional entry; `absent` when it lacks it. */
+uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent);
+static inline uint16_t pdo_comm_index(bool tpdo, uint16_t num)
+{
+    return (uint16_t)((tpdo ? 0x1800u : 0x1400u) + num);
+}
+static inline uint16_t pdo_map_index(bool tpdo, uint16_t num)
+{
+    return (uint16_t)((tpdo ? 0x1A00u : 0x1600u) + num);
+}
 
 /* pdo_tx.c */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */

@@ -13,28 +13,30 @@
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
 
-/* One mapped value from the frame at bit `pos`. A whole value is stored as it comes; a
+/* Slot i's value from the frame at bit `pos`. A whole value is stored as it comes; a
  * value mapped with fewer bits keeps the bits the frame does not carry. */
-static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t *data,
+static void store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint8_t *data,
                        uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    const co_od_entry_t *e = item->entry;
-    if (item->direct && pos % 8u == 0) { /* the common case: bytes into storage */
-        pdo_copy_value(e->value, data + pos / 8u, item->bits / 8u);
+    const co_od_entry_t *e = p->map_entry[i];
+    uint8_t bits = p->map_bits[i];
+    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes into storage */
+        pdo_copy_value(e->value, data + pos / 8u, bits / 8u);
         co_pdo_changed(node, e);
         return;
     }
     uint32_t size = co_type_size((co_type_t)e->type);
+    const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
+#if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[8] = {0};
-    const uint8_t *value = wire;
-    if (pos % 8u == 0 && item->bits == 8u * size) {
-        value = data + pos / 8u;
-    } else {
+    if (pos % 8u != 0 || bits != 8u * size) {
         uint32_t n;
         (void)co_od_read(od, e, 0, wire, sizeof wire, &n, NULL); /* unreadable: zeros */
-        pdo_copy_bits(wire, 0, data, pos, item->bits);
+        pdo_copy_bits(wire, 0, data, pos, bits);
+        value = wire;
     }
+#endif
     if (co_od_store(od, e, value, size) != CO_ABORT_NONE) {
         return;
     }
@@ -52,10 +54,10 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
     } else {
         uint32_t pos = 0;
         for (uint8_t i = 0; i < p->count; i++) {
-            if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
-                store_item(node, &p->items[i], data, pos);
+            if (p->map_entry[i] != NULL) { /* NULL: a dummy entry, skipped */
+                store_item(node, p, i, data, pos);
             }
-            pos += p->items[i].bits;
+            pos += p->map_bits[i];
         }
     }
     if (node->cfg.on_rpdo) {
@@ -143,8 +145,8 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 {
     const co_pdo_t *p = &node->rpdo[rpdo];
     if (node->tpdo_listeners != 0) {
-        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
-            co_pdo_changed(node, item->entry);
+        for (uint8_t i = 0; i < p->count; i++) {
+            co_pdo_changed(node, p->map_entry[i]);
         }
     }
     if (node->cfg.on_rpdo) {
@@ -173,13 +175,12 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
      * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
      * a route; the bound is checked all the same before the array is read. */
     const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
-    if (p != NULL && p->fast != 0 && p->fast == frame->len && !(frame->flags & CO_FRAME_RTR) &&
-        !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
+    if (PDO_FAST_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
+        !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
         const uint8_t *data = frame->data;
-        const co_pdo_item_t *end = p->items + p->count;
-        for (const co_pdo_item_t *item = p->items; item < end; item++) {
-            uint32_t bytes = item->bits / 8u;
-            pdo_copy_fast(item->entry->value, data, bytes);
+        for (uint8_t i = 0; i < p->count; i++) {
+            uint32_t bytes = p->map_bits[i] / 8u;
+            pdo_copy_fast(p->map_entry[i]->value, data, bytes);
             data += bytes;
         }
         if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {

@@ -8,22 +8,25 @@
 
 static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
-/* One mapped value into the frame at bit `pos`: whole bytes straight from co_od_read,
+/* Slot i's value into the frame at bit `pos`: whole bytes straight from co_od_read,
  * anything else through a bit copy of the value's low bits. */
-static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out, uint32_t pos)
+static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
-    if (item->direct && pos % 8u == 0) { /* the common case: bytes from storage */
-        pdo_copy_value(out + pos / 8u, item->entry->value, item->bits / 8u);
+    uint8_t bits = p->map_bits[i];
+    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes from storage */
+        pdo_copy_value(out + pos / 8u, p->map_entry[i]->value, bits / 8u);
         return;
     }
-    if (pos % 8u == 0 && item->bits % 8u == 0) {
-        (void)co_od_read(od, item->entry, 0, out + pos / 8u, item->bits / 8u, &n, NULL);
+    if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
+        (void)co_od_read(od, p->map_entry[i], 0, out + pos / 8u, bits / 8u, &n, NULL);
         return;
     }
+#if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[8] = {0};
-    (void)co_od_read(od, item->entry, 0, wire, sizeof wire, &n, NULL);
-    pdo_copy_bits(out, pos, wire, 0, item->bits);
+    (void)co_od_read(od, p->map_entry[i], 0, wire, sizeof wire, &n, NULL);
+    pdo_copy_bits(out, pos, wire, 0, bits);
+#endif
 }
 
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
@@ -31,17 +34,17 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
     memset(out, 0, 8);
     if (p->plain) { /* whole values as stored: one copy each */
         uint8_t *at = out;
-        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
-            uint32_t bytes = item->bits / 8u;
-            pdo_copy_value(at, item->entry->value, bytes);
+        for (uint8_t i = 0; i < p->count; i++) {
+            uint32_t bytes = p->map_bits[i] / 8u;
+            pdo_copy_value(at, p->map_entry[i]->value, bytes);
             at += bytes;
         }
         return;
     }
     uint32_t pos = 0;
     for (uint8_t i = 0; i < p->count; i++) {
-        pack_item(&node->cfg.od, &p->items[i], out, pos);
-        pos += p->items[i].bits;
+        pack_item(&node->cfg.od, p, i, out, pos);
+        pos += p->map_bits[i];
     }
 }
 
@@ -64,9 +67,9 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
 {
     co_frame_t f = {.id = p->frame_id, .flags = p->frame_flags, .len = p->fast}; /* data zeroed */
     uint8_t *at = f.data;
-    for (const co_pdo_item_t *item = p->items, *end = item + p->count; item < end; item++) {
-        uint32_t bytes = item->bits / 8u;
-        pdo_copy_fast(at, item->entry->value, bytes);
+    for (uint8_t i = 0; i < p->count; i++) {
+        uint32_t bytes = p->map_bits[i] / 8u;
+        pdo_copy_fast(at, p->map_entry[i]->value, bytes);
         at += bytes;
     }
     (void)co_node_send_hot(node, &f, CO_SVC_PDO);
