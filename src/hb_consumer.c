@@ -187,10 +187,8 @@ co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, 
             return CO_ABORT_PARAM_INCOMPAT;
         }
     }
-    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
-        if (node->guard_watch[i].guard_ms != 0 && node->guard_watch[i].node_id == id) {
-            return CO_ABORT_PARAM_INCOMPAT; /* guarded already: one error control per node */
-        }
+    if (co_guard_watches(node, id)) {
+        return CO_ABORT_PARAM_INCOMPAT; /* guarded already: one error control per node */
     }
     return CO_ABORT_NONE;
 }

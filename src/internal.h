@@ -295,12 +295,51 @@ static inline bool co_hb_consumes(const co_node_t *node, uint8_t node_id)
 }
 #endif
 
-/* guarding.c */
+/* guarding.c (CO_CONFIG_GUARDING): without it nothing is routed, polled or kept. */
+#if CO_CONFIG_GUARDING
+void co_guard_bind(co_node_t *node);
 void co_guard_reset_comm(co_node_t *node);
 void co_guard_rtr(co_node_t *node, const co_frame_t *frame);
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us);
 void co_guard_written(co_node_t *node);
+void co_guard_add_routes(co_node_t *node);
+bool co_guard_watches(const co_node_t *node, uint8_t node_id); /* a master-side watch */
+static inline bool co_guard_life_lost(const co_node_t *node) { return node->life_lost; }
+#else
+static inline void co_guard_bind(co_node_t *node) { (void)node; }
+static inline void co_guard_reset_comm(co_node_t *node) { (void)node; }
+static inline void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
+{
+    (void)node;
+    (void)frame;
+}
+static inline void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame)
+{
+    (void)node;
+    (void)slot;
+    (void)frame;
+}
+static inline uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_guard_written(co_node_t *node) { (void)node; }
+static inline void co_guard_add_routes(co_node_t *node) { (void)node; }
+static inline bool co_guard_watches(const co_node_t *node, uint8_t node_id)
+{
+    (void)node;
+    (void)node_id;
+    return false;
+}
+static inline bool co_guard_life_lost(const co_node_t *node)
+{
+    (void)node;
+    return false;
+}
+#endif
 
 /* emcy.c */
 void co_emcy_reset_comm(co_node_t *node);

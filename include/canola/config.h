@@ -99,15 +99,6 @@
 #define CO_CONFIG_MANAGER 1
 #endif
 
-/** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
- *  heartbeat consumer and guarded node, room for the other services, and the boot-ups
- *  of every slave a manager watches. */
-#ifndef CO_RX_ROUTES_MAX
-#define CO_RX_ROUTES_MAX                                                                           \
-    (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +      \
-     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_CONFIG_MANAGER ? 127 : 0))
-#endif
-
 #if (CO_CONFIG_LSS_SLAVE != 0 && CO_CONFIG_LSS_SLAVE != 1) ||                                      \
     (CO_CONFIG_LSS_MASTER != 0 && CO_CONFIG_LSS_MASTER != 1)
 #error "CO_CONFIG_LSS_SLAVE and CO_CONFIG_LSS_MASTER must be 0 or 1"
@@ -211,6 +202,18 @@
     (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
     (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1)
 #error "CO_CONFIG_* feature switches are 0 or 1"
+#endif
+
+/** Receive routes (COB-IDs the node listens to), by default exactly as many as the
+ *  configuration can route: NMT and SYNC, the own guarding RTR (CO_CONFIG_GUARDING), TIME
+ *  (CO_CONFIG_TIME), the LSS slave and master, one per heartbeat consumer, guarded node,
+ *  SDO channel, EMCY consumer entry, RPDO and TPDO (remote requests), and the boot-ups of
+ *  every slave a manager watches. A full table drops the routes added last. */
+#ifndef CO_RX_ROUTES_MAX
+#define CO_RX_ROUTES_MAX                                                                           \
+    (2 + CO_CONFIG_GUARDING + CO_CONFIG_TIME + CO_CONFIG_LSS_SLAVE + CO_CONFIG_LSS_MASTER +        \
+     CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +          \
+     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_CONFIG_MANAGER ? 127 : 0))
 #endif
 
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255

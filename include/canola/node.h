@@ -152,6 +152,7 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint64_t boot_deadline_us; /**< CO_EC_NOT_BOOTED check, CO_TIME_NEVER when done */
 #endif
 
+#if CO_CONFIG_GUARDING
     /* Node guarding, slave side (0x100C, 0x100D) and master side. */
     const co_od_entry_t *guard_time;
     const co_od_entry_t *life_factor;
@@ -160,6 +161,7 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     bool life_guarding; /**< monitoring started by a first RTR */
     bool life_lost;
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
+#endif
 
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
