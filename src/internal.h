@@ -246,7 +246,7 @@ uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us);
 co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                              uint32_t len);
 void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry);
-bool co_hb_consumer_lost(const co_node_t *node); /* some consumed heartbeat is lost */
+bool co_hb_consumer_lost(const co_node_t *node);             /* some consumed heartbeat is lost */
 bool co_hb_consumes(const co_node_t *node, uint8_t node_id); /* an entry watches it */
 #else
 static inline co_err_t co_hb_consumers_bind(co_node_t *node)

@@ -41,19 +41,31 @@ typedef struct type_info {
 
 /* Indexed by type code; the gaps (0x00, 0x0E, 0x17) are zero: K_NONE. */
 static const type_info_t k_types[] = {
-    [CO_TYPE_BOOLEAN] = {1, 1, K_BOOL},           [CO_TYPE_INTEGER8] = {1, 1, K_SIGNED},
-    [CO_TYPE_INTEGER16] = {2, 2, K_SIGNED},       [CO_TYPE_INTEGER32] = {4, 4, K_SIGNED},
-    [CO_TYPE_UNSIGNED8] = {1, 1, K_UNSIGNED},     [CO_TYPE_UNSIGNED16] = {2, 2, K_UNSIGNED},
-    [CO_TYPE_UNSIGNED32] = {4, 4, K_UNSIGNED},    [CO_TYPE_REAL32] = {4, 4, K_REAL},
-    [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING}, [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
-    [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING}, [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
-    [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},    [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
-    [CO_TYPE_INTEGER24] = {3, 4, K_SIGNED},       [CO_TYPE_UNSIGNED24] = {3, 4, K_UNSIGNED},
+    [CO_TYPE_BOOLEAN] = {1, 1, K_BOOL},
+    [CO_TYPE_INTEGER8] = {1, 1, K_SIGNED},
+    [CO_TYPE_INTEGER16] = {2, 2, K_SIGNED},
+    [CO_TYPE_INTEGER32] = {4, 4, K_SIGNED},
+    [CO_TYPE_UNSIGNED8] = {1, 1, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED16] = {2, 2, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED32] = {4, 4, K_UNSIGNED},
+    [CO_TYPE_REAL32] = {4, 4, K_REAL},
+    [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING},
+    [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
+    [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING},
+    [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
+    [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},
+    [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
+    [CO_TYPE_INTEGER24] = {3, 4, K_SIGNED},
+    [CO_TYPE_UNSIGNED24] = {3, 4, K_UNSIGNED},
 #if CO_CONFIG_OD_64BIT /* without them: unknown types, refused by co_od_validate */
-    [CO_TYPE_REAL64] = {8, 8, K_REAL},            [CO_TYPE_INTEGER40] = {5, 8, K_SIGNED},
-    [CO_TYPE_INTEGER48] = {6, 8, K_SIGNED},       [CO_TYPE_INTEGER56] = {7, 8, K_SIGNED},
-    [CO_TYPE_INTEGER64] = {8, 8, K_SIGNED},       [CO_TYPE_UNSIGNED40] = {5, 8, K_UNSIGNED},
-    [CO_TYPE_UNSIGNED48] = {6, 8, K_UNSIGNED},    [CO_TYPE_UNSIGNED56] = {7, 8, K_UNSIGNED},
+    [CO_TYPE_REAL64] = {8, 8, K_REAL},
+    [CO_TYPE_INTEGER40] = {5, 8, K_SIGNED},
+    [CO_TYPE_INTEGER48] = {6, 8, K_SIGNED},
+    [CO_TYPE_INTEGER56] = {7, 8, K_SIGNED},
+    [CO_TYPE_INTEGER64] = {8, 8, K_SIGNED},
+    [CO_TYPE_UNSIGNED40] = {5, 8, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED48] = {6, 8, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED56] = {7, 8, K_UNSIGNED},
     [CO_TYPE_UNSIGNED64] = {8, 8, K_UNSIGNED},
 #endif
 };
@@ -130,7 +142,7 @@ static bits_t sign_extend(bits_t bits, unsigned nbits)
 /* Two's-complement pattern to int64_t without an implementation-defined conversion. */
 static int64_t to_signed(bits_t bits)
 {
-    if (bits <= (bits_t)~(bits_t)0 / 2u) {
+    if (bits <= (bits_t) ~(bits_t)0 / 2u) {
         return (int64_t)bits;
     }
     return -(int64_t)(bits_t)~bits - 1;
