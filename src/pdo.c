@@ -85,6 +85,7 @@ co_err_t co_pdo_bind(co_node_t *node)
     return CO_OK;
 }
 
+#if PDO_FAST_PATHS
 /* After parameters or mapping loaded (NMT states do not change it): may a frame of this
  * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
 static bool fast_widths(const co_pdo_t *p)
@@ -97,10 +98,12 @@ static bool fast_widths(const co_pdo_t *p)
     }
     return true;
 }
+#endif
 
 static void decide_fast(co_pdo_t *p, bool tpdo)
 {
-    bool plain = PDO_FAST_PATHS && p->plain && fast_widths(p); /* -Os: no short paths */
+#if PDO_FAST_PATHS
+    bool plain = p->plain && fast_widths(p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
         co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p)); /* the header, built once */
@@ -111,6 +114,10 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
     }
     bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
     p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
+#else
+    (void)tpdo;
+    p->fast = 0; /* -Os: no short paths */
+#endif
 }
 
 static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)

@@ -85,7 +85,7 @@ static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits +
 /* Slot i of the mapping is copied straight between frame and storage. */
 static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
 {
-    return (p->map_direct[i / 8u] >> (i % 8u)) & 1u;
+    return ((unsigned)p->map_direct[i / 8u] >> (i % 8u)) & 1u;
 }
 
 /* The per-frame short paths (the usual RPDO in co_pdo_rx, the cyclic TPDO in co_pdo_sync)
