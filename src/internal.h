@@ -135,6 +135,52 @@ static inline bool co_sync_window_open(const co_node_t *node, uint64_t now_us)
     return window == 0 || now_us - last < window;
 }
 
+/* Stand-ins for the functions of a feature left out of the build (canola/config.h): the
+ * feature's header part below maps each of its functions onto one of these no-ops. */
+static inline void co_none_node(co_node_t *node) { (void)node; }
+static inline uint64_t co_none_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_none_frame(co_node_t *node, const co_frame_t *frame)
+{
+    (void)node;
+    (void)frame;
+}
+static inline void co_none_slot_frame(co_node_t *node, uint8_t slot, const co_frame_t *frame)
+{
+    (void)node;
+    (void)slot;
+    (void)frame;
+}
+static inline void co_none_entry(co_node_t *node, const co_od_entry_t *entry)
+{
+    (void)node;
+    (void)entry;
+}
+static inline co_abort_t co_none_check(const co_node_t *node, const co_od_entry_t *entry,
+                                       const uint8_t *data, uint32_t len)
+{
+    (void)node;
+    (void)entry;
+    (void)data;
+    (void)len;
+    return CO_ABORT_NONE;
+}
+static inline bool co_none_node_id(const co_node_t *node, uint8_t node_id)
+{
+    (void)node;
+    (void)node_id;
+    return false;
+}
+static inline bool co_none_state(const co_node_t *node)
+{
+    (void)node;
+    return false;
+}
+
 /* node.c */
 void co_node_schedule(co_node_t *node, uint64_t due_us);
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,
@@ -254,45 +300,14 @@ static inline co_err_t co_hb_consumers_bind(co_node_t *node)
     (void)node;
     return CO_OK; /* 0x1016, if any, is a plain entry */
 }
-static inline void co_hb_consumers_reset(co_node_t *node) { (void)node; }
-static inline void co_hb_consumers_add_routes(co_node_t *node) { (void)node; }
-static inline void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
-{
-    (void)node;
-    (void)slot;
-    (void)frame;
-}
-static inline uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER;
-}
-static inline co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                                           const uint8_t *data, uint32_t len)
-{
-    (void)node;
-    (void)entry;
-    (void)data;
-    (void)len;
-    return CO_ABORT_NONE;
-}
-static inline void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry)
-{
-    (void)node;
-    (void)entry;
-}
-static inline bool co_hb_consumer_lost(const co_node_t *node)
-{
-    (void)node;
-    return false;
-}
-static inline bool co_hb_consumes(const co_node_t *node, uint8_t node_id)
-{
-    (void)node;
-    (void)node_id;
-    return false;
-}
+#define co_hb_consumers_reset co_none_node
+#define co_hb_consumers_add_routes co_none_node
+#define co_hb_ingest co_none_slot_frame
+#define co_hb_consumers_poll co_none_poll
+#define co_hb_check_write co_none_check
+#define co_hb_consumer_written co_none_entry
+#define co_hb_consumer_lost co_none_state
+#define co_hb_consumes co_none_node_id
 #endif
 
 /* guarding.c (CO_CONFIG_GUARDING): without it nothing is routed, polled or kept. */
@@ -307,38 +322,15 @@ void co_guard_add_routes(co_node_t *node);
 bool co_guard_watches(const co_node_t *node, uint8_t node_id); /* a master-side watch */
 static inline bool co_guard_life_lost(const co_node_t *node) { return node->life_lost; }
 #else
-static inline void co_guard_bind(co_node_t *node) { (void)node; }
-static inline void co_guard_reset_comm(co_node_t *node) { (void)node; }
-static inline void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
-static inline void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame)
-{
-    (void)node;
-    (void)slot;
-    (void)frame;
-}
-static inline uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER;
-}
-static inline void co_guard_written(co_node_t *node) { (void)node; }
-static inline void co_guard_add_routes(co_node_t *node) { (void)node; }
-static inline bool co_guard_watches(const co_node_t *node, uint8_t node_id)
-{
-    (void)node;
-    (void)node_id;
-    return false;
-}
-static inline bool co_guard_life_lost(const co_node_t *node)
-{
-    (void)node;
-    return false;
-}
+#define co_guard_bind co_none_node
+#define co_guard_reset_comm co_none_node
+#define co_guard_rtr co_none_frame
+#define co_guard_reply co_none_slot_frame
+#define co_guard_poll co_none_poll
+#define co_guard_written co_none_node
+#define co_guard_add_routes co_none_node
+#define co_guard_watches co_none_node_id
+#define co_guard_life_lost co_none_state
 #endif
 
 /* emcy.c */
@@ -359,15 +351,10 @@ static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
 {
     co_emcy_frame_send(node, data);
 }
-static inline void co_emcy_queue_reset(co_node_t *node) { (void)node; }
-static inline void co_emcy_queue_clear(co_node_t *node) { (void)node; }
-static inline uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER;
-}
-static inline void co_emcy_state_entered(co_node_t *node) { (void)node; }
+#define co_emcy_queue_reset co_none_node
+#define co_emcy_queue_clear co_none_node
+#define co_emcy_poll co_none_poll
+#define co_emcy_state_entered co_none_node
 #endif
 
 /* emcy_history.c: 0x1003 (CO_CONFIG_EMCY_HISTORY). */
@@ -383,16 +370,8 @@ static inline void co_emcy_history_record(co_node_t *node, uint16_t code, const 
     (void)code;
     (void)mfr;
 }
-static inline void co_emcy_history_clear(co_node_t *node) { (void)node; }
-static inline co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                                             const uint8_t *data, uint32_t len)
-{
-    (void)node;
-    (void)entry;
-    (void)data;
-    (void)len;
-    return CO_ABORT_NONE;
-}
+#define co_emcy_history_clear co_none_node
+#define co_emcy_check_write co_none_check
 #endif
 
 /* emcy_consumer.c: 0x1028 (CO_EMCY_CONSUMERS_MAX > 0). */
@@ -401,14 +380,9 @@ void co_emcy_consumers_bind(co_node_t *node);
 void co_emcy_add_routes(co_node_t *node);
 void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 #else
-static inline void co_emcy_consumers_bind(co_node_t *node) { (void)node; }
-static inline void co_emcy_add_routes(co_node_t *node) { (void)node; }
-static inline void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
-{
-    (void)node;
-    (void)slot;
-    (void)frame;
-}
+#define co_emcy_consumers_bind co_none_node
+#define co_emcy_add_routes co_none_node
+#define co_emcy_ingest co_none_slot_frame
 #endif
 
 /* sync.c: the consumer. */
@@ -437,14 +411,9 @@ void co_sync_producer_reset(co_node_t *node);
 void co_sync_producer_written(co_node_t *node, uint16_t index);
 uint32_t co_sync_producer_period(const co_node_t *node); /* 0x1006, us */
 #else
-static inline uint64_t co_sync_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER;
-}
-static inline void co_sync_state_entered(co_node_t *node) { (void)node; }
-static inline void co_sync_producer_reset(co_node_t *node) { (void)node; }
+#define co_sync_poll co_none_poll
+#define co_sync_state_entered co_none_node
+#define co_sync_producer_reset co_none_node
 static inline void co_sync_producer_written(co_node_t *node, uint16_t index)
 {
     (void)node;
@@ -468,12 +437,7 @@ void co_pdo_sync(co_node_t *node, uint8_t counter);
 #if CO_CONFIG_PDO_TIMERS
 uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
 #else
-static inline uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER; /* without timers PDOs have nothing to wait for */
-}
+#define co_pdo_poll co_none_poll /* without timers PDOs have nothing to wait for */
 #endif
 co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                               uint32_t len);
