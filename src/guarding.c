@@ -4,6 +4,8 @@
  */
 #include "internal.h"
 
+#if CO_CONFIG_GUARDING
+
 #define GUARD_COB_BASE 0x700u
 
 /* ---- slave side */
@@ -13,6 +15,13 @@ static uint64_t life_time_us(const co_node_t *node)
     uint64_t guard_ms = co_entry_uint(node->guard_time);
     uint64_t factor = co_entry_uint(node->life_factor);
     return co_ms_to_us((uint32_t)(guard_ms * factor));
+}
+
+void co_guard_bind(co_node_t *node)
+{
+    node->life_deadline_us = CO_TIME_NEVER;
+    node->guard_time = co_od_find(&node->cfg.od, 0x100C, 0, NULL);
+    node->life_factor = co_od_find(&node->cfg.od, 0x100D, 0, NULL);
 }
 
 void co_guard_reset_comm(co_node_t *node)
@@ -25,9 +34,6 @@ void co_guard_reset_comm(co_node_t *node)
 
 void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
 {
-    if (!CO_CONFIG_GUARDING) {
-        return; /* not routed without guarding; kept for the dispatch table */
-    }
     if (!(frame->flags & CO_FRAME_RTR)) {
         /* A boot-up or heartbeat on our own error-control ID: another node has our node-ID.
          * Reported once until the application clears 0x8150 (it repeats every heartbeat). */
@@ -62,7 +68,7 @@ void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
 
 void co_guard_written(co_node_t *node)
 {
-    if (!CO_CONFIG_GUARDING || !node->life_guarding || node->life_lost) {
+    if (!node->life_guarding || node->life_lost) {
         return;
     }
     uint64_t life_us = life_time_us(node);
@@ -95,18 +101,12 @@ static uint64_t watch_life_us(const co_guard_watch_t *w)
 
 co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)
 {
-    if (!CO_CONFIG_GUARDING) {
-        return CO_ERR_STATE;
-    }
     if (node_id < 1 || node_id > 127 || node_id == node->node_id ||
         (guard_ms != 0 && factor == 0)) {
         return CO_ERR_ARG;
     }
-    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
-        const co_hb_consumer_t *c = &node->hb_consumers[i];
-        if (guard_ms != 0 && c->watch != CO_HB_WATCH_UNUSED && c->node_id == node_id) {
-            return CO_ERR_STATE;
-        }
+    if (guard_ms != 0 && co_hb_consumes(node, node_id)) {
+        return CO_ERR_STATE;
     }
     co_guard_watch_t *slot = NULL;
     for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
@@ -139,9 +139,6 @@ co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uin
 
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
-    if (!CO_CONFIG_GUARDING) {
-        return; /* no watch is ever routed */
-    }
     if (frame->flags & CO_FRAME_RTR) {
         return; /* our own request, as another master would see it */
     }
@@ -194,9 +191,6 @@ static uint64_t watch_poll(co_node_t *node, co_guard_watch_t *w, uint64_t now_us
 
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
 {
-    if (!CO_CONFIG_GUARDING) {
-        return CO_TIME_NEVER;
-    }
     uint64_t next = life_poll(node, now_us);
     for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
         if (node->guard_watch[i].guard_ms != 0) {
@@ -205,3 +199,39 @@ uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
     }
     return next;
 }
+
+void co_guard_add_routes(co_node_t *node)
+{
+    if (node->node_id >= 1 && node->node_id <= 127) {
+        co_routes_add(node, GUARD_COB_BASE + node->node_id, CO_ROUTE_GUARD_RTR, 0);
+    }
+    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
+        const co_guard_watch_t *w = &node->guard_watch[i];
+        if (w->guard_ms != 0) {
+            co_routes_add(node, GUARD_COB_BASE + w->node_id, CO_ROUTE_GUARD_REPLY, i);
+        }
+    }
+}
+
+bool co_guard_watches(const co_node_t *node, uint8_t node_id)
+{
+    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
+        if (node->guard_watch[i].guard_ms != 0 && node->guard_watch[i].node_id == node_id) {
+            return true;
+        }
+    }
+    return false;
+}
+
+#else
+
+co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)
+{
+    (void)node;
+    (void)node_id;
+    (void)guard_ms;
+    (void)factor;
+    return CO_ERR_STATE; /* no guarding in this build */
+}
+
+#endif

@@ -65,7 +65,6 @@ enum co_hb_watch {
 static inline uint8_t co_guard_watch_max(void) { return CO_GUARD_WATCH_MAX; }
 static inline uint8_t co_sdo_servers_max(void) { return CO_SDO_SERVERS_MAX; }
 static inline uint8_t co_sdo_clients_max(void) { return CO_SDO_CLIENTS_MAX; }
-static inline uint8_t co_emcy_consumers_max(void) { return CO_EMCY_CONSUMERS_MAX; }
 
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 static inline uint64_t co_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
@@ -198,6 +197,52 @@ static inline bool co_sync_window_open(const co_node_t *node, uint64_t now_us)
     return window == 0 || now_us - last < window;
 }
 
+/* Stand-ins for the functions of a feature left out of the build (canola/config.h): the
+ * feature's header part below maps each of its functions onto one of these no-ops. */
+static inline void co_none_node(co_node_t *node) { (void)node; }
+static inline uint64_t co_none_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+    return CO_TIME_NEVER;
+}
+static inline void co_none_frame(co_node_t *node, const co_frame_t *frame)
+{
+    (void)node;
+    (void)frame;
+}
+static inline void co_none_slot_frame(co_node_t *node, uint8_t slot, const co_frame_t *frame)
+{
+    (void)node;
+    (void)slot;
+    (void)frame;
+}
+static inline void co_none_entry(co_node_t *node, const co_od_entry_t *entry)
+{
+    (void)node;
+    (void)entry;
+}
+static inline co_abort_t co_none_check(const co_node_t *node, const co_od_entry_t *entry,
+                                       const uint8_t *data, uint32_t len)
+{
+    (void)node;
+    (void)entry;
+    (void)data;
+    (void)len;
+    return CO_ABORT_NONE;
+}
+static inline bool co_none_node_id(const co_node_t *node, uint8_t node_id)
+{
+    (void)node;
+    (void)node_id;
+    return false;
+}
+static inline bool co_none_state(const co_node_t *node)
+{
+    (void)node;
+    return false;
+}
+
 /* node.c */
 void co_node_schedule(co_node_t *node, uint64_t due_us);
 void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id, uint8_t state,
@@ -275,54 +320,179 @@ void co_sdo_server_stop(co_node_t *node);
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
+void co_sdo_server_add_routes(co_node_t *node);
 
-/* sdo_client.c */
+/* sdo_client.c (CO_SDO_CLIENTS_MAX 0: no client, nothing routed, polled or kept). */
+#if CO_SDO_CLIENTS_MAX > 0
 void co_sdo_client_reset_comm(co_node_t *node);
 void co_sdo_client_stop(co_node_t *node);
 void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);
+void co_sdo_client_add_routes(co_node_t *node);
+#else
+#define co_sdo_client_reset_comm co_none_node
+#define co_sdo_client_stop co_none_node
+#define co_sdo_client_written co_none_entry
+#define co_sdo_client_ingest co_none_slot_frame
+#define co_sdo_client_poll co_none_poll
+#define co_sdo_client_add_routes co_none_node
+#endif
 
 /* nmt.c */
 void co_nmt_ingest(co_node_t *node, const co_frame_t *frame);
 void co_nmt_reset(co_node_t *node, bool application);
 
-/* heartbeat.c */
+/* heartbeat.c: the producer (0x1017), and what the consumer's files need. */
 void co_hb_reset_comm(co_node_t *node);
 void co_hb_state_entered(co_node_t *node);
-void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_hb_poll(co_node_t *node, uint64_t now_us);
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                             uint32_t len);
 void co_hb_written(co_node_t *node, const co_od_entry_t *entry);
 co_err_t co_hb_bind(co_node_t *node);
 
-/* guarding.c */
+/* hb_consumer.c: the consumer (0x1016), CO_HB_CONSUMERS_MAX > 0. */
+#if CO_HB_CONSUMERS_MAX > 0
+co_err_t co_hb_consumers_bind(co_node_t *node);
+void co_hb_consumers_reset(co_node_t *node);
+void co_hb_consumers_add_routes(co_node_t *node);
+void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us);
+co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                             uint32_t len);
+void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry);
+bool co_hb_consumer_lost(const co_node_t *node);             /* some consumed heartbeat is lost */
+bool co_hb_consumes(const co_node_t *node, uint8_t node_id); /* an entry watches it */
+#else
+static inline co_err_t co_hb_consumers_bind(co_node_t *node)
+{
+    (void)node;
+    return CO_OK; /* 0x1016, if any, is a plain entry */
+}
+#define co_hb_consumers_reset co_none_node
+#define co_hb_consumers_add_routes co_none_node
+#define co_hb_ingest co_none_slot_frame
+#define co_hb_consumers_poll co_none_poll
+#define co_hb_check_write co_none_check
+#define co_hb_consumer_written co_none_entry
+#define co_hb_consumer_lost co_none_state
+#define co_hb_consumes co_none_node_id
+#endif
+
+/* guarding.c (CO_CONFIG_GUARDING): without it nothing is routed, polled or kept. */
+#if CO_CONFIG_GUARDING
+void co_guard_bind(co_node_t *node);
 void co_guard_reset_comm(co_node_t *node);
 void co_guard_rtr(co_node_t *node, const co_frame_t *frame);
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us);
 void co_guard_written(co_node_t *node);
+void co_guard_add_routes(co_node_t *node);
+bool co_guard_watches(const co_node_t *node, uint8_t node_id); /* a master-side watch */
+static inline bool co_guard_life_lost(const co_node_t *node) { return node->life_lost; }
+#else
+#define co_guard_bind co_none_node
+#define co_guard_reset_comm co_none_node
+#define co_guard_rtr co_none_frame
+#define co_guard_reply co_none_slot_frame
+#define co_guard_poll co_none_poll
+#define co_guard_written co_none_node
+#define co_guard_add_routes co_none_node
+#define co_guard_watches co_none_node_id
+#define co_guard_life_lost co_none_state
+#endif
 
 /* emcy.c */
 void co_emcy_reset_comm(co_node_t *node);
-void co_emcy_add_routes(co_node_t *node);
-void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+void co_emcy_written(co_node_t *node, const co_od_entry_t *entry);
+bool co_emcy_producer_off(const co_node_t *node); /* 0x1014 bit 31 */
+void co_emcy_frame_send(co_node_t *node, const uint8_t data[8]);
+
+/* emcy_queue.c: the inhibit time (CO_EMCY_QUEUE_LEN > 0); without it frames leave at once. */
+#if CO_EMCY_QUEUE_LEN > 0
+void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8]);
+void co_emcy_queue_reset(co_node_t *node);
+void co_emcy_queue_clear(co_node_t *node);
 uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us);
+void co_emcy_state_entered(co_node_t *node);
+#else
+static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
+{
+    co_emcy_frame_send(node, data);
+}
+#define co_emcy_queue_reset co_none_node
+#define co_emcy_queue_clear co_none_node
+#define co_emcy_poll co_none_poll
+#define co_emcy_state_entered co_none_node
+#endif
+
+/* emcy_history.c: 0x1003 (CO_CONFIG_EMCY_HISTORY). */
+#if CO_CONFIG_EMCY_HISTORY
+void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5]);
+void co_emcy_history_clear(co_node_t *node);
 co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
                                const uint8_t *data, uint32_t len);
-void co_emcy_written(co_node_t *node, const co_od_entry_t *entry);
-void co_emcy_state_entered(co_node_t *node);
+#else
+static inline void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5])
+{
+    (void)node;
+    (void)code;
+    (void)mfr;
+}
+#define co_emcy_history_clear co_none_node
+#define co_emcy_check_write co_none_check
+#endif
 
-/* sync.c */
+/* emcy_consumer.c: 0x1028 (CO_EMCY_CONSUMERS_MAX > 0). */
+#if CO_EMCY_CONSUMERS_MAX > 0
+void co_emcy_consumers_bind(co_node_t *node);
+void co_emcy_add_routes(co_node_t *node);
+void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+#else
+#define co_emcy_consumers_bind co_none_node
+#define co_emcy_add_routes co_none_node
+#define co_emcy_ingest co_none_slot_frame
+#endif
+
+/* sync.c: the consumer. */
 void co_sync_reset_comm(co_node_t *node);
 void co_sync_add_routes(co_node_t *node);
 void co_sync_ingest(co_node_t *node, const co_frame_t *frame);
-uint64_t co_sync_poll(co_node_t *node, uint64_t now_us);
 co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
                                const uint8_t *data, uint32_t len);
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
+/* A SYNC taken (received, or sent by this node's producer). */
+void co_sync_handled(co_node_t *node, uint8_t counter);
+
+/* Overflow value when SYNCs carry a counter, 0 when they carry no data (0x1019 is 0, or
+ * the refused value 1 set natively). */
+static inline uint8_t co_sync_overflow(const co_node_t *node)
+{
+    uint8_t n = (uint8_t)co_entry_uint(node->sync.overflow);
+    return n >= 2 ? n : 0;
+}
+
+/* sync_producer.c: the producer (CO_CONFIG_SYNC_PRODUCER). */
+#if CO_CONFIG_SYNC_PRODUCER
+uint64_t co_sync_poll(co_node_t *node, uint64_t now_us);
 void co_sync_state_entered(co_node_t *node);
+void co_sync_producer_reset(co_node_t *node);
+void co_sync_producer_written(co_node_t *node, uint16_t index);
+uint32_t co_sync_producer_period(const co_node_t *node); /* 0x1006, us */
+#else
+#define co_sync_poll co_none_poll
+#define co_sync_state_entered co_none_node
+#define co_sync_producer_reset co_none_node
+static inline void co_sync_producer_written(co_node_t *node, uint16_t index)
+{
+    (void)node;
+    (void)index;
+}
+static inline uint32_t co_sync_producer_period(const co_node_t *node)
+{
+    (void)node;
+    return 0; /* 0x1006 has no effect: 0x1019 may always change */
+}
+#endif
 
 /* pdo.c */
 co_err_t co_pdo_bind(co_node_t *node); /* at init: count the PDOs the dictionary has */
@@ -332,7 +502,11 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame);
 void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame);
 /* Every SYNC handled (own or received), once sync.last_us is the SYNC's time. */
 void co_pdo_sync(co_node_t *node, uint8_t counter);
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us);
+#if CO_CONFIG_PDO_TIMERS
+uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
+#else
+#define co_pdo_poll co_none_poll /* without timers PDOs have nothing to wait for */
+#endif
 co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                               uint32_t len);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *entry);

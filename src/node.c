@@ -27,10 +27,7 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     node->services = co_nmt_services(CO_NMT_INITIALISING);
     node->next_due_us = CO_TIME_NEVER;
     node->hb_next_us = CO_TIME_NEVER;
-    node->boot_deadline_us = CO_TIME_NEVER;
-    node->life_deadline_us = CO_TIME_NEVER;
-    node->guard_time = co_od_find(&config->od, 0x100C, 0, NULL);
-    node->life_factor = co_od_find(&config->od, 0x100D, 0, NULL);
+    co_guard_bind(node);
     node->error_behaviour = co_od_find(&config->od, 0x1029, 1, NULL);
     co_err_t err = co_hb_bind(node);
     return err == CO_OK ? co_pdo_bind(node) : err;
@@ -245,12 +242,7 @@ void co_node_comm_lost(co_node_t *node)
 /* Anything still lost: a consumed heartbeat, or our own life guarding. */
 static bool comm_still_lost(const co_node_t *node)
 {
-    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
-        if (node->hb_consumers[i].watch == CO_HB_WATCH_LOST) {
-            return true;
-        }
-    }
-    return node->life_lost;
+    return co_hb_consumer_lost(node) || co_guard_life_lost(node);
 }
 
 void co_node_comm_resumed(co_node_t *node)

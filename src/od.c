@@ -2,9 +2,10 @@
  * od.c -- the object dictionary: look-up, wire conversion, checks, hooks, reset.
  *
  * Values live in native form; everything that crosses this API is wire form
- * (little-endian). Numbers always pass through a 64-bit bit pattern:
- * native storage <-> uint64_t <-> wire bytes, built with shifts, so the code
- * never depends on the host's byte order.
+ * (little-endian). Numbers always pass through a bit pattern (bits_t: 64 bits, or 32
+ * without the types wider than 32 bits, CO_CONFIG_OD_64BIT 0):
+ * native storage <-> bits_t <-> wire bytes, built with shifts, so the code never
+ * depends on the host's byte order.
  */
 #include "canola/od.h"
 
@@ -40,19 +41,33 @@ typedef struct type_info {
 
 /* Indexed by type code; the gaps (0x00, 0x0E, 0x17) are zero: K_NONE. */
 static const type_info_t k_types[] = {
-    [CO_TYPE_BOOLEAN] = {1, 1, K_BOOL},           [CO_TYPE_INTEGER8] = {1, 1, K_SIGNED},
-    [CO_TYPE_INTEGER16] = {2, 2, K_SIGNED},       [CO_TYPE_INTEGER32] = {4, 4, K_SIGNED},
-    [CO_TYPE_UNSIGNED8] = {1, 1, K_UNSIGNED},     [CO_TYPE_UNSIGNED16] = {2, 2, K_UNSIGNED},
-    [CO_TYPE_UNSIGNED32] = {4, 4, K_UNSIGNED},    [CO_TYPE_REAL32] = {4, 4, K_REAL},
-    [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING}, [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
-    [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING}, [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
-    [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},    [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
-    [CO_TYPE_INTEGER24] = {3, 4, K_SIGNED},       [CO_TYPE_REAL64] = {8, 8, K_REAL},
-    [CO_TYPE_INTEGER40] = {5, 8, K_SIGNED},       [CO_TYPE_INTEGER48] = {6, 8, K_SIGNED},
-    [CO_TYPE_INTEGER56] = {7, 8, K_SIGNED},       [CO_TYPE_INTEGER64] = {8, 8, K_SIGNED},
-    [CO_TYPE_UNSIGNED24] = {3, 4, K_UNSIGNED},    [CO_TYPE_UNSIGNED40] = {5, 8, K_UNSIGNED},
-    [CO_TYPE_UNSIGNED48] = {6, 8, K_UNSIGNED},    [CO_TYPE_UNSIGNED56] = {7, 8, K_UNSIGNED},
+    [CO_TYPE_BOOLEAN] = {1, 1, K_BOOL},
+    [CO_TYPE_INTEGER8] = {1, 1, K_SIGNED},
+    [CO_TYPE_INTEGER16] = {2, 2, K_SIGNED},
+    [CO_TYPE_INTEGER32] = {4, 4, K_SIGNED},
+    [CO_TYPE_UNSIGNED8] = {1, 1, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED16] = {2, 2, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED32] = {4, 4, K_UNSIGNED},
+    [CO_TYPE_REAL32] = {4, 4, K_REAL},
+    [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING},
+    [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
+    [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING},
+    [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
+    [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},
+    [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
+    [CO_TYPE_INTEGER24] = {3, 4, K_SIGNED},
+    [CO_TYPE_UNSIGNED24] = {3, 4, K_UNSIGNED},
+#if CO_CONFIG_OD_64BIT /* without them: unknown types, refused by co_od_validate */
+    [CO_TYPE_REAL64] = {8, 8, K_REAL},
+    [CO_TYPE_INTEGER40] = {5, 8, K_SIGNED},
+    [CO_TYPE_INTEGER48] = {6, 8, K_SIGNED},
+    [CO_TYPE_INTEGER56] = {7, 8, K_SIGNED},
+    [CO_TYPE_INTEGER64] = {8, 8, K_SIGNED},
+    [CO_TYPE_UNSIGNED40] = {5, 8, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED48] = {6, 8, K_UNSIGNED},
+    [CO_TYPE_UNSIGNED56] = {7, 8, K_UNSIGNED},
     [CO_TYPE_UNSIGNED64] = {8, 8, K_UNSIGNED},
+#endif
 };
 
 static const type_info_t k_unknown = {0, 0, K_NONE};
@@ -111,36 +126,45 @@ static void copy_bytes(void *dst, const void *src, uint32_t n)
 
 /* ---- Bit patterns. */
 
-/* Sign-extend the low `nbits` bits of `bits` to 64 bits (unsigned arithmetic only). */
-static uint64_t sign_extend(uint64_t bits, unsigned nbits)
+/* The widest number the build stores: 64 bits, or 32 (no 64-bit arithmetic at all). */
+#if CO_CONFIG_OD_64BIT
+typedef uint64_t bits_t;
+#else
+typedef uint32_t bits_t;
+#endif
+#define BITS_WIDTH (8u * (unsigned)sizeof(bits_t))
+
+/* Sign-extend the low `nbits` bits of `bits` to the pattern's width (unsigned arithmetic
+ * only). */
+static bits_t sign_extend(bits_t bits, unsigned nbits)
 {
-    if (nbits >= 64u) {
+    if (nbits >= BITS_WIDTH) {
         return bits;
     }
-    uint64_t sign = (uint64_t)1 << (nbits - 1u);
-    bits &= (sign << 1) - 1u;
-    return (bits ^ sign) - sign;
+    bits_t sign = (bits_t)1 << (nbits - 1u);
+    bits &= (bits_t)((sign << 1) - 1u);
+    return (bits_t)((bits ^ sign) - sign);
 }
 
 /* Two's-complement pattern to int64_t without an implementation-defined conversion. */
-static int64_t to_signed(uint64_t bits)
+static int64_t to_signed(bits_t bits)
 {
-    if (bits <= (uint64_t)INT64_MAX) {
+    if (bits <= (bits_t) ~(bits_t)0 / 2u) {
         return (int64_t)bits;
     }
-    return -(int64_t)~bits - 1;
+    return -(int64_t)(bits_t)~bits - 1;
 }
 
-static uint64_t wire_get(const uint8_t *p, unsigned n)
+static bits_t wire_get(const uint8_t *p, unsigned n)
 {
-    uint64_t v = 0;
+    bits_t v = 0;
     while (n-- > 0u) {
-        v = (v << 8) | p[n];
+        v = (bits_t)(v << 8) | p[n];
     }
     return v;
 }
 
-static void wire_put(uint8_t *p, uint64_t v, unsigned n)
+static void wire_put(uint8_t *p, bits_t v, unsigned n)
 {
     for (unsigned i = 0; i < n; i++) {
         p[i] = (uint8_t)(v >> (8u * i));
@@ -148,9 +172,9 @@ static void wire_put(uint8_t *p, uint64_t v, unsigned n)
 }
 
 /* A number's wire bytes as a bit pattern, signed types sign-extended from the wire width. */
-static uint64_t wire_number(const type_info_t *t, const uint8_t *data)
+static bits_t wire_number(const type_info_t *t, const uint8_t *data)
 {
-    uint64_t bits = wire_get(data, t->wire);
+    bits_t bits = wire_get(data, t->wire);
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->wire) : bits;
 }
 
@@ -159,22 +183,29 @@ typedef union native {
     uint8_t u8;
     uint16_t u16;
     uint32_t u32;
+#if CO_CONFIG_OD_64BIT
     uint64_t u64;
+#endif
 } native_t;
 
 /* Native storage as a bit pattern (signed types sign-extended; reals as raw bits). */
-static uint64_t native_get(const void *value, const type_info_t *t)
+static bits_t native_get(const void *value, const type_info_t *t)
 {
     native_t v;
     memcpy(&v, value, t->width);
+#if CO_CONFIG_OD_64BIT
     /* NOLINTNEXTLINE(clang-analyzer-core.uninitialized.Assign): widths are 1, 2, 4, 8 */
-    uint64_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : t->width == 4 ? v.u32 : v.u64;
+    bits_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : t->width == 4 ? v.u32 : v.u64;
+#else
+    /* NOLINTNEXTLINE(clang-analyzer-core.uninitialized.Assign): widths are 1, 2, 4 */
+    bits_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : v.u32;
+#endif
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->width) : bits;
 }
 
 /* Store a bit pattern truncated to the storage width (exact-width signed types are two's
  * complement, so an unsigned copy of the same width holds the same value). */
-static void native_set(void *value, const type_info_t *t, uint64_t bits)
+static void native_set(void *value, const type_info_t *t, bits_t bits)
 {
     native_t v;
     if (t->kind == K_BOOL) {
@@ -184,16 +215,34 @@ static void native_set(void *value, const type_info_t *t, uint64_t bits)
         v.u8 = (uint8_t)bits;
     } else if (t->width == 2) {
         v.u16 = (uint16_t)bits;
-    } else if (t->width == 4) {
-        v.u32 = (uint32_t)bits;
     } else {
-        v.u64 = bits;
+#if CO_CONFIG_OD_64BIT
+        if (t->width == 8) {
+            v.u64 = bits;
+        } else {
+            v.u32 = (uint32_t)bits;
+        }
+#else
+        v.u32 = bits;
+#endif
     }
     memcpy(value, &v, t->width);
 }
 
+/* A pattern as the API's 64 bits: signed types sign-extended (already so when the
+ * pattern is 64 bits wide). */
+static uint64_t widen(const type_info_t *t, bits_t bits)
+{
+#if CO_CONFIG_OD_64BIT
+    (void)t;
+    return bits;
+#else
+    return t->kind == K_SIGNED ? (uint64_t)to_signed(bits) : (uint64_t)bits;
+#endif
+}
+
 /* A REAL32/REAL64 bit pattern as double (float and integer byte orders assumed equal). */
-static double real_value(const type_info_t *t, uint64_t bits)
+static double real_value(const type_info_t *t, bits_t bits)
 {
     if (t->wire == 4) {
         uint32_t b = (uint32_t)bits;
@@ -201,9 +250,13 @@ static double real_value(const type_info_t *t, uint64_t bits)
         memcpy(&f, &b, sizeof f);
         return (double)f;
     }
+#if CO_CONFIG_OD_64BIT
     double d;
     memcpy(&d, &bits, sizeof d);
     return d;
+#else
+    return 0.0; /* no REAL64 in this build */
+#endif
 }
 
 /* ---- Table checks and look-up. */
@@ -517,7 +570,7 @@ static co_abort_t check_len(const co_od_entry_t *e, const type_info_t *t, uint32
     return (t->kind == K_USTRING && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
 }
 
-static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, uint64_t bits)
+static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, bits_t bits)
 {
     bool low;
     bool high;
@@ -544,7 +597,7 @@ static co_abort_t check_number(const co_od_entry_t *e, const type_info_t *t, con
     if (e->limits == NULL && t->kind != K_BOOL) {
         return CO_ABORT_NONE; /* nothing to compare: no need to decode */
     }
-    uint64_t bits = wire_number(t, data);
+    bits_t bits = wire_number(t, data);
     if (t->kind == K_BOOL && bits > 1u) {
         return CO_ABORT_VALUE;
     }
@@ -694,7 +747,8 @@ co_err_t co_od_get_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
     const co_od_entry_t *e;
     co_err_t err = find_uint(od, index, sub, &e);
     if (err == CO_OK) {
-        *value = native_get(e->value, type_info(e->type));
+        const type_info_t *t = type_info(e->type);
+        *value = widen(t, native_get(e->value, t));
     }
     return err;
 }
@@ -704,12 +758,16 @@ co_err_t co_od_set_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
     const co_od_entry_t *e;
     co_err_t err = find_uint(od, index, sub, &e);
     if (err == CO_OK) {
-        native_set(e->value, type_info(e->type), value);
+        native_set(e->value, type_info(e->type), (bits_t)value);
     }
     return err;
 }
 
 uint64_t co_od_entry_uint(const co_od_entry_t *entry)
 {
-    return has_uint(entry) ? native_get(entry->value, type_info(entry->type)) : 0;
+    if (!has_uint(entry)) {
+        return 0;
+    }
+    const type_info_t *t = type_info(entry->type);
+    return widen(t, native_get(entry->value, t));
 }

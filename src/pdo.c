@@ -1,8 +1,8 @@
 /*
  * pdo.c -- what RPDOs and TPDOs share (see canola/pdo.h): binding the dictionary's PDOs,
- * loading their communication parameters, resolving mappings, the re-mapping rules of
- * writes to 0x1400..0x1BFF, routes, and handing NMT states, SYNCs and time to
- * pdo_rx.c / pdo_tx.c.
+ * loading their communication parameters, the rules of writes to 0x1400..0x1BFF, routes,
+ * and handing NMT states and SYNCs to pdo_rx.c / pdo_tx.c. Mappings are pdo_map.c, the
+ * timers pdo_timers.c.
  *
  * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n); rpdo_count / tpdo_count
  * reach up to the highest such PDO below CO_RPDO_MAX / CO_TPDO_MAX that the dictionary
@@ -11,8 +11,6 @@
  * next reset communication.
  */
 #include "pdo_internal.h"
-
-#define PDO_MAP_BITS_MAX 64u
 
 static inline uint16_t rpdo_max(void) { return CO_RPDO_MAX; }
 static inline uint16_t tpdo_max(void) { return CO_TPDO_MAX; }
@@ -31,16 +29,6 @@ static pdo_ref_t pdo_ref(uint16_t index)
         .tpdo = off >= 0x400u, .mapping = (off & 0x200u) != 0, .num = (uint16_t)(off & 0x1FFu)};
 }
 
-static uint16_t comm_index(bool tpdo, uint16_t num)
-{
-    return (uint16_t)((tpdo ? 0x1800u : 0x1400u) + num);
-}
-
-static uint16_t map_index(bool tpdo, uint16_t num)
-{
-    return (uint16_t)((tpdo ? 0x1A00u : 0x1600u) + num);
-}
-
 static co_pdo_t *pdo_slot(co_node_t *node, bool tpdo, uint16_t num)
 {
     if (tpdo) {
@@ -49,145 +37,17 @@ static co_pdo_t *pdo_slot(co_node_t *node, bool tpdo, uint16_t num)
     return num < node->rpdo_count ? &node->rpdo[num] : NULL;
 }
 
-/* Integer value of an optional entry; `absent` when the dictionary lacks it. */
-static uint64_t od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent)
-{
-    uint64_t v = absent;
-    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
-    return v;
-}
-
-void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n)
-{
-    /* At most 64 bits per PDO: a bit at a time is simple and cheap enough. */
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t s = spos + i;
-        uint32_t d = dpos + i;
-        unsigned bit = ((unsigned)src[s / 8u] >> (s % 8u)) & 1u;
-        unsigned mask = 1u << (d % 8u);
-        dst[d / 8u] = (uint8_t)((dst[d / 8u] & ~mask) | (bit << (d % 8u)));
-    }
-}
-
-/* ---- mapping resolution */
-
-/* An object can carry PDO data in this direction: a fixed size of 1..8 bytes, the PDO
- * attribute, and storage or a hook to read (TPDO) / take (RPDO) the value. */
-static bool mappable(const co_od_entry_t *e, bool tpdo)
-{
-    uint32_t size = co_type_size((co_type_t)e->type);
-    if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > 8) {
-        return false;
-    }
-    bool hook = e->hooks && (tpdo ? e->hooks->read != NULL : e->hooks->write != NULL);
-    return e->value != NULL || hook;
-}
-
-/* One mapping entry value (index << 16 | sub << 8 | bits) to an item. */
-static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_pdo_item_t *item)
-{
-    uint16_t index = (uint16_t)(value >> 16);
-    uint8_t bits = (uint8_t)value;
-    item->entry = NULL;
-    item->direct = false;
-    item->bits = bits;
-    if (bits == 0) {
-        return CO_ABORT_NO_MAP;
-    }
-    if (index >= CO_TYPE_BOOLEAN && index <= CO_TYPE_UNSIGNED32) {
-        /* a dummy entry: skips bits of a received frame */
-        bool fits = bits <= 8u * co_type_size((co_type_t)index);
-        return (!tpdo && fits) ? CO_ABORT_NONE : CO_ABORT_NO_MAP;
-    }
-    const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(value >> 8), NULL);
-    if (e == NULL || !mappable(e, tpdo) || bits > 8u * co_type_size((co_type_t)e->type)) {
-        return CO_ABORT_NO_MAP;
-    }
-    item->entry = e;
-    /* A whole number stored as it travels (and no hook to run): copied straight to and
-     * from the frame. */
-    uint32_t len = 0;
-    uint32_t size = co_type_size((co_type_t)e->type);
-    bool whole = bits == 8u * size && size != 0;
-    bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
-    item->direct = whole && plain;
-    return CO_ABORT_NONE;
-}
-
-/* Every item is copied straight between the frame and storage (no dummy entry, no bit
- * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
-static bool all_direct(const co_pdo_t *p)
-{
-    for (uint8_t i = 0; i < p->count; i++) {
-        if (!p->items[i].direct || p->items[i].bits % 8u != 0) {
-            return false;
-        }
-    }
-    return true;
-}
-
-/* Resolve entries 1..n of mapping object `index` into out's items, count and bits. */
-static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, bool tpdo,
-                                  co_pdo_t *out)
-{
-    out->count = 0;
-    out->bits = 0;
-    out->plain = false;
-    if (n == 0) {
-        return CO_ABORT_NONE;
-    }
-    if (co_od_find(od, index, n, NULL) == NULL) {
-        return CO_ABORT_VALUE_HIGH; /* more entries than the object has */
-    }
-    if (n > CO_PDO_MAP_MAX) {
-        return CO_ABORT_MAP_LEN;
-    }
-    uint32_t total = 0;
-    for (uint8_t k = 0; k < n; k++) {
-        const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(k + 1u), NULL);
-        if (e == NULL) {
-            return CO_ABORT_VALUE_HIGH;
-        }
-        co_abort_t abort = resolve_item(od, (uint32_t)co_od_entry_uint(e), tpdo, &out->items[k]);
-        if (abort != CO_ABORT_NONE) {
-            return abort;
-        }
-        total += out->items[k].bits;
-        if (total > PDO_MAP_BITS_MAX) {
-            return CO_ABORT_MAP_LEN;
-        }
-    }
-    out->count = n;
-    out->bits = (uint8_t)total;
-    out->plain = n > 0 && all_direct(out);
-    return CO_ABORT_NONE;
-}
-
 /* ---- loading parameters */
 
 static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
-    uint16_t idx = comm_index(tpdo, num);
+    uint16_t idx = pdo_comm_index(tpdo, num);
     const co_od_entry_t *cob = co_od_find(&node->cfg.od, idx, 1, NULL);
     p->flags = cob ? PDO_F_PRESENT : 0;
     p->cob_id = cob ? (uint32_t)co_od_entry_uint(cob) : CO_COB_INVALID;
-    p->type = (uint8_t)od_uint(node, idx, 2, 255);
-    p->event_ms = (uint16_t)od_uint(node, idx, 5, 0);
-    p->inhibit = tpdo ? (uint16_t)od_uint(node, idx, 3, 0) : 0;
-    p->sync_start = tpdo ? (uint8_t)od_uint(node, idx, 6, 0) : 0;
-}
-
-/* A mapping that does not resolve (set natively, or stored before the rules) maps
- * nothing: the PDO then does nothing until it is re-mapped. */
-static void load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
-{
-    uint16_t idx = map_index(tpdo, num);
-    uint8_t n = (uint8_t)od_uint(node, idx, 0, 0);
-    if (resolve_mapping(&node->cfg.od, idx, n, tpdo, p) != CO_ABORT_NONE) {
-        p->count = 0;
-        p->bits = 0;
-        p->plain = false;
-    }
+    p->type = (uint8_t)pdo_od_uint(node, idx, 2, 255);
+    pdo_timers_load(node, p, tpdo, idx);
+    p->sync_start = tpdo ? (uint8_t)pdo_od_uint(node, idx, 6, 0) : 0;
 }
 
 /* Runtime state from scratch: timers off, nothing pending; in operational the TPDO's
@@ -196,8 +56,7 @@ static void load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 {
     pdo_clear(p, PDO_F_PENDING | PDO_F_SAMPLED | PDO_F_STARTED | PDO_F_WAITING);
-    p->next_us = CO_TIME_NEVER;
-    p->inhibit_until_us = 0;
+    pdo_timers_restart(p);
     p->sync_count = 0;
     p->len = 0;
     if (tpdo) {
@@ -226,21 +85,24 @@ co_err_t co_pdo_bind(co_node_t *node)
     return CO_OK;
 }
 
+#if PDO_FAST_PATHS
 /* After parameters or mapping loaded (NMT states do not change it): may a frame of this
  * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
 static bool fast_widths(const co_pdo_t *p)
 {
     for (uint8_t i = 0; i < p->count; i++) {
-        uint8_t b = p->items[i].bits;
+        uint8_t b = p->map_bits[i];
         if (b != 8 && b != 16 && b != 32 && b != 64) {
             return false; /* pdo_copy_fast copies 1, 2, 4 or 8 bytes */
         }
     }
     return true;
 }
+#endif
 
 static void decide_fast(co_pdo_t *p, bool tpdo)
 {
+#if PDO_FAST_PATHS
     bool plain = p->plain && fast_widths(p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
@@ -250,14 +112,18 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
         p->frame_flags = f.flags;
         return;
     }
-    bool fast = pdo_active(p) && plain && p->type > 240 && p->event_ms == 0;
+    bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
     p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
+#else
+    (void)tpdo;
+    p->fast = 0; /* -Os: no short paths */
+#endif
 }
 
 static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     load_comm(node, p, tpdo, num);
-    load_mapping(node, p, tpdo, num);
+    pdo_load_mapping(node, p, tpdo, num);
     decide_fast(p, tpdo);
     restart(node, p, tpdo);
 }
@@ -339,7 +205,7 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     }
     for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
-        if (!p->fast) {
+        if (!PDO_FAST_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);
         } else if (++p->sync_count >= p->type) { /* the usual one: cyclic, whole values */
             p->sync_count = 0;
@@ -348,24 +214,12 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     }
 }
 
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
-{
-    uint64_t next = CO_TIME_NEVER;
-    for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
-        next = co_min_u64(next, rpdo_poll(node, &node->rpdo[n], now_us));
-    }
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
-        next = co_min_u64(next, tpdo_poll(node, &node->tpdo[n], now_us));
-    }
-    return pdo_running(node) ? next : CO_TIME_NEVER;
-}
-
 /* ---- events */
 
 static bool maps_entry(const co_pdo_t *p, const co_od_entry_t *entry)
 {
     for (uint8_t i = 0; i < p->count; i++) {
-        if (p->items[i].entry == entry) {
+        if (p->map_entry[i] == entry) {
             return true;
         }
     }
@@ -401,7 +255,7 @@ uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
 
 static uint32_t od_cob_id(const co_node_t *node, pdo_ref_t r)
 {
-    return (uint32_t)od_uint(node, comm_index(r.tpdo, r.num), 1, CO_COB_INVALID);
+    return (uint32_t)pdo_od_uint(node, pdo_comm_index(r.tpdo, r.num), 1, CO_COB_INVALID);
 }
 
 static bool type_allowed(uint8_t type, bool tpdo)
@@ -427,31 +281,12 @@ static co_abort_t check_comm(const co_node_t *node, pdo_ref_t r, uint8_t sub, co
     return CO_ABORT_NONE;
 }
 
-/* The re-mapping procedure: the PDO not valid, sub0 = 0 while entries change, then
- * sub0 = N, checked against the dictionary. */
-static co_abort_t check_mapping(const co_node_t *node, pdo_ref_t r, uint8_t sub,
-                                const uint8_t *data, uint32_t len)
-{
-    uint16_t idx = map_index(r.tpdo, r.num);
-    if (!(od_cob_id(node, r) & CO_COB_INVALID)) {
-        return CO_ABORT_UNSUPPORTED;
-    }
-    if (sub != 0) {
-        return od_uint(node, idx, 0, 0) != 0 ? CO_ABORT_UNSUPPORTED : CO_ABORT_NONE;
-    }
-    if (len != 1) {
-        return CO_ABORT_NONE; /* the length check has refused it already */
-    }
-    co_pdo_t trial;
-    return resolve_mapping(&node->cfg.od, idx, data[0], r.tpdo, &trial);
-}
-
 co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                               uint32_t len)
 {
     pdo_ref_t r = pdo_ref(entry->index);
     if (r.mapping) {
-        return check_mapping(node, r, entry->sub, data, len);
+        return pdo_check_mapping(node, r.tpdo, r.num, entry->sub, data, len);
     }
     return check_comm(node, r, entry->sub, data, len);
 }
@@ -466,8 +301,8 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     uint32_t old_cob = p->cob_id;
     uint8_t old_type = p->type;
     bool was_active = pdo_active(p);
-    if (r.mapping) {
-        load_mapping(node, p, r.tpdo, r.num);
+    if (CO_CONFIG_PDO_DYNAMIC && r.mapping) {
+        pdo_load_mapping(node, p, r.tpdo, r.num);
     } else {
         uint8_t flags = p->flags;
         load_comm(node, p, r.tpdo, r.num);

@@ -82,36 +82,140 @@ static inline void pdo_copy_fast(void *dst, const void *src, uint32_t bytes)
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
 
+/* Slot i of the mapping is copied straight between frame and storage. */
+static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
+{
+    return ((unsigned)p->map_direct[i / 8u] >> (i % 8u)) & 1u;
+}
+
+/* The per-frame short paths (the usual RPDO in co_pdo_rx, the cyclic TPDO in co_pdo_sync)
+ * do what the general paths do, with fewer instructions. A size build (-Os) keeps only the
+ * general paths: flash counts more than cycles there. */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_FAST_PATHS 0
+#else
+#define PDO_FAST_PATHS 1
+#endif
+
 /* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
  * told when some TPDO listens to changes. */
 static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
-    const co_pdo_item_t *item = p->items;
-    const co_pdo_item_t *end = item + p->count;
-    for (; item < end; item++) {
-        uint32_t bytes = item->bits / 8u;
-        pdo_copy_value(item->entry->value, data, bytes);
+    for (uint8_t i = 0; i < p->count; i++) {
+        uint32_t bytes = p->map_bits[i] / 8u;
+        pdo_copy_value(p->map_entry[i]->value, data, bytes);
         data += bytes;
     }
     if (node->tpdo_listeners != 0) {
-        for (item = p->items; item < end; item++) {
-            co_pdo_changed(node, item->entry);
+        for (uint8_t i = 0; i < p->count; i++) {
+            co_pdo_changed(node, p->map_entry[i]);
         }
     }
 }
 
-/* pdo.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
+#if CO_CONFIG_PDO_BIT_MAPPING
+/* pdo_map.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n);
+#endif
+
+/* pdo_map.c: resolving mappings into co_pdo_t, checking a new one. */
+void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num);
+#if CO_CONFIG_PDO_DYNAMIC
+/* A write to mapping object sub `sub` of PDO `num` (the re-mapping procedure). */
+co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uint8_t sub,
+                             const uint8_t *data, uint32_t len);
+#else
+static inline co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num,
+                                           uint8_t sub, const uint8_t *data, uint32_t len)
+{
+    (void)node;
+    (void)tpdo;
+    (void)num;
+    (void)sub;
+    (void)data;
+    (void)len;
+    return CO_ABORT_READ_ONLY; /* the dictionary's mapping is fixed in this build */
+}
+#endif
+/* The dictionary's value of an optional entry; `absent` when it lacks it. */
+uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent);
+static inline uint16_t pdo_comm_index(bool tpdo, uint16_t num)
+{
+    return (uint16_t)((tpdo ? 0x1800u : 0x1400u) + num);
+}
+static inline uint16_t pdo_map_index(bool tpdo, uint16_t num)
+{
+    return (uint16_t)((tpdo ? 0x1A00u : 0x1600u) + num);
+}
 
 /* pdo_tx.c */
-void tpdo_start(co_node_t *node, co_pdo_t *p); /* entering operational / new parameters */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
 void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* p->plain: pack, send */
-uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
 
 /* pdo_rx.c */
 void rpdo_sync(co_node_t *node, uint8_t n);
-uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
+void pdo_clear_emcy(co_node_t *node, uint16_t code); /* co_emcy_clear if active */
+
+/* pdo_timers.c: inhibit time, event timer, RPDO deadline (CO_CONFIG_PDO_TIMERS). */
+#if CO_CONFIG_PDO_TIMERS
+void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
+static inline void pdo_timers_restart(co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    p->inhibit_until_us = 0;
+}
+/* Entering operational / new parameters: an event-driven TPDO's event timer starts. */
+static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
+/* Inside the inhibit time: true, and a poll is scheduled for its end. */
+bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
+void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
+void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
+static inline bool rpdo_monitored(const co_pdo_t *p) { return p->event_ms != 0; }
+#else
+static inline void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
+{
+    (void)node;
+    (void)p;
+    (void)tpdo;
+    (void)comm_index;
+}
+static inline void pdo_timers_restart(co_pdo_t *p) { (void)p; }
+static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+    return false;
+}
+static inline void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline void rpdo_received(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline bool rpdo_monitored(const co_pdo_t *p)
+{
+    (void)p;
+    return false;
+}
+#endif
 
 #endif /* CANOLA_PDO_INTERNAL_H */

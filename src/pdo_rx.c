@@ -12,30 +12,31 @@
 
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
-#define EMCY_RPDO_TIMEOUT 0x8250u
 
-/* One mapped value from the frame at bit `pos`. A whole value is stored as it comes; a
+/* Slot i's value from the frame at bit `pos`. A whole value is stored as it comes; a
  * value mapped with fewer bits keeps the bits the frame does not carry. */
-static void store_item(co_node_t *node, const co_pdo_item_t *item, const uint8_t *data,
+static void store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint8_t *data,
                        uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    const co_od_entry_t *e = item->entry;
-    if (item->direct && pos % 8u == 0) { /* the common case: bytes into storage */
-        pdo_copy_value(e->value, data + pos / 8u, item->bits / 8u);
+    const co_od_entry_t *e = p->map_entry[i];
+    uint8_t bits = p->map_bits[i];
+    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes into storage */
+        pdo_copy_value(e->value, data + pos / 8u, bits / 8u);
         co_pdo_changed(node, e);
         return;
     }
     uint32_t size = co_type_size((co_type_t)e->type);
+    const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
+#if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[8] = {0};
-    const uint8_t *value = wire;
-    if (pos % 8u == 0 && item->bits == 8u * size) {
-        value = data + pos / 8u;
-    } else {
+    if (pos % 8u != 0 || bits != 8u * size) {
         uint32_t n;
         (void)co_od_read(od, e, 0, wire, sizeof wire, &n, NULL); /* unreadable: zeros */
-        pdo_copy_bits(wire, 0, data, pos, item->bits);
+        pdo_copy_bits(wire, 0, data, pos, bits);
+        value = wire;
     }
+#endif
     if (co_od_store(od, e, value, size) != CO_ABORT_NONE) {
         return;
     }
@@ -53,10 +54,10 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
     } else {
         uint32_t pos = 0;
         for (uint8_t i = 0; i < p->count; i++) {
-            if (p->items[i].entry != NULL) { /* NULL: a dummy entry, skipped */
-                store_item(node, &p->items[i], data, pos);
+            if (p->map_entry[i] != NULL) { /* NULL: a dummy entry, skipped */
+                store_item(node, p, i, data, pos);
             }
-            pos += p->items[i].bits;
+            pos += p->map_bits[i];
         }
     }
     if (node->cfg.on_rpdo) {
@@ -65,7 +66,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 }
 
 /* Another RPDO than `self` has `flag` set. */
-static bool other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
+bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
 {
     for (uint16_t n = 0; n < node->rpdo_count; n++) {
         const co_pdo_t *p = &node->rpdo[n];
@@ -76,25 +77,10 @@ static bool other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag
     return false;
 }
 
-static void clear_if_active(co_node_t *node, uint16_t code)
+void pdo_clear_emcy(co_node_t *node, uint16_t code)
 {
     if (co_emcy_active(node, code)) {
         (void)co_emcy_clear(node, code);
-    }
-}
-
-/* A frame of usable length arrived: the deadline restarts, a missed one is over. */
-static void received(co_node_t *node, co_pdo_t *p)
-{
-    if (p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
-    if (pdo_has(p, PDO_F_TIMED_OUT)) {
-        pdo_clear(p, PDO_F_TIMED_OUT);
-        if (!other_has(node, p, PDO_F_TIMED_OUT)) {
-            clear_if_active(node, EMCY_RPDO_TIMEOUT);
-        }
     }
 }
 
@@ -112,9 +98,9 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
         return;
     }
     pdo_clear(p, PDO_F_LEN_ERROR);
-    if (!other_has(node, p, PDO_F_LEN_ERROR)) {
-        clear_if_active(node, EMCY_PDO_LENGTH);
-        clear_if_active(node, EMCY_PDO_EXCEEDED);
+    if (!rpdo_other_has(node, p, PDO_F_LEN_ERROR)) {
+        pdo_clear_emcy(node, EMCY_PDO_LENGTH);
+        pdo_clear_emcy(node, EMCY_PDO_EXCEEDED);
     }
 }
 
@@ -140,7 +126,7 @@ static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame
         length_error(node, p, EMCY_PDO_LENGTH);
         return;
     }
-    received(node, p);
+    rpdo_received(node, p);
     if (p->type <= 240) {
         hold_for_sync(node, p, frame);
     } else {
@@ -159,8 +145,8 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 {
     const co_pdo_t *p = &node->rpdo[rpdo];
     if (node->tpdo_listeners != 0) {
-        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
-            co_pdo_changed(node, item->entry);
+        for (uint8_t i = 0; i < p->count; i++) {
+            co_pdo_changed(node, p->map_entry[i]);
         }
     }
     if (node->cfg.on_rpdo) {
@@ -189,13 +175,12 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
      * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
      * a route; the bound is checked all the same before the array is read. */
     const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
-    if (p != NULL && p->fast != 0 && p->fast == frame->len && !(frame->flags & CO_FRAME_RTR) &&
-        !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
+    if (PDO_FAST_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
+        !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
         const uint8_t *data = frame->data;
-        const co_pdo_item_t *end = p->items + p->count;
-        for (const co_pdo_item_t *item = p->items; item < end; item++) {
-            uint32_t bytes = item->bits / 8u;
-            pdo_copy_fast(item->entry->value, data, bytes);
+        for (uint8_t i = 0; i < p->count; i++) {
+            uint32_t bytes = p->map_bits[i] / 8u;
+            pdo_copy_fast(p->map_entry[i]->value, data, bytes);
             data += bytes;
         }
         if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {
@@ -216,16 +201,4 @@ void rpdo_sync(co_node_t *node, uint8_t n)
     if (pdo_active(p)) {
         apply(node, n, p->data);
     }
-}
-
-uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
-{
-    if (now_us < p->next_us) {
-        return p->next_us;
-    }
-    p->next_us = CO_TIME_NEVER; /* reported once, until the next RPDO */
-    pdo_set(p, PDO_F_TIMED_OUT);
-    (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
-    co_node_error_behaviour(node);
-    return CO_TIME_NEVER;
 }

@@ -8,22 +8,25 @@
 
 static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
-/* One mapped value into the frame at bit `pos`: whole bytes straight from co_od_read,
+/* Slot i's value into the frame at bit `pos`: whole bytes straight from co_od_read,
  * anything else through a bit copy of the value's low bits. */
-static void pack_item(const co_od_t *od, const co_pdo_item_t *item, uint8_t *out, uint32_t pos)
+static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
-    if (item->direct && pos % 8u == 0) { /* the common case: bytes from storage */
-        pdo_copy_value(out + pos / 8u, item->entry->value, item->bits / 8u);
+    uint8_t bits = p->map_bits[i];
+    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes from storage */
+        pdo_copy_value(out + pos / 8u, p->map_entry[i]->value, bits / 8u);
         return;
     }
-    if (pos % 8u == 0 && item->bits % 8u == 0) {
-        (void)co_od_read(od, item->entry, 0, out + pos / 8u, item->bits / 8u, &n, NULL);
+    if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
+        (void)co_od_read(od, p->map_entry[i], 0, out + pos / 8u, bits / 8u, &n, NULL);
         return;
     }
+#if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[8] = {0};
-    (void)co_od_read(od, item->entry, 0, wire, sizeof wire, &n, NULL);
-    pdo_copy_bits(out, pos, wire, 0, item->bits);
+    (void)co_od_read(od, p->map_entry[i], 0, wire, sizeof wire, &n, NULL);
+    pdo_copy_bits(out, pos, wire, 0, bits);
+#endif
 }
 
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
@@ -31,17 +34,17 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
     memset(out, 0, 8);
     if (p->plain) { /* whole values as stored: one copy each */
         uint8_t *at = out;
-        for (const co_pdo_item_t *item = p->items; item < p->items + p->count; item++) {
-            uint32_t bytes = item->bits / 8u;
-            pdo_copy_value(at, item->entry->value, bytes);
+        for (uint8_t i = 0; i < p->count; i++) {
+            uint32_t bytes = p->map_bits[i] / 8u;
+            pdo_copy_value(at, p->map_entry[i]->value, bytes);
             at += bytes;
         }
         return;
     }
     uint32_t pos = 0;
     for (uint8_t i = 0; i < p->count; i++) {
-        pack_item(&node->cfg.od, &p->items[i], out, pos);
-        pos += p->items[i].bits;
+        pack_item(&node->cfg.od, p, i, out, pos);
+        pos += p->map_bits[i];
     }
 }
 
@@ -64,30 +67,20 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
 {
     co_frame_t f = {.id = p->frame_id, .flags = p->frame_flags, .len = p->fast}; /* data zeroed */
     uint8_t *at = f.data;
-    for (const co_pdo_item_t *item = p->items, *end = item + p->count; item < end; item++) {
-        uint32_t bytes = item->bits / 8u;
-        pdo_copy_fast(at, item->entry->value, bytes);
+    for (uint8_t i = 0; i < p->count; i++) {
+        uint32_t bytes = p->map_bits[i] / 8u;
+        pdo_copy_fast(at, p->map_entry[i]->value, bytes);
         at += bytes;
     }
     (void)co_node_send_hot(node, &f, CO_SVC_PDO);
 }
 
 /* An event-driven transmission: the inhibit time and the event timer count from it. */
-static void send_event(co_node_t *node, co_pdo_t *p)
+void tpdo_send_event(co_node_t *node, co_pdo_t *p)
 {
     pdo_clear(p, PDO_F_PENDING);
     send_fresh(node, p);
-    p->inhibit_until_us = node->now_us + (uint64_t)p->inhibit * 100u;
-    tpdo_start(node, p);
-}
-
-void tpdo_start(co_node_t *node, co_pdo_t *p)
-{
-    p->next_us = CO_TIME_NEVER;
-    if (pdo_active(p) && pdo_running(node) && event_driven(p) && p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
+    tpdo_event_sent(node, p);
 }
 
 bool tpdo_event(co_node_t *node, co_pdo_t *p)
@@ -96,12 +89,8 @@ bool tpdo_event(co_node_t *node, co_pdo_t *p)
         return false;
     }
     pdo_set(p, PDO_F_PENDING); /* type 0: goes at the next SYNC */
-    if (event_driven(p)) {
-        if (node->now_us >= p->inhibit_until_us) {
-            send_event(node, p);
-        } else {
-            co_node_schedule(node, p->inhibit_until_us);
-        }
+    if (event_driven(p) && !tpdo_inhibited(node, p)) {
+        tpdo_send_event(node, p);
     }
     return true;
 }
@@ -161,24 +150,6 @@ void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
     } else if (p->type == 252 && pdo_has(p, PDO_F_SAMPLED)) {
         send_data(node, p, p->data); /* before the first SYNC there is nothing to send */
     }
-}
-
-uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
-{
-    if (!pdo_active(p) || !event_driven(p)) {
-        return CO_TIME_NEVER;
-    }
-    if (now_us >= p->next_us) { /* the event timer is an event */
-        p->next_us = CO_TIME_NEVER;
-        pdo_set(p, PDO_F_PENDING);
-    }
-    if (pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us) {
-        send_event(node, p);
-    }
-    if (pdo_has(p, PDO_F_PENDING)) {
-        return co_min_u64(p->next_us, p->inhibit_until_us);
-    }
-    return p->next_us;
 }
 
 co_err_t co_tpdo_request(co_node_t *node, uint8_t n)

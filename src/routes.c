@@ -56,33 +56,10 @@ void co_routes_rebuild(co_node_t *node)
     node->route_hint = 0;
     node->route_groups = 0;
     co_routes_add(node, 0x000, CO_ROUTE_NMT, 0);
-    if (CO_CONFIG_GUARDING && node->node_id >= 1 && node->node_id <= 127) {
-        co_routes_add(node, 0x700u + node->node_id, CO_ROUTE_GUARD_RTR, 0);
-    }
-    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
-        const co_hb_consumer_t *c = &node->hb_consumers[i];
-        if (c->watch != CO_HB_WATCH_UNUSED) {
-            co_routes_add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
-        }
-    }
-    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
-        const co_guard_watch_t *w = &node->guard_watch[i];
-        if (w->guard_ms != 0) {
-            co_routes_add(node, 0x700u + w->node_id, CO_ROUTE_GUARD_REPLY, i);
-        }
-    }
-    for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
-        uint32_t cob = node->sdo_servers[i].cob_rx;
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
-        }
-    }
-    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
-        uint32_t cob = node->sdo_clients[i].cob_rx;
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);
-        }
-    }
+    co_guard_add_routes(node); /* own guarding RTR, guarded nodes' replies */
+    co_hb_consumers_add_routes(node);
+    co_sdo_server_add_routes(node);
+    co_sdo_client_add_routes(node);
     co_sync_add_routes(node);
     co_time_add_routes(node);
     co_emcy_add_routes(node);

@@ -18,6 +18,8 @@
 
 #include "internal.h"
 
+#if CO_SDO_CLIENTS_MAX > 0
+
 enum client_state {
     IDLE = 0,
     UP_INIT,  /* 0x40 sent, expect the initiate upload response */
@@ -537,6 +539,16 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 
 /* Resume paced block sending first (a stalled sender is not a silent server), then
  * time out transfers that saw no frame for the time-out. */
+void co_sdo_client_add_routes(co_node_t *node)
+{
+    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
+        uint32_t cob = node->sdo_clients[i].cob_rx;
+        if (!(cob & CO_COB_INVALID)) {
+            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);
+        }
+    }
+}
+
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
@@ -741,3 +753,81 @@ bool co_sdo_client_busy(const co_node_t *node, uint8_t channel)
     return node != NULL && channel < co_sdo_clients_max() &&
            node->sdo_clients[channel].state != IDLE;
 }
+
+#else /* no client channel: every channel number is out of range */
+
+co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id)
+{
+    (void)node;
+    (void)channel;
+    (void)server_id;
+    return CO_ERR_ARG;
+}
+
+co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize, bool crc,
+                                     uint8_t pst)
+{
+    (void)node;
+    (void)channel;
+    (void)blksize;
+    (void)crc;
+    (void)pst;
+    return CO_ERR_ARG;
+}
+
+co_err_t co_sdo_client_set_timeout(co_node_t *node, uint8_t channel, uint16_t timeout_ms)
+{
+    (void)node;
+    (void)channel;
+    (void)timeout_ms;
+    return CO_ERR_ARG;
+}
+
+co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
+                       co_sdo_mode_t mode, uint8_t *buf, uint32_t cap, co_sdo_done_fn done,
+                       void *ctx)
+{
+    (void)node;
+    (void)channel;
+    (void)index;
+    (void)sub;
+    (void)mode;
+    (void)buf;
+    (void)cap;
+    (void)done;
+    (void)ctx;
+    return CO_ERR_ARG;
+}
+
+co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
+                         co_sdo_mode_t mode, const uint8_t *data, uint32_t len, co_sdo_done_fn done,
+                         void *ctx)
+{
+    (void)node;
+    (void)channel;
+    (void)index;
+    (void)sub;
+    (void)mode;
+    (void)data;
+    (void)len;
+    (void)done;
+    (void)ctx;
+    return CO_ERR_ARG;
+}
+
+co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code)
+{
+    (void)node;
+    (void)channel;
+    (void)code;
+    return CO_ERR_ARG;
+}
+
+bool co_sdo_client_busy(const co_node_t *node, uint8_t channel)
+{
+    (void)node;
+    (void)channel;
+    return false;
+}
+
+#endif

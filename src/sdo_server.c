@@ -73,6 +73,16 @@ void co_sdo_server_stop(co_node_t *node)
     }
 }
 
+void co_sdo_server_add_routes(co_node_t *node)
+{
+    for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
+        uint32_t cob = node->sdo_servers[i].cob_rx;
+        if (!(cob & CO_COB_INVALID)) {
+            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
+        }
+    }
+}
+
 /* Take new COB-IDs into use. A channel reconfigured by a request it is serving itself
  * answers that request on the old COB-ID first: the reload waits for the answer. */
 static void apply_reloads(co_node_t *node)

@@ -5,6 +5,8 @@
  */
 #include "internal.h"
 
+#if CO_SDO_CLIENTS_MAX > 0
+
 static co_sdo_client_t *channel_of(co_node_t *node, uint8_t channel)
 {
     return channel < co_sdo_clients_max() ? &node->sdo_clients[channel] : NULL;
@@ -62,3 +64,33 @@ co_err_t co_sdo_write_value(co_node_t *node, uint8_t channel, uint16_t index, ui
     return co_sdo_download(node, channel, index, sub, CO_SDO_AUTO, c->value, size, write_done,
                            node);
 }
+
+#else /* no client channel */
+
+co_err_t co_sdo_read_value(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
+                           co_sdo_value_fn done, void *ctx)
+{
+    (void)node;
+    (void)channel;
+    (void)index;
+    (void)sub;
+    (void)done;
+    (void)ctx;
+    return CO_ERR_ARG;
+}
+
+co_err_t co_sdo_write_value(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
+                            uint64_t value, uint8_t size, co_sdo_done_fn done, void *ctx)
+{
+    (void)node;
+    (void)channel;
+    (void)index;
+    (void)sub;
+    (void)value;
+    (void)size;
+    (void)done;
+    (void)ctx;
+    return CO_ERR_ARG;
+}
+
+#endif

@@ -6,8 +6,6 @@
  * the NMT state changes, frames whose service the new state does not allow (an SDO
  * answer queued just before "stop") are dropped instead of sent.
  */
-#include <string.h>
-
 #include "internal.h"
 
 /* Arbitration rank: lower wins. An 11-bit frame beats a 29-bit frame with the
@@ -65,18 +63,20 @@ void co_txq_purge(co_node_t *node)
 
 void co_txq_flush(co_node_t *node)
 {
-    /* Nothing waiting is void here: every state change purges the queue (co_txq_purge). */
-    uint8_t gone = 0;
-    while (gone < node->txq_count && driver_take(node, &node->txq[gone].frame)) {
-        gone++;
-    }
-    if (gone) {
-        node->txq_count = (uint8_t)(node->txq_count - gone);
-        memmove(&node->txq[0], &node->txq[gone], node->txq_count * sizeof node->txq[0]);
-        if (node->txq_count == 0) {
-            /* room again: a paced sender (block transfer) goes on at the next poll */
-            co_node_schedule(node, node->now_us);
+    /* Nothing waiting is void here: every state change purges the queue (co_txq_purge).
+     * The frames before the first one the driver refuses leave; the rest move up. */
+    uint8_t count = node->txq_count;
+    uint8_t kept = 0;
+    for (uint8_t i = 0; i < count; i++) {
+        if (kept == 0 && driver_take(node, &node->txq[i].frame)) {
+            continue;
         }
+        node->txq[kept++] = node->txq[i];
+    }
+    node->txq_count = kept;
+    if (kept == 0 && count != 0) {
+        /* room again: a paced sender (block transfer) goes on at the next poll */
+        co_node_schedule(node, node->now_us);
     }
 }
 
@@ -92,10 +92,9 @@ static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t servi
     uint32_t rank = priority(frame);
     uint8_t at = node->txq_count;
     while (at > 0 && priority(&node->txq[at - 1].frame) > rank) {
+        node->txq[at] = node->txq[at - 1]; /* insertion: the later frames move down */
         at--;
     }
-    memmove(&node->txq[at + 1], &node->txq[at],
-            (size_t)(node->txq_count - at) * sizeof node->txq[0]);
     node->txq[at] = (co_tx_item_t){.frame = *frame, .service = service};
     node->txq_count++;
     node->stats.tx_queued++;

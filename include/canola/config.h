@@ -20,7 +20,10 @@
 #define CO_TX_QUEUE_LEN 8
 #endif
 
-/** Heartbeat consumer entries (0x1016 sub1..N) a node can monitor. 0..127. */
+/** Heartbeat consumer entries (0x1016 sub1..N) a node can monitor. 0..127. 0 leaves the
+ *  heartbeat consumer out of the build (src/hb_consumer.c): 0x1016 is then a plain entry
+ *  of the dictionary (any number of sub-indices, no checks, no effect), no heartbeat of
+ *  another node is routed, co_hb_remote_state answers 0xFF and boot_time_ms is ignored. */
 #ifndef CO_HB_CONSUMERS_MAX
 #define CO_HB_CONSUMERS_MAX 8
 #endif
@@ -47,7 +50,9 @@
 #define CO_SDO_BUF_SIZE 889
 #endif
 
-/** EMCY frames that may wait for the inhibit time (0x1015). 1..255. */
+/** EMCY frames that may wait for the inhibit time (0x1015). 0..255. 0 leaves the inhibit
+ *  time out of the build: every EMCY leaves at once, whatever 0x1015 says (a plain entry
+ *  then), and co_emcy_t keeps no queue. */
 #ifndef CO_EMCY_QUEUE_LEN
 #define CO_EMCY_QUEUE_LEN 4
 #endif
@@ -92,15 +97,6 @@
 /** The CANopen manager (CiA 302-2, canola/manager.h). 0 leaves it out of the build. */
 #ifndef CO_CONFIG_MANAGER
 #define CO_CONFIG_MANAGER 1
-#endif
-
-/** Receive routes (COB-IDs the node listens to): NMT, own guarding RTR, one per
- *  heartbeat consumer and guarded node, room for the other services, and the boot-ups
- *  of every slave a manager watches. */
-#ifndef CO_RX_ROUTES_MAX
-#define CO_RX_ROUTES_MAX                                                                           \
-    (8 + CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +      \
-     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_CONFIG_MANAGER ? 127 : 0))
 #endif
 
 #if (CO_CONFIG_LSS_SLAVE != 0 && CO_CONFIG_LSS_SLAVE != 1) ||                                      \
@@ -158,9 +154,57 @@
 #define CO_CONFIG_REAL_LIMITS 1
 #endif
 
+/** PDO timers: the TPDO inhibit time (0x1800+n sub3) and event timer (sub5), and RPDO
+ *  deadline monitoring (0x1400+n sub5, EMCY 0x8250). Without them those sub-indices are
+ *  plain entries with no effect: an event-driven TPDO is sent on each event at once, and
+ *  co_pdo_t keeps no timer state. */
+#ifndef CO_CONFIG_PDO_TIMERS
+#define CO_CONFIG_PDO_TIMERS 1
+#endif
+
+/** PDO re-mapping (the CiA 301 procedure on 0x1600.., 0x1A00..). Without it the mapping is
+ *  the dictionary's (read at reset communication); a write to a mapping object is refused
+ *  with 0x06010002 (read only), through the network and co_node_set_uint alike. */
+#ifndef CO_CONFIG_PDO_DYNAMIC
+#define CO_CONFIG_PDO_DYNAMIC 1
+#endif
+
+/** Bit-granular PDO mapping: entries of fewer bits than their object, entries at bit
+ *  offsets, and dummy entries (data types 0x0001..0x0007) in RPDOs. Without it every
+ *  mapping entry is a whole object at a byte boundary; a mapping with any other entry is
+ *  refused as an unmappable one (0x06040041) and maps nothing when the dictionary has it. */
+#ifndef CO_CONFIG_PDO_BIT_MAPPING
+#define CO_CONFIG_PDO_BIT_MAPPING 1
+#endif
+
+/** Dictionary types wider than 32 bits: INTEGER40..64, UNSIGNED40..64 and REAL64. Without
+ *  them co_od_validate refuses a dictionary holding one, and the dictionary's arithmetic is
+ *  32-bit (no 64-bit helpers on a 32-bit MCU); the API keeps its uint64_t values. */
+#ifndef CO_CONFIG_OD_64BIT
+#define CO_CONFIG_OD_64BIT 1
+#endif
+
+/** SYNC producer (0x1005 bit 30, 0x1006). Without it the node consumes SYNC only: bit 30
+ *  and 0x1006 have no effect (0x1019 is still the counter the consumer expects). */
+#ifndef CO_CONFIG_SYNC_PRODUCER
+#define CO_CONFIG_SYNC_PRODUCER 1
+#endif
+
+/** EMCY error history (0x1003). Without it co_emcy_raise records nothing: 0x1003, when the
+ *  dictionary has it, is a plain entry with no effect (a write to sub0 clears nothing). */
+#ifndef CO_CONFIG_EMCY_HISTORY
+#define CO_CONFIG_EMCY_HISTORY 1
+#endif
+
 #if (CO_CONFIG_SDO_BLOCK != 0 && CO_CONFIG_SDO_BLOCK != 1) ||                                      \
     (CO_CONFIG_SDO_SEGMENTED != 0 && CO_CONFIG_SDO_SEGMENTED != 1) ||                              \
     (CO_CONFIG_CRC16_FAST != 0 && CO_CONFIG_CRC16_FAST != 1) ||                                    \
+    (CO_CONFIG_PDO_TIMERS != 0 && CO_CONFIG_PDO_TIMERS != 1) ||                                    \
+    (CO_CONFIG_PDO_DYNAMIC != 0 && CO_CONFIG_PDO_DYNAMIC != 1) ||                                  \
+    (CO_CONFIG_PDO_BIT_MAPPING != 0 && CO_CONFIG_PDO_BIT_MAPPING != 1) ||                          \
+    (CO_CONFIG_OD_64BIT != 0 && CO_CONFIG_OD_64BIT != 1) ||                                        \
+    (CO_CONFIG_SYNC_PRODUCER != 0 && CO_CONFIG_SYNC_PRODUCER != 1) ||                              \
+    (CO_CONFIG_EMCY_HISTORY != 0 && CO_CONFIG_EMCY_HISTORY != 1) ||                                \
     (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
     (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
     (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
@@ -168,6 +212,21 @@
 #error "CO_CONFIG_* feature switches are 0 or 1"
 #endif
 
+/** Receive routes (COB-IDs the node listens to), by default exactly as many as the
+ *  configuration can route: NMT and SYNC, the own guarding RTR (CO_CONFIG_GUARDING), TIME
+ *  (CO_CONFIG_TIME), the LSS slave and master, one per heartbeat consumer, guarded node,
+ *  SDO channel, EMCY consumer entry, RPDO and TPDO (remote requests), and the boot-ups of
+ *  every slave a manager watches. A full table drops the routes added last. */
+#ifndef CO_RX_ROUTES_MAX
+#define CO_RX_ROUTES_MAX                                                                           \
+    (2 + CO_CONFIG_GUARDING + CO_CONFIG_TIME + CO_CONFIG_LSS_SLAVE + CO_CONFIG_LSS_MASTER +        \
+     CO_HB_CONSUMERS_MAX + CO_GUARD_WATCH_MAX + CO_SDO_SERVERS_MAX + CO_SDO_CLIENTS_MAX +          \
+     CO_EMCY_CONSUMERS_MAX + CO_RPDO_MAX + CO_TPDO_MAX + (CO_CONFIG_MANAGER ? 127 : 0))
+#endif
+
+#if CO_CONFIG_MANAGER && CO_SDO_CLIENTS_MAX < 1
+#error "CO_CONFIG_MANAGER configures its slaves over an SDO client: CO_SDO_CLIENTS_MAX >= 1"
+#endif
 #if CO_TX_QUEUE_LEN < 1 || CO_TX_QUEUE_LEN > 255
 #error "CO_TX_QUEUE_LEN must be 1..255"
 #endif
@@ -186,8 +245,8 @@
 #if CO_SDO_BUF_SIZE < 7 || CO_SDO_BUF_SIZE > 65535
 #error "CO_SDO_BUF_SIZE must be 7..65535"
 #endif
-#if CO_EMCY_QUEUE_LEN < 1 || CO_EMCY_QUEUE_LEN > 255
-#error "CO_EMCY_QUEUE_LEN must be 1..255"
+#if CO_EMCY_QUEUE_LEN < 0 || CO_EMCY_QUEUE_LEN > 255
+#error "CO_EMCY_QUEUE_LEN must be 0..255"
 #endif
 #if CO_EMCY_ACTIVE_MAX < 1 || CO_EMCY_ACTIVE_MAX > 255
 #error "CO_EMCY_ACTIVE_MAX must be 1..255"

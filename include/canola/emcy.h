@@ -27,7 +27,13 @@
  * received on one of them is decoded and handed to on_emcy with the sender's
  * COB-ID. Frames shorter than 8 bytes are ignored and counted as malformed.
  *
- * Memory: 8 bytes per queued frame, 4 per active error.
+ * Left out by configuration (canola/config.h): the history with CO_CONFIG_EMCY_HISTORY 0
+ * (nothing recorded, 0x1003 a plain entry), the inhibit time and its queue with
+ * CO_EMCY_QUEUE_LEN 0 (every frame leaves at once; a frame raised while the NMT state holds
+ * EMCY back, before boot-up or in stopped, is not sent), the consumer with
+ * CO_EMCY_CONSUMERS_MAX 0 (no 0x1028 COB-ID routed, on_emcy never called).
+ *
+ * Memory: 8 bytes per queued frame, 2 per active error, 4 per consumer entry.
  */
 #ifndef CANOLA_EMCY_H
 #define CANOLA_EMCY_H
@@ -49,16 +55,22 @@ typedef struct co_emcy_msg {
     uint8_t manufacturer[5];
 } co_emcy_msg_t;
 
-/** EMCY state of a node (embedded in co_node_t; fields are internal). */
+/** EMCY state of a node (embedded in co_node_t; fields are internal). The queue exists
+ *  with CO_EMCY_QUEUE_LEN > 0 (the inhibit time), the consumer entries with
+ *  CO_EMCY_CONSUMERS_MAX > 0. */
 typedef struct co_emcy {
+#if CO_EMCY_QUEUE_LEN > 0
     uint64_t last_us; /**< inhibit: time of the latest frame sent, CO_TIME_NEVER: none */
     uint8_t queue[CO_EMCY_QUEUE_LEN][8]; /**< frames waiting for the inhibit time */
     uint8_t queue_count;
+    uint32_t dropped; /**< frames lost to a full queue */
+#endif
     uint16_t active[CO_EMCY_ACTIVE_MAX]; /**< error codes active now */
     uint8_t active_count;
-    uint32_t dropped; /**< frames lost to a full queue */
-    uint32_t consumer_cob[CO_EMCY_CONSUMERS_MAX > 0 ? CO_EMCY_CONSUMERS_MAX : 1];
+#if CO_EMCY_CONSUMERS_MAX > 0
     uint8_t consumer_count; /**< 0x1028 sub-indices bound */
+    uint32_t consumer_cob[CO_EMCY_CONSUMERS_MAX];
+#endif
 } co_emcy_t;
 
 /** Bus events a driver reports (co_node_bus_event). */

@@ -145,11 +145,14 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     const co_od_entry_t *hb_period; /**< 0x1017 or NULL */
     uint64_t hb_next_us;
 
+#if CO_HB_CONSUMERS_MAX > 0
     /* Heartbeat consumer (0x1016). */
-    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX > 0 ? CO_HB_CONSUMERS_MAX : 1];
+    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX];
     uint8_t hb_consumer_count; /**< sub-indices of 0x1016 bound (<= CO_HB_CONSUMERS_MAX) */
     uint64_t boot_deadline_us; /**< CO_EC_NOT_BOOTED check, CO_TIME_NEVER when done */
+#endif
 
+#if CO_CONFIG_GUARDING
     /* Node guarding, slave side (0x100C, 0x100D) and master side. */
     const co_od_entry_t *guard_time;
     const co_od_entry_t *life_factor;
@@ -158,12 +161,15 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     bool life_guarding; /**< monitoring started by a first RTR */
     bool life_lost;
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
+#endif
 
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
     /* SDO channels. */
     co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
-    co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX > 0 ? CO_SDO_CLIENTS_MAX : 1];
+#if CO_SDO_CLIENTS_MAX > 0
+    co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX];
+#endif
     /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. */
     co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
     co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];

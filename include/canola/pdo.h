@@ -46,9 +46,16 @@
  *
  * PDOs run in operational only.
  *
+ * Left out by configuration (canola/config.h): the timers with CO_CONFIG_PDO_TIMERS 0
+ * (sub3 and sub5 without effect: an event-driven TPDO goes at each event, an RPDO is not
+ * monitored), re-mapping with CO_CONFIG_PDO_DYNAMIC 0 (the dictionary's mapping, writes
+ * to 0x1600.. and 0x1A00.. refused with 0x06010002), bit-granular mapping and dummy
+ * entries with CO_CONFIG_PDO_BIT_MAPPING 0 (every entry a whole object: another mapping
+ * is 0x06040041, and maps nothing when the dictionary holds it).
+ *
  * Cost: an RPDO of two byte-aligned 32-bit entries is a route look-up plus two copies.
- * Memory (32-bit targets): 40 bytes per PDO plus 12 per mapping slot (CO_PDO_MAP_MAX),
- * 136 bytes per PDO with the default 8 slots.
+ * Memory (32-bit targets): 48 bytes per PDO (28 without the timers) plus 5 per mapping
+ * slot (CO_PDO_MAP_MAX) and 1 per 8 slots: 89 bytes per PDO with the default 8 slots.
  */
 #ifndef CANOLA_PDO_H
 #define CANOLA_PDO_H
@@ -63,22 +70,21 @@ extern "C" {
 
 typedef struct co_node co_node_t;
 
-/** One resolved mapping entry (internal). */
-typedef struct co_pdo_item {
-    const co_od_entry_t *entry; /**< NULL for a dummy entry */
-    uint8_t bits;               /**< bits mapped */
-    bool direct; /**< the value travels as it is stored: copied to/from entry->value */
-} co_pdo_item_t;
-
-/** One PDO's resolved mapping and state (embedded in the node; fields are internal). */
+/** One PDO's resolved mapping and state (embedded in the node; fields are internal). The
+ *  mapping is kept in parallel arrays: an entry pointer and a bit count per slot, and a bit
+ *  per slot for "the value travels as it is stored" (copied to/from entry->value). */
 typedef struct co_pdo {
-    co_pdo_item_t items[CO_PDO_MAP_MAX];
-    uint64_t next_us; /**< TPDO: event timer / inhibit end; RPDO: deadline */
+#if CO_CONFIG_PDO_TIMERS
+    uint64_t next_us; /**< TPDO: event timer; RPDO: deadline */
     uint64_t inhibit_until_us;
+#endif
+    const co_od_entry_t *map_entry[CO_PDO_MAP_MAX]; /**< NULL for a dummy entry */
     uint32_t cob_id;
-    uint32_t frame_id;   /**< TPDO with `fast`: the identifier of its frames, from cob_id */
-    uint16_t event_ms;   /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
-    uint16_t inhibit;    /**< TPDO sub3: inhibit time, 100 us */
+    uint32_t frame_id; /**< TPDO with `fast`: the identifier of its frames, from cob_id */
+#if CO_CONFIG_PDO_TIMERS
+    uint16_t event_ms; /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
+    uint16_t inhibit;  /**< TPDO sub3: inhibit time, 100 us */
+#endif
     uint8_t sync_start;  /**< TPDO sub6: SYNC start value */
     uint8_t count;       /**< mapped entries */
     uint8_t bits;        /**< mapped bits in all */
@@ -91,7 +97,9 @@ typedef struct co_pdo {
                             asynchronous, no deadline; TPDO: active, plain, type 1..240,
                             no SYNC start value */
     uint8_t frame_flags; /**< TPDO with `fast`: the flags of its frames */
-    uint8_t data[8];     /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+    uint8_t map_bits[CO_PDO_MAP_MAX];             /**< bits mapped per slot */
+    uint8_t map_direct[(CO_PDO_MAP_MAX + 7) / 8]; /**< bit i: slot i copied as stored */
+    uint8_t data[8]; /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 } co_pdo_t;
 
 /** Mark the TPDOs mapping (index, sub) as having an event (as a change of a mapped value

@@ -16,6 +16,9 @@
  * and got another length) raises EMCY 0x8240 and is otherwise ignored. SYNC runs
  * in pre-operational and operational only.
  *
+ * Without the producer (CO_CONFIG_SYNC_PRODUCER 0) the node consumes SYNC only: 0x1005
+ * bit 30 and 0x1006 have no effect.
+ *
  * The synchronous window: co_sync_in_window() tells whether `now` lies within the
  * window after the latest SYNC (synchronous PDOs outside it are neither sent nor
  * applied).
@@ -23,6 +26,7 @@
 #ifndef CANOLA_SYNC_H
 #define CANOLA_SYNC_H
 
+#include "canola/config.h"
 #include "canola/types.h"
 
 #ifdef __cplusplus
@@ -33,14 +37,16 @@ typedef struct co_node co_node_t;
 
 /** SYNC state of a node (embedded in co_node_t; fields are internal). */
 typedef struct co_sync {
-    uint64_t next_us; /**< producer: next SYNC */
     uint64_t last_us; /**< time of the latest SYNC, CO_TIME_NEVER before the first */
-    uint32_t cob_id;  /**< 0x1005 */
-    const struct co_od_entry *period;   /**< 0x1006, or NULL */
+#if CO_CONFIG_SYNC_PRODUCER
+    uint64_t next_us;                 /**< producer: next SYNC */
+    const struct co_od_entry *period; /**< 0x1006, or NULL */
+    uint8_t counter;                  /**< producer: counter of the next SYNC */
+#endif
+    uint8_t last_counter;               /**< counter of the latest SYNC */
+    uint32_t cob_id;                    /**< 0x1005 */
     const struct co_od_entry *window;   /**< 0x1007, or NULL */
     const struct co_od_entry *overflow; /**< 0x1019, or NULL */
-    uint8_t counter;                    /**< producer: counter of the next SYNC; consumer: latest */
-    uint8_t last_counter;               /**< counter of the latest SYNC */
 } co_sync_t;
 
 /** True when the synchronous window (0x1007) after the latest SYNC is still open at

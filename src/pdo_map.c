@@ -1,0 +1,167 @@
+/*
+ * pdo_map.c -- PDO mappings (see canola/pdo.h): each mapping entry resolved to its
+ * object's storage and a bit count once, when the mapping becomes valid, so that frames
+ * pack and unpack without dictionary look-ups; and the re-mapping procedure's checks
+ * (CO_CONFIG_PDO_DYNAMIC). Bit-granular entries and dummy entries are
+ * CO_CONFIG_PDO_BIT_MAPPING.
+ */
+#include "pdo_internal.h"
+
+#define PDO_MAP_BITS_MAX 64u
+
+uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent)
+{
+    uint64_t v = absent;
+    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
+    return v;
+}
+
+#if CO_CONFIG_PDO_BIT_MAPPING
+void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n)
+{
+    /* At most 64 bits per PDO: a bit at a time is simple and cheap enough. */
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t s = spos + i;
+        uint32_t d = dpos + i;
+        unsigned bit = ((unsigned)src[s / 8u] >> (s % 8u)) & 1u;
+        unsigned mask = 1u << (d % 8u);
+        dst[d / 8u] = (uint8_t)((dst[d / 8u] & ~mask) | (bit << (d % 8u)));
+    }
+}
+#endif
+
+/* An object can carry PDO data in this direction: a fixed size of 1..8 bytes, the PDO
+ * attribute, and storage or a hook to read (TPDO) / take (RPDO) the value. */
+static bool mappable(const co_od_entry_t *e, bool tpdo)
+{
+    uint32_t size = co_type_size((co_type_t)e->type);
+    if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > 8) {
+        return false;
+    }
+    bool hook = e->hooks && (tpdo ? e->hooks->read != NULL : e->hooks->write != NULL);
+    return e->value != NULL || hook;
+}
+
+/* Bits an entry of `size` bytes may map: any 1..8 x size with bit-granular mapping, else
+ * exactly the whole value. */
+static bool bits_fit(uint8_t bits, uint32_t size)
+{
+    return CO_CONFIG_PDO_BIT_MAPPING ? bits <= 8u * size : bits == 8u * size;
+}
+
+/* One mapping entry value (index << 16 | sub << 8 | bits) into slot k of `out`. */
+static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_pdo_t *out,
+                               uint8_t k)
+{
+    uint16_t index = (uint16_t)(value >> 16);
+    uint8_t bits = (uint8_t)value;
+    out->map_entry[k] = NULL;
+    out->map_bits[k] = bits;
+    if (bits == 0) {
+        return CO_ABORT_NO_MAP;
+    }
+    if (CO_CONFIG_PDO_BIT_MAPPING && index >= CO_TYPE_BOOLEAN && index <= CO_TYPE_UNSIGNED32) {
+        /* a dummy entry: skips bits of a received frame */
+        bool fits = bits <= 8u * co_type_size((co_type_t)index);
+        return (!tpdo && fits) ? CO_ABORT_NONE : CO_ABORT_NO_MAP;
+    }
+    const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(value >> 8), NULL);
+    if (e == NULL || !mappable(e, tpdo) || !bits_fit(bits, co_type_size((co_type_t)e->type))) {
+        return CO_ABORT_NO_MAP;
+    }
+    out->map_entry[k] = e;
+    /* A whole number stored as it travels (and no hook to run): copied straight to and
+     * from the frame. */
+    uint32_t len = 0;
+    uint32_t size = co_type_size((co_type_t)e->type);
+    bool whole = bits == 8u * size;
+    bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
+    if (whole && plain) {
+        out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
+    }
+    return CO_ABORT_NONE;
+}
+
+/* Every item is copied straight between the frame and storage (no dummy entry, no bit
+ * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
+static bool all_direct(const co_pdo_t *p)
+{
+    for (uint8_t i = 0; i < p->count; i++) {
+        if (!pdo_direct(p, i)) {
+            return false; /* a direct item is whole bytes: the next one stays aligned */
+        }
+    }
+    return true;
+}
+
+/* Resolve entries 1..n of mapping object `index` into out's slots, count and bits. */
+static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, bool tpdo,
+                                  co_pdo_t *out)
+{
+    out->count = 0;
+    out->bits = 0;
+    out->plain = false;
+    memset(out->map_direct, 0, sizeof out->map_direct);
+    if (n == 0) {
+        return CO_ABORT_NONE;
+    }
+    if (co_od_find(od, index, n, NULL) == NULL) {
+        return CO_ABORT_VALUE_HIGH; /* more entries than the object has */
+    }
+    if (n > CO_PDO_MAP_MAX) {
+        return CO_ABORT_MAP_LEN;
+    }
+    uint32_t total = 0;
+    for (uint8_t k = 0; k < n; k++) {
+        const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(k + 1u), NULL);
+        if (e == NULL) {
+            return CO_ABORT_VALUE_HIGH;
+        }
+        co_abort_t abort = resolve_item(od, (uint32_t)co_od_entry_uint(e), tpdo, out, k);
+        if (abort != CO_ABORT_NONE) {
+            return abort;
+        }
+        total += out->map_bits[k];
+        if (total > PDO_MAP_BITS_MAX) {
+            return CO_ABORT_MAP_LEN;
+        }
+    }
+    out->count = n;
+    out->bits = (uint8_t)total;
+    out->plain = all_direct(out);
+    return CO_ABORT_NONE;
+}
+
+/* A mapping that does not resolve (set natively, or stored before the rules) maps
+ * nothing: the PDO then does nothing until it is re-mapped. */
+void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+{
+    uint16_t idx = pdo_map_index(tpdo, num);
+    uint8_t n = (uint8_t)pdo_od_uint(node, idx, 0, 0);
+    if (resolve_mapping(&node->cfg.od, idx, n, tpdo, p) != CO_ABORT_NONE) {
+        p->count = 0;
+        p->bits = 0;
+        p->plain = false;
+    }
+}
+
+#if CO_CONFIG_PDO_DYNAMIC
+/* The re-mapping procedure: the PDO not valid, sub0 = 0 while entries change, then
+ * sub0 = N, checked against the dictionary. */
+co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uint8_t sub,
+                             const uint8_t *data, uint32_t len)
+{
+    uint16_t idx = pdo_map_index(tpdo, num);
+    if (!(pdo_od_uint(node, pdo_comm_index(tpdo, num), 1, CO_COB_INVALID) & CO_COB_INVALID)) {
+        return CO_ABORT_UNSUPPORTED;
+    }
+    if (sub != 0) {
+        return pdo_od_uint(node, idx, 0, 0) != 0 ? CO_ABORT_UNSUPPORTED : CO_ABORT_NONE;
+    }
+    if (len != 1) {
+        return CO_ABORT_NONE; /* the length check has refused it already */
+    }
+    co_pdo_t trial;
+    return resolve_mapping(&node->cfg.od, idx, data[0], tpdo, &trial);
+}
+#endif

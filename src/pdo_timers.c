@@ -1,0 +1,97 @@
+/*
+ * pdo_timers.c -- the PDO timers (see canola/pdo.h): the TPDO inhibit time (0x1800+n sub3)
+ * and event timer (sub5), and RPDO deadline monitoring (0x1400+n sub5). Left out with
+ * CO_CONFIG_PDO_TIMERS 0 (pdo_internal.h): those sub-indices are then plain entries.
+ */
+#include "pdo_internal.h"
+
+#if CO_CONFIG_PDO_TIMERS
+
+#define EMCY_RPDO_TIMEOUT 0x8250u
+
+static uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
+{
+    uint64_t v = 0;
+    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
+    return (uint16_t)v;
+}
+
+void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
+{
+    p->event_ms = od_u16(node, comm_index, 5);
+    p->inhibit = tpdo ? od_u16(node, comm_index, 3) : 0;
+}
+
+bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
+{
+    if (node->now_us >= p->inhibit_until_us) {
+        return false;
+    }
+    co_node_schedule(node, p->inhibit_until_us);
+    return true;
+}
+
+void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
+{
+    p->inhibit_until_us = node->now_us + (uint64_t)p->inhibit * 100u;
+    tpdo_start(node, p);
+}
+
+/* A frame of usable length arrived: the deadline restarts, a missed one is over. */
+void rpdo_received(co_node_t *node, co_pdo_t *p)
+{
+    if (p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+    if (pdo_has(p, PDO_F_TIMED_OUT)) {
+        pdo_clear(p, PDO_F_TIMED_OUT);
+        if (!rpdo_other_has(node, p, PDO_F_TIMED_OUT)) {
+            pdo_clear_emcy(node, EMCY_RPDO_TIMEOUT);
+        }
+    }
+}
+
+static uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+{
+    if (now_us < p->next_us) {
+        return p->next_us;
+    }
+    p->next_us = CO_TIME_NEVER; /* reported once, until the next RPDO */
+    pdo_set(p, PDO_F_TIMED_OUT);
+    (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
+    co_node_error_behaviour(node);
+    return CO_TIME_NEVER;
+}
+
+static uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+{
+    if (!pdo_active(p) || p->type < 254) {
+        return CO_TIME_NEVER;
+    }
+    if (now_us >= p->next_us) { /* the event timer is an event */
+        p->next_us = CO_TIME_NEVER;
+        pdo_set(p, PDO_F_PENDING);
+    }
+    if (pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us) {
+        tpdo_send_event(node, p);
+    }
+    if (pdo_has(p, PDO_F_PENDING)) {
+        return co_min_u64(p->next_us, p->inhibit_until_us);
+    }
+    return p->next_us;
+}
+
+uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    uint64_t next = CO_TIME_NEVER;
+    for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
+        next = co_min_u64(next, rpdo_poll(node, &node->rpdo[n], now_us));
+    }
+    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+        next = co_min_u64(next, tpdo_poll(node, &node->tpdo[n], now_us));
+    }
+    return pdo_running(node) ? next : CO_TIME_NEVER;
+}
+
+#endif
