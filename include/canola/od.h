@@ -192,6 +192,7 @@ co_err_t co_od_hash_build(co_od_t *od, uint16_t *slots, uint8_t bits);
 
 /** Find an entry. On failure returns NULL and sets `*abort` (when not NULL) to
  *  CO_ABORT_NO_OBJECT (index unknown) or CO_ABORT_NO_SUB (index known, sub-index not).
+ *  With a hash O(1) expected (a miss that asks for the abort code also searches), else
  *  O(log n). */
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort);
 
