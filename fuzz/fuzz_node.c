@@ -144,7 +144,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     static rig_t r; /* the fuzzer's harness, not the core: reinitialised every run */
     memset(&r, 0, sizeof r);
-    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&r.od, 100)};
+    /* keyed and hashed, as canola.odgen emits dictionaries: the look-up the firmware runs */
+    co_node_config_t cfg = {.node_id = 5,
+                            .od = example_od_keyed(&r.od, example_od_init(&r.od, 100))};
     cfg.driver.tx = capture;
     cfg.driver.ctx = &r;
     cfg.boot_time_ms = 500;
