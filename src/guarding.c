@@ -14,7 +14,7 @@ static uint64_t life_time_us(const co_node_t *node)
 {
     uint64_t guard_ms = co_entry_uint(node->guard_time);
     uint64_t factor = co_entry_uint(node->life_factor);
-    return co_ms_to_us((uint32_t)(guard_ms * factor));
+    return co_long_ms_to_us((uint32_t)(guard_ms * factor));
 }
 
 void co_guard_bind(co_node_t *node)
@@ -96,7 +96,7 @@ static uint64_t life_poll(co_node_t *node, uint64_t now_us)
 
 static uint64_t watch_life_us(const co_guard_watch_t *w)
 {
-    return co_ms_to_us((uint32_t)w->guard_ms * w->factor);
+    return co_long_ms_to_us((uint32_t)w->guard_ms * w->factor);
 }
 
 co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)

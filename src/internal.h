@@ -4,6 +4,7 @@
 #ifndef CANOLA_INTERNAL_H
 #define CANOLA_INTERNAL_H
 
+#include "build.h"
 #include "canola/node.h"
 
 /* Receive route kinds (co_route_t.kind). */
@@ -67,13 +68,17 @@ static inline uint8_t co_sdo_servers_max(void) { return CO_SDO_SERVERS_MAX; }
 static inline uint8_t co_sdo_clients_max(void) { return CO_SDO_CLIENTS_MAX; }
 
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
-static inline uint64_t co_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
+/* Milliseconds of a 16-bit object (a period, a time-out) in microseconds: they fit 32 bits,
+ * so the multiply is a 32-bit one (no 64-bit helper call on Cortex-M0). */
+static inline uint64_t co_ms_to_us(uint16_t ms) { return (uint32_t)ms * 1000u; }
+/* Any 32-bit count of milliseconds (guard time x life time factor) in microseconds. */
+static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
 
 /* SDO server and client time-out (co_node_config_t.sdo_timeout_ms, default 1 s). */
 static inline uint64_t co_sdo_timeout_us(const co_node_t *node)
 {
     uint16_t ms = node->cfg.sdo_timeout_ms;
-    return co_ms_to_us(ms ? ms : 1000u);
+    return co_ms_to_us(ms ? ms : (uint16_t)1000u);
 }
 
 /* Integer value of an optional entry (0 when the OD lacks it). */
@@ -154,34 +159,6 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
 {
     return frame->id | ((frame->flags & CO_FRAME_EXT) ? 0x80000000u : 0u);
 }
-
-/* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
- * compilers without the attribute just decide for themselves). */
-#if defined(__GNUC__) || defined(__clang__)
-#define CO_NOINLINE __attribute__((noinline))
-#else
-#define CO_NOINLINE
-#endif
-
-/* The opposite hint: a small hot helper that the compiler's size heuristics would keep
- * out of line. Not when compiling for size (-Os): there flash counts more than cycles. */
-#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
-#define CO_INLINE inline __attribute__((always_inline))
-#else
-#define CO_INLINE inline
-#endif
-
-/* Short paths: code that does for the common case (a middle segment, a plain number) what
- * a general path next to it does for every case, only faster. Left out when compiling for
- * size (-Os), where flash counts more than cycles: the general paths then serve every case
- * (tests/CMakeLists.txt runs the SDO and PDO tests built that way too). */
-#ifndef CO_SHORT_PATHS
-#if defined(__OPTIMIZE_SIZE__)
-#define CO_SHORT_PATHS 0
-#else
-#define CO_SHORT_PATHS 1
-#endif
-#endif
 
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }

@@ -35,7 +35,7 @@ static void arm(co_node_t *node)
 {
     co_lss_master_t *m = &node->lss_master;
     m->heard = false;
-    m->deadline_us = node->now_us + co_ms_to_us(timeout_ms(m));
+    m->deadline_us = node->now_us + co_long_ms_to_us(timeout_ms(m));
     co_node_schedule(node, m->deadline_us);
 }
 

@@ -20,8 +20,8 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     if (co_od_validate(&config->od, NULL) != CO_OK) {
         return CO_ERR_CONFIG;
     }
-    memset(node, 0, sizeof *node);
-    node->cfg = *config;
+    co_zero(node, sizeof *node);
+    co_copy(&node->cfg, config, sizeof *config); /* (a struct copy would call memcpy) */
     node->node_id = id;
     node->nmt_state = CO_NMT_INITIALISING;
     node->services = co_nmt_services(CO_NMT_INITIALISING);

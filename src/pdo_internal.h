@@ -54,7 +54,7 @@ static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
         memcpy(dst, src, 8);
         break;
     default:
-        memcpy(dst, src, bytes);
+        co_copy(dst, src, bytes);
         break;
     }
 }

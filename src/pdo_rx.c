@@ -112,7 +112,7 @@ static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
     if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
-    memcpy(p->data, frame->data, frame->len);
+    co_copy(p->data, frame->data, frame->len);
     p->len = frame->len;
     pdo_set(p, PDO_F_WAITING);
 }

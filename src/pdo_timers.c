@@ -33,7 +33,7 @@ bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
 {
-    p->inhibit_until_us = node->now_us + (uint64_t)p->inhibit * 100u;
+    p->inhibit_until_us = node->now_us + (uint32_t)p->inhibit * 100u; /* 32-bit: fits */
     tpdo_start(node, p);
 }
 

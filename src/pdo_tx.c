@@ -51,7 +51,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
     co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
-    memcpy(f.data, data, f.len);
+    co_copy(f.data, data, f.len);
     (void)co_node_send_as(node, &f, CO_SVC_PDO);
 }
 

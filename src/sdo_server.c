@@ -246,7 +246,7 @@ static CO_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const
             return abort;
         }
     }
-    memcpy(&s->buf[s->buf_len], data, n);
+    co_copy(&s->buf[s->buf_len], data, n);
     s->buf_len += n;
     return CO_ABORT_NONE;
 }
@@ -431,7 +431,7 @@ static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t
         }
     } else {
         n = total < 4 ? total : 4;
-        memcpy(first, s->wire, n);
+        co_copy(first, s->wire, n);
     }
     if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= 4) {
         answer_expedited(node, s, small_value(first, total), total);
@@ -474,7 +474,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
         if (n == SEG_BYTES) {
             memcpy(&r[1], s->wire + s->done, SEG_BYTES); /* the usual case, copied inline */
         } else {
-            memcpy(&r[1], s->wire + s->done, n);
+            co_copy(&r[1], s->wire + s->done, n);
         }
     } else {
         co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
@@ -657,7 +657,7 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
         uint32_t offset = (uint32_t)seq * SEG_BYTES;
         uint32_t n = s->buf_len - offset;
         uint8_t d[8] = {(uint8_t)(0x80u | ++seq)};
-        memcpy(&d[1], &s->buf[offset], n);
+        co_copy(&d[1], &s->buf[offset], n);
         s->last_len = (uint8_t)n;
         send(node, s, d);
     }

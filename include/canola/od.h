@@ -151,7 +151,10 @@ struct co_od_entry {
  *  key * 0x9E3779B1 (Fibonacci hashing, modulo 2^32), as many as the mask has. */
 #define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key)*0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
-/** An object dictionary: the entry table and the context its hooks receive. */
+/** An object dictionary: the entry table and the context its hooks receive. `keys` and
+ *  `hash` make look-ups faster; a core built for size (-Os) leaves their use out (the
+ *  binary search over the entries finds the same entries with less code) and only
+ *  validates them. */
 typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;
