@@ -29,12 +29,19 @@ static pdo_ref_t pdo_ref(uint16_t index)
         .tpdo = off >= 0x400u, .mapping = (off & 0x200u) != 0, .num = (uint16_t)(off & 0x1FFu)};
 }
 
+/* The node's PDOs of one direction, `*count` of them. The loops over both directions below
+ * run over the two tables in turn (one loop body instead of two: less code). */
+static co_pdo_t *pdo_table(co_node_t *node, bool tpdo, uint16_t *count)
+{
+    *count = tpdo ? node->tpdo_count : node->rpdo_count;
+    return tpdo ? node->tpdo : node->rpdo;
+}
+
 static co_pdo_t *pdo_slot(co_node_t *node, bool tpdo, uint16_t num)
 {
-    if (tpdo) {
-        return num < node->tpdo_count ? &node->tpdo[num] : NULL;
-    }
-    return num < node->rpdo_count ? &node->rpdo[num] : NULL;
+    uint16_t count;
+    co_pdo_t *table = pdo_table(node, tpdo, &count);
+    return num < count ? &table[num] : NULL;
 }
 
 /* ---- loading parameters */
@@ -157,39 +164,41 @@ static void count_listeners(co_node_t *node)
 
 void co_pdo_reset_comm(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
-        load_pdo(node, &node->rpdo[n], false, n);
-    }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
-        load_pdo(node, &node->tpdo[n], true, n);
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        uint16_t count;
+        co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (uint16_t n = 0; n < count; n++) {
+            load_pdo(node, &table[n], tpdo, n);
+        }
     }
     count_listeners(node);
 }
 
 void co_pdo_add_routes(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
-        const co_pdo_t *p = &node->rpdo[n];
-        if (pdo_active(p)) {
-            co_routes_add(node, co_cob_key(p->cob_id), CO_ROUTE_RPDO, (uint8_t)n);
-        }
-    }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
-        const co_pdo_t *p = &node->tpdo[n];
-        bool rtr_only = p->type == 252 || p->type == 253;
-        if (pdo_active(p) && rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)) {
-            co_routes_add(node, co_cob_key(p->cob_id), CO_ROUTE_TPDO_RTR, (uint8_t)n);
+    /* Every active RPDO; a TPDO for its remote requests (types 252 and 253, RTR allowed). */
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        uint16_t count;
+        const co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (uint16_t n = 0; n < count; n++) {
+            const co_pdo_t *p = &table[n];
+            bool rtr_only = p->type == 252 || p->type == 253;
+            if (pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)))) {
+                co_routes_add(node, co_cob_key(p->cob_id),
+                              tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO, (uint8_t)n);
+            }
         }
     }
 }
 
 void co_pdo_state_entered(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
-        restart(node, &node->rpdo[n], false);
-    }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
-        restart(node, &node->tpdo[n], true);
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        uint16_t count;
+        co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (uint16_t n = 0; n < count; n++) {
+            restart(node, &table[n], tpdo);
+        }
     }
 }
 

@@ -37,9 +37,14 @@ static inline bool pdo_running(const co_node_t *node)
 }
 
 /* Copy a whole mapped value: the usual widths as fixed-size copies (compiled inline, not
- * a library call), anything else with memcpy. */
+ * a library call), anything else with co_copy; without the short paths (a build for size)
+ * all of them with co_copy. */
 static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
 {
+    if (!CO_SHORT_PATHS) {
+        co_copy(dst, src, bytes);
+        return;
+    }
     switch (bytes) {
     case 1:
         memcpy(dst, src, 1);
@@ -89,13 +94,8 @@ static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
 }
 
 /* The per-frame short paths (the usual RPDO in co_pdo_rx, the cyclic TPDO in co_pdo_sync)
- * do what the general paths do, with fewer instructions. A size build (-Os) keeps only the
- * general paths: flash counts more than cycles there. */
-#if defined(__OPTIMIZE_SIZE__)
-#define PDO_FAST_PATHS 0
-#else
-#define PDO_FAST_PATHS 1
-#endif
+ * do what the general paths do, with fewer instructions: CO_SHORT_PATHS (build.h). */
+#define PDO_FAST_PATHS CO_SHORT_PATHS
 
 /* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
  * told when some TPDO listens to changes. */

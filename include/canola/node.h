@@ -141,13 +141,11 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
     uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
     uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
-    uint32_t route_groups;   /**< bit (key >> 6) % 32 set for every route: a quick "no" */
-    uint64_t now_us;         /**< time of the latest ingest/poll */
-    uint64_t next_due_us;    /**< earliest deadline of any service */
-
-    /* Heartbeat producer (0x1017). */
-    uint64_t hb_next_us;
-    const co_od_entry_t *hb_period;       /**< 0x1017 or NULL */
+    uint32_t route_groups;          /**< bit (key >> 6) % 32 set for every route: a quick "no" */
+    const co_od_entry_t *hb_period; /**< heartbeat producer: 0x1017 or NULL */
+    uint64_t now_us;                /**< time of the latest ingest/poll */
+    uint64_t next_due_us;           /**< earliest deadline of any service */
+    uint64_t hb_next_us;            /**< heartbeat producer: the next heartbeat */
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
     co_node_config_t cfg;
