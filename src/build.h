@@ -18,6 +18,15 @@
 #define CO_NOINLINE
 #endif
 
+/* Out of line in a build for size: a small helper that -Os would copy into each of its
+ * callers, where one copy and the calls are smaller (GCC's estimate misses it; the
+ * helpers marked so were found by measuring). Other builds let the compiler decide. */
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__OPTIMIZE_SIZE__)
+#define CO_SIZE_NOINLINE __attribute__((noinline))
+#else
+#define CO_SIZE_NOINLINE
+#endif
+
 /* The opposite hint: a small hot helper that the compiler's size heuristics would keep
  * out of line. Not when compiling for size (-Os): there flash counts more than cycles. */
 #if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)

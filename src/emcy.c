@@ -47,14 +47,14 @@ static uint8_t register_of_active(const co_node_t *node)
     return reg;
 }
 
-static void register_store(co_node_t *node, uint8_t reg)
+static CO_SIZE_NOINLINE void register_store(co_node_t *node, uint8_t reg)
 {
     (void)co_od_set_uint(&node->cfg.od, 0x1001, 0, reg); /* no 0x1001: nothing to keep */
 }
 
 /* ---- active errors */
 
-static int active_find(const co_node_t *node, uint16_t code)
+static CO_SIZE_NOINLINE int active_find(const co_node_t *node, uint16_t code)
 {
     for (uint8_t i = 0; i < node->emcy.active_count; i++) {
         if (node->emcy.active[i] == code) {

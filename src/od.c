@@ -74,7 +74,7 @@ static const type_info_t k_types[] = {
 
 static const type_info_t k_unknown = {0, 0, K_NONE};
 
-static const type_info_t *type_info(unsigned type)
+static CO_SIZE_NOINLINE const type_info_t *type_info(unsigned type)
 {
     return type < sizeof k_types / sizeof k_types[0] ? &k_types[type] : &k_unknown;
 }
@@ -125,7 +125,7 @@ typedef uint32_t bits_t;
 
 /* Sign-extend the low `nbits` bits of `bits` to the pattern's width (unsigned arithmetic
  * only). */
-static bits_t sign_extend(bits_t bits, unsigned nbits)
+static CO_SIZE_NOINLINE bits_t sign_extend(bits_t bits, unsigned nbits)
 {
     if (nbits >= BITS_WIDTH) {
         return bits;

@@ -60,7 +60,7 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 /* Runtime state from scratch: timers off, nothing pending; in operational the TPDO's
  * event timer starts and RPDO monitoring waits for the first frame. A missed deadline or
  * a length error stays reported until the next RPDO clears it. */
-static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
+static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 {
     pdo_clear(p, PDO_F_PENDING | PDO_F_SAMPLED | PDO_F_STARTED | PDO_F_WAITING);
     pdo_timers_restart(p);
@@ -74,7 +74,7 @@ static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 /* ---- node hooks */
 
 /* 1 + the highest PDO number below `max` whose communication object exists. */
-static uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
+static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
 {
     uint16_t count = 0;
     for (uint16_t n = 0; n < max; n++) {
@@ -127,7 +127,7 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
 #endif
 }
 
-static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     load_comm(node, p, tpdo, num);
     pdo_load_mapping(node, p, tpdo, num);
@@ -184,8 +184,8 @@ void co_pdo_add_routes(co_node_t *node)
             const co_pdo_t *p = &table[n];
             bool rtr_only = p->type == 252 || p->type == 253;
             if (pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)))) {
-                co_routes_add(node, co_cob_key(p->cob_id),
-                              tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO, (uint8_t)n);
+                co_routes_add(node, co_cob_key(p->cob_id), tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO,
+                              (uint8_t)n);
             }
         }
     }

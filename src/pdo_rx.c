@@ -106,7 +106,7 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
 
 /* Synchronous data waits for the next SYNC; a frame outside the window after the last
  * SYNC is dropped (before any SYNC it waits). */
-static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
+static CO_SIZE_NOINLINE void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
 {
     bool synced = node->sync.last_us != CO_TIME_NEVER;
     if (synced && !co_sync_window_open(node, node->now_us)) {

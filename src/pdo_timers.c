@@ -9,7 +9,7 @@
 
 #define EMCY_RPDO_TIMEOUT 0x8250u
 
-static uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
+static CO_SIZE_NOINLINE uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
 {
     uint64_t v = 0;
     (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
@@ -64,7 +64,7 @@ static uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
     return CO_TIME_NEVER;
 }
 
-static uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+static CO_SIZE_NOINLINE uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
 {
     if (!pdo_active(p) || p->type < 254) {
         return CO_TIME_NEVER;

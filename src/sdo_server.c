@@ -35,7 +35,8 @@ enum server_state {
 
 /* ---- channels and their COB-IDs */
 
-static uint32_t cob_from_od(const co_node_t *node, uint8_t ch, uint8_t sub, uint32_t fallback)
+static CO_SIZE_NOINLINE uint32_t cob_from_od(const co_node_t *node, uint8_t ch, uint8_t sub,
+                                             uint32_t fallback)
 {
     uint64_t v = 0;
     if (co_od_get_uint(&node->cfg.od, (uint16_t)(0x1200 + ch), sub, &v) == CO_OK) {
@@ -132,7 +133,7 @@ static co_abort_t write_value(co_node_t *node, const co_sdo_server_t *s, const u
 /* ---- sending */
 
 /* A transfer opens (or goes on in a new state): poll must look at it by the time-out. */
-static void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
+static CO_SIZE_NOINLINE void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
 {
     s->state = state;
     co_node_schedule(node, s->last_us + co_sdo_timeout_us(node));

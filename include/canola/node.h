@@ -138,9 +138,9 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. */
     uint16_t rpdo_count;
     uint16_t tpdo_count;
-    uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
-    uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
-    uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
+    uint16_t tpdo_listeners;        /**< active TPDOs a changed value can trigger */
+    uint16_t tpdo_sync_end;         /**< 1 + the last active TPDO a SYNC drives (0: none) */
+    uint16_t rpdo_sync_end;         /**< 1 + the last active synchronous RPDO (0: none) */
     uint32_t route_groups;          /**< bit (key >> 6) % 32 set for every route: a quick "no" */
     const co_od_entry_t *hb_period; /**< heartbeat producer: 0x1017 or NULL */
     uint64_t now_us;                /**< time of the latest ingest/poll */
