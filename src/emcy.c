@@ -83,9 +83,8 @@ bool co_emcy_producer_off(const co_node_t *node)
 
 void co_emcy_frame_send(co_node_t *node, const uint8_t data[8])
 {
-    co_frame_t f = co_cob_frame(producer_cob(node), 8);
-    memcpy(f.data, data, 8);
-    (void)co_node_send_as(node, &f, CO_SVC_EMCY); /* a full tx queue counts the loss itself */
+    /* a full tx queue counts the loss itself */
+    (void)co_node_send_cob(node, producer_cob(node), data, 8, CO_SVC_EMCY);
 }
 
 /* One EMCY frame: out now, or after the inhibit time (emcy_queue.c). */
@@ -97,7 +96,7 @@ static void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[
     uint8_t data[8];
     co_put_u16(data, code);
     data[2] = reg;
-    memcpy(&data[3], mfr, 5);
+    co_copy(&data[3], mfr, 5);
     co_emcy_queue_emit(node, data);
 }
 

@@ -33,7 +33,7 @@ static void queue_pop(co_emcy_t *e)
 {
     e->queue_count--;
     for (uint8_t i = 0; i < e->queue_count; i++) {
-        memcpy(e->queue[i], e->queue[i + 1u], sizeof e->queue[0]);
+        co_copy(e->queue[i], e->queue[i + 1u], sizeof e->queue[0]);
     }
 }
 
@@ -69,7 +69,7 @@ void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
         e->dropped++; /* the newest is the one lost: the queue keeps the order of events */
         return;
     }
-    memcpy(e->queue[e->queue_count], data, 8);
+    co_copy(e->queue[e->queue_count], data, 8);
     e->queue_count++;
     co_emcy_state_entered(node);
 }

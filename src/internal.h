@@ -251,6 +251,11 @@ void co_txq_purge(co_node_t *node);
  * with CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue
  * if the state stops allowing it before the driver takes it. */
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service);
+/* Send `len` (0..8) bytes of `data` (NULL: none) on the identifier a COB-ID object value
+ * names (an 11-bit identifier is its own COB-ID value), as co_node_send_as does; the
+ * frame's other data bytes are zero. The services' frames are built here, in one place. */
+co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
+                          uint16_t service);
 /* The driver did not take a frame handed to it directly (co_node_send_hot): queue it
  * (CO_ERR_BUSY) or count it dropped, as co_node_send_as does. */
 co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t service, co_err_t err);
@@ -326,6 +331,8 @@ void co_hb_state_entered(co_node_t *node);
 uint64_t co_hb_poll(co_node_t *node, uint64_t now_us);
 void co_hb_written(co_node_t *node, const co_od_entry_t *entry);
 co_err_t co_hb_bind(co_node_t *node);
+/* The frame on 0x700 + node-ID: a heartbeat (the state) or the boot-up (0, service 0). */
+void co_hb_frame_send(co_node_t *node, uint8_t state, uint16_t service);
 
 /* hb_consumer.c: the consumer (0x1016), CO_HB_CONSUMERS_MAX > 0. */
 #if CO_HB_CONSUMERS_MAX > 0

@@ -31,7 +31,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
 
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 {
-    memset(out, 0, 8);
+    co_zero(out, 8);
     if (p->plain) { /* whole values as stored: one copy each */
         uint8_t *at = out;
         for (uint8_t i = 0; i < p->count; i++) {
@@ -50,16 +50,14 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 
 static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
-    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
-    co_copy(f.data, data, f.len);
-    (void)co_node_send_as(node, &f, CO_SVC_PDO);
+    (void)co_node_send_cob(node, p->cob_id, data, pdo_bytes(p), CO_SVC_PDO);
 }
 
 static void send_fresh(co_node_t *node, const co_pdo_t *p)
 {
-    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
-    pack(node, p, f.data); /* straight into the frame: no second copy */
-    (void)co_node_send_as(node, &f, CO_SVC_PDO);
+    uint8_t data[8];
+    pack(node, p, data);
+    send_data(node, p, data);
 }
 
 /* A TPDO with `fast` set: its frame header is precomputed. */

@@ -56,7 +56,10 @@ static void load_channel(co_node_t *node, uint8_t ch)
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
-    s->reply = co_cob_frame(s->cob_tx, 8);
+    co_frame_t *r = &s->reply; /* (field by field: no memcpy, no memset) */
+    r->id = (s->cob_tx & CO_COB_EXT) ? (s->cob_tx & CO_ID_EXT_MAX) : (s->cob_tx & CO_ID_STD_MAX);
+    r->flags = (s->cob_tx & CO_COB_EXT) ? CO_FRAME_EXT : 0;
+    r->len = 8;
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -151,7 +154,7 @@ static CO_INLINE void send_reply(co_node_t *node, co_sdo_server_t *s)
 /* A frame of 8 bytes to the client. */
 static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
 {
-    memcpy(s->reply.data, data, 8);
+    co_copy(s->reply.data, data, 8);
     send_reply(node, s);
 }
 
@@ -319,7 +322,7 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
     } else if (s->buf_len + SEG_BYTES <= CO_SDO_BUF_SIZE) {
-        memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
+        co_copy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
         s->buf_len += n;
     } else {
         abort = collect(node, s, &d[1], n);
@@ -472,7 +475,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
     uint32_t total = s->size;
     if (s->wire != NULL) { /* stored in wire form: copy the piece */
         n = total - s->done < SEG_BYTES ? total - s->done : SEG_BYTES;
-        if (n == SEG_BYTES) {
+        if (CO_SHORT_PATHS && n == SEG_BYTES) {
             memcpy(&r[1], s->wire + s->done, SEG_BYTES); /* the usual case, copied inline */
         } else {
             co_copy(&r[1], s->wire + s->done, n);

@@ -50,9 +50,9 @@ co_err_t co_time_send(co_node_t *node, const co_time_of_day_t *t)
     if (t->ms >= MS_PER_DAY) {
         return CO_ERR_ARG;
     }
-    co_frame_t f = co_cob_frame(node->time.cob_id, TIME_FRAME_LEN);
-    co_time_encode(t, f.data);
-    return co_node_send_as(node, &f, CO_SVC_TIME);
+    uint8_t data[TIME_FRAME_LEN];
+    co_time_encode(t, data);
+    return co_node_send_cob(node, node->time.cob_id, data, TIME_FRAME_LEN, CO_SVC_TIME);
 }
 
 /* ---- consumer */

@@ -124,6 +124,19 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
     return co_txq_refused(node, frame, service, CO_ERR_BUSY); /* queued */
 }
 
+co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
+                          uint16_t service)
+{
+    co_frame_t f;
+    f.id = (cob & CO_COB_EXT) ? (cob & CO_ID_EXT_MAX) : (cob & CO_ID_STD_MAX);
+    f.flags = (cob & CO_COB_EXT) ? CO_FRAME_EXT : 0;
+    f.len = len;
+    for (uint8_t i = 0; i < sizeof f.data; i++) { /* (no memcpy, no memset) */
+        f.data[i] = i < len ? data[i] : 0;
+    }
+    return co_node_send_as(node, &f, service);
+}
+
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame)
 {
     return co_node_send_as(node, frame, 0);
