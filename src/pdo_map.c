@@ -70,13 +70,13 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
         return CO_ABORT_NO_MAP;
     }
     out->map_entry[k] = e;
-    /* A whole number stored as it travels (and no hook to run): copied straight to and
-     * from the frame. */
+    /* A whole number stored as it travels (and no hook to run): the short paths copy it
+     * straight to and from the frame. */
     uint32_t len = 0;
     uint32_t size = co_type_size((co_type_t)e->type);
     bool whole = bits == 8u * size;
     bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
-    if (whole && plain) {
+    if (CO_SHORT_PATHS && whole && plain) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }
     return CO_ABORT_NONE;
@@ -128,7 +128,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
-    out->plain = all_direct(out);
+    out->plain = CO_SHORT_PATHS && all_direct(out);
     return CO_ABORT_NONE;
 }
 

@@ -14,7 +14,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
 {
     uint32_t n;
     uint8_t bits = p->map_bits[i];
-    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes from storage */
+    if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
         pdo_copy_value(out + pos / 8u, p->map_entry[i]->value, bits / 8u);
         return;
     }
@@ -32,7 +32,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 {
     co_zero(out, 8);
-    if (p->plain) { /* whole values as stored: one copy each */
+    if (CO_SHORT_PATHS && p->plain) { /* whole values as stored: one copy each */
         uint8_t *at = out;
         for (uint8_t i = 0; i < p->count; i++) {
             uint32_t bytes = p->map_bits[i] / 8u;

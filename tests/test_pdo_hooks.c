@@ -209,6 +209,25 @@ static void test_rpdo_value_refused_by_the_write_hook(void)
     CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#88776655");
 }
 
+/* An RPDO stores all its values before TPDOs hear of the changes, also when a value goes
+ * through hooks (not the plain copy): the event-driven TPDO mapping both objects never
+ * carries the new first value with the old second one. */
+static void test_rpdo_values_stored_before_tpdo_events(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21010010, 0x21020010};
+    remap(0x1400, 0x1600, 0x205, m, 2);
+    remap(0x1800, 0x1A00, 0x185, m, 2);
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 1000, 0x205, "34 12 78 56");
+    CHECK_EQ(g.u16, 0x1234);
+    CHECK_EQ(g.plain16, 0x5678);
+    CHECK_EQ(g.written, 1);
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#34127856 185#34127856");
+}
+
 /* A cyclic TPDO that is not all plain values (a hook-served one first) counts its SYNCs
  * all the same, and samples each value when it is due. */
 static void test_cyclic_tpdo_with_a_hooked_object(void)
@@ -278,6 +297,7 @@ int main(void)
     RUN(test_local_access_to_other_kinds);
     RUN(test_rpdo_value_refused_by_the_write_hook);
     RUN(test_cyclic_tpdo_with_a_hooked_object);
+    RUN(test_rpdo_values_stored_before_tpdo_events);
     RUN(test_plain_16_bit_value_on_the_short_paths);
     return check_summary();
 }

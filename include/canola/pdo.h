@@ -83,7 +83,8 @@ typedef struct co_pdo {
     uint8_t sync_count;  /**< SYNCs counted towards the next transmission */
     uint8_t flags;       /**< internal state bits */
     uint8_t len;         /**< RPDO: bytes of the frame waiting for the next SYNC */
-    bool plain;          /**< every item a whole byte-aligned value copied as stored */
+    bool plain;          /**< every item a whole byte-aligned value copied as stored (set
+                            and used by the short paths only, as map_direct) */
     uint8_t fast;        /**< the short path's frame length, else 0. RPDO: active, plain,
                             asynchronous, no deadline; TPDO: active, plain, type 1..240,
                             no SYNC start value */
