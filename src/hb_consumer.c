@@ -159,7 +159,7 @@ bool co_hb_consumes(const co_node_t *node, uint8_t node_id)
 
 /* ---- object dictionary writes */
 
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+co_abort_t co_hb_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                              uint32_t len)
 {
     if (entry->index != 0x1016 || entry->sub == 0 || len != 4) {

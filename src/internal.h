@@ -199,7 +199,7 @@ static inline void co_none_entry(co_node_t *node, const co_od_entry_t *entry)
     (void)node;
     (void)entry;
 }
-static inline co_abort_t co_none_check(const co_node_t *node, const co_od_entry_t *entry,
+static inline co_abort_t co_none_check(co_node_t *node, const co_od_entry_t *entry,
                                        const uint8_t *data, uint32_t len)
 {
     (void)node;
@@ -300,7 +300,11 @@ void co_sdo_server_reset_comm(co_node_t *node);
 /* The NMT state no longer allows SDO: open transfers end without a frame. */
 void co_sdo_server_stop(co_node_t *node);
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
+#if CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
+#else
+#define co_sdo_server_poll co_none_poll /* expedited transfers leave nothing open */
+#endif
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sdo_server_add_routes(co_node_t *node);
 
@@ -341,7 +345,7 @@ void co_hb_consumers_reset(co_node_t *node);
 void co_hb_consumers_add_routes(co_node_t *node);
 void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us);
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+co_abort_t co_hb_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                              uint32_t len);
 void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry);
 bool co_hb_consumer_lost(const co_node_t *node);             /* some consumed heartbeat is lost */
@@ -413,8 +417,8 @@ static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
 #if CO_CONFIG_EMCY_HISTORY
 void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5]);
 void co_emcy_history_clear(co_node_t *node);
-co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len);
+co_abort_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len);
 #else
 static inline void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5])
 {
@@ -441,8 +445,8 @@ void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_sync_reset_comm(co_node_t *node);
 void co_sync_add_routes(co_node_t *node);
 void co_sync_ingest(co_node_t *node, const co_frame_t *frame);
-co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len);
+co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len);
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
 /* A SYNC taken (received, or sent by this node's producer). */
 void co_sync_handled(co_node_t *node, uint8_t counter);

@@ -267,81 +267,87 @@ void co_node_state_changed(co_node_t *node)
 
 /* ---- object dictionary access */
 
-/* Service side of a write: refuse values a service cannot take. */
-/* The objects whose value is a COB-ID (bit 31 valid, bit 29 frame format, the ID). */
-static bool is_cob_id_object(const co_od_entry_t *e)
+/* ---- The services' objects: which service checks a write to which communication object,
+ * and takes the new value into effect. A table, searched on each write to 0x1000..0x1FFF,
+ * instead of a switch per step: less code. */
+
+typedef co_abort_t (*write_check_fn)(co_node_t *node, const co_od_entry_t *entry,
+                                     const uint8_t *data, uint32_t len);
+typedef void (*written_fn)(co_node_t *node, const co_od_entry_t *entry);
+
+/* Which sub-indices of an object hold a COB-ID (bit 31 valid, bit 29 frame format, the
+ * identifier): a new one must name an identifier of its own format. */
+enum { COB_NONE, COB_SUB0, COB_SUB1_2, COB_SUB1_UP };
+
+typedef struct service_object {
+    uint16_t first; /* indices first..last */
+    uint16_t last;
+    uint8_t cob;          /* COB_*: the sub-indices holding a COB-ID */
+    write_check_fn check; /* refuse a value the service cannot take (NULL: none) */
+    written_fn written;   /* the new value takes effect (NULL: nothing to do) */
+} service_object_t;
+
+#if CO_CONFIG_GUARDING
+static void guard_written(co_node_t *node, const co_od_entry_t *entry)
 {
-    uint16_t i = e->index;
-    return ((i == 0x1005 || i == 0x1012 || i == 0x1014) && e->sub == 0) ||
-           (i >= 0x1200 && i <= 0x12FF && (e->sub == 1 || e->sub == 2)) ||
-           (i == 0x1028 && e->sub >= 1);
+    (void)entry;
+    co_guard_written(node);
+}
+#endif
+
+/* Objects of left-out features stay (for their COB-ID check) or go (with no effect). */
+static const service_object_t k_service_objects[] = {
+#if CO_CONFIG_EMCY_HISTORY
+    {0x1003, 0x1003, COB_NONE, co_emcy_check_write, co_emcy_written},
+#endif
+    {0x1005, 0x1005, COB_SUB0, NULL, co_sync_written},
+#if CO_CONFIG_SYNC_PRODUCER
+    {0x1006, 0x1007, COB_NONE, NULL, co_sync_written},
+#endif
+#if CO_CONFIG_GUARDING
+    {0x100C, 0x100D, COB_NONE, NULL, guard_written},
+#endif
+    {0x1010, 0x1011, COB_NONE, co_storage_check_write, co_storage_show_capability},
+    {0x1012, 0x1012, COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
+    {0x1014, 0x1014, COB_SUB0, NULL, CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
+#if CO_EMCY_QUEUE_LEN > 0
+    {0x1015, 0x1015, COB_NONE, NULL, co_emcy_written},
+#endif
+#if CO_HB_CONSUMERS_MAX > 0
+    {0x1016, 0x1016, COB_NONE, co_hb_check_write, co_hb_written},
+#endif
+    {0x1017, 0x1017, COB_NONE, NULL, co_hb_written},
+    {0x1019, 0x1019, COB_NONE, co_sync_check_write, co_sync_written},
+    {0x1028, 0x1028, COB_SUB1_UP, NULL, CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
+    {0x1200, 0x127F, COB_SUB1_2, NULL, co_sdo_server_written},
+    {0x1280, 0x12FF, COB_SUB1_2, NULL, CO_SDO_CLIENTS_MAX > 0 ? co_sdo_client_written : NULL},
+    {0x1400, 0x1BFF, COB_NONE, co_pdo_check_write, co_pdo_written},
+};
+
+/* The service object of an entry of 0x1000..0x1FFF, or NULL. */
+static const service_object_t *service_object(const co_od_entry_t *entry)
+{
+    for (size_t i = 0; i < sizeof k_service_objects / sizeof k_service_objects[0]; i++) {
+        const service_object_t *o = &k_service_objects[i];
+        if (entry->index >= o->first && entry->index <= o->last) {
+            return o;
+        }
+    }
+    return NULL;
 }
 
-static co_abort_t service_check(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                                uint32_t len)
+/* Service side of a write: refuse values a service cannot take. */
+static co_abort_t service_check(co_node_t *node, const service_object_t *o,
+                                const co_od_entry_t *entry, const uint8_t *data, uint32_t len)
 {
-    if (len == 4 && is_cob_id_object(entry) && !co_cob_valid(co_get_u32(data))) {
+    uint8_t sub = entry->sub;
+    bool cob = (o->cob == COB_SUB0 && sub == 0) ||
+               (o->cob == COB_SUB1_2 && (sub == 1 || sub == 2)) ||
+               (o->cob == COB_SUB1_UP && sub >= 1);
+    if (len == 4 && cob && !co_cob_valid(co_get_u32(data))) {
         return CO_ABORT_VALUE;
     }
-    if (entry->index >= 0x1400 && entry->index <= 0x1BFF) {
-        return co_pdo_check_write(node, entry, data, len);
-    }
-    switch (entry->index) {
-    case 0x1010:
-    case 0x1011:
-        return co_storage_check_write(node, entry, data, len); /* the command runs here */
-    case 0x1016:
-        return co_hb_check_write(node, entry, data, len);
-    case 0x1003:
-        return co_emcy_check_write(node, entry, data, len);
-    case 0x1019:
-        return co_sync_check_write(node, entry, data, len);
-    default:
-        return CO_ABORT_NONE;
-    }
-}
-
-/* Service side of a write: take the new value into effect at once. */
-static void service_apply(co_node_t *node, const co_od_entry_t *entry)
-{
-    switch (entry->index) {
-    case 0x1016:
-    case 0x1017:
-        co_hb_written(node, entry);
-        break;
-    case 0x100C:
-    case 0x100D:
-        co_guard_written(node);
-        break;
-    case 0x1005:
-    case 0x1006:
-    case 0x1007:
-    case 0x1019:
-        co_sync_written(node, entry);
-        break;
-    case 0x1012:
-        co_time_written(node, entry);
-        break;
-    case 0x1010:
-    case 0x1011:
-        co_storage_show_capability(node, entry);
-        break;
-    case 0x1003:
-    case 0x1014:
-    case 0x1015:
-    case 0x1028:
-        co_emcy_written(node, entry);
-        break;
-    default:
-        if (entry->index >= 0x1400 && entry->index <= 0x1BFF) {
-            co_pdo_written(node, entry);
-        } else if (entry->index >= 0x1200 && entry->index <= 0x127F) {
-            co_sdo_server_written(node, entry);
-        } else if (entry->index >= 0x1280 && entry->index <= 0x12FF) {
-            co_sdo_client_written(node, entry);
-        }
-        break;
-    }
+    return o->check != NULL ? o->check(node, entry, data, len) : CO_ABORT_NONE;
 }
 
 /* co_node_write_entry of anything but a plain application number. */
@@ -350,11 +356,11 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
 {
     /* The services own objects of the communication profile area only (0x1000..0x1FFF):
      * an application object needs neither their checks nor their effects. */
-    bool comm = entry->index < 0x2000u;
+    const service_object_t *o = entry->index < 0x2000u ? service_object(entry) : NULL;
     const co_od_t *od = &node->cfg.od;
     co_abort_t abort = co_od_check(od, entry, data, len);
-    if (abort == CO_ABORT_NONE && comm) {
-        abort = service_check(node, entry, data, len);
+    if (abort == CO_ABORT_NONE && o != NULL) {
+        abort = service_check(node, o, entry, data, len);
     }
     if (abort == CO_ABORT_NONE) {
         abort = co_od_store(od, entry, data, len);
@@ -362,8 +368,8 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    if (comm) {
-        service_apply(node, entry);
+    if (o != NULL && o->written != NULL) {
+        o->written(node, entry); /* the new value takes effect at once */
     }
     co_pdo_changed(node, entry); /* change of state: event-driven TPDOs mapping it */
     if (entry->hooks && entry->hooks->written) {

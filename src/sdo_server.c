@@ -897,6 +897,7 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     serve_other(node, s, d);
 }
 
+#if CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
@@ -916,3 +917,4 @@ uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
     }
     return next;
 }
+#endif

@@ -67,8 +67,8 @@ void co_sync_add_routes(co_node_t *node)
     }
 }
 
-co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len)
+co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len)
 {
     if (entry->index != 0x1019 || len < 1) {
         return CO_ABORT_NONE;
