@@ -88,8 +88,8 @@ static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
         return 0;
     }
     /* The communication objects read on every SYNC or poll are u8/u16/u32 in storage:
-     * read them in place; any other type takes the general path. */
-    if (entry->value != NULL) {
+     * read them in place (a short path); any other type takes the general one. */
+    if (CO_SHORT_PATHS && entry->value != NULL) {
         switch (entry->type) {
         case CO_TYPE_UNSIGNED8:
             return *(const uint8_t *)entry->value;

@@ -146,10 +146,11 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         return;
     }
     /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
-     * the one the last frame took; this path makes no call but the service's. */
+     * the one the last frame took; this path makes no call but the service's (a short
+     * path: without it every frame takes the search). */
     uint32_t key = co_route_key(frame);
     const co_route_t *route = &node->routes[node->route_hint];
-    if (node->route_hint >= node->route_count || route->key != key) {
+    if (!CO_SHORT_PATHS || node->route_hint >= node->route_count || route->key != key) {
         ingest_searched(node, frame, key);
         return;
     }

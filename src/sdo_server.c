@@ -426,7 +426,9 @@ static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t
     uint32_t n = 0;
     uint32_t total = 0;
     begin(s);
-    s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    if (CO_CONFIG_SDO_SEGMENTED) { /* the segments of a long value copy from the wire view */
+        s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    }
     if (s->wire == NULL) {
         co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
         if (abort != CO_ABORT_NONE) {
