@@ -509,10 +509,17 @@ void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);
 void co_storage_reset_comm(co_node_t *node);
 
 /* time.c */
+#if CO_CONFIG_TIME
 void co_time_reset_comm(co_node_t *node);
 void co_time_add_routes(co_node_t *node);
 void co_time_ingest(co_node_t *node, const co_frame_t *frame);
 void co_time_written(co_node_t *node, const co_od_entry_t *entry);
+#else /* neither role: time.cob_id stays 0, nothing is routed */
+#define co_time_reset_comm co_none_node
+#define co_time_add_routes co_none_node
+#define co_time_ingest co_none_frame
+#define co_time_written co_none_entry
+#endif
 
 /* lss_slave.c, lss_master.c: no-ops when left out of the build. */
 #if CO_CONFIG_LSS_SLAVE

@@ -74,9 +74,8 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
      * straight to and from the frame. */
     uint32_t len = 0;
     uint32_t size = co_type_size((co_type_t)e->type);
-    bool whole = bits == 8u * size;
-    bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
-    if (CO_SHORT_PATHS && whole && plain) {
+    if (CO_SHORT_PATHS && bits == 8u * size && e->hooks == NULL &&
+        co_od_wire_data(od, e, &len) == e->value && len == size) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }
     return CO_ABORT_NONE;

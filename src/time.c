@@ -57,11 +57,10 @@ co_err_t co_time_send(co_node_t *node, const co_time_of_day_t *t)
 
 /* ---- consumer */
 
+#if CO_CONFIG_TIME
+
 void co_time_ingest(co_node_t *node, const co_frame_t *frame)
 {
-    if (!CO_CONFIG_TIME) {
-        return; /* never routed: cob_id stays 0 */
-    }
     if ((frame->flags & CO_FRAME_RTR) || frame->len != TIME_FRAME_LEN) {
         node->stats.rx_malformed++;
         return;
@@ -77,10 +76,8 @@ void co_time_ingest(co_node_t *node, const co_frame_t *frame)
 void co_time_reset_comm(co_node_t *node)
 {
     uint64_t v = 0;
-    if (CO_CONFIG_TIME) {
-        (void)co_od_get_uint(&node->cfg.od, 0x1012, 0, &v); /* absent: 0, neither role */
-    }
-    node->time.cob_id = (uint32_t)v; /* without TIME: neither role, whatever 0x1012 says */
+    (void)co_od_get_uint(&node->cfg.od, 0x1012, 0, &v); /* absent: 0, neither role */
+    node->time.cob_id = (uint32_t)v;
 }
 
 void co_time_add_routes(co_node_t *node)
@@ -93,7 +90,7 @@ void co_time_add_routes(co_node_t *node)
 
 void co_time_written(co_node_t *node, const co_od_entry_t *entry)
 {
-    if (!CO_CONFIG_TIME || entry->index != 0x1012) {
+    if (entry->index != 0x1012) {
         return;
     }
     uint32_t old = node->time.cob_id;
@@ -105,3 +102,5 @@ void co_time_written(co_node_t *node, const co_od_entry_t *entry)
         co_routes_rebuild(node);
     }
 }
+
+#endif /* CO_CONFIG_TIME: without it neither role, whatever 0x1012 says */
