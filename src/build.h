@@ -18,6 +18,14 @@
 #define CO_NOINLINE
 #endif
 
+/* CO_NOINLINE for speed's sake alone (the caller's common path keeps its registers): a
+ * build for size lets the compiler decide (where that measured smaller). */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
+#define CO_FAST_NOINLINE __attribute__((noinline))
+#else
+#define CO_FAST_NOINLINE
+#endif
+
 /* Out of line in a build for size: a small helper that -Os would copy into each of its
  * callers, where one copy and the calls are smaller (GCC's estimate misses it; the
  * helpers marked so were found by measuring). Other builds let the compiler decide. */

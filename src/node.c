@@ -104,8 +104,8 @@ static CO_INLINE void dispatch(co_node_t *node, const co_route_t *route, const c
 
 /* A frame whose service the NMT state does not allow now: dropped and counted, unless
  * it is the one that ends an LSS quiet time. */
-static CO_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
-                                     const co_frame_t *frame)
+static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
+                                          const co_frame_t *frame)
 {
     if (co_lss_slave_resume(node, route->service)) {
         dispatch(node, route, frame);
@@ -115,7 +115,7 @@ static CO_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
 }
 
 /* A frame on another COB-ID than the last one routed: the search, then as below. */
-static CO_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
+static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
 {
     const co_route_t *route = co_routes_find(node, key);
     if (route == NULL) {

@@ -393,8 +393,8 @@ static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 }
 
 /* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
-static CO_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint32_t key,
-                                                    co_abort_t *abort)
+static CO_FAST_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint32_t key,
+                                                         co_abort_t *abort)
 {
     uint16_t index = (uint16_t)(key >> 8);
     uint32_t pos = lower_bound(od, key);

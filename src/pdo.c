@@ -140,6 +140,9 @@ static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, u
  * RPDOs. Counted again whenever a PDO changes. */
 static void count_listeners(co_node_t *node)
 {
+    if (!CO_SHORT_PATHS) {
+        return; /* a build for size looks at every PDO (co_pdo_sync, co_pdo_changed) */
+    }
     uint16_t listeners = 0;
     uint16_t sync_end = 0;
     for (uint16_t n = 0; n < node->tpdo_count; n++) {
@@ -207,12 +210,14 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
      * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
      * Both loops test the NMT state first (an application callback may change it). */
-    for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
+    uint16_t rx_end = CO_SHORT_PATHS ? node->rpdo_sync_end : node->rpdo_count;
+    uint16_t tx_end = CO_SHORT_PATHS ? node->tpdo_sync_end : node->tpdo_count;
+    for (uint16_t n = 0; n < rx_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n);
         }
     }
-    for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < tx_end && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (!PDO_FAST_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);
@@ -249,7 +254,8 @@ static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
 {
-    if (node->tpdo_listeners != 0 && (entry->attr & CO_OD_TPDO) && pdo_running(node)) {
+    bool listened = !CO_SHORT_PATHS || node->tpdo_listeners != 0; /* (see count_listeners) */
+    if (listened && (entry->attr & CO_OD_TPDO) && pdo_running(node)) {
         (void)mark_tpdos(node, entry);
     }
 }

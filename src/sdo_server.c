@@ -230,8 +230,8 @@ static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 }
 
 /* Append received bytes; when the buffer is full, stream it on or fail. */
-static CO_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
-                                      uint32_t n)
+static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
+                                           uint32_t n)
 {
     /* a block's last segment may carry up to 6 bytes of padding past the value */
     uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
@@ -420,7 +420,7 @@ static CO_INLINE uint32_t plain_value(const co_od_entry_t *e)
 }
 
 /* Any other upload: through the dictionary's wire view or its read hook. */
-static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
+static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
 {
     uint8_t first[4] = {0};
     uint32_t n = 0;

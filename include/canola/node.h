@@ -134,10 +134,11 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     bool sdo_reload;      /**< a server channel waits to take new COB-IDs */
     uint16_t services;    /**< co_service_t bits the current NMT state allows */
     uint16_t route_count; /**< receive routes, sorted by key (routes[] below) */
-    uint16_t route_hint;  /**< the route found last */
+    uint16_t route_hint;  /**< the route found last (short paths only) */
     /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. */
     uint16_t rpdo_count;
     uint16_t tpdo_count;
+    /* The three below are kept by the short paths only (a size build looks at every PDO). */
     uint16_t tpdo_listeners;        /**< active TPDOs a changed value can trigger */
     uint16_t tpdo_sync_end;         /**< 1 + the last active TPDO a SYNC drives (0: none) */
     uint16_t rpdo_sync_end;         /**< 1 + the last active synchronous RPDO (0: none) */
@@ -148,9 +149,9 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint64_t hb_next_us;            /**< heartbeat producer: the next heartbeat */
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
-    co_node_config_t cfg;
     co_node_stats_t stats;
     co_sync_t sync;
+    co_node_config_t cfg;
     co_time_t time;
     co_emcy_t emcy;
 
