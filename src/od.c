@@ -476,14 +476,16 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
     return writable ? CO_ABORT_NONE : CO_ABORT_READ_ONLY;
 }
 
-/* The wire bytes of a value in storage (`*len` of them, its current length): numbers not
- * stored in their wire form are encoded into tmp (when given; NULL without), the rest is
- * read where it is. */
+/* The wire bytes of a value in storage (`*len` of them, its current length), read where
+ * they are: on a little-endian host the wire bytes of every number are the first bytes of
+ * its storage (an INTEGER24 is the low three bytes of its int32_t). A big-endian host
+ * encodes numbers into tmp (when given; NULL without). */
 static const uint8_t *stored_wire(const co_od_entry_t *e, uint8_t *tmp, uint32_t *len)
 {
     const type_info_t *t = type_info(e->type);
     *len = co_od_value_len(NULL, e);
-    if (is_number(t) && !wire_is_native(t)) {
+#if !LITTLE_ENDIAN_HOST
+    if (is_number(t)) {
         if (tmp != NULL) {
             bits_t bits = native_get(e->value, t);
             for (unsigned i = 0; i < t->wire; i++) {
@@ -492,6 +494,9 @@ static const uint8_t *stored_wire(const co_od_entry_t *e, uint8_t *tmp, uint32_t
         }
         return tmp;
     }
+#else
+    (void)tmp;
+#endif
     return t->kind == K_DOMAIN ? ((const co_od_domain_t *)e->value)->data : e->value;
 }
 

@@ -72,10 +72,9 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     out->map_entry[k] = e;
     /* A whole number stored as it travels (and no hook to run): the short paths copy it
      * straight to and from the frame. */
-    uint32_t len = 0;
     uint32_t size = co_type_size((co_type_t)e->type);
-    if (CO_SHORT_PATHS && bits == 8u * size && e->hooks == NULL &&
-        co_od_wire_data(od, e, &len) == e->value && len == size) {
+    if (CO_SHORT_PATHS && bits == 8u * size && e->hooks == NULL && e->value != NULL &&
+        ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u)) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }
     return CO_ABORT_NONE;

@@ -48,7 +48,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
     }
 }
 
-static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+static CO_SIZE_NOINLINE void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
     (void)co_node_send_cob(node, p->cob_id, data, pdo_bytes(p), CO_SVC_PDO);
 }

@@ -89,7 +89,7 @@ void co_sdo_server_add_routes(co_node_t *node)
 
 /* Take new COB-IDs into use. A channel reconfigured by a request it is serving itself
  * answers that request on the old COB-ID first: the reload waits for the answer. */
-static void apply_reloads(co_node_t *node)
+static CO_SIZE_NOINLINE void apply_reloads(co_node_t *node)
 {
     if (!node->sdo_reload) {
         return;

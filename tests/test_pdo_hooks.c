@@ -10,13 +10,15 @@
 
 typedef struct rig {
     test_node_t t;
-    co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 7];
+    co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 9];
     uint16_t u16;     /* 0x2101: storage with check and written hooks */
     uint16_t plain16; /* 0x2102 */
     uint64_t plain64; /* 0x2103 */
     double real64;    /* 0x2104 */
     uint8_t tod[6];   /* 0x2105 TIME_OF_DAY */
     char text[8];     /* 0x2106 VISIBLE_STRING, marked mappable */
+    int32_t i24;      /* 0x2107 INTEGER24 */
+    bool flag;        /* 0x2108 BOOLEAN */
     uint32_t produced;
     uint8_t taken[8];
     uint32_t taken_len;
@@ -76,8 +78,8 @@ static const co_od_hooks_t k_stream = {.read = h_read, .write = h_write};
 static const co_od_hooks_t k_guarded = {.check = h_check, .written = h_written};
 
 /* The example dictionary plus 0x2100 (u32, hooks only), 0x2101 (u16, checked), plain
- * mappable 0x2102 (u16) and 0x2103 (u64), 0x2104 REAL64, 0x2105 TIME_OF_DAY and 0x2106, a
- * string wrongly marked mappable. */
+ * mappable 0x2102 (u16) and 0x2103 (u64), 0x2104 REAL64, 0x2105 TIME_OF_DAY, 0x2106, a
+ * string wrongly marked mappable, and mappable 0x2107 INTEGER24 and 0x2108 BOOLEAN. */
 static void rig_up(void)
 {
     memset(&g, 0, sizeof g);
@@ -92,10 +94,12 @@ static void rig_up(void)
         {0x2104, 0, CO_TYPE_REAL64, CO_OD_RW, 8, &g.real64, NULL, NULL, NULL},
         {0x2105, 0, CO_TYPE_TIME_OF_DAY, CO_OD_RW, 6, g.tod, NULL, NULL, NULL},
         {0x2106, 0, CO_TYPE_VISIBLE_STRING, map, sizeof g.text, g.text, NULL, NULL, NULL},
+        {0x2107, 0, CO_TYPE_INTEGER24, map, 3, &g.i24, NULL, NULL, NULL},
+        {0x2108, 0, CO_TYPE_BOOLEAN, map, 1, &g.flag, NULL, NULL, NULL},
     };
     uint32_t n = 0;
     for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x2106 && n == i) {
+        if (base.entries[i].index > 0x2108 && n == i) {
             g.entries[n++] = stream;
             g.entries[n++] = guarded;
             for (size_t k = 0; k < sizeof extra / sizeof extra[0]; k++) {
@@ -228,6 +232,24 @@ static void test_rpdo_values_stored_before_tpdo_events(void)
     CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#34127856 185#34127856");
 }
 
+/* Whole values whose storage is not their wire form, in both directions: an INTEGER24
+ * (sign-extended into its int32_t) and a BOOLEAN (any non-zero byte stored as 1). */
+static void test_values_converted_on_the_way(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21070018, 0x21080008};
+    remap(0x1400, 0x1600, 0x205, m, 2);
+    remap(0x1800, 0x1A00, 0x185, m, 2);
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
+    g.i24 = 0x7FFFFFFF;
+    ingest(&g.t, 1000, 0x205, "FE FF FF 05");
+    CHECK_EQ(g.i24, -2);
+    CHECK_EQ(g.flag, true);
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#FEFFFF01 185#FEFFFF01");
+}
+
 /* A cyclic TPDO that is not all plain values (a hook-served one first) counts its SYNCs
  * all the same, and samples each value when it is due. */
 static void test_cyclic_tpdo_with_a_hooked_object(void)
@@ -298,6 +320,7 @@ int main(void)
     RUN(test_rpdo_value_refused_by_the_write_hook);
     RUN(test_cyclic_tpdo_with_a_hooked_object);
     RUN(test_rpdo_values_stored_before_tpdo_events);
+    RUN(test_values_converted_on_the_way);
     RUN(test_plain_16_bit_value_on_the_short_paths);
     return check_summary();
 }

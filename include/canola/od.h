@@ -215,11 +215,12 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write);
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
                       uint32_t cap, uint32_t *n, uint32_t *total);
 
-/** The wire bytes of an entry whose storage already is its wire form (strings, domains,
- *  TIME_OF_DAY/TIME_DIFFERENCE, and numbers as wide as their wire form on little-endian
- *  hosts), with `*len` set to the current length; NULL for entries read through a hook or
- *  converted on read. Lets a reader copy pieces without co_od_read's checks. O(1), except
- *  VISIBLE/UNICODE_STRING: O(length) to find the terminator. */
+/** The wire bytes of an entry whose storage already holds its wire form (strings, domains,
+ *  TIME_OF_DAY/TIME_DIFFERENCE, and on little-endian hosts every number: its wire bytes are
+ *  the first bytes of its storage), with `*len` set to the current length; NULL for entries
+ *  read through a hook, and for numbers on big-endian hosts (converted on read). Lets a reader copy
+ * pieces without co_od_read's checks. O(1), except VISIBLE/UNICODE_STRING: O(length) to find the
+ * terminator. */
 const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, uint32_t *len);
 
 /** Check a whole new wire value without storing it: length against the type (0x06070012
