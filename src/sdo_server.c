@@ -755,9 +755,10 @@ static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, cons
     s->sub = d[3];
     co_abort_t abort = CO_ABORT_NO_OBJECT;
     const co_od_entry_t *e = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
-    if (e != NULL && !may_access(e, write)) {
+    /* (the inline test is a short path: co_od_access tells the same) */
+    if (e != NULL && (!CO_SHORT_PATHS || !may_access(e, write))) {
         abort = co_od_access(e, write);
-        e = NULL;
+        e = abort == CO_ABORT_NONE ? e : NULL;
     }
     if (e == NULL) { /* no entry is never served */
         abort_transfer(node, s, abort);
@@ -848,7 +849,8 @@ static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const u
         }
         return;
     }
-    if (s->state == IDLE) {
+    /* (with expedited transfers alone nothing stays open: the state is always IDLE) */
+    if (s->state == IDLE || !(CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK)) {
         s->index = 0;
         s->sub = 0;
         abort_transfer(node, s, CO_ABORT_COMMAND);
