@@ -32,8 +32,9 @@ void co_guard_reset_comm(co_node_t *node)
     node->life_deadline_us = CO_TIME_NEVER;
 }
 
-void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
+void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if (!(frame->flags & CO_FRAME_RTR)) {
         /* A boot-up or heartbeat on our own error-control ID: another node has our node-ID.
          * Reported once until the application clears 0x8150 (it repeats every heartbeat). */

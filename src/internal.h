@@ -183,11 +183,6 @@ static inline uint64_t co_none_poll(co_node_t *node, uint64_t now_us)
     (void)now_us;
     return CO_TIME_NEVER;
 }
-static inline void co_none_frame(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
 static inline void co_none_slot_frame(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)node;
@@ -326,7 +321,7 @@ void co_sdo_client_add_routes(co_node_t *node);
 #endif
 
 /* nmt.c */
-void co_nmt_ingest(co_node_t *node, const co_frame_t *frame);
+void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_nmt_reset(co_node_t *node, bool application);
 
 /* heartbeat.c: the producer (0x1017), and what the consumer's files need. */
@@ -370,7 +365,7 @@ static inline co_err_t co_hb_consumers_bind(co_node_t *node)
 #if CO_CONFIG_GUARDING
 void co_guard_bind(co_node_t *node);
 void co_guard_reset_comm(co_node_t *node);
-void co_guard_rtr(co_node_t *node, const co_frame_t *frame);
+void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us);
 void co_guard_written(co_node_t *node);
@@ -380,7 +375,7 @@ static inline bool co_guard_life_lost(const co_node_t *node) { return node->life
 #else
 #define co_guard_bind co_none_node
 #define co_guard_reset_comm co_none_node
-#define co_guard_rtr co_none_frame
+#define co_guard_rtr co_none_slot_frame
 #define co_guard_reply co_none_slot_frame
 #define co_guard_poll co_none_poll
 #define co_guard_written co_none_node
@@ -444,7 +439,7 @@ void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 /* sync.c: the consumer. */
 void co_sync_reset_comm(co_node_t *node);
 void co_sync_add_routes(co_node_t *node);
-void co_sync_ingest(co_node_t *node, const co_frame_t *frame);
+void co_sync_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                uint32_t len);
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
@@ -512,18 +507,18 @@ void co_storage_reset_comm(co_node_t *node);
 #if CO_CONFIG_TIME
 void co_time_reset_comm(co_node_t *node);
 void co_time_add_routes(co_node_t *node);
-void co_time_ingest(co_node_t *node, const co_frame_t *frame);
+void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_time_written(co_node_t *node, const co_od_entry_t *entry);
 #else /* neither role: time.cob_id stays 0, nothing is routed */
 #define co_time_reset_comm co_none_node
 #define co_time_add_routes co_none_node
-#define co_time_ingest co_none_frame
+#define co_time_ingest co_none_slot_frame
 #define co_time_written co_none_entry
 #endif
 
 /* lss_slave.c, lss_master.c: no-ops when left out of the build. */
 #if CO_CONFIG_LSS_SLAVE
-void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame);
+void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us);
 /* At every reset: the node-ID the node runs with from now on (CiA 305 pending node-ID). */
 void co_lss_slave_reset(co_node_t *node, bool application);
@@ -537,11 +532,7 @@ static inline bool co_lss_slave_resume(co_node_t *node, uint16_t service)
     (void)service;
     return false;
 }
-static inline void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
+#define co_lss_slave_ingest co_none_slot_frame
 static inline uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us)
 {
     (void)node;
@@ -555,18 +546,14 @@ static inline void co_lss_slave_reset(co_node_t *node, bool application)
 }
 #endif
 #if CO_CONFIG_LSS_MASTER
-void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame);
+void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us);
 static inline bool co_lss_master_listening(const co_node_t *node)
 {
     return node->lss_master.listening;
 }
 #else
-static inline void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
+#define co_lss_master_ingest co_none_slot_frame
 static inline uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us)
 {
     (void)node;

@@ -90,8 +90,9 @@ static uint8_t expected_answer(uint8_t op)
     }
 }
 
-void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame)
+void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     co_lss_master_t *m = &node->lss_master;
     const uint8_t *d = frame->data;
     if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {

@@ -120,8 +120,9 @@ co_err_t co_nmt_apply(co_node_t *node, co_nmt_cmd_t cmd)
     return CO_ERR_ARG;
 }
 
-void co_nmt_ingest(co_node_t *node, const co_frame_t *frame)
+void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if (frame->len != 2 || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;

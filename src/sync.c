@@ -22,8 +22,9 @@ void co_sync_handled(co_node_t *node, uint8_t counter)
     }
 }
 
-void co_sync_ingest(co_node_t *node, const co_frame_t *frame)
+void co_sync_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if (frame->flags & CO_FRAME_RTR) {
         node->stats.rx_malformed++;
         return;

@@ -59,8 +59,9 @@ co_err_t co_time_send(co_node_t *node, const co_time_of_day_t *t)
 
 #if CO_CONFIG_TIME
 
-void co_time_ingest(co_node_t *node, const co_frame_t *frame)
+void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if ((frame->flags & CO_FRAME_RTR) || frame->len != TIME_FRAME_LEN) {
         node->stats.rx_malformed++;
         return;
