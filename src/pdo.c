@@ -196,13 +196,23 @@ void co_pdo_add_routes(co_node_t *node)
 
 void co_pdo_state_entered(co_node_t *node)
 {
-    for (int tpdo = 0; tpdo <= 1; tpdo++) {
-        uint16_t count;
-        co_pdo_t *table = pdo_table(node, tpdo, &count);
-        for (uint16_t n = 0; n < count; n++) {
-            restart(node, &table[n], tpdo);
-        }
+    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+        restart(node, &node->rpdo[n], false);
     }
+    for (uint16_t n = 0; n < node->tpdo_count; n++) {
+        restart(node, &node->tpdo[n], true);
+    }
+}
+
+/* How far a SYNC looks among RPDOs and TPDOs (read again at each step: an application
+ * callback may change the PDOs); a build for size keeps no counts and looks at all. */
+static inline uint16_t rpdo_sync_end(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->rpdo_sync_end : node->rpdo_count;
+}
+static inline uint16_t tpdo_sync_end(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->tpdo_sync_end : node->tpdo_count;
 }
 
 void co_pdo_sync(co_node_t *node, uint8_t counter)
@@ -210,14 +220,12 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
      * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
      * Both loops test the NMT state first (an application callback may change it). */
-    uint16_t rx_end = CO_SHORT_PATHS ? node->rpdo_sync_end : node->rpdo_count;
-    uint16_t tx_end = CO_SHORT_PATHS ? node->tpdo_sync_end : node->tpdo_count;
-    for (uint16_t n = 0; n < rx_end && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n);
         }
     }
-    for (uint16_t n = 0; n < tx_end && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (!PDO_FAST_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);

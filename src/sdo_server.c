@@ -755,10 +755,10 @@ static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, cons
     s->sub = d[3];
     co_abort_t abort = CO_ABORT_NO_OBJECT;
     const co_od_entry_t *e = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
-    /* (the inline test is a short path: co_od_access tells the same) */
-    if (e != NULL && (!CO_SHORT_PATHS || !may_access(e, write))) {
+    /* The inline test is a short path; without it co_od_access tells for every entry. */
+    if (e != NULL && !(CO_SHORT_PATHS && may_access(e, write))) {
         abort = co_od_access(e, write);
-        e = abort == CO_ABORT_NONE ? e : NULL;
+        e = CO_SHORT_PATHS || abort != CO_ABORT_NONE ? NULL : e; /* refused: no entry */
     }
     if (e == NULL) { /* no entry is never served */
         abort_transfer(node, s, abort);
