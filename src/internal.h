@@ -235,6 +235,8 @@ void co_routes_rebuild(co_node_t *node);
 /* Add a route while rebuilding (services call it from their co_*_add_routes). A key
  * already routed keeps its first owner; a full table drops the route. */
 void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot);
+/* co_routes_add for the identifier a COB-ID object value names (the key of co_cob_key). */
+void co_routes_add_cob(co_node_t *node, uint32_t cob, uint8_t kind, uint8_t slot);
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
 
 /* txq.c */
@@ -497,7 +499,15 @@ void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value w
 void co_pdo_state_entered(co_node_t *node);
 
 /* storage.c */
+#if CO_CONFIG_STORAGE
 void co_storage_load(co_node_t *node, co_param_group_t group);
+#else
+static inline void co_storage_load(co_node_t *node, co_param_group_t group)
+{
+    (void)node;
+    (void)group; /* nothing is ever stored */
+}
+#endif
 co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                   uint32_t len);
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);

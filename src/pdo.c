@@ -6,9 +6,9 @@
  *
  * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n); rpdo_count / tpdo_count
  * reach up to the highest such PDO below CO_RPDO_MAX / CO_TPDO_MAX that the dictionary
- * has, and slots in gaps stay not present. Parameters are loaded at reset communication
- * and when written through the node; values set natively (co_od_set_uint) count from the
- * next reset communication.
+ * has (a build for size takes all of them), and slots in gaps stay not present. Parameters are
+ * loaded at reset communication and when written through the node; values set natively
+ * (co_od_set_uint) count from the next reset communication.
  */
 #include "pdo_internal.h"
 
@@ -87,8 +87,12 @@ static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base,
 
 co_err_t co_pdo_bind(co_node_t *node)
 {
-    node->rpdo_count = count_present(&node->cfg.od, 0x1400u, rpdo_max());
-    node->tpdo_count = count_present(&node->cfg.od, 0x1800u, tpdo_max());
+    /* The counts bound the loops over PDOs (a short path): a build for size takes every
+     * slot, the ones the dictionary lacks staying not present. */
+    node->rpdo_count =
+        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1400u, rpdo_max()) : rpdo_max();
+    node->tpdo_count =
+        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1800u, tpdo_max()) : tpdo_max();
     return CO_OK;
 }
 
@@ -187,8 +191,8 @@ void co_pdo_add_routes(co_node_t *node)
             const co_pdo_t *p = &table[n];
             bool rtr_only = p->type == 252 || p->type == 253;
             if (pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)))) {
-                co_routes_add(node, co_cob_key(p->cob_id), tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO,
-                              (uint8_t)n);
+                co_routes_add_cob(node, p->cob_id, tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO,
+                                  (uint8_t)n);
             }
         }
     }

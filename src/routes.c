@@ -54,6 +54,11 @@ void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
     node->route_groups |= co_route_group(key);
 }
 
+void co_routes_add_cob(co_node_t *node, uint32_t cob, uint8_t kind, uint8_t slot)
+{
+    co_routes_add(node, co_cob_key(cob), kind, slot);
+}
+
 void co_routes_rebuild(co_node_t *node)
 {
     node->route_count = 0;

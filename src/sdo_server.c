@@ -82,7 +82,7 @@ void co_sdo_server_add_routes(co_node_t *node)
     for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
         uint32_t cob = node->sdo_servers[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
-            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
+            co_routes_add_cob(node, cob, CO_ROUTE_SDO_SERVER, i);
         }
     }
 }

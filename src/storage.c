@@ -86,6 +86,8 @@ static co_err_t restore_defaults(co_node_t *node, uint8_t which)
 
 /* ---- loading */
 
+#if CO_CONFIG_STORAGE
+
 void co_storage_load(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
@@ -114,6 +116,7 @@ void co_storage_load(co_node_t *node, co_param_group_t group)
         }
     }
 }
+#endif
 
 /* ---- 0x1010 and 0x1011 */
 

@@ -64,7 +64,7 @@ void co_sync_add_routes(co_node_t *node)
 {
     /* Every node with 0x1005 consumes SYNC; bit 31 means nothing for this object. */
     if (co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL) {
-        co_routes_add(node, co_cob_key(node->sync.cob_id), CO_ROUTE_SYNC, 0);
+        co_routes_add_cob(node, node->sync.cob_id, CO_ROUTE_SYNC, 0);
     }
 }
 

@@ -85,7 +85,7 @@ void co_time_add_routes(co_node_t *node)
 {
     uint32_t cob = node->time.cob_id;
     if (cob & TIME_CONSUMER) {
-        co_routes_add(node, co_cob_key(cob), CO_ROUTE_TIME, 0);
+        co_routes_add_cob(node, cob, CO_ROUTE_TIME, 0);
     }
 }
 
