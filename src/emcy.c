@@ -71,9 +71,7 @@ bool co_emcy_active(const co_node_t *node, uint16_t code) { return active_find(n
 /* The COB-ID object 0x1014; without one, the pre-defined 0x80 + node-ID. */
 static uint32_t producer_cob(const co_node_t *node)
 {
-    uint64_t cob = EMCY_COB_BASE + node->node_id;
-    (void)co_od_get_uint(&node->cfg.od, 0x1014, 0, &cob);
-    return (uint32_t)cob;
+    return co_od_u32(node, 0x1014, 0, EMCY_COB_BASE + node->node_id);
 }
 
 bool co_emcy_producer_off(const co_node_t *node)

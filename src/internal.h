@@ -226,6 +226,9 @@ void co_node_comm_resumed(co_node_t *node);
 /* Apply the communication error behaviour of 0x1029 sub1 (also for bus-off). */
 void co_node_error_behaviour(co_node_t *node);
 void co_node_state_changed(co_node_t *node);
+/* The dictionary's value of an optional integer entry, `absent` when it lacks it (or it is
+ * no integer): the services' parameters, 32 bits at most. */
+uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent);
 /* A whole new value for an entry, with checks, service effects and hooks (no access rights). */
 co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                uint32_t len);

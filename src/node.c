@@ -416,6 +416,13 @@ co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64
     return co_node_write_entry(node, entry, wire, size);
 }
 
+uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent)
+{
+    uint64_t v = absent;
+    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
+    return (uint32_t)v;
+}
+
 co_err_t co_node_get_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t *value)
 {
     return co_od_get_uint(&node->cfg.od, index, sub, value);

@@ -52,9 +52,9 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     const co_od_entry_t *cob = co_od_find(&node->cfg.od, idx, 1, NULL);
     p->flags = cob ? PDO_F_PRESENT : 0;
     p->cob_id = cob ? (uint32_t)co_od_entry_uint(cob) : CO_COB_INVALID;
-    p->type = (uint8_t)pdo_od_uint(node, idx, 2, 255);
+    p->type = (uint8_t)co_od_u32(node, idx, 2, 255);
     pdo_timers_load(node, p, tpdo, idx);
-    p->sync_start = tpdo ? (uint8_t)pdo_od_uint(node, idx, 6, 0) : 0;
+    p->sync_start = tpdo ? (uint8_t)co_od_u32(node, idx, 6, 0) : 0;
 }
 
 /* Runtime state from scratch: timers off, nothing pending; in operational the TPDO's
@@ -282,7 +282,7 @@ uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
 
 static uint32_t od_cob_id(const co_node_t *node, pdo_ref_t r)
 {
-    return (uint32_t)pdo_od_uint(node, pdo_comm_index(r.tpdo, r.num), 1, CO_COB_INVALID);
+    return co_od_u32(node, pdo_comm_index(r.tpdo, r.num), 1, CO_COB_INVALID);
 }
 
 static bool type_allowed(uint8_t type, bool tpdo)

@@ -137,8 +137,6 @@ static inline co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uin
     return CO_ABORT_READ_ONLY; /* the dictionary's mapping is fixed in this build */
 }
 #endif
-/* The dictionary's value of an optional entry; `absent` when it lacks it. */
-uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent);
 static inline uint16_t pdo_comm_index(bool tpdo, uint16_t num)
 {
     return (uint16_t)((tpdo ? 0x1800u : 0x1400u) + num);

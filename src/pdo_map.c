@@ -9,13 +9,6 @@
 
 #define PDO_MAP_BITS_MAX 64u
 
-uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent)
-{
-    uint64_t v = absent;
-    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
-    return v;
-}
-
 #if CO_CONFIG_PDO_BIT_MAPPING
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n)
 {
@@ -135,7 +128,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
 void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     uint16_t idx = pdo_map_index(tpdo, num);
-    uint8_t n = (uint8_t)pdo_od_uint(node, idx, 0, 0);
+    uint8_t n = (uint8_t)co_od_u32(node, idx, 0, 0);
     if (resolve_mapping(&node->cfg.od, idx, n, tpdo, p) != CO_ABORT_NONE) {
         p->count = 0;
         p->bits = 0;
@@ -150,11 +143,11 @@ co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uin
                              const uint8_t *data, uint32_t len)
 {
     uint16_t idx = pdo_map_index(tpdo, num);
-    if (!(pdo_od_uint(node, pdo_comm_index(tpdo, num), 1, CO_COB_INVALID) & CO_COB_INVALID)) {
+    if (!(co_od_u32(node, pdo_comm_index(tpdo, num), 1, CO_COB_INVALID) & CO_COB_INVALID)) {
         return CO_ABORT_UNSUPPORTED;
     }
     if (sub != 0) {
-        return pdo_od_uint(node, idx, 0, 0) != 0 ? CO_ABORT_UNSUPPORTED : CO_ABORT_NONE;
+        return co_od_u32(node, idx, 0, 0) != 0 ? CO_ABORT_UNSUPPORTED : CO_ABORT_NONE;
     }
     if (len != 1) {
         return CO_ABORT_NONE; /* the length check has refused it already */

@@ -9,11 +9,9 @@
 
 #define EMCY_RPDO_TIMEOUT 0x8250u
 
-static CO_SIZE_NOINLINE uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
+static uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
 {
-    uint64_t v = 0;
-    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
-    return (uint16_t)v;
+    return (uint16_t)co_od_u32(node, index, sub, 0);
 }
 
 void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)

@@ -35,14 +35,9 @@ enum server_state {
 
 /* ---- channels and their COB-IDs */
 
-static CO_SIZE_NOINLINE uint32_t cob_from_od(const co_node_t *node, uint8_t ch, uint8_t sub,
-                                             uint32_t fallback)
+static uint32_t cob_from_od(const co_node_t *node, uint8_t ch, uint8_t sub, uint32_t fallback)
 {
-    uint64_t v = 0;
-    if (co_od_get_uint(&node->cfg.od, (uint16_t)(0x1200 + ch), sub, &v) == CO_OK) {
-        return (uint32_t)v;
-    }
-    return fallback;
+    return co_od_u32(node, (uint16_t)(0x1200 + ch), sub, fallback);
 }
 
 static void load_channel(co_node_t *node, uint8_t ch)

@@ -50,9 +50,7 @@ uint8_t co_sync_counter(const co_node_t *node) { return node->sync.last_counter;
 void co_sync_reset_comm(co_node_t *node)
 {
     co_sync_t *s = &node->sync;
-    uint64_t cob = 0;
-    (void)co_od_get_uint(&node->cfg.od, 0x1005, 0, &cob); /* absent: 0 */
-    s->cob_id = (uint32_t)cob;
+    s->cob_id = co_od_u32(node, 0x1005, 0, 0);              /* absent: 0 */
     s->window = co_od_find(&node->cfg.od, 0x1007, 0, NULL); /* absent: no window */
     s->overflow = co_od_find(&node->cfg.od, 0x1019, 0, NULL);
     s->last_us = CO_TIME_NEVER;

@@ -76,9 +76,7 @@ void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 
 void co_time_reset_comm(co_node_t *node)
 {
-    uint64_t v = 0;
-    (void)co_od_get_uint(&node->cfg.od, 0x1012, 0, &v); /* absent: 0, neither role */
-    node->time.cob_id = (uint32_t)v;
+    node->time.cob_id = co_od_u32(node, 0x1012, 0, 0); /* absent: 0, neither role */
 }
 
 void co_time_add_routes(co_node_t *node)
