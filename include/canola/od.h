@@ -152,9 +152,9 @@ struct co_od_entry {
 #define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key)*0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
 /** An object dictionary: the entry table and the context its hooks receive. `keys` and
- *  `hash` make look-ups faster; a core built for size (-Os) leaves their use out (the
- *  binary search over the entries finds the same entries with less code) and only
- *  validates them. */
+ *  `hash` make look-ups faster; a core built for size (-Os) leaves them out altogether
+ *  (the binary search over the entries finds the same entries with less code): it reads
+ *  neither, and co_od_validate does not check them. */
 typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;
@@ -177,7 +177,8 @@ typedef struct co_od {
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
  *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
- *  every entry with an empty slot left. Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
+ *  every entry with an empty slot left (keys and hash not in a core built for size, which
+ *  does not use them: see co_od_t). Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
  *  to the offending entry's position, or to `count` for a bad hash, when `bad` is not
  *  NULL). O(n) plus O(slots). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
