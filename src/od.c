@@ -445,21 +445,13 @@ uint32_t co_type_size(co_type_t type) { return type_info((unsigned)type)->wire; 
 
 /* ---- Reading. */
 
-static uint32_t vstring_len(const uint8_t *s, uint32_t cap)
+/* Bytes of a string before its first zero code unit: a zero byte (`unit` 1), or two zero
+ * bytes (a UNICODE_STRING's 16-bit unit, `unit` 2: zero in either byte order). */
+static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
 {
     uint32_t n = 0;
-    while (n < cap && s[n] != 0) {
-        n++;
-    }
-    return n;
-}
-
-/* Bytes before the first zero code unit; a zero unit is two zero bytes in either order. */
-static uint32_t ustring_len(const uint8_t *s, uint32_t cap)
-{
-    uint32_t n = 0;
-    while (n + 2u <= cap && (s[n] != 0 || s[n + 1u] != 0)) {
-        n += 2u;
+    while (n + unit <= cap && (s[n] | s[n + unit - 1u]) != 0) {
+        n += unit;
     }
     return n;
 }
@@ -470,11 +462,11 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
     if (entry->value == NULL) {
         return entry->size;
     }
-    switch (type_info(entry->type)->kind) {
+    uint8_t kind = type_info(entry->type)->kind;
+    switch (kind) {
     case K_VSTRING:
-        return vstring_len(entry->value, entry->size);
     case K_USTRING:
-        return ustring_len(entry->value, entry->size);
+        return string_len(entry->value, entry->size, kind == K_USTRING ? 2u : 1u);
     case K_DOMAIN:
         return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
     default:

@@ -863,7 +863,9 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     co_sdo_server_t *s = &node->sdo_servers[channel];
     const uint8_t *d = frame->data;
     uint8_t cmd = d[0];
-    s->last_us = node->now_us; /* the time-out counts from the last frame */
+    if (CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK) { /* (expedited ones never time out) */
+        s->last_us = node->now_us; /* the time-out counts from the last frame */
+    }
     switch (s->state) {
     case IDLE:
         break;
