@@ -513,8 +513,12 @@ static inline void co_storage_load(co_node_t *node, co_param_group_t group)
 #endif
 co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                   uint32_t len);
+#if CO_CONFIG_STORAGE
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);
 void co_storage_reset_comm(co_node_t *node);
+#else /* 0x1010 and 0x1011 keep the dictionary's values; every command is refused */
+#define co_storage_reset_comm co_none_node
+#endif
 
 /* time.c */
 #if CO_CONFIG_TIME

@@ -282,7 +282,11 @@ static const service_object_t k_service_objects[] = {
 #if CO_CONFIG_GUARDING
     {0x100C, 0x100D, COB_NONE, NULL, guard_written},
 #endif
+#if CO_CONFIG_STORAGE
     {0x1010, 0x1011, COB_NONE, co_storage_check_write, co_storage_show_capability},
+#else
+    {0x1010, 0x1011, COB_NONE, co_storage_check_write, NULL}, /* every command refused */
+#endif
     {0x1012, 0x1012, COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
     {0x1014, 0x1014, COB_SUB0, NULL, CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
 #if CO_EMCY_QUEUE_LEN > 0

@@ -135,6 +135,7 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
     return err == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
 }
 
+#if CO_CONFIG_STORAGE
 /* After the command: the entry reads as the capability again, not as the signature. */
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry)
 {
@@ -156,3 +157,4 @@ void co_storage_reset_comm(co_node_t *node)
         }
     }
 }
+#endif

@@ -17,8 +17,8 @@
 #define HAS_EMCY_INHIBIT (CO_EMCY_QUEUE_LEN > 0)
 
 typedef struct dict {
-    uint32_t device_type, sync_cob, sync_period, emcy_cob, hb_cons[1], history[2], vendor;
-    uint8_t reg, history_count, hb_cons_count, id_count, rpdo_comm_n[2], tpdo_comm_n[2];
+    uint32_t device_type, sync_cob, sync_period, emcy_cob, hb_cons[1], history[2], vendor, save;
+    uint8_t reg, save_count, history_count, hb_cons_count, id_count, rpdo_comm_n[2], tpdo_comm_n[2];
     uint16_t emcy_inhibit, hb_ms;
     char name[16];
     struct {
@@ -38,7 +38,7 @@ typedef struct dict {
 } dict_t;
 
 static const uint32_t k_sync_cob = 0x80, k_emcy_cob = 0x80, k_rpdo_cob[2] = {0x200, 0x300},
-                      k_tpdo_cob[2] = {0x180, 0x280}, k_zero32 = 0, k_vendor = 0xCA0;
+                      k_tpdo_cob[2] = {0x180, 0x280}, k_zero32 = 0, k_one32 = 1, k_vendor = 0xCA0;
 static const uint32_t k_rpdo_map[2][2] = {{0x21000020, 0x21010010}, {0x21020004, 0}};
 static const uint32_t k_tpdo_map[2][2] = {{0x20000020, 0}, {0x20010010, 0}};
 static const uint8_t k_zero8 = 0, k_one8 = 1, k_five8 = 5, k_six8 = 6, k_type_sync = 1,
@@ -74,6 +74,8 @@ static co_od_t dict_init(dict_t *d)
     put(d, 0x1005, 0, U32, CO_OD_RW, &d->sync_cob, &k_sync_cob);
     put(d, 0x1006, 0, U32, CO_OD_RW, &d->sync_period, &k_zero32);
     put(d, 0x1008, 0, CO_TYPE_VISIBLE_STRING, CO_OD_CO, d->name, k_name);
+    put(d, 0x1010, 0, U8, CO_OD_CO, &d->save_count, &k_one8);
+    put(d, 0x1010, 1, U32, CO_OD_RW, &d->save, &k_one32); /* "saves on command" */
     put(d, 0x1014, 0, U32, CO_OD_RW | CO_OD_NODEID, &d->emcy_cob, &k_emcy_cob);
     put(d, 0x1015, 0, U16, CO_OD_RW, &d->emcy_inhibit, &k_zero16);
     put(d, 0x1016, 0, U8, CO_OD_CO, &d->hb_cons_count, &k_one8);
@@ -261,6 +263,24 @@ static void test_emcy_frame_layout(void)
     CHECK_EQ(co_emcy_clear(&r->node, 0x2310), CO_OK);
     run(r, r->bus.now_us + 1);
     CHECK_STR(seen(r), "085#0000000000000000");
+}
+
+/* No storage is given (minimal: none is built in): "save" is refused with 0x08000020. A
+ * core with storage shows that it has none in 0x1010 (0); one without keeps what the
+ * dictionary says there. */
+static void test_no_parameter_storage(void)
+{
+    rig_t *r = rig_start();
+    clear(r);
+    send(r, 0x605, "23 10 10 01 73 61 76 65");
+    CHECK_STR(seen(r), "585#8010100120000008");
+    clear(r);
+    send(r, 0x605, "40 10 10 01 00 00 00 00");
+#if CO_CONFIG_STORAGE
+    CHECK_STR(seen(r), "585#4310100100000000");
+#else
+    CHECK_STR(seen(r), "585#4310100101000000");
+#endif
 }
 
 /* Both profiles leave out the types wider than 32 bits: the example dictionary, which has
@@ -479,6 +499,7 @@ int main(void)
     RUN(test_block_transfer_refused);
     RUN(test_pdos_sync_and_rpdo);
     RUN(test_emcy_frame_layout);
+    RUN(test_no_parameter_storage);
     RUN(test_64_bit_types_refused);
     RUN(test_segmented_sdo);
     RUN(test_error_history);

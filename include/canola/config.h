@@ -142,8 +142,10 @@
 #define CO_CONFIG_TIME 1
 #endif
 
-/** Store and restore parameters (0x1010, 0x1011) through co_node_config_t.storage; without
- *  it the node behaves as with no storage given. */
+/** Store and restore parameters (0x1010, 0x1011) through co_node_config_t.storage. Without
+ *  it nothing is stored: a write of the save or restore signature is refused with
+ *  0x08000020, as by a node given no storage, and 0x1010/0x1011 read as the dictionary
+ *  gives them (with it, a node given no storage shows 0 there: no capability). */
 #ifndef CO_CONFIG_STORAGE
 #define CO_CONFIG_STORAGE 1
 #endif
