@@ -53,7 +53,9 @@ static const type_info_t k_types[] = {
     [CO_TYPE_REAL32] = {4, 4, K_REAL},
     [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING},
     [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
+#if CO_CONFIG_OD_UNICODE /* without it: an unknown type, refused by co_od_validate */
     [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING},
+#endif
     [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
     [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},
     [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
@@ -80,6 +82,13 @@ static CO_SIZE_NOINLINE const type_info_t *type_info(unsigned type)
 }
 
 static bool is_number(const type_info_t *t) { return t->kind >= K_BOOL && t->kind <= K_REAL; }
+
+/* A DOMAIN kept in RAM (a co_od_domain_t), a UNICODE_STRING: each a switch (config.h). */
+static bool is_domain(const type_info_t *t) { return CO_CONFIG_OD_DOMAIN && t->kind == K_DOMAIN; }
+static bool is_ustring(const type_info_t *t)
+{
+    return CO_CONFIG_OD_UNICODE && t->kind == K_USTRING;
+}
 
 static bool is_integer(const type_info_t *t)
 {
@@ -243,8 +252,11 @@ static uint64_t widen(const type_info_t *t, bits_t bits)
 static bool storage_ok(const co_od_entry_t *e, const type_info_t *t)
 {
     if (e->value != NULL) {
-        /* a DOMAIN kept in RAM needs its buffer */
-        return t->kind != K_DOMAIN || ((const co_od_domain_t *)e->value)->data != NULL;
+        /* a DOMAIN kept in RAM (CO_CONFIG_OD_DOMAIN) needs its buffer */
+        if (t->kind == K_DOMAIN) {
+            return CO_CONFIG_OD_DOMAIN && ((const co_od_domain_t *)e->value)->data != NULL;
+        }
+        return true;
     }
     bool rd = has_read_hook(e);
     bool wr = has_write_hook(e);
@@ -263,11 +275,12 @@ static bool entry_ok(const co_od_entry_t *e)
     if (t->wire != 0 ? e->size != t->wire : e->size == 0) {
         return false;
     }
-    if (t->kind == K_USTRING && (e->size & 1u) != 0) {
+    if (is_ustring(t) && (e->size & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
-    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && e->limits != NULL) {
-        return false; /* REAL limits are left out of this build */
+    if (e->limits != NULL &&
+        (!CO_CONFIG_OD_LIMITS || (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL))) {
+        return false; /* limits (or REAL limits) are left out of this build */
     }
     return storage_ok(e, t);
 }
@@ -462,16 +475,14 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
     if (entry->value == NULL) {
         return entry->size;
     }
-    uint8_t kind = type_info(entry->type)->kind;
-    switch (kind) {
-    case K_VSTRING:
-    case K_USTRING:
-        return string_len(entry->value, entry->size, kind == K_USTRING ? 2u : 1u);
-    case K_DOMAIN:
-        return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
-    default:
-        return entry->size;
+    const type_info_t *t = type_info(entry->type);
+    if (t->kind == K_VSTRING || is_ustring(t)) {
+        return string_len(entry->value, entry->size, is_ustring(t) ? 2u : 1u);
     }
+    if (is_domain(t)) {
+        return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
+    }
+    return entry->size;
 }
 
 co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
@@ -504,7 +515,7 @@ static const uint8_t *stored_wire(const co_od_entry_t *e, uint8_t *tmp, uint32_t
 #else
     (void)tmp;
 #endif
-    return t->kind == K_DOMAIN ? ((const co_od_domain_t *)e->value)->data : e->value;
+    return is_domain(t) ? ((const co_od_domain_t *)e->value)->data : e->value;
 }
 
 const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, uint32_t *len)
@@ -568,7 +579,7 @@ static co_abort_t check_len(const co_od_entry_t *e, const type_info_t *t, uint32
     if (len > e->size) {
         return CO_ABORT_LEN_HIGH;
     }
-    return (t->kind == K_USTRING && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
+    return (is_ustring(t) && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
 }
 
 #if CO_CONFIG_REAL_LIMITS
@@ -621,12 +632,13 @@ co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint
     const type_info_t *t = type_info(entry->type);
     co_abort_t abort = check_len(entry, t, len);
     /* a number with limits, or a BOOLEAN (0 or 1), is decoded; others need not be */
-    if (abort == CO_ABORT_NONE && is_number(t) && (entry->limits || t->kind == K_BOOL)) {
+    const co_od_limits_t *limits = CO_CONFIG_OD_LIMITS ? entry->limits : NULL;
+    if (abort == CO_ABORT_NONE && is_number(t) && (limits || t->kind == K_BOOL)) {
         bits_t bits = wire_number(t, data);
         if (t->kind == K_BOOL && bits > 1u) {
             abort = CO_ABORT_VALUE;
-        } else if (entry->limits) {
-            abort = check_limits(entry->limits, t, bits);
+        } else if (limits) {
+            abort = check_limits(limits, t, bits);
         }
     }
     if (abort == CO_ABORT_NONE && entry->hooks && entry->hooks->check) {
@@ -652,7 +664,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
     uint8_t *value = entry->value;
     if (is_number(t) && !wire_is_native(t)) {
         native_set(value, t, wire_number(t, data));
-    } else if (t->kind == K_DOMAIN) {
+    } else if (is_domain(t)) {
         co_od_domain_t *d = entry->value;
         co_copy(d->data, data, len);
         d->len = len;
@@ -706,7 +718,7 @@ static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
         return;
     }
     const type_info_t *t = type_info(e->type);
-    if (t->kind == K_DOMAIN) {
+    if (is_domain(t)) {
         const co_od_domain_t *src = e->dflt;
         co_od_domain_t *dst = e->value;
         uint32_t n = min_u32(src->len, e->size);

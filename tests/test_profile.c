@@ -284,7 +284,8 @@ static void test_no_parameter_storage(void)
 }
 
 /* Both profiles leave out the types wider than 32 bits: the example dictionary, which has
- * an INTEGER64 (0x2005), is refused. */
+ * an INTEGER64 (0x2005), is refused (the minimal profile refuses it earlier: at the
+ * limits of 0x2001). */
 static void test_64_bit_types_refused(void)
 {
     static example_od_t x;
@@ -293,8 +294,53 @@ static void test_64_bit_types_refused(void)
     cfg.driver = co_sim_port_driver(&g_rig.dev_port);
     uint32_t bad = 0;
     CHECK_EQ(co_od_validate(&cfg.od, &bad), CO_ERR_CONFIG);
-    CHECK_EQ(cfg.od.entries[bad].type, CO_TYPE_INTEGER64);
+    CHECK_EQ(cfg.od.entries[bad].type, CO_CONFIG_OD_LIMITS ? CO_TYPE_INTEGER64 : CO_TYPE_INTEGER16);
     CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_CONFIG);
+}
+
+static co_abort_t domain_read(void *ctx, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                              uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)entry;
+    (void)offset;
+    (void)buf;
+    (void)cap;
+    *n = 0;
+    *total = 0;
+    return CO_ABORT_NONE;
+}
+
+/* Of the dictionary's features the minimal profile leaves out limits, DOMAIN values kept
+ * in RAM and UNICODE_STRING: a dictionary with one of them is refused (a DOMAIN served by
+ * hooks is fine). The default profile keeps them. */
+static void test_dictionary_features(void)
+{
+    static const co_od_limits_t limits = {.low = {.u = 1}, .high = {.u = 9}};
+    static const co_od_hooks_t hooks = {.read = domain_read};
+    static uint8_t u8, bytes[4];
+    static uint16_t text[2];
+    static co_od_domain_t domain = {.data = bytes, .len = 0};
+    co_od_entry_t e = {.index = 0x2000,
+                       .type = CO_TYPE_UNSIGNED8,
+                       .attr = CO_OD_RW,
+                       .size = 1,
+                       .value = &u8,
+                       .limits = &limits};
+    co_od_t od = {.entries = &e, .count = 1};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_CONFIG_OD_LIMITS ? CO_OK : CO_ERR_CONFIG);
+    e = (co_od_entry_t){
+        .index = 0x2000, .type = CO_TYPE_DOMAIN, .attr = CO_OD_RW, .size = 4, .value = &domain};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_CONFIG_OD_DOMAIN ? CO_OK : CO_ERR_CONFIG);
+    e = (co_od_entry_t){
+        .index = 0x2000, .type = CO_TYPE_DOMAIN, .attr = CO_OD_RO, .size = 4, .hooks = &hooks};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    e = (co_od_entry_t){.index = 0x2000,
+                        .type = CO_TYPE_UNICODE_STRING,
+                        .attr = CO_OD_RW,
+                        .size = 4,
+                        .value = text};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_CONFIG_OD_UNICODE ? CO_OK : CO_ERR_CONFIG);
 }
 
 /* ---- what the profiles differ in */
@@ -501,6 +547,7 @@ int main(void)
     RUN(test_emcy_frame_layout);
     RUN(test_no_parameter_storage);
     RUN(test_64_bit_types_refused);
+    RUN(test_dictionary_features);
     RUN(test_segmented_sdo);
     RUN(test_error_history);
     RUN(test_heartbeat_consumer);

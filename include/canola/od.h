@@ -15,7 +15,10 @@
  * VISIBLE_STRING/OCTET_STRING/UNICODE_STRING -> `size` bytes of buffer;
  * DOMAIN -> a co_od_domain_t (buffer + current length) or no storage at all
  * when hooks stream it. `size` is the length on the wire (for strings and
- * domains: the capacity).
+ * domains: the capacity). A core built without some of the dictionary's features
+ * (canola/config.h: CO_CONFIG_OD_64BIT, CO_CONFIG_OD_LIMITS, CO_CONFIG_REAL_LIMITS,
+ * CO_CONFIG_OD_DOMAIN, CO_CONFIG_OD_UNICODE) refuses a dictionary using them
+ * (co_od_validate).
  *
  * Hooks let the application compute a value on read, validate or veto a write
  * with an abort code, stream large values (DOMAIN, long strings) in pieces, and
