@@ -15,7 +15,8 @@
 static uint64_t inhibit_us(const co_node_t *node)
 {
     uint16_t units = (uint16_t)co_od_u32(node, 0x1015, 0, 0);
-    return (uint32_t)units * EMCY_INHIBIT_UNIT_US; /* UNSIGNED16: a 32-bit product */
+    uint32_t us = (uint32_t)units * EMCY_INHIBIT_UNIT_US; /* UNSIGNED16: a 32-bit product */
+    return us;
 }
 
 /* Earliest time the next frame may leave (the inhibit time counts from the latest frame,

@@ -136,8 +136,8 @@ typedef uint32_t bits_t;
  * only). */
 static CO_SIZE_NOINLINE bits_t sign_extend(bits_t bits, unsigned nbits)
 {
-    if (nbits >= BITS_WIDTH) {
-        return bits;
+    if (nbits == 0 || nbits >= BITS_WIDTH) {
+        return bits; /* no bits, or nothing to extend */
     }
     bits_t sign = (bits_t)1 << (nbits - 1u);
     bits &= (bits_t)((sign << 1) - 1u);
@@ -278,9 +278,11 @@ static bool entry_ok(const co_od_entry_t *e)
     if (is_ustring(t) && (e->size & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
-    if (e->limits != NULL &&
-        (!CO_CONFIG_OD_LIMITS || (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL))) {
-        return false; /* limits (or REAL limits) are left out of this build */
+    if (!CO_CONFIG_OD_LIMITS && e->limits != NULL) {
+        return false; /* limits are left out of this build */
+    }
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && e->limits != NULL) {
+        return false; /* REAL limits are left out of this build */
     }
     return storage_ok(e, t);
 }
@@ -290,8 +292,10 @@ static bool entry_fits(const co_od_t *od, uint32_t i)
 {
     const co_od_entry_t *entries = od->entries;
     bool sorted = i == 0 || entry_key(&entries[i]) > entry_key(&entries[i - 1u]);
-    bool keyed = !CO_SHORT_PATHS || od->keys == NULL || od->keys[i] == entry_key(&entries[i]);
-    return sorted && keyed && entry_ok(&entries[i]);
+    if (CO_SHORT_PATHS && od->keys != NULL && od->keys[i] != entry_key(&entries[i])) {
+        return false; /* (a build for size does not use the keys: see co_od_t) */
+    }
+    return sorted && entry_ok(&entries[i]);
 }
 
 /* The hash slot that holds `key` (a validated hash: keys exist, a slot is empty, slots

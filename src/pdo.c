@@ -266,8 +266,10 @@ static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
 {
-    bool listened = !CO_SHORT_PATHS || node->tpdo_listeners != 0; /* (see count_listeners) */
-    if (listened && (entry->attr & CO_OD_TPDO) && pdo_running(node)) {
+    if (CO_SHORT_PATHS && node->tpdo_listeners == 0) {
+        return; /* no TPDO listens (see count_listeners) */
+    }
+    if ((entry->attr & CO_OD_TPDO) && pdo_running(node)) {
         (void)mark_tpdos(node, entry);
     }
 }

@@ -31,7 +31,8 @@ bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
 {
-    p->inhibit_until_us = node->now_us + (uint32_t)p->inhibit * 100u; /* 32-bit: fits */
+    uint32_t inhibit_us = (uint32_t)p->inhibit * 100u; /* 32-bit: fits */
+    p->inhibit_until_us = node->now_us + inhibit_us;
     tpdo_start(node, p);
 }
 

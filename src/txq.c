@@ -125,7 +125,7 @@ co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, ui
     f.id = (cob & CO_COB_EXT) ? (cob & CO_ID_EXT_MAX) : (cob & CO_ID_STD_MAX);
     f.flags = (cob & CO_COB_EXT) ? CO_FRAME_EXT : 0;
     f.len = len;
-    for (uint8_t i = 0; i < sizeof f.data; i++) { /* (no memcpy, no memset) */
+    for (unsigned i = 0; i < sizeof f.data; i++) { /* (no memcpy, no memset) */
         f.data[i] = i < len ? data[i] : 0;
     }
     return co_node_send_as(node, &f, service);
