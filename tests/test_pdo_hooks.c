@@ -125,6 +125,16 @@ static void remap(uint16_t comm, uint16_t map, uint32_t cob, const uint32_t *ent
     CHECK_EQ(write_u32(&g.t, comm, 1, cob), CO_ABORT_NONE);
 }
 
+/* RPDO1 (0x205) and TPDO1 (0x185) both mapping the `count` entries `m`, the node
+ * operational, nothing sent so far. */
+static void map_both_and_start(const uint32_t *m, uint8_t count)
+{
+    remap(0x1400, 0x1600, 0x205, m, count);
+    remap(0x1800, 0x1A00, 0x185, m, count);
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
+}
+
 static void test_rpdo_into_hooked_objects(void)
 {
     rig_up();
@@ -195,10 +205,7 @@ static void test_rpdo_value_refused_by_the_write_hook(void)
 {
     rig_up();
     const uint32_t m[] = {0x21000020};
-    remap(0x1400, 0x1600, 0x205, m, 1);
-    remap(0x1800, 0x1A00, 0x185, m, 1);
-    ingest(&g.t, 0, 0x000, "01 05");
-    fake_clear(&g.t.bus);
+    map_both_and_start(m, 1);
     g.refuse = true;
     ingest(&g.t, 1000, 0x205, "11 22 33 44");
     CHECK_EQ(g.writes, 1);
@@ -220,10 +227,7 @@ static void test_rpdo_values_stored_before_tpdo_events(void)
 {
     rig_up();
     const uint32_t m[] = {0x21010010, 0x21020010};
-    remap(0x1400, 0x1600, 0x205, m, 2);
-    remap(0x1800, 0x1A00, 0x185, m, 2);
-    ingest(&g.t, 0, 0x000, "01 05");
-    fake_clear(&g.t.bus);
+    map_both_and_start(m, 2);
     ingest(&g.t, 1000, 0x205, "34 12 78 56");
     CHECK_EQ(g.u16, 0x1234);
     CHECK_EQ(g.plain16, 0x5678);
@@ -238,10 +242,7 @@ static void test_values_converted_on_the_way(void)
 {
     rig_up();
     const uint32_t m[] = {0x21070018, 0x21080008};
-    remap(0x1400, 0x1600, 0x205, m, 2);
-    remap(0x1800, 0x1A00, 0x185, m, 2);
-    ingest(&g.t, 0, 0x000, "01 05");
-    fake_clear(&g.t.bus);
+    map_both_and_start(m, 2);
     g.i24 = 0x7FFFFFFF;
     ingest(&g.t, 1000, 0x205, "FE FF FF 05");
     CHECK_EQ(g.i24, -2);
