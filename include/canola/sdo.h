@@ -37,11 +37,11 @@
  * (CO_ABORT_NONE on success) and the bytes transferred. A channel whose server is
  * the node itself reads and writes the node's own dictionary, with no frames.
  *
- * Memory: each server channel holds a CO_SDO_BUF_SIZE + 6 byte buffer and 69 bytes of
- * state on 32-bit targets (81 on 64-bit hosts); a client channel 80 bytes (112), as it
- * works in the caller's buffers.
- * Cost: an expedited request is the look-up (O(1) expected with the dictionary's hash,
- * O(log entries) without) plus O(1); a segment of an open transfer is O(1).
+ * Memory: each server channel holds a CO_SDO_BUF_SIZE + 6 byte buffer and 68 bytes of
+ * state on 32-bit targets (76 on 64-bit hosts), rounded up to a multiple of 8; a client channel 80
+ * bytes (112), as it works in the caller's buffers. Cost: an expedited request is the look-up (O(1)
+ * expected with the dictionary's hash, O(log entries) without) plus O(1); a segment of an open
+ * transfer is O(1).
  */
 #ifndef CANOLA_SDO_H
 #define CANOLA_SDO_H
