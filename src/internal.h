@@ -255,6 +255,9 @@ void co_txq_purge(co_node_t *node);
  * with CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue
  * if the state stops allowing it before the driver takes it. */
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service);
+/* Address a frame of `len` bytes to the identifier a COB-ID object value names (its id,
+ * flags and length; the data is left as it is). */
+void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len);
 /* Send `len` (0..8) bytes of `data` (NULL: none) on the identifier a COB-ID object value
  * names (an 11-bit identifier is its own COB-ID value), as co_node_send_as does; the
  * frame's other data bytes are zero. The services' frames are built here, in one place. */

@@ -51,10 +51,7 @@ static void load_channel(co_node_t *node, uint8_t ch)
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
-    co_frame_t *r = &s->reply; /* (field by field: no memcpy, no memset) */
-    r->id = (s->cob_tx & CO_COB_EXT) ? (s->cob_tx & CO_ID_EXT_MAX) : (s->cob_tx & CO_ID_STD_MAX);
-    r->flags = (s->cob_tx & CO_COB_EXT) ? CO_FRAME_EXT : 0;
-    r->len = 8;
+    co_frame_address(&s->reply, s->cob_tx, 8);
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
