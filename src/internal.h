@@ -605,12 +605,7 @@ static inline uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
     (void)now_us;
     return CO_TIME_NEVER;
 }
-static inline void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame)
-{
-    (void)node;
-    (void)n;
-    (void)frame;
-}
+#define co_manager_bootup co_none_slot_frame
 static inline void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev)
 {
     (void)node;
