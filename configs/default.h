@@ -8,8 +8,9 @@
  * stored parameters, 4 RPDOs and 4 TPDOs with inhibit time, event timer and RPDO deadline,
  * and (as CANopenNode has them) PDO re-mapping and bit-granular mapping. Not in the list,
  * so left out: SDO block transfer, the SDO client, node guarding, the EMCY consumer, LSS,
- * the manager, REAL limits and dictionary types wider than 32 bits. Every choice below is a
- * documented switch or size of canola/config.h. */
+ * the manager, REAL limits and dictionary types wider than 32 bits. The dictionary keeps
+ * integer limits, DOMAIN values in RAM and UNICODE_STRING (switches on by default). Every
+ * choice below is a documented switch or size of canola/config.h. */
 #define CO_TX_QUEUE_LEN 8
 #define CO_HB_CONSUMERS_MAX 4
 #define CO_GUARD_WATCH_MAX 0

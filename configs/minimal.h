@@ -6,8 +6,10 @@
  * re-mapping, whole objects only), a SYNC consumer only (no producer), an EMCY producer
  * without error history (0x1003) and without inhibit time (0x1015), no EMCY consumer.
  * Left out as well, being in neither list: node guarding, TIME, stored parameters, LSS,
- * the manager, REAL limits and dictionary types wider than 32 bits. Every choice below is
- * a documented switch or size of canola/config.h. */
+ * the manager, and of the dictionary's features limits (REAL or integer), DOMAIN values kept
+ * in RAM (of no use to an expedited-only server: a hook-served DOMAIN stays possible),
+ * UNICODE_STRING and the types wider than 32 bits. Every choice below is a documented
+ * switch or size of canola/config.h. */
 #ifndef CO_TX_QUEUE_LEN
 #define CO_TX_QUEUE_LEN 4
 #endif
@@ -63,6 +65,15 @@
 #endif
 #ifndef CO_CONFIG_REAL_LIMITS
 #define CO_CONFIG_REAL_LIMITS 0
+#endif
+#ifndef CO_CONFIG_OD_LIMITS
+#define CO_CONFIG_OD_LIMITS 0
+#endif
+#ifndef CO_CONFIG_OD_DOMAIN
+#define CO_CONFIG_OD_DOMAIN 0
+#endif
+#ifndef CO_CONFIG_OD_UNICODE
+#define CO_CONFIG_OD_UNICODE 0
 #endif
 #ifndef CO_CONFIG_OD_64BIT
 #define CO_CONFIG_OD_64BIT 0

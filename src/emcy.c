@@ -47,14 +47,14 @@ static uint8_t register_of_active(const co_node_t *node)
     return reg;
 }
 
-static void register_store(co_node_t *node, uint8_t reg)
+static CO_SIZE_NOINLINE void register_store(co_node_t *node, uint8_t reg)
 {
     (void)co_od_set_uint(&node->cfg.od, 0x1001, 0, reg); /* no 0x1001: nothing to keep */
 }
 
 /* ---- active errors */
 
-static int active_find(const co_node_t *node, uint16_t code)
+static CO_SIZE_NOINLINE int active_find(const co_node_t *node, uint16_t code)
 {
     for (uint8_t i = 0; i < node->emcy.active_count; i++) {
         if (node->emcy.active[i] == code) {
@@ -71,9 +71,7 @@ bool co_emcy_active(const co_node_t *node, uint16_t code) { return active_find(n
 /* The COB-ID object 0x1014; without one, the pre-defined 0x80 + node-ID. */
 static uint32_t producer_cob(const co_node_t *node)
 {
-    uint64_t cob = EMCY_COB_BASE + node->node_id;
-    (void)co_od_get_uint(&node->cfg.od, 0x1014, 0, &cob);
-    return (uint32_t)cob;
+    return co_od_u32(node, 0x1014, 0, EMCY_COB_BASE + node->node_id);
 }
 
 bool co_emcy_producer_off(const co_node_t *node)
@@ -83,9 +81,8 @@ bool co_emcy_producer_off(const co_node_t *node)
 
 void co_emcy_frame_send(co_node_t *node, const uint8_t data[8])
 {
-    co_frame_t f = co_cob_frame(producer_cob(node), 8);
-    memcpy(f.data, data, 8);
-    (void)co_node_send_as(node, &f, CO_SVC_EMCY); /* a full tx queue counts the loss itself */
+    /* a full tx queue counts the loss itself */
+    (void)co_node_send_cob(node, producer_cob(node), data, 8, CO_SVC_EMCY);
 }
 
 /* One EMCY frame: out now, or after the inhibit time (emcy_queue.c). */
@@ -97,7 +94,7 @@ static void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[
     uint8_t data[8];
     co_put_u16(data, code);
     data[2] = reg;
-    memcpy(&data[3], mfr, 5);
+    co_copy(&data[3], mfr, 5);
     co_emcy_queue_emit(node, data);
 }
 

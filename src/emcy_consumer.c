@@ -29,7 +29,7 @@ void co_emcy_add_routes(co_node_t *node)
     for (uint8_t i = 0; i < node->emcy.consumer_count; i++) {
         uint32_t cob = node->emcy.consumer_cob[i];
         if (!(cob & CO_COB_INVALID)) {
-            co_routes_add(node, co_cob_key(cob), CO_ROUTE_EMCY, i);
+            co_routes_add_cob(node, cob, CO_ROUTE_EMCY, i);
         }
     }
 }

@@ -43,8 +43,8 @@ void co_emcy_history_clear(co_node_t *node)
     }
 }
 
-co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len)
+co_abort_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len)
 {
     (void)node;
     if (entry->index != 0x1003 || entry->sub != 0) {

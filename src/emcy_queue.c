@@ -14,9 +14,9 @@
 
 static uint64_t inhibit_us(const co_node_t *node)
 {
-    uint64_t units = 0;
-    (void)co_od_get_uint(&node->cfg.od, 0x1015, 0, &units);
-    return units * EMCY_INHIBIT_UNIT_US;
+    uint16_t units = (uint16_t)co_od_u32(node, 0x1015, 0, 0);
+    uint32_t us = (uint32_t)units * EMCY_INHIBIT_UNIT_US; /* UNSIGNED16: a 32-bit product */
+    return us;
 }
 
 /* Earliest time the next frame may leave (the inhibit time counts from the latest frame,
@@ -33,7 +33,7 @@ static void queue_pop(co_emcy_t *e)
 {
     e->queue_count--;
     for (uint8_t i = 0; i < e->queue_count; i++) {
-        memcpy(e->queue[i], e->queue[i + 1u], sizeof e->queue[0]);
+        co_copy(e->queue[i], e->queue[i + 1u], sizeof e->queue[0]);
     }
 }
 
@@ -69,7 +69,7 @@ void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
         e->dropped++; /* the newest is the one lost: the queue keeps the order of events */
         return;
     }
-    memcpy(e->queue[e->queue_count], data, 8);
+    co_copy(e->queue[e->queue_count], data, 8);
     e->queue_count++;
     co_emcy_state_entered(node);
 }

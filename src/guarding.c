@@ -14,7 +14,7 @@ static uint64_t life_time_us(const co_node_t *node)
 {
     uint64_t guard_ms = co_entry_uint(node->guard_time);
     uint64_t factor = co_entry_uint(node->life_factor);
-    return co_ms_to_us((uint32_t)(guard_ms * factor));
+    return co_long_ms_to_us((uint32_t)(guard_ms * factor));
 }
 
 void co_guard_bind(co_node_t *node)
@@ -32,8 +32,9 @@ void co_guard_reset_comm(co_node_t *node)
     node->life_deadline_us = CO_TIME_NEVER;
 }
 
-void co_guard_rtr(co_node_t *node, const co_frame_t *frame)
+void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if (!(frame->flags & CO_FRAME_RTR)) {
         /* A boot-up or heartbeat on our own error-control ID: another node has our node-ID.
          * Reported once until the application clears 0x8150 (it repeats every heartbeat). */
@@ -96,7 +97,7 @@ static uint64_t life_poll(co_node_t *node, uint64_t now_us)
 
 static uint64_t watch_life_us(const co_guard_watch_t *w)
 {
-    return co_ms_to_us((uint32_t)w->guard_ms * w->factor);
+    return co_long_ms_to_us((uint32_t)w->guard_ms * w->factor);
 }
 
 co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uint8_t factor)

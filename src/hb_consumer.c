@@ -17,9 +17,7 @@ static void consumer_decode(uint32_t value, uint8_t *node_id, uint16_t *time_ms)
 static void consumer_load(co_node_t *node, uint8_t slot)
 {
     co_hb_consumer_t *c = &node->hb_consumers[slot];
-    uint64_t raw = 0;
-    (void)co_od_get_uint(&node->cfg.od, 0x1016, (uint8_t)(slot + 1), &raw);
-    consumer_decode((uint32_t)raw, &c->node_id, &c->time_ms);
+    consumer_decode(co_od_u32(node, 0x1016, (uint8_t)(slot + 1), 0), &c->node_id, &c->time_ms);
     bool used = c->node_id >= 1 && c->node_id <= 127 && c->time_ms != 0;
     c->watch = used ? CO_HB_WATCH_WAITING : CO_HB_WATCH_UNUSED;
     c->state = CO_STATE_NONE;
@@ -63,7 +61,7 @@ void co_hb_consumers_add_routes(co_node_t *node)
     }
 }
 
-static bool valid_state(uint8_t s)
+static CO_SIZE_NOINLINE bool valid_state(uint8_t s)
 {
     return s == CO_NMT_INITIALISING || s == CO_NMT_STOPPED || s == CO_NMT_OPERATIONAL ||
            s == CO_NMT_PRE_OPERATIONAL;
@@ -159,7 +157,7 @@ bool co_hb_consumes(const co_node_t *node, uint8_t node_id)
 
 /* ---- object dictionary writes */
 
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+co_abort_t co_hb_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                              uint32_t len)
 {
     if (entry->index != 0x1016 || entry->sub == 0 || len != 4) {
@@ -178,11 +176,9 @@ co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, 
         if ((uint8_t)(i + 1) == entry->sub) {
             continue;
         }
-        uint64_t raw = 0;
         uint8_t other_id;
         uint16_t other_time;
-        (void)co_od_get_uint(&node->cfg.od, 0x1016, (uint8_t)(i + 1), &raw);
-        consumer_decode((uint32_t)raw, &other_id, &other_time);
+        consumer_decode(co_od_u32(node, 0x1016, (uint8_t)(i + 1), 0), &other_id, &other_time);
         if (other_id == id && other_time != 0) {
             return CO_ABORT_PARAM_INCOMPAT;
         }

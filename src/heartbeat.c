@@ -30,14 +30,18 @@ static uint64_t producer_poll(co_node_t *node, uint64_t now_us)
     if (now_us < node->hb_next_us) {
         return node->hb_next_us;
     }
-    co_frame_t hb = {.id = HB_COB_BASE + node->node_id, .len = 1, .data = {node->nmt_state}};
-    co_node_send_as(node, &hb, CO_SVC_ERROR_CONTROL);
+    co_hb_frame_send(node, node->nmt_state, CO_SVC_ERROR_CONTROL);
     uint64_t period_us = co_ms_to_us(producer_period_ms(node));
     node->hb_next_us += period_us;
     if (node->hb_next_us <= now_us) { /* polled late: keep the period, drop the missed beats */
         node->hb_next_us = now_us + period_us;
     }
     return node->hb_next_us;
+}
+
+void co_hb_frame_send(co_node_t *node, uint8_t state, uint16_t service)
+{
+    (void)co_node_send_cob(node, HB_COB_BASE + node->node_id, &state, 1, service);
 }
 
 co_err_t co_hb_bind(co_node_t *node)

@@ -4,6 +4,7 @@
 #ifndef CANOLA_INTERNAL_H
 #define CANOLA_INTERNAL_H
 
+#include "build.h"
 #include "canola/node.h"
 
 /* Receive route kinds (co_route_t.kind). */
@@ -67,13 +68,21 @@ static inline uint8_t co_sdo_servers_max(void) { return CO_SDO_SERVERS_MAX; }
 static inline uint8_t co_sdo_clients_max(void) { return CO_SDO_CLIENTS_MAX; }
 
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
-static inline uint64_t co_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
+/* Milliseconds of a 16-bit object (a period, a time-out) in microseconds: they fit 32 bits,
+ * so the multiply is a 32-bit one (no 64-bit helper call on Cortex-M0). */
+static inline uint64_t co_ms_to_us(uint16_t ms)
+{
+    uint32_t us = (uint32_t)ms * 1000u;
+    return us;
+}
+/* Any 32-bit count of milliseconds (guard time x life time factor) in microseconds. */
+static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
 
 /* SDO server and client time-out (co_node_config_t.sdo_timeout_ms, default 1 s). */
 static inline uint64_t co_sdo_timeout_us(const co_node_t *node)
 {
     uint16_t ms = node->cfg.sdo_timeout_ms;
-    return co_ms_to_us(ms ? ms : 1000u);
+    return co_ms_to_us(ms ? ms : (uint16_t)1000u);
 }
 
 /* Integer value of an optional entry (0 when the OD lacks it). */
@@ -83,8 +92,8 @@ static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
         return 0;
     }
     /* The communication objects read on every SYNC or poll are u8/u16/u32 in storage:
-     * read them in place; any other type takes the general path. */
-    if (entry->value != NULL) {
+     * read them in place (a short path); any other type takes the general one. */
+    if (CO_SHORT_PATHS && entry->value != NULL) {
         switch (entry->type) {
         case CO_TYPE_UNSIGNED8:
             return *(const uint8_t *)entry->value;
@@ -155,34 +164,6 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
     return frame->id | ((frame->flags & CO_FRAME_EXT) ? 0x80000000u : 0u);
 }
 
-/* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
- * compilers without the attribute just decide for themselves). */
-#if defined(__GNUC__) || defined(__clang__)
-#define CO_NOINLINE __attribute__((noinline))
-#else
-#define CO_NOINLINE
-#endif
-
-/* The opposite hint: a small hot helper that the compiler's size heuristics would keep
- * out of line. Not when compiling for size (-Os): there flash counts more than cycles. */
-#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
-#define CO_INLINE inline __attribute__((always_inline))
-#else
-#define CO_INLINE inline
-#endif
-
-/* Short paths: code that does for the common case (a middle segment, a plain number) what
- * a general path next to it does for every case, only faster. Left out when compiling for
- * size (-Os), where flash counts more than cycles: the general paths then serve every case
- * (tests/CMakeLists.txt runs the SDO and PDO tests built that way too). */
-#ifndef CO_SHORT_PATHS
-#if defined(__OPTIMIZE_SIZE__)
-#define CO_SHORT_PATHS 0
-#else
-#define CO_SHORT_PATHS 1
-#endif
-#endif
-
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
 
@@ -206,11 +187,6 @@ static inline uint64_t co_none_poll(co_node_t *node, uint64_t now_us)
     (void)now_us;
     return CO_TIME_NEVER;
 }
-static inline void co_none_frame(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
 static inline void co_none_slot_frame(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)node;
@@ -222,7 +198,7 @@ static inline void co_none_entry(co_node_t *node, const co_od_entry_t *entry)
     (void)node;
     (void)entry;
 }
-static inline co_abort_t co_none_check(const co_node_t *node, const co_od_entry_t *entry,
+static inline co_abort_t co_none_check(co_node_t *node, const co_od_entry_t *entry,
                                        const uint8_t *data, uint32_t len)
 {
     (void)node;
@@ -254,6 +230,9 @@ void co_node_comm_resumed(co_node_t *node);
 /* Apply the communication error behaviour of 0x1029 sub1 (also for bus-off). */
 void co_node_error_behaviour(co_node_t *node);
 void co_node_state_changed(co_node_t *node);
+/* The dictionary's value of an optional integer entry, `absent` when it lacks it (or it is
+ * no integer): the services' parameters, 32 bits at most. */
+uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent);
 /* A whole new value for an entry, with checks, service effects and hooks (no access rights). */
 co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                uint32_t len);
@@ -263,6 +242,8 @@ void co_routes_rebuild(co_node_t *node);
 /* Add a route while rebuilding (services call it from their co_*_add_routes). A key
  * already routed keeps its first owner; a full table drops the route. */
 void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot);
+/* co_routes_add for the identifier a COB-ID object value names (the key of co_cob_key). */
+void co_routes_add_cob(co_node_t *node, uint32_t cob, uint8_t kind, uint8_t slot);
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
 
 /* txq.c */
@@ -274,6 +255,14 @@ void co_txq_purge(co_node_t *node);
  * with CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue
  * if the state stops allowing it before the driver takes it. */
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service);
+/* Address a frame of `len` bytes to the identifier a COB-ID object value names (its id,
+ * flags and length; the data is left as it is). */
+void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len);
+/* Send `len` (0..8) bytes of `data` (NULL: none) on the identifier a COB-ID object value
+ * names (an 11-bit identifier is its own COB-ID value), as co_node_send_as does; the
+ * frame's other data bytes are zero. The services' frames are built here, in one place. */
+co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
+                          uint16_t service);
 /* The driver did not take a frame handed to it directly (co_node_send_hot): queue it
  * (CO_ERR_BUSY) or count it dropped, as co_node_send_as does. */
 co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t service, co_err_t err);
@@ -318,7 +307,11 @@ void co_sdo_server_reset_comm(co_node_t *node);
 /* The NMT state no longer allows SDO: open transfers end without a frame. */
 void co_sdo_server_stop(co_node_t *node);
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
+#if CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
+#else
+#define co_sdo_server_poll co_none_poll /* expedited transfers leave nothing open */
+#endif
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry);
 void co_sdo_server_add_routes(co_node_t *node);
 
@@ -340,7 +333,7 @@ void co_sdo_client_add_routes(co_node_t *node);
 #endif
 
 /* nmt.c */
-void co_nmt_ingest(co_node_t *node, const co_frame_t *frame);
+void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_nmt_reset(co_node_t *node, bool application);
 
 /* heartbeat.c: the producer (0x1017), and what the consumer's files need. */
@@ -349,6 +342,8 @@ void co_hb_state_entered(co_node_t *node);
 uint64_t co_hb_poll(co_node_t *node, uint64_t now_us);
 void co_hb_written(co_node_t *node, const co_od_entry_t *entry);
 co_err_t co_hb_bind(co_node_t *node);
+/* The frame on 0x700 + node-ID: a heartbeat (the state) or the boot-up (0, service 0). */
+void co_hb_frame_send(co_node_t *node, uint8_t state, uint16_t service);
 
 /* hb_consumer.c: the consumer (0x1016), CO_HB_CONSUMERS_MAX > 0. */
 #if CO_HB_CONSUMERS_MAX > 0
@@ -357,7 +352,7 @@ void co_hb_consumers_reset(co_node_t *node);
 void co_hb_consumers_add_routes(co_node_t *node);
 void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us);
-co_abort_t co_hb_check_write(const co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+co_abort_t co_hb_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                              uint32_t len);
 void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry);
 bool co_hb_consumer_lost(const co_node_t *node);             /* some consumed heartbeat is lost */
@@ -382,7 +377,7 @@ static inline co_err_t co_hb_consumers_bind(co_node_t *node)
 #if CO_CONFIG_GUARDING
 void co_guard_bind(co_node_t *node);
 void co_guard_reset_comm(co_node_t *node);
-void co_guard_rtr(co_node_t *node, const co_frame_t *frame);
+void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_guard_poll(co_node_t *node, uint64_t now_us);
 void co_guard_written(co_node_t *node);
@@ -392,7 +387,7 @@ static inline bool co_guard_life_lost(const co_node_t *node) { return node->life
 #else
 #define co_guard_bind co_none_node
 #define co_guard_reset_comm co_none_node
-#define co_guard_rtr co_none_frame
+#define co_guard_rtr co_none_slot_frame
 #define co_guard_reply co_none_slot_frame
 #define co_guard_poll co_none_poll
 #define co_guard_written co_none_node
@@ -429,8 +424,8 @@ static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
 #if CO_CONFIG_EMCY_HISTORY
 void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5]);
 void co_emcy_history_clear(co_node_t *node);
-co_abort_t co_emcy_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len);
+co_abort_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len);
 #else
 static inline void co_emcy_history_record(co_node_t *node, uint16_t code, const uint8_t mfr[5])
 {
@@ -456,9 +451,9 @@ void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 /* sync.c: the consumer. */
 void co_sync_reset_comm(co_node_t *node);
 void co_sync_add_routes(co_node_t *node);
-void co_sync_ingest(co_node_t *node, const co_frame_t *frame);
-co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len);
+void co_sync_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len);
 void co_sync_written(co_node_t *node, const co_od_entry_t *entry);
 /* A SYNC taken (received, or sent by this node's producer). */
 void co_sync_handled(co_node_t *node, uint8_t counter);
@@ -514,21 +509,40 @@ void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value w
 void co_pdo_state_entered(co_node_t *node);
 
 /* storage.c */
+#if CO_CONFIG_STORAGE
 void co_storage_load(co_node_t *node, co_param_group_t group);
+#else
+static inline void co_storage_load(co_node_t *node, co_param_group_t group)
+{
+    (void)node;
+    (void)group; /* nothing is ever stored */
+}
+#endif
 co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                   uint32_t len);
+#if CO_CONFIG_STORAGE
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);
 void co_storage_reset_comm(co_node_t *node);
+#else /* 0x1010 and 0x1011 keep the dictionary's values; every command is refused */
+#define co_storage_reset_comm co_none_node
+#endif
 
 /* time.c */
+#if CO_CONFIG_TIME
 void co_time_reset_comm(co_node_t *node);
 void co_time_add_routes(co_node_t *node);
-void co_time_ingest(co_node_t *node, const co_frame_t *frame);
+void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 void co_time_written(co_node_t *node, const co_od_entry_t *entry);
+#else /* neither role: time.cob_id stays 0, nothing is routed */
+#define co_time_reset_comm co_none_node
+#define co_time_add_routes co_none_node
+#define co_time_ingest co_none_slot_frame
+#define co_time_written co_none_entry
+#endif
 
 /* lss_slave.c, lss_master.c: no-ops when left out of the build. */
 #if CO_CONFIG_LSS_SLAVE
-void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame);
+void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us);
 /* At every reset: the node-ID the node runs with from now on (CiA 305 pending node-ID). */
 void co_lss_slave_reset(co_node_t *node, bool application);
@@ -542,11 +556,7 @@ static inline bool co_lss_slave_resume(co_node_t *node, uint16_t service)
     (void)service;
     return false;
 }
-static inline void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
+#define co_lss_slave_ingest co_none_slot_frame
 static inline uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us)
 {
     (void)node;
@@ -560,18 +570,14 @@ static inline void co_lss_slave_reset(co_node_t *node, bool application)
 }
 #endif
 #if CO_CONFIG_LSS_MASTER
-void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame);
+void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us);
 static inline bool co_lss_master_listening(const co_node_t *node)
 {
     return node->lss_master.listening;
 }
 #else
-static inline void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame)
-{
-    (void)node;
-    (void)frame;
-}
+#define co_lss_master_ingest co_none_slot_frame
 static inline uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us)
 {
     (void)node;
@@ -599,12 +605,7 @@ static inline uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
     (void)now_us;
     return CO_TIME_NEVER;
 }
-static inline void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame)
-{
-    (void)node;
-    (void)n;
-    (void)frame;
-}
+#define co_manager_bootup co_none_slot_frame
 static inline void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev)
 {
     (void)node;

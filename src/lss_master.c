@@ -35,7 +35,7 @@ static void arm(co_node_t *node)
 {
     co_lss_master_t *m = &node->lss_master;
     m->heard = false;
-    m->deadline_us = node->now_us + co_ms_to_us(timeout_ms(m));
+    m->deadline_us = node->now_us + co_long_ms_to_us(timeout_ms(m));
     co_node_schedule(node, m->deadline_us);
 }
 
@@ -90,8 +90,9 @@ static uint8_t expected_answer(uint8_t op)
     }
 }
 
-void co_lss_master_ingest(co_node_t *node, const co_frame_t *frame)
+void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     co_lss_master_t *m = &node->lss_master;
     const uint8_t *d = frame->data;
     if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {

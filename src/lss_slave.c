@@ -177,8 +177,9 @@ static void configure(co_node_t *node, const uint8_t *d)
     }
 }
 
-void co_lss_slave_ingest(co_node_t *node, const co_frame_t *frame)
+void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     const uint8_t *d = frame->data;
     if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;

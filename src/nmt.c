@@ -57,12 +57,6 @@ static void enter(co_node_t *node, co_nmt_state_t state)
     }
 }
 
-static void send_bootup(co_node_t *node)
-{
-    co_frame_t boot = {.id = 0x700u + node->node_id, .len = 1, .data = {0x00}};
-    co_node_send(node, &boot);
-}
-
 /* Initialisation as CiA 301 orders it: reset application (optional), reset
  * communication, boot-up once, pre-operational (or operational when self-starting). */
 void co_nmt_reset(co_node_t *node, bool application)
@@ -96,7 +90,7 @@ void co_nmt_reset(co_node_t *node, bool application)
     if (node->node_id == CO_NODE_ID_UNCONFIGURED) {
         return; /* waits in initialisation until LSS gives it a node-ID */
     }
-    send_bootup(node);
+    co_hb_frame_send(node, 0x00, 0); /* the boot-up */
     enter(node, node->cfg.self_start ? CO_NMT_OPERATIONAL : CO_NMT_PRE_OPERATIONAL);
     co_hb_state_entered(node);
 }
@@ -126,8 +120,9 @@ co_err_t co_nmt_apply(co_node_t *node, co_nmt_cmd_t cmd)
     return CO_ERR_ARG;
 }
 
-void co_nmt_ingest(co_node_t *node, const co_frame_t *frame)
+void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if (frame->len != 2 || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
@@ -153,8 +148,8 @@ co_err_t co_nmt_send(co_node_t *node, co_nmt_cmd_t cmd, uint8_t target)
     if (!known_command(cmd) || target > 127) {
         return CO_ERR_ARG;
     }
-    co_frame_t frame = {.id = 0x000, .len = 2, .data = {(uint8_t)cmd, target}};
-    co_node_send(node, &frame);
+    uint8_t data[2] = {(uint8_t)cmd, target};
+    (void)co_node_send_cob(node, 0x000, data, 2, 0);
     if (target == 0 || target == node->node_id) {
         (void)co_nmt_apply(node, cmd);
     }

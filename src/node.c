@@ -20,8 +20,8 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     if (co_od_validate(&config->od, NULL) != CO_OK) {
         return CO_ERR_CONFIG;
     }
-    memset(node, 0, sizeof *node);
-    node->cfg = *config;
+    co_zero(node, sizeof *node);
+    co_copy(&node->cfg, config, sizeof *config); /* (a struct copy would call memcpy) */
     node->node_id = id;
     node->nmt_state = CO_NMT_INITIALISING;
     node->services = co_nmt_services(CO_NMT_INITIALISING);
@@ -50,62 +50,36 @@ const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stat
 
 /* ---- dispatch */
 
-/* Hand a frame to the service its route names. */
+/* The service that takes the frames of each route kind, with the route's slot (a table:
+ * less code than a switch). Left-out services are stand-ins that ignore the frame. */
+typedef void (*ingest_fn)(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+static const ingest_fn k_ingest[] = {
+    [CO_ROUTE_NMT] = co_nmt_ingest,
+    [CO_ROUTE_GUARD_RTR] = co_guard_rtr,
+    [CO_ROUTE_HB_CONSUMER] = co_hb_ingest,
+    [CO_ROUTE_GUARD_REPLY] = co_guard_reply,
+    [CO_ROUTE_SDO_SERVER] = co_sdo_server_ingest,
+    [CO_ROUTE_SDO_CLIENT] = co_sdo_client_ingest,
+    [CO_ROUTE_SYNC] = co_sync_ingest,
+    [CO_ROUTE_TIME] = co_time_ingest,
+    [CO_ROUTE_EMCY] = co_emcy_ingest,
+    [CO_ROUTE_RPDO] = co_pdo_rx,
+    [CO_ROUTE_TPDO_RTR] = co_pdo_rtr,
+    [CO_ROUTE_LSS_SLAVE] = co_lss_slave_ingest,
+    [CO_ROUTE_LSS_MASTER] = co_lss_master_ingest,
+    [CO_ROUTE_MGR_BOOTUP] = co_manager_bootup,
+};
+
+/* Hand a frame to the service its route names (routes hold the kinds above only). */
 static CO_INLINE void dispatch(co_node_t *node, const co_route_t *route, const co_frame_t *frame)
 {
-    uint8_t slot = route->slot;
-    switch (route->kind) {
-    case CO_ROUTE_NMT:
-        co_nmt_ingest(node, frame);
-        break;
-    case CO_ROUTE_GUARD_RTR:
-        co_guard_rtr(node, frame);
-        break;
-    case CO_ROUTE_HB_CONSUMER:
-        co_hb_ingest(node, slot, frame);
-        break;
-    case CO_ROUTE_GUARD_REPLY:
-        co_guard_reply(node, slot, frame);
-        break;
-    case CO_ROUTE_SDO_SERVER:
-        co_sdo_server_ingest(node, slot, frame);
-        break;
-    case CO_ROUTE_SDO_CLIENT:
-        co_sdo_client_ingest(node, slot, frame);
-        break;
-    case CO_ROUTE_SYNC:
-        co_sync_ingest(node, frame);
-        break;
-    case CO_ROUTE_TIME:
-        co_time_ingest(node, frame);
-        break;
-    case CO_ROUTE_EMCY:
-        co_emcy_ingest(node, slot, frame);
-        break;
-    case CO_ROUTE_RPDO:
-        co_pdo_rx(node, slot, frame);
-        break;
-    case CO_ROUTE_TPDO_RTR:
-        co_pdo_rtr(node, slot, frame);
-        break;
-    case CO_ROUTE_LSS_SLAVE:
-        co_lss_slave_ingest(node, frame);
-        break;
-    case CO_ROUTE_LSS_MASTER:
-        co_lss_master_ingest(node, frame);
-        break;
-    case CO_ROUTE_MGR_BOOTUP:
-        co_manager_bootup(node, slot, frame);
-        break;
-    default:
-        break;
-    }
+    k_ingest[route->kind](node, route->slot, frame);
 }
 
 /* A frame whose service the NMT state does not allow now: dropped and counted, unless
  * it is the one that ends an LSS quiet time. */
-static CO_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
-                                     const co_frame_t *frame)
+static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
+                                          const co_frame_t *frame)
 {
     if (co_lss_slave_resume(node, route->service)) {
         dispatch(node, route, frame);
@@ -115,7 +89,7 @@ static CO_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
 }
 
 /* A frame on another COB-ID than the last one routed: the search, then as below. */
-static CO_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
+static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
 {
     const co_route_t *route = co_routes_find(node, key);
     if (route == NULL) {
@@ -146,10 +120,11 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         return;
     }
     /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
-     * the one the last frame took; this path makes no call but the service's. */
+     * the one the last frame took; this path makes no call but the service's (a short
+     * path: without it every frame takes the search). */
     uint32_t key = co_route_key(frame);
     const co_route_t *route = &node->routes[node->route_hint];
-    if (node->route_hint >= node->route_count || route->key != key) {
+    if (!CO_SHORT_PATHS || node->route_hint >= node->route_count || route->key != key) {
         ingest_searched(node, frame, key);
         return;
     }
@@ -267,81 +242,95 @@ void co_node_state_changed(co_node_t *node)
 
 /* ---- object dictionary access */
 
-/* Service side of a write: refuse values a service cannot take. */
-/* The objects whose value is a COB-ID (bit 31 valid, bit 29 frame format, the ID). */
-static bool is_cob_id_object(const co_od_entry_t *e)
+/* ---- The services' objects: which service checks a write to which communication object,
+ * and takes the new value into effect. A table, searched on each write to 0x1000..0x1FFF,
+ * instead of a switch per step: less code. */
+
+typedef co_abort_t (*write_check_fn)(co_node_t *node, const co_od_entry_t *entry,
+                                     const uint8_t *data, uint32_t len);
+typedef void (*written_fn)(co_node_t *node, const co_od_entry_t *entry);
+
+/* Which sub-indices of an object hold a COB-ID (bit 31 valid, bit 29 frame format, the
+ * identifier): a new one must name an identifier of its own format. */
+enum { COB_NONE, COB_SUB0, COB_SUB1_2, COB_SUB1_UP };
+
+typedef struct service_object {
+    uint16_t first; /* indices first..last */
+    uint16_t last;
+    uint8_t cob;          /* COB_*: the sub-indices holding a COB-ID */
+    write_check_fn check; /* refuse a value the service cannot take (NULL: none) */
+    written_fn written;   /* the new value takes effect (NULL: nothing to do) */
+} service_object_t;
+
+#if CO_CONFIG_GUARDING
+static void guard_written(co_node_t *node, const co_od_entry_t *entry)
 {
-    uint16_t i = e->index;
-    return ((i == 0x1005 || i == 0x1012 || i == 0x1014) && e->sub == 0) ||
-           (i >= 0x1200 && i <= 0x12FF && (e->sub == 1 || e->sub == 2)) ||
-           (i == 0x1028 && e->sub >= 1);
+    (void)entry;
+    co_guard_written(node);
+}
+#endif
+
+/* Objects of left-out features stay (for their COB-ID check) or go (with no effect). */
+static const service_object_t k_service_objects[] = {
+#if CO_CONFIG_EMCY_HISTORY
+    {0x1003, 0x1003, COB_NONE, co_emcy_check_write, co_emcy_written},
+#endif
+    {0x1005, 0x1005, COB_SUB0, NULL, co_sync_written},
+#if CO_CONFIG_SYNC_PRODUCER
+    {0x1006, 0x1007, COB_NONE, NULL, co_sync_written},
+#endif
+#if CO_CONFIG_GUARDING
+    {0x100C, 0x100D, COB_NONE, NULL, guard_written},
+#endif
+#if CO_CONFIG_STORAGE
+    {0x1010, 0x1011, COB_NONE, co_storage_check_write, co_storage_show_capability},
+#else
+    {0x1010, 0x1011, COB_NONE, co_storage_check_write, NULL}, /* every command refused */
+#endif
+    {0x1012, 0x1012, COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
+    {0x1014, 0x1014, COB_SUB0, NULL, CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
+#if CO_EMCY_QUEUE_LEN > 0
+    {0x1015, 0x1015, COB_NONE, NULL, co_emcy_written},
+#endif
+#if CO_HB_CONSUMERS_MAX > 0
+    {0x1016, 0x1016, COB_NONE, co_hb_check_write, co_hb_written},
+#endif
+    {0x1017, 0x1017, COB_NONE, NULL, co_hb_written},
+    {0x1019, 0x1019, COB_NONE, co_sync_check_write, co_sync_written},
+    {0x1028, 0x1028, COB_SUB1_UP, NULL, CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
+#if CO_SDO_CLIENTS_MAX > 0
+    {0x1200, 0x127F, COB_SUB1_2, NULL, co_sdo_server_written},
+    {0x1280, 0x12FF, COB_SUB1_2, NULL, co_sdo_client_written},
+#else /* without clients 0x1280.. have no effect: no server channel is 0x1200 + 0x80 or more */
+    {0x1200, 0x12FF, COB_SUB1_2, NULL, co_sdo_server_written},
+#endif
+    {0x1400, 0x1BFF, COB_NONE, co_pdo_check_write, co_pdo_written},
+};
+
+/* The service object of an entry of 0x1000..0x1FFF, or NULL. */
+static const service_object_t *service_object(const co_od_entry_t *entry)
+{
+    for (size_t i = 0; i < sizeof k_service_objects / sizeof k_service_objects[0]; i++) {
+        const service_object_t *o = &k_service_objects[i];
+        if (entry->index >= o->first && entry->index <= o->last) {
+            return o;
+        }
+    }
+    return NULL;
 }
 
-static co_abort_t service_check(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                                uint32_t len)
+/* Service side of a write: refuse values a service cannot take. */
+static co_abort_t service_check(co_node_t *node, const service_object_t *o,
+                                const co_od_entry_t *entry, const uint8_t *data, uint32_t len)
 {
-    if (len == 4 && is_cob_id_object(entry) && !co_cob_valid(co_get_u32(data))) {
+    uint8_t sub = entry->sub;
+    bool cob = (o->cob == COB_SUB0 && sub == 0) ||
+               (o->cob == COB_SUB1_2 && (sub == 1 || sub == 2)) ||
+               (o->cob == COB_SUB1_UP && sub >= 1);
+    if (len == 4 && cob && !co_cob_valid(co_get_u32(data))) {
         return CO_ABORT_VALUE;
     }
-    if (entry->index >= 0x1400 && entry->index <= 0x1BFF) {
-        return co_pdo_check_write(node, entry, data, len);
-    }
-    switch (entry->index) {
-    case 0x1010:
-    case 0x1011:
-        return co_storage_check_write(node, entry, data, len); /* the command runs here */
-    case 0x1016:
-        return co_hb_check_write(node, entry, data, len);
-    case 0x1003:
-        return co_emcy_check_write(node, entry, data, len);
-    case 0x1019:
-        return co_sync_check_write(node, entry, data, len);
-    default:
-        return CO_ABORT_NONE;
-    }
-}
-
-/* Service side of a write: take the new value into effect at once. */
-static void service_apply(co_node_t *node, const co_od_entry_t *entry)
-{
-    switch (entry->index) {
-    case 0x1016:
-    case 0x1017:
-        co_hb_written(node, entry);
-        break;
-    case 0x100C:
-    case 0x100D:
-        co_guard_written(node);
-        break;
-    case 0x1005:
-    case 0x1006:
-    case 0x1007:
-    case 0x1019:
-        co_sync_written(node, entry);
-        break;
-    case 0x1012:
-        co_time_written(node, entry);
-        break;
-    case 0x1010:
-    case 0x1011:
-        co_storage_show_capability(node, entry);
-        break;
-    case 0x1003:
-    case 0x1014:
-    case 0x1015:
-    case 0x1028:
-        co_emcy_written(node, entry);
-        break;
-    default:
-        if (entry->index >= 0x1400 && entry->index <= 0x1BFF) {
-            co_pdo_written(node, entry);
-        } else if (entry->index >= 0x1200 && entry->index <= 0x127F) {
-            co_sdo_server_written(node, entry);
-        } else if (entry->index >= 0x1280 && entry->index <= 0x12FF) {
-            co_sdo_client_written(node, entry);
-        }
-        break;
-    }
+    return o->check != NULL ? o->check(node, entry, data, len) : CO_ABORT_NONE;
 }
 
 /* co_node_write_entry of anything but a plain application number. */
@@ -350,11 +339,11 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
 {
     /* The services own objects of the communication profile area only (0x1000..0x1FFF):
      * an application object needs neither their checks nor their effects. */
-    bool comm = entry->index < 0x2000u;
+    const service_object_t *o = entry->index < 0x2000u ? service_object(entry) : NULL;
     const co_od_t *od = &node->cfg.od;
     co_abort_t abort = co_od_check(od, entry, data, len);
-    if (abort == CO_ABORT_NONE && comm) {
-        abort = service_check(node, entry, data, len);
+    if (abort == CO_ABORT_NONE && o != NULL) {
+        abort = service_check(node, o, entry, data, len);
     }
     if (abort == CO_ABORT_NONE) {
         abort = co_od_store(od, entry, data, len);
@@ -362,8 +351,8 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    if (comm) {
-        service_apply(node, entry);
+    if (o != NULL && o->written != NULL) {
+        o->written(node, entry); /* the new value takes effect at once */
     }
     co_pdo_changed(node, entry); /* change of state: event-driven TPDOs mapping it */
     if (entry->hooks && entry->hooks->written) {
@@ -433,6 +422,13 @@ co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64
         wire[i] = (uint8_t)(value >> (8 * i));
     }
     return co_node_write_entry(node, entry, wire, size);
+}
+
+uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent)
+{
+    uint64_t v = absent;
+    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
+    return (uint32_t)v;
 }
 
 co_err_t co_node_get_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t *value)

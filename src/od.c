@@ -13,6 +13,8 @@
 
 #include <string.h>
 
+#include "build.h"
+
 /* REAL32/REAL64 are copied bit for bit through uint32_t/uint64_t. */
 _Static_assert(sizeof(float) == 4, "REAL32 needs a 4-byte float");
 _Static_assert(sizeof(double) == 8, "REAL64 needs an 8-byte double");
@@ -51,7 +53,9 @@ static const type_info_t k_types[] = {
     [CO_TYPE_REAL32] = {4, 4, K_REAL},
     [CO_TYPE_VISIBLE_STRING] = {0, 0, K_VSTRING},
     [CO_TYPE_OCTET_STRING] = {0, 0, K_OSTRING},
+#if CO_CONFIG_OD_UNICODE /* without it: an unknown type, refused by co_od_validate */
     [CO_TYPE_UNICODE_STRING] = {0, 0, K_USTRING},
+#endif
     [CO_TYPE_TIME_OF_DAY] = {6, 6, K_RAW},
     [CO_TYPE_TIME_DIFFERENCE] = {6, 6, K_RAW},
     [CO_TYPE_DOMAIN] = {0, 0, K_DOMAIN},
@@ -72,19 +76,19 @@ static const type_info_t k_types[] = {
 
 static const type_info_t k_unknown = {0, 0, K_NONE};
 
-/* Keeps the slow look-up out of the fast one (a hint; other compilers decide). */
-#if defined(__GNUC__) || defined(__clang__)
-#define CO_OD_NOINLINE __attribute__((noinline))
-#else
-#define CO_OD_NOINLINE
-#endif
-
-static const type_info_t *type_info(unsigned type)
+static CO_SIZE_NOINLINE const type_info_t *type_info(unsigned type)
 {
     return type < sizeof k_types / sizeof k_types[0] ? &k_types[type] : &k_unknown;
 }
 
 static bool is_number(const type_info_t *t) { return t->kind >= K_BOOL && t->kind <= K_REAL; }
+
+/* A DOMAIN kept in RAM (a co_od_domain_t), a UNICODE_STRING: each a switch (config.h). */
+static bool is_domain(const type_info_t *t) { return CO_CONFIG_OD_DOMAIN && t->kind == K_DOMAIN; }
+static bool is_ustring(const type_info_t *t)
+{
+    return CO_CONFIG_OD_UNICODE && t->kind == K_USTRING;
+}
 
 static bool is_integer(const type_info_t *t)
 {
@@ -100,11 +104,13 @@ static uint32_t min_u32(uint32_t a, uint32_t b) { return a < b ? a : b; }
 /* On a little-endian host a number whose storage is as wide as its wire form (8, 16, 32,
  * 64 bits, REAL32/64) already is its wire form: reads and writes copy it as it is. */
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define LITTLE_ENDIAN_HOST 1
 static bool wire_is_native(const type_info_t *t)
 {
     return t->wire == t->width && t->kind >= K_SIGNED && t->kind <= K_REAL;
 }
 #else
+#define LITTLE_ENDIAN_HOST 0
 static bool wire_is_native(const type_info_t *t)
 {
     (void)t;
@@ -115,14 +121,6 @@ static bool wire_is_native(const type_info_t *t)
 static bool has_read_hook(const co_od_entry_t *e) { return e->hooks && e->hooks->read; }
 
 static bool has_write_hook(const co_od_entry_t *e) { return e->hooks && e->hooks->write; }
-
-/* memcpy that accepts a NULL pointer when there is nothing to copy. */
-static void copy_bytes(void *dst, const void *src, uint32_t n)
-{
-    if (n > 0) {
-        memcpy(dst, src, n);
-    }
-}
 
 /* ---- Bit patterns. */
 
@@ -136,10 +134,10 @@ typedef uint32_t bits_t;
 
 /* Sign-extend the low `nbits` bits of `bits` to the pattern's width (unsigned arithmetic
  * only). */
-static bits_t sign_extend(bits_t bits, unsigned nbits)
+static CO_SIZE_NOINLINE bits_t sign_extend(bits_t bits, unsigned nbits)
 {
-    if (nbits >= BITS_WIDTH) {
-        return bits;
+    if (nbits == 0 || nbits >= BITS_WIDTH) {
+        return bits; /* no bits, or nothing to extend */
     }
     bits_t sign = (bits_t)1 << (nbits - 1u);
     bits &= (bits_t)((sign << 1) - 1u);
@@ -155,51 +153,49 @@ static int64_t to_signed(bits_t bits)
     return -(int64_t)(bits_t)~bits - 1;
 }
 
-static bits_t wire_get(const uint8_t *p, unsigned n)
-{
-    bits_t v = 0;
-    while (n-- > 0u) {
-        v = (bits_t)(v << 8) | p[n];
-    }
-    return v;
-}
-
-static void wire_put(uint8_t *p, bits_t v, unsigned n)
-{
-    for (unsigned i = 0; i < n; i++) {
-        p[i] = (uint8_t)(v >> (8u * i));
-    }
-}
-
 /* A number's wire bytes as a bit pattern, signed types sign-extended from the wire width. */
 static bits_t wire_number(const type_info_t *t, const uint8_t *data)
 {
-    bits_t bits = wire_get(data, t->wire);
+    bits_t bits = 0;
+    for (unsigned n = t->wire; n-- > 0u;) {
+        bits = (bits_t)(bits << 8) | data[n];
+    }
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->wire) : bits;
 }
 
-/* Native storage of a number, seen through a union of the unsigned widths. */
-typedef union native {
-    uint8_t u8;
-    uint16_t u16;
-    uint32_t u32;
-#if CO_CONFIG_OD_64BIT
-    uint64_t u64;
-#endif
-} native_t;
-
-/* Native storage as a bit pattern (signed types sign-extended; reals as raw bits). */
+/* Native storage of a number as a bit pattern (signed types sign-extended). Integers and
+ * BOOLEAN are read as the unsigned integer of their width, which may alias them; reals bit
+ * for bit. */
 static bits_t native_get(const void *value, const type_info_t *t)
 {
-    native_t v;
-    memcpy(&v, value, t->width);
+    bits_t bits;
+    if (!LITTLE_ENDIAN_HOST && t->kind == K_REAL) { /* elsewhere reals are wire form */
+        uint32_t b32;
 #if CO_CONFIG_OD_64BIT
-    /* NOLINTNEXTLINE(clang-analyzer-core.uninitialized.Assign): widths are 1, 2, 4, 8 */
-    bits_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : t->width == 4 ? v.u32 : v.u64;
-#else
-    /* NOLINTNEXTLINE(clang-analyzer-core.uninitialized.Assign): widths are 1, 2, 4 */
-    bits_t bits = t->width == 1 ? v.u8 : t->width == 2 ? v.u16 : v.u32;
+        if (t->width == 8) {
+            memcpy(&bits, value, sizeof bits);
+            return bits;
+        }
 #endif
+        memcpy(&b32, value, sizeof b32);
+        return b32;
+    }
+    switch (t->width) {
+    case 1:
+        bits = *(const uint8_t *)value;
+        break;
+    case 2:
+        bits = *(const uint16_t *)value;
+        break;
+#if CO_CONFIG_OD_64BIT
+    case 8:
+        bits = *(const uint64_t *)value;
+        break;
+#endif
+    default:
+        bits = *(const uint32_t *)value;
+        break;
+    }
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->width) : bits;
 }
 
@@ -207,26 +203,36 @@ static bits_t native_get(const void *value, const type_info_t *t)
  * complement, so an unsigned copy of the same width holds the same value). */
 static void native_set(void *value, const type_info_t *t, bits_t bits)
 {
-    native_t v;
     if (t->kind == K_BOOL) {
         bits = bits != 0u;
     }
-    if (t->width == 1) {
-        v.u8 = (uint8_t)bits;
-    } else if (t->width == 2) {
-        v.u16 = (uint16_t)bits;
-    } else {
+    if (!LITTLE_ENDIAN_HOST && t->kind == K_REAL) { /* elsewhere reals are wire form */
+        uint32_t b32 = (uint32_t)bits;
 #if CO_CONFIG_OD_64BIT
         if (t->width == 8) {
-            v.u64 = bits;
-        } else {
-            v.u32 = (uint32_t)bits;
+            memcpy(value, &bits, sizeof bits);
+            return;
         }
-#else
-        v.u32 = bits;
 #endif
+        memcpy(value, &b32, sizeof b32);
+        return;
     }
-    memcpy(value, &v, t->width);
+    switch (t->width) {
+    case 1:
+        *(uint8_t *)value = (uint8_t)bits;
+        break;
+    case 2:
+        *(uint16_t *)value = (uint16_t)bits;
+        break;
+#if CO_CONFIG_OD_64BIT
+    case 8:
+        *(uint64_t *)value = bits;
+        break;
+#endif
+    default:
+        *(uint32_t *)value = (uint32_t)bits;
+        break;
+    }
 }
 
 /* A pattern as the API's 64 bits: signed types sign-extended (already so when the
@@ -241,31 +247,16 @@ static uint64_t widen(const type_info_t *t, bits_t bits)
 #endif
 }
 
-/* A REAL32/REAL64 bit pattern as double (float and integer byte orders assumed equal). */
-static double real_value(const type_info_t *t, bits_t bits)
-{
-    if (t->wire == 4) {
-        uint32_t b = (uint32_t)bits;
-        float f;
-        memcpy(&f, &b, sizeof f);
-        return (double)f;
-    }
-#if CO_CONFIG_OD_64BIT
-    double d;
-    memcpy(&d, &bits, sizeof d);
-    return d;
-#else
-    return 0.0; /* no REAL64 in this build */
-#endif
-}
-
 /* ---- Table checks and look-up. */
 
 static bool storage_ok(const co_od_entry_t *e, const type_info_t *t)
 {
     if (e->value != NULL) {
-        /* a DOMAIN kept in RAM needs its buffer */
-        return t->kind != K_DOMAIN || ((const co_od_domain_t *)e->value)->data != NULL;
+        /* a DOMAIN kept in RAM (CO_CONFIG_OD_DOMAIN) needs its buffer */
+        if (t->kind == K_DOMAIN) {
+            return CO_CONFIG_OD_DOMAIN && ((const co_od_domain_t *)e->value)->data != NULL;
+        }
+        return true;
     }
     bool rd = has_read_hook(e);
     bool wr = has_write_hook(e);
@@ -284,8 +275,11 @@ static bool entry_ok(const co_od_entry_t *e)
     if (t->wire != 0 ? e->size != t->wire : e->size == 0) {
         return false;
     }
-    if (t->kind == K_USTRING && (e->size & 1u) != 0) {
+    if (is_ustring(t) && (e->size & 1u) != 0) {
         return false; /* whole 16-bit code units only */
+    }
+    if (!CO_CONFIG_OD_LIMITS && e->limits != NULL) {
+        return false; /* limits are left out of this build */
     }
     if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && e->limits != NULL) {
         return false; /* REAL limits are left out of this build */
@@ -298,8 +292,22 @@ static bool entry_fits(const co_od_t *od, uint32_t i)
 {
     const co_od_entry_t *entries = od->entries;
     bool sorted = i == 0 || entry_key(&entries[i]) > entry_key(&entries[i - 1u]);
-    bool keyed = od->keys == NULL || od->keys[i] == entry_key(&entries[i]);
-    return sorted && keyed && entry_ok(&entries[i]);
+    if (CO_SHORT_PATHS && od->keys != NULL && od->keys[i] != entry_key(&entries[i])) {
+        return false; /* (a build for size does not use the keys: see co_od_t) */
+    }
+    return sorted && entry_ok(&entries[i]);
+}
+
+/* The hash slot that holds `key` (a validated hash: keys exist, a slot is empty, slots
+ * point into the table), or the empty slot where its probe ends. */
+static uint32_t hash_probe(const co_od_t *od, uint32_t key)
+{
+    uint32_t mask = od->hash_mask;
+    uint32_t slot = CO_OD_HASH_HOME(key, mask);
+    for (uint32_t at; (at = od->hash[slot]) != 0 && od->keys[at - 1u] != key;) {
+        slot = (slot + 1u) & mask;
+    }
+    return slot;
 }
 
 /* The hash (when given) leads every key to its own entry and cannot loop (checked after
@@ -324,7 +332,7 @@ static bool hash_fits(const co_od_t *od)
         return false; /* a missing key would probe forever */
     }
     for (uint32_t i = 0; i < od->count; i++) {
-        if (co_od_find(od, od->entries[i].index, od->entries[i].sub, NULL) != &od->entries[i]) {
+        if (od->hash[hash_probe(od, od->keys[i])] != i + 1u) {
             return false;
         }
     }
@@ -340,7 +348,9 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     while (od->entries != NULL && i < od->count && entry_fits(od, i)) {
         i++;
     }
-    if (i == od->count && hash_fits(od)) {
+    /* A build for size reads neither keys nor hash (look-ups search the entries): it does
+     * not check them either. */
+    if (i == od->count && (!CO_SHORT_PATHS || hash_fits(od))) {
         return CO_OK;
     }
     if (bad != NULL) {
@@ -349,8 +359,7 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     return CO_ERR_CONFIG;
 }
 
-/* Position of the first entry whose key is >= key (count when there is none). The
- * halving has no data-dependent branch, so it costs the same few instructions per step. */
+#if CO_SHORT_PATHS
 /* The largest power of two <= n (n >= 1). */
 static inline uint32_t pow2_floor(uint32_t n)
 {
@@ -377,9 +386,27 @@ static uint32_t lower_bound_keys(const uint32_t *keys, uint32_t count, uint32_t 
     }
     return lb + (keys[lb] < key ? 1u : 0u);
 }
+#endif
 
+/* Position of the first entry whose key is >= key (count when there is none). The halving
+ * has no data-dependent branch, so it costs the same few instructions per step. A build
+ * for size searches the entries only (the keys, when given, are theirs: validated), with
+ * the plain bisection, shorter code. */
 static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 {
+#if !CO_SHORT_PATHS
+    uint32_t lo = 0;
+    uint32_t hi = od->count;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2u;
+        if (entry_key(&od->entries[mid]) < key) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+#else
     if (od->count == 0) {
         return 0;
     }
@@ -394,11 +421,12 @@ static uint32_t lower_bound(const co_od_t *od, uint32_t key)
         n -= half;
     }
     return (uint32_t)(base - od->entries) + (entry_key(base) < key ? 1u : 0u);
+#endif
 }
 
 /* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
-static CO_OD_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint32_t key,
-                                                       co_abort_t *abort)
+static CO_FAST_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint32_t key,
+                                                         co_abort_t *abort)
 {
     uint16_t index = (uint16_t)(key >> 8);
     uint32_t pos = lower_bound(od, key);
@@ -418,13 +446,10 @@ static CO_OD_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint32
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort)
 {
     uint32_t key = key_of(index, sub);
-    if (od->hash != NULL) { /* validated: keys exist, a slot is empty, slots point into it */
-        uint32_t mask = od->hash_mask;
-        uint32_t slot = CO_OD_HASH_HOME(key, mask);
-        for (uint32_t at; (at = od->hash[slot]) != 0; slot = (slot + 1u) & mask) {
-            if (od->keys[at - 1u] == key) {
-                return &od->entries[at - 1u];
-            }
+    if (CO_SHORT_PATHS && od->hash != NULL) { /* a build for size: the search finds it too */
+        uint32_t at = od->hash[hash_probe(od, key)];
+        if (at != 0) {
+            return &od->entries[at - 1u];
         }
         if (abort == NULL) {
             return NULL; /* a miss: the search only tells which abort code */
@@ -437,21 +462,13 @@ uint32_t co_type_size(co_type_t type) { return type_info((unsigned)type)->wire; 
 
 /* ---- Reading. */
 
-static uint32_t vstring_len(const uint8_t *s, uint32_t cap)
+/* Bytes of a string before its first zero code unit: a zero byte (`unit` 1), or two zero
+ * bytes (a UNICODE_STRING's 16-bit unit, `unit` 2: zero in either byte order). */
+static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
 {
     uint32_t n = 0;
-    while (n < cap && s[n] != 0) {
-        n++;
-    }
-    return n;
-}
-
-/* Bytes before the first zero code unit; a zero unit is two zero bytes in either order. */
-static uint32_t ustring_len(const uint8_t *s, uint32_t cap)
-{
-    uint32_t n = 0;
-    while (n + 2u <= cap && (s[n] != 0 || s[n + 1u] != 0)) {
-        n += 2u;
+    while (n + unit <= cap && (s[n] | s[n + unit - 1u]) != 0) {
+        n += unit;
     }
     return n;
 }
@@ -462,16 +479,14 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
     if (entry->value == NULL) {
         return entry->size;
     }
-    switch (type_info(entry->type)->kind) {
-    case K_VSTRING:
-        return vstring_len(entry->value, entry->size);
-    case K_USTRING:
-        return ustring_len(entry->value, entry->size);
-    case K_DOMAIN:
-        return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
-    default:
-        return entry->size;
+    const type_info_t *t = type_info(entry->type);
+    if (t->kind == K_VSTRING || is_ustring(t)) {
+        return string_len(entry->value, entry->size, is_ustring(t) ? 2u : 1u);
     }
+    if (is_domain(t)) {
+        return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
+    }
+    return entry->size;
 }
 
 co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
@@ -483,34 +498,37 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
     return writable ? CO_ABORT_NONE : CO_ABORT_READ_ONLY;
 }
 
-/* The wire bytes of a stored value: numbers are encoded into tmp, the rest is kept as is. */
-static const uint8_t *wire_view(const co_od_entry_t *e, uint8_t tmp[8])
+/* The wire bytes of a value in storage (`*len` of them, its current length), read where
+ * they are: on a little-endian host the wire bytes of every number are the first bytes of
+ * its storage (an INTEGER24 is the low three bytes of its int32_t). A big-endian host
+ * encodes numbers into tmp (when given; NULL without). */
+static const uint8_t *stored_wire(const co_od_entry_t *e, uint8_t *tmp, uint32_t *len)
 {
     const type_info_t *t = type_info(e->type);
-    if (wire_is_native(t)) {
-        return e->value;
-    }
+    *len = co_od_value_len(NULL, e);
+#if !LITTLE_ENDIAN_HOST
     if (is_number(t)) {
-        wire_put(tmp, native_get(e->value, t), t->wire);
+        if (tmp != NULL) {
+            bits_t bits = native_get(e->value, t);
+            for (unsigned i = 0; i < t->wire; i++) {
+                tmp[i] = (uint8_t)(bits >> (8u * i));
+            }
+        }
         return tmp;
     }
-    if (t->kind == K_DOMAIN) {
-        return ((const co_od_domain_t *)e->value)->data;
-    }
-    return e->value;
+#else
+    (void)tmp;
+#endif
+    return is_domain(t) ? ((const co_od_domain_t *)e->value)->data : e->value;
 }
 
 const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, uint32_t *len)
 {
+    (void)od;
     if (has_read_hook(entry) || entry->value == NULL) {
         return NULL;
     }
-    const type_info_t *t = type_info(entry->type);
-    if (is_number(t) && !wire_is_native(t)) {
-        return NULL;
-    }
-    *len = co_od_value_len(od, entry);
-    return t->kind == K_DOMAIN ? ((const co_od_domain_t *)entry->value)->data : entry->value;
+    return stored_wire(entry, NULL, len);
 }
 
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
@@ -530,26 +548,24 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
         return CO_ABORT_WRITE_ONLY;
     }
     const type_info_t *t = type_info(entry->type);
-    if (wire_is_native(t) && offset == 0 && cap >= t->wire) { /* a whole number, as stored */
-        memcpy(buf, entry->value, t->wire);
+    if (CO_SHORT_PATHS && wire_is_native(t) && offset == 0 && cap >= t->wire) {
+        memcpy(buf, entry->value, t->wire); /* a whole number, as stored */
         *n = t->wire;
         if (total != NULL) {
             *total = t->wire;
         }
         return CO_ABORT_NONE;
     }
-    whole = co_od_value_len(od, entry);
+    uint8_t tmp[8];
+    const uint8_t *wire = stored_wire(entry, tmp, &whole);
     if (total != NULL) {
         *total = whole;
     }
     if (offset > whole) {
         return CO_ABORT_GENERAL;
     }
-    uint8_t tmp[8];
     uint32_t count = min_u32(cap, whole - offset);
-    if (count > 0) {
-        memcpy(buf, wire_view(entry, tmp) + offset, count);
-    }
+    co_copy(buf, wire + offset, count);
     *n = count;
     return CO_ABORT_NONE;
 }
@@ -567,8 +583,28 @@ static co_abort_t check_len(const co_od_entry_t *e, const type_info_t *t, uint32
     if (len > e->size) {
         return CO_ABORT_LEN_HIGH;
     }
-    return (t->kind == K_USTRING && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
+    return (is_ustring(t) && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
 }
+
+#if CO_CONFIG_REAL_LIMITS
+/* A REAL32/REAL64 bit pattern as double (float and integer byte orders assumed equal). */
+static double real_value(const type_info_t *t, bits_t bits)
+{
+    if (t->wire == 4) {
+        uint32_t b = (uint32_t)bits;
+        float f;
+        memcpy(&f, &b, sizeof f);
+        return (double)f;
+    }
+#if CO_CONFIG_OD_64BIT
+    double d;
+    memcpy(&d, &bits, sizeof d);
+    return d;
+#else
+    return 0.0; /* no REAL64 in this build */
+#endif
+}
+#endif
 
 static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, bits_t bits)
 {
@@ -578,13 +614,15 @@ static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, 
         int64_t v = to_signed(bits);
         low = v < lim->low.i;
         high = v > lim->high.i;
-    } else if (CO_CONFIG_REAL_LIMITS && t->kind == K_REAL) {
+#if CO_CONFIG_REAL_LIMITS
+    } else if (t->kind == K_REAL) {
         double v = real_value(t, bits);
         if (v != v) {
             return CO_ABORT_VALUE; /* NaN lies within no range */
         }
         low = v < lim->low.f;
         high = v > lim->high.f;
+#endif
     } else {
         low = bits < lim->low.u;
         high = bits > lim->high.u;
@@ -592,51 +630,25 @@ static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, 
     return low ? CO_ABORT_VALUE_LOW : high ? CO_ABORT_VALUE_HIGH : CO_ABORT_NONE;
 }
 
-static co_abort_t check_number(const co_od_entry_t *e, const type_info_t *t, const uint8_t *data)
-{
-    if (e->limits == NULL && t->kind != K_BOOL) {
-        return CO_ABORT_NONE; /* nothing to compare: no need to decode */
-    }
-    bits_t bits = wire_number(t, data);
-    if (t->kind == K_BOOL && bits > 1u) {
-        return CO_ABORT_VALUE;
-    }
-    return e->limits ? check_limits(e->limits, t, bits) : CO_ABORT_NONE;
-}
-
 co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
                        uint32_t len)
 {
     const type_info_t *t = type_info(entry->type);
     co_abort_t abort = check_len(entry, t, len);
-    if (abort == CO_ABORT_NONE && is_number(t)) {
-        abort = check_number(entry, t, data);
+    /* a number with limits, or a BOOLEAN (0 or 1), is decoded; others need not be */
+    const co_od_limits_t *limits = CO_CONFIG_OD_LIMITS ? entry->limits : NULL;
+    if (abort == CO_ABORT_NONE && is_number(t) && (limits || t->kind == K_BOOL)) {
+        bits_t bits = wire_number(t, data);
+        if (t->kind == K_BOOL && bits > 1u) {
+            abort = CO_ABORT_VALUE;
+        } else if (limits) {
+            abort = check_limits(limits, t, bits);
+        }
     }
     if (abort == CO_ABORT_NONE && entry->hooks && entry->hooks->check) {
         abort = entry->hooks->check(od->hook_ctx, entry, data, len);
     }
     return abort;
-}
-
-/* Decode a wire value of checked length into the entry's storage. */
-static void store_value(const co_od_entry_t *e, const type_info_t *t, const uint8_t *data,
-                        uint32_t len)
-{
-    if (wire_is_native(t)) {
-        memcpy(e->value, data, t->wire);
-    } else if (is_number(t)) {
-        native_set(e->value, t, wire_number(t, data));
-    } else if (t->kind == K_RAW) {
-        memcpy(e->value, data, t->wire);
-    } else if (t->kind == K_DOMAIN) {
-        co_od_domain_t *d = e->value;
-        copy_bytes(d->data, data, len);
-        d->len = len;
-    } else {
-        /* strings: zero the tail so a shorter VISIBLE_STRING ends in NUL */
-        copy_bytes(e->value, data, len);
-        memset((uint8_t *)e->value + len, 0, e->size - len);
-    }
 }
 
 co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
@@ -650,10 +662,23 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
     }
     const type_info_t *t = type_info(entry->type);
     co_abort_t abort = check_len(entry, t, len); /* never overrun the storage */
-    if (abort == CO_ABORT_NONE) {
-        store_value(entry, t, data, len);
+    if (abort != CO_ABORT_NONE) {
+        return abort;
     }
-    return abort;
+    uint8_t *value = entry->value;
+    if (is_number(t) && !wire_is_native(t)) {
+        native_set(value, t, wire_number(t, data));
+    } else if (is_domain(t)) {
+        co_od_domain_t *d = entry->value;
+        co_copy(d->data, data, len);
+        d->len = len;
+    } else {
+        /* the value as it came; strings get their tail zeroed, so that a shorter
+         * VISIBLE_STRING ends in NUL (fixed types fill their wire size exactly) */
+        co_copy(value, data, len);
+        co_zero(value + len, (t->wire != 0 ? t->wire : entry->size) - len);
+    }
+    return CO_ABORT_NONE;
 }
 
 static void notify_written(const co_od_t *od, const co_od_entry_t *entry)
@@ -691,26 +716,21 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* ---- Power-on values. */
 
-static void reset_domain(const co_od_entry_t *e)
-{
-    const co_od_domain_t *src = e->dflt;
-    co_od_domain_t *dst = e->value;
-    uint32_t n = min_u32(src->len, e->size);
-    copy_bytes(dst->data, src->data, n);
-    dst->len = n;
-}
-
 static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
 {
     if (e->dflt == NULL || e->value == NULL) {
         return;
     }
     const type_info_t *t = type_info(e->type);
-    if (t->kind == K_DOMAIN) {
-        reset_domain(e);
+    if (is_domain(t)) {
+        const co_od_domain_t *src = e->dflt;
+        co_od_domain_t *dst = e->value;
+        uint32_t n = min_u32(src->len, e->size);
+        co_copy(dst->data, src->data, n);
+        dst->len = n;
         return;
     }
-    memcpy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
+    co_copy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
     if ((e->attr & CO_OD_NODEID) && is_integer(t)) {
         native_set(e->value, t, native_get(e->value, t) + node_id);
     }
@@ -747,8 +767,7 @@ co_err_t co_od_get_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
     const co_od_entry_t *e;
     co_err_t err = find_uint(od, index, sub, &e);
     if (err == CO_OK) {
-        const type_info_t *t = type_info(e->type);
-        *value = widen(t, native_get(e->value, t));
+        *value = co_od_entry_uint(e);
     }
     return err;
 }

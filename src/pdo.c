@@ -6,9 +6,9 @@
  *
  * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n); rpdo_count / tpdo_count
  * reach up to the highest such PDO below CO_RPDO_MAX / CO_TPDO_MAX that the dictionary
- * has, and slots in gaps stay not present. Parameters are loaded at reset communication
- * and when written through the node; values set natively (co_od_set_uint) count from the
- * next reset communication.
+ * has (a build for size takes all of them), and slots in gaps stay not present. Parameters are
+ * loaded at reset communication and when written through the node; values set natively
+ * (co_od_set_uint) count from the next reset communication.
  */
 #include "pdo_internal.h"
 
@@ -29,12 +29,19 @@ static pdo_ref_t pdo_ref(uint16_t index)
         .tpdo = off >= 0x400u, .mapping = (off & 0x200u) != 0, .num = (uint16_t)(off & 0x1FFu)};
 }
 
+/* The node's PDOs of one direction, `*count` of them. The loops over both directions below
+ * run over the two tables in turn (one loop body instead of two: less code). */
+static co_pdo_t *pdo_table(co_node_t *node, bool tpdo, uint16_t *count)
+{
+    *count = tpdo ? node->tpdo_count : node->rpdo_count;
+    return tpdo ? node->tpdo : node->rpdo;
+}
+
 static co_pdo_t *pdo_slot(co_node_t *node, bool tpdo, uint16_t num)
 {
-    if (tpdo) {
-        return num < node->tpdo_count ? &node->tpdo[num] : NULL;
-    }
-    return num < node->rpdo_count ? &node->rpdo[num] : NULL;
+    uint16_t count;
+    co_pdo_t *table = pdo_table(node, tpdo, &count);
+    return num < count ? &table[num] : NULL;
 }
 
 /* ---- loading parameters */
@@ -45,15 +52,15 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     const co_od_entry_t *cob = co_od_find(&node->cfg.od, idx, 1, NULL);
     p->flags = cob ? PDO_F_PRESENT : 0;
     p->cob_id = cob ? (uint32_t)co_od_entry_uint(cob) : CO_COB_INVALID;
-    p->type = (uint8_t)pdo_od_uint(node, idx, 2, 255);
+    p->type = (uint8_t)co_od_u32(node, idx, 2, 255);
     pdo_timers_load(node, p, tpdo, idx);
-    p->sync_start = tpdo ? (uint8_t)pdo_od_uint(node, idx, 6, 0) : 0;
+    p->sync_start = tpdo ? (uint8_t)co_od_u32(node, idx, 6, 0) : 0;
 }
 
 /* Runtime state from scratch: timers off, nothing pending; in operational the TPDO's
  * event timer starts and RPDO monitoring waits for the first frame. A missed deadline or
  * a length error stays reported until the next RPDO clears it. */
-static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
+static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 {
     pdo_clear(p, PDO_F_PENDING | PDO_F_SAMPLED | PDO_F_STARTED | PDO_F_WAITING);
     pdo_timers_restart(p);
@@ -67,7 +74,7 @@ static void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 /* ---- node hooks */
 
 /* 1 + the highest PDO number below `max` whose communication object exists. */
-static uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
+static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
 {
     uint16_t count = 0;
     for (uint16_t n = 0; n < max; n++) {
@@ -80,8 +87,12 @@ static uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
 
 co_err_t co_pdo_bind(co_node_t *node)
 {
-    node->rpdo_count = count_present(&node->cfg.od, 0x1400u, rpdo_max());
-    node->tpdo_count = count_present(&node->cfg.od, 0x1800u, tpdo_max());
+    /* The counts bound the loops over PDOs (a short path): a build for size takes every
+     * slot, the ones the dictionary lacks staying not present. */
+    node->rpdo_count =
+        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1400u, rpdo_max()) : rpdo_max();
+    node->tpdo_count =
+        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1800u, tpdo_max()) : tpdo_max();
     return CO_OK;
 }
 
@@ -120,7 +131,7 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
 #endif
 }
 
-static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     load_comm(node, p, tpdo, num);
     pdo_load_mapping(node, p, tpdo, num);
@@ -133,6 +144,9 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
  * RPDOs. Counted again whenever a PDO changes. */
 static void count_listeners(co_node_t *node)
 {
+    if (!CO_SHORT_PATHS) {
+        return; /* a build for size looks at every PDO (co_pdo_sync, co_pdo_changed) */
+    }
     uint16_t listeners = 0;
     uint16_t sync_end = 0;
     for (uint16_t n = 0; n < node->tpdo_count; n++) {
@@ -157,28 +171,29 @@ static void count_listeners(co_node_t *node)
 
 void co_pdo_reset_comm(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
-        load_pdo(node, &node->rpdo[n], false, n);
-    }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
-        load_pdo(node, &node->tpdo[n], true, n);
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        uint16_t count;
+        co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (uint16_t n = 0; n < count; n++) {
+            load_pdo(node, &table[n], tpdo, n);
+        }
     }
     count_listeners(node);
 }
 
 void co_pdo_add_routes(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
-        const co_pdo_t *p = &node->rpdo[n];
-        if (pdo_active(p)) {
-            co_routes_add(node, co_cob_key(p->cob_id), CO_ROUTE_RPDO, (uint8_t)n);
-        }
-    }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
-        const co_pdo_t *p = &node->tpdo[n];
-        bool rtr_only = p->type == 252 || p->type == 253;
-        if (pdo_active(p) && rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)) {
-            co_routes_add(node, co_cob_key(p->cob_id), CO_ROUTE_TPDO_RTR, (uint8_t)n);
+    /* Every active RPDO; a TPDO for its remote requests (types 252 and 253, RTR allowed). */
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        uint16_t count;
+        const co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (uint16_t n = 0; n < count; n++) {
+            const co_pdo_t *p = &table[n];
+            bool rtr_only = p->type == 252 || p->type == 253;
+            if (pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)))) {
+                co_routes_add_cob(node, p->cob_id, tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO,
+                                  (uint8_t)n);
+            }
         }
     }
 }
@@ -193,17 +208,28 @@ void co_pdo_state_entered(co_node_t *node)
     }
 }
 
+/* How far a SYNC looks among RPDOs and TPDOs (read again at each step: an application
+ * callback may change the PDOs); a build for size keeps no counts and looks at all. */
+static inline uint16_t rpdo_sync_end(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->rpdo_sync_end : node->rpdo_count;
+}
+static inline uint16_t tpdo_sync_end(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->tpdo_sync_end : node->tpdo_count;
+}
+
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
      * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
      * Both loops test the NMT state first (an application callback may change it). */
-    for (uint16_t n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n);
         }
     }
-    for (uint16_t n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
+    for (uint16_t n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (!PDO_FAST_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);
@@ -240,7 +266,10 @@ static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
 {
-    if (node->tpdo_listeners != 0 && (entry->attr & CO_OD_TPDO) && pdo_running(node)) {
+    if (CO_SHORT_PATHS && node->tpdo_listeners == 0) {
+        return; /* no TPDO listens (see count_listeners) */
+    }
+    if ((entry->attr & CO_OD_TPDO) && pdo_running(node)) {
         (void)mark_tpdos(node, entry);
     }
 }
@@ -255,7 +284,7 @@ uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
 
 static uint32_t od_cob_id(const co_node_t *node, pdo_ref_t r)
 {
-    return (uint32_t)pdo_od_uint(node, pdo_comm_index(r.tpdo, r.num), 1, CO_COB_INVALID);
+    return co_od_u32(node, pdo_comm_index(r.tpdo, r.num), 1, CO_COB_INVALID);
 }
 
 static bool type_allowed(uint8_t type, bool tpdo)

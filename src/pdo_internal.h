@@ -37,9 +37,14 @@ static inline bool pdo_running(const co_node_t *node)
 }
 
 /* Copy a whole mapped value: the usual widths as fixed-size copies (compiled inline, not
- * a library call), anything else with memcpy. */
+ * a library call), anything else with co_copy; without the short paths (a build for size)
+ * all of them with co_copy. */
 static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
 {
+    if (!CO_SHORT_PATHS) {
+        co_copy(dst, src, bytes);
+        return;
+    }
     switch (bytes) {
     case 1:
         memcpy(dst, src, 1);
@@ -54,7 +59,7 @@ static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
         memcpy(dst, src, 8);
         break;
     default:
-        memcpy(dst, src, bytes);
+        co_copy(dst, src, bytes);
         break;
     }
 }
@@ -89,13 +94,8 @@ static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
 }
 
 /* The per-frame short paths (the usual RPDO in co_pdo_rx, the cyclic TPDO in co_pdo_sync)
- * do what the general paths do, with fewer instructions. A size build (-Os) keeps only the
- * general paths: flash counts more than cycles there. */
-#if defined(__OPTIMIZE_SIZE__)
-#define PDO_FAST_PATHS 0
-#else
-#define PDO_FAST_PATHS 1
-#endif
+ * do what the general paths do, with fewer instructions: CO_SHORT_PATHS (build.h). */
+#define PDO_FAST_PATHS CO_SHORT_PATHS
 
 /* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
  * told when some TPDO listens to changes. */
@@ -137,8 +137,6 @@ static inline co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uin
     return CO_ABORT_READ_ONLY; /* the dictionary's mapping is fixed in this build */
 }
 #endif
-/* The dictionary's value of an optional entry; `absent` when it lacks it. */
-uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent);
 static inline uint16_t pdo_comm_index(bool tpdo, uint16_t num)
 {
     return (uint16_t)((tpdo ? 0x1800u : 0x1400u) + num);

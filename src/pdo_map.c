@@ -9,13 +9,6 @@
 
 #define PDO_MAP_BITS_MAX 64u
 
-uint64_t pdo_od_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t absent)
-{
-    uint64_t v = absent;
-    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
-    return v;
-}
-
 #if CO_CONFIG_PDO_BIT_MAPPING
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n)
 {
@@ -32,9 +25,8 @@ void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spo
 
 /* An object can carry PDO data in this direction: a fixed size of 1..8 bytes, the PDO
  * attribute, and storage or a hook to read (TPDO) / take (RPDO) the value. */
-static bool mappable(const co_od_entry_t *e, bool tpdo)
+static bool mappable(const co_od_entry_t *e, uint32_t size, bool tpdo)
 {
-    uint32_t size = co_type_size((co_type_t)e->type);
     if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > 8) {
         return false;
     }
@@ -66,17 +58,15 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
         return (!tpdo && fits) ? CO_ABORT_NONE : CO_ABORT_NO_MAP;
     }
     const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(value >> 8), NULL);
-    if (e == NULL || !mappable(e, tpdo) || !bits_fit(bits, co_type_size((co_type_t)e->type))) {
+    uint32_t size = e != NULL ? co_type_size((co_type_t)e->type) : 0;
+    if (e == NULL || !mappable(e, size, tpdo) || !bits_fit(bits, size)) {
         return CO_ABORT_NO_MAP;
     }
     out->map_entry[k] = e;
-    /* A whole number stored as it travels (and no hook to run): copied straight to and
-     * from the frame. */
-    uint32_t len = 0;
-    uint32_t size = co_type_size((co_type_t)e->type);
-    bool whole = bits == 8u * size;
-    bool plain = e->hooks == NULL && co_od_wire_data(od, e, &len) == e->value && len == size;
-    if (whole && plain) {
+    /* A whole number stored as it travels (and no hook to run): the short paths copy it
+     * straight to and from the frame. */
+    if (CO_SHORT_PATHS && bits == 8u * size && e->hooks == NULL && e->value != NULL &&
+        ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u)) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }
     return CO_ABORT_NONE;
@@ -94,7 +84,8 @@ static bool all_direct(const co_pdo_t *p)
     return true;
 }
 
-/* Resolve entries 1..n of mapping object `index` into out's slots, count and bits. */
+/* Resolve entries 1..n of mapping object `index` into out's slots, count and bits; on a
+ * failure count, bits and plain stay 0. */
 static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, bool tpdo,
                                   co_pdo_t *out)
 {
@@ -128,21 +119,17 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
-    out->plain = all_direct(out);
+    out->plain = CO_SHORT_PATHS && all_direct(out);
     return CO_ABORT_NONE;
 }
 
 /* A mapping that does not resolve (set natively, or stored before the rules) maps
- * nothing: the PDO then does nothing until it is re-mapped. */
+ * nothing (resolve_mapping sets the count last): the PDO then does nothing until it is
+ * re-mapped. */
 void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     uint16_t idx = pdo_map_index(tpdo, num);
-    uint8_t n = (uint8_t)pdo_od_uint(node, idx, 0, 0);
-    if (resolve_mapping(&node->cfg.od, idx, n, tpdo, p) != CO_ABORT_NONE) {
-        p->count = 0;
-        p->bits = 0;
-        p->plain = false;
-    }
+    (void)resolve_mapping(&node->cfg.od, idx, (uint8_t)co_od_u32(node, idx, 0, 0), tpdo, p);
 }
 
 #if CO_CONFIG_PDO_DYNAMIC
@@ -152,11 +139,11 @@ co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uin
                              const uint8_t *data, uint32_t len)
 {
     uint16_t idx = pdo_map_index(tpdo, num);
-    if (!(pdo_od_uint(node, pdo_comm_index(tpdo, num), 1, CO_COB_INVALID) & CO_COB_INVALID)) {
+    if (!(co_od_u32(node, pdo_comm_index(tpdo, num), 1, CO_COB_INVALID) & CO_COB_INVALID)) {
         return CO_ABORT_UNSUPPORTED;
     }
     if (sub != 0) {
-        return pdo_od_uint(node, idx, 0, 0) != 0 ? CO_ABORT_UNSUPPORTED : CO_ABORT_NONE;
+        return co_od_u32(node, idx, 0, 0) != 0 ? CO_ABORT_UNSUPPORTED : CO_ABORT_NONE;
     }
     if (len != 1) {
         return CO_ABORT_NONE; /* the length check has refused it already */

@@ -13,18 +13,18 @@
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
 
-/* Slot i's value from the frame at bit `pos`. A whole value is stored as it comes; a
- * value mapped with fewer bits keeps the bits the frame does not carry. */
-static void store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint8_t *data,
+/* Slot i's value from the frame at bit `pos`; false when the object's write hook refused it
+ * (then nothing changed). A whole value is stored as it comes; a value mapped with fewer
+ * bits keeps the bits the frame does not carry. */
+static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint8_t *data,
                        uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
     const co_od_entry_t *e = p->map_entry[i];
     uint8_t bits = p->map_bits[i];
-    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes into storage */
+    if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* what co_od_store does */
         pdo_copy_value(e->value, data + pos / 8u, bits / 8u);
-        co_pdo_changed(node, e);
-        return;
+        return true;
     }
     uint32_t size = co_type_size((co_type_t)e->type);
     const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
@@ -38,26 +38,34 @@ static void store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint
     }
 #endif
     if (co_od_store(od, e, value, size) != CO_ABORT_NONE) {
-        return;
+        return false;
     }
     if (e->hooks && e->hooks->written) {
         e->hooks->written(od->hook_ctx, e);
     }
-    co_pdo_changed(node, e);
+    return true;
 }
 
+/* Every value of the frame is stored first, then TPDOs hear of the changes: an event-driven
+ * TPDO the first one triggers carries the new values of the others too. */
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    if (p->plain) {
+    if (CO_SHORT_PATHS && p->plain) {
         pdo_apply_plain(node, p, data);
     } else {
+        const co_od_entry_t *stored[CO_PDO_MAP_MAX];
+        uint8_t count = 0;
         uint32_t pos = 0;
         for (uint8_t i = 0; i < p->count; i++) {
-            if (p->map_entry[i] != NULL) { /* NULL: a dummy entry, skipped */
-                store_item(node, p, i, data, pos);
+            /* a NULL entry is a dummy entry: skipped */
+            if (p->map_entry[i] != NULL && store_item(node, p, i, data, pos)) {
+                stored[count++] = p->map_entry[i];
             }
             pos += p->map_bits[i];
+        }
+        for (uint8_t i = 0; i < count; i++) {
+            co_pdo_changed(node, stored[i]);
         }
     }
     if (node->cfg.on_rpdo) {
@@ -106,13 +114,13 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
 
 /* Synchronous data waits for the next SYNC; a frame outside the window after the last
  * SYNC is dropped (before any SYNC it waits). */
-static void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
+static CO_SIZE_NOINLINE void hold_for_sync(co_node_t *node, co_pdo_t *p, const co_frame_t *frame)
 {
     bool synced = node->sync.last_us != CO_TIME_NEVER;
     if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
-    memcpy(p->data, frame->data, frame->len);
+    co_copy(p->data, frame->data, frame->len);
     p->len = frame->len;
     pdo_set(p, PDO_F_WAITING);
 }
@@ -155,7 +163,7 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 }
 
 /* Every frame the short path does not take. */
-static CO_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+static CO_FAST_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
     if (frame->flags & CO_FRAME_RTR) {
         node->stats.rx_malformed++; /* RPDOs are not requested */

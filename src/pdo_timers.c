@@ -11,9 +11,7 @@
 
 static uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
 {
-    uint64_t v = 0;
-    (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
-    return (uint16_t)v;
+    return (uint16_t)co_od_u32(node, index, sub, 0);
 }
 
 void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
@@ -33,7 +31,8 @@ bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
 {
-    p->inhibit_until_us = node->now_us + (uint64_t)p->inhibit * 100u;
+    uint32_t inhibit_us = (uint32_t)p->inhibit * 100u; /* 32-bit: fits */
+    p->inhibit_until_us = node->now_us + inhibit_us;
     tpdo_start(node, p);
 }
 
@@ -64,7 +63,7 @@ static uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
     return CO_TIME_NEVER;
 }
 
-static uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+static CO_SIZE_NOINLINE uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
 {
     if (!pdo_active(p) || p->type < 254) {
         return CO_TIME_NEVER;

@@ -14,7 +14,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
 {
     uint32_t n;
     uint8_t bits = p->map_bits[i];
-    if (pdo_direct(p, i) && pos % 8u == 0) { /* the common case: bytes from storage */
+    if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
         pdo_copy_value(out + pos / 8u, p->map_entry[i]->value, bits / 8u);
         return;
     }
@@ -31,8 +31,8 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
 
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
 {
-    memset(out, 0, 8);
-    if (p->plain) { /* whole values as stored: one copy each */
+    co_zero(out, 8);
+    if (CO_SHORT_PATHS && p->plain) { /* whole values as stored: one copy each */
         uint8_t *at = out;
         for (uint8_t i = 0; i < p->count; i++) {
             uint32_t bytes = p->map_bits[i] / 8u;
@@ -48,18 +48,16 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
     }
 }
 
-static void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
+static CO_SIZE_NOINLINE void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
-    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
-    memcpy(f.data, data, f.len);
-    (void)co_node_send_as(node, &f, CO_SVC_PDO);
+    (void)co_node_send_cob(node, p->cob_id, data, pdo_bytes(p), CO_SVC_PDO);
 }
 
 static void send_fresh(co_node_t *node, const co_pdo_t *p)
 {
-    co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p));
-    pack(node, p, f.data); /* straight into the frame: no second copy */
-    (void)co_node_send_as(node, &f, CO_SVC_PDO);
+    uint8_t data[8];
+    pack(node, p, data);
+    send_data(node, p, data);
 }
 
 /* A TPDO with `fast` set: its frame header is precomputed. */

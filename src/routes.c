@@ -41,13 +41,22 @@ void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
     /* Insertion keeps the array sorted; n is small and this runs only on changes. */
     uint16_t at = node->route_count;
     while (at > 0 && node->routes[at - 1].key > key) {
-        node->routes[at] = node->routes[at - 1];
+        co_copy(&node->routes[at], &node->routes[at - 1], sizeof node->routes[0]);
         at--;
     }
-    node->routes[at] =
-        (co_route_t){.key = key, .service = kind_service(kind), .kind = kind, .slot = slot};
+    /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
+    co_route_t *r = &node->routes[at];
+    r->key = key;
+    r->service = kind_service(kind);
+    r->kind = kind;
+    r->slot = slot;
     node->route_count++;
     node->route_groups |= co_route_group(key);
+}
+
+void co_routes_add_cob(co_node_t *node, uint32_t cob, uint8_t kind, uint8_t slot)
+{
+    co_routes_add(node, co_cob_key(cob), kind, slot);
 }
 
 void co_routes_rebuild(co_node_t *node)

@@ -544,7 +544,7 @@ void co_sdo_client_add_routes(co_node_t *node)
     for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
         uint32_t cob = node->sdo_clients[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
-            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_CLIENT, i);
+            co_routes_add_cob(node, cob, CO_ROUTE_SDO_CLIENT, i);
         }
     }
 }

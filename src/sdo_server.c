@@ -37,11 +37,7 @@ enum server_state {
 
 static uint32_t cob_from_od(const co_node_t *node, uint8_t ch, uint8_t sub, uint32_t fallback)
 {
-    uint64_t v = 0;
-    if (co_od_get_uint(&node->cfg.od, (uint16_t)(0x1200 + ch), sub, &v) == CO_OK) {
-        return (uint32_t)v;
-    }
-    return fallback;
+    return co_od_u32(node, (uint16_t)(0x1200 + ch), sub, fallback);
 }
 
 static void load_channel(co_node_t *node, uint8_t ch)
@@ -55,7 +51,7 @@ static void load_channel(co_node_t *node, uint8_t ch)
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
-    s->reply = co_cob_frame(s->cob_tx, 8);
+    co_frame_address(&s->reply, s->cob_tx, 8);
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -78,14 +74,14 @@ void co_sdo_server_add_routes(co_node_t *node)
     for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
         uint32_t cob = node->sdo_servers[i].cob_rx;
         if (!(cob & CO_COB_INVALID)) {
-            co_routes_add(node, co_cob_key(cob), CO_ROUTE_SDO_SERVER, i);
+            co_routes_add_cob(node, cob, CO_ROUTE_SDO_SERVER, i);
         }
     }
 }
 
 /* Take new COB-IDs into use. A channel reconfigured by a request it is serving itself
  * answers that request on the old COB-ID first: the reload waits for the answer. */
-static void apply_reloads(co_node_t *node)
+static CO_SIZE_NOINLINE void apply_reloads(co_node_t *node)
 {
     if (!node->sdo_reload) {
         return;
@@ -132,7 +128,7 @@ static co_abort_t write_value(co_node_t *node, const co_sdo_server_t *s, const u
 /* ---- sending */
 
 /* A transfer opens (or goes on in a new state): poll must look at it by the time-out. */
-static void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
+static CO_SIZE_NOINLINE void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
 {
     s->state = state;
     co_node_schedule(node, s->last_us + co_sdo_timeout_us(node));
@@ -150,7 +146,7 @@ static CO_INLINE void send_reply(co_node_t *node, co_sdo_server_t *s)
 /* A frame of 8 bytes to the client. */
 static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
 {
-    memcpy(s->reply.data, data, 8);
+    co_copy(s->reply.data, data, 8);
     send_reply(node, s);
 }
 
@@ -226,8 +222,8 @@ static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 }
 
 /* Append received bytes; when the buffer is full, stream it on or fail. */
-static CO_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
-                                      uint32_t n)
+static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
+                                           uint32_t n)
 {
     /* a block's last segment may carry up to 6 bytes of padding past the value */
     uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
@@ -246,7 +242,7 @@ static CO_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const
             return abort;
         }
     }
-    memcpy(&s->buf[s->buf_len], data, n);
+    co_copy(&s->buf[s->buf_len], data, n);
     s->buf_len += n;
     return CO_ABORT_NONE;
 }
@@ -318,7 +314,7 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
     } else if (s->buf_len + SEG_BYTES <= CO_SDO_BUF_SIZE) {
-        memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
+        co_copy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
         s->buf_len += n;
     } else {
         abort = collect(node, s, &d[1], n);
@@ -416,13 +412,15 @@ static CO_INLINE uint32_t plain_value(const co_od_entry_t *e)
 }
 
 /* Any other upload: through the dictionary's wire view or its read hook. */
-static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
+static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
 {
     uint8_t first[4] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
     begin(s);
-    s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    if (CO_CONFIG_SDO_SEGMENTED) { /* the segments of a long value copy from the wire view */
+        s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    }
     if (s->wire == NULL) {
         co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
         if (abort != CO_ABORT_NONE) {
@@ -431,7 +429,7 @@ static CO_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t
         }
     } else {
         n = total < 4 ? total : 4;
-        memcpy(first, s->wire, n);
+        co_copy(first, s->wire, n);
     }
     if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= 4) {
         answer_expedited(node, s, small_value(first, total), total);
@@ -471,10 +469,10 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
     uint32_t total = s->size;
     if (s->wire != NULL) { /* stored in wire form: copy the piece */
         n = total - s->done < SEG_BYTES ? total - s->done : SEG_BYTES;
-        if (n == SEG_BYTES) {
+        if (CO_SHORT_PATHS && n == SEG_BYTES) {
             memcpy(&r[1], s->wire + s->done, SEG_BYTES); /* the usual case, copied inline */
         } else {
-            memcpy(&r[1], s->wire + s->done, n);
+            co_copy(&r[1], s->wire + s->done, n);
         }
     } else {
         co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
@@ -657,7 +655,7 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
         uint32_t offset = (uint32_t)seq * SEG_BYTES;
         uint32_t n = s->buf_len - offset;
         uint8_t d[8] = {(uint8_t)(0x80u | ++seq)};
-        memcpy(&d[1], &s->buf[offset], n);
+        co_copy(&d[1], &s->buf[offset], n);
         s->last_len = (uint8_t)n;
         send(node, s, d);
     }
@@ -749,9 +747,10 @@ static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, cons
     s->sub = d[3];
     co_abort_t abort = CO_ABORT_NO_OBJECT;
     const co_od_entry_t *e = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
-    if (e != NULL && !may_access(e, write)) {
+    /* The inline test is a short path; without it co_od_access tells for every entry. */
+    if (e != NULL && !(CO_SHORT_PATHS && may_access(e, write))) {
         abort = co_od_access(e, write);
-        e = NULL;
+        e = CO_SHORT_PATHS || abort != CO_ABORT_NONE ? NULL : e; /* refused: no entry */
     }
     if (e == NULL) { /* no entry is never served */
         abort_transfer(node, s, abort);
@@ -842,7 +841,8 @@ static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const u
         }
         return;
     }
-    if (s->state == IDLE) {
+    /* (with expedited transfers alone nothing stays open: the state is always IDLE) */
+    if (s->state == IDLE || !(CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK)) {
         s->index = 0;
         s->sub = 0;
         abort_transfer(node, s, CO_ABORT_COMMAND);
@@ -860,7 +860,9 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     co_sdo_server_t *s = &node->sdo_servers[channel];
     const uint8_t *d = frame->data;
     uint8_t cmd = d[0];
-    s->last_us = node->now_us; /* the time-out counts from the last frame */
+    if (CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK) { /* (expedited ones never time out) */
+        s->last_us = node->now_us; /* the time-out counts from the last frame */
+    }
     switch (s->state) {
     case IDLE:
         break;
@@ -893,6 +895,7 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     serve_other(node, s, d);
 }
 
+#if CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
@@ -912,3 +915,4 @@ uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
     }
     return next;
 }
+#endif

@@ -86,6 +86,8 @@ static co_err_t restore_defaults(co_node_t *node, uint8_t which)
 
 /* ---- loading */
 
+#if CO_CONFIG_STORAGE
+
 void co_storage_load(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
@@ -114,6 +116,7 @@ void co_storage_load(co_node_t *node, co_param_group_t group)
         }
     }
 }
+#endif
 
 /* ---- 0x1010 and 0x1011 */
 
@@ -132,6 +135,7 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
     return err == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
 }
 
+#if CO_CONFIG_STORAGE
 /* After the command: the entry reads as the capability again, not as the signature. */
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry)
 {
@@ -153,3 +157,4 @@ void co_storage_reset_comm(co_node_t *node)
         }
     }
 }
+#endif

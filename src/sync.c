@@ -22,8 +22,9 @@ void co_sync_handled(co_node_t *node, uint8_t counter)
     }
 }
 
-void co_sync_ingest(co_node_t *node, const co_frame_t *frame)
+void co_sync_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
+    (void)slot;
     if (frame->flags & CO_FRAME_RTR) {
         node->stats.rx_malformed++;
         return;
@@ -49,9 +50,7 @@ uint8_t co_sync_counter(const co_node_t *node) { return node->sync.last_counter;
 void co_sync_reset_comm(co_node_t *node)
 {
     co_sync_t *s = &node->sync;
-    uint64_t cob = 0;
-    (void)co_od_get_uint(&node->cfg.od, 0x1005, 0, &cob); /* absent: 0 */
-    s->cob_id = (uint32_t)cob;
+    s->cob_id = co_od_u32(node, 0x1005, 0, 0);              /* absent: 0 */
     s->window = co_od_find(&node->cfg.od, 0x1007, 0, NULL); /* absent: no window */
     s->overflow = co_od_find(&node->cfg.od, 0x1019, 0, NULL);
     s->last_us = CO_TIME_NEVER;
@@ -63,12 +62,12 @@ void co_sync_add_routes(co_node_t *node)
 {
     /* Every node with 0x1005 consumes SYNC; bit 31 means nothing for this object. */
     if (co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL) {
-        co_routes_add(node, co_cob_key(node->sync.cob_id), CO_ROUTE_SYNC, 0);
+        co_routes_add_cob(node, node->sync.cob_id, CO_ROUTE_SYNC, 0);
     }
 }
 
-co_abort_t co_sync_check_write(const co_node_t *node, const co_od_entry_t *entry,
-                               const uint8_t *data, uint32_t len)
+co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len)
 {
     if (entry->index != 0x1019 || len < 1) {
         return CO_ABORT_NONE;

@@ -44,7 +44,6 @@ static void produce(co_node_t *node)
 {
     co_sync_t *s = &node->sync;
     uint8_t overflow = co_sync_overflow(node);
-    co_frame_t f = co_cob_frame(s->cob_id, overflow ? 1 : 0);
     uint8_t counter = 0;
     if (overflow) {
         if (s->counter == 0 || s->counter > overflow) {
@@ -52,9 +51,8 @@ static void produce(co_node_t *node)
         }
         counter = s->counter;
         s->counter = counter == overflow ? 1 : (uint8_t)(counter + 1);
-        f.data[0] = counter;
     }
-    co_node_send_as(node, &f, CO_SVC_SYNC);
+    co_node_send_cob(node, s->cob_id, &counter, overflow ? 1 : 0, CO_SVC_SYNC);
     co_sync_handled(node, counter); /* a node does not receive its own frames */
 }
 

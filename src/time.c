@@ -50,18 +50,18 @@ co_err_t co_time_send(co_node_t *node, const co_time_of_day_t *t)
     if (t->ms >= MS_PER_DAY) {
         return CO_ERR_ARG;
     }
-    co_frame_t f = co_cob_frame(node->time.cob_id, TIME_FRAME_LEN);
-    co_time_encode(t, f.data);
-    return co_node_send_as(node, &f, CO_SVC_TIME);
+    uint8_t data[TIME_FRAME_LEN];
+    co_time_encode(t, data);
+    return co_node_send_cob(node, node->time.cob_id, data, TIME_FRAME_LEN, CO_SVC_TIME);
 }
 
 /* ---- consumer */
 
-void co_time_ingest(co_node_t *node, const co_frame_t *frame)
+#if CO_CONFIG_TIME
+
+void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
-    if (!CO_CONFIG_TIME) {
-        return; /* never routed: cob_id stays 0 */
-    }
+    (void)slot;
     if ((frame->flags & CO_FRAME_RTR) || frame->len != TIME_FRAME_LEN) {
         node->stats.rx_malformed++;
         return;
@@ -76,24 +76,20 @@ void co_time_ingest(co_node_t *node, const co_frame_t *frame)
 
 void co_time_reset_comm(co_node_t *node)
 {
-    uint64_t v = 0;
-    if (CO_CONFIG_TIME) {
-        (void)co_od_get_uint(&node->cfg.od, 0x1012, 0, &v); /* absent: 0, neither role */
-    }
-    node->time.cob_id = (uint32_t)v; /* without TIME: neither role, whatever 0x1012 says */
+    node->time.cob_id = co_od_u32(node, 0x1012, 0, 0); /* absent: 0, neither role */
 }
 
 void co_time_add_routes(co_node_t *node)
 {
     uint32_t cob = node->time.cob_id;
     if (cob & TIME_CONSUMER) {
-        co_routes_add(node, co_cob_key(cob), CO_ROUTE_TIME, 0);
+        co_routes_add_cob(node, cob, CO_ROUTE_TIME, 0);
     }
 }
 
 void co_time_written(co_node_t *node, const co_od_entry_t *entry)
 {
-    if (!CO_CONFIG_TIME || entry->index != 0x1012) {
+    if (entry->index != 0x1012) {
         return;
     }
     uint32_t old = node->time.cob_id;
@@ -105,3 +101,5 @@ void co_time_written(co_node_t *node, const co_od_entry_t *entry)
         co_routes_rebuild(node);
     }
 }
+
+#endif /* CO_CONFIG_TIME: without it neither role, whatever 0x1012 says */

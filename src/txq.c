@@ -48,37 +48,31 @@ static bool void_now(const co_node_t *node, const co_tx_item_t *item)
     return item->service != 0 && !(node->services & item->service);
 }
 
-void co_txq_purge(co_node_t *node)
+/* One pass over the queue: the frames that go (`send`: to the driver, up to the first it
+ * refuses; else the void ones, counted) leave, the rest move up in their order. */
+static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
 {
-    uint8_t kept = 0;
-    for (uint8_t i = 0; i < node->txq_count; i++) {
-        if (void_now(node, &node->txq[i])) {
-            node->stats.tx_gated++;
-        } else {
-            node->txq[kept++] = node->txq[i];
-        }
-    }
-    node->txq_count = kept;
-}
-
-void co_txq_flush(co_node_t *node)
-{
-    /* Nothing waiting is void here: every state change purges the queue (co_txq_purge).
-     * The frames before the first one the driver refuses leave; the rest move up. */
     uint8_t count = node->txq_count;
     uint8_t kept = 0;
     for (uint8_t i = 0; i < count; i++) {
-        if (kept == 0 && driver_take(node, &node->txq[i].frame)) {
+        const co_tx_item_t *item = &node->txq[i];
+        if (send ? kept == 0 && driver_take(node, &item->frame) : void_now(node, item)) {
+            node->stats.tx_gated += send ? 0u : 1u;
             continue;
         }
-        node->txq[kept++] = node->txq[i];
+        node->txq[kept++] = *item;
     }
     node->txq_count = kept;
-    if (kept == 0 && count != 0) {
+    if (send && kept == 0 && count != 0) {
         /* room again: a paced sender (block transfer) goes on at the next poll */
         co_node_schedule(node, node->now_us);
     }
 }
+
+void co_txq_purge(co_node_t *node) { pass(node, false); }
+
+/* Nothing waiting is void here: every state change purges the queue (co_txq_purge). */
+void co_txq_flush(co_node_t *node) { pass(node, true); }
 
 static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
@@ -122,6 +116,24 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
         return CO_OK;
     }
     return co_txq_refused(node, frame, service, CO_ERR_BUSY); /* queued */
+}
+
+void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len)
+{
+    frame->id = (cob & CO_COB_EXT) ? (cob & CO_ID_EXT_MAX) : (cob & CO_ID_STD_MAX);
+    frame->flags = (cob & CO_COB_EXT) ? CO_FRAME_EXT : 0;
+    frame->len = len;
+}
+
+co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
+                          uint16_t service)
+{
+    co_frame_t f;
+    co_frame_address(&f, cob, len);
+    for (unsigned i = 0; i < sizeof f.data; i++) { /* (no memcpy, no memset) */
+        f.data[i] = i < len ? data[i] : 0;
+    }
+    return co_node_send_as(node, &f, service);
 }
 
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame)

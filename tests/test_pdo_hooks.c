@@ -10,13 +10,15 @@
 
 typedef struct rig {
     test_node_t t;
-    co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 7];
+    co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 9];
     uint16_t u16;     /* 0x2101: storage with check and written hooks */
     uint16_t plain16; /* 0x2102 */
     uint64_t plain64; /* 0x2103 */
     double real64;    /* 0x2104 */
     uint8_t tod[6];   /* 0x2105 TIME_OF_DAY */
     char text[8];     /* 0x2106 VISIBLE_STRING, marked mappable */
+    int32_t i24;      /* 0x2107 INTEGER24 */
+    bool flag;        /* 0x2108 BOOLEAN */
     uint32_t produced;
     uint8_t taken[8];
     uint32_t taken_len;
@@ -76,8 +78,8 @@ static const co_od_hooks_t k_stream = {.read = h_read, .write = h_write};
 static const co_od_hooks_t k_guarded = {.check = h_check, .written = h_written};
 
 /* The example dictionary plus 0x2100 (u32, hooks only), 0x2101 (u16, checked), plain
- * mappable 0x2102 (u16) and 0x2103 (u64), 0x2104 REAL64, 0x2105 TIME_OF_DAY and 0x2106, a
- * string wrongly marked mappable. */
+ * mappable 0x2102 (u16) and 0x2103 (u64), 0x2104 REAL64, 0x2105 TIME_OF_DAY, 0x2106, a
+ * string wrongly marked mappable, and mappable 0x2107 INTEGER24 and 0x2108 BOOLEAN. */
 static void rig_up(void)
 {
     memset(&g, 0, sizeof g);
@@ -92,10 +94,12 @@ static void rig_up(void)
         {0x2104, 0, CO_TYPE_REAL64, CO_OD_RW, 8, &g.real64, NULL, NULL, NULL},
         {0x2105, 0, CO_TYPE_TIME_OF_DAY, CO_OD_RW, 6, g.tod, NULL, NULL, NULL},
         {0x2106, 0, CO_TYPE_VISIBLE_STRING, map, sizeof g.text, g.text, NULL, NULL, NULL},
+        {0x2107, 0, CO_TYPE_INTEGER24, map, 3, &g.i24, NULL, NULL, NULL},
+        {0x2108, 0, CO_TYPE_BOOLEAN, map, 1, &g.flag, NULL, NULL, NULL},
     };
     uint32_t n = 0;
     for (uint32_t i = 0; i < base.count; i++) {
-        if (base.entries[i].index > 0x2106 && n == i) {
+        if (base.entries[i].index > 0x2108 && n == i) {
             g.entries[n++] = stream;
             g.entries[n++] = guarded;
             for (size_t k = 0; k < sizeof extra / sizeof extra[0]; k++) {
@@ -119,6 +123,16 @@ static void remap(uint16_t comm, uint16_t map, uint32_t cob, const uint32_t *ent
     }
     CHECK_EQ(write_u8(&g.t, map, 0, count), CO_ABORT_NONE);
     CHECK_EQ(write_u32(&g.t, comm, 1, cob), CO_ABORT_NONE);
+}
+
+/* RPDO1 (0x205) and TPDO1 (0x185) both mapping the `count` entries `m`, the node
+ * operational, nothing sent so far. */
+static void map_both_and_start(const uint32_t *m, uint8_t count)
+{
+    remap(0x1400, 0x1600, 0x205, m, count);
+    remap(0x1800, 0x1A00, 0x185, m, count);
+    ingest(&g.t, 0, 0x000, "01 05");
+    fake_clear(&g.t.bus);
 }
 
 static void test_rpdo_into_hooked_objects(void)
@@ -191,10 +205,7 @@ static void test_rpdo_value_refused_by_the_write_hook(void)
 {
     rig_up();
     const uint32_t m[] = {0x21000020};
-    remap(0x1400, 0x1600, 0x205, m, 1);
-    remap(0x1800, 0x1A00, 0x185, m, 1);
-    ingest(&g.t, 0, 0x000, "01 05");
-    fake_clear(&g.t.bus);
+    map_both_and_start(m, 1);
     g.refuse = true;
     ingest(&g.t, 1000, 0x205, "11 22 33 44");
     CHECK_EQ(g.writes, 1);
@@ -207,6 +218,37 @@ static void test_rpdo_value_refused_by_the_write_hook(void)
     CHECK_EQ(co_get_u32(g.taken), 0x44332211u);
     char dump[64];
     CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#88776655");
+}
+
+/* An RPDO stores all its values before TPDOs hear of the changes, also when a value goes
+ * through hooks (not the plain copy): the event-driven TPDO mapping both objects never
+ * carries the new first value with the old second one. */
+static void test_rpdo_values_stored_before_tpdo_events(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21010010, 0x21020010};
+    map_both_and_start(m, 2);
+    ingest(&g.t, 1000, 0x205, "34 12 78 56");
+    CHECK_EQ(g.u16, 0x1234);
+    CHECK_EQ(g.plain16, 0x5678);
+    CHECK_EQ(g.written, 1);
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#34127856 185#34127856");
+}
+
+/* Whole values whose storage is not their wire form, in both directions: an INTEGER24
+ * (sign-extended into its int32_t) and a BOOLEAN (any non-zero byte stored as 1). */
+static void test_values_converted_on_the_way(void)
+{
+    rig_up();
+    const uint32_t m[] = {0x21070018, 0x21080008};
+    map_both_and_start(m, 2);
+    g.i24 = 0x7FFFFFFF;
+    ingest(&g.t, 1000, 0x205, "FE FF FF 05");
+    CHECK_EQ(g.i24, -2);
+    CHECK_EQ(g.flag, true);
+    char dump[64];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "185#FEFFFF01 185#FEFFFF01");
 }
 
 /* A cyclic TPDO that is not all plain values (a hook-served one first) counts its SYNCs
@@ -278,6 +320,8 @@ int main(void)
     RUN(test_local_access_to_other_kinds);
     RUN(test_rpdo_value_refused_by_the_write_hook);
     RUN(test_cyclic_tpdo_with_a_hooked_object);
+    RUN(test_rpdo_values_stored_before_tpdo_events);
+    RUN(test_values_converted_on_the_way);
     RUN(test_plain_16_bit_value_on_the_short_paths);
     return check_summary();
 }

@@ -17,8 +17,8 @@
 #define HAS_EMCY_INHIBIT (CO_EMCY_QUEUE_LEN > 0)
 
 typedef struct dict {
-    uint32_t device_type, sync_cob, sync_period, emcy_cob, hb_cons[1], history[2], vendor;
-    uint8_t reg, history_count, hb_cons_count, id_count, rpdo_comm_n[2], tpdo_comm_n[2];
+    uint32_t device_type, sync_cob, sync_period, emcy_cob, hb_cons[1], history[2], vendor, save;
+    uint8_t reg, save_count, history_count, hb_cons_count, id_count, rpdo_comm_n[2], tpdo_comm_n[2];
     uint16_t emcy_inhibit, hb_ms;
     char name[16];
     struct {
@@ -38,7 +38,7 @@ typedef struct dict {
 } dict_t;
 
 static const uint32_t k_sync_cob = 0x80, k_emcy_cob = 0x80, k_rpdo_cob[2] = {0x200, 0x300},
-                      k_tpdo_cob[2] = {0x180, 0x280}, k_zero32 = 0, k_vendor = 0xCA0;
+                      k_tpdo_cob[2] = {0x180, 0x280}, k_zero32 = 0, k_one32 = 1, k_vendor = 0xCA0;
 static const uint32_t k_rpdo_map[2][2] = {{0x21000020, 0x21010010}, {0x21020004, 0}};
 static const uint32_t k_tpdo_map[2][2] = {{0x20000020, 0}, {0x20010010, 0}};
 static const uint8_t k_zero8 = 0, k_one8 = 1, k_five8 = 5, k_six8 = 6, k_type_sync = 1,
@@ -74,6 +74,8 @@ static co_od_t dict_init(dict_t *d)
     put(d, 0x1005, 0, U32, CO_OD_RW, &d->sync_cob, &k_sync_cob);
     put(d, 0x1006, 0, U32, CO_OD_RW, &d->sync_period, &k_zero32);
     put(d, 0x1008, 0, CO_TYPE_VISIBLE_STRING, CO_OD_CO, d->name, k_name);
+    put(d, 0x1010, 0, U8, CO_OD_CO, &d->save_count, &k_one8);
+    put(d, 0x1010, 1, U32, CO_OD_RW, &d->save, &k_one32); /* "saves on command" */
     put(d, 0x1014, 0, U32, CO_OD_RW | CO_OD_NODEID, &d->emcy_cob, &k_emcy_cob);
     put(d, 0x1015, 0, U16, CO_OD_RW, &d->emcy_inhibit, &k_zero16);
     put(d, 0x1016, 0, U8, CO_OD_CO, &d->hb_cons_count, &k_one8);
@@ -263,8 +265,27 @@ static void test_emcy_frame_layout(void)
     CHECK_STR(seen(r), "085#0000000000000000");
 }
 
+/* No storage is given (minimal: none is built in): "save" is refused with 0x08000020. A
+ * core with storage shows that it has none in 0x1010 (0); one without keeps what the
+ * dictionary says there. */
+static void test_no_parameter_storage(void)
+{
+    rig_t *r = rig_start();
+    clear(r);
+    send(r, 0x605, "23 10 10 01 73 61 76 65");
+    CHECK_STR(seen(r), "585#8010100120000008");
+    clear(r);
+    send(r, 0x605, "40 10 10 01 00 00 00 00");
+#if CO_CONFIG_STORAGE
+    CHECK_STR(seen(r), "585#4310100100000000");
+#else
+    CHECK_STR(seen(r), "585#4310100101000000");
+#endif
+}
+
 /* Both profiles leave out the types wider than 32 bits: the example dictionary, which has
- * an INTEGER64 (0x2005), is refused. */
+ * an INTEGER64 (0x2005), is refused (the minimal profile refuses it earlier: at the
+ * limits of 0x2001). */
 static void test_64_bit_types_refused(void)
 {
     static example_od_t x;
@@ -273,8 +294,53 @@ static void test_64_bit_types_refused(void)
     cfg.driver = co_sim_port_driver(&g_rig.dev_port);
     uint32_t bad = 0;
     CHECK_EQ(co_od_validate(&cfg.od, &bad), CO_ERR_CONFIG);
-    CHECK_EQ(cfg.od.entries[bad].type, CO_TYPE_INTEGER64);
+    CHECK_EQ(cfg.od.entries[bad].type, CO_CONFIG_OD_LIMITS ? CO_TYPE_INTEGER64 : CO_TYPE_INTEGER16);
     CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_CONFIG);
+}
+
+static co_abort_t domain_read(void *ctx, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                              uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)entry;
+    (void)offset;
+    (void)buf;
+    (void)cap;
+    *n = 0;
+    *total = 0;
+    return CO_ABORT_NONE;
+}
+
+/* Of the dictionary's features the minimal profile leaves out limits, DOMAIN values kept
+ * in RAM and UNICODE_STRING: a dictionary with one of them is refused (a DOMAIN served by
+ * hooks is fine). The default profile keeps them. */
+static void test_dictionary_features(void)
+{
+    static const co_od_limits_t limits = {.low = {.u = 1}, .high = {.u = 9}};
+    static const co_od_hooks_t hooks = {.read = domain_read};
+    static uint8_t u8, bytes[4];
+    static uint16_t text[2];
+    static co_od_domain_t domain = {.data = bytes, .len = 0};
+    co_od_entry_t e = {.index = 0x2000,
+                       .type = CO_TYPE_UNSIGNED8,
+                       .attr = CO_OD_RW,
+                       .size = 1,
+                       .value = &u8,
+                       .limits = &limits};
+    co_od_t od = {.entries = &e, .count = 1};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_CONFIG_OD_LIMITS ? CO_OK : CO_ERR_CONFIG);
+    e = (co_od_entry_t){
+        .index = 0x2000, .type = CO_TYPE_DOMAIN, .attr = CO_OD_RW, .size = 4, .value = &domain};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_CONFIG_OD_DOMAIN ? CO_OK : CO_ERR_CONFIG);
+    e = (co_od_entry_t){
+        .index = 0x2000, .type = CO_TYPE_DOMAIN, .attr = CO_OD_RO, .size = 4, .hooks = &hooks};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    e = (co_od_entry_t){.index = 0x2000,
+                        .type = CO_TYPE_UNICODE_STRING,
+                        .attr = CO_OD_RW,
+                        .size = 4,
+                        .value = text};
+    CHECK_EQ(co_od_validate(&od, NULL), CO_CONFIG_OD_UNICODE ? CO_OK : CO_ERR_CONFIG);
 }
 
 /* ---- what the profiles differ in */
@@ -479,7 +545,9 @@ int main(void)
     RUN(test_block_transfer_refused);
     RUN(test_pdos_sync_and_rpdo);
     RUN(test_emcy_frame_layout);
+    RUN(test_no_parameter_storage);
     RUN(test_64_bit_types_refused);
+    RUN(test_dictionary_features);
     RUN(test_segmented_sdo);
     RUN(test_error_history);
     RUN(test_heartbeat_consumer);

@@ -142,8 +142,10 @@
 #define CO_CONFIG_TIME 1
 #endif
 
-/** Store and restore parameters (0x1010, 0x1011) through co_node_config_t.storage; without
- *  it the node behaves as with no storage given. */
+/** Store and restore parameters (0x1010, 0x1011) through co_node_config_t.storage. Without
+ *  it nothing is stored: a write of the save or restore signature is refused with
+ *  0x08000020, as by a node given no storage, and 0x1010/0x1011 read as the dictionary
+ *  gives them (with it, a node given no storage shows 0 there: no capability). */
 #ifndef CO_CONFIG_STORAGE
 #define CO_CONFIG_STORAGE 1
 #endif
@@ -177,6 +179,26 @@
 #define CO_CONFIG_PDO_BIT_MAPPING 1
 #endif
 
+/** Limits on numeric entries (co_od_entry_t.limits: 0x06090031/0x06090032 for a value out
+ *  of range). Without them co_od_validate refuses a dictionary giving any limits; a value
+ *  is then checked for its length, BOOLEAN values for 0/1, and by the check hook. */
+#ifndef CO_CONFIG_OD_LIMITS
+#define CO_CONFIG_OD_LIMITS 1
+#endif
+
+/** DOMAIN entries kept in RAM (co_od_entry_t.value pointing at a co_od_domain_t). Without
+ *  them a DOMAIN entry is served by its hooks alone (value NULL): co_od_validate refuses a
+ *  DOMAIN with storage. */
+#ifndef CO_CONFIG_OD_DOMAIN
+#define CO_CONFIG_OD_DOMAIN 1
+#endif
+
+/** UNICODE_STRING entries (16-bit code units). Without them co_od_validate refuses a
+ *  dictionary holding one. */
+#ifndef CO_CONFIG_OD_UNICODE
+#define CO_CONFIG_OD_UNICODE 1
+#endif
+
 /** Dictionary types wider than 32 bits: INTEGER40..64, UNSIGNED40..64 and REAL64. Without
  *  them co_od_validate refuses a dictionary holding one, and the dictionary's arithmetic is
  *  32-bit (no 64-bit helpers on a 32-bit MCU); the API keeps its uint64_t values. */
@@ -208,8 +230,14 @@
     (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
     (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
     (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
-    (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1)
+    (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1) ||                                  \
+    (CO_CONFIG_OD_LIMITS != 0 && CO_CONFIG_OD_LIMITS != 1) ||                                      \
+    (CO_CONFIG_OD_DOMAIN != 0 && CO_CONFIG_OD_DOMAIN != 1) ||                                      \
+    (CO_CONFIG_OD_UNICODE != 0 && CO_CONFIG_OD_UNICODE != 1)
 #error "CO_CONFIG_* feature switches are 0 or 1"
+#endif
+#if CO_CONFIG_REAL_LIMITS && !CO_CONFIG_OD_LIMITS
+#error "CO_CONFIG_REAL_LIMITS needs CO_CONFIG_OD_LIMITS"
 #endif
 
 /** Receive routes (COB-IDs the node listens to), by default exactly as many as the

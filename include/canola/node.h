@@ -120,36 +120,47 @@ typedef struct co_route {
     uint8_t slot;
 } co_route_t;
 
-/** The node. Fields are internal; read them through the functions below. Grouped by
- *  service, not by size: that costs about 32 bytes of padding of several KB. */
+/** The node. Fields are internal; read them through the functions below. The small fields
+ *  the services use most come first, then the configuration, then the tables: Cortex-M
+ *  loads and stores reach the first 32 (bytes), 64 (halfwords) or 128 (words) bytes of a
+ *  struct with one short instruction, fields further in cost an instruction more or a
+ *  longer one at every use (a few hundred bytes of code in all). */
 struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
-    co_node_config_t cfg;
-    uint64_t now_us;      /**< time of the latest ingest/poll */
-    uint64_t next_due_us; /**< earliest deadline of any service */
-    uint16_t services;    /**< co_service_t bits the current NMT state allows */
     uint8_t node_id;
     uint8_t nmt_state;
     bool started;
-
-    /* Receive routes, sorted by key. */
-    co_route_t routes[CO_RX_ROUTES_MAX];
-    uint16_t route_count;
-    uint16_t route_hint;   /**< the route found last */
-    uint32_t route_groups; /**< bit (key >> 6) % 32 set for every route: a quick "no" */
-
-    /* Transmit queue, sorted by COB-ID (ties in arrival order). */
-    co_tx_item_t txq[CO_TX_QUEUE_LEN];
     uint8_t txq_count;
+    bool sdo_serving;     /**< inside an SDO server request (see sdo_server.c) */
+    bool sdo_reload;      /**< a server channel waits to take new COB-IDs */
+    uint16_t services;    /**< co_service_t bits the current NMT state allows */
+    uint16_t route_count; /**< receive routes, sorted by key (routes[] below) */
+    uint16_t route_hint;  /**< the route found last (short paths only) */
+    /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. (all
+     * CO_RPDO_MAX / CO_TPDO_MAX in a build for size) */
+    uint16_t rpdo_count;
+    uint16_t tpdo_count;
+    /* The three below are kept by the short paths only (a size build looks at every PDO). */
+    uint16_t tpdo_listeners;        /**< active TPDOs a changed value can trigger */
+    uint16_t tpdo_sync_end;         /**< 1 + the last active TPDO a SYNC drives (0: none) */
+    uint16_t rpdo_sync_end;         /**< 1 + the last active synchronous RPDO (0: none) */
+    uint32_t route_groups;          /**< bit (key >> 6) % 32 set for every route: a quick "no" */
+    const co_od_entry_t *hb_period; /**< heartbeat producer: 0x1017 or NULL */
+    uint64_t now_us;                /**< time of the latest ingest/poll */
+    uint64_t next_due_us;           /**< earliest deadline of any service */
+    uint64_t hb_next_us;            /**< heartbeat producer: the next heartbeat */
+    const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
-    /* Heartbeat producer (0x1017). */
-    const co_od_entry_t *hb_period; /**< 0x1017 or NULL */
-    uint64_t hb_next_us;
+    co_node_stats_t stats;
+    co_sync_t sync;
+    co_node_config_t cfg;
+    co_time_t time;
+    co_emcy_t emcy;
 
 #if CO_HB_CONSUMERS_MAX > 0
     /* Heartbeat consumer (0x1016). */
-    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX];
     uint8_t hb_consumer_count; /**< sub-indices of 0x1016 bound (<= CO_HB_CONSUMERS_MAX) */
     uint64_t boot_deadline_us; /**< CO_EC_NOT_BOOTED check, CO_TIME_NEVER when done */
+    co_hb_consumer_t hb_consumers[CO_HB_CONSUMERS_MAX];
 #endif
 
 #if CO_CONFIG_GUARDING
@@ -163,28 +174,19 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
 #endif
 
-    const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
+    /* Transmit queue, sorted by COB-ID (ties in arrival order). */
+    co_tx_item_t txq[CO_TX_QUEUE_LEN];
+    /* Receive routes, sorted by key. */
+    co_route_t routes[CO_RX_ROUTES_MAX];
+
+    co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
+    co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];
 
     /* SDO channels. */
     co_sdo_server_t sdo_servers[CO_SDO_SERVERS_MAX > 0 ? CO_SDO_SERVERS_MAX : 1];
 #if CO_SDO_CLIENTS_MAX > 0
     co_sdo_client_t sdo_clients[CO_SDO_CLIENTS_MAX];
 #endif
-    /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. */
-    co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
-    co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];
-    uint16_t rpdo_count;
-    uint16_t tpdo_count;
-    uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
-    uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
-    uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
-
-    co_emcy_t emcy;
-    co_sync_t sync;
-    co_time_t time;
-
-    bool sdo_serving; /**< inside an SDO server request (see sdo_server.c) */
-    bool sdo_reload;  /**< a server channel waits to take new COB-IDs */
 
 #if CO_CONFIG_LSS_SLAVE
     co_lss_slave_t lss_slave;
@@ -196,8 +198,6 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_manager_t *manager; /**< attached by co_manager_init, or NULL */
     co_flash_t *flash;     /**< program download in progress, or NULL */
 #endif
-
-    co_node_stats_t stats;
 };
 
 /** Prepare a node: check the config and the object dictionary (co_od_validate), bind the

@@ -15,7 +15,10 @@
  * VISIBLE_STRING/OCTET_STRING/UNICODE_STRING -> `size` bytes of buffer;
  * DOMAIN -> a co_od_domain_t (buffer + current length) or no storage at all
  * when hooks stream it. `size` is the length on the wire (for strings and
- * domains: the capacity).
+ * domains: the capacity). A core built without some of the dictionary's features
+ * (canola/config.h: CO_CONFIG_OD_64BIT, CO_CONFIG_OD_LIMITS, CO_CONFIG_REAL_LIMITS,
+ * CO_CONFIG_OD_DOMAIN, CO_CONFIG_OD_UNICODE) refuses a dictionary using them
+ * (co_od_validate).
  *
  * Hooks let the application compute a value on read, validate or veto a write
  * with an abort code, stream large values (DOMAIN, long strings) in pieces, and
@@ -151,7 +154,10 @@ struct co_od_entry {
  *  key * 0x9E3779B1 (Fibonacci hashing, modulo 2^32), as many as the mask has. */
 #define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key)*0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
-/** An object dictionary: the entry table and the context its hooks receive. */
+/** An object dictionary: the entry table and the context its hooks receive. `keys` and
+ *  `hash` make look-ups faster; a core built for size (-Os) leaves them out altogether
+ *  (the binary search over the entries finds the same entries with less code): it reads
+ *  neither, and co_od_validate does not check them. */
 typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;
@@ -174,7 +180,8 @@ typedef struct co_od {
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
  *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
- *  every entry with an empty slot left. Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
+ *  every entry with an empty slot left (keys and hash not in a core built for size, which
+ *  does not use them: see co_od_t). Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
  *  to the offending entry's position, or to `count` for a bad hash, when `bad` is not
  *  NULL). O(n) plus O(slots). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
@@ -213,11 +220,12 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write);
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
                       uint32_t cap, uint32_t *n, uint32_t *total);
 
-/** The wire bytes of an entry whose storage already is its wire form (strings, domains,
- *  TIME_OF_DAY/TIME_DIFFERENCE, and numbers as wide as their wire form on little-endian
- *  hosts), with `*len` set to the current length; NULL for entries read through a hook or
- *  converted on read. Lets a reader copy pieces without co_od_read's checks. O(1), except
- *  VISIBLE/UNICODE_STRING: O(length) to find the terminator. */
+/** The wire bytes of an entry whose storage already holds its wire form (strings, domains,
+ *  TIME_OF_DAY/TIME_DIFFERENCE, and on little-endian hosts every number: its wire bytes are
+ *  the first bytes of its storage), with `*len` set to the current length; NULL for entries
+ *  read through a hook, and for numbers on big-endian hosts (converted on read). Lets a reader copy
+ * pieces without co_od_read's checks. O(1), except VISIBLE/UNICODE_STRING: O(length) to find the
+ * terminator. */
 const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, uint32_t *len);
 
 /** Check a whole new wire value without storing it: length against the type (0x06070012

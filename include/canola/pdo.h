@@ -72,19 +72,10 @@ typedef struct co_node co_node_t;
 
 /** One PDO's resolved mapping and state (embedded in the node; fields are internal). The
  *  mapping is kept in parallel arrays: an entry pointer and a bit count per slot, and a bit
- *  per slot for "the value travels as it is stored" (copied to/from entry->value). */
+ *  per slot for "the value travels as it is stored" (copied to/from entry->value). The
+ *  byte fields come first: Cortex-M reaches the first 32 bytes of a struct with the short
+ *  byte loads and stores. */
 typedef struct co_pdo {
-#if CO_CONFIG_PDO_TIMERS
-    uint64_t next_us; /**< TPDO: event timer; RPDO: deadline */
-    uint64_t inhibit_until_us;
-#endif
-    const co_od_entry_t *map_entry[CO_PDO_MAP_MAX]; /**< NULL for a dummy entry */
-    uint32_t cob_id;
-    uint32_t frame_id; /**< TPDO with `fast`: the identifier of its frames, from cob_id */
-#if CO_CONFIG_PDO_TIMERS
-    uint16_t event_ms; /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
-    uint16_t inhibit;  /**< TPDO sub3: inhibit time, 100 us */
-#endif
     uint8_t sync_start;  /**< TPDO sub6: SYNC start value */
     uint8_t count;       /**< mapped entries */
     uint8_t bits;        /**< mapped bits in all */
@@ -92,14 +83,24 @@ typedef struct co_pdo {
     uint8_t sync_count;  /**< SYNCs counted towards the next transmission */
     uint8_t flags;       /**< internal state bits */
     uint8_t len;         /**< RPDO: bytes of the frame waiting for the next SYNC */
-    bool plain;          /**< every item a whole byte-aligned value copied as stored */
+    bool plain;          /**< every item a whole byte-aligned value copied as stored (set
+                            and used by the short paths only, as map_direct) */
     uint8_t fast;        /**< the short path's frame length, else 0. RPDO: active, plain,
                             asynchronous, no deadline; TPDO: active, plain, type 1..240,
                             no SYNC start value */
     uint8_t frame_flags; /**< TPDO with `fast`: the flags of its frames */
-    uint8_t map_bits[CO_PDO_MAP_MAX];             /**< bits mapped per slot */
     uint8_t map_direct[(CO_PDO_MAP_MAX + 7) / 8]; /**< bit i: slot i copied as stored */
-    uint8_t data[8]; /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+    uint8_t data[8];                  /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+    uint8_t map_bits[CO_PDO_MAP_MAX]; /**< bits mapped per slot */
+    uint32_t cob_id;
+    uint32_t frame_id; /**< TPDO with `fast`: the identifier of its frames, from cob_id */
+#if CO_CONFIG_PDO_TIMERS
+    uint16_t event_ms; /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
+    uint16_t inhibit;  /**< TPDO sub3: inhibit time, 100 us */
+    uint64_t next_us;  /**< TPDO: event timer; RPDO: deadline */
+    uint64_t inhibit_until_us;
+#endif
+    const co_od_entry_t *map_entry[CO_PDO_MAP_MAX]; /**< NULL for a dummy entry */
 } co_pdo_t;
 
 /** Mark the TPDOs mapping (index, sub) as having an event (as a change of a mapped value

@@ -37,11 +37,11 @@
  * (CO_ABORT_NONE on success) and the bytes transferred. A channel whose server is
  * the node itself reads and writes the node's own dictionary, with no frames.
  *
- * Memory: each server channel holds a CO_SDO_BUF_SIZE + 6 byte buffer and 69 bytes of
- * state on 32-bit targets (81 on 64-bit hosts); a client channel 80 bytes (112), as it
- * works in the caller's buffers.
- * Cost: an expedited request is the look-up (O(1) expected with the dictionary's hash,
- * O(log entries) without) plus O(1); a segment of an open transfer is O(1).
+ * Memory: each server channel holds a CO_SDO_BUF_SIZE + 6 byte buffer and 68 bytes of
+ * state on 32-bit targets (76 on 64-bit hosts), rounded up to a multiple of 8; a client channel 80
+ * bytes (112), as it works in the caller's buffers. Cost: an expedited request is the look-up (O(1)
+ * expected with the dictionary's hash, O(log entries) without) plus O(1); a segment of an open
+ * transfer is O(1).
  */
 #ifndef CANOLA_SDO_H
 #define CANOLA_SDO_H
@@ -75,17 +75,6 @@ typedef void (*co_sdo_done_fn)(void *ctx, uint8_t channel, co_abort_t abort, uin
 
 /** One SDO server channel (embedded in the node; fields are internal). */
 typedef struct co_sdo_server {
-    const co_od_entry_t *entry;
-    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
-    uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
-    co_frame_t reply;    /**< the next response, its header (cob_tx, 8 bytes) set at load */
-    uint32_t cob_rx;     /**< client -> server; bit 31 = off */
-    uint32_t cob_tx;     /**< server -> client */
-    uint32_t size;       /**< indicated or known total size */
-    uint32_t done;       /**< bytes transferred so far */
-    uint32_t buf_len;
-    uint16_t index;
-    uint16_t crc;
     uint8_t sub;
     uint8_t state;
     uint8_t toggle;
@@ -96,6 +85,17 @@ typedef struct co_sdo_server {
     bool crc_on;
     bool last_sent;
     bool reload; /**< new COB-IDs to take once the current request is answered */
+    uint16_t index;
+    uint16_t crc;
+    const co_od_entry_t *entry;
+    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
+    uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
+    uint32_t cob_rx;     /**< client -> server; bit 31 = off */
+    uint32_t cob_tx;     /**< server -> client */
+    uint32_t size;       /**< indicated or known total size */
+    uint32_t done;       /**< bytes transferred so far */
+    uint32_t buf_len;
+    co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
     uint8_t buf[CO_SDO_BUF_SIZE + 6]; /**< + room for a block's last segment padding */
 } co_sdo_server_t;
 

@@ -15,6 +15,8 @@
  * Another value aborts with 0x08000020, as does any sub-index above 3 and a node
  * without storage; a storage failure aborts with 0x06060000. Read, 0x1010/0x1011 subN
  * give 1 when the node has storage (parameters are saved on command) and 0 otherwise.
+ * A core built without storage (CO_CONFIG_STORAGE 0) refuses every command the same way
+ * and leaves 0x1010/0x1011 as the dictionary gives them (its dictionary says 0 there).
  *
  * Power-on values: reset application and reset communication first copy the defaults
  * of their range, then the stored image over them, so what is stored is exactly what a

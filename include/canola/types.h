@@ -87,9 +87,11 @@ typedef uint32_t co_abort_t;
 #define CO_ABORT_NO_DATA 0x08000024u       /**< no data available */
 
 /* ---- Little-endian helpers for byte buffers (safe for any alignment). On a little-endian
- * host they are one (unaligned) load or store: memcpy of a fixed size, which compilers
- * turn into a move; elsewhere they go byte by byte. */
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+ * host with unaligned loads they are one load or store: memcpy of a fixed size, which
+ * compilers turn into a move; elsewhere (Cortex-M0, which has no unaligned access and would
+ * call memcpy) they go byte by byte. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ &&                        \
+    !(defined(__arm__) && !defined(__ARM_FEATURE_UNALIGNED))
 static inline uint16_t co_get_u16(const uint8_t *p)
 {
     uint16_t v;

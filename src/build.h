@@ -1,0 +1,85 @@
+/*
+ * src/build.h -- what the build's goal changes in the core: hints for the compiler, the
+ * short paths a build for size (-Os) leaves out, and the copies of a size known only at
+ * run time. Not installed; every module includes it (through internal.h, or directly).
+ */
+#ifndef CANOLA_BUILD_H
+#define CANOLA_BUILD_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
+ * compilers without the attribute just decide for themselves). */
+#if defined(__GNUC__) || defined(__clang__)
+#define CO_NOINLINE __attribute__((noinline))
+#else
+#define CO_NOINLINE
+#endif
+
+/* CO_NOINLINE for speed's sake alone (the caller's common path keeps its registers): a
+ * build for size lets the compiler decide (where that measured smaller). */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
+#define CO_FAST_NOINLINE __attribute__((noinline))
+#else
+#define CO_FAST_NOINLINE
+#endif
+
+/* Out of line in a build for size: a small helper that -Os would copy into each of its
+ * callers, where one copy and the calls are smaller (GCC's estimate misses it; the
+ * helpers marked so were found by measuring). Other builds let the compiler decide. */
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__OPTIMIZE_SIZE__)
+#define CO_SIZE_NOINLINE __attribute__((noinline))
+#else
+#define CO_SIZE_NOINLINE
+#endif
+
+/* The opposite hint: a small hot helper that the compiler's size heuristics would keep
+ * out of line. Not when compiling for size (-Os): there flash counts more than cycles. */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
+#define CO_INLINE inline __attribute__((always_inline))
+#else
+#define CO_INLINE inline
+#endif
+
+/* Short paths: code that does for the common case (a middle segment, a plain number) what
+ * a general path next to it does for every case, only faster. Left out when compiling for
+ * size (-Os), where flash counts more than cycles: the general paths then serve every case
+ * (tests/CMakeLists.txt runs the SDO and PDO tests built that way too). */
+#ifndef CO_SHORT_PATHS
+#if defined(__OPTIMIZE_SIZE__)
+#define CO_SHORT_PATHS 0
+#else
+#define CO_SHORT_PATHS 1
+#endif
+#endif
+
+/* Copies and fills of a size known only at run time. Without the short paths (a build for
+ * size) they are the byte loops of copy.c, a few instructions each, instead of the C
+ * library's memcpy and memset, which no other call needs (about 470 bytes on Cortex-M4 with
+ * newlib-nano, 310 on Cortex-M0). Otherwise the library's, faster on long runs. Both take
+ * NULL pointers when `n` is 0. Copies of a size known at compile time stay memcpy: the
+ * compiler turns those into moves. */
+void co_copy_bytes(void *dst, const void *src, size_t n);
+void co_zero_bytes(void *dst, size_t n);
+
+static inline void co_copy(void *dst, const void *src, size_t n)
+{
+    if (!CO_SHORT_PATHS) {
+        co_copy_bytes(dst, src, n);
+    } else if (n > 0) {
+        memcpy(dst, src, n);
+    }
+}
+
+static inline void co_zero(void *dst, size_t n)
+{
+    if (!CO_SHORT_PATHS) {
+        co_zero_bytes(dst, n);
+    } else if (n > 0) {
+        memset(dst, 0, n);
+    }
+}
+
+#endif /* CANOLA_BUILD_H */
