@@ -106,12 +106,6 @@ typedef struct co_node_stats {
     uint32_t tx_gated;     /**< service frames the NMT state no longer allowed to send */
 } co_node_stats_t;
 
-/** A frame waiting for the driver, with the service that sent it (0: none). Internal. */
-typedef struct co_tx_item {
-    co_frame_t frame;
-    uint16_t service;
-} co_tx_item_t;
-
 /** One receive route: COB-ID key -> service and slot. Internal. */
 typedef struct co_route {
     uint32_t key;     /**< id, with bit 31 set for 29-bit ids */
@@ -174,8 +168,10 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
 #endif
 
-    /* Transmit queue, sorted by COB-ID (ties in arrival order). */
-    co_tx_item_t txq[CO_TX_QUEUE_LEN];
+    /* Transmit queue, sorted by COB-ID (ties in arrival order): the frames and, beside them
+     * (not padded into each), the service that sent each (0: none). */
+    co_frame_t txq[CO_TX_QUEUE_LEN];
+    uint16_t txq_service[CO_TX_QUEUE_LEN];
     /* Receive routes, sorted by key. */
     co_route_t routes[CO_RX_ROUTES_MAX];
 
