@@ -126,9 +126,14 @@
 #endif
 
 /** The SDO block CRC eight bytes a step (4 KiB of const tables, about 3 instructions a
- *  byte) instead of two (1 KiB, about 7). Only with CO_CONFIG_SDO_BLOCK. */
+ *  byte) instead of two (1 KiB, about 7). Only with CO_CONFIG_SDO_BLOCK. By default on,
+ *  except in a build for size (-Os), where the 3 KiB count more than the cycles. */
 #ifndef CO_CONFIG_CRC16_FAST
+#if defined(__OPTIMIZE_SIZE__)
+#define CO_CONFIG_CRC16_FAST 0
+#else
 #define CO_CONFIG_CRC16_FAST 1
+#endif
 #endif
 
 /** Node guarding and life guarding (0x100C, 0x100D, co_guard_watch). Without it the node
