@@ -139,7 +139,7 @@ static inline bool co_od_writes_plain(const co_od_entry_t *e)
 }
 
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no
- * library call. */
+ * library call, so a loop around it needs no saved registers (the short paths' copies). */
 static inline void co_copy_number(void *dst, const void *src, uint32_t bytes)
 {
     switch (bytes) {

@@ -104,7 +104,7 @@ static bool fast_widths(const co_pdo_t *p)
     for (uint8_t i = 0; i < p->count; i++) {
         uint8_t b = p->map_bits[i];
         if (b != 8 && b != 16 && b != 32 && b != 64) {
-            return false; /* pdo_copy_fast copies 1, 2, 4 or 8 bytes */
+            return false; /* co_copy_number copies 1, 2, 4 or 8 bytes */
         }
     }
     return true;

@@ -64,26 +64,6 @@ static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
     }
 }
 
-/* pdo_copy_value for the short paths (co_pdo_t.fast), whose items are 1, 2, 4 or 8 bytes:
- * no library call, so the copy loop needs no saved registers. */
-static inline void pdo_copy_fast(void *dst, const void *src, uint32_t bytes)
-{
-    switch (bytes) {
-    case 1:
-        memcpy(dst, src, 1);
-        break;
-    case 2:
-        memcpy(dst, src, 2);
-        break;
-    case 4:
-        memcpy(dst, src, 4);
-        break;
-    default:
-        memcpy(dst, src, 8);
-        break;
-    }
-}
-
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
 

@@ -188,7 +188,7 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
         const uint8_t *data = frame->data;
         for (uint8_t i = 0; i < p->count; i++) {
             uint32_t bytes = p->map_bits[i] / 8u;
-            pdo_copy_fast(p->map_entry[i]->value, data, bytes);
+            co_copy_number(p->map_entry[i]->value, data, bytes);
             data += bytes;
         }
         if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {

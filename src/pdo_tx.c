@@ -67,7 +67,7 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
     uint8_t *at = f.data;
     for (uint8_t i = 0; i < p->count; i++) {
         uint32_t bytes = p->map_bits[i] / 8u;
-        pdo_copy_fast(at, p->map_entry[i]->value, bytes);
+        co_copy_number(at, p->map_entry[i]->value, bytes);
         at += bytes;
     }
     (void)co_node_send_hot(node, &f, CO_SVC_PDO);
