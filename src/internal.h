@@ -557,12 +557,7 @@ static inline bool co_lss_slave_resume(co_node_t *node, uint16_t service)
     return false;
 }
 #define co_lss_slave_ingest co_none_slot_frame
-static inline uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER;
-}
+#define co_lss_slave_poll co_none_poll
 static inline void co_lss_slave_reset(co_node_t *node, bool application)
 {
     (void)node;
@@ -578,17 +573,8 @@ static inline bool co_lss_master_listening(const co_node_t *node)
 }
 #else
 #define co_lss_master_ingest co_none_slot_frame
-static inline uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-    return CO_TIME_NEVER;
-}
-static inline bool co_lss_master_listening(const co_node_t *node)
-{
-    (void)node;
-    return false;
-}
+#define co_lss_master_poll co_none_poll
+#define co_lss_master_listening co_none_state
 #endif
 
 /* manager.c: no-ops when left out of the build. */
