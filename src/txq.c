@@ -57,8 +57,8 @@ static void move(co_node_t *node, uint8_t to, uint8_t from)
     node->txq_service[to] = node->txq_service[from];
 }
 
-/* One pass over the queue: the frames that go (`send`: to the driver, up to the first it
- * refuses; else the void ones, counted) leave, the rest move up in their order. */
+/* One pass over the queue (not empty): the frames that go (`send`: to the driver, up to the first
+ * it refuses; else the void ones, counted) leave, the rest move up in their order. */
 static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
 {
     uint8_t count = node->txq_count;
@@ -71,16 +71,28 @@ static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
         move(node, kept++, i);
     }
     node->txq_count = kept;
-    if (send && kept == 0 && count != 0) {
+    if (send && kept == 0) {
         /* room again: a paced sender (block transfer) goes on at the next poll */
         co_node_schedule(node, node->now_us);
     }
 }
 
-void co_txq_purge(co_node_t *node) { pass(node, false); }
+/* (An empty queue, the usual case, is tested here: GCC saves pass's registers before its
+ * first test.) */
+void co_txq_purge(co_node_t *node)
+{
+    if (node->txq_count != 0) {
+        pass(node, false);
+    }
+}
 
 /* Nothing waiting is void here: every state change purges the queue (co_txq_purge). */
-void co_txq_flush(co_node_t *node) { pass(node, true); }
+void co_txq_flush(co_node_t *node)
+{
+    if (node->txq_count != 0) {
+        pass(node, true);
+    }
+}
 
 static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
