@@ -10,6 +10,8 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "canola/od.h" /* CO_SHORT_PATHS */
+
 /* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
  * compilers without the attribute just decide for themselves). */
 #if defined(__GNUC__) || defined(__clang__)
@@ -43,17 +45,8 @@
 #define CO_INLINE inline
 #endif
 
-/* Short paths: code that does for the common case (a middle segment, a plain number) what
- * a general path next to it does for every case, only faster. Left out when compiling for
- * size (-Os), where flash counts more than cycles: the general paths then serve every case
- * (tests/CMakeLists.txt runs the SDO and PDO tests built that way too). */
-#ifndef CO_SHORT_PATHS
-#if defined(__OPTIMIZE_SIZE__)
-#define CO_SHORT_PATHS 0
-#else
-#define CO_SHORT_PATHS 1
-#endif
-#endif
+/* Short paths (CO_SHORT_PATHS, canola/od.h: 0 in a build for size): tests/CMakeLists.txt
+ * runs the SDO, PDO and dictionary tests without them too. */
 
 /* Copies and fills of a size known only at run time. Without the short paths (a build for
  * size) they are the byte loops of copy.c, a few instructions each, instead of the C

@@ -45,6 +45,20 @@ extern "C" {
 #define CO_OD_FORMAT 3
 #endif
 
+/** The short paths: code that does for the common case (a middle SDO segment, a plain
+ *  number, a look-up through co_od_t.keys and .hash) what a general path beside it does
+ *  for every case, only faster. 0 when compiling for size (-Os, where flash counts more
+ *  than cycles): the general paths then serve every case, and generated dictionaries
+ *  (canola.odgen) leave out the look-up tables such a core does not read. Override with
+ *  -DCO_SHORT_PATHS=0/1 for the library and the dictionary alike. */
+#ifndef CO_SHORT_PATHS
+#if defined(__OPTIMIZE_SIZE__)
+#define CO_SHORT_PATHS 0
+#else
+#define CO_SHORT_PATHS 1
+#endif
+#endif
+
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
 typedef enum co_type {
     CO_TYPE_BOOLEAN = 0x01,
@@ -155,9 +169,10 @@ struct co_od_entry {
 #define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key)*0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
 /** An object dictionary: the entry table and the context its hooks receive. `keys` and
- *  `hash` make look-ups faster; a core built for size (-Os) leaves them out altogether
- *  (the binary search over the entries finds the same entries with less code): it reads
- *  neither, and co_od_validate does not check them. */
+ *  `hash` make look-ups faster; a core without the short paths (CO_SHORT_PATHS 0, a build
+ *  for size) leaves them out altogether (the binary search over the entries finds the
+ *  same entries with less code): it reads neither, and co_od_validate does not check
+ *  them. */
 typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;

@@ -535,7 +535,11 @@ def _source_text(name: str, source: str, entries: list[_Entry],
                 f".limits = {lim}, .hooks = NULL}},")
         out.append("};")
         out.append("")
-        # The dense key array the look-up searches (co_od_t.keys): 4 bytes per entry.
+        # The look-up tables, left out where the core does not read them (CO_SHORT_PATHS 0,
+        # a build for size). The dense key array the look-up searches (co_od_t.keys): 4
+        # bytes per entry.
+        out.append("#if CO_SHORT_PATHS /* canola/od.h: 0 in a build for size, which reads "
+                   "neither */")
         out.append("static const uint32_t k_keys[] = {")
         keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]
         for i in range(0, len(keys), 8):
@@ -552,8 +556,14 @@ def _source_text(name: str, source: str, entries: list[_Entry],
             out.append("};")
             out.append("")
             hashed = f", .hash = k_hash, .hash_mask = {len(slots) - 1}u"
+        out.append("#endif")
+        out.append("")
         out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
-                   f".hook_ctx = NULL, .keys = k_keys{hashed}}};")
+                   ".hook_ctx = NULL,")
+        out.append("#if CO_SHORT_PATHS")
+        out.append(f"    .keys = k_keys{hashed}")
+        out.append("#endif")
+        out.append("};")
     else:
         out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
     out.append("")
