@@ -67,6 +67,9 @@ SYNC_US = 10_000
 SYNCS = 5  # SYNC cycles of the TPDO step
 TARGET_RPM = 1500
 EMCY_CODE = 0x4310  # CiA 402: excess temperature, drive
+# How long (times the time scale) a step waits for the network's answer to what it did:
+# long enough for a process starved by a loaded machine; the waits end on the answer.
+REACTION_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -198,7 +201,7 @@ class Scenario:
         sent = self._nmt_seen("preop")
         self.master.nmt(0, "preop")
         self.wait_until(lambda: self._nmt_seen("preop") > sent and all(
-            d.nmt_state == "PRE-OPERATIONAL" for d in self.devices.values()), 0.2)
+            d.nmt_state == "PRE-OPERATIONAL" for d in self.devices.values()), REACTION_S)
         if self._nmt_seen("preop") == sent:
             return False, "the NMT command did not reach the bus"
         wrong = {n: d.nmt_state for n, d in self.devices.items()
@@ -356,8 +359,9 @@ class Scenario:
         def answered() -> dict[int, int]:
             return {n: c - tpdos0[n] for n, c in self.obs.tpdo_counts().items()}
 
-        # the TPDOs of the last SYNC may still be on their way (real buses)
-        self.wait_until(lambda: min(answered().values()) >= syncs, 0.05)
+        # the TPDOs of the last SYNC may still be on their way (real buses, a starved
+        # process: these waits end as soon as what they wait for is there)
+        self.wait_until(lambda: min(answered().values()) >= syncs, REACTION_S)
         tpdos = answered()
         short = {n: c for n, c in tpdos.items() if c < syncs}
         if syncs < SYNCS:
@@ -380,7 +384,7 @@ class Scenario:
             self.wait(self.sync_us / 1e6)
         drive, io = self.devices[DRIVE], self.devices[IO]
         self.wait_until(lambda: self.obs.last_tpdo(IO).get("inputs") == outputs
-                        and self.obs.last_tpdo(DRIVE).get("velocity") == TARGET_RPM, 0.2)
+                        and self.obs.last_tpdo(DRIVE).get("velocity") == TARGET_RPM, REACTION_S)
         problems = []
         if drive.od[0x60FF, 0] != TARGET_RPM or drive.od[0x6040, 0] != 0x000F:
             problems.append(f"drive holds target velocity {drive.od[0x60FF, 0]}, "
@@ -409,7 +413,7 @@ class Scenario:
         def arrived() -> list[EmcyEvent]:
             return [e for e in self.obs.emcys(before) if e.node == DRIVE]
 
-        self.wait_until(lambda: bool(arrived()), 0.2)
+        self.wait_until(lambda: bool(arrived()), REACTION_S)
         got = arrived()
         if not any(e.code == EMCY_CODE for e in got):
             return False, f"no EMCY 0x{EMCY_CODE:04X} from node {DRIVE} reached the master"
