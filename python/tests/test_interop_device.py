@@ -140,8 +140,20 @@ def test_nmt_and_heartbeat(peer: Peer) -> None:
         nmt.state = command
         assert wait_until(lambda state=state: device.nmt_state == state)  # type: ignore[misc]
         assert wait_until(lambda state=state: nmt.wait_for_heartbeat(1.0) == state)  # type: ignore[misc]
-    nmt.state = "RESET"
-    nmt.wait_for_bootup(3.0)
+    # Listening before the command: python-canopen's wait_for_bootup waits for the next
+    # state frame, and misses a boot-up that comes before it starts (a fast device).
+    bootups: list[bytes] = []
+
+    def heard(_cob: int, data: bytearray, _stamp: float) -> None:
+        if bytes(data) == b"\x00":
+            bootups.append(bytes(data))
+
+    peer.network.subscribe(0x700 + NODE, heard)
+    try:
+        nmt.state = "RESET"
+        assert wait_until(lambda: len(bootups) == 1)
+    finally:
+        peer.network.unsubscribe(0x700 + NODE, heard)
     assert wait_until(lambda: device.nmt_state == "PRE-OPERATIONAL")
 
 
