@@ -68,7 +68,10 @@ static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
             node->stats.tx_gated += send ? 0u : 1u;
             continue;
         }
-        move(node, kept++, i);
+        if (kept != i) {
+            move(node, kept, i); /* (not onto itself: memcpy's ranges must not overlap) */
+        }
+        kept++;
     }
     node->txq_count = kept;
     if (send && kept == 0) {
