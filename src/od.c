@@ -163,13 +163,27 @@ static bits_t wire_number(const type_info_t *t, const uint8_t *data)
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->wire) : bits;
 }
 
-/* Native storage of a number as a bit pattern (signed types sign-extended). Integers and
- * BOOLEAN are read as the unsigned integer of their width, which may alias them; reals bit
- * for bit. */
+/* Storage read and written as the unsigned integer of its width. That may alias the
+ * signed integers and BOOLEAN, but not a REAL32/REAL64: GCC and clang have a type
+ * attribute that allows it; other compilers copy reals with memcpy. */
+#if defined(__GNUC__) || defined(__clang__)
+#define REALS_ALIASED 1
+typedef uint16_t __attribute__((may_alias)) any_u16;
+typedef uint32_t __attribute__((may_alias)) any_u32;
+typedef uint64_t __attribute__((may_alias)) any_u64;
+#else
+#define REALS_ALIASED 0
+typedef uint16_t any_u16;
+typedef uint32_t any_u32;
+typedef uint64_t any_u64;
+#endif
+
+/* Native storage of a number as a bit pattern (signed types sign-extended; reals bit for
+ * bit). */
 static bits_t native_get(const void *value, const type_info_t *t)
 {
     bits_t bits;
-    if (!LITTLE_ENDIAN_HOST && t->kind == K_REAL) { /* elsewhere reals are wire form */
+    if (!REALS_ALIASED && t->kind == K_REAL) {
         uint32_t b32;
 #if CO_CONFIG_OD_64BIT
         if (t->width == 8) {
@@ -185,15 +199,15 @@ static bits_t native_get(const void *value, const type_info_t *t)
         bits = *(const uint8_t *)value;
         break;
     case 2:
-        bits = *(const uint16_t *)value;
+        bits = *(const any_u16 *)value;
         break;
 #if CO_CONFIG_OD_64BIT
     case 8:
-        bits = *(const uint64_t *)value;
+        bits = *(const any_u64 *)value;
         break;
 #endif
     default:
-        bits = *(const uint32_t *)value;
+        bits = *(const any_u32 *)value;
         break;
     }
     return t->kind == K_SIGNED ? sign_extend(bits, 8u * t->width) : bits;
@@ -206,7 +220,7 @@ static void native_set(void *value, const type_info_t *t, bits_t bits)
     if (t->kind == K_BOOL) {
         bits = bits != 0u;
     }
-    if (!LITTLE_ENDIAN_HOST && t->kind == K_REAL) { /* elsewhere reals are wire form */
+    if (!REALS_ALIASED && t->kind == K_REAL) {
         uint32_t b32 = (uint32_t)bits;
 #if CO_CONFIG_OD_64BIT
         if (t->width == 8) {
@@ -222,15 +236,15 @@ static void native_set(void *value, const type_info_t *t, bits_t bits)
         *(uint8_t *)value = (uint8_t)bits;
         break;
     case 2:
-        *(uint16_t *)value = (uint16_t)bits;
+        *(any_u16 *)value = (uint16_t)bits;
         break;
 #if CO_CONFIG_OD_64BIT
     case 8:
-        *(uint64_t *)value = bits;
+        *(any_u64 *)value = bits;
         break;
 #endif
     default:
-        *(uint32_t *)value = (uint32_t)bits;
+        *(any_u32 *)value = (uint32_t)bits;
         break;
     }
 }
