@@ -96,7 +96,7 @@ co_err_t co_pdo_bind(co_node_t *node)
     return CO_OK;
 }
 
-#if PDO_FAST_PATHS
+#if CO_SHORT_PATHS
 /* After parameters or mapping loaded (NMT states do not change it): may a frame of this
  * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
 static bool fast_widths(const co_pdo_t *p)
@@ -113,7 +113,7 @@ static bool fast_widths(const co_pdo_t *p)
 
 static void decide_fast(co_pdo_t *p, bool tpdo)
 {
-#if PDO_FAST_PATHS
+#if CO_SHORT_PATHS
     bool plain = p->plain && fast_widths(p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
@@ -231,7 +231,7 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     }
     for (uint16_t n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
-        if (!PDO_FAST_PATHS || !p->fast) {
+        if (!CO_SHORT_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);
         } else if (++p->sync_count >= p->type) { /* the usual one: cyclic, whole values */
             p->sync_count = 0;

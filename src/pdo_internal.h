@@ -36,31 +36,15 @@ static inline bool pdo_running(const co_node_t *node)
     return node->nmt_state == CO_NMT_OPERATIONAL;
 }
 
-/* Copy a whole mapped value: the usual widths as fixed-size copies (compiled inline, not
+/* Copy a whole mapped value: the usual widths as fixed-size copies (co_copy_number: not
  * a library call), anything else with co_copy; without the short paths (a build for size)
  * all of them with co_copy. */
 static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
 {
-    if (!CO_SHORT_PATHS) {
+    if (CO_SHORT_PATHS && (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8)) {
+        co_copy_number(dst, src, bytes);
+    } else {
         co_copy(dst, src, bytes);
-        return;
-    }
-    switch (bytes) {
-    case 1:
-        memcpy(dst, src, 1);
-        break;
-    case 2:
-        memcpy(dst, src, 2);
-        break;
-    case 4:
-        memcpy(dst, src, 4);
-        break;
-    case 8:
-        memcpy(dst, src, 8);
-        break;
-    default:
-        co_copy(dst, src, bytes);
-        break;
     }
 }
 
@@ -72,10 +56,6 @@ static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
 {
     return ((unsigned)p->map_direct[i / 8u] >> (i % 8u)) & 1u;
 }
-
-/* The per-frame short paths (the usual RPDO in co_pdo_rx, the cyclic TPDO in co_pdo_sync)
- * do what the general paths do, with fewer instructions: CO_SHORT_PATHS (build.h). */
-#define PDO_FAST_PATHS CO_SHORT_PATHS
 
 /* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
  * told when some TPDO listens to changes. */

@@ -183,7 +183,7 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
      * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
      * a route; the bound is checked all the same before the array is read. */
     const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
-    if (PDO_FAST_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
+    if (CO_SHORT_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
         !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
         const uint8_t *data = frame->data;
         for (uint8_t i = 0; i < p->count; i++) {
