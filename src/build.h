@@ -10,7 +10,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "canola/od.h" /* CO_SHORT_PATHS */
+#include "canola/config.h" /* CO_SHORT_PATHS */
 
 /* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
  * compilers without the attribute just decide for themselves). */
@@ -45,7 +45,7 @@
 #define CO_INLINE inline
 #endif
 
-/* Short paths (CO_SHORT_PATHS, canola/od.h: 0 in a build for size): tests/CMakeLists.txt
+/* Short paths (CO_SHORT_PATHS, canola/config.h: 0 in a build for size): tests/CMakeLists.txt
  * runs the SDO, PDO and dictionary tests without them too. */
 
 /* Copies and fills of a size known only at run time. Without the short paths (a build for

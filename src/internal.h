@@ -270,8 +270,8 @@ co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t servi
  * frames (block transfer) tests the queue once per frame, not twice. */
 static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
-#if defined(__OPTIMIZE_SIZE__)
-    return co_node_send_as(node, frame, service); /* -Os: one copy of the send path */
+#if !CO_SHORT_PATHS
+    return co_node_send_as(node, frame, service); /* a build for size: one send path */
 #else
     if (!(node->services & service)) {
         return co_node_send_as(node, frame, service);

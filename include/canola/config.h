@@ -125,15 +125,25 @@
 #define CO_CONFIG_SDO_SEGMENTED 1
 #endif
 
-/** The SDO block CRC eight bytes a step (4 KiB of const tables, about 3 instructions a
- *  byte) instead of two (1 KiB, about 7). Only with CO_CONFIG_SDO_BLOCK. By default on,
- *  except in a build for size (-Os), where the 3 KiB count more than the cycles. */
-#ifndef CO_CONFIG_CRC16_FAST
+/** The short paths: code that does for the common case (a middle SDO segment, a plain
+ *  number, a look-up through co_od_t.keys and .hash) what a general path beside it does
+ *  for every case, only faster. 0 when compiling for size (-Os, where flash counts more
+ *  than cycles): the general paths then serve every case, and generated dictionaries
+ *  (canola.odgen) leave out the look-up tables such a core does not read. Override with
+ *  -DCO_SHORT_PATHS=0/1 for the library and the dictionary alike. */
+#ifndef CO_SHORT_PATHS
 #if defined(__OPTIMIZE_SIZE__)
-#define CO_CONFIG_CRC16_FAST 0
+#define CO_SHORT_PATHS 0
 #else
-#define CO_CONFIG_CRC16_FAST 1
+#define CO_SHORT_PATHS 1
 #endif
+#endif
+
+/** The SDO block CRC eight bytes a step (4 KiB of const tables, about 3 instructions a
+ *  byte) instead of two (1 KiB, about 7). Only with CO_CONFIG_SDO_BLOCK. By default as
+ *  CO_SHORT_PATHS: off in a build for size, where the 3 KiB count more than the cycles. */
+#ifndef CO_CONFIG_CRC16_FAST
+#define CO_CONFIG_CRC16_FAST CO_SHORT_PATHS
 #endif
 
 /** Node guarding and life guarding (0x100C, 0x100D, co_guard_watch). Without it the node

@@ -32,6 +32,7 @@
 #ifndef CANOLA_OD_H
 #define CANOLA_OD_H
 
+#include "canola/config.h" /* CO_SHORT_PATHS */
 #include "canola/types.h"
 
 #ifdef __cplusplus
@@ -43,20 +44,6 @@ extern "C" {
  *  3: co_od_t.hash. */
 #ifndef CO_OD_FORMAT
 #define CO_OD_FORMAT 3
-#endif
-
-/** The short paths: code that does for the common case (a middle SDO segment, a plain
- *  number, a look-up through co_od_t.keys and .hash) what a general path beside it does
- *  for every case, only faster. 0 when compiling for size (-Os, where flash counts more
- *  than cycles): the general paths then serve every case, and generated dictionaries
- *  (canola.odgen) leave out the look-up tables such a core does not read. Override with
- *  -DCO_SHORT_PATHS=0/1 for the library and the dictionary alike. */
-#ifndef CO_SHORT_PATHS
-#if defined(__OPTIMIZE_SIZE__)
-#define CO_SHORT_PATHS 0
-#else
-#define CO_SHORT_PATHS 1
-#endif
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */

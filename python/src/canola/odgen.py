@@ -538,7 +538,7 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         # The look-up tables, left out where the core does not read them (CO_SHORT_PATHS 0,
         # a build for size). The dense key array the look-up searches (co_od_t.keys): 4
         # bytes per entry.
-        out.append("#if CO_SHORT_PATHS /* canola/od.h: 0 in a build for size, which reads "
+        out.append("#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which reads "
                    "neither */")
         out.append("static const uint32_t k_keys[] = {")
         keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]

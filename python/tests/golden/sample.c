@@ -112,7 +112,7 @@ static const co_od_entry_t k_entries[] = {
     {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.mode, .dflt = &k_defaults.mode, .limits = NULL, .hooks = NULL},
 };
 
-#if CO_SHORT_PATHS /* canola/od.h: 0 in a build for size, which reads neither */
+#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which reads neither */
 static const uint32_t k_keys[] = {
     0x100000u, 0x100100u, 0x100800u, 0x101400u, 0x101700u, 0x101800u, 0x101801u, 0x101802u,
     0x101803u, 0x101804u, 0x180000u, 0x180001u, 0x180002u, 0x200000u, 0x200100u, 0x200200u,
