@@ -88,7 +88,17 @@ static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *rou
     }
 }
 
-/* A frame on another COB-ID than the last one routed: the search, then as below. */
+/* A routed frame: to its service, or to the gate when the NMT state does not allow it. */
+static CO_INLINE void deliver(co_node_t *node, const co_route_t *route, const co_frame_t *frame)
+{
+    if (!(node->services & route->service)) {
+        ingest_gated(node, route, frame);
+        return;
+    }
+    dispatch(node, route, frame);
+}
+
+/* A frame on another COB-ID than the last one routed: the search, then delivered. */
 static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
 {
     const co_route_t *route = co_routes_find(node, key);
@@ -101,11 +111,7 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
         return;
     }
     node->route_hint = (uint16_t)(route - node->routes);
-    if (!(node->services & route->service)) {
-        ingest_gated(node, route, frame);
-        return;
-    }
-    dispatch(node, route, frame);
+    deliver(node, route, frame);
 }
 
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
@@ -128,11 +134,7 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         ingest_searched(node, frame, key);
         return;
     }
-    if (!(node->services & route->service)) {
-        ingest_gated(node, route, frame);
-        return;
-    }
-    dispatch(node, route, frame);
+    deliver(node, route, frame);
 }
 
 /* ---- time */
