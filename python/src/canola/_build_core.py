@@ -735,7 +735,9 @@ ffibuilder.cdef(CDEF)
 ffibuilder.set_source(
     "canola._core",
     PREAMBLE,
-    sources=[_rel(p) for p in _SOURCES],
+    # Absolute paths: the objects go under the build's own temporary folder (relative ones
+    # climb out of it, to /tmp/src, shared by every checkout built at the same time).
+    sources=_SOURCES,
     include_dirs=[_rel(p) for p in _INCLUDES],
     define_macros=_CONFIG,
     # A header change rebuilds the extension (setuptools only compares sources otherwise).
