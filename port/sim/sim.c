@@ -10,6 +10,10 @@
  * end of the latest frame as microseconds plus a remainder in 1/bitrate us; back-to-back
  * frames start at the exact end of the previous one and long runs do not drift. The rest of
  * the world sees whole microseconds: a frame reaches the receivers at its end rounded up.
+ *
+ * Cost per frame, whatever the number of ports: the frame's length is worked out a byte at a
+ * time when it is sent, the pending frames are a heap in the order they will win the bus, and
+ * a completed frame goes only to the ports the delivery index names for its identifier.
  */
 #include "canola/sim.h"
 
@@ -35,26 +39,35 @@ typedef struct wire {
     uint8_t run;   /* bits of that level in a row (a stuff bit starts a new run) */
 } wire_t;
 
+static uint16_t crc15_bit(uint16_t crc, uint8_t bit)
+{
+    bool feedback = (bit ^ (crc >> 14)) & 1u;
+    crc = (uint16_t)(((uint32_t)crc << 1) & 0x7FFFu);
+    return feedback ? (uint16_t)(crc ^ CRC15_POLY) : crc;
+}
+
+/* One bit on the wire: 1 when a stuff bit follows it. */
+static uint32_t stuff_bit(uint8_t *level, uint8_t *run, uint8_t bit)
+{
+    *run = (uint8_t)((*run > 0 && bit == *level) ? *run + 1 : 1);
+    *level = bit;
+    if (*run == 5) { /* five equal bits: the transmitter inserts the opposite level */
+        *level ^= 1u;
+        *run = 1;
+        return 1;
+    }
+    return 0;
+}
+
 /* Feed the `n` low bits of `value`, most significant first. */
 static void wire_put(wire_t *w, uint32_t value, unsigned n, bool in_crc)
 {
     while (n-- > 0) {
         uint8_t bit = (uint8_t)((value >> n) & 1u);
         if (in_crc) {
-            bool feedback = (bit ^ (w->crc >> 14)) & 1u;
-            w->crc = (uint16_t)(((uint32_t)w->crc << 1) & 0x7FFFu);
-            if (feedback) {
-                w->crc = (uint16_t)(w->crc ^ CRC15_POLY);
-            }
+            w->crc = crc15_bit(w->crc, bit);
         }
-        w->run = (uint8_t)((w->run > 0 && bit == w->level) ? w->run + 1 : 1);
-        w->level = bit;
-        w->bits++;
-        if (w->run == 5) { /* five equal bits: the transmitter inserts the opposite level */
-            w->bits++;
-            w->level ^= 1u;
-            w->run = 1;
-        }
+        w->bits += 1 + stuff_bit(&w->level, &w->run, bit);
     }
 }
 
@@ -80,6 +93,86 @@ uint32_t co_sim_frame_bits(const co_frame_t *frame)
     }
     wire_put(&w, w.crc, 15, false); /* the CRC sequence is stuffed too */
     return w.bits + TAIL_BITS;
+}
+
+/* The same length a byte at a time, with the bus's tables (built from the functions above at
+ * co_sim_bus_init): the bits SOF..CRC packed into bytes, the CRC and the stuffing of whole
+ * bytes from the tables, the few bits after the last whole byte one by one. */
+
+/* State of the stuffing between bytes: level * 5 + run (run 0: no bit yet). */
+#define STUFF_STATES 10u
+
+typedef struct packed_bits {
+    uint8_t bytes[16]; /* whole bytes so far, first bit most significant */
+    uint32_t count;
+    uint64_t acc; /* bits not yet in a whole byte: the low `rest` bits */
+    uint32_t rest;
+} packed_bits_t;
+
+/* Append the `n` (<= 32) low bits of `value`. */
+static void pack(packed_bits_t *p, uint32_t value, unsigned n)
+{
+    p->acc = (p->acc << n) | (value & (uint32_t)((1ull << n) - 1u));
+    p->rest += n;
+    while (p->rest >= 8) {
+        p->rest -= 8;
+        p->bytes[p->count++] = (uint8_t)(p->acc >> p->rest);
+    }
+}
+
+static void build_wire_tables(co_sim_bus_t *bus)
+{
+    for (uint32_t b = 0; b < 256; b++) {
+        wire_t w = {0};
+        wire_put(&w, b, 8, true);
+        bus->crc15_table[b] = w.crc;
+        for (uint8_t state = 0; state < STUFF_STATES; state++) {
+            wire_t x = {.level = (uint8_t)(state / 5u), .run = (uint8_t)(state % 5u)};
+            wire_put(&x, b, 8, false);
+            bus->stuff_table[state][b] = (uint8_t)((x.bits - 8u) << 4 | (x.level * 5u + x.run));
+        }
+    }
+}
+
+static uint32_t frame_bits_fast(const co_sim_bus_t *bus, const co_frame_t *frame)
+{
+    packed_bits_t p;
+    p.count = 0;
+    p.acc = 0;
+    p.rest = 0;
+    uint32_t rtr = (frame->flags & CO_FRAME_RTR) ? 1u : 0u;
+    uint8_t len = frame->len > 8 ? 8 : frame->len;
+    if (frame->flags & CO_FRAME_EXT) { /* SOF, base ID, SRR, IDE, ID extension; RTR r1 r0, DLC */
+        pack(&p, ((frame->id >> 18) & 0x7FFu) << 20 | 3u << 18 | (frame->id & 0x3FFFFu), 32);
+        pack(&p, rtr << 6 | len, 7);
+    } else { /* SOF, ID, RTR IDE r0, DLC */
+        pack(&p, (frame->id & 0x7FFu) << 7 | rtr << 6 | len, 19);
+    }
+    for (uint8_t i = 0; !rtr && i < len; i++) {
+        pack(&p, frame->data[i], 8);
+    }
+    uint16_t crc = 0;
+    for (uint32_t i = 0; i < p.count; i++) {
+        uint32_t top = ((uint32_t)crc >> 7 ^ p.bytes[i]) & 0xFFu;
+        crc = (uint16_t)(((uint32_t)crc << 8 & 0x7FFFu) ^ bus->crc15_table[top]);
+    }
+    for (uint32_t k = p.rest; k-- > 0;) {
+        crc = crc15_bit(crc, (uint8_t)((p.acc >> k) & 1u));
+    }
+    pack(&p, crc, 15);
+    uint32_t stuffed = 0;
+    uint8_t state = 0;
+    for (uint32_t i = 0; i < p.count; i++) {
+        uint8_t e = bus->stuff_table[state][p.bytes[i]];
+        stuffed += e >> 4;
+        state = e & 15u;
+    }
+    uint8_t level = (uint8_t)(state / 5u);
+    uint8_t run = (uint8_t)(state % 5u);
+    for (uint32_t k = p.rest; k-- > 0;) {
+        stuffed += stuff_bit(&level, &run, (uint8_t)((p.acc >> k) & 1u));
+    }
+    return p.count * 8u + p.rest + stuffed + TAIL_BITS;
 }
 
 /* The arbitration field as a number, first bit most significant: the lowest value wins (0 is
@@ -168,7 +261,45 @@ co_err_t co_sim_bus_init(co_sim_bus_t *bus, uint32_t bitrate)
     memset(bus, 0, sizeof *bus);
     bus->bitrate = bitrate;
     strcpy(bus->name, "sim0");
+    build_wire_tables(bus);
     return CO_OK;
+}
+
+/* ---- The delivery index: which ports a frame goes to. */
+
+static uint64_t port_bit(const co_sim_port_t *port) { return 1ull << (port->index % 64u); }
+
+static void portset_put(co_sim_portset_t *set, const co_sim_port_t *port, bool member)
+{
+    uint64_t *word = &set->bits[port->index / 64u];
+    *word = member ? *word | port_bit(port) : *word & ~port_bit(port);
+}
+
+/* Enter a node port's routes into the index, or (not indexed) make it see every frame. */
+static void index_port(co_sim_bus_t *bus, const co_sim_port_t *port)
+{
+    for (uint32_t id = 0; id <= CO_ID_STD_MAX; id++) {
+        portset_put(&bus->receivers[id], port, false);
+    }
+    portset_put(&bus->ext_receivers, port, false);
+    portset_put(&bus->every_frame, port, port->node && !port->indexed);
+    if (!port->node || !port->indexed) {
+        return;
+    }
+    uint32_t count = co_node_route_count(port->node);
+    for (uint32_t i = 0; i < count; i++) {
+        uint32_t key = co_node_route_id(port->node, i); /* bit 31: a 29-bit identifier */
+        portset_put(key & 0x80000000u ? &bus->ext_receivers : &bus->receivers[key & CO_ID_STD_MAX],
+                    port, true);
+    }
+}
+
+void co_sim_port_routes_changed(co_sim_port_t *port)
+{
+    if (port && port->bus && port->node) { /* before co_sim_port_bind: bind indexes it */
+        port->indexed = true;
+        index_port(port->bus, port);
+    }
 }
 
 /* Attaching resets the port: set `mailboxes` afterwards. */
@@ -196,11 +327,14 @@ co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_r
     if (err == CO_OK) {
         port->rx = rx;
         port->rx_ctx = ctx;
+        portset_put(&bus->every_frame, port, true);
     }
     return err;
 }
 
 static co_err_t port_tx(void *ctx, const co_frame_t *frame) { return co_sim_send(ctx, frame); }
+
+static void port_routes_changed(void *ctx) { co_sim_port_routes_changed(ctx); }
 
 /* A node's next poll; the bus keeps a lower bound of them all, so that instants with no
  * poll due skip the scan of every port (a big network has one frame per instant). */
@@ -214,14 +348,75 @@ static void set_due(co_sim_port_t *port, uint64_t due_us)
 
 co_driver_t co_sim_port_driver(co_sim_port_t *port)
 {
-    co_driver_t d = {.tx = port_tx, .on_routes_changed = NULL, .ctx = port};
+    co_driver_t d = {.tx = port_tx, .on_routes_changed = port_routes_changed, .ctx = port};
     return d;
 }
 
 void co_sim_port_bind(co_sim_port_t *port, co_node_t *node)
 {
     port->node = node;
+    /* Whether this node notifies is unknown until it does: it sees every frame until then. */
+    port->indexed = false;
+    index_port(port->bus, port);
     set_due(port, 0); /* unknown: poll at the next instant the bus runs */
+}
+
+/* ---- The pending frames: a binary heap whose top is the frame that goes next when it is
+ * ready (timing model: the lowest arbitration key; instant delivery: the oldest; ties: the
+ * oldest). Selection takes the top when it is ready, and only otherwise (a frame sent with a
+ * delay, or after the instant arbitration began) looks through them all. */
+
+static bool goes_before(const co_sim_bus_t *bus, const co_sim_pending_t *a,
+                        const co_sim_pending_t *b)
+{
+    if (bus->bitrate && a->key != b->key) {
+        return a->key < b->key;
+    }
+    return seq_before(a->seq, b->seq);
+}
+
+static void heap_up(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    while (i > 0 && goes_before(bus, &p, &bus->pending[(i - 1) / 2])) {
+        bus->pending[i] = bus->pending[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    bus->pending[i] = p;
+}
+
+static void heap_down(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    for (uint32_t child; (child = 2 * i + 1) < bus->pending_count; i = child) {
+        if (child + 1 < bus->pending_count &&
+            goes_before(bus, &bus->pending[child + 1], &bus->pending[child])) {
+            child++;
+        }
+        if (!goes_before(bus, &bus->pending[child], &p)) {
+            break;
+        }
+        bus->pending[i] = bus->pending[child];
+    }
+    bus->pending[i] = p;
+}
+
+static void pending_push(co_sim_bus_t *bus, const co_sim_pending_t *p)
+{
+    bus->pending[bus->pending_count++] = *p;
+    heap_up(bus, bus->pending_count - 1);
+}
+
+/* Remove and return the i-th entry; the last one fills its place. */
+static co_sim_pending_t pending_take(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    if (i < --bus->pending_count) {
+        bus->pending[i] = bus->pending[bus->pending_count];
+        heap_up(bus, i);
+        heap_down(bus, i);
+    }
+    return p;
 }
 
 co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
@@ -242,23 +437,15 @@ co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
         bus->stats.overflow++;
         return CO_ERR_BUSY;
     }
-    co_sim_pending_t *p = &bus->pending[bus->pending_count++];
-    p->frame = *frame;
-    p->ready_us = bus->now_us + bus->delay_us;
-    p->seq = bus->seq++;
-    p->bits = co_sim_frame_bits(frame); /* arbitration and completion both need it */
-    p->port = port->index;
+    co_sim_pending_t p = {.frame = *frame,
+                          .ready_us = bus->now_us + bus->delay_us,
+                          .seq = bus->seq++,
+                          .bits = frame_bits_fast(bus, frame), /* arbitration and completion */
+                          .key = arbitration_key(frame),
+                          .port = port->index};
+    pending_push(bus, &p);
     port->in_flight++;
     return CO_OK;
-}
-
-/* Order does not matter in the pending list (selection scans it): fill the hole with the
- * last entry. */
-static co_sim_pending_t pending_take(co_sim_bus_t *bus, uint32_t i)
-{
-    co_sim_pending_t p = bus->pending[i];
-    bus->pending[i] = bus->pending[--bus->pending_count];
-    return p;
 }
 
 void co_sim_set_bus_off(co_sim_port_t *port, bool bus_off)
@@ -270,11 +457,17 @@ void co_sim_set_bus_off(co_sim_port_t *port, bool bus_off)
     }
     /* A controller going bus-off abandons what waits in its mailboxes; a frame already on
      * the wire finishes. */
-    for (uint32_t i = bus->pending_count; i-- > 0;) {
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < bus->pending_count; i++) {
         if (bus->pending[i].port == port->index) {
-            (void)pending_take(bus, i);
             port->in_flight--;
+        } else {
+            bus->pending[kept++] = bus->pending[i];
         }
+    }
+    bus->pending_count = kept;
+    for (uint32_t i = kept / 2; i-- > 0;) {
+        heap_down(bus, i);
     }
 }
 
@@ -294,12 +487,35 @@ static void receive(co_sim_port_t *port, uint64_t t, const co_frame_t *f)
         return;
     }
     if (port->node) {
-        if (co_node_accepts(port->node, f)) { /* the controller's acceptance filter */
+        /* The controller's acceptance filter. The index named this port, but a node
+         * initialised again since its last notification may have dropped the route. */
+        if (co_node_accepts(port->node, f)) {
             co_node_ingest(port->node, t, f);
             set_due(port, co_node_poll(port->node, t));
         }
     } else if (port->rx) {
         port->rx(port->rx_ctx, t, f);
+    }
+}
+
+/* Hand a frame to the ports the index names for it, all but the sender, in the order they
+ * were attached. The index is read afresh after each port: a receiver's callbacks may change
+ * the routes of a port further on, which then receives as its routes are at its turn. */
+static void deliver(co_sim_bus_t *bus, uint64_t t, const co_frame_t *f, uint32_t sender)
+{
+    const co_sim_portset_t *named =
+        (f->flags & CO_FRAME_EXT) ? &bus->ext_receivers : &bus->receivers[f->id & CO_ID_STD_MAX];
+    for (uint32_t w = 0; w < CO_SIM_PORT_WORDS; w++) {
+        uint64_t after = ~0ull; /* the ports of this word not visited yet */
+        uint64_t todo;
+        while ((todo = (named->bits[w] | bus->every_frame.bits[w]) & after) != 0) {
+            uint32_t b = (uint32_t)__builtin_ctzll(todo);
+            after = b == 63 ? 0 : ~0ull << (b + 1);
+            uint32_t i = w * 64u + b;
+            if (i != sender) {
+                receive(bus->ports[i], t, f);
+            }
+        }
     }
 }
 
@@ -318,11 +534,7 @@ static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
     } else {
         fault_corrupt(bus, &frame);
         trace_frame(bus, t, &frame);
-        for (uint32_t i = 0; i < bus->port_count; i++) {
-            if (i != p->port) {
-                receive(bus->ports[i], t, &frame);
-            }
-        }
+        deliver(bus, t, &frame, p->port);
     }
     co_sim_port_t *sender = bus->ports[p->port];
     sender->in_flight--;
@@ -338,6 +550,9 @@ static int32_t next_completion(const co_sim_bus_t *bus, uint64_t t)
     if (bus->bitrate) {
         exact_t end = {bus->idle_at_us, bus->idle_rem};
         return (bus->transmitting && exact_ceil(end) <= t) ? 0 : -1;
+    }
+    if (bus->pending_count > 0 && bus->pending[0].ready_us <= t) {
+        return 0; /* the oldest frame, ready */
     }
     int32_t best = -1;
     for (uint32_t i = 0; i < bus->pending_count; i++) {
@@ -376,27 +591,21 @@ static void start_transmission(co_sim_bus_t *bus, uint64_t t)
         return;
     }
     exact_t start = {bus->idle_at_us, bus->idle_rem};
-    uint64_t first = first_ready(bus);
-    if (first > start.us || (first == start.us && start.rem == 0)) {
+    /* A top ready by the end of the previous frame wins: no other can start the bus sooner. */
+    bool top_ready = bus->pending[0].ready_us <= start.us;
+    uint64_t first = top_ready ? start.us : first_ready(bus);
+    if (first > start.us) {
         start = (exact_t){first, 0}; /* the bus was idle: the frame starts when ready */
     }
     if (exact_ceil(start) > t) {
         return;
     }
     uint32_t best = 0;
-    uint32_t best_key = UINT32_MAX;
-    bool found = false;
-    for (uint32_t i = 0; i < bus->pending_count; i++) {
+    for (uint32_t i = 1; !top_ready && i < bus->pending_count; i++) {
         const co_sim_pending_t *p = &bus->pending[i];
-        uint32_t key = arbitration_key(&p->frame);
-        if (p->ready_us > start.us) {
-            continue; /* not ready when arbitration began */
-        }
-        if (!found || key < best_key ||
-            (key == best_key && seq_before(p->seq, bus->pending[best].seq))) {
-            best = i;
-            best_key = key;
-            found = true;
+        if (p->ready_us <= start.us &&
+            (bus->pending[best].ready_us > start.us || goes_before(bus, p, &bus->pending[best]))) {
+            best = i; /* the winner among the frames ready when arbitration began */
         }
     }
     bus->on_bus = pending_take(bus, best);
