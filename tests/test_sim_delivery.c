@@ -151,8 +151,7 @@ static void test_arbitration_order_many(void)
         want[k] = want[w];
         want[w] = tmp;
         start += co_sim_frame_bits(&want[k].f); /* 1 us per bit */
-        if ((rr.f[k].id != want[k].f.id || rr.f[k].flags != want[k].f.flags ||
-             rr.t[k] != start) &&
+        if ((rr.f[k].id != want[k].f.id || rr.f[k].flags != want[k].f.flags || rr.t[k] != start) &&
             mismatches++ < 5) {
             char got[40], exp[40];
             printf("  frame %u: got %s at %llu, expected %s at %llu\n", k,
@@ -349,8 +348,8 @@ static void test_delivery_node_initialised_again(void)
     co_sim_port_attach_raw(bus, &raw, NULL, NULL);
     add_node(bus, &n, 5);
     co_sim_run_until(bus, 1000);
-    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&n.od, 0),
-                            .driver = co_sim_port_driver(&n.port)};
+    co_node_config_t cfg = {
+        .node_id = 5, .od = example_od_init(&n.od, 0), .driver = co_sim_port_driver(&n.port)};
     CHECK_EQ(co_node_init(&n.node, &cfg), CO_OK);
     put(bus, &raw, frm(0x000, "01 00"));
     put(bus, &raw, frm(0x605, "40 00 10 00 00 00 00 00"));

@@ -96,29 +96,13 @@ uint32_t co_sim_frame_bits(const co_frame_t *frame)
 }
 
 /* The same length a byte at a time, with the bus's tables (built from the functions above at
- * co_sim_bus_init): the bits SOF..CRC packed into bytes, the CRC and the stuffing of whole
- * bytes from the tables, the few bits after the last whole byte one by one. */
+ * co_sim_bus_init). The CRC reads the frame's bits in whole bytes from the right: leading
+ * zeros leave a CRC at zero, so the header is padded in front to whole bytes and the data
+ * bytes follow as they are. The stuffing reads the bits from SOF in whole bytes, and the few
+ * bits after the last whole byte one by one. */
 
 /* State of the stuffing between bytes: level * 5 + run (run 0: no bit yet). */
 #define STUFF_STATES 10u
-
-typedef struct packed_bits {
-    uint8_t bytes[16]; /* whole bytes so far, first bit most significant */
-    uint32_t count;
-    uint64_t acc; /* bits not yet in a whole byte: the low `rest` bits */
-    uint32_t rest;
-} packed_bits_t;
-
-/* Append the `n` (<= 32) low bits of `value`. */
-static void pack(packed_bits_t *p, uint32_t value, unsigned n)
-{
-    p->acc = (p->acc << n) | (value & (uint32_t)((1ull << n) - 1u));
-    p->rest += n;
-    while (p->rest >= 8) {
-        p->rest -= 8;
-        p->bytes[p->count++] = (uint8_t)(p->acc >> p->rest);
-    }
-}
 
 static void build_wire_tables(co_sim_bus_t *bus)
 {
@@ -134,45 +118,74 @@ static void build_wire_tables(co_sim_bus_t *bus)
     }
 }
 
+static uint16_t crc15_byte(const co_sim_bus_t *bus, uint16_t crc, uint8_t byte)
+{
+    uint32_t top = ((uint32_t)crc >> 7 ^ byte) & 0xFFu;
+    return (uint16_t)(((uint32_t)crc << 8 & 0x7FFFu) ^ bus->crc15_table[top]);
+}
+
+/* The stuffing of a bit stream fed in pieces. */
+typedef struct stuffing {
+    uint64_t acc;  /* the latest bits; the low `rest` are not counted yet */
+    uint32_t rest; /* < 8 between calls */
+    uint32_t bits; /* bits counted, stuff bits included */
+    uint8_t state;
+} stuffing_t;
+
+static void stuff_byte(const co_sim_bus_t *bus, stuffing_t *s, uint8_t byte)
+{
+    uint8_t e = bus->stuff_table[s->state][byte];
+    s->bits += 8u + (e >> 4);
+    s->state = e & 15u;
+}
+
+/* Feed the `n` (<= 32) low bits of `value`. */
+static void stuff_feed(const co_sim_bus_t *bus, stuffing_t *s, uint32_t value, unsigned n)
+{
+    s->acc = (s->acc << n) | (value & (uint32_t)((1ull << n) - 1u));
+    s->rest += n;
+    while (s->rest >= 8) {
+        s->rest -= 8;
+        stuff_byte(bus, s, (uint8_t)(s->acc >> s->rest));
+    }
+}
+
 static uint32_t frame_bits_fast(const co_sim_bus_t *bus, const co_frame_t *frame)
 {
-    packed_bits_t p;
-    p.count = 0;
-    p.acc = 0;
-    p.rest = 0;
     uint32_t rtr = (frame->flags & CO_FRAME_RTR) ? 1u : 0u;
     uint8_t len = frame->len > 8 ? 8 : frame->len;
-    if (frame->flags & CO_FRAME_EXT) { /* SOF, base ID, SRR, IDE, ID extension; RTR r1 r0, DLC */
-        pack(&p, ((frame->id >> 18) & 0x7FFu) << 20 | 3u << 18 | (frame->id & 0x3FFFFu), 32);
-        pack(&p, rtr << 6 | len, 7);
-    } else { /* SOF, ID, RTR IDE r0, DLC */
-        pack(&p, (frame->id & 0x7FFu) << 7 | rtr << 6 | len, 19);
-    }
-    for (uint8_t i = 0; !rtr && i < len; i++) {
-        pack(&p, frame->data[i], 8);
-    }
+    uint8_t data_len = rtr ? 0 : len;
+    stuffing_t s = {0};
     uint16_t crc = 0;
-    for (uint32_t i = 0; i < p.count; i++) {
-        uint32_t top = ((uint32_t)crc >> 7 ^ p.bytes[i]) & 0xFFu;
-        crc = (uint16_t)(((uint32_t)crc << 8 & 0x7FFFu) ^ bus->crc15_table[top]);
+    if (frame->flags & CO_FRAME_EXT) { /* SOF, base ID, SRR, IDE, ID extension; RTR r1 r0, DLC */
+        uint32_t id = ((frame->id >> 18) & 0x7FFu) << 20 | 3u << 18 | (frame->id & 0x3FFFFu);
+        uint32_t tail = rtr << 6 | len;
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 25)); /* 39 bits in 5 bytes: 1 bit of pad */
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 17));
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 9));
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 1));
+        crc = crc15_byte(bus, crc, (uint8_t)(id << 7 | tail));
+        stuff_feed(bus, &s, id, 32);
+        stuff_feed(bus, &s, tail, 7);
+    } else {                                                        /* SOF, ID, RTR IDE r0, DLC */
+        uint32_t head = (frame->id & 0x7FFu) << 7 | rtr << 6 | len; /* 19 bits: 5 of pad */
+        crc = crc15_byte(bus, crc, (uint8_t)(head >> 16));
+        crc = crc15_byte(bus, crc, (uint8_t)(head >> 8));
+        crc = crc15_byte(bus, crc, (uint8_t)head);
+        stuff_feed(bus, &s, head, 19);
     }
-    for (uint32_t k = p.rest; k-- > 0;) {
-        crc = crc15_bit(crc, (uint8_t)((p.acc >> k) & 1u));
+    for (uint8_t i = 0; i < data_len; i++) { /* whole bytes: `rest` stays as it is */
+        crc = crc15_byte(bus, crc, frame->data[i]);
+        s.acc = s.acc << 8 | frame->data[i];
+        stuff_byte(bus, &s, (uint8_t)(s.acc >> s.rest));
     }
-    pack(&p, crc, 15);
-    uint32_t stuffed = 0;
-    uint8_t state = 0;
-    for (uint32_t i = 0; i < p.count; i++) {
-        uint8_t e = bus->stuff_table[state][p.bytes[i]];
-        stuffed += e >> 4;
-        state = e & 15u;
+    stuff_feed(bus, &s, crc, 15);
+    uint8_t level = (uint8_t)(s.state / 5u);
+    uint8_t run = (uint8_t)(s.state % 5u);
+    for (uint32_t k = s.rest; k-- > 0;) {
+        s.bits += 1 + stuff_bit(&level, &run, (uint8_t)((s.acc >> k) & 1u));
     }
-    uint8_t level = (uint8_t)(state / 5u);
-    uint8_t run = (uint8_t)(state % 5u);
-    for (uint32_t k = p.rest; k-- > 0;) {
-        stuffed += stuff_bit(&level, &run, (uint8_t)((p.acc >> k) & 1u));
-    }
-    return p.count * 8u + p.rest + stuffed + TAIL_BITS;
+    return s.bits + TAIL_BITS;
 }
 
 /* The arbitration field as a number, first bit most significant: the lowest value wins (0 is
