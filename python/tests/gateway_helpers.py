@@ -48,6 +48,10 @@ class FakeMaster:
     def node_id(self) -> int:
         return self._node_id
 
+    @property
+    def has_lss(self) -> bool:
+        return False
+
     async def _gate(self, node: int, index: int, sub: int) -> None:
         if node in self.gates:
             self.started.setdefault(node, asyncio.Event()).set()
@@ -125,8 +129,8 @@ class Client:
         await self.writer.drain()
 
     async def line(self, timeout: float = TIMEOUT) -> str:
-        data = await asyncio.wait_for(self.reader.readline(), timeout)
-        assert data.endswith(b"\r\n"), data[:80]
+        """The next reply or event: up to CR LF (a reply of several lines has LF inside)."""
+        data = await asyncio.wait_for(self.reader.readuntil(b"\r\n"), timeout)
         return data[:-2].decode()
 
     async def ask(self, line: str, timeout: float = TIMEOUT) -> str:
@@ -138,7 +142,7 @@ class Client:
         await self.send(line)
         seq = line.split("]", 1)[0] + "]"
         events: list[str] = []
-        while not (got := await self.line(timeout)).startswith(seq):
+        while seq not in (got := await self.line(timeout)).rsplit("\n", 1)[-1]:
             events.append(got)
         return got, events
 

@@ -27,9 +27,11 @@ def test_stdio_script() -> None:
               "[7] 127 stop\n[8] 127 r 0x1017 0 u16\n")
     done = subprocess.run([sys.executable, "-m", "canola.gateway", *SIM, "--listen", "stdio"],
                           input=script.encode(), capture_output=True, timeout=60, check=True)
-    assert done.stdout.decode().splitlines() == [
-        '[1] "canola sample"', "[2] OK", "[3] 401", "[4] OK", "[5] 0x00000010", "ERROR:101",
-        "[6] ERROR:101", "[7] OK", "[8] 0"]
+    # one reply per line, each ended by CR LF; the comment's is empty, the line without
+    # [seq] has the last sequence number seen (as CANopenNode's gateway answers)
+    assert done.stdout.decode().split("\r\n") == [
+        '[1] "canola sample"', "", "[2] OK", "[3] 401", "[4] OK", "[5] 0x00000010",
+        "[5] ERROR:101", "[6] ERROR:101", "[7] OK", "[8] 0", ""]
 
 
 def test_tcp_process_and_sigterm() -> None:

@@ -37,7 +37,7 @@ def test_fastscan_set_node_store_and_boot() -> None:
         by_serial = {d.od[0x1018, 4]: d for d in devices}
         async with serve(master) as (address, _):
             c = await Client.connect(address)
-            assert await c.ask("[1] lss_get_node") == "[1] ERROR:103"  # none selected
+            assert await c.ask("[1] lss_get_node") == "[1] ERROR:102"  # none selected
             assert await c.ask("[2] _lss_fastscan 20") == f"[2] {_addr(0x100)}"
             assert await c.ask("[3] lss_get_node") == "[3] 0xFF"
             assert await c.ask("[4] lss_inquire_addr 3") == "[4] 0x00000100"
@@ -63,7 +63,7 @@ def test_fastscan_set_node_store_and_boot() -> None:
             assert await c.ask("[15] _lss_fastscan 20") == "[15] ERROR:103"  # none left
             assert await c.ask(f"[16] lss_switch_sel {_addr(0x999)}") == "[16] ERROR:103"
             assert await c.ask("[17] lss_switch_glob 2") == "[17] ERROR:101"
-            assert await c.ask("[18] lss_set_node 128") == "[18] ERROR:502"
+            assert await c.ask("[18] lss_set_node 128") == "[18] ERROR:101"
             assert await c.ask("[19] lss_conf_bitrate 0 2") == "[19] ERROR:100"
             assert await c.ask("[20] lss_activate_bitrate 100") == "[20] ERROR:100"
             assert await c.ask("[21] 2 lss_store") == "[21] ERROR:106"  # network 2
@@ -77,19 +77,18 @@ def test_allnodes() -> None:
         bus, master, devices = _network()
         async with serve(master) as (address, _):
             c = await Client.connect(address)
-            reply, lines = await c.reply("[1] lss_allnodes 20 126 0")
-            assert reply == "[1] OK"
-            # 127 is the gateway's own node-ID: no node-ID left for the second device
-            assert lines == [f"# Node-ID 126 assigned to: {_addr(0x100)}",
-                             "# Not all nodes scanned!"]
+            # one reply, its lines joined by LF (127 is the gateway's own node-ID: no
+            # node-ID left for the second device)
+            assert await c.ask("[1] lss_allnodes 20 126 0") == (
+                f"# Node-ID 126 assigned to: {_addr(0x100)}\n# Not all nodes scanned!\n[1] OK")
             bus.run_for(10_000)
             assert sorted(d.node_id for d in devices) == [126, UNCONFIGURED]
             # store 1: the device refuses (no LSS storage): 504, its node-ID applies
             assert await c.ask("[2] lss_allnodes 20 5 1 0 0 0 0 0 0 0 0") == "[2] ERROR:504"
             bus.run_for(10_000)
             assert sorted(d.node_id for d in devices) == [5, 126]
-            reply, lines = await c.reply("[5] lss_allnodes 20")
-            assert (reply, lines) == ("[5] OK", ["# Found 0 nodes, search finished."])
+            assert await c.ask("[5] lss_allnodes 20") == \
+                "# Found 0 nodes, search finished.\n[5] OK"
             assert await c.ask("[3] lss_allnodes 20 5 0 1 0 0 0 0 0 0 0") == "[3] ERROR:100"
             assert await c.ask("[4] lss_allnodes 20 5") == "[4] ERROR:101"
             await c.close()

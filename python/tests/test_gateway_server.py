@@ -127,11 +127,12 @@ def test_local_node_and_nmt() -> None:
         assert await c.ask("[6] 1 stop") == "[6] OK"
         assert await c.ask("[7] 5 preop") == "[7] OK"
         assert await c.ask("[8] 5 reset node") == "[8] OK"
-        assert m.nmt_sent == [(5, "start"), (0, "reset_comm"), (5, "preop"), (5, "reset_node")]
-        assert m.local_nmt_done == ["stop"]
-        assert (await c.ask("[9] info version")).startswith("[9] 3232 0 0.0 0 2 3.0 ")
-        await c.send("[10] help")
-        assert (await c.line()).startswith("[10] canola CiA 309-3 gateway")
+        assert await c.ask("[9] 1 reset comm") == "[9] OK"
+        # to its own node-ID: on the bus (as CANopenNode's gateway) and applied to itself
+        assert m.nmt_sent == [(5, "start"), (0, "reset_comm"), (1, "stop"), (5, "preop"),
+                              (5, "reset_node"), (1, "reset_comm")]
+        assert m.local_nmt_done == ["stop", "reset_comm"]
+        assert (await c.ask("[10] info version")).startswith("[10] 3232 0 0.0 0 2 3.0 ")
         await c.close()
         await server.close()
 
@@ -143,15 +144,18 @@ def test_malformed_lines_keep_the_connection() -> None:
         m = _master()
         server, address = await _start(m)
         c = await Client.connect(address)
-        assert await c.ask("hello") == "ERROR:101"
+        # a line without [seq]: the last sequence number of this client (0 before any), as
+        # CANopenNode's gateway answers it (cocomm takes a reply without one for a value)
+        assert await c.ask("hello") == "[0] ERROR:101"
         assert await c.ask("[1] 5 explode") == "[1] ERROR:100"
         assert await c.ask("[2] 5 r 0xZZ 0") == "[2] ERROR:101"
         assert await c.ask("[3] 5 w 0x2000 0 u8 300") == "[3] ERROR:101"
-        await c.send("")  # empty lines and comments get no reply
-        await c.send("# a comment")
+        assert await c.ask("") == ""  # empty lines and comments: an empty reply
+        assert await c.ask("  # a comment") == ""
         c.writer.write(b"\xff\xfe[4] \x00\x01\r\n")
-        assert await c.line() == "ERROR:101"
+        assert await c.line() == "[3] ERROR:101"
         assert await c.ask("[5] 5 r 0x1000 0 u32") == "[5] 401"
+        assert await c.ask("5 start") == "[5] ERROR:101"
         await c.close()
         await server.close()
 
@@ -176,17 +180,24 @@ def test_line_length_limit() -> None:
     run(main())
 
 
-def test_client_limit() -> None:
+def test_client_limit_when_every_client_is_busy() -> None:
+    """Every slot has a request running: one more client is refused, with a sequence
+    number (cocomm reads a reply without one as a value), and closed."""
     async def main() -> None:
         m = _master()
+        m.gates[5] = asyncio.Event()
         server, address = await _start(m, max_clients=2)
         a = await Client.connect(address)
         b = await Client.connect(address)
-        assert await a.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
-        assert await b.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
+        await a.send("[1] 5 r 0x1000 0 u32")
+        await b.send("[1] 5 r 0x1000 0 u32")
+        await eventually(lambda: 5 in m.started and server.clients == 2)
         c = await Client.connect(address)
-        assert await c.line() == "ERROR:102"
+        assert await c.line() == "[0] ERROR:102"
         assert await asyncio.wait_for(c.reader.read(), 5) == b""  # closed
+        m.gates[5].set()
+        assert await a.line() == "[1] 401"
+        assert await b.line() == "[1] 401"
         await a.close()
         await eventually(lambda: server.clients == 1)
         d = await Client.connect(address)
