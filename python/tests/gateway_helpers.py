@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import AsyncIterator, Awaitable, Callable
+import subprocess
+import sys
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import TypeVar
 
 from canola.errors import SdoAbort
@@ -175,3 +177,31 @@ async def serving(backend: MasterBackend | SimBackend) -> AsyncIterator[str]:
             await pump
         await server.close()
         hub.close()
+
+
+async def start_gateway(master: FakeMaster, **limits: float) -> tuple[GatewayServer, str]:
+    """The gateway (and its event hub) on ``master``, listening on a free TCP port of
+    127.0.0.1 (``limits``: GatewayServer's max_clients, max_line, idle_timeout)."""
+    hub = EventHub(master)
+    server = GatewayServer(Executor(master, hub), hub, **limits)  # type: ignore[arg-type]
+    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+    return server, GatewayServer.address(srv)
+
+
+@contextlib.contextmanager
+def gateway_process(*options: str) -> Iterator[tuple[subprocess.Popen[str], str]]:
+    """``python -m canola.gateway OPTIONS --listen tcp:127.0.0.1:0``: the process and its
+    address (killed after, if still running)."""
+    proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *options, "--listen",
+                             "tcp:127.0.0.1:0"], stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline()
+        assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
+        yield proc, line.split()[-1]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=20)
+        if proc.stderr is not None:
+            proc.stderr.close()

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import can
-from gateway_helpers import Client, run
+from gateway_helpers import Client, gateway_process, run
 
 from canola import Device
 from canola.cli import main as canola_main
@@ -35,14 +35,7 @@ def test_stdio_script() -> None:
 
 
 def test_tcp_process_and_sigterm() -> None:
-    proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *SIM, "--listen",
-                             "tcp:127.0.0.1:0"], stderr=subprocess.PIPE)
-    try:
-        assert proc.stderr is not None
-        line = proc.stderr.readline().decode()
-        assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
-        address = line.split()[-1]
-
+    with gateway_process(*SIM) as (proc, address):
         async def main() -> None:
             c = await Client.connect(address)
             assert await c.ask("[1] 3 r 0x1018 1 u32") == "[1] 3232"
@@ -51,12 +44,6 @@ def test_tcp_process_and_sigterm() -> None:
         run(main())
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(timeout=20) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=20)
-        if proc.stderr is not None:
-            proc.stderr.close()
 
 
 def test_canola_command_arguments() -> None:

@@ -6,18 +6,15 @@ from __future__ import annotations
 
 import asyncio
 
-from gateway_helpers import Client, FakeMaster, run
+from gateway_helpers import Client, FakeMaster, run, start_gateway
 
-from canola.gateway import Executor, GatewayServer, parse_listen
-from canola.gateway.events import EventHub
+from canola.gateway import GatewayServer
 from canola.gateway.helptext import TOPICS
 
 
 async def _start(master: FakeMaster) -> tuple[GatewayServer, Client]:
-    hub = EventHub(master)
-    server = GatewayServer(Executor(master, hub), hub)
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    return server, await Client.connect(GatewayServer.address(srv))
+    server, address = await start_gateway(master)
+    return server, await Client.connect(address)
 
 
 def _master() -> FakeMaster:

@@ -5,7 +5,6 @@ SYNC period of its own dictionary."""
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import itertools
 import logging
 import signal
@@ -15,15 +14,13 @@ import sys
 import textwrap
 import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from gateway_helpers import Client, FakeMaster, eventually, run
+from gateway_helpers import Client, FakeMaster, eventually, gateway_process, run, start_gateway
 from test_gateway_master import GW, _sim, serve
 
-from canola.gateway import Executor, GatewayServer, connection, parse_listen
-from canola.gateway.events import EventHub
+from canola.gateway import connection
 from canola.gateway.server import MAX_LINE
 
 PARSE_BOUND_S = 5.0  # per 4 MiB line; it takes well under a second (docs/security.md)
@@ -84,43 +81,16 @@ def test_every_line_parses_in_time_linear_in_its_length() -> None:
     assert not slow, slow
 
 
-async def _start(master: FakeMaster, **kwargs: float) -> tuple[GatewayServer, str]:
-    hub = EventHub(master)
-    server = GatewayServer(Executor(master, hub), hub, **kwargs)  # type: ignore[arg-type]
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    return server, GatewayServer.address(srv)
-
-
 def _master() -> FakeMaster:
     m = FakeMaster(node_id=1)
     m.objects[5, 0x1000, 0] = (0x191).to_bytes(4, "little")
     return m
 
 
-@contextlib.contextmanager
-def _gateway_process(channel: str, *options: str) -> Iterator[tuple[subprocess.Popen[str], str]]:
-    """``python -m canola.gateway`` alone on python-can's virtual bus ``channel``: the
-    process and its address (killed after, if still running)."""
-    proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", "--bus",
-                             f"virtual://{channel}", *options, "--listen", "tcp:127.0.0.1:0"],
-                            stderr=subprocess.PIPE, text=True)
-    try:
-        assert proc.stderr is not None
-        line = proc.stderr.readline()
-        assert "listening on tcp:" in line, line
-        yield proc, line.split()[-1]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=20)
-        if proc.stderr is not None:
-            proc.stderr.close()
-
-
 def test_a_hostile_line_holds_up_no_other_client(tmp_path: Path) -> None:
     """The r32 line that froze every client (a gateway process of its own: a frozen one
     is killed, not waited for)."""
-    with _gateway_process(f"gw-{tmp_path.name}") as (_, address):
+    with gateway_process("--bus", f"virtual://gw-{tmp_path.name}") as (_, address):
         async def main() -> None:
             hostile = await Client.connect(address)
             other = await Client.connect(address)
@@ -163,7 +133,7 @@ def test_long_lines_are_parsed_off_the_event_loop(monkeypatch: pytest.MonkeyPatc
     monkeypatch.setattr(connection, "_parse", held)
 
     async def main() -> None:
-        server, address = await _start(_master())
+        server, address = await start_gateway(_master())
         thread = threading.Thread(target=other, args=(int(address.rsplit(":", 1)[1]),))
         thread.start()
         slow = await Client.connect(address)
@@ -197,7 +167,7 @@ def test_idle_clients_are_dropped_and_logged(caplog: pytest.LogCaptureFixture) -
     async def main() -> None:
         m = _master()
         m.gates[5] = asyncio.Event()
-        server, address = await _start(m, idle_timeout=0.5)
+        server, address = await start_gateway(m, idle_timeout=0.5)
         silent = await Client.connect(address)
         trickle = await Client.connect(address)
         waiting = await Client.connect(address)
@@ -232,7 +202,7 @@ def test_a_new_client_takes_the_slot_of_the_idlest(caplog: pytest.LogCaptureFixt
     caplog.set_level(logging.INFO, logger="canola.gateway")
 
     async def main() -> None:
-        server, address = await _start(_master(), max_clients=2, idle_timeout=0)
+        server, address = await start_gateway(_master(), max_clients=2, idle_timeout=0)
         oldest = await Client.connect(address)
         assert await oldest.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
         newer = await Client.connect(address)
@@ -257,8 +227,8 @@ def test_sigterm_and_sigint_stop_it_whatever_the_clients_do(tmp_path: Path) -> N
     on python-can's virtual bus): the gateway ends within a generous bound (it takes a few
     tenths of a second)."""
     for sig in (signal.SIGTERM, signal.SIGINT):
-        with _gateway_process(f"gw-{tmp_path.name}-{sig.name}", "--sdo-timeout",
-                              "60000") as (proc, address):
+        with gateway_process("--bus", f"virtual://gw-{tmp_path.name}-{sig.name}",
+                             "--sdo-timeout", "60000") as (proc, address):
             async def signal_and_wait(address: str = address,
                                       sig: signal.Signals = sig) -> float:
                 held = [await Client.connect(address) for _ in range(4)]

@@ -7,19 +7,12 @@ import base64
 import os
 import tempfile
 
-from gateway_helpers import Client, FakeMaster, eventually, run
+from gateway_helpers import Client, FakeMaster, eventually, run, start_gateway
 
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import BootUp, Emcy, Heartbeat, HeartbeatLost
 from canola.gateway.events import EventHub
 from canola.gateway.server import LineSplitter, Listen
-
-
-async def _start(master: FakeMaster, **kwargs: int) -> tuple[GatewayServer, str]:
-    hub = EventHub(master)
-    server = GatewayServer(Executor(master, hub), hub, **kwargs)
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    return server, GatewayServer.address(srv)
 
 
 def _master() -> FakeMaster:
@@ -60,7 +53,7 @@ def test_line_splitter() -> None:
 def test_basic_replies_and_sequence_numbers() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         a = await Client.connect(address)
         b = await Client.connect(address)
         assert await a.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
@@ -100,7 +93,7 @@ def test_a_failing_master_costs_one_reply() -> None:
         async def broken(*args: object, **kwargs: object) -> bytes:
             raise RuntimeError("a bug")
 
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         m.sdo_upload = broken  # type: ignore[method-assign]
         assert await c.ask("[1] 5 r 0x1000 0") == "[1] ERROR:102"
@@ -114,7 +107,7 @@ def test_a_failing_master_costs_one_reply() -> None:
 def test_local_node_and_nmt() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         assert await c.ask("[1] 1 r 0x1018 1 u32") == "[1] 3232"
         assert await c.ask("[2] 1 w 0x1017 0 u16 100") == "[2] OK"
@@ -142,7 +135,7 @@ def test_local_node_and_nmt() -> None:
 def test_malformed_lines_keep_the_connection() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         # a line without [seq]: the last sequence number of this client (0 before any), as
         # CANopenNode's gateway answers it (cocomm takes a reply without one for a value)
@@ -165,7 +158,7 @@ def test_malformed_lines_keep_the_connection() -> None:
 def test_line_length_limit() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m, max_line=100)
+        server, address = await start_gateway(m, max_line=100)
         c = await Client.connect(address)
         assert await c.ask("[1] 5 w 0x2000 0 d " + "A" * 200) == "[1] ERROR:600"
         assert await c.ask("[2] 5 w 0x2000 0 d " + "QUJD") == "[2] OK"
@@ -186,7 +179,7 @@ def test_client_limit_when_every_client_is_busy() -> None:
     async def main() -> None:
         m = _master()
         m.gates[5] = asyncio.Event()
-        server, address = await _start(m, max_clients=2)
+        server, address = await start_gateway(m, max_clients=2)
         a = await Client.connect(address)
         b = await Client.connect(address)
         await a.send("[1] 5 r 0x1000 0 u32")
@@ -213,7 +206,7 @@ def test_slow_transfer_does_not_stall_other_clients() -> None:
     async def main() -> None:
         m = _master()
         m.gates[5] = asyncio.Event()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         a = await Client.connect(address)
         b = await Client.connect(address)
         await a.send("[1] set sdo_block 1")
@@ -235,7 +228,7 @@ def test_slow_transfer_does_not_stall_other_clients() -> None:
 def test_pipelined_requests_answer_in_order() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         c.writer.write(b"".join(f"[{i}] {5 + i % 2} r 0x1000 0 u32\r\n".encode()
                                 for i in range(50)))
@@ -251,7 +244,7 @@ def test_pipelined_requests_answer_in_order() -> None:
 def test_client_that_does_not_read_stalls_nobody() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         flood = await Client.connect(address)
         other = await Client.connect(address)
         assert await flood.ask("[0] set events 1") == "[0] OK"
@@ -275,7 +268,7 @@ def test_disconnect_mid_transfer_aborts() -> None:
     async def main() -> None:
         m = _master()
         m.gates[5] = asyncio.Event()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         a = await Client.connect(address)
         await a.send("[1] 5 w 0x2200 0 d " + "QUJD" * 1000)
         await eventually(lambda: 5 in m.started)
@@ -294,7 +287,7 @@ def test_disconnect_mid_transfer_aborts() -> None:
 def test_events_to_subscribed_clients() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         quiet = await Client.connect(address)
         boots = await Client.connect(address)
         every = await Client.connect(address)
@@ -330,7 +323,7 @@ def test_events_to_subscribed_clients() -> None:
 def test_one_mib_domain_block_mode() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         data = os.urandom(1024 * 1024)
         text = base64.b64encode(data).decode()
@@ -372,7 +365,7 @@ def test_pdo_configuration_and_data() -> None:
             sent.append(num)
 
         m.pdo_send = pdo_send  # type: ignore[attr-defined]
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         assert await c.ask("[1] set rpdo 1 0x205 event 2 0x2000 0 u8 0x2001 0 u16") == "[1] OK"
         assert m.objects[1, 0x1400, 1] == (0x205).to_bytes(4, "little")
