@@ -51,6 +51,8 @@ def test_canola_command_arguments() -> None:
     assert canola_main(["gateway", "--iface", "can0", "--bus", "virtual://x"]) == 2
     assert canola_main(["gateway", "--node-id", "200", *SIM]) == 2
     assert canola_main(["gateway", "--max-clients", "0", *SIM]) == 2
+    assert canola_main(["gateway", "--idle-timeout", "-1", *SIM]) == 2
+    assert canola_main(["gateway", "--idle-timeout", "soon", *SIM]) == 2
 
 
 def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:
