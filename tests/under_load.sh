@@ -32,7 +32,10 @@ logs=$root/build-load
 mkdir -p "$logs"
 hog_pids=()
 clones=()
+run_pid=
 stop_hogs() {
+    # a run still going (Ctrl-C): its whole session, which setsid gave it
+    [[ -n $run_pid ]] && kill -TERM -- -"$run_pid" 2>/dev/null && wait "$run_pid" 2>/dev/null
     ((${#hog_pids[@]})) && kill "${hog_pids[@]}" 2>/dev/null
     ((${#hog_pids[@]})) && wait "${hog_pids[@]}" 2>/dev/null
     hog_pids=()
@@ -60,7 +63,10 @@ for ((run = 1; run <= runs; run++)); do
     log=$logs/run-$run.log
     start=$SECONDS
     rc=0
-    (cd "$dir" && "${command[@]}") >"$log" 2>&1 || rc=$?
+    (cd "$dir" && exec setsid "${command[@]}") >"$log" 2>&1 </dev/null &
+    run_pid=$!
+    wait "$run_pid" || rc=$?
+    run_pid=
     took=$((SECONDS - start))
     load=$(cut -d' ' -f1-3 /proc/loadavg)
     if ((rc == 0)); then

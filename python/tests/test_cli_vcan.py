@@ -17,6 +17,8 @@ from pathlib import Path
 import pytest
 from cli_helpers import cli
 
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
+
 EDS = Path(__file__).parent / "data" / "cli_device.eds"
 PY = sys.executable
 

@@ -11,11 +11,14 @@ import sys
 from pathlib import Path
 
 import can
+import pytest
 from gateway_helpers import Client, run
 
 from canola import Device
 from canola.cli import main as canola_main
 from canola.gateway.cli import _serve
+
+pytestmark = pytest.mark.realtime
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 SIM = ["--simulate", str(SAMPLE), "--sim-node", "2", "--sim-node", "3"]

@@ -14,6 +14,8 @@ import pytest
 from canola.hub import HubThread
 from canola.socketcand import Frame, parse_server_element, split_elements
 
+pytestmark = pytest.mark.realtime
+
 
 @pytest.fixture
 def hub() -> Iterator[HubThread]:

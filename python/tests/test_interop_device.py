@@ -23,7 +23,7 @@ from conftest import SDO_TIMEOUT_MS, wait_until
 from canola import Device
 from canola.values import TimeOfDay
 
-pytestmark = pytest.mark.vcan
+pytestmark = [pytest.mark.realtime, pytest.mark.vcan]
 
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
 NODE = 5

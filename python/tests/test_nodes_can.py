@@ -13,6 +13,8 @@ from conftest import wait_until
 
 from canola import Device, Error, Master
 
+pytestmark = pytest.mark.realtime
+
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
 
 
