@@ -9,6 +9,9 @@
 BUILD      ?= build
 BUILD_SAN  ?= build-san
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+# Tests run side by side: most of the C tests' and Python tests' time is waiting.
+JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
+PY_WORKERS ?= 4
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
@@ -35,12 +38,12 @@ check:
 test-plain:
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	cmake --build $(BUILD)
-	cd $(BUILD) && ctest --output-on-failure
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-san:
 	cmake -S . -B $(BUILD_SAN) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCANOLA_SANITIZE=ON >/dev/null
 	cmake --build $(BUILD_SAN)
-	cd $(BUILD_SAN) && UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure
+	cd $(BUILD_SAN) && UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 
 # The core must build warning-free with every configuration in configs/ (and clang's view).
 test-configs:
@@ -81,11 +84,11 @@ demo:
 test-python: test-pytest test-python-lint
 
 test-pytest: py-env
-	cd python && ../$(PY_VENV)/bin/python -m pytest -q tests
+	cd python && ../$(PY_VENV)/bin/python -m pytest -q -n $(PY_WORKERS) tests
 
 # make check's share: the tests not marked slow.
 test-pytest-fast: py-env
-	cd python && ../$(PY_VENV)/bin/python -m pytest -q -m 'not slow' tests
+	cd python && ../$(PY_VENV)/bin/python -m pytest -q -n $(PY_WORKERS) -m 'not slow' tests
 
 test-python-lint: py-env
 	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src
