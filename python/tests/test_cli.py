@@ -28,6 +28,9 @@ from canola.hub import HubThread
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "cli_device.eds"
 SCAN_MS = "3000"  # how long a scan collects answers: late ones of a busy machine too
+#: ``python -m canola.cli`` with Python's own SIGINT handler (KeyboardInterrupt) in place.
+_WITH_CTRL_C = ("import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler);"
+                " runpy.run_module('canola.cli', run_name='__main__', alter_sys=True)")
 
 
 @pytest.fixture(scope="module")
@@ -280,6 +283,7 @@ def test_monitor_once(capsys: pytest.CaptureFixture[str],
 
 
 @pytest.mark.realtime
+@pytest.mark.slow
 def test_module_runs_as_a_program() -> None:
     proc = subprocess.run([sys.executable, "-m", "canola.cli", "nmt", "start", "0"],
                           capture_output=True, text=True, timeout=60, check=False,
@@ -294,7 +298,9 @@ def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
     url = f"socketcand://127.0.0.1:{hub.port}/tty"
     peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="tty")
     leader, follower = pty.openpty()
-    proc = subprocess.Popen([sys.executable, "-m", "canola.cli", "monitor", "--bus", url],
+    # Ctrl-C as on a terminal: SIGINT raises KeyboardInterrupt even where this process
+    # ignores it (a pytest-xdist worker does, and a child inherits that)
+    proc = subprocess.Popen([sys.executable, "-c", _WITH_CTRL_C, "monitor", "--bus", url],
                             stdout=follower, stderr=subprocess.PIPE, text=True)
     os.close(follower)
     screen = b""

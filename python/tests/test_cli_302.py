@@ -87,7 +87,9 @@ def test_boot_yaml(capsys: pytest.CaptureFixture[str], net: Net, plant: Path) ->
         "0x05040000 (SDO protocol timed out))",
         "network started",
     ]
-    assert two.od[0x2001, 0] == 0x2A and two.nmt_state == "OPERATIONAL"
+    assert two.od[0x2001, 0] == 0x2A  # written and confirmed by SDO
+    # the NMT start has no answer: the device's thread applies it when it gets there
+    assert wait_until(lambda: two.nmt_state == "OPERATIONAL")
 
 
 def test_boot_json_and_halted(capsys: pytest.CaptureFixture[str], net: Net, plant: Path

@@ -20,7 +20,7 @@ import canopen
 import pytest
 from cli_helpers import cli, one_line_error
 
-pytestmark = pytest.mark.realtime
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]  # processes: a hub, devices
 
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "cli_device.eds"
@@ -188,7 +188,6 @@ def test_sdo_errors(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Pro
 
 
 @pytest.mark.parametrize("block", [True, False])
-@pytest.mark.slow
 def test_sdo_upload_download_files(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                    net: tuple[str, list[Proc]], block: bool) -> None:
     url = net[0]
@@ -226,7 +225,6 @@ def test_sdo_file_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path,
     one_line_error(err)
 
 
-@pytest.mark.slow
 def test_nmt_scan_monitor(capsys: pytest.CaptureFixture[str],
                           net: tuple[str, list[Proc]]) -> None:
     url, devices = net
@@ -246,7 +244,6 @@ def test_nmt_scan_monitor(capsys: pytest.CaptureFixture[str],
     devices[1].wait_for("node 6: INITIALISING|node 6: BOOT")
 
 
-@pytest.mark.slow
 def test_dump_sees_an_sdo_read(capsys: pytest.CaptureFixture[str],
                                net: tuple[str, list[Proc]]) -> None:
     url = net[0]
@@ -340,7 +337,6 @@ def test_device_stops_on_sigint(net: tuple[str, list[Proc]],
     dev.wait_for("node 20 stopped")
 
 
-@pytest.mark.slow
 def test_commands_end_when_the_hub_goes_away(procs: Callable[..., Proc]) -> None:
     hub = procs("-v", "bus", "serve", "--port", "0")  # -v: the hub logs who joins
     port = hub.wait_for(r"127\.0\.0\.1:(\d+)").group(1)

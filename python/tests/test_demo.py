@@ -370,6 +370,7 @@ def test_demo_on_socketcan_or_virtual(capsys: pytest.CaptureFixture[str]) -> Non
 
 
 @pytest.mark.realtime
+@pytest.mark.slow
 def test_runs_as_a_program_on_an_ascii_terminal() -> None:
     done = subprocess.run([PY, "-m", "canola.cli", "demo", "--quiet"], capture_output=True,
                           text=True, timeout=60, check=False,

@@ -18,6 +18,7 @@ def _run(*args: str) -> str:
     return done.stdout
 
 
+@pytest.mark.slow
 def test_master_example() -> None:
     out = _run(str(EXAMPLES / "master_example.py"))
     assert "node 5: 'canola interop', vendor 0xCA0" in out

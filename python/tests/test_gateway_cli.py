@@ -24,6 +24,7 @@ SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 SIM = ["--simulate", str(SAMPLE), "--sim-node", "2", "--sim-node", "3"]
 
 
+@pytest.mark.slow
 def test_stdio_script() -> None:
     script = ("[1] 2 r 0x1008 0 vs\n# comment\n[2] set node 3\n[3] r 0x1000 0 u32\n"
               "[4] 2 w 0x200C 0 u32 0x10\n[5] 2 r 0x200C 0 x32\nnonsense\n[6] 9 9 9 r\n"
@@ -35,6 +36,7 @@ def test_stdio_script() -> None:
         "[6] ERROR:101", "[7] OK", "[8] 0"]
 
 
+@pytest.mark.slow
 def test_tcp_process_and_sigterm() -> None:
     proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *SIM, "--listen",
                              "tcp:127.0.0.1:0"], stderr=subprocess.PIPE)

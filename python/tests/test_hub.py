@@ -162,6 +162,7 @@ def test_slow_client_loses_frames_but_stalls_nobody(hub: HubThread) -> None:
         slow.close()
 
 
+@pytest.mark.slow
 def test_serve_command_in_a_subprocess() -> None:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
@@ -184,6 +185,7 @@ def test_serve_command_in_a_subprocess() -> None:
         assert proc.wait(10) == 0
 
 
+@pytest.mark.slow
 def test_port_in_use_is_one_line_error() -> None:
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))

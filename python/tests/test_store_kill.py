@@ -123,7 +123,7 @@ def test_sigkill_during_save_keeps_old_or_new(tmp_path: Path,
     with HubThread() as hub:
         url = f"socketcand://127.0.0.1:{hub.port}/store"
         bus = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="store")
-        master = Master(bus, 127, sdo_timeout_ms=2000)
+        master = Master(bus, 127, sdo_timeout_ms=10000)  # a starved device answers late
         master.start()
         try:
             app_gen = comm_gen = 0
