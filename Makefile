@@ -16,7 +16,9 @@ PY_WORKERS ?= 4
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
-        test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 test-clang analyse clean
+        test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
+        fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
+        test-clang analyse clean
 
 all: $(BUILD)/build.stamp
 
