@@ -17,9 +17,14 @@
  *
  * Downloads of values up to CO_SDO_BUF_SIZE bytes are collected in the channel's
  * buffer and handed to the object dictionary whole, when the transfer completes:
- * an aborted transfer changes nothing. Entries that take their value through a
- * write hook (co_od_hooks_t.write) get it in pieces as it arrives, so a DOMAIN of
- * any size streams through a buffer of a few hundred bytes. Uploads read the
+ * an aborted transfer changes nothing. A DOMAIN or string kept in RAM takes values
+ * up to its own size: what does not fit the buffer is received into the entry's
+ * storage, and the whole value is checked and stored at the end as usual (its
+ * check hook sees all of it; a DOMAIN's length changes only then), but an aborted
+ * or refused transfer of that size leaves the bytes received so far in storage.
+ * Entries that take their value through a write hook (co_od_hooks_t.write) get it
+ * in pieces as it arrives, so a DOMAIN of any size streams through a buffer of a
+ * few hundred bytes. Uploads read the
  * dictionary piece by piece (co_od_read with an offset), so read hooks stream too.
  *
  * Block transfer: CRC-16-CCITT (0x1021, initial 0) when both sides support it;
