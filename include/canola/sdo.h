@@ -39,7 +39,10 @@
  * and reset communication reloads it from its power-on values, as it does every
  * communication object; a channel without 0x1280 + i keeps its setup). Transfers are asynchronous:
  * start one, the node's ingest/poll drive it, and a completion callback reports the abort code
- * (CO_ABORT_NONE on success) and the bytes transferred. A channel whose server is
+ * (CO_ABORT_NONE on success) and the bytes transferred. While a transfer waits for the
+ * answer to its initiate request, a frame naming another object (index, sub-index) is
+ * not its answer: a server's late answer to an earlier request, or another client's
+ * answer, is ignored (only the time-out ends the wait). A channel whose server is
  * the node itself reads and writes the node's own dictionary, with no frames.
  *
  * Memory: each server channel holds a CO_SDO_BUF_SIZE + 6 byte buffer and 68 bytes of
