@@ -14,6 +14,7 @@ from pathlib import Path
 import can
 import pytest
 from cli_helpers import cli, one_line_error
+from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model, write_dcf
 
 from canola import Device
@@ -205,7 +206,7 @@ def test_flash_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str])
 
 
 #: LSS time-out of the CLI tests (ms): python-can threads under load answer late, and a
-#: fastscan costs 133 of them per device.
+#: fastscan costs 134 of them per device.
 LSS_MS = "50"
 
 
@@ -216,7 +217,8 @@ def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str], net: Net) -
     address = f"{VENDOR:08X}:{PRODUCT:08X}:{REVISION:08X}:00000011"
     code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS)
     assert (code, err) == (0, "")
-    assert out.splitlines() == [address, "1 device(s) without node-ID"]
+    assert out.splitlines()[0] == address
+    assert out.splitlines()[1].startswith("1 device(s) without node-ID (fastscan took ")
 
     code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--timeout", LSS_MS)
     assert code == 0
@@ -245,6 +247,29 @@ def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str], net: Net) -
     assert (code, json.loads(out)) == (0, [])
 
 
+def test_lss_scan_ends_against_slaves_that_answer_in_configuration(
+        capsys: pytest.CaptureFixture[str], net: Net) -> None:
+    opts, _ = net
+    channel = opts[1].removeprefix("virtual://")
+    bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        slave = ChattyLssSlave(bus, (0x2E0, 0x17, 3, 0x100), port_id=100)
+        code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS,
+                             "--max-devices", "3")
+        assert (code, err) == (0, "")
+        assert out.splitlines()[0] == "000002E0:00000017:00000003:00000100"
+        assert out.splitlines()[1].startswith("1 device(s) without node-ID")
+        # bounded: the limit reached is said, with what was found and the advice
+        code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS,
+                             "--time-limit", "1")
+        assert (code, out) == (1, "")
+        assert "not done within 1 s" in err and "--time-limit" in err and "--timeout" in err
+        one_line_error(err)
+        slave.stop()
+    finally:
+        bus.shutdown()
+
+
 def test_lss_failures(capsys: pytest.CaptureFixture[str], net: Net) -> None:
     opts, device = net
     device(7, serial=0x77)
@@ -262,6 +287,8 @@ def test_lss_failures(capsys: pytest.CaptureFixture[str], net: Net) -> None:
     ["lss"],
     ["lss", "scan"],
     ["lss", "scan", "--bus", "virtual://x", "--timeout", "0"],
+    ["lss", "scan", "--bus", "virtual://x", "--time-limit", "0"],
+    ["lss", "scan", "--bus", "virtual://x", "--max-devices", "128"],
     ["lss", "set-id", "1:2:3", "5", "--bus", "virtual://x"],
     ["lss", "set-id", "1:2:3:4:5", "5", "--bus", "virtual://x"],
     ["lss", "set-id", "1:2:3:g", "5", "--bus", "virtual://x"],

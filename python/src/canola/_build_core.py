@@ -427,8 +427,8 @@ CDEF += """
 typedef struct co_lss_address { uint32_t vendor; uint32_t product; uint32_t revision;
                                 uint32_t serial; } co_lss_address_t;
 typedef struct co_lss_result { uint8_t cs; uint8_t status; uint8_t error; uint8_t spec_error;
-                               uint32_t value; uint16_t answers; co_lss_address_t address;
-                               ...; } co_lss_result_t;
+                               uint32_t value; uint16_t answers; bool keeps_answering;
+                               co_lss_address_t address; ...; } co_lss_result_t;
 typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; ...; }
     co_lss_fastscan_t;
 typedef void (*co_lss_done_fn)(void *ctx, const co_lss_result_t *result);
