@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from managed import PRODUCT, VENDOR, model, write_dcf
 
-from canola import Device, Error, Master
+from canola import Device, Error, Master, SdoAbort
 from canola.core import SimBus
 from canola.manager import BootEvent, NetworkManager
 from canola.network import Identity, Network, NetworkError, SlaveSpec
@@ -206,3 +206,30 @@ def test_reset_slaves_first() -> None:
     frames = [line.split()[-1] for line in bus.trace]
     assert "000#8202" in frames and "000#8203" not in frames  # keep-alive spared
     assert devices[3].od[0x2001, 0] == 99
+
+
+def test_dcf_that_remaps_pdos_boots_a_device_that_enforces_the_procedure(
+        tmp_path: Path) -> None:
+    """A DCF made from an EDS re-maps TPDO1 and RPDO1; the device refuses a mapping
+    written while its PDO is valid, as CiA 301 has it: the concise DCF follows the
+    re-mapping procedure, and the PDOs work afterwards."""
+    from test_network import INTEROP, _remapping_dcf  # noqa: PLC0415
+
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    device = Device(INTEROP, 5, bus)
+    device.start()
+    bus.run_for(10_000)
+    with pytest.raises(SdoAbort):  # the device enforces the procedure
+        master.sdo(5).write(0x1A00, 0, "u8", 0)
+    mgr = master.boot([_remapping_dcf(tmp_path)])
+    assert mgr.started, [str(s) for s in mgr.slaves()]
+    assert device.od[0x1A00, 1] == 0x20070020 and device.od[0x1A00, 0] == 1
+    assert device.od[0x1600, 1] == 0x20010008 and device.od[0x1800, 1] == 0x185
+    seen: list[bytes] = []
+    master.on_frame(lambda f: seen.append(f.data), cob_id=0x185)
+    device.od[0x2007, 0] = 0x01020304
+    master.start_sync(10_000)
+    bus.run_for(50_000)
+    assert seen and seen[-1] == (0x01020304).to_bytes(4, "little")
