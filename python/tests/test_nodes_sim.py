@@ -16,6 +16,7 @@ from canola.values import TimeOfDay
 
 DATA = Path(__file__).parent / "data"
 INTEROP = DATA / "interop.eds"
+SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 
 
 @pytest.fixture
@@ -311,3 +312,27 @@ def test_deterministic() -> None:
         return bus.trace
 
     assert run() == run()
+
+
+def test_values_larger_than_the_sdo_buffer_into_ram_entries() -> None:
+    """A DOMAIN (and a string) in RAM takes SDO downloads up to its own size, by segmented
+    and by block transfer: the server's buffer (4 KiB here) frames the transfer only."""
+    bus = SimBus()
+    master = Master(bus, node_id=1)
+    device = Device(SAMPLE, 2, bus, domain_size=65536, string_size=10_000)
+    master.start()
+    device.start()
+    bus.run_for(10_000)
+    data = bytes(range(256)) * 20  # 5,120 bytes
+    master.sdo(2).download(0x2200, 0, data[:5000])
+    assert device.od.read(0x2200, 0) == data[:5000]
+    big = data * 12 + data[:4096]  # 65,536 bytes: the whole room
+    master.sdo(2).download(0x2200, 0, big, block=True)
+    assert device.od.read(0x2200, 0) == big
+    assert master.sdo(2).upload(0x2200, 0, block=True, max_size=70_000) == big
+    with pytest.raises(SdoAbort) as exc:
+        master.sdo(2).download(0x2200, 0, big + b"!")
+    assert exc.value.code == 0x06070012  # longer than the entry: its own abort code
+    text = "canola " * 1400  # 9,800 characters
+    master.sdo(2).write(0x2013, 0, "vs", text)
+    assert master.sdo(2).read(0x2013, 0, "vs", max_size=20_000) == text

@@ -45,7 +45,7 @@ _CONFIG = [
     ("CO_TPDO_MAX", "64"),
     ("CO_TX_QUEUE_LEN", "64"),
     ("CO_EMCY_QUEUE_LEN", "16"),
-    ("CO_SDO_BUF_SIZE", "4096"),  # values up to 4 KiB downloaded into RAM entries
+    ("CO_SDO_BUF_SIZE", "4096"),  # frames a transfer; RAM entries take up to their size
 ]
 
 CDEF = """
