@@ -122,6 +122,13 @@ def test_sdo_read(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]
         0, "canola cli test\n", "")
     assert cli(capsys, "sdo", "read", "5", "0x1008:0", "--bus", url)[1] == (
         "'canola cli test' (15 bytes)\n")
+    # four bytes of letters are still a number; UTF-8 text is shown as text
+    assert cli(capsys, "sdo", "write", "5", "0x2000:0", "u32", "0x44434241", "--bus", url)[0] == 0
+    assert cli(capsys, "sdo", "read", "5", "0x2000:0", "--bus", url)[1] == "0x44434241\n"
+    assert cli(capsys, "sdo", "write", "5", "0x2002:0", "vs", "2 € each", "--bus", url)[0] == 0
+    assert cli(capsys, "sdo", "read", "5", "0x2002:0", "--bus", url)[1] == (
+        "'2 € each' (10 bytes)\n")
+    assert cli(capsys, "sdo", "read", "5", "0x2002:0", "vs", "--bus", url)[1] == "2 € each\n"
     code, out, _ = cli(capsys, "sdo", "read", "5", "0x2001:0", "i16", "--bus", url, "--json")
     assert code == 0
     assert json.loads(out) == {"node": 5, "index": 0x2001, "sub": 0, "raw": "fbff",

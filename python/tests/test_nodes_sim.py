@@ -336,3 +336,11 @@ def test_values_larger_than_the_sdo_buffer_into_ram_entries() -> None:
     text = "canola " * 1400  # 9,800 characters
     master.sdo(2).write(0x2013, 0, "vs", text)
     assert master.sdo(2).read(0x2013, 0, "vs", max_size=20_000) == text
+
+
+def test_visible_string_in_utf8(net: tuple[SimBus, Master, Device]) -> None:
+    _, master, device = net
+    master.sdo(5).write(0x2009, 0, "vs", "2 € / µm")
+    assert device.od.read(0x2009, 0).rstrip(b"\0") == "2 € / µm".encode()
+    assert device.od[0x2009, 0] == "2 € / µm"
+    assert master.sdo(5).read(0x2009, 0, "vs") == "2 € / µm"
