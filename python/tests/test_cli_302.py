@@ -319,3 +319,44 @@ def test_boot_gives_up_at_the_timeout(capsys: pytest.CaptureFixture[str], net: N
     assert out.splitlines()[-1] == "network not started: the boot did not end within 0.3 s"
     code, out, _ = cli(capsys, "boot", str(dcf), *opts, "--timeout", "0.3", "--json")
     assert code == 1 and json.loads(out)["settled"] is False
+
+
+# ---- who announces itself on the bus
+
+
+def _own_frames(listener: can.BusABC, master_id: int = 127) -> list[str]:
+    """Error control frames (boot-up, heartbeat) of node ``master_id`` seen so far."""
+    seen = []
+    while (msg := listener.recv(0.05)) is not None:
+        if msg.arbitration_id == 0x700 + master_id:
+            seen.append(f"{msg.arbitration_id:03X}#{bytes(msg.data).hex().upper()}")
+    return seen
+
+
+def test_one_shot_commands_are_silent_unless_asked(capsys: pytest.CaptureFixture[str],
+                                                    net: Net, tmp_path: Path) -> None:
+    opts, device = net
+    device(5, serial=5)
+    listener = can.Bus(interface="virtual", channel=opts[1].removeprefix("virtual://"))
+    try:
+        _own_frames(listener)
+        for args in (["sdo", "read", "5", "0x1018:1"], ["sdo", "write", "5", "0x1017:0", "u16",
+                                                       "0"],
+                     ["scan", "--nodes", "1-8", "--timeout", "200"], ["nmt", "preop", "all"],
+                     ["lss", "scan", "--timeout", "10", "--max-devices", "1"],
+                     ["dump", "--duration", "0.2"]):
+            code, _, err = cli(capsys, *args, *opts)
+            assert (code, err) == (0, ""), args
+            assert _own_frames(listener) == [], args  # no boot-up 77F#00, no heartbeat
+        # asked to: the master takes part (its boot-up)
+        assert cli(capsys, "sdo", "read", "5", "0x1018:1", *opts, "--announce")[0] == 0
+        assert _own_frames(listener) == ["77F#00"]
+        code, _, _ = cli(capsys, "sdo", "read", "5", "0x1018:1", *opts, "--announce",
+                         "--master-id", "100")
+        assert code == 0 and _own_frames(listener, 100) == ["764#00"]
+        # the master of canola boot runs the network: it announces itself
+        dcf = write_dcf(tmp_path / "n5.dcf", 5, {}, serial=5)
+        assert cli(capsys, "boot", str(dcf), *opts)[0] == 0
+        assert _own_frames(listener)[:1] == ["77F#00"]
+    finally:
+        listener.shutdown()

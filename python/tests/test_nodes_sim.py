@@ -344,3 +344,26 @@ def test_visible_string_in_utf8(net: tuple[SimBus, Master, Device]) -> None:
     assert device.od.read(0x2009, 0).rstrip(b"\0") == "2 € / µm".encode()
     assert device.od[0x2009, 0] == "2 € / µm"
     assert master.sdo(5).read(0x2009, 0, "vs") == "2 € / µm"
+
+
+def test_master_announces_itself_unless_told_not_to() -> None:
+    bus = SimBus()
+    member = Master(bus, node_id=0x3F)
+    tool = Master(bus, node_id=0x7F, announce=False)
+    device = Device(INTEROP, 5, bus)
+    for node in (member, tool, device):
+        node.start()
+    for master in (member, tool):
+        master.od[0x1017, 0] = 50  # a heartbeat every 50 ms
+    bus.run_for(200_000)
+    tool.send(0x73F, rtr=True)  # node guarding of the tool's node: no answer either
+    member.send(0x77F, rtr=True)
+    bus.run_for(100_000)
+    frames = _frames(bus)
+    assert frames[0] == "73F#00" and frames.count("73F#7F") >= 3  # boot-up, heartbeats
+    assert [f for f in frames if f.startswith("77F#")] == ["77F#R"]  # the request only
+    assert tool.sdo(5).read(0x1018, 1, "u32") == 0xCA0  # it works all the same
+    tool.nmt(0, "reset-communication")  # its own reset (from the member) stays quiet too
+    member.nmt(0x7F, "reset-communication")
+    bus.run_for(10_000)
+    assert not any(f.startswith("77F#") and f != "77F#R" for f in _frames(bus))

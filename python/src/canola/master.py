@@ -329,19 +329,25 @@ class Master(NodeBase):
 
     ``eds``: another dictionary for the master (default :data:`MASTER_EDS`).
     ``sdo_timeout_ms``: how long an SDO transfer waits for each answer.
+    ``announce``: the master is a member of the network and says so, as every node does:
+    its boot-up (0x700 + node-ID) at start and after a reset, then its heartbeat at the
+    period of its 0x1017 (0, none, in :data:`MASTER_EDS`). A tool that only asks or
+    commands passes ``announce=False``: none of these frames (nor answers to node
+    guarding) go on the bus, so a CiA 302 manager sees no phantom node.
     Call :meth:`start` (or use ``with``).
     """
 
     _kind = "master"
 
     def __init__(self, bus: Bus, node_id: int = 127, *, sdo_timeout_ms: int = 1000,
-                 eds_file: str | os.PathLike[str] | eds.ObjectDictionary | None = None) -> None:
+                 eds_file: str | os.PathLike[str] | eds.ObjectDictionary | None = None,
+                 announce: bool = True) -> None:
         if not isinstance(node_id, int) or not 1 <= node_id <= 127:
             raise Error(f"node-ID {node_id!r} is outside 1..127")
         od = load_od(eds_file if eds_file is not None else MASTER_EDS, node_id,
                      GenerateOptions(min_string_size=64))
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms, store_dir=None,
-                         raw_frames=True)
+                         raw_frames=True, quiet=not announce)
         self._clients: dict[int, SdoClient] = {}
         self._channels: dict[int, int] = {}  # node -> client channel
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
