@@ -6,11 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from managed import PRODUCT, VENDOR, model, write_dcf
+from managed import DEVICE_TYPE, PRODUCT, VENDOR, model, write_dcf
 
 from canola import Device, Error, Master, SdoAbort
 from canola.core import SimBus
 from canola.manager import BootEvent, NetworkManager
+from canola.master import Frame
 from canola.network import Identity, Network, NetworkError, SlaveSpec
 
 PLANT = """
@@ -233,3 +234,37 @@ def test_dcf_that_remaps_pdos_boots_a_device_that_enforces_the_procedure(
     master.start_sync(10_000)
     bus.run_for(50_000)
     assert seen and seen[-1] == (0x01020304).to_bytes(4, "little")
+
+
+@pytest.mark.parametrize("start", ["each", "all"])
+@pytest.mark.parametrize("mandatory", [False, True])
+def test_late_slave_that_answers_late_too(mandatory: bool, start: str) -> None:
+    """A slave missing at boot (B) boots later; being slow, it also answers the request it
+    got before its boot-up while its identity is read. Booted all the same: an optional
+    one joins the running network, a mandatory one lets the network start."""
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    slow = Master(bus, node_id=100, announce=False)  # plays the slave's late answer
+    slow.start()
+    late_answers: list[int] = []
+
+    def answer_late(frame: Frame) -> None:
+        if frame.data[:4] == bytes.fromhex("43181001") and not late_answers:
+            late_answers.append(1)
+            slow.send(0x584, bytes.fromhex("43001000") + DEVICE_TYPE.to_bytes(4, "little"))
+
+    slow.on_frame(answer_late, cob_id=0x584)
+    net = Network((SlaveSpec(4, mandatory=mandatory,
+                             identity=Identity(vendor=VENDOR, product=PRODUCT)),), start=start)
+    mgr = master.boot(net)
+    assert mgr.status(4).reason == "B" and mgr.started is not mandatory
+    device = Device(model(serial=4), 4, bus)
+    device.start()
+    for _ in range(200):  # fine steps: the late answer follows the vendor-ID's at once
+        bus.run_for(100)
+    bus.run_for(2_000_000)
+    assert late_answers == [1]
+    kinds = [e.kind for e in mgr.events if e.node == 4 and e.kind != "network-halted"]
+    assert kinds == ["failed", "booted", "started"]
+    assert mgr.started and device.nmt_state == "OPERATIONAL"
