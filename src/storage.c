@@ -277,11 +277,9 @@ static bool apply_records(co_node_t *node, co_param_group_t group)
     return true;
 }
 
-/* A rejected image: the group's defaults again, an EMCY and on_error. */
+/* A rejected image (the group holds its defaults): an EMCY and on_error. */
 static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fault)
 {
-    uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id; /* as nmt.c */
-    co_od_reset(&node->cfg.od, k_first[group], k_last[group], id);
     const uint8_t mfr[5] = {(uint8_t)fault, 0, 0, 0, 0};
     (void)co_emcy_raise(node, (uint16_t)(CO_EMCY_STORE_REJECTED + group), mfr);
     if (node->cfg.on_error) {
@@ -291,10 +289,13 @@ static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fau
     }
 }
 
+/* Called right after the group's defaults were copied (reset application/communication). */
 void co_storage_load(co_node_t *node, co_param_group_t group)
 {
     co_store_fault_t fault = co_storage_verify(node, group);
     if (fault == CO_STORE_INTACT && !apply_records(node, group)) {
+        uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id; /* as nmt.c */
+        co_od_reset(&node->cfg.od, k_first[group], k_last[group], id); /* no half image */
         fault = CO_STORE_READ_ERROR;
     }
     if (fault != CO_STORE_INTACT && fault != CO_STORE_NONE) {
