@@ -16,6 +16,8 @@ from canola import hub as hub_module
 from canola.hub import Hub, HubThread, exposed_addresses
 from canola.socketcand import Frame, parse_server_element, split_elements
 
+pytestmark = pytest.mark.realtime
+
 
 @pytest.fixture
 def hub() -> Iterator[HubThread]:
@@ -162,6 +164,7 @@ def test_slow_client_loses_frames_but_stalls_nobody(hub: HubThread) -> None:
         slow.close()
 
 
+@pytest.mark.slow
 def test_serve_command_in_a_subprocess() -> None:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
@@ -184,6 +187,7 @@ def test_serve_command_in_a_subprocess() -> None:
         assert proc.wait(10) == 0
 
 
+@pytest.mark.slow
 def test_port_in_use_is_one_line_error() -> None:
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
