@@ -311,6 +311,7 @@ def test_serve_warns_for_every_non_loopback_address(capsys: pytest.CaptureFixtur
     assert served == ["0.0.0.0", "::", "192.0.2.7", "127.0.0.1"]
 
 
+@pytest.mark.slow
 def test_empty_host_is_refused_in_one_line() -> None:
     proc = subprocess.run([sys.executable, "-m", "canola.cli", "bus", "serve", "--host", "",
                            "--port", "0"], capture_output=True, text=True, timeout=30,

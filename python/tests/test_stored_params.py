@@ -114,6 +114,8 @@ def test_without_a_callback_a_warning_is_logged(tmp_path: Path,
         "defaults in use (EMCY 0xFF11)"]
 
 
+@pytest.mark.slow
+@pytest.mark.realtime
 def test_device_command_says_so(tmp_path: Path) -> None:
     _saved(tmp_path)
     _flip_777(tmp_path / "comm.params")
