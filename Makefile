@@ -241,7 +241,8 @@ analyse: lint cortex-m test-m32 test-clang
 # The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
 # candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
 # one canvm run (CANOLA_CANVM, else ../shared/tools/canvm/canvm), else reported NOT RUN.
-test-vcan:
+# It needs the Python environment (canola device, pytest -m vcan) complete before it starts.
+test-vcan: py-env
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	cmake --build $(BUILD) --target test_socketcan canola-node
 	tests/linux/run-vcan-tier $(BUILD)
