@@ -14,7 +14,9 @@
     canola flash NODE FILE                    program download (CiA 302-3)
     canola lss scan|set-id|inquire            layer setting services (CiA 305)
 
-Every bus command takes ``--iface IFACE`` or ``--bus URL``. A bad argument is one line on
+Every bus command takes ``--iface IFACE`` or ``--bus URL``; without them it uses the
+default bus: the URL in ``CANOLA_BUS``, else python-can's configuration (``CAN_INTERFACE``,
+``CAN_CHANNEL``, ``CAN_CONFIG``, ``~/.canrc``, ...). A bad argument is one line on
 stderr and exit code 2; a failure (no answer, SDO abort, bus missing) one line and exit
 code 1. Nothing waits without a time limit.
 """

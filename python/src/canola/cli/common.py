@@ -13,7 +13,7 @@ from typing import Any, Literal, NoReturn, overload
 
 import can
 
-from canola.buses import BusError, connection_lost, open_bus
+from canola.buses import BUS_ENV, BusError, NoBusError, connection_lost, open_bus
 from canola.candump import LogFrame
 from canola.master import Master
 
@@ -104,18 +104,24 @@ def positive_ms(text: str) -> int:
     return int_in_range(text, 1, 3_600_000, "time", "ms")
 
 
-def add_bus_options(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
-    """``--iface IFACE`` | ``--bus URL`` (one of them ``required``, else at most one)."""
-    group = parser.add_mutually_exclusive_group(required=required)
+def add_bus_options(parser: argparse.ArgumentParser) -> None:
+    """``--iface IFACE`` | ``--bus URL``; without either the default bus
+    (:func:`canola.buses.default_bus`: ``CANOLA_BUS``, else python-can's configuration)."""
+    group = parser.add_mutually_exclusive_group()
     group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
     group.add_argument("--bus", metavar="URL",
                        help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
-                            "virtual://CHANNEL")
+                            f"virtual://CHANNEL (default: ${BUS_ENV}, else python-can's "
+                            "configuration: CAN_INTERFACE, CAN_CHANNEL, ~/.canrc, ...)")
 
 
 def bus_from_args(args: argparse.Namespace) -> can.BusABC:
+    """The bus of ``--iface``/``--bus``, else the default bus. No bus at all is a usage
+    error (exit 2), one that does not open a failure (exit 1)."""
     try:
         return open_bus(iface=args.iface, url=args.bus)
+    except NoBusError as exc:
+        raise CliError(f"canola: {exc}", 2) from None
     except BusError as exc:
         raise CliError(str(exc)) from None
 

@@ -26,7 +26,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "heartbeat, PDO by COB-ID, SDO transfers with their values), live from a "
                     "bus or from a candump file (log or screen format; - is stdin).")
     p.add_argument("file", nargs="?", metavar="FILE", help="candump file instead of a bus")
-    add_bus_options(p, required=False)
+    add_bus_options(p)
     p.add_argument("--count", type=int, metavar="N", help="stop after N frames")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (live)")
     p.add_argument("--json", action="store_true", help="one JSON object per frame")
@@ -34,8 +34,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    live = args.iface is not None or args.bus is not None
-    if live == (args.file is not None):
+    live = args.file is None
+    if not live and (args.iface is not None or args.bus is not None):
         raise CliError("canola dump: error: give a FILE or --iface/--bus (not both)", 2)
     if args.count is not None and args.count < 1:
         raise CliError(f"canola dump: error: bad --count {args.count}", 2)
