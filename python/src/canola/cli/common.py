@@ -15,7 +15,9 @@ import can
 
 from canola.buses import BUS_ENV, BusError, NoBusError, connection_lost, open_bus
 from canola.candump import LogFrame
+from canola.errors import EdsError, Error
 from canola.master import Master
+from canola.nodedicts import NodeDictionaries
 
 __all__ = [
     "CliError",
@@ -23,8 +25,10 @@ __all__ = [
     "UsageError",
     "add_announce_option",
     "add_bus_options",
+    "add_dictionary_options",
     "add_master_options",
     "bus_from_args",
+    "dictionaries_from_args",
     "emit_json",
     "live_frames",
     "master_from_args",
@@ -124,6 +128,28 @@ def bus_from_args(args: argparse.Namespace) -> can.BusABC:
         raise CliError(f"canola: {exc}", 2) from None
     except BusError as exc:
         raise CliError(str(exc)) from None
+
+
+def add_dictionary_options(parser: argparse.ArgumentParser) -> None:
+    """``--eds FILE`` / ``--dcf FILE`` (every node) and ``--eds N=FILE`` (node N),
+    repeatable: entries by name, types and PDO mappings from the files."""
+    for flag in ("--eds", "--dcf"):
+        parser.add_argument(flag, dest="dictionaries", action="append", default=[],
+                            metavar="[N=]FILE",
+                            help=f"{flag[2:].upper()} of every node, or of node N (N=FILE; "
+                                 "repeatable): entries by name, types, PDO mappings")
+
+
+def dictionaries_from_args(args: argparse.Namespace) -> NodeDictionaries:
+    """The files of ``--eds``/``--dcf``, each read once now (a bad one fails here)."""
+    try:
+        dicts = NodeDictionaries(args.dictionaries)
+        dicts.check()
+    except EdsError as exc:
+        raise CliError(str(exc)) from None
+    except Error as exc:
+        raise CliError(f"canola: error: {exc}", 2) from None
+    return dicts
 
 
 def add_master_options(p: argparse.ArgumentParser, *, announce: bool = True) -> None:
