@@ -6,6 +6,7 @@ python-can virtual bus, the commands run in this process."""
 from __future__ import annotations
 
 import contextlib
+import datetime
 import itertools
 import json
 import threading
@@ -20,6 +21,7 @@ from cli_helpers import cli, one_line_error
 from conftest import wait_until
 
 import canola
+from canola.decode import Decoder
 
 pytestmark = pytest.mark.realtime  # python-can threads
 
@@ -187,3 +189,121 @@ def test_dump_and_monitor_live_decode_the_device_pdos(capsys: pytest.CaptureFixt
             assert "TPDO1: Statusword = " in out
     finally:
         net.device.nmt_apply("preop")
+
+
+def _pdo(capsys: pytest.CaptureFixture[str], net: Net, *args: str) -> tuple[int, str, str]:
+    return cli(capsys, "pdo", *args, "--bus", net.bus_url, "--sdo-timeout", SDO_MS)
+
+
+@pytest.mark.parametrize("node", [5, 6])  # canola's device, python-canopen's LocalNode
+def test_pdo_show_and_map(capsys: pytest.CaptureFixture[str], net: Net, node: int) -> None:
+    code, out, _ = _pdo(capsys, net, "show", str(node), "--eds", DRIVE)
+    assert code == 0
+    assert out.splitlines()[:2] == [
+        f"RPDO1  COB-ID 0x{0x200 + node:03X} valid, transmission type 255 "
+        "(event-driven (profile))",
+        "  1  0x6040:00 16 bits  Controlword"]
+    assert (f"TPDO1  COB-ID 0x{0x180 + node:03X} valid, transmission type 255 "
+            "(event-driven (profile)), inhibit 0 us, event timer 0 ms") in out
+    code, out, err = _pdo(capsys, net, "map", str(node), "TPDO1", "Statusword",
+                          "Position actual value", "--type", "254", "--event-timer", "100",
+                          "--eds", DRIVE)
+    assert (code, err) == (0, ""), err
+    assert out.splitlines() == [
+        f"TPDO1  COB-ID 0x{0x180 + node:03X} valid, transmission type 254 "
+        "(event-driven (manufacturer)), inhibit 0 us, event timer 100 ms",
+        "  1  0x6041:00 16 bits  Statusword",
+        "  2  0x6064:00 32 bits  Position actual value"]
+    # read back by show, as JSON, without an EDS: addresses for names
+    code, out, _ = _pdo(capsys, net, "show", str(node), "TPDO1", "--json")
+    pdo = json.loads(out)["pdos"][0]
+    assert [(e["index"], e["sub"], e["bits"], e["name"]) for e in pdo["entries"]] == [
+        (0x6041, 0, 16, "0x6041:00"), (0x6064, 0, 32, "0x6064:00")]
+    assert (pdo["transmission_type"], pdo["event_timer_ms"], pdo["valid"]) == (254, 100, True)
+    # back as the EDS has it, by addresses
+    assert _pdo(capsys, net, "map", str(node), "TPDO1", "0x6041:0:16", "--type", "255",
+                "--event-timer", "0")[0] == 0
+
+
+@pytest.mark.parametrize(("args", "code", "message"), [
+    (["map", "5", "TPDO9", "Statusword", "--eds", DRIVE], 1, "node 5 TPDO9: SDO abort"),
+    (["map", "5", "XPDO1", "Statusword", "--eds", DRIVE], 2, "bad PDO 'XPDO1'"),
+    (["map", "5", "TPDO1", "Statusword"], 2, "names need --eds FILE"),
+    (["map", "5", "TPDO1", "Producer heartbeat time", "--eds", DRIVE], 2,
+     "may not be mapped into a PDO"),
+    (["map", "5", "TPDO1", "0x6041:0"], 2, "give its size in bits"),
+    (["map", "5", "TPDO1", "--type", "256"], 2, "bad transmission type"),
+    (["map", "5", "TPDO1", *["0x6064:0:32"] * 3], 2, "a PDO holds 64"),
+    (["show", "5", "TPDO7"], 1, "node 5 has none of the PDOs asked for"),
+])
+def test_pdo_errors(capsys: pytest.CaptureFixture[str], net: Net, args: list[str],
+                    code: int, message: str) -> None:
+    got, out, err = _pdo(capsys, net, *args)
+    assert (got, out) == (code, ""), err
+    one_line_error(err)
+    assert message in err
+
+
+def test_pdo_map_changes_what_the_device_sends(capsys: pytest.CaptureFixture[str],
+                                               net: Net) -> None:
+    assert _pdo(capsys, net, "map", "5", "TPDO1", "Statusword", "Position actual value",
+                "--type", "255", "--event-timer", "100", "--eds", DRIVE)[0] == 0
+    net.device.od[0x6064][0] = -1000
+    net.device.od[0x6041][0] = 0x250
+    net.device.nmt_apply("start")
+    try:
+        # the EDS's mapping is not the device's any more: said so
+        code, out, _ = cli(capsys, "dump", "--bus", net.bus_url, "--duration", "3",
+                           "--eds", DRIVE, "--id", "0x185", "--count", "1")
+        assert code == 0
+        assert out.split(None, 2)[2] == (
+            "TPDO1 node 5 Statusword = 592 (0x250) (6 bytes, the mapping has 16 bits)\n")
+        # the device's own mapping, read by SDO first
+        code, out, _ = cli(capsys, "dump", "--bus", net.bus_url, "--duration", "3",
+                           "--eds", DRIVE, "--id", "0x185", "--count", "1",
+                           "--read-pdos", "5", "--sdo-timeout", SDO_MS)
+        assert code == 0
+        assert out.split(None, 2)[2] == (
+            "TPDO1 node 5 Statusword = 592 (0x250), Position actual value = -1000\n"), out
+        code, out, _ = cli(capsys, "monitor", "--bus", net.bus_url, "--duration", "2",
+                           "--read-pdos", "5", "--sdo-timeout", SDO_MS, "--json")
+        node5 = {n["node"]: n for n in json.loads(out)["nodes"]}[5]
+        assert node5["pdo_values"] == {"0x6041:00": 0x250, "0x6064:00": 0xFFFFFC18}
+    finally:
+        net.device.nmt_apply("preop")
+        _pdo(capsys, net, "map", "5", "TPDO1", "Statusword", "--event-timer", "0",
+             "--eds", DRIVE)
+
+
+def test_sync_and_time(capsys: pytest.CaptureFixture[str], net: Net) -> None:
+    while net.peer.recv(0) is not None:
+        pass
+    assert cli(capsys, "sync", "5", "--counter", "3", "--count", "4", "--bus",
+               net.bus_url) == (0, "", "")
+    assert cli(capsys, "time", "--bus", net.bus_url, "--json") == (
+        0, '{"frames": 1, "service": "time"}\n', "")
+    frames = []
+    while (msg := net.peer.recv(5)) is not None and len(frames) < 5:
+        if msg.arbitration_id in (0x080, 0x100):
+            frames.append((msg.arbitration_id, bytes(msg.data)))
+    assert frames[:4] == [(0x080, b"\x01"), (0x080, b"\x02"), (0x080, b"\x03"),
+                          (0x080, b"\x01")]
+    assert frames[4][0] == 0x100
+    today = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d")
+    event = Decoder().decode(0x100, frames[4][1])
+    assert event.text.startswith("TIME ") and event.text[5:15] in (today, _yesterday())
+
+
+def _yesterday() -> str:  # the test may run across midnight
+    day = datetime.datetime.now(datetime.UTC) - datetime.timedelta(days=1)
+    return day.strftime("%Y-%m-%d")
+
+
+@pytest.mark.parametrize("command", ["dump", "monitor"])
+def test_read_pdos_of_a_silent_node(capsys: pytest.CaptureFixture[str], net: Net,
+                                    command: str) -> None:
+    code, out, err = cli(capsys, command, "--bus", net.bus_url, "--read-pdos", "9",
+                         "--sdo-timeout", "300", "--duration", "1")
+    assert (code, out) == (1, "")
+    one_line_error(err)
+    assert "no response from node 9 (SDO time-out 300 ms)" in err

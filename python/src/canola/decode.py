@@ -19,7 +19,7 @@ from canola.errors import ABORT_TEXT
 from canola.nodedicts import NodeDictionaries
 from canola.odnames import entry_name, value_text
 from canola.pdomap import Pdo, pdos_from_od
-from canola.values import TimeOfDay, Value
+from canola.values import TIME_EPOCH, TimeOfDay, Value
 from canola.values import untyped_text as format_value
 
 __all__ = ["STATE_NAMES", "Decoder", "Event", "emcy_text", "format_value"]
@@ -44,7 +44,6 @@ _EMCY_GROUPS = {0x1: "generic", 0x2: "current", 0x3: "voltage", 0x4: "temperatur
                 0x5: "device hardware", 0x6: "device software", 0x7: "additional modules",
                 0x8: "monitoring", 0x9: "external error", 0xF: "additional functions"}
 
-_TIME_EPOCH = datetime.datetime(1984, 1, 1, tzinfo=datetime.UTC)
 
 
 def emcy_text(code: int) -> str:
@@ -214,7 +213,7 @@ class Decoder:
             return Event("time", None, f"TIME bad length {len(data)}")
         ms = int.from_bytes(data[0:4], "little") & 0x0FFFFFFF
         days = int.from_bytes(data[4:6], "little")
-        when = _TIME_EPOCH + datetime.timedelta(days=days, milliseconds=ms)
+        when = TIME_EPOCH + datetime.timedelta(days=days, milliseconds=ms)
         stamp = when.strftime("%Y-%m-%d %H:%M:%S.") + f"{when.microsecond // 1000:03d}"
         return Event("time", None, f"TIME {stamp}", {"days": days, "ms": ms})
 
@@ -235,6 +234,9 @@ class Decoder:
                          {"pdo": pdo.name})
         decoded = pdomap.decode(pdo, data)
         shown = ", ".join(f"{m.name} = {_shown(v)}" for m, v in decoded)
+        bits = sum(m.bits for m in pdo.entries)
+        if bits != 8 * len(data):  # the mapping known is not the one the sender uses
+            shown += f" ({len(data)} bytes, the mapping has {bits} bits)"
         return Event("pdo", node, f"{pdo.name} node {node} {shown or data.hex(' ').upper()}",
                      {"pdo": pdo.name, "data": data.hex(),
                       "values": {m.name: _json_value(v) for m, v in decoded}})

@@ -24,8 +24,12 @@ from canola.eds import ObjectDictionary, Variable
 from canola.errors import Error, SdoAbort
 from canola.odnames import entry_name, find_entry, parse_address
 
-__all__ = ["Mapped", "Pdo", "PdoError", "configure_pdo", "decode", "mapped_entry",
-           "parse_pdo_name", "pdos_from_od", "read_pdo"]
+__all__ = ["Mapped", "Pdo", "PdoError", "configure_pdo", "decode", "describe",
+           "mapped_entry", "parse_pdo_name", "pdos_from_od", "read_pdo", "read_pdos"]
+
+#: What the PDOs of a device without an EDS are probed for (the pre-defined set).
+DEFAULT_PDOS = ("RPDO1", "RPDO2", "RPDO3", "RPDO4", "TPDO1", "TPDO2", "TPDO3", "TPDO4")
+_MISSING = (0x06020000, 0x06090011)  # object / sub-index does not exist
 
 _COMM_BASE = {"RPDO": 0x1400, "TPDO": 0x1800}
 _MAP_OFFSET = 0x200
@@ -212,12 +216,58 @@ def read_pdo(sdo: SdoAccess, name: str, od: ObjectDictionary | None = None, *,
         try:
             setattr(pdo, attr, _u(sdo, pdo.comm_index, sub, timeout))
         except SdoAbort as exc:
-            if exc.code not in (0x06090011, 0x06020000, 0x06010001):
+            if exc.code not in (*_MISSING, 0x06010001):
                 raise
     count = _u(sdo, pdo.map_index, 0, timeout)
     pdo.entries = [_mapped(od, _u(sdo, pdo.map_index, i, timeout))
                    for i in range(1, min(count, 64) + 1)]
     return pdo
+
+
+def read_pdos(sdo: SdoAccess, od: ObjectDictionary | None = None,
+              names: list[str] | None = None, *, timeout: float | None = None) -> list[Pdo]:
+    """The PDOs ``names`` (default: those ``od`` defines, else the pre-defined set's
+    RPDO1..4 and TPDO1..4) as the device has them; those it lacks are left out."""
+    if names is None:
+        names = ([p.name for p in pdos_from_od(od)] if od is not None else list(DEFAULT_PDOS))
+    found = []
+    for name in names:
+        try:
+            found.append(read_pdo(sdo, name, od, timeout=timeout))
+        except SdoAbort as exc:
+            if exc.code not in _MISSING:
+                raise
+    return found
+
+
+_TRANSMISSION = {0: "synchronous, acyclic", 252: "synchronous, on RTR only",
+                 253: "on RTR only", 254: "event-driven (manufacturer)",
+                 255: "event-driven (profile)"}
+
+
+def transmission_text(kind: int | None) -> str:
+    if kind is None:
+        return "?"
+    if 1 <= kind <= 240:
+        return f"{kind} (every {kind}. SYNC)" if kind > 1 else "1 (every SYNC)"
+    return f"{kind} ({_TRANSMISSION.get(kind, 'reserved')})"
+
+
+def describe(pdo: Pdo) -> list[str]:
+    """``pdo`` as the lines ``canola pdo show`` prints."""
+    state = "valid" if pdo.valid else "not valid"
+    parts = [f"{pdo.name}  COB-ID 0x{pdo.cob_id:03X} {state}",
+             f"transmission type {transmission_text(pdo.transmission_type)}"]
+    if pdo.inhibit_100us is not None:
+        parts.append(f"inhibit {pdo.inhibit_100us * 100} us")
+    if pdo.event_timer_ms is not None:
+        parts.append(f"event timer {pdo.event_timer_ms} ms")
+    lines = [", ".join(parts)]
+    lines.extend(f"  {i}  0x{m.index:04X}:{m.sub:02X} {m.bits:>2} bits  {m.name}"
+                 for i, m in enumerate(pdo.entries, 1))
+    if not pdo.entries:
+        lines.append("  (nothing mapped)")
+    return lines
 
 
 def configure_pdo(sdo: SdoAccess, name: str, entries: list[Mapped], *,

@@ -21,6 +21,7 @@ Every bad value or name raises :class:`ValueFormatError` (a :class:`canola.Error
 
 from __future__ import annotations
 
+import datetime
 import math
 import struct
 from typing import NamedTuple
@@ -30,6 +31,7 @@ from canola.errors import Error
 
 __all__ = [
     "CIA309_NAMES",
+    "TIME_EPOCH",
     "TimeOfDay",
     "Value",
     "ValueFormatError",
@@ -57,6 +59,9 @@ class TimeOfDay(NamedTuple):
 
 
 Value = bool | int | float | str | bytes | TimeOfDay
+
+#: Day 0 of TIME_OF_DAY (CiA 301).
+TIME_EPOCH = datetime.datetime(1984, 1, 1, tzinfo=datetime.UTC)
 
 #: CiA 309-3 data type names -> CiA 301 type code.
 CIA309_NAMES: dict[str, int] = {

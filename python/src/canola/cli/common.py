@@ -15,9 +15,11 @@ import can
 
 from canola.buses import BUS_ENV, BusError, NoBusError, connection_lost, open_bus
 from canola.candump import LogFrame
-from canola.errors import EdsError, Error
-from canola.master import Master
+from canola.decode import Decoder
+from canola.errors import EdsError, Error, SdoAbort
+from canola.master import Master, SdoTimeout
 from canola.nodedicts import NodeDictionaries
+from canola.pdomap import Pdo, read_pdos
 
 __all__ = [
     "CliError",
@@ -27,7 +29,9 @@ __all__ = [
     "add_bus_options",
     "add_dictionary_options",
     "add_master_options",
+    "add_pdo_reading_options",
     "bus_from_args",
+    "decoder_from_args",
     "dictionaries_from_args",
     "emit_json",
     "live_frames",
@@ -150,6 +154,34 @@ def dictionaries_from_args(args: argparse.Namespace) -> NodeDictionaries:
     except Error as exc:
         raise CliError(f"canola: error: {exc}", 2) from None
     return dicts
+
+
+def add_pdo_reading_options(parser: argparse.ArgumentParser) -> None:
+    """``--read-pdos NODE``: PDO mappings read from the device (and the options of the
+    master that reads them)."""
+    parser.add_argument("--read-pdos", type=node_id, action="append", default=[],
+                        metavar="NODE",
+                        help="read node NODE's PDO mappings by SDO first and decode its "
+                             "PDOs by them (repeatable)")
+    add_master_options(parser, announce=False)
+
+
+def decoder_from_args(args: argparse.Namespace) -> Decoder:
+    """A decoder with the dictionaries of ``--eds``/``--dcf`` and the PDOs of
+    ``--read-pdos`` (read now, before the command listens)."""
+    dicts = dictionaries_from_args(args)
+    pdos: dict[int, list[Pdo]] = {}
+    if args.read_pdos:
+        with master_from_args(args) as master:
+            for node in args.read_pdos:
+                try:
+                    pdos[node] = read_pdos(master.sdo(node), dicts.get(node))
+                except SdoTimeout:
+                    raise CliError(f"no response from node {node} (SDO time-out "
+                                   f"{args.sdo_timeout} ms)") from None
+                except SdoAbort as exc:
+                    raise CliError(f"node {node}: reading its PDOs: {exc}") from None
+    return Decoder(dicts, pdos)
 
 
 def add_master_options(p: argparse.ArgumentParser, *, announce: bool = True) -> None:

@@ -15,14 +15,15 @@ from canola.cli.common import (
     Parser,
     add_bus_options,
     add_dictionary_options,
+    add_pdo_reading_options,
     bus_from_args,
-    dictionaries_from_args,
+    decoder_from_args,
     emit_json,
     int_in_range,
     live_frames,
     node_id,
 )
-from canola.decode import Decoder, Event
+from canola.decode import Event
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
@@ -34,6 +35,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p.add_argument("file", nargs="?", metavar="FILE", help="candump file instead of a bus")
     add_bus_options(p)
     add_dictionary_options(p)
+    add_pdo_reading_options(p)
     p.add_argument("--node", type=node_id, action="append", metavar="N",
                    help="only frames of node N (repeatable)")
     p.add_argument("--service", type=_services, action="append", metavar="NAME[,NAME]",
@@ -84,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("canola dump: error: give a FILE or --iface/--bus (not both)", 2)
     if args.count is not None and args.count < 1:
         raise CliError(f"canola dump: error: bad --count {args.count}", 2)
-    decoder = Decoder(dictionaries_from_args(args))
+    decoder = decoder_from_args(args)
     frames = _live(args) if live else _file(args.file)
     seen = 0
     try:

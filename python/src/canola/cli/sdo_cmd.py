@@ -142,14 +142,22 @@ class _Target:
 
 
 @contextlib.contextmanager
-def _sdo_errors(args: argparse.Namespace, target: _Target) -> Iterator[None]:
+def sdo_errors(node: int, timeout_ms: int, where: str | None = None) -> Iterator[None]:
+    """An SDO time-out or abort of a transfer with ``node`` as a one-line CliError; an
+    abort says ``where`` (default: the node)."""
     try:
         yield
     except SdoTimeout:
-        raise CliError(f"no response from node {args.node} (SDO time-out {args.timeout} ms)"
+        raise CliError(f"no response from node {node} (SDO time-out {timeout_ms} ms)"
                        ) from None
     except SdoAbort as exc:
-        raise CliError(f"{target.where}: SDO abort 0x{exc.code:08X}: {exc.text}") from None
+        at = where or f"node {node}"
+        raise CliError(f"{at}: SDO abort 0x{exc.code:08X}: {exc.text}") from None
+
+
+def _sdo_errors(args: argparse.Namespace,
+                target: _Target) -> contextlib.AbstractContextManager[None]:
+    return sdo_errors(args.node, args.timeout, target.where)
 
 
 def run_read(args: argparse.Namespace) -> int:
