@@ -189,6 +189,51 @@ def test_dump_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
                                "state_name": "OPERATIONAL"}
 
 
+_MIXED = ("(1.0) can0 000#0105\n(1.1) can0 080#\n(1.2) can0 100#000000000000\n"
+          "(1.3) can0 085#1081100000000000\n(1.4) can0 185#3702\n(1.5) can0 1A0#01\n"
+          "(1.6) can0 205#0F00\n(1.7) can0 605#4000100000000000\n"
+          "(1.8) can0 585#4300100092010200\n(1.9) can0 705#05\n(2.0) can0 706#00\n"
+          "(2.1) can0 7E5#5E00000000000000\n(2.2) can0 7E4#4400000000000000\n")
+
+
+@pytest.mark.parametrize(("filters", "ids"), [
+    ([], [0x000, 0x080, 0x100, 0x085, 0x185, 0x1A0, 0x205, 0x605, 0x585, 0x705, 0x706,
+          0x7E5, 0x7E4]),
+    (["--node", "5"], [0x000, 0x085, 0x185, 0x205, 0x605, 0x585, 0x705]),
+    (["--node", "5", "--node", "6"], [0x000, 0x085, 0x185, 0x205, 0x605, 0x585, 0x705,
+                                      0x706]),
+    (["--service", "nmt"], [0x000]),
+    (["--service", "hb"], [0x705, 0x706]),
+    (["--service", "sdo"], [0x605, 0x585]),
+    (["--service", "pdo"], [0x185, 0x1A0, 0x205]),
+    (["--service", "emcy"], [0x085]),
+    (["--service", "sync,time"], [0x080, 0x100]),
+    (["--service", "lss"], [0x7E5, 0x7E4]),
+    (["--service", "sync", "--service", "lss"], [0x080, 0x7E5, 0x7E4]),
+    (["--id", "0x181-0x1FF"], [0x185, 0x1A0]),
+    (["--id", "0x080", "--id", "0x700-0x7FF"], [0x080, 0x705, 0x706, 0x7E5, 0x7E4]),
+    (["--node", "5", "--service", "pdo", "--id", "0x180-0x1FF"], [0x185]),
+    (["--service", "pdo", "--count", "2"], [0x185, 0x1A0]),
+])
+def test_dump_filters(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                      filters: list[str], ids: list[int]) -> None:
+    log = tmp_path / "mixed.log"
+    log.write_text(_MIXED)
+    code, out, err = cli(capsys, "dump", str(log), "--json", *filters)
+    assert (code, err) == (0, "")
+    assert [json.loads(line)["id"] for line in out.splitlines()] == ids
+
+
+@pytest.mark.parametrize("args", [["--node", "0"], ["--node", "x"], ["--service", "pdox"],
+                                  ["--service", "nmt,"], ["--id", "0x1FF-0x181"],
+                                  ["--id", "zz"], ["--id", "0x20000000"]])
+def test_dump_filter_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                            args: list[str]) -> None:
+    code, out, err = cli(capsys, "dump", str(tmp_path / "never-read.log"), *args)
+    assert (code, out) == (2, "")
+    one_line_error(err)
+
+
 def test_dump_file_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     code, _, err = cli(capsys, "dump", str(tmp_path / "missing.log"))
     assert code == 1
