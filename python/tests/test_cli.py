@@ -23,6 +23,7 @@ import pytest
 from cli_helpers import cli, one_line_error
 
 from canola.cli import build_parser
+from canola.decode import Decoder
 from canola.hub import HubThread
 
 DATA = Path(__file__).parent / "data"
@@ -180,7 +181,8 @@ def test_dump_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     lines = out.splitlines()
     assert lines[0] == "(1.000000) 705#05               node 5 heartbeat OPERATIONAL"
     assert lines[2].endswith("SDO upload 0x1018:01 = 0x00000004 (node 5)")
-    assert lines[3].endswith("EMCY node 3 0x4210 temperature register 0x08")
+    assert lines[3].endswith("EMCY node 3 0x4210 device temperature, error register 0x08 "
+                             "(temperature)")
     assert lines[4].endswith(" SYNC")
     code, out, _ = cli(capsys, "dump", str(log), "--json", "--count", "1")
     assert json.loads(out) == {"t": 1.0, "id": 0x705, "data": "05", "rtr": False,
@@ -282,7 +284,8 @@ def test_monitor_live(capsys: pytest.CaptureFixture[str],
     assert (five["node"], five["state"], ten["node"], ten["state"]) == (5, "OPERATIONAL", 10,
                                                                         "STOPPED")
     assert five["pdo_total"]["TPDO1"] >= 2 and five["pdo_rate"]["TPDO1"] > 0
-    assert five["last_emcy"] == "0x8130 life guard / heartbeat error register 0x11"
+    assert five["last_emcy"] == ("0x8130 life guard / heartbeat error, error register 0x11 "
+                                 "(generic, communication)")
     assert 0.1 < five["heartbeat_gap"] < 3
 
 
@@ -377,3 +380,44 @@ def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
         peer.shutdown()
     assert b"\x1b[H\x1b[2J" in screen  # redrawn in place
     assert re.search(rb"\n\s+3\s+OPERATIONAL", screen)
+
+
+@pytest.mark.realtime
+@pytest.mark.slow
+def test_device_reports_a_duplicate_node_id_in_words(hub: HubThread) -> None:
+    """Another node's boot-up on the device's own COB-ID: the device raises EMCY 0x8150 and
+    ``canola device`` says so in words, as ``canola dump`` does for the frame."""
+    channel = f"dup{time.monotonic_ns() % 10**9}"
+    url = f"socketcand://127.0.0.1:{hub.port}/{channel}"
+    drive = str(Path(__file__).resolve().parents[2] / "examples" / "eds" / "drive.eds")
+    device = subprocess.Popen([sys.executable, "-m", "canola.cli", "device", "--eds", drive,
+                               "--node-id", "5", "--bus", url], stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+    peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel=channel)
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(device.stdout or ()), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 60
+        while not any("PRE-OPERATIONAL" in line for line in list(lines)):
+            assert time.monotonic() < deadline and device.poll() is None, lines
+            time.sleep(0.05)
+        emcy = None
+        with _repeating(peer, [(0x705, b"\x00")], pause=0.5):
+            deadline = time.monotonic() + 60
+            while emcy is None and time.monotonic() < deadline:
+                msg = peer.recv(1)
+                if msg is not None and msg.arbitration_id == 0x085:
+                    emcy = bytes(msg.data)
+        assert emcy is not None and emcy[:2] == b"\x50\x81"
+    finally:
+        device.send_signal(signal.SIGTERM)
+        device.wait(60)
+        reader.join(10)
+        peer.shutdown()
+    out = "".join(lines)
+    assert ("node 5: EMCY 0x8150 CAN-ID collision (another node uses this node-ID), "
+            f"error register 0x{emcy[2]:02X} (") in out, out
+    event = Decoder().decode(0x085, emcy)
+    assert event.text.startswith("EMCY node 5 0x8150 CAN-ID collision (another node uses "
+                                 "this node-ID), error register")

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from canola import pdomap
+from canola.emcycodes import emcy_class, emcy_line, emcy_text, register_text
 from canola.errors import ABORT_TEXT
 from canola.nodedicts import NodeDictionaries
 from canola.odnames import entry_name, value_text
@@ -30,29 +31,6 @@ STATE_NAMES: dict[int, str] = {0x00: "BOOT-UP", 0x04: "STOPPED", 0x05: "OPERATIO
 
 _NMT_COMMANDS = {0x01: "start", 0x02: "stop", 0x80: "preop", 0x81: "reset-node",
                  0x82: "reset-comm"}
-
-_EMCY_CODES = {
-    0x0000: "error reset / no error", 0x1000: "generic error", 0x8100: "communication",
-    0x8110: "CAN overrun", 0x8120: "CAN error passive", 0x8130: "life guard / heartbeat error",
-    0x8140: "recovered from bus-off", 0x8150: "CAN-ID collision", 0x8200: "protocol error",
-    0x8210: "PDO not processed (length)", 0x8220: "PDO length exceeded",
-    0x8230: "DAM MPDO not processed", 0x8240: "unexpected SYNC data length",
-    0x8250: "RPDO time-out", 0x9000: "external error", 0xF000: "additional functions",
-    0xFF00: "device specific",
-}
-_EMCY_GROUPS = {0x1: "generic", 0x2: "current", 0x3: "voltage", 0x4: "temperature",
-                0x5: "device hardware", 0x6: "device software", 0x7: "additional modules",
-                0x8: "monitoring", 0x9: "external error", 0xF: "additional functions"}
-
-
-
-def emcy_text(code: int) -> str:
-    """The CiA 301 name of an emergency error code (exact code, else its group)."""
-    if code in _EMCY_CODES:
-        return _EMCY_CODES[code]
-    if code & 0xFF00 == 0xFF00:
-        return "device specific"
-    return _EMCY_GROUPS.get(code >> 12, "unknown error code")
 
 
 def _shown(value: Value) -> str:
@@ -203,10 +181,10 @@ class Decoder:
         code = int.from_bytes(data[0:2], "little")
         reg = data[2]
         extra = data[3:8].hex(" ").upper()
-        text = f"EMCY node {node} 0x{code:04X} {emcy_text(code)} register 0x{reg:02X}"
-        if any(data[3:8]):
-            text += f" data {extra}"
-        return Event("emcy", node, text, {"code": code, "register": reg, "data": extra})
+        return Event("emcy", node, f"EMCY node {node} {emcy_line(code, reg, data[3:8])}",
+                     {"code": code, "register": reg, "data": extra,
+                      "class": emcy_class(code), "meaning": emcy_text(code),
+                      "register_bits": register_text(reg)})
 
     def _time(self, data: bytes) -> Event:
         if len(data) != 6:

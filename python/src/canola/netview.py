@@ -94,10 +94,12 @@ def render(rows: list[dict[str, Any]], frames: int) -> str:
     for r in rows:
         age = "-" if r["heartbeat_age"] is None else f"{r['heartbeat_age']:.1f}s"
         pdo = " ".join(f"{k}:{v:g}" for k, v in r["pdo_rate"].items()) or "-"
-        emcy = r["last_emcy"] or "-"
+        emcy = r["last_emcy"].split(",")[0] or "-"  # code and meaning; in full below
         if r["emcy_count"] > 1:
             emcy += f" (x{r['emcy_count']})"
         lines.append(f"{r['node']:>4}  {r['state']:<15}  {age:>7}  {emcy[:36]:<36}  {pdo}")
+        if r["last_emcy"]:
+            lines.append(f"{'':6}EMCY: {r['last_emcy']}")
         lines.extend(f"{'':6}{name}: {text}" for name, text in r.get("pdo_text", {}).items())
     if not rows:
         lines.append("  (no node seen)")
