@@ -20,7 +20,7 @@ from pathlib import Path
 import can
 import canopen
 import pytest
-from cli_helpers import cli, one_line_error
+from cli_helpers import cli, one_line_error, repeating
 
 from canola.cli import build_parser
 from canola.decode import Decoder
@@ -56,26 +56,14 @@ def vbus(request: pytest.FixtureRequest) -> Iterator[tuple[list[str], can.BusABC
     bus.shutdown()
 
 
-@contextlib.contextmanager
 def _repeating(bus: can.BusABC, frames: list[tuple[int, bytes]],
-               pause: float = 0.3) -> Iterator[None]:
-    """Send ``frames`` again and again (a pause after each round) while the block runs: the
-    command under test opens its bus at a moment the test does not know (slow under
-    emulation), so it sees some round from its start."""
-    stop = threading.Event()
-
+               pause: float = 0.3) -> contextlib.AbstractContextManager[None]:
+    """Send ``frames`` again and again while the block runs (see cli_helpers.repeating)."""
     def send() -> None:
-        while not stop.wait(pause):
-            for can_id, data in frames:
-                bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
+        for can_id, data in frames:
+            bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
 
-    thread = threading.Thread(target=send, daemon=True)
-    thread.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        thread.join(5)
+    return repeating(send, pause)
 
 
 @pytest.fixture

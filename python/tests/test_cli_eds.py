@@ -5,19 +5,17 @@ python-can virtual bus, the commands run in this process."""
 
 from __future__ import annotations
 
-import contextlib
 import datetime
 import itertools
 import json
-import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import can
 import canopen
 import pytest
-from cli_helpers import cli, one_line_error
+from cli_helpers import cli, one_line_error, repeating
 from conftest import wait_until
 
 import canola
@@ -60,21 +58,6 @@ def net() -> Iterator[Net]:
 
 def sdo(capsys: pytest.CaptureFixture[str], net: Net, *args: str) -> tuple[int, str, str]:
     return cli(capsys, "sdo", *args, "--bus", net.bus_url, "--timeout", SDO_MS)
-
-
-@contextlib.contextmanager
-def repeating(action: Callable[[], None], pause: float = 0.2) -> Iterator[None]:
-    """Do ``action`` again and again while the block runs (a live command opens its bus
-    at a moment the test does not know)."""
-    stop = threading.Event()
-    thread = threading.Thread(target=lambda: [action() for _ in iter(
-        lambda: stop.wait(pause), True)], daemon=True)
-    thread.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        thread.join(5)
 
 
 def test_sdo_names_and_types_from_the_eds(capsys: pytest.CaptureFixture[str],
@@ -175,7 +158,7 @@ def test_dump_and_monitor_live_decode_the_device_pdos(capsys: pytest.CaptureFixt
         net.device.od[0x6041][0] = next(words)
 
     try:
-        with repeating(change):
+        with repeating(change, 0.2):
             code, out, _ = cli(capsys, "dump", "--bus", net.bus_url, "--duration", "3",
                                "--eds", DRIVE, "--node", "5", "--service", "pdo")
             assert code == 0

@@ -28,6 +28,7 @@ __all__ = [
     "add_announce_option",
     "add_bus_options",
     "add_dictionary_options",
+    "add_group",
     "add_master_options",
     "add_pdo_reading_options",
     "bus_from_args",
@@ -63,6 +64,15 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{self.prog}: error: {message} (see {self.prog} --help)")
+
+
+def add_group(subs: argparse._SubParsersAction[Parser], name: str, help_text: str,
+              description: str) -> argparse._SubParsersAction[Parser]:
+    """A command with sub-commands (``canola sdo read``, ``canola pdo show``, ...)."""
+    p = subs.add_parser(name, help=help_text, description=description)
+    group = p.add_subparsers(dest=f"{name}_command", metavar="SUBCOMMAND", parser_class=Parser)
+    group.required = True
+    return group
 
 
 def int_in_range(text: str, low: int, high: int, what: str, unit: str = "") -> int:

@@ -18,6 +18,7 @@ from canola.cli.common import (
     UsageError,
     add_bus_options,
     add_dictionary_options,
+    add_group,
     add_master_options,
     dictionaries_from_args,
     emit_json,
@@ -47,10 +48,8 @@ def _pdo_name(text: str) -> str:
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
-    p = subs.add_parser("pdo", help="a node's PDOs: show, map",
-                        description="Read or configure a node's PDOs by SDO.")
-    pdo_subs = p.add_subparsers(dest="pdo_command", metavar="SUBCOMMAND", parser_class=Parser)
-    pdo_subs.required = True
+    pdo_subs = add_group(subs, "pdo", "a node's PDOs: show, map",
+                         "Read or configure a node's PDOs by SDO.")
 
     def common(sp: argparse.ArgumentParser) -> None:
         sp.add_argument("node", type=node_id, metavar="NODE", help="node-ID 1..127")

@@ -26,6 +26,7 @@ from canola.cli.common import (
     add_announce_option,
     add_bus_options,
     add_dictionary_options,
+    add_group,
     dictionaries_from_args,
     emit_json,
     master_from_args,
@@ -49,10 +50,8 @@ def _type(text: str) -> int:
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
-    p = subs.add_parser("sdo", help="SDO client: read, write, upload, download",
-                        description="Access a node's object dictionary over SDO.")
-    sdo_subs = p.add_subparsers(dest="sdo_command", metavar="SUBCOMMAND", parser_class=Parser)
-    sdo_subs.required = True
+    sdo_subs = add_group(subs, "sdo", "SDO client: read, write, upload, download",
+                         "Access a node's object dictionary over SDO.")
 
     def common(sp: argparse.ArgumentParser) -> None:
         sp.add_argument("node", type=node_id, metavar="NODE", help="node-ID 1..127")
