@@ -120,6 +120,14 @@ def test_help_on_every_level(capsys: pytest.CaptureFixture[str]) -> None:
     ["dump"], ["dump", "f.log", "--bus", "virtual://x"],
     ["monitor", "--bus", "virtual://x", "--duration", "-1"],
     ["bus", "serve", "--port", "70000"], ["bus"],
+    ["sync", "--bus", "virtual://x"], ["sync", "0", "--bus", "virtual://x"],
+    ["sync", "10", "--counter", "1", "--bus", "virtual://x"],
+    ["sync", "10", "--count", "0", "--bus", "virtual://x"],
+    ["sync", "10", "--duration", "0", "--bus", "virtual://x"],
+    ["time", "--period", "0", "--bus", "virtual://x"], ["time", "now", "--bus", "virtual://x"],
+    ["pdo", "show", "--bus", "virtual://x"], ["pdo", "map", "5", "--bus", "virtual://x"],
+    ["pdo", "map", "5", "TPDO0", "--bus", "virtual://x"],
+    ["pdo", "show", "5", "--eds", "200=x.eds", "--bus", "virtual://x"],
 ])
 def test_usage_errors_are_one_line_exit_2(capsys: pytest.CaptureFixture[str],
                                           args: list[str]) -> None:

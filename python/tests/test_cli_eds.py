@@ -86,6 +86,20 @@ def test_sdo_names_and_types_from_the_eds(capsys: pytest.CaptureFixture[str],
     assert sdo(capsys, net, "read", "5", "Statusword", "u8", "--eds", DRIVE)[0] == 1
 
 
+def test_sdo_upload_download_by_name(capsys: pytest.CaptureFixture[str], net: Net,
+                                     tmp_path: Path) -> None:
+    blob = bytes(range(256)) * 4
+    src, back = tmp_path / "fw.bin", tmp_path / "back.bin"
+    src.write_bytes(blob)
+    assert sdo(capsys, net, "download", "5", "Firmware", str(src), "--eds", DRIVE) == (
+        0, "", "")
+    code, out, _ = sdo(capsys, net, "upload", "5", "firmware", str(back), "--eds", DRIVE,
+                       "--json")
+    assert code == 0 and json.loads(out) == {"node": 5, "index": 0x2004, "sub": 0,
+                                             "name": "Firmware", "bytes": len(blob)}
+    assert back.read_bytes() == blob
+
+
 @pytest.mark.parametrize(("args", "code", "message"), [
     (["read", "5", "Producer heartbeat tme", "--eds", DRIVE], 2,
      "did you mean 'Producer heartbeat time'"),
