@@ -5,12 +5,16 @@ a one-line error."""
 from __future__ import annotations
 
 import itertools
+import json
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import can
 import pytest
 from cli_helpers import cli, one_line_error
+
+from canola.hub import HubThread
 
 _channels = itertools.count()
 
@@ -36,7 +40,7 @@ def _nmt_start_seen(capsys: pytest.CaptureFixture[str], bus: can.BusABC,
     """``canola nmt start 5 OPTIONS`` went out on ``bus``."""
     code, _, err = cli(capsys, "nmt", "start", "5", *options)
     assert (code, err) == (0, "")
-    msg = bus.recv(5)
+    msg = bus.recv(2)
     return msg is not None and (msg.arbitration_id, bytes(msg.data)) == (0, b"\x01\x05")
 
 
@@ -122,3 +126,23 @@ def test_dump_of_a_file_needs_no_bus(capsys: pytest.CaptureFixture[str], home: P
     monkeypatch.setenv("CANOLA_BUS", "socketcand://127.0.0.1:1/nothing-listens-here")
     code, out, _ = cli(capsys, "dump", str(log))
     assert code == 0 and "node 5 heartbeat OPERATIONAL" in out
+
+
+@pytest.mark.realtime
+def test_python_can_socketcand_configuration(capsys: pytest.CaptureFixture[str], home: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """A socketcand bus from python-can's configuration opens as --bus socketcand://..."""
+    with HubThread() as hub:
+        peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port,
+                       channel="cfg")
+        try:
+            monkeypatch.setenv("CAN_CONFIG", json.dumps(
+                {"interface": "socketcand", "host": "127.0.0.1", "port": hub.port,
+                 "channel": "cfg"}))
+            deadline = time.monotonic() + 30
+            seen = False
+            while not seen and time.monotonic() < deadline:  # the peer's join is async
+                seen = _nmt_start_seen(capsys, peer)
+            assert seen
+        finally:
+            peer.shutdown()
