@@ -94,6 +94,7 @@ class Decoder:
         self._dicts = dictionaries or NodeDictionaries()
         self._given = pdos or {}
         self._by_cob: dict[int, tuple[int, Pdo] | None] = {}
+        self._file_pdos: dict[int, list[Pdo]] = {}
 
     # ---- what the dictionaries say
 
@@ -128,8 +129,10 @@ class Decoder:
         return self._by_cob[can_id]
 
     def _pdos_of(self, node: int) -> list[Pdo]:
-        od = self._dicts.get(node)
-        return [] if od is None else pdos_from_od(od)
+        if node not in self._file_pdos:
+            od = self._dicts.get(node)
+            self._file_pdos[node] = [] if od is None else pdos_from_od(od)
+        return self._file_pdos[node]
 
     def decode(self, can_id: int, data: bytes, *, rtr: bool = False,
                extended: bool = False) -> Event:

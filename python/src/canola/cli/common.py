@@ -39,7 +39,6 @@ __all__ = [
     "master_from_args",
     "node_id",
     "node_or_all",
-    "object_address",
     "positive_ms",
 ]
 
@@ -101,21 +100,6 @@ def node_or_all(text: str) -> int:
         return node_id(text)
     except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127 or all") from None
-
-
-def object_address(text: str) -> tuple[int, int]:
-    """``INDEX[:SUB]``: the index in hex (``0x1018`` or ``1018``), the sub-index decimal or
-    0x-hex (default 0)."""
-    index_text, _, sub_text = text.partition(":")
-    try:
-        index = int(index_text[2:] if index_text.lower().startswith("0x") else index_text, 16)
-        sub = int(sub_text, 0) if sub_text else 0
-    except ValueError:
-        index = sub = -1
-    if not (0 <= index <= 0xFFFF and 0 <= sub <= 0xFF) or not index_text:
-        raise argparse.ArgumentTypeError(
-            f"bad object {text!r}: INDEX:SUB, e.g. 0x1018:1")
-    return index, sub
 
 
 def positive_ms(text: str) -> int:
