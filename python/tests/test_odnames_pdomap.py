@@ -3,6 +3,7 @@ from a dictionary, decoded, read and configured by SDO), without a bus."""
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 import canopen
@@ -22,6 +23,7 @@ from canola.pdomap import (
     pdos_from_od,
     read_pdo,
     read_pdos,
+    type_bits,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -118,8 +120,20 @@ def test_decode_bit_level_and_dummies() -> None:
         Mapped(0x2000, 2, 16, "b", 0x0003), Mapped(0x2000, 3, 4, "c"),
         Mapped(0x2000, 4, 32, "d", 0x0007)])
     data = bytes([0x01 | 0x7E, 0x18, 0xFC, 0x0A, 0, 0, 0])  # d does not fit: left out
-    assert decode(pdo, data) == [(pdo.entries[0], True), (pdo.entries[2], -1000),
-                                 (pdo.entries[3], 0xA)]
+    decoded = decode(pdo, data)
+    assert decoded == [(pdo.entries[0], True), (pdo.entries[2], -1000), (pdo.entries[3], 0xA)]
+    assert decoded[0][1] is True  # a BOOLEAN, not the number 1
+
+
+def test_decode_reals_and_strings() -> None:
+    pdo = Pdo("RPDO", 2, 0x305, entries=[Mapped(0x2000, 0, 32, "r", 0x0008),
+                                          Mapped(0x2001, 0, 24, "s", 0x0009),
+                                          Mapped(0x2002, 0, 8, "n", 0x0007)])  # not its size
+    data = struct.pack("<f", 2.5) + b"abc" + b"\x07"
+    assert [v for _, v in decode(pdo, data)] == [2.5, "abc", 7]
+    assert (type_bits(0x0008), type_bits(0x0011), type_bits(0x000C), type_bits(0x0009),
+            type_bits(0x0001), type_bits(0x0016), type_bits(0x9999)) == (
+        32, 64, 48, None, 1, 24, None)
 
 
 def test_mapped_entry(od: eds.ObjectDictionary) -> None:

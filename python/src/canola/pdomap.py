@@ -25,7 +25,8 @@ from canola.errors import Error, SdoAbort
 from canola.odnames import entry_name, find_entry, parse_address
 
 __all__ = ["Mapped", "Pdo", "PdoError", "configure_pdo", "decode", "describe",
-           "mapped_entry", "parse_pdo_name", "pdos_from_od", "read_pdo", "read_pdos"]
+           "mapped_entry", "parse_pdo_name", "pdos_from_od", "read_pdo", "read_pdos",
+           "type_bits"]
 
 #: What the PDOs of a device without an EDS are probed for (the pre-defined set).
 DEFAULT_PDOS = ("RPDO1", "RPDO2", "RPDO3", "RPDO4", "TPDO1", "TPDO2", "TPDO3", "TPDO4")
@@ -138,6 +139,31 @@ def pdos_from_od(od: ObjectDictionary) -> list[Pdo]:
     return found
 
 
+#: Sizes in bits of the types whose DATA_TYPES entry has none (0: no fixed size).
+_FIXED_BITS = {0x01: 1, 0x08: 32, 0x11: 64, 0x0C: 48, 0x0D: 48}
+
+
+def type_bits(code: int | None) -> int | None:
+    """The size in bits a mapping of data type ``code`` takes, None when the type has no
+    fixed size (strings, DOMAIN) or is unknown."""
+    if code is None or code not in DATA_TYPES:
+        return None
+    return _FIXED_BITS.get(code, DATA_TYPES[code].bits) or None
+
+
+def _typed(m: Mapped, raw: int) -> values.Value:
+    """A mapped entry's bits as its EDS type: a BOOLEAN of any size, a type whose size
+    is the mapping's, a string or DOMAIN of whole bytes; else the unsigned number."""
+    if m.data_type == 0x01:
+        return bool(raw)
+    if m.data_type is None or m.bits % 8 or type_bits(m.data_type) not in (m.bits, None):
+        return raw
+    try:
+        return values.decode(m.data_type, raw.to_bytes(m.bits // 8, "little"))
+    except values.ValueFormatError:
+        return raw
+
+
 def decode(pdo: Pdo, data: bytes) -> list[tuple[Mapped, values.Value]]:
     """The values of PDO frame ``data`` by the mapping of ``pdo``: typed when the EDS gives
     a type that fills the mapped bits, else unsigned integers. Entries beyond the frame's
@@ -152,14 +178,7 @@ def decode(pdo: Pdo, data: bytes) -> list[tuple[Mapped, values.Value]]:
         offset += m.bits
         if m.index < 0x1000 and m.index in DATA_TYPES:  # dummy mapping: a gap
             continue
-        value: values.Value = raw
-        info = None if m.data_type is None else DATA_TYPES.get(m.data_type)
-        if info is not None and m.bits % 8 == 0 and (info.bits or 8) == m.bits:
-            try:
-                value = values.decode(m.data_type or 0, raw.to_bytes(m.bits // 8, "little"))
-            except values.ValueFormatError:
-                value = raw
-        out.append((m, value))
+        out.append((m, _typed(m, raw)))
     return out
 
 
@@ -179,15 +198,13 @@ def mapped_entry(od: ObjectDictionary | None, text: str) -> Mapped:
         if not var.pdo_mapping:
             raise PdoError(f"{entry_name(od, index, sub)} (0x{index:04X}:{sub:02X}) "
                            "may not be mapped into a PDO (PDOMapping=0)")
-    info = None if var is None or var.data_type is None else DATA_TYPES.get(var.data_type)
     if bits_text:
         try:
             bits = int(bits_text, 0)
         except ValueError:
             bits = 0
     else:
-        bits = (info.bits or (8 if var is not None and var.data_type == 0x01 else 0)) \
-            if info is not None else 0
+        bits = (None if var is None else type_bits(var.data_type)) or 0
     if not 1 <= bits <= 64:
         raise PdoError(f"{text!r}: give its size in bits (INDEX:SUB:BITS, 1..64)")
     return _mapped(od, index << 16 | sub << 8 | bits)
