@@ -103,5 +103,7 @@ def run_sync(args: argparse.Namespace) -> int:
 
 
 def run_time(args: argparse.Namespace) -> int:
+    if args.period is None and (args.count is not None or args.duration is not None):
+        raise CliError("canola time: error: --count and --duration need --period", 2)
     return _produce(args, args.period, lambda _: time_frame(dt.datetime.now(dt.UTC)), 0x100,
                     "time")
