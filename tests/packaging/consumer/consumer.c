@@ -57,18 +57,43 @@ static const char k_name[24] = "installed canola device";
 static co_od_t station_od(station_t *s)
 {
     const co_od_entry_t e[6] = {
-        {.index = 0x1000, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4,
-         .value = &s->device_type, .dflt = &k_device_type},
-        {.index = 0x1001, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1,
-         .value = &s->error_register, .dflt = &k_zero_u8},
-        {.index = 0x1008, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_CO, .size = 24,
-         .value = s->name, .dflt = k_name},
-        {.index = 0x1017, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .size = 2,
-         .value = &s->heartbeat_ms, .dflt = &k_zero_u16},
-        {.index = 0x1018, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO, .size = 1,
-         .value = &s->identity_count, .dflt = &k_one_u8},
-        {.index = 0x1018, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4,
-         .value = &s->vendor, .dflt = &k_vendor},
+        {.index = 0x1000,
+         .type = CO_TYPE_UNSIGNED32,
+         .attr = CO_OD_RO,
+         .size = 4,
+         .value = &s->device_type,
+         .dflt = &k_device_type},
+        {.index = 0x1001,
+         .type = CO_TYPE_UNSIGNED8,
+         .attr = CO_OD_RO,
+         .size = 1,
+         .value = &s->error_register,
+         .dflt = &k_zero_u8},
+        {.index = 0x1008,
+         .type = CO_TYPE_VISIBLE_STRING,
+         .attr = CO_OD_CO,
+         .size = 24,
+         .value = s->name,
+         .dflt = k_name},
+        {.index = 0x1017,
+         .type = CO_TYPE_UNSIGNED16,
+         .attr = CO_OD_RW,
+         .size = 2,
+         .value = &s->heartbeat_ms,
+         .dflt = &k_zero_u16},
+        {.index = 0x1018,
+         .type = CO_TYPE_UNSIGNED8,
+         .attr = CO_OD_CO,
+         .size = 1,
+         .value = &s->identity_count,
+         .dflt = &k_one_u8},
+        {.index = 0x1018,
+         .sub = 1,
+         .type = CO_TYPE_UNSIGNED32,
+         .attr = CO_OD_RO,
+         .size = 4,
+         .value = &s->vendor,
+         .dflt = &k_vendor},
     };
     memcpy(s->entries, e, sizeof e);
     co_od_t od = {.entries = s->entries, .count = 6};
@@ -91,11 +116,11 @@ static int start(co_sim_bus_t *bus, station_t *s, uint8_t id, const co_storage_t
 }
 
 typedef struct results {
-    bool bootup;        /* 0x705 with 00 seen on the bus */
-    bool vendor_done;   /* the vendor-ID read finished */
+    bool bootup;      /* 0x705 with 00 seen on the bus */
+    bool vendor_done; /* the vendor-ID read finished */
     co_abort_t vendor_abort;
     uint64_t vendor;
-    bool name_done;     /* the device name read finished */
+    bool name_done; /* the device name read finished */
     co_abort_t name_abort;
     uint32_t name_len;
     uint8_t name[32];
@@ -148,7 +173,8 @@ int main(int argc, char **argv)
     if (co_file_storage_init(&storage, argv[1]) != CO_OK) {
         return fail("the storage folder is refused (co_file_storage_init)");
     }
-    if (co_sim_bus_init(&bus, 125000) != CO_OK || co_sim_port_attach_raw(&bus, &watcher, watch, &r) != CO_OK ||
+    if (co_sim_bus_init(&bus, 125000) != CO_OK ||
+        co_sim_port_attach_raw(&bus, &watcher, watch, &r) != CO_OK ||
         start(&bus, &device, DEVICE_ID, &storage.api) != 0 || start(&bus, &master, 1, NULL) != 0) {
         return fail("setting up the bus and the nodes failed");
     }
