@@ -114,7 +114,7 @@ def test_wheel_installs_and_runs_the_demo(tmp_path: Path) -> None:
     with zipfile.ZipFile(wheel) as whl:
         names = set(whl.namelist())
     assert any(re.fullmatch(r"canola/_core\..*\.so", n) for n in names), "no extension"
-    assert {"canola/data/demo/drive.eds", "canola/py.typed"} <= names
+    assert {"canola/data/demo/drive.eds", "canola/py.typed", "canola/_core.pyi"} <= names
 
     # The newest versions the ranges allow (or pip's cache has).
     newest = fresh_venv(tmp_path / "newest", wheel)
