@@ -3,7 +3,7 @@
  * sub0 the number recorded; writing 0 to sub0 clears it, anything else is refused with
  * 0x06090030. Left out with CO_CONFIG_EMCY_HISTORY 0 (internal.h).
  */
-#include "internal.h"
+#include "emcy_internal.h"
 
 #if CO_CONFIG_EMCY_HISTORY
 

@@ -6,7 +6,7 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "emcy_internal.h"
 
 #if CO_EMCY_QUEUE_LEN > 0
 

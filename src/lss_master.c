@@ -2,7 +2,7 @@
  * lss_master.c -- the LSS master (CiA 305): one request at a time on 0x7E5, answers on
  * 0x7E4, time-outs from the node's poll, fastscan as a walk over the address bits.
  */
-#include "internal.h"
+#include "lss_internal.h"
 
 #if CO_CONFIG_LSS_MASTER
 
@@ -47,7 +47,7 @@ static co_err_t begin(co_node_t *node, uint8_t op, co_lss_done_fn done, void *ct
     }
     if (!m->listening) { /* 0x7E4 is routed from the first request on */
         m->listening = true;
-        co_routes_rebuild(node);
+        co_route_set(node, CO_ROUTE_LSS_MASTER, 0, CO_LSS_COB_SLAVE);
     }
     m->op = op;
     m->done = done;

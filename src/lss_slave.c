@@ -2,7 +2,7 @@
  * lss_slave.c -- the LSS slave (CiA 305): answers the master on 0x7E5, keeps the
  * pending node-ID and bit timing, and boots an unconfigured node once it has an ID.
  */
-#include "internal.h"
+#include "lss_internal.h"
 
 #if CO_CONFIG_LSS_SLAVE
 
@@ -51,7 +51,7 @@ static void switch_global(co_node_t *node, uint8_t mode)
     s->mode = CO_LSS_WAITING;
     /* A node without an ID boots as soon as it has one (reset communication takes it). */
     if (node->node_id == CO_NODE_ID_UNCONFIGURED && s->pending_id != CO_NODE_ID_UNCONFIGURED) {
-        co_nmt_reset(node, false);
+        node->wiring->nmt_reset(node, false); /* NMT's reset communication (kernel.h) */
     }
 }
 
@@ -288,6 +288,7 @@ void co_lss_slave_reset(co_node_t *node, bool application)
         s->fastscan_pos = 0;
     }
     node->node_id = s->pending_id;
+    co_route_set(node, CO_ROUTE_LSS_SLAVE, 0, CO_LSS_COB_MASTER);
 }
 
 co_err_t co_lss_slave_setup(co_node_t *node, const co_lss_slave_config_t *config)

@@ -1,30 +1,9 @@
 /*
- * nmt.c -- the NMT state machine of a node, and NMT commands as a master.
+ * nmt.c -- the NMT state machine of a node and its fan-out: every service resets its
+ * communication, starts, stops or catches up as the state says; and NMT commands as a master.
+ * (Which services each state allows is the kernel's gate: co_nmt_services, kernel.c.)
  */
-#include "internal.h"
-
-uint16_t co_nmt_services(co_nmt_state_t state)
-{
-    switch (state) {
-    case CO_NMT_INITIALISING:
-        return CO_SVC_BOOTUP | CO_SVC_LSS;
-    case CO_NMT_PRE_OPERATIONAL:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-               CO_SVC_EMCY | CO_SVC_LSS;
-    case CO_NMT_OPERATIONAL:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-               CO_SVC_EMCY | CO_SVC_PDO | CO_SVC_LSS;
-    case CO_NMT_STOPPED:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
-    default:
-        return CO_SVC_LSS;
-    }
-}
-
-bool co_nmt_allows(co_nmt_state_t state, co_service_t service)
-{
-    return (co_nmt_services(state) & (uint16_t)service) != 0;
-}
+#include "node_internal.h"
 
 const char *co_nmt_state_name(uint8_t state)
 {
@@ -44,6 +23,19 @@ const char *co_nmt_state_name(uint8_t state)
 
 co_nmt_state_t co_nmt_state(const co_node_t *node) { return (co_nmt_state_t)node->nmt_state; }
 
+/* The state changed: services that depend on it start, stop or catch up. */
+static void state_changed(co_node_t *node)
+{
+    co_txq_purge(node);
+    if (!(node->services & CO_SVC_SDO)) {
+        co_sdo_server_stop(node);
+        co_sdo_client_stop(node);
+    }
+    co_sync_state_entered(node);
+    co_emcy_state_entered(node);
+    co_pdo_state_entered(node);
+}
+
 static void enter(co_node_t *node, co_nmt_state_t state)
 {
     if (node->nmt_state == (uint8_t)state) {
@@ -51,7 +43,7 @@ static void enter(co_node_t *node, co_nmt_state_t state)
     }
     node->nmt_state = (uint8_t)state;
     node->services = co_nmt_services(state);
-    co_node_state_changed(node);
+    state_changed(node);
     if (node->cfg.on_state) {
         node->cfg.on_state(node->cfg.user, state);
     }
@@ -74,6 +66,8 @@ void co_nmt_reset(co_node_t *node, bool application)
     }
     co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, id);
     co_storage_load(node, CO_PARAMS_COMMUNICATION);
+    /* Every service takes its parameters again, and with them its receive routes. */
+    co_route_set(node, CO_ROUTE_NMT, 0, 0x000);
     co_storage_reset_comm(node);
     co_hb_reset_comm(node);
     co_guard_reset_comm(node);
@@ -83,7 +77,7 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_time_reset_comm(node);
     co_emcy_reset_comm(node);
     co_pdo_reset_comm(node);
-    co_routes_rebuild(node);
+    co_manager_reset_comm(node);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);
     }

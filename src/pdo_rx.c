@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "pdo_internal.h"
+#include "sync_internal.h" /* co_sync_window_open */
 
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */

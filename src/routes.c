@@ -1,12 +1,13 @@
 /*
- * routes.c -- the receive routes: which service owns which COB-ID.
+ * routes.c -- the receive routes: which service takes the frames of which COB-ID.
  *
- * A small array sorted by key, searched by bisection, rebuilt from the services'
- * configuration whenever a COB-ID object changes (reset communication, a write to
- * 0x1016, a new guarding watch). Frames are dispatched in O(log routes) whatever
- * the number of services.
+ * A small array sorted by key (then kind and slot), searched by bisection: frames are
+ * dispatched in O(log routes) whatever the number of services. Each service sets and clears
+ * its own routes when its COB-ID objects change (reset communication, a write, a new watch),
+ * one per kind and slot. A key with two owners keeps both, the lower kind first: that one
+ * takes the frames (kernel.h orders the kinds), and the other takes over when it goes.
  */
-#include "internal.h"
+#include "kernel.h"
 
 static uint16_t kind_service(uint8_t kind)
 {
@@ -33,15 +34,64 @@ static uint16_t kind_service(uint8_t kind)
     }
 }
 
-void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+/* The place of the route of `kind` and `slot`, or route_count when it has none. */
+static uint16_t owned(const co_node_t *node, uint8_t kind, uint8_t slot)
 {
-    if (node->route_count >= CO_RX_ROUTES_MAX || co_routes_find(node, key)) {
-        return; /* a key has one owner; the first configured keeps it */
+    uint16_t i = 0;
+    while (i < node->route_count &&
+           (node->routes[i].kind != kind || node->routes[i].slot != slot)) {
+        i++;
+    }
+    return i;
+}
+
+/* Route `r` comes before (key, kind, slot). */
+static bool before(const co_route_t *r, uint32_t key, uint8_t kind, uint8_t slot)
+{
+    if (r->key != key) {
+        return r->key < key;
+    }
+    return r->kind != kind ? r->kind < kind : r->slot < slot;
+}
+
+static void remove_at(co_node_t *node, uint16_t at)
+{
+    node->route_count--;
+    for (uint16_t i = at; i < node->route_count; i++) {
+        co_copy(&node->routes[i], &node->routes[i + 1u], sizeof node->routes[0]);
+    }
+}
+
+/* The set of routes changed: the quick "no" is counted again, the hint starts over at the
+ * first route (the first of its key, as a hint must be), and the driver hears of it. */
+static void changed(co_node_t *node)
+{
+    uint32_t groups = 0;
+    for (uint16_t i = 0; i < node->route_count; i++) {
+        groups |= co_route_group(node->routes[i].key);
+    }
+    node->route_groups = groups;
+    node->route_hint = 0;
+    if (node->cfg.driver.on_routes_changed) {
+        node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
+    }
+}
+
+void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
+{
+    uint16_t at = owned(node, kind, slot);
+    if (at < node->route_count) {
+        if (node->routes[at].key == key) {
+            return; /* already there */
+        }
+        remove_at(node, at);
+    } else if (node->route_count >= CO_RX_ROUTES_MAX) {
+        return; /* a full table drops the route */
     }
     /* Insertion keeps the array sorted; n is small and this runs only on changes. */
-    uint16_t at = node->route_count;
-    while (at > 0 && node->routes[at - 1].key > key) {
-        co_copy(&node->routes[at], &node->routes[at - 1], sizeof node->routes[0]);
+    at = node->route_count;
+    while (at > 0 && !before(&node->routes[at - 1u], key, kind, slot)) {
+        co_copy(&node->routes[at], &node->routes[at - 1u], sizeof node->routes[0]);
         at--;
     }
     /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
@@ -51,37 +101,24 @@ void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
     r->kind = kind;
     r->slot = slot;
     node->route_count++;
-    node->route_groups |= co_route_group(key);
+    changed(node);
 }
 
-void co_routes_add_cob(co_node_t *node, uint32_t cob, uint8_t kind, uint8_t slot)
+void co_route_clear(co_node_t *node, uint8_t kind, uint8_t slot)
 {
-    co_routes_add(node, co_cob_key(cob), kind, slot);
+    uint16_t at = owned(node, kind, slot);
+    if (at < node->route_count) {
+        remove_at(node, at);
+        changed(node);
+    }
 }
 
-void co_routes_rebuild(co_node_t *node)
+void co_route_cob(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t cob)
 {
-    node->route_count = 0;
-    node->route_hint = 0;
-    node->route_groups = 0;
-    co_routes_add(node, 0x000, CO_ROUTE_NMT, 0);
-    co_guard_add_routes(node); /* own guarding RTR, guarded nodes' replies */
-    co_hb_consumers_add_routes(node);
-    co_sdo_server_add_routes(node);
-    co_sdo_client_add_routes(node);
-    co_sync_add_routes(node);
-    co_time_add_routes(node);
-    co_emcy_add_routes(node);
-    co_pdo_add_routes(node);
-    if (CO_CONFIG_LSS_SLAVE) {
-        co_routes_add(node, CO_LSS_COB_MASTER, CO_ROUTE_LSS_SLAVE, 0);
-    }
-    if (co_lss_master_listening(node)) {
-        co_routes_add(node, CO_LSS_COB_SLAVE, CO_ROUTE_LSS_MASTER, 0);
-    }
-    co_manager_add_routes(node); /* last: a consumed node's heartbeat route comes first */
-    if (node->cfg.driver.on_routes_changed) {
-        node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
+    if (cob & CO_COB_INVALID) {
+        co_route_clear(node, kind, slot);
+    } else {
+        co_route_set(node, kind, slot, co_cob_key(cob));
     }
 }
 
@@ -89,19 +126,15 @@ const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)
 {
     uint32_t lo = 0;
     uint32_t hi = node->route_count;
-    while (lo < hi) {
+    while (lo < hi) { /* the first route of the key: its lowest kind */
         uint32_t mid = (lo + hi) / 2;
-        uint32_t k = node->routes[mid].key;
-        if (k == key) {
-            return &node->routes[mid];
-        }
-        if (k < key) {
+        if (node->routes[mid].key < key) {
             lo = mid + 1;
         } else {
             hi = mid;
         }
     }
-    return NULL;
+    return lo < node->route_count && node->routes[lo].key == key ? &node->routes[lo] : NULL;
 }
 
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)

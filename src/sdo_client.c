@@ -16,7 +16,7 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "sdo_internal.h"
 
 #if CO_SDO_CLIENTS_MAX > 0
 
@@ -82,7 +82,8 @@ static void touch(co_node_t *node, co_sdo_client_t *c)
 
 static void transmit(co_node_t *node, const co_sdo_client_t *c, const uint8_t d[8])
 {
-    co_frame_t f = co_cob_frame(c->cob_tx, 8);
+    co_frame_t f;
+    co_frame_address(&f, c->cob_tx, 8);
     memcpy(f.data, d, 8);
     (void)co_node_send_as(node, &f, CO_SVC_SDO); /* a lost frame ends in the time-out */
 }
@@ -417,6 +418,13 @@ static co_abort_t on_block_download_end(co_node_t *node, co_sdo_client_t *c, con
 
 /* ---- the node's side */
 
+/* The channel listens to its server's responses (a channel to the node itself, or one
+ * without valid COB-IDs, to nothing). */
+static void route(co_node_t *node, uint8_t ch)
+{
+    co_route_cob(node, CO_ROUTE_SDO_CLIENT, ch, node->sdo_clients[ch].cob_rx);
+}
+
 /* Take the channel's parameters from 0x1280 + ch when the dictionary has them: sub1
  * COB-ID client -> server, sub2 server -> client, sub3 server node-ID. Returns false when
  * it has not. */
@@ -453,6 +461,7 @@ void co_sdo_client_reset_comm(co_node_t *node)
             c->cob_tx = CO_COB_INVALID;
             c->cob_rx = CO_COB_INVALID;
         }
+        route(node, i);
     }
 }
 
@@ -475,7 +484,7 @@ void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry)
             fail(node, c, CO_ABORT_GENERAL); /* its server changed under it */
         }
         (void)load_from_od(node, (uint8_t)ch);
-        co_routes_rebuild(node);
+        route(node, (uint8_t)ch);
     }
 }
 
@@ -539,16 +548,6 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 
 /* Resume paced block sending first (a stalled sender is not a silent server), then
  * time out transfers that saw no frame for the time-out. */
-void co_sdo_client_add_routes(co_node_t *node)
-{
-    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
-        uint32_t cob = node->sdo_clients[i].cob_rx;
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add_cob(node, cob, CO_ROUTE_SDO_CLIENT, i);
-        }
-    }
-}
-
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
@@ -593,7 +592,7 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
     (void)co_od_set_uint(&node->cfg.od, index, 1, 0x600u + server_id);
     (void)co_od_set_uint(&node->cfg.od, index, 2, 0x580u + server_id);
     (void)co_od_set_uint(&node->cfg.od, index, 3, server_id);
-    co_routes_rebuild(node);
+    route(node, channel);
     return CO_OK;
 }
 
@@ -656,6 +655,36 @@ static void begin(co_sdo_client_t *c, uint16_t index, uint8_t sub, co_sdo_done_f
     c->seq = 0;
 }
 
+/* ---- a channel to the node itself: the request is served on its own dictionary as its
+ * SDO server would serve it, without frames (writes with their effects: co_node_write) */
+
+/* The entry of a local request, found and accessible in that direction; else NULL and the
+ * abort code. */
+static const co_od_entry_t *local_entry(co_node_t *node, uint16_t index, uint8_t sub, bool write,
+                                        co_abort_t *abort)
+{
+    const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, abort);
+    if (e != NULL) {
+        *abort = co_od_access(e, write);
+    }
+    return *abort == CO_ABORT_NONE ? e : NULL;
+}
+
+/* A value larger than `cap` is refused whole, as a remote server's would be. */
+static co_abort_t local_upload(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                               uint32_t cap, uint32_t *len)
+{
+    co_abort_t abort = CO_ABORT_NONE;
+    const co_od_entry_t *e = local_entry(node, index, sub, false, &abort);
+    uint32_t total = 0;
+    if (e != NULL) {
+        abort = co_od_read(&node->cfg.od, e, 0, buf, cap, len, &total);
+    }
+    return abort == CO_ABORT_NONE && total != CO_OD_SIZE_UNKNOWN && total > *len
+               ? CO_ABORT_OUT_OF_MEMORY
+               : abort;
+}
+
 co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
                        co_sdo_mode_t mode, uint8_t *buf, uint32_t cap, co_sdo_done_fn done,
                        void *ctx)
@@ -671,10 +700,9 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
     if (c->server_id == node->node_id) {
         uint8_t none = 0;
         uint32_t len = 0;
-        co_abort_t code = co_node_read_net(node, index, sub, buf ? buf : &none, cap, &len);
+        co_abort_t code = local_upload(node, index, sub, buf ? buf : &none, cap, &len);
         if (done) {
-            done(ctx, channel, code == CO_ABORT_LEN_HIGH ? CO_ABORT_OUT_OF_MEMORY : code,
-                 code == CO_ABORT_NONE ? len : 0);
+            done(ctx, channel, code, code == CO_ABORT_NONE ? len : 0);
         }
         return CO_OK;
     }
@@ -709,7 +737,9 @@ co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8
     co_sdo_client_t *c = &node->sdo_clients[channel];
     if (c->server_id == node->node_id) {
         static const uint8_t none = 0;
-        co_abort_t code = co_node_write_net(node, index, sub, data ? data : &none, len);
+        co_abort_t code = CO_ABORT_NONE;
+        const co_od_entry_t *e = local_entry(node, index, sub, true, &code);
+        code = e != NULL ? co_node_write(node, e, data ? data : &none, len) : code;
         if (done) {
             done(ctx, channel, code, code == CO_ABORT_NONE ? len : 0);
         }

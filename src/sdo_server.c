@@ -16,7 +16,8 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "od_plain.h"
+#include "sdo_internal.h"
 
 enum server_state {
     IDLE = 0,
@@ -52,6 +53,7 @@ static void load_channel(co_node_t *node, uint8_t ch)
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
     co_frame_address(&s->reply, s->cob_tx, 8);
+    co_route_cob(node, CO_ROUTE_SDO_SERVER, ch, s->cob_rx);
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -69,60 +71,14 @@ void co_sdo_server_stop(co_node_t *node)
     }
 }
 
-void co_sdo_server_add_routes(co_node_t *node)
-{
-    for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
-        uint32_t cob = node->sdo_servers[i].cob_rx;
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add_cob(node, cob, CO_ROUTE_SDO_SERVER, i);
-        }
-    }
-}
-
-/* Take new COB-IDs into use. A channel reconfigured by a request it is serving itself
- * answers that request on the old COB-ID first: the reload waits for the answer. */
-static CO_SIZE_NOINLINE void apply_reloads(co_node_t *node)
-{
-    if (!node->sdo_reload) {
-        return;
-    }
-    node->sdo_reload = false;
-    bool changed = false;
-    for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
-        co_sdo_server_t *s = &node->sdo_servers[ch];
-        if (s->reload) {
-            s->reload = false;
-            s->state = IDLE;
-            load_channel(node, ch);
-            changed = true;
-        }
-    }
-    if (changed) {
-        co_routes_rebuild(node);
-    }
-}
-
+/* New COB-IDs take effect at once: a transfer open on the channel ends (without a frame). */
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t ch = entry->index - 0x1200u;
     if (ch < co_sdo_servers_max() && (entry->sub == 1 || entry->sub == 2)) {
-        node->sdo_servers[ch].reload = true;
-        node->sdo_reload = true;
-        if (!node->sdo_serving) {
-            apply_reloads(node);
-        }
+        node->sdo_servers[ch].state = IDLE;
+        load_channel(node, (uint8_t)ch);
     }
-}
-
-/* A whole value from the network into the dictionary, with the services' effects; a
- * new COB-ID of a server channel waits until the request is answered (apply_reloads). */
-static co_abort_t write_value(co_node_t *node, const co_sdo_server_t *s, const uint8_t *data,
-                              uint32_t len)
-{
-    node->sdo_serving = true;
-    co_abort_t abort = co_node_write_entry(node, s->entry, data, len);
-    node->sdo_serving = false;
-    return abort;
 }
 
 /* ---- sending */
@@ -159,16 +115,49 @@ static CO_INLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t h
     send_reply(node, s);
 }
 
-/* A response naming the transfer's object: cmd, index, sub-index, then `tail`. */
+/* The first word of a response naming the transfer's object: cmd, index, sub-index. */
+static CO_INLINE uint32_t head(const co_sdo_server_t *s, uint8_t cmd)
+{
+    return cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24);
+}
+
+/* A response naming the transfer's object, then `tail`. */
 static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
-    send_words(node, s, cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24), tail);
+    send_words(node, s, head(s, cmd), tail);
 }
 
 static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
 {
     respond(node, s, 0x80, code);
     s->state = IDLE;
+}
+
+/* The confirmation of a write that moved this very channel (0x1200 + ch sub1 or sub2 written
+ * through it): it leaves where the client waits for it, on the COB-ID the request was served
+ * on (`id`, `flags`; valid, or the request had not come); the channel keeps its new one. */
+static CO_NOINLINE void confirm_moved(co_node_t *node, uint32_t id, uint8_t flags, uint32_t ok)
+{
+    co_frame_t f = {.id = id, .flags = flags, .len = 8};
+    co_put_u32(&f.data[0], ok);
+    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
+}
+
+/* A whole value from the network into the dictionary with the services' effects, then the
+ * answer: the confirmation (`ok`, its first word; the second is 0) or the abort. */
+static void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
+                  uint32_t ok)
+{
+    uint32_t id = s->reply.id; /* where this request is answered */
+    uint8_t flags = s->reply.flags;
+    co_abort_t abort = co_node_write(node, s->entry, data, len);
+    if (abort != CO_ABORT_NONE) {
+        abort_transfer(node, s, abort);
+    } else if (s->reply.id != id || s->reply.flags != flags) {
+        confirm_moved(node, id, flags, ok);
+    } else {
+        send_words(node, s, ok, 0);
+    }
 }
 
 /* The first bytes of a new transfer's bookkeeping (expedited requests need none). */
@@ -207,12 +196,9 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
     return CO_ABORT_NONE;
 }
 
-/* Pass the buffered bytes on: to the write hook as a piece, or (last) store them whole. */
+/* Pass the buffered bytes of a streamed value on to its write hook as a piece. */
 static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 {
-    if (!streams(s)) {
-        return last ? write_value(node, s, s->buf, s->buf_len) : CO_ABORT_NONE;
-    }
     uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
     co_abort_t abort =
         co_od_write_piece(&node->cfg.od, s->entry, s->done, s->buf, s->buf_len, total, last);
@@ -261,13 +247,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
     uint8_t cmd = d[0];
     if (cmd & 0x02u) { /* expedited */
         uint32_t len = (cmd & 0x01u) ? 4u - ((cmd >> 2) & 3u) : unsized_length(s->entry);
-        co_abort_t abort = write_value(node, s, &d[4], len);
-        if (abort != CO_ABORT_NONE) {
-            abort_transfer(node, s, abort);
-            return;
-        }
-        respond(node, s, 0x60, 0);
-        apply_reloads(node);
+        store(node, s, &d[4], len, head(s, 0x60));
         return;
     }
     if (!CO_CONFIG_SDO_SEGMENTED) {
@@ -287,16 +267,26 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
     respond(node, s, 0x60, 0);
 }
 
-/* The end of a download: sizes agree, then the value goes to the dictionary. */
-static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
+/* The end of a download (the transfer is over): sizes agree, then the value goes to the
+ * dictionary, and the client hears `ok` (the confirmation's first word) or the abort. */
+static void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
 {
+    co_abort_t abort;
     if (s->size_known && received(s) != s->size) {
-        return received(s) > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
+        abort = received(s) > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
+    } else if (streams(s)) {
+        abort = flush(node, s, true);
+    } else if (s->buf_len > CO_SDO_BUF_SIZE) {
+        abort = CO_ABORT_OUT_OF_MEMORY;
+    } else {
+        store(node, s, s->buf, s->buf_len, ok);
+        return;
     }
-    if (!streams(s) && s->buf_len > CO_SDO_BUF_SIZE) {
-        return CO_ABORT_OUT_OF_MEMORY;
+    if (abort != CO_ABORT_NONE) {
+        abort_transfer(node, s, abort);
+    } else {
+        send_words(node, s, ok, 0);
     }
-    return flush(node, s, true);
 }
 
 /* A download segment (command 000t nnnc) of an open segmented download: any case. */
@@ -319,20 +309,17 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
     } else {
         abort = collect(node, s, &d[1], n);
     }
-    bool last = cmd & 0x01u;
-    if (abort == CO_ABORT_NONE && last) {
-        abort = finish_download(node, s);
-    }
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
         return;
     }
     s->toggle = (uint8_t)(toggle ^ TOGGLE);
-    send_words(node, s, 0x20u | toggle, 0);
-    if (last) {
+    if (cmd & 0x01u) { /* the last segment */
         s->state = IDLE;
-        apply_reloads(node);
+        finish_download(node, s, 0x20u | toggle);
+        return;
     }
+    send_words(node, s, 0x20u | toggle, 0);
 }
 
 /* A download segment: the usual one (more to come, the right toggle, room for 7 bytes in
@@ -593,15 +580,8 @@ static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_
         abort_transfer(node, s, CO_ABORT_CRC);
         return;
     }
-    co_abort_t abort = finish_download(node, s);
-    if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
-    }
-    uint8_t r[8] = {0xA1};
-    send(node, s, r);
     s->state = IDLE;
-    apply_reloads(node);
+    finish_download(node, s, 0xA1);
 }
 
 /* ---- block upload */

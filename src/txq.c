@@ -6,7 +6,7 @@
  * the NMT state changes, frames whose service the new state does not allow (an SDO
  * answer queued just before "stop") are dropped instead of sent.
  */
-#include "internal.h"
+#include "kernel.h"
 
 /* Arbitration rank: lower wins. An 11-bit frame beats a 29-bit frame with the
  * same 11 base bits (its IDE bit is dominant). */

@@ -9,6 +9,7 @@ the core's structure should keep small: docs/architecture.md names the one it al
     tools/core_graph.py build/libcanola.a            the largest group, its files and links
     tools/core_graph.py --edges build/libcanola.a    every link of it, with the symbols
     tools/core_graph.py --max-files 8 build/libcanola.a   exit 1 when the group is larger
+    tools/core_graph.py --headers src --max-header-lines 200 ...   and when a header of src/ is
 
 Arguments are object files or static libraries (nm reads both). Only the standard library
 and nm (binutils) are needed.
@@ -120,6 +121,9 @@ def main():
     ap.add_argument("--nm", default="nm", help="the nm to use (default: nm)")
     ap.add_argument("--edges", action="store_true", help="list the group's links and symbols")
     ap.add_argument("--max-files", type=int, help="fail (exit 1) above this many files")
+    ap.add_argument("--headers", help="a folder whose headers (*.h) --max-header-lines checks")
+    ap.add_argument("--max-header-lines", type=int, default=200,
+                    help="fail (exit 1) when a header of --headers is longer (default 200)")
     args = ap.parse_args()
 
     units, defined, undefined = read_symbols(args.objects, args.nm)
@@ -137,10 +141,20 @@ def main():
     if args.edges:
         for a, b in links:
             print(f"  {a} -> {b}: {' '.join(sorted(edges[a][b]))}")
+    failed = False
     if args.max_files is not None and len(largest) > args.max_files:
         print(f"core_graph: the group has more than {args.max_files} files", file=sys.stderr)
-        return 1
-    return 0
+        failed = True
+    if args.headers:
+        for name in sorted(os.listdir(args.headers)):
+            if name.endswith(".h"):
+                with open(os.path.join(args.headers, name)) as f:
+                    lines = sum(1 for _ in f)
+                if lines > args.max_header_lines:
+                    print(f"core_graph: {name} has {lines} lines (more than "
+                          f"{args.max_header_lines})", file=sys.stderr)
+                    failed = True
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

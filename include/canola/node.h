@@ -114,6 +114,8 @@ typedef struct co_route {
     uint8_t slot;
 } co_route_t;
 
+struct co_node_wiring; /* internal (src/kernel.h) */
+
 /** The node. Fields are internal; read them through the functions below. The small fields
  *  the services use most come first, then the configuration, then the tables: Cortex-M
  *  loads and stores reach the first 32 (bytes), 64 (halfwords) or 128 (words) bytes of a
@@ -124,8 +126,6 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint8_t nmt_state;
     bool started;
     uint8_t txq_count;
-    bool sdo_serving;     /**< inside an SDO server request (see sdo_server.c) */
-    bool sdo_reload;      /**< a server channel waits to take new COB-IDs */
     uint16_t services;    /**< co_service_t bits the current NMT state allows */
     uint16_t route_count; /**< receive routes, sorted by key (routes[] below) */
     uint16_t route_hint;  /**< the route found last (short paths only) */
@@ -139,9 +139,10 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint16_t rpdo_sync_end;         /**< 1 + the last active synchronous RPDO (0: none) */
     uint32_t route_groups;          /**< bit (key >> 6) % 32 set for every route: a quick "no" */
     const co_od_entry_t *hb_period; /**< heartbeat producer: 0x1017 or NULL */
-    uint64_t now_us;                /**< time of the latest ingest/poll */
-    uint64_t next_due_us;           /**< earliest deadline of any service */
-    uint64_t hb_next_us;            /**< heartbeat producer: the next heartbeat */
+    const struct co_node_wiring *wiring;  /**< the services' calls up (src/kernel.h) */
+    uint64_t now_us;                      /**< time of the latest ingest/poll */
+    uint64_t next_due_us;                 /**< earliest deadline of any service */
+    uint64_t hb_next_us;                  /**< heartbeat producer: the next heartbeat */
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
     co_node_stats_t stats;
