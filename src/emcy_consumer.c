@@ -21,7 +21,7 @@ void co_emcy_consumers_bind(co_node_t *node)
             co_od_get_uint(&node->cfg.od, 0x1028, (uint8_t)(i + 1), &cob) == CO_OK) {
             e->consumer_cob[e->consumer_count++] = (uint32_t)cob;
         }
-        co_route_cob(node, CO_ROUTE_EMCY, i, (uint32_t)cob);
+        co_route_set(node, CO_ROUTE_EMCY, i, co_cob_route((uint32_t)cob));
     }
 }
 

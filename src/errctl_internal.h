@@ -8,6 +8,7 @@
 #define CANOLA_ERRCTL_INTERNAL_H
 
 #include "kernel.h"
+#include "od_plain.h"
 #include "standin.h"
 
 #define CO_STATE_NONE 0xFFu /* "no state heard yet" */

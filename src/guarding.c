@@ -31,11 +31,9 @@ void co_guard_reset_comm(co_node_t *node)
     node->life_lost = false;
     node->life_deadline_us = CO_TIME_NEVER;
     /* the guarding requests to this node-ID (an unconfigured node has none) */
-    if (node->node_id >= 1 && node->node_id <= 127) {
-        co_route_set(node, CO_ROUTE_GUARD_RTR, 0, GUARD_COB_BASE + node->node_id);
-    } else {
-        co_route_clear(node, CO_ROUTE_GUARD_RTR, 0);
-    }
+    bool configured = node->node_id >= 1 && node->node_id <= 127;
+    co_route_set(node, CO_ROUTE_GUARD_RTR, 0,
+                 configured ? GUARD_COB_BASE + node->node_id : CO_ROUTE_OFF);
 }
 
 void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
@@ -141,10 +139,9 @@ co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uin
     if (guard_ms != 0) {
         slot->life_deadline_us = node->now_us + watch_life_us(slot);
         co_node_schedule(node, node->now_us);
-        co_route_set(node, CO_ROUTE_GUARD_REPLY, watch, GUARD_COB_BASE + node_id);
-    } else {
-        co_route_clear(node, CO_ROUTE_GUARD_REPLY, watch);
     }
+    co_route_set(node, CO_ROUTE_GUARD_REPLY, watch,
+                 guard_ms != 0 ? GUARD_COB_BASE + node_id : CO_ROUTE_OFF);
     return CO_OK;
 }
 

@@ -23,11 +23,7 @@ static void consumer_load(co_node_t *node, uint8_t slot)
     c->state = CO_STATE_NONE;
     c->ever_heard = false;
     c->deadline_us = CO_TIME_NEVER;
-    if (used) {
-        co_route_set(node, CO_ROUTE_HB_CONSUMER, slot, 0x700u + c->node_id);
-    } else {
-        co_route_clear(node, CO_ROUTE_HB_CONSUMER, slot);
-    }
+    co_route_set(node, CO_ROUTE_HB_CONSUMER, slot, used ? 0x700u + c->node_id : CO_ROUTE_OFF);
 }
 
 co_err_t co_hb_consumers_bind(co_node_t *node)

@@ -12,23 +12,7 @@ void co_node_schedule(co_node_t *node, uint64_t due_us)
     }
 }
 
-uint16_t co_nmt_services(co_nmt_state_t state)
-{
-    switch (state) {
-    case CO_NMT_INITIALISING:
-        return CO_SVC_BOOTUP | CO_SVC_LSS;
-    case CO_NMT_PRE_OPERATIONAL:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-               CO_SVC_EMCY | CO_SVC_LSS;
-    case CO_NMT_OPERATIONAL:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-               CO_SVC_EMCY | CO_SVC_PDO | CO_SVC_LSS;
-    case CO_NMT_STOPPED:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
-    default:
-        return CO_SVC_LSS;
-    }
-}
+uint16_t co_nmt_services(co_nmt_state_t state) { return co_nmt_gate((uint8_t)state); }
 
 bool co_nmt_allows(co_nmt_state_t state, co_service_t service)
 {

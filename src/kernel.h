@@ -50,14 +50,17 @@ enum co_route_kind {
     CO_ROUTE_MGR_BOOTUP,  /* 0x700 + n of a slave the manager boots (slot = n) */
 };
 
-/* The route of `kind` and `slot` takes the frames of `key` from now on (a COB-ID's key: see
- * co_cob_key), in place of the key it had. A full table drops the route. O(routes). */
+#define CO_ROUTE_OFF UINT32_MAX /* the key of no frame: no route */
+
+/* The route of `kind` and `slot` takes the frames of `key` from now on (a route key: see
+ * co_cob_key), in place of the key it had; CO_ROUTE_OFF: it goes. A full table drops a new
+ * route. O(routes). */
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key);
-/* The route of `kind` and `slot` goes (none: nothing changes). O(routes). */
-void co_route_clear(co_node_t *node, uint8_t kind, uint8_t slot);
-/* co_route_set for the identifier a COB-ID value names, co_route_clear when bit 31 says
- * "not valid". */
-void co_route_cob(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t cob);
+/* The route key of a COB-ID value, CO_ROUTE_OFF when bit 31 says "not valid". */
+static inline uint32_t co_cob_route(uint32_t cob)
+{
+    return (cob & CO_COB_INVALID) ? CO_ROUTE_OFF : co_cob_key(cob);
+}
 /* The route that takes the frames of `key` (the lowest kind of its owners), or NULL. */
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
 
@@ -134,31 +137,30 @@ static inline uint64_t co_ms_to_us(uint16_t ms) { return (uint32_t)ms * 1000u; }
 /* Any 32-bit count of milliseconds (guard time x life time factor) in microseconds. */
 static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
 
-/* ---- the dictionary's parameters (kernel.c); the NMT gate is co_nmt_services (kernel.c) */
+/* ---- the dictionary's parameters (kernel.c; entries found once: co_entry_uint, od_plain.h) */
 
 /* The value of an optional integer entry, `absent` when the dictionary lacks it (or it is
  * no integer): the services' parameters, 32 bits at most. */
 uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent);
 
-/* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place (a short path). */
-static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
+/* ---- the NMT gate: the services each state allows (co_nmt_services, canola/nmt.h; inline
+ * for the state changes). The send and receive paths test node->services, set from it. */
+static inline uint16_t co_nmt_gate(uint8_t state)
 {
-    if (entry == NULL) {
-        return 0;
+    uint16_t stopped = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
+    uint16_t pre = stopped | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME | CO_SVC_EMCY;
+    switch (state) {
+    case CO_NMT_INITIALISING:
+        return CO_SVC_BOOTUP | CO_SVC_LSS;
+    case CO_NMT_PRE_OPERATIONAL:
+        return pre;
+    case CO_NMT_OPERATIONAL:
+        return pre | CO_SVC_PDO;
+    case CO_NMT_STOPPED:
+        return stopped;
+    default:
+        return CO_SVC_LSS;
     }
-    if (CO_SHORT_PATHS && entry->value != NULL) {
-        switch (entry->type) {
-        case CO_TYPE_UNSIGNED8:
-            return *(const uint8_t *)entry->value;
-        case CO_TYPE_UNSIGNED16:
-            return *(const uint16_t *)entry->value;
-        case CO_TYPE_UNSIGNED32:
-            return *(const uint32_t *)entry->value;
-        default:
-            break;
-        }
-    }
-    return co_od_entry_uint(entry);
 }
 
 /* ---- calls up to the node: exactly the ones CiA 301 makes necessary

@@ -246,7 +246,7 @@ static bool end_quiet_time(co_node_t *node)
         return false;
     }
     s->quiet_until_us = 0;
-    node->services = co_nmt_services((co_nmt_state_t)node->nmt_state);
+    node->services = co_nmt_gate(node->nmt_state);
     return true;
 }
 

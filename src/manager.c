@@ -444,11 +444,8 @@ void co_manager_reset_comm(co_node_t *node)
 {
     const co_manager_t *m = node->manager;
     for (uint8_t n = 1; m != NULL && n <= 127; n++) {
-        if (listed(m, n) && n != node->node_id) {
-            co_route_set(node, CO_ROUTE_MGR_BOOTUP, n, 0x700u + n);
-        } else {
-            co_route_clear(node, CO_ROUTE_MGR_BOOTUP, n);
-        }
+        bool slave_n = listed(m, n) && n != node->node_id;
+        co_route_set(node, CO_ROUTE_MGR_BOOTUP, n, slave_n ? 0x700u + n : CO_ROUTE_OFF);
     }
 }
 

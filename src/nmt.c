@@ -23,8 +23,9 @@ const char *co_nmt_state_name(uint8_t state)
 
 co_nmt_state_t co_nmt_state(const co_node_t *node) { return (co_nmt_state_t)node->nmt_state; }
 
-/* The state changed: services that depend on it start, stop or catch up. */
-static void state_changed(co_node_t *node)
+/* The state changed: services that depend on it start, stop or catch up. (Out of line: the
+ * state's own change, inline in co_nmt_apply, stays short.) */
+static CO_FAST_NOINLINE void state_changed(co_node_t *node)
 {
     co_txq_purge(node);
     if (!(node->services & CO_SVC_SDO)) {
@@ -36,13 +37,13 @@ static void state_changed(co_node_t *node)
     co_pdo_state_entered(node);
 }
 
-static void enter(co_node_t *node, co_nmt_state_t state)
+static CO_INLINE void enter(co_node_t *node, co_nmt_state_t state)
 {
     if (node->nmt_state == (uint8_t)state) {
         return;
     }
     node->nmt_state = (uint8_t)state;
-    node->services = co_nmt_services(state);
+    node->services = co_nmt_gate((uint8_t)state);
     state_changed(node);
     if (node->cfg.on_state) {
         node->cfg.on_state(node->cfg.user, state);

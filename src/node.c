@@ -40,7 +40,7 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     node->wiring = &k_wiring;
     node->node_id = id;
     node->nmt_state = CO_NMT_INITIALISING;
-    node->services = co_nmt_services(CO_NMT_INITIALISING);
+    node->services = co_nmt_gate(CO_NMT_INITIALISING);
     node->next_due_us = CO_TIME_NEVER;
     node->hb_next_us = CO_TIME_NEVER;
     co_guard_bind(node);

@@ -12,6 +12,7 @@
 #include "kernel.h"
 #include "lss_internal.h"
 #include "manager_internal.h"
+#include "od_plain.h"
 #include "pdo_internal.h"
 #include "sdo_internal.h"
 #include "storage_internal.h"

@@ -1,13 +1,35 @@
 /*
- * src/od_plain.h -- plain values: dictionary entries whose storage is their wire form, which
- * the short paths (the SDO server's answers, the node's writes, the PDOs' copies) move without
- * the dictionary's general read and write. Not installed.
+ * src/od_plain.h -- values read and written in place: the parameters the services read on
+ * every SYNC or poll, and entries whose storage is their wire form, which the short paths
+ * (the SDO server's answers, the node's writes, the PDOs' copies) move without the
+ * dictionary's general read and write. Not installed.
  */
 #ifndef CANOLA_OD_PLAIN_H
 #define CANOLA_OD_PLAIN_H
 
 #include "build.h"
 #include "canola/od.h"
+
+/* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place (a short path). */
+static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
+{
+    if (entry == NULL) {
+        return 0;
+    }
+    if (CO_SHORT_PATHS && entry->value != NULL) {
+        switch (entry->type) {
+        case CO_TYPE_UNSIGNED8:
+            return *(const uint8_t *)entry->value;
+        case CO_TYPE_UNSIGNED16:
+            return *(const uint16_t *)entry->value;
+        case CO_TYPE_UNSIGNED32:
+            return *(const uint32_t *)entry->value;
+        default:
+            break;
+        }
+    }
+    return co_od_entry_uint(entry);
+}
 
 /* The types whose native storage is their wire form (as in od.c: numbers as wide as their
  * wire form, on a little-endian host; BOOLEAN is left to the general paths, which check

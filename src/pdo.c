@@ -137,12 +137,9 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
 static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
 {
     bool rtr_only = p->type == 252 || p->type == 253;
-    uint8_t kind = tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO;
-    if (pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)))) {
-        co_route_set(node, kind, (uint8_t)num, co_cob_key(p->cob_id));
-    } else {
-        co_route_clear(node, kind, (uint8_t)num);
-    }
+    bool listens = pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)));
+    co_route_set(node, tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO, (uint8_t)num,
+                 listens ? co_cob_key(p->cob_id) : CO_ROUTE_OFF);
 }
 
 static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)

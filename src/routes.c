@@ -62,15 +62,10 @@ static void remove_at(co_node_t *node, uint16_t at)
     }
 }
 
-/* The set of routes changed: the quick "no" is counted again, the hint starts over at the
- * first route (the first of its key, as a hint must be), and the driver hears of it. */
+/* The set of routes changed: the hint starts over at the first route (the first of its key,
+ * as a hint must be), and the driver hears of it. */
 static void changed(co_node_t *node)
 {
-    uint32_t groups = 0;
-    for (uint16_t i = 0; i < node->route_count; i++) {
-        groups |= co_route_group(node->routes[i].key);
-    }
-    node->route_groups = groups;
     node->route_hint = 0;
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
@@ -80,46 +75,31 @@ static void changed(co_node_t *node)
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 {
     uint16_t at = owned(node, kind, slot);
-    if (at < node->route_count) {
-        if (node->routes[at].key == key) {
-            return; /* already there */
+    bool had = at < node->route_count;
+    if (had ? node->routes[at].key == key : key == CO_ROUTE_OFF) {
+        return; /* nothing changes */
+    }
+    if (had) {
+        remove_at(node, at);
+    }
+    if (key != CO_ROUTE_OFF && node->route_count < CO_RX_ROUTES_MAX) { /* full: dropped */
+        /* Insertion keeps the array sorted; n is small and this runs only on changes. */
+        at = node->route_count;
+        while (at > 0 && !before(&node->routes[at - 1u], key, kind, slot)) {
+            co_copy(&node->routes[at], &node->routes[at - 1u], sizeof node->routes[0]);
+            at--;
         }
-        remove_at(node, at);
-    } else if (node->route_count >= CO_RX_ROUTES_MAX) {
-        return; /* a full table drops the route */
+        /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
+        co_route_t *r = &node->routes[at];
+        r->key = key;
+        r->service = kind_service(kind);
+        r->kind = kind;
+        r->slot = slot;
+        node->route_count++;
+        /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
+        node->route_groups |= co_route_group(key);
     }
-    /* Insertion keeps the array sorted; n is small and this runs only on changes. */
-    at = node->route_count;
-    while (at > 0 && !before(&node->routes[at - 1u], key, kind, slot)) {
-        co_copy(&node->routes[at], &node->routes[at - 1u], sizeof node->routes[0]);
-        at--;
-    }
-    /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
-    co_route_t *r = &node->routes[at];
-    r->key = key;
-    r->service = kind_service(kind);
-    r->kind = kind;
-    r->slot = slot;
-    node->route_count++;
     changed(node);
-}
-
-void co_route_clear(co_node_t *node, uint8_t kind, uint8_t slot)
-{
-    uint16_t at = owned(node, kind, slot);
-    if (at < node->route_count) {
-        remove_at(node, at);
-        changed(node);
-    }
-}
-
-void co_route_cob(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t cob)
-{
-    if (cob & CO_COB_INVALID) {
-        co_route_clear(node, kind, slot);
-    } else {
-        co_route_set(node, kind, slot, co_cob_key(cob));
-    }
 }
 
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)

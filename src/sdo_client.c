@@ -422,7 +422,7 @@ static co_abort_t on_block_download_end(co_node_t *node, co_sdo_client_t *c, con
  * without valid COB-IDs, to nothing). */
 static void route(co_node_t *node, uint8_t ch)
 {
-    co_route_cob(node, CO_ROUTE_SDO_CLIENT, ch, node->sdo_clients[ch].cob_rx);
+    co_route_set(node, CO_ROUTE_SDO_CLIENT, ch, co_cob_route(node->sdo_clients[ch].cob_rx));
 }
 
 /* Take the channel's parameters from 0x1280 + ch when the dictionary has them: sub1

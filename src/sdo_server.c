@@ -53,7 +53,7 @@ static void load_channel(co_node_t *node, uint8_t ch)
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
     co_frame_address(&s->reply, s->cob_tx, 8);
-    co_route_cob(node, CO_ROUTE_SDO_SERVER, ch, s->cob_rx);
+    co_route_set(node, CO_ROUTE_SDO_SERVER, ch, co_cob_route(s->cob_rx));
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -133,28 +133,35 @@ static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_a
     s->state = IDLE;
 }
 
-/* The confirmation of a write that moved this very channel (0x1200 + ch sub1 or sub2 written
- * through it): it leaves where the client waits for it, on the COB-ID the request was served
- * on (`id`, `flags`; valid, or the request had not come); the channel keeps its new one. */
-static CO_NOINLINE void confirm_moved(co_node_t *node, uint32_t id, uint8_t flags, uint32_t ok)
+/* store() of a server parameter (0x1200..0x127F), which may move this very channel (sub1 or
+ * sub2 written through it): the write takes effect at once, and its confirmation still leaves
+ * where the client waits for it, on the COB-ID the request was served on. */
+static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
+                                        uint32_t len, uint32_t ok)
 {
-    co_frame_t f = {.id = id, .flags = flags, .len = 8};
-    co_put_u32(&f.data[0], ok);
-    (void)co_node_send_hot(node, &f, CO_SVC_SDO);
+    co_frame_t served = s->reply; /* valid: else the request had not come */
+    co_abort_t abort = co_node_write(node, s->entry, data, len);
+    if (abort != CO_ABORT_NONE) {
+        abort_transfer(node, s, abort);
+        return;
+    }
+    co_put_u32(&served.data[0], ok);
+    co_put_u32(&served.data[4], 0);
+    (void)co_node_send_hot(node, &served, CO_SVC_SDO);
 }
 
 /* A whole value from the network into the dictionary with the services' effects, then the
  * answer: the confirmation (`ok`, its first word; the second is 0) or the abort. */
-static void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
-                  uint32_t ok)
+static CO_INLINE void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
+                            uint32_t ok)
 {
-    uint32_t id = s->reply.id; /* where this request is answered */
-    uint8_t flags = s->reply.flags;
+    if ((s->entry->index >> 7) == (0x1200u >> 7)) {
+        store_parameter(node, s, data, len, ok);
+        return;
+    }
     co_abort_t abort = co_node_write(node, s->entry, data, len);
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
-    } else if (s->reply.id != id || s->reply.flags != flags) {
-        confirm_moved(node, id, flags, ok);
     } else {
         send_words(node, s, ok, 0);
     }
@@ -719,8 +726,8 @@ static CO_INLINE bool may_access(const co_od_entry_t *e, bool write)
 
 /* A new transfer's object: found and accessible in that direction, or the request is
  * answered with the abort code (NULL). */
-static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, const uint8_t *d,
-                                       bool write)
+static CO_INLINE const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s,
+                                                 const uint8_t *d, bool write)
 {
     s->state = IDLE; /* a transfer still open ends here */
     s->index = co_get_u16(&d[1]);

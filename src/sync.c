@@ -58,11 +58,8 @@ void co_sync_reset_comm(co_node_t *node)
     s->last_counter = 0;
     co_sync_producer_reset(node);
     /* Every node with 0x1005 consumes SYNC; bit 31 means nothing for this object. */
-    if (co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL) {
-        co_route_set(node, CO_ROUTE_SYNC, 0, co_cob_key(s->cob_id));
-    } else {
-        co_route_clear(node, CO_ROUTE_SYNC, 0);
-    }
+    bool consumes = co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL;
+    co_route_set(node, CO_ROUTE_SYNC, 0, consumes ? co_cob_key(s->cob_id) : CO_ROUTE_OFF);
 }
 
 co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,

@@ -7,6 +7,7 @@
 #define CANOLA_SYNC_INTERNAL_H
 
 #include "kernel.h"
+#include "od_plain.h"
 #include "standin.h"
 
 /* sync.c: the consumer. */

@@ -78,11 +78,7 @@ void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 static void route(co_node_t *node)
 {
     uint32_t cob = node->time.cob_id;
-    if (cob & TIME_CONSUMER) {
-        co_route_set(node, CO_ROUTE_TIME, 0, co_cob_key(cob));
-    } else {
-        co_route_clear(node, CO_ROUTE_TIME, 0);
-    }
+    co_route_set(node, CO_ROUTE_TIME, 0, (cob & TIME_CONSUMER) ? co_cob_key(cob) : CO_ROUTE_OFF);
 }
 
 void co_time_reset_comm(co_node_t *node)

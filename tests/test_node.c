@@ -150,6 +150,36 @@ static void test_routes_and_acceptance(void)
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
 }
 
+/* A COB-ID with two owners (a configuration may make one): both routes are kept and listed,
+ * the one of the lower kind (src/kernel.h orders them: TIME before the PDOs) takes the
+ * frames, whichever was set first, and the other takes over while it is gone. */
+static void test_two_owners_of_one_cob_id(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_nmt_apply(&t.node, CO_NMT_CMD_START);
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE); /* RPDO1 off, then moved */
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x100u), CO_ABORT_NONE);      /* onto TIME's 0x100 */
+    CHECK_EQ(co_node_route_count(&t.node), 7);
+    CHECK_EQ(co_node_route_id(&t.node, 2), 0x100);
+    CHECK_EQ(co_node_route_id(&t.node, 3), 0x100);
+    ingest(&t, 1, 0x100, "11 22 33 44"); /* to TIME, for which 4 bytes are malformed */
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    CHECK_EQ(t.od.outputs[0], 0);
+
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x100u), CO_ABORT_NONE); /* TIME stops consuming */
+    CHECK_EQ(co_node_route_count(&t.node), 6);
+    ingest(&t, 2, 0x100, "11 22 33 44");
+    CHECK_EQ(t.od.outputs[0], 0x11);
+    CHECK_EQ(t.od.outputs[3], 0x44);
+
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x80000100u), CO_ABORT_NONE); /* and starts again */
+    ingest(&t, 3, 0x100, "55 66 77 88");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 2);
+    CHECK_EQ(t.od.outputs[0], 0x11);
+}
+
 static void test_od_access_through_node(void)
 {
     test_node_t t;
@@ -206,6 +236,7 @@ int main(void)
     RUN(test_queue_overflow_is_counted_and_reported);
     RUN(test_driver_error_drops_frame);
     RUN(test_routes_and_acceptance);
+    RUN(test_two_owners_of_one_cob_id);
     RUN(test_od_access_through_node);
     return check_summary();
 }

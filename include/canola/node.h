@@ -134,11 +134,11 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint16_t rpdo_count;
     uint16_t tpdo_count;
     /* The three below are kept by the short paths only (a size build looks at every PDO). */
-    uint16_t tpdo_listeners;        /**< active TPDOs a changed value can trigger */
-    uint16_t tpdo_sync_end;         /**< 1 + the last active TPDO a SYNC drives (0: none) */
-    uint16_t rpdo_sync_end;         /**< 1 + the last active synchronous RPDO (0: none) */
-    uint32_t route_groups;          /**< bit (key >> 6) % 32 set for every route: a quick "no" */
-    const co_od_entry_t *hb_period; /**< heartbeat producer: 0x1017 or NULL */
+    uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
+    uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
+    uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
+    uint32_t route_groups;   /**< bit (key >> 6) % 32 of every route (and gone): a quick "no" */
+    const co_od_entry_t *hb_period;       /**< heartbeat producer: 0x1017 or NULL */
     const struct co_node_wiring *wiring;  /**< the services' calls up (src/kernel.h) */
     uint64_t now_us;                      /**< time of the latest ingest/poll */
     uint64_t next_due_us;                 /**< earliest deadline of any service */
