@@ -79,10 +79,10 @@ bool co_emcy_producer_off(const co_node_t *node)
     return (producer_cob(node) & CO_COB_INVALID) != 0;
 }
 
-void co_emcy_frame_send(co_node_t *node, const uint8_t data[8])
+void co_emcy_frame_send(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 {
     /* a full tx queue counts the loss itself */
-    (void)co_node_send_cob(node, producer_cob(node), data, 8, CO_SVC_EMCY);
+    (void)co_node_send_cob(node, producer_cob(node), data, CO_EMCY_FRAME_LEN, CO_SVC_EMCY);
 }
 
 /* One EMCY frame: out now, or after the inhibit time (emcy_queue.c). */
@@ -91,7 +91,7 @@ static void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[
     if (co_emcy_producer_off(node)) {
         return; /* EMCY off: errors and history are kept, nothing is sent */
     }
-    uint8_t data[8];
+    uint8_t data[CO_EMCY_FRAME_LEN];
     co_put_u16(data, code);
     data[2] = reg;
     co_copy(&data[3], mfr, 5);

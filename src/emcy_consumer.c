@@ -28,7 +28,7 @@ void co_emcy_consumers_bind(co_node_t *node)
 void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot; /* every consumer entry is handled alike */
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_EMCY_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }

@@ -15,17 +15,17 @@
 void co_emcy_reset_comm(co_node_t *node);
 void co_emcy_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1003, 0x1014.., 0x1028 */
 bool co_emcy_producer_off(const co_node_t *node);                  /* 0x1014 bit 31 */
-void co_emcy_frame_send(co_node_t *node, const uint8_t data[8]);
+void co_emcy_frame_send(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN]);
 
 /* emcy_queue.c: without it frames leave at once. */
 #if CO_EMCY_QUEUE_LEN > 0
-void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8]);
+void co_emcy_queue_emit(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN]);
 void co_emcy_queue_reset(co_node_t *node);
 void co_emcy_queue_clear(co_node_t *node);
 uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us);
 void co_emcy_state_entered(co_node_t *node);
 #else
-static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
+static inline void co_emcy_queue_emit(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 {
     co_emcy_frame_send(node, data);
 }

@@ -61,7 +61,7 @@ uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us)
     return CO_TIME_NEVER;
 }
 
-void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
+void co_emcy_queue_emit(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 {
     co_emcy_t *e = &node->emcy;
     (void)co_emcy_poll(node, node->now_us); /* make room: frames due may leave first */
@@ -69,7 +69,7 @@ void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
         e->dropped++; /* the newest is the one lost: the queue keeps the order of events */
         return;
     }
-    co_copy(e->queue[e->queue_count], data, 8);
+    co_copy(e->queue[e->queue_count], data, CO_EMCY_FRAME_LEN);
     e->queue_count++;
     co_emcy_state_entered(node);
 }

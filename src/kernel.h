@@ -79,7 +79,7 @@ static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) &
  * CO_ERR_STATE when the NMT state does not allow it now, and dropped from the queue if the
  * state stops allowing it before the driver takes it. */
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service);
-/* Send `len` (0..8) bytes of `data` (NULL: none) on the identifier a COB-ID value names, as
+/* Send `len` (up to CO_FRAME_DATA_MAX) bytes of `data` on the identifier a COB-ID value names, as
  * co_node_send_as does; the frame's other data bytes are zero. */
 co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
                           uint16_t service);

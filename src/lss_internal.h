@@ -9,6 +9,8 @@
 #include "kernel.h"
 #include "standin.h"
 
+#define CO_LSS_FRAME_LEN 8u /* every LSS frame: the command, then 7 bytes */
+
 #if CO_CONFIG_LSS_SLAVE
 void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 uint64_t co_lss_slave_poll(co_node_t *node, uint64_t now_us);

@@ -16,8 +16,8 @@ static uint32_t timeout_ms(const co_lss_master_t *m)
 
 static void send(co_node_t *node, uint8_t cs, const uint8_t *payload, uint8_t n)
 {
-    co_frame_t f = {.id = CO_LSS_COB_MASTER, .len = 8, .data = {cs}};
-    for (uint8_t i = 0; i < n && i < 7; i++) {
+    co_frame_t f = {.id = CO_LSS_COB_MASTER, .len = CO_LSS_FRAME_LEN, .data = {cs}};
+    for (uint8_t i = 0; i < n && i < CO_LSS_FRAME_LEN - 1u; i++) {
         f.data[1 + i] = payload[i];
     }
     (void)co_node_send_as(node, &f, CO_SVC_LSS);
@@ -95,7 +95,7 @@ void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame
     (void)slot;
     co_lss_master_t *m = &node->lss_master;
     const uint8_t *d = frame->data;
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_LSS_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }

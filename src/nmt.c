@@ -5,6 +5,8 @@
  */
 #include "node_internal.h"
 
+#define NMT_FRAME_LEN 2u /* command specifier, node-ID (0: all) */
+
 const char *co_nmt_state_name(uint8_t state)
 {
     switch (state) {
@@ -118,7 +120,7 @@ co_err_t co_nmt_apply(co_node_t *node, co_nmt_cmd_t cmd)
 void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot;
-    if (frame->len != 2 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != NMT_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }
@@ -143,8 +145,8 @@ co_err_t co_nmt_send(co_node_t *node, co_nmt_cmd_t cmd, uint8_t target)
     if (!known_command(cmd) || target > 127) {
         return CO_ERR_ARG;
     }
-    uint8_t data[2] = {(uint8_t)cmd, target};
-    (void)co_node_send_cob(node, 0x000, data, 2, 0);
+    uint8_t data[NMT_FRAME_LEN] = {(uint8_t)cmd, target};
+    (void)co_node_send_cob(node, 0x000, data, NMT_FRAME_LEN, 0);
     if (target == 0 || target == node->node_id) {
         (void)co_nmt_apply(node, cmd);
     }

@@ -38,8 +38,8 @@ uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
 #define PDO_F_WAITING 0x10u   /* RPDO 0..240: data[] waits for the next SYNC */
 #define PDO_F_TIMED_OUT 0x20u /* RPDO: deadline missed and reported, until the next RPDO */
 #define PDO_F_LEN_ERROR 0x40u /* RPDO: raised 0x8210/0x8220, until a frame of the right length */
-
 #define PDO_RTR_NOT_ALLOWED 0x40000000u /* TPDO COB-ID bit 30 */
+#define PDO_VALUE_MAX 8u                /* bytes of the widest mappable value (64 bits) */
 
 static inline void pdo_set(co_pdo_t *p, unsigned f) { p->flags = (uint8_t)(p->flags | f); }
 static inline void pdo_clear(co_pdo_t *p, unsigned f) { p->flags = (uint8_t)(p->flags & ~f); }
