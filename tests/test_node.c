@@ -228,6 +228,119 @@ static void test_od_access_through_node(void)
     CHECK_EQ(co_node_set_uint(&t.node, 0x1000, 7, 1), CO_ABORT_NO_SUB);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static co_err_t no_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_OK;
+}
+
+static co_err_t busy_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_ERR_BUSY;
+}
+
+static int g_sent;
+static co_err_t counting_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    g_sent++;
+    return CO_OK;
+}
+
+static void test_node_init_arguments(void)
+{
+    static example_od_t od;
+    static co_node_t node;
+    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&od, 0)};
+    CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_ARG); /* no tx */
+    cfg.driver.tx = no_tx;
+    CHECK_EQ(co_node_init(NULL, &cfg), CO_ERR_ARG);
+    CHECK_EQ(co_node_init(&node, NULL), CO_ERR_ARG);
+    co_node_config_t no_od = cfg;
+    no_od.od.entries = NULL;
+    CHECK_EQ(co_node_init(&node, &no_od), CO_ERR_ARG);
+    cfg.node_id = 0;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_ARG);
+    cfg.node_id = 5;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    /* Nothing runs before start. */
+    CHECK_EQ(co_node_poll(&node, 10 * MS), CO_TIME_NEVER);
+}
+
+static void test_local_reads_of_the_wrong_kind(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint64_t v = 7;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2FFF, 0, &v), CO_ERR_NOT_FOUND);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2006, 0, &v), CO_ERR_ARG); /* REAL32 */
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2002, 0, &v), CO_ERR_ARG); /* a string */
+    CHECK_EQ(v, 7);
+    /* A network read into a buffer too small for the value. */
+    uint8_t buf[2];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&t.node, 0x2000, 0, buf, sizeof buf, &len), CO_ABORT_LEN_HIGH);
+}
+
+static void test_queue_overflow_and_driver_errors_without_callback(void)
+{
+    static example_od_t od;
+    static co_node_t node;
+    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&od, 0)};
+    cfg.driver.tx = busy_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0); /* the boot-up waits */
+    co_frame_t f = {.id = 0x300, .len = 1};
+    for (int i = 0; i < CO_TX_QUEUE_LEN; i++) {
+        co_node_send(&node, &f);
+    }
+    CHECK_EQ(co_node_stats(&node)->tx_overflow, 1);
+    cfg.driver.tx = failing_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0);
+    CHECK_EQ(co_node_stats(&node)->tx_dropped, 1);
+    /* An SDO answer the driver refuses for good is dropped as well, not queued. */
+    co_frame_t read = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    co_node_ingest(&node, 0, &read);
+    CHECK_EQ(co_node_stats(&node)->tx_dropped, 2);
+    CHECK_EQ(co_node_stats(&node)->tx_queued, 0);
+    /* The application's own frames carry no service: a state change does not purge them,
+     * while a service's frame the new state forbids is dropped. */
+    cfg.driver.tx = busy_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0);
+    co_node_send(&node, &f);
+    co_frame_t req = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    co_node_ingest(&node, 0, &req); /* its SDO response waits in the queue */
+    co_nmt_apply(&node, CO_NMT_CMD_STOP);
+    CHECK_EQ(co_node_stats(&node)->tx_gated, 1);
+    node.cfg.driver.tx = counting_tx;
+    g_sent = 0;
+    co_node_poll(&node, 1 * MS);
+    CHECK_EQ(g_sent, 2); /* the boot-up and the application's frame, not the SDO answer */
+}
+
+/* An 11-bit frame whose identifier does not fit 11 bits is malformed, not a match for a
+ * 29-bit route or anything else. */
+static void test_standard_frame_with_an_oversized_id_is_malformed(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_frame_t bad = frm(0x000, "01 05");
+    bad.id = 0x80000000u; /* no CO_FRAME_EXT */
+    co_node_ingest(&t.node, 1, &bad);
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
+}
+
 int main(void)
 {
     RUN(test_init_rejects_bad_config);
@@ -238,5 +351,9 @@ int main(void)
     RUN(test_routes_and_acceptance);
     RUN(test_two_owners_of_one_cob_id);
     RUN(test_od_access_through_node);
+    RUN(test_node_init_arguments);
+    RUN(test_local_reads_of_the_wrong_kind);
+    RUN(test_queue_overflow_and_driver_errors_without_callback);
+    RUN(test_standard_frame_with_an_oversized_id_is_malformed);
     return check_summary();
 }
