@@ -4,9 +4,9 @@
  *
  * Data flows one way. The driver hands each received frame to
  * co_node_ingest(); the node finds the frame's COB-ID in its receive routes (a
- * sorted table rebuilt whenever a COB-ID object changes; O(log routes), no scan
- * over services), checks that the NMT state allows the service, and the
- * service updates its state and the object dictionary. Frames to send go out
+ * sorted table in which each service keeps the COB-IDs it listens to; O(log
+ * routes), no scan over services), checks that the NMT state allows the
+ * service, and the service updates its state and the object dictionary. Frames to send go out
  * through the driver's tx callback; when it reports CO_ERR_BUSY they wait in a
  * bounded queue (CO_TX_QUEUE_LEN) ordered by priority (lowest COB-ID first,
  * first-in first-out among equal IDs) and leave on the next co_node_poll().
@@ -221,7 +221,7 @@ uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame);
 
 /** Number of receive routes and the i-th routed COB-ID (bit 31 set for 29-bit), for
- *  drivers that program hardware filters. */
+ *  drivers that program hardware filters (a COB-ID two services listen to comes twice). */
 uint32_t co_node_route_count(const co_node_t *node);
 uint32_t co_node_route_id(const co_node_t *node, uint32_t i);
 
@@ -238,7 +238,7 @@ const co_node_stats_t *co_node_stats(const co_node_t *node);
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame);
 
 /* ---- Object dictionary access through the node, so that writes take effect on the
- * services (a new 0x1017 period at once, 0x1016 entries rebuilt, ...). */
+ * services (a new 0x1017 period at once, 0x1016 entries reloaded, ...). */
 
 /** Write a wire value as the network would (access rights, length, limits, hooks,
  *  service checks). Returns CO_ABORT_NONE or the CiA abort code. */
