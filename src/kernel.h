@@ -51,7 +51,6 @@ enum co_route_kind {
 };
 
 #define CO_ROUTE_OFF UINT32_MAX /* the key of no frame: no route */
-
 /* The route of `kind` and `slot` takes the frames of `key` from now on (a route key: see
  * co_cob_key), in place of the key it had; CO_ROUTE_OFF: it goes. A full table drops a new
  * route. O(routes). */
@@ -63,7 +62,6 @@ static inline uint32_t co_cob_route(uint32_t cob)
 }
 /* The route that takes the frames of `key` (the lowest kind of its owners), or NULL. */
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
-
 /* The route key of a received frame. */
 static inline uint32_t co_route_key(const co_frame_t *frame)
 {
@@ -83,18 +81,16 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
  * co_node_send_as does; the frame's other data bytes are zero. */
 co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
                           uint16_t service);
-/* Address a frame of `len` bytes to a COB-ID value (id, flags, length; data untouched). */
+/* Address a frame of `len` bytes to a COB-ID value (its id, flags and length). */
 void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len);
 /* Drop the waiting frames of services the NMT state does not allow (at every state change). */
 void co_txq_purge(co_node_t *node);
 /* Hand the waiting frames to the driver (co_node_poll). */
 void co_txq_flush(co_node_t *node);
-/* The driver did not take a frame handed to it directly: queue it (CO_ERR_BUSY) or count it
- * dropped, as co_node_send_as does. */
+/* A frame the driver did not take: queued (CO_ERR_BUSY) or counted dropped, as co_node_send_as. */
 co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t service, co_err_t err);
 
-/* True when nothing waits in the transmit queue: a sender of many frames (block transfer)
- * sends only then, so it never floods the queue; poll resumes it. */
+/* Nothing waits to be sent: a sender of many frames (block transfer) sends only then. */
 static inline bool co_txq_idle(const co_node_t *node) { return node->txq_count == 0; }
 
 /* co_node_send_as for a sender that knows the queue is empty (co_txq_idle): the driver is
@@ -133,7 +129,11 @@ void co_node_schedule(co_node_t *node, uint64_t due_us);
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 /* Milliseconds of a 16-bit object (a period, a time-out) in microseconds: they fit 32 bits,
  * so the multiply is a 32-bit one (no 64-bit helper call on Cortex-M0). */
-static inline uint64_t co_ms_to_us(uint16_t ms) { return (uint32_t)ms * 1000u; }
+static inline uint64_t co_ms_to_us(uint16_t ms)
+{
+    uint32_t us = (uint32_t)ms * 1000u;
+    return us;
+}
 /* Any 32-bit count of milliseconds (guard time x life time factor) in microseconds. */
 static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
 
