@@ -220,23 +220,28 @@ static void test_nmt_before_start(void)
 
 /* ---- NMT states and the frames that wait in the transmit queue */
 
+/* An SDO response that waits in the queue (driver busy) while the NMT command `cmd` arrives
+ * and takes the node to `state`; then the driver is free again. */
+static void queued_response_then(test_node_t *t, const char *cmd, co_nmt_state_t state)
+{
+    test_node_init(t, 5, 0);
+    co_node_start(&t->node, 0);
+    fake_clear(&t->bus);
+    t->bus.busy = true;
+    ingest(t, 1 * MS, 0x605, "40 00 10 00 00 00 00 00");
+    ingest(t, 2 * MS, 0x000, cmd);
+    CHECK_EQ(co_nmt_state(&t->node), state);
+    t->bus.busy = false;
+    (void)co_node_poll(&t->node, 3 * MS);
+}
+
 /* nmt.h: SDO runs in pre-operational and operational only, and "every producer" consults
- * the service table. An SDO response that waited in the queue (driver busy) when an NMT
- * stop arrived must not leave once the node is stopped. */
+ * the service table. An SDO response that waited in the queue when an NMT stop arrived must
+ * not leave once the node is stopped. */
 static void test_sdo_response_queued_before_stop_is_not_sent_when_stopped(void)
 {
     test_node_t t;
-    test_node_init(&t, 5, 0);
-    co_node_start(&t.node, 0);
-    fake_clear(&t.bus);
-    t.bus.busy = true;
-    co_frame_t req = frm(0x605, "40 00 10 00 00 00 00 00");
-    co_node_ingest(&t.node, 1 * MS, &req);
-    co_frame_t stop = frm(0x000, "02 05");
-    co_node_ingest(&t.node, 2 * MS, &stop);
-    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_STOPPED);
-    t.bus.busy = false;
-    (void)co_node_poll(&t.node, 3 * MS);
+    queued_response_then(&t, "02 05", CO_NMT_STOPPED);
     CHECK_EQ(fake_count_id(&t.bus, 0x585), 0);
 }
 
@@ -245,17 +250,7 @@ static void test_sdo_response_queued_before_stop_is_not_sent_when_stopped(void)
 static void test_sdo_response_queued_before_start_is_sent_when_operational(void)
 {
     test_node_t t;
-    test_node_init(&t, 5, 0);
-    co_node_start(&t.node, 0);
-    fake_clear(&t.bus);
-    t.bus.busy = true;
-    co_frame_t req = frm(0x605, "40 00 10 00 00 00 00 00");
-    co_node_ingest(&t.node, 1 * MS, &req);
-    co_frame_t start = frm(0x000, "01 05");
-    co_node_ingest(&t.node, 2 * MS, &start);
-    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_OPERATIONAL);
-    t.bus.busy = false;
-    (void)co_node_poll(&t.node, 3 * MS);
+    queued_response_then(&t, "01 05", CO_NMT_OPERATIONAL);
     CHECK_EQ(fake_count_id(&t.bus, 0x585), 1);
     CHECK_EQ(co_node_stats(&t.node)->tx_gated, 0);
 }
