@@ -82,7 +82,12 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
 co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,
                           uint16_t service);
 /* Address a frame of `len` bytes to a COB-ID value (its id, flags and length). */
-void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len);
+static inline void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len)
+{
+    frame->id = (cob & CO_COB_EXT) ? (cob & CO_ID_EXT_MAX) : (cob & CO_ID_STD_MAX);
+    frame->flags = (cob & CO_COB_EXT) ? CO_FRAME_EXT : 0;
+    frame->len = len;
+}
 /* Drop the waiting frames of services the NMT state does not allow (at every state change). */
 void co_txq_purge(co_node_t *node);
 /* Hand the waiting frames to the driver (co_node_poll). */
@@ -149,18 +154,11 @@ static inline uint16_t co_nmt_gate(uint8_t state)
 {
     uint16_t stopped = CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
     uint16_t pre = stopped | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME | CO_SVC_EMCY;
-    switch (state) {
-    case CO_NMT_INITIALISING:
-        return CO_SVC_BOOTUP | CO_SVC_LSS;
-    case CO_NMT_PRE_OPERATIONAL:
-        return pre;
-    case CO_NMT_OPERATIONAL:
-        return pre | CO_SVC_PDO;
-    case CO_NMT_STOPPED:
-        return stopped;
-    default:
-        return CO_SVC_LSS;
-    }
+    return state == CO_NMT_OPERATIONAL       ? (uint16_t)(pre | CO_SVC_PDO)
+           : state == CO_NMT_PRE_OPERATIONAL ? pre
+           : state == CO_NMT_STOPPED         ? stopped
+           : state == CO_NMT_INITIALISING    ? (uint16_t)(CO_SVC_BOOTUP | CO_SVC_LSS)
+                                             : (uint16_t)CO_SVC_LSS;
 }
 
 /* ---- calls up to the node: exactly the ones CiA 301 makes necessary

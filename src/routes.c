@@ -106,15 +106,22 @@ const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)
 {
     uint32_t lo = 0;
     uint32_t hi = node->route_count;
-    while (lo < hi) { /* the first route of the key: its lowest kind */
+    while (lo < hi) {
         uint32_t mid = (lo + hi) / 2;
-        if (node->routes[mid].key < key) {
+        uint32_t k = node->routes[mid].key;
+        if (k == key) {
+            while (mid > 0 && node->routes[mid - 1u].key == key) {
+                mid--; /* the first of its owners: the lowest kind */
+            }
+            return &node->routes[mid];
+        }
+        if (k < key) {
             lo = mid + 1;
         } else {
             hi = mid;
         }
     }
-    return lo < node->route_count && node->routes[lo].key == key ? &node->routes[lo] : NULL;
+    return NULL;
 }
 
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)
