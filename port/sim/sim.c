@@ -10,6 +10,10 @@
  * end of the latest frame as microseconds plus a remainder in 1/bitrate us; back-to-back
  * frames start at the exact end of the previous one and long runs do not drift. The rest of
  * the world sees whole microseconds: a frame reaches the receivers at its end rounded up.
+ *
+ * Cost per frame, whatever the number of ports: the frame's length is worked out a byte at a
+ * time when it is sent, the pending frames are a heap in the order they will win the bus, and
+ * a completed frame goes only to the ports the delivery index names for its identifier.
  */
 #include "canola/sim.h"
 
@@ -35,26 +39,35 @@ typedef struct wire {
     uint8_t run;   /* bits of that level in a row (a stuff bit starts a new run) */
 } wire_t;
 
+static uint16_t crc15_bit(uint16_t crc, uint8_t bit)
+{
+    bool feedback = (bit ^ (crc >> 14)) & 1u;
+    crc = (uint16_t)(((uint32_t)crc << 1) & 0x7FFFu);
+    return feedback ? (uint16_t)(crc ^ CRC15_POLY) : crc;
+}
+
+/* One bit on the wire: 1 when a stuff bit follows it. */
+static uint32_t stuff_bit(uint8_t *level, uint8_t *run, uint8_t bit)
+{
+    *run = (uint8_t)((*run > 0 && bit == *level) ? *run + 1 : 1);
+    *level = bit;
+    if (*run == 5) { /* five equal bits: the transmitter inserts the opposite level */
+        *level ^= 1u;
+        *run = 1;
+        return 1;
+    }
+    return 0;
+}
+
 /* Feed the `n` low bits of `value`, most significant first. */
 static void wire_put(wire_t *w, uint32_t value, unsigned n, bool in_crc)
 {
     while (n-- > 0) {
         uint8_t bit = (uint8_t)((value >> n) & 1u);
         if (in_crc) {
-            bool feedback = (bit ^ (w->crc >> 14)) & 1u;
-            w->crc = (uint16_t)(((uint32_t)w->crc << 1) & 0x7FFFu);
-            if (feedback) {
-                w->crc = (uint16_t)(w->crc ^ CRC15_POLY);
-            }
+            w->crc = crc15_bit(w->crc, bit);
         }
-        w->run = (uint8_t)((w->run > 0 && bit == w->level) ? w->run + 1 : 1);
-        w->level = bit;
-        w->bits++;
-        if (w->run == 5) { /* five equal bits: the transmitter inserts the opposite level */
-            w->bits++;
-            w->level ^= 1u;
-            w->run = 1;
-        }
+        w->bits += 1 + stuff_bit(&w->level, &w->run, bit);
     }
 }
 
@@ -80,6 +93,99 @@ uint32_t co_sim_frame_bits(const co_frame_t *frame)
     }
     wire_put(&w, w.crc, 15, false); /* the CRC sequence is stuffed too */
     return w.bits + TAIL_BITS;
+}
+
+/* The same length a byte at a time, with the bus's tables (built from the functions above at
+ * co_sim_bus_init). The CRC reads the frame's bits in whole bytes from the right: leading
+ * zeros leave a CRC at zero, so the header is padded in front to whole bytes and the data
+ * bytes follow as they are. The stuffing reads the bits from SOF in whole bytes, and the few
+ * bits after the last whole byte one by one. */
+
+/* State of the stuffing between bytes: level * 5 + run (run 0: no bit yet). */
+#define STUFF_STATES 10u
+
+static void build_wire_tables(co_sim_bus_t *bus)
+{
+    for (uint32_t b = 0; b < 256; b++) {
+        wire_t w = {0};
+        wire_put(&w, b, 8, true);
+        bus->crc15_table[b] = w.crc;
+        for (uint8_t state = 0; state < STUFF_STATES; state++) {
+            wire_t x = {.level = (uint8_t)(state / 5u), .run = (uint8_t)(state % 5u)};
+            wire_put(&x, b, 8, false);
+            bus->stuff_table[state][b] = (uint8_t)((x.bits - 8u) << 4 | (x.level * 5u + x.run));
+        }
+    }
+}
+
+static uint16_t crc15_byte(const co_sim_bus_t *bus, uint16_t crc, uint8_t byte)
+{
+    uint32_t top = ((uint32_t)crc >> 7 ^ byte) & 0xFFu;
+    return (uint16_t)(((uint32_t)crc << 8 & 0x7FFFu) ^ bus->crc15_table[top]);
+}
+
+/* The stuffing of a bit stream fed in pieces. */
+typedef struct stuffing {
+    uint64_t acc;  /* the latest bits; the low `rest` are not counted yet */
+    uint32_t rest; /* < 8 between calls */
+    uint32_t bits; /* bits counted, stuff bits included */
+    uint8_t state;
+} stuffing_t;
+
+static void stuff_byte(const co_sim_bus_t *bus, stuffing_t *s, uint8_t byte)
+{
+    uint8_t e = bus->stuff_table[s->state][byte];
+    s->bits += 8u + (e >> 4);
+    s->state = e & 15u;
+}
+
+/* Feed the `n` (<= 32) low bits of `value`. */
+static void stuff_feed(const co_sim_bus_t *bus, stuffing_t *s, uint32_t value, unsigned n)
+{
+    s->acc = (s->acc << n) | (value & (uint32_t)((1ull << n) - 1u));
+    s->rest += n;
+    while (s->rest >= 8) {
+        s->rest -= 8;
+        stuff_byte(bus, s, (uint8_t)(s->acc >> s->rest));
+    }
+}
+
+static uint32_t frame_bits_fast(const co_sim_bus_t *bus, const co_frame_t *frame)
+{
+    uint32_t rtr = (frame->flags & CO_FRAME_RTR) ? 1u : 0u;
+    uint8_t len = frame->len > 8 ? 8 : frame->len;
+    uint8_t data_len = rtr ? 0 : len;
+    stuffing_t s = {0};
+    uint16_t crc = 0;
+    if (frame->flags & CO_FRAME_EXT) { /* SOF, base ID, SRR, IDE, ID extension; RTR r1 r0, DLC */
+        uint32_t id = ((frame->id >> 18) & 0x7FFu) << 20 | 3u << 18 | (frame->id & 0x3FFFFu);
+        uint32_t tail = rtr << 6 | len;
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 25)); /* 39 bits in 5 bytes: 1 bit of pad */
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 17));
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 9));
+        crc = crc15_byte(bus, crc, (uint8_t)(id >> 1));
+        crc = crc15_byte(bus, crc, (uint8_t)(id << 7 | tail));
+        stuff_feed(bus, &s, id, 32);
+        stuff_feed(bus, &s, tail, 7);
+    } else {                                                        /* SOF, ID, RTR IDE r0, DLC */
+        uint32_t head = (frame->id & 0x7FFu) << 7 | rtr << 6 | len; /* 19 bits: 5 of pad */
+        crc = crc15_byte(bus, crc, (uint8_t)(head >> 16));
+        crc = crc15_byte(bus, crc, (uint8_t)(head >> 8));
+        crc = crc15_byte(bus, crc, (uint8_t)head);
+        stuff_feed(bus, &s, head, 19);
+    }
+    for (uint8_t i = 0; i < data_len; i++) { /* whole bytes: `rest` stays as it is */
+        crc = crc15_byte(bus, crc, frame->data[i]);
+        s.acc = s.acc << 8 | frame->data[i];
+        stuff_byte(bus, &s, (uint8_t)(s.acc >> s.rest));
+    }
+    stuff_feed(bus, &s, crc, 15);
+    uint8_t level = (uint8_t)(s.state / 5u);
+    uint8_t run = (uint8_t)(s.state % 5u);
+    for (uint32_t k = s.rest; k-- > 0;) {
+        s.bits += 1 + stuff_bit(&level, &run, (uint8_t)((s.acc >> k) & 1u));
+    }
+    return s.bits + TAIL_BITS;
 }
 
 /* The arbitration field as a number, first bit most significant: the lowest value wins (0 is
@@ -168,7 +274,45 @@ co_err_t co_sim_bus_init(co_sim_bus_t *bus, uint32_t bitrate)
     memset(bus, 0, sizeof *bus);
     bus->bitrate = bitrate;
     strcpy(bus->name, "sim0");
+    build_wire_tables(bus);
     return CO_OK;
+}
+
+/* ---- The delivery index: which ports a frame goes to. */
+
+static uint64_t port_bit(const co_sim_port_t *port) { return 1ull << (port->index % 64u); }
+
+static void portset_put(co_sim_portset_t *set, const co_sim_port_t *port, bool member)
+{
+    uint64_t *word = &set->bits[port->index / 64u];
+    *word = member ? *word | port_bit(port) : *word & ~port_bit(port);
+}
+
+/* Enter a node port's routes into the index, or (not indexed) make it see every frame. */
+static void index_port(co_sim_bus_t *bus, const co_sim_port_t *port)
+{
+    for (uint32_t id = 0; id <= CO_ID_STD_MAX; id++) {
+        portset_put(&bus->receivers[id], port, false);
+    }
+    portset_put(&bus->ext_receivers, port, false);
+    portset_put(&bus->every_frame, port, port->node && !port->indexed);
+    if (!port->node || !port->indexed) {
+        return;
+    }
+    uint32_t count = co_node_route_count(port->node);
+    for (uint32_t i = 0; i < count; i++) {
+        uint32_t key = co_node_route_id(port->node, i); /* bit 31: a 29-bit identifier */
+        portset_put(key & 0x80000000u ? &bus->ext_receivers : &bus->receivers[key & CO_ID_STD_MAX],
+                    port, true);
+    }
+}
+
+void co_sim_port_routes_changed(co_sim_port_t *port)
+{
+    if (port && port->bus && port->node) { /* before co_sim_port_bind: bind indexes it */
+        port->indexed = true;
+        index_port(port->bus, port);
+    }
 }
 
 /* Attaching resets the port: set `mailboxes` afterwards. */
@@ -196,11 +340,14 @@ co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_r
     if (err == CO_OK) {
         port->rx = rx;
         port->rx_ctx = ctx;
+        portset_put(&bus->every_frame, port, true);
     }
     return err;
 }
 
 static co_err_t port_tx(void *ctx, const co_frame_t *frame) { return co_sim_send(ctx, frame); }
+
+static void port_routes_changed(void *ctx) { co_sim_port_routes_changed(ctx); }
 
 /* A node's next poll; the bus keeps a lower bound of them all, so that instants with no
  * poll due skip the scan of every port (a big network has one frame per instant). */
@@ -214,14 +361,75 @@ static void set_due(co_sim_port_t *port, uint64_t due_us)
 
 co_driver_t co_sim_port_driver(co_sim_port_t *port)
 {
-    co_driver_t d = {.tx = port_tx, .on_routes_changed = NULL, .ctx = port};
+    co_driver_t d = {.tx = port_tx, .on_routes_changed = port_routes_changed, .ctx = port};
     return d;
 }
 
 void co_sim_port_bind(co_sim_port_t *port, co_node_t *node)
 {
     port->node = node;
+    /* Whether this node notifies is unknown until it does: it sees every frame until then. */
+    port->indexed = false;
+    index_port(port->bus, port);
     set_due(port, 0); /* unknown: poll at the next instant the bus runs */
+}
+
+/* ---- The pending frames: a binary heap whose top is the frame that goes next when it is
+ * ready (timing model: the lowest arbitration key; instant delivery: the oldest; ties: the
+ * oldest). Selection takes the top when it is ready, and only otherwise (a frame sent with a
+ * delay, or after the instant arbitration began) looks through them all. */
+
+static bool goes_before(const co_sim_bus_t *bus, const co_sim_pending_t *a,
+                        const co_sim_pending_t *b)
+{
+    if (bus->bitrate && a->key != b->key) {
+        return a->key < b->key;
+    }
+    return seq_before(a->seq, b->seq);
+}
+
+static void heap_up(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    while (i > 0 && goes_before(bus, &p, &bus->pending[(i - 1) / 2])) {
+        bus->pending[i] = bus->pending[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    bus->pending[i] = p;
+}
+
+static void heap_down(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    for (uint32_t child; (child = 2 * i + 1) < bus->pending_count; i = child) {
+        if (child + 1 < bus->pending_count &&
+            goes_before(bus, &bus->pending[child + 1], &bus->pending[child])) {
+            child++;
+        }
+        if (!goes_before(bus, &bus->pending[child], &p)) {
+            break;
+        }
+        bus->pending[i] = bus->pending[child];
+    }
+    bus->pending[i] = p;
+}
+
+static void pending_push(co_sim_bus_t *bus, const co_sim_pending_t *p)
+{
+    bus->pending[bus->pending_count++] = *p;
+    heap_up(bus, bus->pending_count - 1);
+}
+
+/* Remove and return the i-th entry; the last one fills its place. */
+static co_sim_pending_t pending_take(co_sim_bus_t *bus, uint32_t i)
+{
+    co_sim_pending_t p = bus->pending[i];
+    if (i < --bus->pending_count) {
+        bus->pending[i] = bus->pending[bus->pending_count];
+        heap_up(bus, i);
+        heap_down(bus, i);
+    }
+    return p;
 }
 
 co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
@@ -242,23 +450,15 @@ co_err_t co_sim_send(co_sim_port_t *port, const co_frame_t *frame)
         bus->stats.overflow++;
         return CO_ERR_BUSY;
     }
-    co_sim_pending_t *p = &bus->pending[bus->pending_count++];
-    p->frame = *frame;
-    p->ready_us = bus->now_us + bus->delay_us;
-    p->seq = bus->seq++;
-    p->bits = co_sim_frame_bits(frame); /* arbitration and completion both need it */
-    p->port = port->index;
+    co_sim_pending_t p = {.frame = *frame,
+                          .ready_us = bus->now_us + bus->delay_us,
+                          .seq = bus->seq++,
+                          .bits = frame_bits_fast(bus, frame), /* arbitration and completion */
+                          .key = arbitration_key(frame),
+                          .port = port->index};
+    pending_push(bus, &p);
     port->in_flight++;
     return CO_OK;
-}
-
-/* Order does not matter in the pending list (selection scans it): fill the hole with the
- * last entry. */
-static co_sim_pending_t pending_take(co_sim_bus_t *bus, uint32_t i)
-{
-    co_sim_pending_t p = bus->pending[i];
-    bus->pending[i] = bus->pending[--bus->pending_count];
-    return p;
 }
 
 void co_sim_set_bus_off(co_sim_port_t *port, bool bus_off)
@@ -270,11 +470,17 @@ void co_sim_set_bus_off(co_sim_port_t *port, bool bus_off)
     }
     /* A controller going bus-off abandons what waits in its mailboxes; a frame already on
      * the wire finishes. */
-    for (uint32_t i = bus->pending_count; i-- > 0;) {
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < bus->pending_count; i++) {
         if (bus->pending[i].port == port->index) {
-            (void)pending_take(bus, i);
             port->in_flight--;
+        } else {
+            bus->pending[kept++] = bus->pending[i];
         }
+    }
+    bus->pending_count = kept;
+    for (uint32_t i = kept / 2; i-- > 0;) {
+        heap_down(bus, i);
     }
 }
 
@@ -294,12 +500,35 @@ static void receive(co_sim_port_t *port, uint64_t t, const co_frame_t *f)
         return;
     }
     if (port->node) {
-        if (co_node_accepts(port->node, f)) { /* the controller's acceptance filter */
+        /* The controller's acceptance filter. The index named this port, but a node
+         * initialised again since its last notification may have dropped the route. */
+        if (co_node_accepts(port->node, f)) {
             co_node_ingest(port->node, t, f);
             set_due(port, co_node_poll(port->node, t));
         }
     } else if (port->rx) {
         port->rx(port->rx_ctx, t, f);
+    }
+}
+
+/* Hand a frame to the ports the index names for it, all but the sender, in the order they
+ * were attached. The index is read afresh after each port: a receiver's callbacks may change
+ * the routes of a port further on, which then receives as its routes are at its turn. */
+static void deliver(co_sim_bus_t *bus, uint64_t t, const co_frame_t *f, uint32_t sender)
+{
+    const co_sim_portset_t *named =
+        (f->flags & CO_FRAME_EXT) ? &bus->ext_receivers : &bus->receivers[f->id & CO_ID_STD_MAX];
+    for (uint32_t w = 0; w < CO_SIM_PORT_WORDS; w++) {
+        uint64_t after = ~0ull; /* the ports of this word not visited yet */
+        uint64_t todo;
+        while ((todo = (named->bits[w] | bus->every_frame.bits[w]) & after) != 0) {
+            uint32_t b = (uint32_t)__builtin_ctzll(todo);
+            after = b == 63 ? 0 : ~0ull << (b + 1);
+            uint32_t i = w * 64u + b;
+            if (i != sender) {
+                receive(bus->ports[i], t, f);
+            }
+        }
     }
 }
 
@@ -318,11 +547,7 @@ static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
     } else {
         fault_corrupt(bus, &frame);
         trace_frame(bus, t, &frame);
-        for (uint32_t i = 0; i < bus->port_count; i++) {
-            if (i != p->port) {
-                receive(bus->ports[i], t, &frame);
-            }
-        }
+        deliver(bus, t, &frame, p->port);
     }
     co_sim_port_t *sender = bus->ports[p->port];
     sender->in_flight--;
@@ -338,6 +563,9 @@ static int32_t next_completion(const co_sim_bus_t *bus, uint64_t t)
     if (bus->bitrate) {
         exact_t end = {bus->idle_at_us, bus->idle_rem};
         return (bus->transmitting && exact_ceil(end) <= t) ? 0 : -1;
+    }
+    if (bus->pending_count > 0 && bus->pending[0].ready_us <= t) {
+        return 0; /* the oldest frame, ready */
     }
     int32_t best = -1;
     for (uint32_t i = 0; i < bus->pending_count; i++) {
@@ -376,27 +604,21 @@ static void start_transmission(co_sim_bus_t *bus, uint64_t t)
         return;
     }
     exact_t start = {bus->idle_at_us, bus->idle_rem};
-    uint64_t first = first_ready(bus);
-    if (first > start.us || (first == start.us && start.rem == 0)) {
+    /* A top ready by the end of the previous frame wins: no other can start the bus sooner. */
+    bool top_ready = bus->pending[0].ready_us <= start.us;
+    uint64_t first = top_ready ? start.us : first_ready(bus);
+    if (first > start.us) {
         start = (exact_t){first, 0}; /* the bus was idle: the frame starts when ready */
     }
     if (exact_ceil(start) > t) {
         return;
     }
     uint32_t best = 0;
-    uint32_t best_key = UINT32_MAX;
-    bool found = false;
-    for (uint32_t i = 0; i < bus->pending_count; i++) {
+    for (uint32_t i = 1; !top_ready && i < bus->pending_count; i++) {
         const co_sim_pending_t *p = &bus->pending[i];
-        uint32_t key = arbitration_key(&p->frame);
-        if (p->ready_us > start.us) {
-            continue; /* not ready when arbitration began */
-        }
-        if (!found || key < best_key ||
-            (key == best_key && seq_before(p->seq, bus->pending[best].seq))) {
-            best = i;
-            best_key = key;
-            found = true;
+        if (p->ready_us <= start.us &&
+            (bus->pending[best].ready_us > start.us || goes_before(bus, p, &bus->pending[best]))) {
+            best = i; /* the winner among the frames ready when arbitration began */
         }
     }
     bus->on_bus = pending_take(bus, best);

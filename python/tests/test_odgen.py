@@ -347,3 +347,32 @@ def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> No
     for line in refused:
         print("  refused", line)
     assert compiled
+
+
+# --- the size rows' dictionary (bench/run) ------------------------------------------------
+
+BENCH_EDS = REPO / "bench" / "ds301_objects.eds"
+CANOPENNODE_PROFILE = REPO / ".." / "shared" / "reference" / "footprint" / "DS301_profile.eds"
+
+
+def test_bench_eds_and_size_firmware_compile_cleanly(tmp_path: Path) -> None:
+    """bench/run links bench/size_firmware.c with the dictionary of bench/ds301_objects.eds
+    (for Cortex-M, where it does not ask for warnings): both are clean C."""
+    assert eds.parse(BENCH_EDS).warnings == []
+    cc = compiler()
+    _, code = odgen.generate_files(BENCH_EDS, "ds301", tmp_path)
+    firmware = REPO / "bench" / "size_firmware.c"
+    for source, flags in ((code, ()), (firmware, (f"-I{tmp_path}", f"-I{REPO / 'src'}"))):
+        r = compile_c(cc, source, tmp_path, flags)
+        assert r.returncode == 0, f"{source.name}:\n{r.stderr}"
+
+
+def test_bench_eds_gives_the_dictionary_of_canopennodes_profile() -> None:
+    """The size rows count the dictionary of CANopenNode's example profile; where it is absent
+    they use bench/ds301_objects.eds, which must give the same generated code."""
+    if not CANOPENNODE_PROFILE.is_file():
+        pytest.skip(f"no CANopenNode profile at {CANOPENNODE_PROFILE}")
+    ours = odgen.generate(eds.parse(BENCH_EDS), "ds301")
+    theirs = odgen.generate(eds.parse(CANOPENNODE_PROFILE), "ds301")
+    for a, b in zip(ours, theirs, strict=True):
+        assert a.split("\n", 1)[1] == b.split("\n", 1)[1]  # line 1 names the EDS file

@@ -18,7 +18,17 @@
  *
  * Acceptance filtering: a node port receives only frames whose COB-ID its node
  * routes (co_node_accepts), as a CAN controller's filters would pass them. A raw
- * port receives every frame. A sender never receives its own frame.
+ * port receives every frame. A sender never receives its own frame. Ports receive a
+ * frame in the order they were attached.
+ *
+ * Delivery cost: the bus keeps one index from 11-bit identifier to the node ports whose
+ * routes take it (and the set of node ports with a 29-bit route), so a frame costs the
+ * same whatever the number of ports that do not want it. A node port joins the index at
+ * the first route notification of its node after co_sim_port_bind: the driver of
+ * co_sim_port_driver notifies (on_routes_changed); a driver of your own calls
+ * co_sim_port_routes_changed from its on_routes_changed. Until then, and for a node whose
+ * driver never notifies, the port asks co_node_accepts for every frame (the same
+ * behaviour, at the cost of one call per port and frame).
  *
  * Each port has `mailboxes` transmit slots (default 3, like most controllers):
  * while that many of its frames wait for the bus, tx answers CO_ERR_BUSY and the
@@ -53,6 +63,8 @@ extern "C" {
 #define CO_SIM_PENDING_MAX 1024
 #endif
 
+#define CO_SIM_PORT_WORDS ((CO_SIM_PORTS_MAX + 63) / 64)
+
 typedef struct co_sim_bus co_sim_bus_t;
 
 /** Receive callback of a raw port. */
@@ -71,7 +83,13 @@ typedef struct co_sim_port {
     uint8_t in_flight;    /**< own frames pending on the bus */
     uint8_t index;        /**< position on the bus */
     bool bus_off;
+    bool indexed; /**< the node notifies its route changes: the bus index holds its routes */
 } co_sim_port_t;
+
+/** A set of ports, by position on the bus. Internal. */
+typedef struct co_sim_portset {
+    uint64_t bits[CO_SIM_PORT_WORDS];
+} co_sim_portset_t;
 
 /** A frame waiting for (or on) the bus. Internal. */
 typedef struct co_sim_pending {
@@ -79,6 +97,7 @@ typedef struct co_sim_pending {
     uint64_t ready_us; /**< earliest start of transmission */
     uint32_t seq;      /**< send order, breaks ties */
     uint32_t bits;     /**< co_sim_frame_bits of the frame, computed once when sent */
+    uint32_t key;      /**< its arbitration field, computed once when sent */
     uint8_t port;
 } co_sim_pending_t;
 
@@ -103,9 +122,21 @@ struct co_sim_bus {
     co_sim_port_t *ports[CO_SIM_PORTS_MAX];
     uint32_t port_count;
     uint64_t due_min_us; /**< at most every node's node_due_us: "no poll due" in one test */
+    /* Frames waiting for the bus: a binary heap, the next to go first (the timing model: the
+     * lowest arbitration key; instant delivery: the oldest), with ties to the oldest. */
     co_sim_pending_t pending[CO_SIM_PENDING_MAX];
     uint32_t pending_count;
     uint32_t seq;
+    /* Delivery index (see above): for each 11-bit identifier the indexed node ports whose
+     * routes take it, the indexed node ports with a 29-bit route, and the ports that see
+     * every frame (raw ports; node ports not indexed, which ask co_node_accepts). */
+    co_sim_portset_t receivers[CO_ID_STD_MAX + 1];
+    co_sim_portset_t ext_receivers;
+    co_sim_portset_t every_frame;
+    /* Frame length on the wire a byte at a time: CRC-15 of a byte, and the stuff bits of a
+     * byte from each state of the stuffing (level and run of the latest bits). */
+    uint16_t crc15_table[256];
+    uint8_t stuff_table[10][256];
     /* faults */
     uint64_t rng;
     uint64_t drop_nth; /**< 0 = off; counts frames sent on the bus from 1 */
@@ -130,6 +161,11 @@ co_err_t co_sim_bus_init(co_sim_bus_t *bus, uint32_t bitrate);
 co_err_t co_sim_port_attach(co_sim_bus_t *bus, co_sim_port_t *port);
 co_driver_t co_sim_port_driver(co_sim_port_t *port);
 void co_sim_port_bind(co_sim_port_t *port, co_node_t *node);
+
+/** For a driver of your own around a node port (its tx calls co_sim_send): call this from
+ *  the driver's on_routes_changed, so that the port's node receives through the bus's
+ *  index (see Delivery cost above). */
+void co_sim_port_routes_changed(co_sim_port_t *port);
 
 /** Attach a raw port: `rx` receives every frame others send. */
 co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx, void *ctx);

@@ -293,6 +293,13 @@ static co_err_t canola_py_sim_tx(void *ctx, const co_frame_t *frame)
     return err;
 }
 
+/* The node's routes changed: the bus's delivery index follows (see canola/sim.h). */
+static void canola_py_sim_routes_changed(void *ctx)
+{
+    canola_py_dev_t *d = ctx;
+    co_sim_port_routes_changed(&d->port);
+}
+
 static bool same_frame(const co_frame_t *a, const co_frame_t *b)
 {
     return a->id == b->id && a->flags == b->flags && a->len == b->len &&
@@ -360,6 +367,7 @@ static canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, co_od_entry_t *entr
             return d; /* attached ports stay with the bus: the caller keeps d with it */
         }
         cfg.driver.tx = canola_py_sim_tx;
+        cfg.driver.on_routes_changed = canola_py_sim_routes_changed;
         cfg.driver.ctx = d;
     } else {
         cfg.driver.tx = canola_py_tx;
@@ -735,7 +743,9 @@ ffibuilder.cdef(CDEF)
 ffibuilder.set_source(
     "canola._core",
     PREAMBLE,
-    sources=[_rel(p) for p in _SOURCES],
+    # Absolute paths: the objects go under the build's own temporary folder (relative ones
+    # climb out of it, to /tmp/src, shared by every checkout built at the same time).
+    sources=_SOURCES,
     include_dirs=[_rel(p) for p in _INCLUDES],
     define_macros=_CONFIG,
     # A header change rebuilds the extension (setuptools only compares sources otherwise).
