@@ -4,10 +4,13 @@
  * A small array sorted by key (then kind and slot), searched by bisection: frames are
  * dispatched in O(log routes) whatever the number of services. Each service sets and clears
  * its own routes when its COB-ID objects change (reset communication, a write, a new watch),
- * one per kind and slot. A key with two owners keeps both, the lower kind first: that one
- * takes the frames (kernel.h orders the kinds), and the other takes over when it goes.
+ * one per kind and slot. A key with two owners keeps both: the lower kind (kernel.h orders
+ * the kinds) takes the frames, the other waits behind it, its key marked SHADOW (a bit no
+ * frame's key has, so the search never finds it), and takes over when the first goes.
  */
 #include "kernel.h"
+
+#define SHADOW 0x40000000u /* a route waiting behind another owner of its key */
 
 static uint16_t kind_service(uint8_t kind)
 {
@@ -72,32 +75,77 @@ static void changed(co_node_t *node)
     }
 }
 
+/* Insert a route where its order puts it (the caller made room). */
+static void insert(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+{
+    /* Insertion keeps the array sorted; n is small and this runs only on changes. */
+    uint16_t at = node->route_count;
+    while (at > 0 && !before(&node->routes[at - 1u], key, kind, slot)) {
+        co_copy(&node->routes[at], &node->routes[at - 1u], sizeof node->routes[0]);
+        at--;
+    }
+    /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
+    co_route_t *r = &node->routes[at];
+    r->key = key;
+    r->service = kind_service(kind);
+    r->kind = kind;
+    r->slot = slot;
+    node->route_count++;
+    /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
+    node->route_groups |= co_route_group(key);
+}
+
+/* Route `at` moves to `key` (its place in the order with it). */
+static void rekey(co_node_t *node, uint16_t at, uint32_t key)
+{
+    uint8_t kind = node->routes[at].kind;
+    uint8_t slot = node->routes[at].slot;
+    remove_at(node, at);
+    insert(node, key, kind, slot);
+}
+
+/* The owner of `key` went: the first that waits behind it (the lowest kind: the order puts
+ * it first) takes the frames. */
+static void next_owner(co_node_t *node, uint32_t key)
+{
+    for (uint16_t i = 0; i < node->route_count; i++) {
+        if (node->routes[i].key == (key | SHADOW)) {
+            rekey(node, i, key);
+            return;
+        }
+    }
+}
+
+/* A new route of `key`: it takes the frames, unless an owner of a lower kind has them. */
+static void add(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
+{
+    if (node->route_count >= CO_RX_ROUTES_MAX) {
+        return; /* a full table drops the route */
+    }
+    const co_route_t *owner = co_routes_find(node, key);
+    if (owner != NULL && !before(owner, key, kind, slot)) {
+        rekey(node, (uint16_t)(owner - node->routes), key | SHADOW); /* it waits now */
+        owner = NULL;
+    }
+    insert(node, owner != NULL ? key | SHADOW : key, kind, slot);
+}
+
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 {
     uint16_t at = owned(node, kind, slot);
     bool had = at < node->route_count;
-    if (had ? node->routes[at].key == key : key == CO_ROUTE_OFF) {
+    if (had ? (node->routes[at].key & ~SHADOW) == key : key == CO_ROUTE_OFF) {
         return; /* nothing changes */
     }
     if (had) {
+        uint32_t old = node->routes[at].key;
         remove_at(node, at);
-    }
-    if (key != CO_ROUTE_OFF && node->route_count < CO_RX_ROUTES_MAX) { /* full: dropped */
-        /* Insertion keeps the array sorted; n is small and this runs only on changes. */
-        at = node->route_count;
-        while (at > 0 && !before(&node->routes[at - 1u], key, kind, slot)) {
-            co_copy(&node->routes[at], &node->routes[at - 1u], sizeof node->routes[0]);
-            at--;
+        if (!(old & SHADOW)) {
+            next_owner(node, old);
         }
-        /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
-        co_route_t *r = &node->routes[at];
-        r->key = key;
-        r->service = kind_service(kind);
-        r->kind = kind;
-        r->slot = slot;
-        node->route_count++;
-        /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
-        node->route_groups |= co_route_group(key);
+    }
+    if (key != CO_ROUTE_OFF) {
+        add(node, kind, slot, key);
     }
     changed(node);
 }
@@ -110,9 +158,6 @@ const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)
         uint32_t mid = (lo + hi) / 2;
         uint32_t k = node->routes[mid].key;
         if (k == key) {
-            while (mid > 0 && node->routes[mid - 1u].key == key) {
-                mid--; /* the first of its owners: the lowest kind */
-            }
             return &node->routes[mid];
         }
         if (k < key) {
@@ -136,5 +181,5 @@ uint32_t co_node_route_count(const co_node_t *node) { return node->route_count; 
 
 uint32_t co_node_route_id(const co_node_t *node, uint32_t i)
 {
-    return i < node->route_count ? node->routes[i].key : 0;
+    return i < node->route_count ? node->routes[i].key & ~SHADOW : 0;
 }
