@@ -129,8 +129,10 @@ fuzz-gateway: py-env
 	    echo "fuzz_gateway: NOT RUN (atheris not installable; tests/test_gateway_parser.py fuzzes by random lines)"; \
 	    exit 0; fi; \
 	  $(PY_VENV)/bin/python fuzz/fuzz_gateway_parser.py -artifact_prefix=build-fuzz/ \
-	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-gateway > build-fuzz/fuzz-gateway.log 2>&1; \
-	  rc=$$?; tail -n 4 build-fuzz/fuzz-gateway.log; echo "fuzz_gateway: exit $$rc"; exit $$rc
+	  -max_total_time=$(FUZZ_SECONDS) -dict=fuzz/gateway.dict \
+	  build-fuzz/corpus-gateway fuzz/corpus/gateway > build-fuzz/fuzz-gateway.log 2>&1; \
+	  rc=$$?; grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)' build-fuzz/fuzz-gateway.log; \
+	  tail -n 1 build-fuzz/fuzz-gateway.log; echo "fuzz_gateway: exit $$rc"; exit $$rc
 
 fuzz-socketcand: py-env
 	@mkdir -p build-fuzz/corpus-socketcand

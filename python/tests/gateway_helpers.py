@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import AsyncIterator, Awaitable, Callable
+import subprocess
+import sys
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import TypeVar
 
 from canola.errors import SdoAbort
@@ -47,6 +49,10 @@ class FakeMaster:
     @property
     def node_id(self) -> int:
         return self._node_id
+
+    @property
+    def has_lss(self) -> bool:
+        return False
 
     async def _gate(self, node: int, index: int, sub: int) -> None:
         if node in self.gates:
@@ -125,8 +131,8 @@ class Client:
         await self.writer.drain()
 
     async def line(self, timeout: float = TIMEOUT) -> str:
-        data = await asyncio.wait_for(self.reader.readline(), timeout)
-        assert data.endswith(b"\r\n"), data[:80]
+        """The next reply or event: up to CR LF (a reply of several lines has LF inside)."""
+        data = await asyncio.wait_for(self.reader.readuntil(b"\r\n"), timeout)
         return data[:-2].decode()
 
     async def ask(self, line: str, timeout: float = TIMEOUT) -> str:
@@ -138,7 +144,7 @@ class Client:
         await self.send(line)
         seq = line.split("]", 1)[0] + "]"
         events: list[str] = []
-        while not (got := await self.line(timeout)).startswith(seq):
+        while seq not in (got := await self.line(timeout)).rsplit("\n", 1)[-1]:
             events.append(got)
         return got, events
 
@@ -171,3 +177,31 @@ async def serving(backend: MasterBackend | SimBackend) -> AsyncIterator[str]:
             await pump
         await server.close()
         hub.close()
+
+
+async def start_gateway(master: FakeMaster, **limits: float) -> tuple[GatewayServer, str]:
+    """The gateway (and its event hub) on ``master``, listening on a free TCP port of
+    127.0.0.1 (``limits``: GatewayServer's max_clients, max_line, idle_timeout)."""
+    hub = EventHub(master)
+    server = GatewayServer(Executor(master, hub), hub, **limits)  # type: ignore[arg-type]
+    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+    return server, GatewayServer.address(srv)
+
+
+@contextlib.contextmanager
+def gateway_process(*options: str) -> Iterator[tuple[subprocess.Popen[str], str]]:
+    """``python -m canola.gateway OPTIONS --listen tcp:127.0.0.1:0``: the process and its
+    address (killed after, if still running)."""
+    proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *options, "--listen",
+                             "tcp:127.0.0.1:0"], stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline()
+        assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
+        yield proc, line.split()[-1]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=20)
+        if proc.stderr is not None:
+            proc.stderr.close()

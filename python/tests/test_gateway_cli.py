@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import can
-from gateway_helpers import Client, run
+from gateway_helpers import Client, gateway_process, run
 
 from canola import Device
 from canola.cli import main as canola_main
@@ -27,20 +27,15 @@ def test_stdio_script() -> None:
               "[7] 127 stop\n[8] 127 r 0x1017 0 u16\n")
     done = subprocess.run([sys.executable, "-m", "canola.gateway", *SIM, "--listen", "stdio"],
                           input=script.encode(), capture_output=True, timeout=60, check=True)
-    assert done.stdout.decode().splitlines() == [
-        '[1] "canola sample"', "[2] OK", "[3] 401", "[4] OK", "[5] 0x00000010", "ERROR:101",
-        "[6] ERROR:101", "[7] OK", "[8] 0"]
+    # one reply per line, each ended by CR LF; the comment's is empty, the line without
+    # [seq] has the last sequence number seen (as CANopenNode's gateway answers)
+    assert done.stdout.decode().split("\r\n") == [
+        '[1] "canola sample"', "", "[2] OK", "[3] 401", "[4] OK", "[5] 0x00000010",
+        "[5] ERROR:101", "[6] ERROR:101", "[7] OK", "[8] 0", ""]
 
 
 def test_tcp_process_and_sigterm() -> None:
-    proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *SIM, "--listen",
-                             "tcp:127.0.0.1:0"], stderr=subprocess.PIPE)
-    try:
-        assert proc.stderr is not None
-        line = proc.stderr.readline().decode()
-        assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
-        address = line.split()[-1]
-
+    with gateway_process(*SIM) as (proc, address):
         async def main() -> None:
             c = await Client.connect(address)
             assert await c.ask("[1] 3 r 0x1018 1 u32") == "[1] 3232"
@@ -49,12 +44,6 @@ def test_tcp_process_and_sigterm() -> None:
         run(main())
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(timeout=20) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=20)
-        if proc.stderr is not None:
-            proc.stderr.close()
 
 
 def test_canola_command_arguments() -> None:
@@ -62,6 +51,8 @@ def test_canola_command_arguments() -> None:
     assert canola_main(["gateway", "--iface", "can0", "--bus", "virtual://x"]) == 2
     assert canola_main(["gateway", "--node-id", "200", *SIM]) == 2
     assert canola_main(["gateway", "--max-clients", "0", *SIM]) == 2
+    assert canola_main(["gateway", "--idle-timeout", "-1", *SIM]) == 2
+    assert canola_main(["gateway", "--idle-timeout", "soon", *SIM]) == 2
 
 
 def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:

@@ -66,14 +66,41 @@ def test_sim_sdo_nmt_and_local_node() -> None:
             assert await c.ask(f"[12] {GW} w 0x1017 0 u16 0") == "[12] OK"
             assert await c.ask(f"[13] {GW} r 0x1017 0 u16") == "[13] 0"
             assert await c.ask(f"[14] {GW} w 0x1018 1 u32 1") == "[14] ERROR:0x06010002"
-            assert not [line for line in bus.trace[before:]
-                        if line.split()[-1].startswith(("000#", f"{0x600 + GW:03X}#"))]
+            # NMT to its own node-ID goes on the bus too; its SDO never does
+            assert [frame for line in bus.trace[before:]
+                    if (frame := line.split()[-1]).startswith(("000#", f"{0x600 + GW:03X}#"))
+                    ] == [f"000#02{GW:02X}", f"000#80{GW:02X}"]
             assert await c.ask("[15] set sdo_block 1") == "[15] OK"
             data = os.urandom(880)
             text = base64.b64encode(data).decode()
             assert await c.ask(f"[16] 2 w 0x2200 0 d {text}") == "[16] OK"
             assert await c.ask("[17] 2 r 0x2200 0 d") == f"[17] {text}"
             assert devices[2].od.read(0x2200, 0) == data
+            await c.close()
+
+    run(main())
+
+
+def test_nmt_to_the_gateways_own_node_id_goes_on_the_bus() -> None:
+    """As CANopenNode's gateway does (scripts count the frames): ``<own id> reset comm`` is
+    000#82<id> on the bus, then the gateway's own reset (its boot-up); the same for reset
+    node and the state commands, which the gateway follows too."""
+    async def main() -> None:
+        bus, master, devices = _sim()
+        async with serve(master) as (address, _):
+            c = await Client.connect(address)
+            for seq, (command, cs) in enumerate([("reset comm", 0x82), ("reset node", 0x81),
+                                                 ("start", 0x01)], start=1):
+                before = len(bus.trace)
+                assert await c.ask(f"[{seq}] {GW} {command}") == f"[{seq}] OK"
+                bus.run_for(10_000)
+                frames = [line.split()[-1] for line in bus.trace[before:]]
+                assert frames[0] == f"000#{cs:02X}{GW:02X}", frames
+                if command.startswith("reset"):
+                    assert f"{0x700 + GW:03X}#00" in frames[1:], frames  # its boot-up
+            assert master.nmt_state == "OPERATIONAL"
+            # the devices heard the frames addressed to the gateway only
+            assert {d.nmt_state for d in devices.values()} == {"PRE-OPERATIONAL"}
             await c.close()
 
     run(main())

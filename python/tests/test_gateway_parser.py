@@ -5,14 +5,17 @@ from __future__ import annotations
 import base64
 import random
 import struct
+from pathlib import Path
 
 import pytest
 
 from canola import values
 from canola.gateway import GatewayError, ParseError, parse_line
 from canola.gateway.formats import TYPES, format_value, parse_value
+from canola.gateway.parser import LSS_COMMANDS
 from canola.gateway.requests import (
     BootUpIndication,
+    DisableGuarding,
     DisableHeartbeat,
     EnableGuarding,
     EnableHeartbeat,
@@ -209,3 +212,36 @@ def test_types_agree_with_canola_values() -> None:
         wire = parse_value(name, text)
         assert wire == values.encode(name, value), name
         assert values.decode(name, wire) == value, name
+
+
+SEEDS = Path(__file__).resolve().parents[2] / "fuzz" / "corpus" / "gateway"
+
+
+def test_fuzz_seeds_cover_every_command_family() -> None:
+    """The seed corpus of fuzz/fuzz_gateway_parser.py: valid lines of every kind of
+    request (and the lines that are answered without one), so that the fuzzer starts past
+    ``[seq]``."""
+    kinds: set[str] = set()
+    for seed in sorted(SEEDS.iterdir()):
+        try:
+            request = parse_line(seed.read_bytes().decode())
+        except ParseError as exc:
+            kinds.add(f"error {int(exc.code)}")
+            continue
+        kinds.add(type(request).__name__ if request is not None else "empty")
+        if isinstance(request, Lss):
+            kinds.add(request.command)
+    requests = {cls.__name__ for cls in (SdoRead, SdoWrite, Nmt, Set, SetRpdo, SetTpdo,
+                                          PdoRead, PdoWrite, EnableHeartbeat,
+                                          DisableHeartbeat, EnableGuarding, DisableGuarding,
+                                          Init, BootUpIndication, InfoVersion, Help)}
+    assert requests | LSS_COMMANDS - {"_lss_slowscan"} <= kinds
+    assert {"empty", "error 100", "error 101"} <= kinds
+
+
+def test_lss_arguments_are_bounded() -> None:
+    assert parse_line("[1] lss_allnodes " + " ".join(["0"] * 11)) == Lss(
+        1, command="lss_allnodes", args=(0,) * 11)
+    with pytest.raises(ParseError) as exc:
+        parse_line("[2] lss_allnodes " + "0 " * 100_000)
+    assert (exc.value.code, exc.value.seq) == (GatewayError.SYNTAX, 2)

@@ -7,19 +7,12 @@ import base64
 import os
 import tempfile
 
-from gateway_helpers import Client, FakeMaster, eventually, run
+from gateway_helpers import Client, FakeMaster, eventually, run, start_gateway
 
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import BootUp, Emcy, Heartbeat, HeartbeatLost
 from canola.gateway.events import EventHub
 from canola.gateway.server import LineSplitter, Listen
-
-
-async def _start(master: FakeMaster, **kwargs: int) -> tuple[GatewayServer, str]:
-    hub = EventHub(master)
-    server = GatewayServer(Executor(master, hub), hub, **kwargs)
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    return server, GatewayServer.address(srv)
 
 
 def _master() -> FakeMaster:
@@ -60,7 +53,7 @@ def test_line_splitter() -> None:
 def test_basic_replies_and_sequence_numbers() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         a = await Client.connect(address)
         b = await Client.connect(address)
         assert await a.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
@@ -100,7 +93,7 @@ def test_a_failing_master_costs_one_reply() -> None:
         async def broken(*args: object, **kwargs: object) -> bytes:
             raise RuntimeError("a bug")
 
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         m.sdo_upload = broken  # type: ignore[method-assign]
         assert await c.ask("[1] 5 r 0x1000 0") == "[1] ERROR:102"
@@ -114,7 +107,7 @@ def test_a_failing_master_costs_one_reply() -> None:
 def test_local_node_and_nmt() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         assert await c.ask("[1] 1 r 0x1018 1 u32") == "[1] 3232"
         assert await c.ask("[2] 1 w 0x1017 0 u16 100") == "[2] OK"
@@ -127,11 +120,12 @@ def test_local_node_and_nmt() -> None:
         assert await c.ask("[6] 1 stop") == "[6] OK"
         assert await c.ask("[7] 5 preop") == "[7] OK"
         assert await c.ask("[8] 5 reset node") == "[8] OK"
-        assert m.nmt_sent == [(5, "start"), (0, "reset_comm"), (5, "preop"), (5, "reset_node")]
-        assert m.local_nmt_done == ["stop"]
-        assert (await c.ask("[9] info version")).startswith("[9] 3232 0 0.0 0 2 3.0 ")
-        await c.send("[10] help")
-        assert (await c.line()).startswith("[10] canola CiA 309-3 gateway")
+        assert await c.ask("[9] 1 reset comm") == "[9] OK"
+        # to its own node-ID: on the bus (as CANopenNode's gateway) and applied to itself
+        assert m.nmt_sent == [(5, "start"), (0, "reset_comm"), (1, "stop"), (5, "preop"),
+                              (5, "reset_node"), (1, "reset_comm")]
+        assert m.local_nmt_done == ["stop", "reset_comm"]
+        assert (await c.ask("[10] info version")).startswith("[10] 3232 0 0.0 0 2 3.0 ")
         await c.close()
         await server.close()
 
@@ -141,17 +135,20 @@ def test_local_node_and_nmt() -> None:
 def test_malformed_lines_keep_the_connection() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
-        assert await c.ask("hello") == "ERROR:101"
+        # a line without [seq]: the last sequence number of this client (0 before any), as
+        # CANopenNode's gateway answers it (cocomm takes a reply without one for a value)
+        assert await c.ask("hello") == "[0] ERROR:101"
         assert await c.ask("[1] 5 explode") == "[1] ERROR:100"
         assert await c.ask("[2] 5 r 0xZZ 0") == "[2] ERROR:101"
         assert await c.ask("[3] 5 w 0x2000 0 u8 300") == "[3] ERROR:101"
-        await c.send("")  # empty lines and comments get no reply
-        await c.send("# a comment")
+        assert await c.ask("") == ""  # empty lines and comments: an empty reply
+        assert await c.ask("  # a comment") == ""
         c.writer.write(b"\xff\xfe[4] \x00\x01\r\n")
-        assert await c.line() == "ERROR:101"
+        assert await c.line() == "[3] ERROR:101"
         assert await c.ask("[5] 5 r 0x1000 0 u32") == "[5] 401"
+        assert await c.ask("5 start") == "[5] ERROR:101"
         await c.close()
         await server.close()
 
@@ -161,7 +158,7 @@ def test_malformed_lines_keep_the_connection() -> None:
 def test_line_length_limit() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m, max_line=100)
+        server, address = await start_gateway(m, max_line=100)
         c = await Client.connect(address)
         assert await c.ask("[1] 5 w 0x2000 0 d " + "A" * 200) == "[1] ERROR:600"
         assert await c.ask("[2] 5 w 0x2000 0 d " + "QUJD") == "[2] OK"
@@ -176,17 +173,24 @@ def test_line_length_limit() -> None:
     run(main())
 
 
-def test_client_limit() -> None:
+def test_client_limit_when_every_client_is_busy() -> None:
+    """Every slot has a request running: one more client is refused, with a sequence
+    number (cocomm reads a reply without one as a value), and closed."""
     async def main() -> None:
         m = _master()
-        server, address = await _start(m, max_clients=2)
+        m.gates[5] = asyncio.Event()
+        server, address = await start_gateway(m, max_clients=2)
         a = await Client.connect(address)
         b = await Client.connect(address)
-        assert await a.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
-        assert await b.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
+        await a.send("[1] 5 r 0x1000 0 u32")
+        await b.send("[1] 5 r 0x1000 0 u32")
+        await eventually(lambda: 5 in m.started and server.clients == 2)
         c = await Client.connect(address)
-        assert await c.line() == "ERROR:102"
+        assert await c.line() == "[0] ERROR:102"
         assert await asyncio.wait_for(c.reader.read(), 5) == b""  # closed
+        m.gates[5].set()
+        assert await a.line() == "[1] 401"
+        assert await b.line() == "[1] 401"
         await a.close()
         await eventually(lambda: server.clients == 1)
         d = await Client.connect(address)
@@ -202,7 +206,7 @@ def test_slow_transfer_does_not_stall_other_clients() -> None:
     async def main() -> None:
         m = _master()
         m.gates[5] = asyncio.Event()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         a = await Client.connect(address)
         b = await Client.connect(address)
         await a.send("[1] set sdo_block 1")
@@ -224,7 +228,7 @@ def test_slow_transfer_does_not_stall_other_clients() -> None:
 def test_pipelined_requests_answer_in_order() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         c.writer.write(b"".join(f"[{i}] {5 + i % 2} r 0x1000 0 u32\r\n".encode()
                                 for i in range(50)))
@@ -240,7 +244,7 @@ def test_pipelined_requests_answer_in_order() -> None:
 def test_client_that_does_not_read_stalls_nobody() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         flood = await Client.connect(address)
         other = await Client.connect(address)
         assert await flood.ask("[0] set events 1") == "[0] OK"
@@ -264,7 +268,7 @@ def test_disconnect_mid_transfer_aborts() -> None:
     async def main() -> None:
         m = _master()
         m.gates[5] = asyncio.Event()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         a = await Client.connect(address)
         await a.send("[1] 5 w 0x2200 0 d " + "QUJD" * 1000)
         await eventually(lambda: 5 in m.started)
@@ -283,7 +287,7 @@ def test_disconnect_mid_transfer_aborts() -> None:
 def test_events_to_subscribed_clients() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         quiet = await Client.connect(address)
         boots = await Client.connect(address)
         every = await Client.connect(address)
@@ -319,7 +323,7 @@ def test_events_to_subscribed_clients() -> None:
 def test_one_mib_domain_block_mode() -> None:
     async def main() -> None:
         m = _master()
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         data = os.urandom(1024 * 1024)
         text = base64.b64encode(data).decode()
@@ -361,7 +365,7 @@ def test_pdo_configuration_and_data() -> None:
             sent.append(num)
 
         m.pdo_send = pdo_send  # type: ignore[attr-defined]
-        server, address = await _start(m)
+        server, address = await start_gateway(m)
         c = await Client.connect(address)
         assert await c.ask("[1] set rpdo 1 0x205 event 2 0x2000 0 u8 0x2001 0 u16") == "[1] OK"
         assert m.objects[1, 0x1400, 1] == (0x205).to_bytes(4, "little")

@@ -78,7 +78,7 @@ def test_every_type_over_sdo() -> None:
 
 def test_abort_and_gateway_errors() -> None:
     async def main() -> None:
-        async with gateway() as (address, _, _nodes):
+        async with gateway() as (address, backend, _nodes):
             c = await Client.connect(address)
             assert await c.ask("[1] 2 r 0x5FFF 0") == "[1] ERROR:0x06020000"
             assert await c.ask("[2] 2 r 0x1018 9") == "[2] ERROR:0x06090011"
@@ -94,8 +94,9 @@ def test_abort_and_gateway_errors() -> None:
             assert await c.ask("[12] 0 r 0x1000 0") == "[12] ERROR:107"
             assert await c.ask("[13] 2 bogus") == "[13] ERROR:100"
             assert await c.ask("[14] 2 r 0x1000") == "[14] ERROR:101"
-            assert await c.ask("[15] lss_get_node") == "[15] ERROR:100"
-            assert await c.ask("[16] 1 start") == "[16] ERROR:100"  # no local NMT binding yet
+            assert await c.ask("[15] lss_get_node") == "[15] ERROR:100"  # no LSS master
+            assert await c.ask("[16] 1 start") == "[16] OK"  # the gateway itself: on the bus too
+            assert backend.node.state == 0x05
             assert await c.ask("[17] 2 r 0x1000 0 u32") == "[17] 401"  # still usable
             await c.close()
 

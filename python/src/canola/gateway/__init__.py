@@ -1,10 +1,13 @@
 """The CiA 309-3 ASCII gateway: a master node exposed as text lines (``canola gateway``).
 
-- :mod:`~canola.gateway.parser`: one line -> one typed request (pure; fuzzed)
+- :mod:`~canola.gateway.parser`: one line -> one typed request (pure, linear; fuzzed)
 - :mod:`~canola.gateway.formats`: values <-> text per CiA 309-3 data type
-- :mod:`~canola.gateway.executor`: requests -> replies against a master
+- :mod:`~canola.gateway.executor`: requests -> replies against a master;
+  :mod:`~canola.gateway.lsscommands`: the lss_* commands; :mod:`~canola.gateway.helptext`
 - :mod:`~canola.gateway.events`: boot-up, heartbeat and EMCY events to clients
-- :mod:`~canola.gateway.server`: TCP, Unix socket and stdio clients
+- :mod:`~canola.gateway.server`: TCP, Unix socket and stdio clients, their slots and idle
+  time-out; :mod:`~canola.gateway.connection`: one client's reader, worker and writer;
+  :mod:`~canola.gateway.listen`: where to listen
 - :mod:`~canola.gateway.backend`: what the gateway needs from a master;
   :mod:`~canola.gateway.masterbackend`: canola.Master (python-can or simulated bus);
   :mod:`~canola.gateway.simbackend`: a canola.core node on a simulated bus

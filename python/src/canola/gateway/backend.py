@@ -90,6 +90,11 @@ class Backend(Protocol):
         """The master's own node-ID."""
         ...
 
+    @property
+    def has_lss(self) -> bool:
+        """Whether :meth:`lss` works (without, every lss_* command answers ERROR:100)."""
+        ...
+
     async def sdo_upload(self, node: int, index: int, sub: int, *, block: bool,
                          timeout_ms: int) -> bytes:
         """Read (index, sub) of ``node`` over SDO (``block``: block transfer; ``timeout_ms``:
@@ -110,7 +115,8 @@ class Backend(Protocol):
         ...
 
     async def nmt(self, node: int, command: NmtCommand) -> None:
-        """Send an NMT command to ``node`` (0: all nodes) on the bus."""
+        """Send an NMT command to ``node`` (0: all nodes) on the bus; the master itself
+        does not follow it (see :meth:`local_nmt`)."""
         ...
 
     async def local_nmt(self, command: NmtCommand) -> None:

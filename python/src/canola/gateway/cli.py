@@ -2,12 +2,13 @@
 
     canola gateway (--iface IFACE | --bus URL | --simulate EDS) [--listen WHERE]
                    [--node-id N] [--sdo-timeout MS] [--eds FILE] [--max-clients N]
-                   [--max-line BYTES]
+                   [--max-line BYTES] [--idle-timeout S]
 
 ``--listen`` is ``tcp:HOST:PORT`` (default tcp:127.0.0.1:6000, loopback only),
 ``unix:PATH`` or ``stdio``. ``--simulate EDS`` runs the gateway's master and the devices
 named by ``--sim-node`` on a simulated bus (no hardware; for trying the protocol out).
-The same options work as ``python -m canola.gateway``.
+The same options work as ``python -m canola.gateway``. SIGINT and SIGTERM stop it at once,
+whatever its clients are doing (their transfers are aborted).
 """
 
 from __future__ import annotations
@@ -25,7 +26,13 @@ from canola.errors import Error
 from canola.gateway.backend import Backend
 from canola.gateway.events import EventHub
 from canola.gateway.executor import Executor
-from canola.gateway.server import DEFAULT_LISTEN, MAX_CLIENTS, MAX_LINE, GatewayServer
+from canola.gateway.server import (
+    DEFAULT_LISTEN,
+    IDLE_TIMEOUT,
+    MAX_CLIENTS,
+    MAX_LINE,
+    GatewayServer,
+)
 from canola.gateway.server import parse_listen as _parse_listen
 
 __all__ = ["add_arguments", "main", "run"]
@@ -59,6 +66,16 @@ def _positive(text: str) -> int:
     return value
 
 
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0 <= value <= 86400:
+        raise argparse.ArgumentTypeError(f"bad time {text!r}: 0..86400 seconds (0: never)")
+    return value
+
+
 def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) -> None:
     """The gateway's options (``bus_options``: also ``--iface`` / ``--bus``)."""
     group = parser.add_mutually_exclusive_group(required=True)
@@ -82,6 +99,9 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
                         help=f"clients at once (default {MAX_CLIENTS})")
     parser.add_argument("--max-line", type=_positive, default=MAX_LINE, metavar="BYTES",
                         help=f"longest request line (default {MAX_LINE})")
+    parser.add_argument("--idle-timeout", type=_seconds, default=IDLE_TIMEOUT, metavar="S",
+                        help=f"drop a client silent for S seconds (default {IDLE_TIMEOUT:g}; "
+                             "0: never; clients that asked for events stay)")
 
 
 def _simulated(args: argparse.Namespace) -> tuple[Backend, asyncio.Task[None] | None]:
@@ -120,10 +140,21 @@ async def _serve(args: argparse.Namespace) -> int:
     backend, pump = _backend(args)
     hub = EventHub(backend)
     server = GatewayServer(Executor(backend, hub), hub, max_clients=args.max_clients,
-                           max_line=args.max_line)
+                           max_line=args.max_line,
+                           idle_timeout=getattr(args, "idle_timeout", IDLE_TIMEOUT))
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError):
+            loop.add_signal_handler(sig, stop.set)
     try:
         if where.kind == "stdio":
-            await server.serve_stdio()
+            served = asyncio.create_task(server.serve_stdio())
+            stopped = asyncio.create_task(stop.wait())
+            await asyncio.wait({served, stopped}, return_when=asyncio.FIRST_COMPLETED)
+            stopped.cancel()
+            if served.done():
+                served.result()  # its error, if it ended with one
             return 0
         srv = await server.start(where)
         if where.kind == "tcp" and not ipaddress.ip_address(
@@ -132,14 +163,12 @@ async def _serve(args: argparse.Namespace) -> int:
                   "controls the CAN network", file=sys.stderr)
         print(f"canola gateway: listening on {GatewayServer.address(srv)}", file=sys.stderr,
               flush=True)
-        stop = asyncio.Event()
-        loop = asyncio.get_running_loop()
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            with contextlib.suppress(NotImplementedError, RuntimeError):
-                loop.add_signal_handler(sig, stop.set)
         await stop.wait()
         return 0
     finally:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            with contextlib.suppress(NotImplementedError, RuntimeError):
+                loop.remove_signal_handler(sig)
         await server.close()
         hub.close()
         if pump is not None:

@@ -2,15 +2,18 @@
 
 One :class:`Session` per client holds what CiA 309-3 makes per-connection: default
 network and node, SDO time-out, block transfer on/off, and which events it receives.
-:meth:`Executor.execute` turns one request into its reply lines (without line ends):
-``[seq] OK``, ``[seq] <value>``, ``[seq] ERROR:0x<abort code>`` or
-``[seq] ERROR:<gateway error>``.
+:meth:`Executor.execute` turns one request into its reply (without line end): ``[seq] OK``,
+``[seq] <value>``, ``[seq] ERROR:0x<abort code>`` or ``[seq] ERROR:<gateway error>``; a
+reply of several lines (help, ``lss_allnodes``) has them joined with LF.
 
 Concurrency: requests of different clients run concurrently; SDO transfers to one node
 take turns (one lock per node), so a long block transfer to one node does not hold up
 requests to any other node. SDO requests to the gateway's own node-ID are served from
-its own dictionary without a frame on the bus; NMT commands to its own node-ID apply to
-itself.
+its own dictionary without a frame on the bus, as the network would see it, except that
+a SYNC period (0x1006) shorter than :data:`SYNC_PERIOD_MIN_US` is refused (abort
+0x06090030): a SYNC every microsecond would flood the bus and starve the gateway's own
+SDO traffic. NMT commands to its own node-ID are sent on the bus and applied to itself
+(as CANopenNode's gateway does). Network 0 is the gateway's own network.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ from canola.gateway.backend import Backend
 from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.events import EVENT_KINDS, EventHub
 from canola.gateway.formats import TYPES, format_value
+from canola.gateway.helptext import TOPICS
+from canola.gateway.lsscommands import LssCommands
 from canola.gateway.parser import ParseError
 from canola.gateway.pdo import mapped_entries, mapped_values
 from canola.gateway.requests import (
@@ -49,66 +54,25 @@ from canola.gateway.requests import (
     SetTpdo,
 )
 
-__all__ = ["GATEWAY_CLASS", "HELP", "PROTOCOL_VERSION", "Executor", "Session",
+__all__ = ["GATEWAY_CLASS", "PROTOCOL_VERSION", "SYNC_PERIOD_MIN_US", "Executor", "Session",
            "error_reply"]
 
 #: CiA 309-1 gateway class and CiA 309-3 protocol version that ``info version`` reports.
 GATEWAY_CLASS = 2
 PROTOCOL_VERSION = (3, 0)
 ABORT_TIMEOUT = 0x05040000
+ABORT_VALUE_RANGE = 0x06090030
+#: The shortest SYNC period (us) the gateway's own 0x1006 takes from a client (0: off).
+#: A SYNC frame lasts up to ~55 us at 1 Mbit/s and ~440 us at 125 kbit/s: at 1 ms the bus
+#: keeps room for everything else even at 125 kbit/s.
+SYNC_PERIOD_MIN_US = 1000
 
 log = logging.getLogger("canola.gateway")
 
-HELP = """\
-canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
-[<seq>] OK | <value> | ERROR:0x<SDO abort code> | ERROR:<gateway error code>.
-  r[ead] <index> <sub> [<type>]           SDO upload (no type: hex bytes)
-  w[rite] <index> <sub> <type> <value>    SDO download
-  start | stop | preop[erational]         NMT
-  reset node | reset comm[unication]      NMT
-  enable heartbeat <ms> | disable heartbeat   watch a node's heartbeat
-  [<net>] set network|node <n>            defaults of this connection
-  [<net>] set sdo_timeout <ms>            SDO time-out per answer (default: --sdo-timeout)
-  [<net>] set sdo_block 0|1               SDO block transfer
-  [<net>] set heartbeat <ms>              the gateway's own heartbeat
-  [<net>] set events 0|1                  all events to this connection
-  [<net>] boot_up_indication Enable|Disable
-  [<net>] set rpdo|tpdo[x] ... | r[ead] p[do] <n> | w[rite] p[do] <n> <count> <values>
-  info version | help [datatype|lss]
-Events (without sequence number): <net> <node> BOOT_UP | <net> <node> ERROR 203
-  (heartbeat lost) | <net> <node> ERROR 202 | <net> <node> EMCY <code> <reg> <5 bytes>
-  | <net> pdo <num> <count> <values> (the gateway's RPDO received)
-'#' starts a comment."""
-
-HELP_DATATYPE = """\
-b boolean; i8 i16 i24 i32 i40 i48 i56 i64 signed; u8 .. u64 unsigned;
-x8 .. x64 unsigned shown in hex; r32 r64 real; t td time of day / difference
-as '<ms> <days>'; vs visible string ("quoted", "" for a quote); os us d octet string,
-unicode string, domain as base64; hex raw bytes as hex pairs."""
-
-HELP_LSS = """\
-LSS (CiA 305) through the gateway's LSS master; all start with [<seq>] [<net>]:
-  lss_switch_glob 0|1                     switch state global (0 waiting, 1 configuration)
-  lss_switch_sel <vendor> <product> <revision> <serial>   switch state selective
-  lss_set_node <node>                     configure node-ID (1..127, 255: none)
-  lss_store                               store configuration
-  lss_inquire_addr [0..3]                 inquire vendor, product, revision, serial (all 4)
-  lss_get_node                            inquire node-ID
-  _lss_fastscan [<timeout ms>]            fastscan one device without node-ID: its address
-                                          (it stays in configuration)
-  lss_allnodes [<timeout ms> [<first node> <store 0|1> [0 <v> 0 <p> 0 <r> 0 <s>]]]
-                                          give every device without node-ID the next one
-  lss_conf_bitrate, lss_activate_bitrate, lss_identity, lss_ident_nonconf: ERROR:100
-Errors: 103 no answer, 501 refused, 502 node-ID refused, 504 store refused."""
-
-#: Default time-out (ms) per LSS answer of ``_lss_fastscan`` and ``lss_allnodes``.
-LSS_SCAN_TIMEOUT_MS = 100
-
-
-def error_reply(seq: int | None, code: int, *, abort: bool = False) -> str:
-    """``[seq] ERROR:...`` (no ``[seq]`` when the request had no readable one)."""
+def error_reply(seq: int, code: int, *, abort: bool = False) -> str:
+    """``[seq] ERROR:<code>`` (``abort``: ``ERROR:0x<abort code>``)."""
     text = f"ERROR:0x{code:08X}" if abort else f"ERROR:{code}"
-    return text if seq is None else f"[{seq}] {text}"
+    return f"[{seq}] {text}"
 
 
 @dataclass
@@ -138,12 +102,13 @@ class Executor:
         self.hub = hub
         self.net = net
         self._locks: dict[int, asyncio.Lock] = {}
+        self._lss = LssCommands(backend)
 
     def new_session(self) -> Session:
         return Session(net=self.net)
 
-    async def execute(self, session: Session, request: Request) -> list[str]:
-        """The reply lines of ``request``; never raises for a request that fails."""
+    async def execute(self, session: Session, request: Request) -> str:
+        """The reply to ``request``; never raises for a request that fails."""
         seq = request.seq
         try:
             if session.command_timeout_ms > 0:
@@ -151,24 +116,26 @@ class Executor:
                     return await self._run(session, request)
             return await self._run(session, request)
         except SdoAbort as exc:
-            return [error_reply(seq, exc.code, abort=True)]
+            return error_reply(seq, exc.code, abort=True)
         except GatewayFailure as exc:
-            return [error_reply(seq, exc.code)]
+            return error_reply(seq, exc.code)
         except ParseError as exc:
-            return [error_reply(seq, exc.code)]
+            return error_reply(seq, exc.code)
         except TimeoutError:
-            return [error_reply(seq, GatewayError.TIMEOUT)]
+            return error_reply(seq, GatewayError.TIMEOUT)
         except Error as exc:
             log.info("request %d: %s", seq, exc)
-            return [error_reply(seq, GatewayError.INTERNAL_STATE)]
+            return error_reply(seq, GatewayError.INTERNAL_STATE)
         except Exception:  # a bug must cost one reply, not the connection
             log.exception("request %d failed", seq)
-            return [error_reply(seq, GatewayError.INTERNAL_STATE)]
+            return error_reply(seq, GatewayError.INTERNAL_STATE)
 
     # ---- helpers
 
     def _net(self, session: Session, request: Request) -> int:
         net = request.net if request.net is not None else session.net
+        if net == 0:  # CANopenNode's default network
+            net = self.net
         if net != self.net:
             raise GatewayFailure(GatewayError.UNSUPPORTED_NET, f"network {net}")
         return net
@@ -201,6 +168,7 @@ class Executor:
     async def _download(self, session: Session, node: int, index: int, sub: int,
                         data: bytes) -> None:
         if node == self.backend.node_id:
+            self._check_local(index, sub, data)
             self.backend.local_write(index, sub, data)
             return
         async with self._lock(node):
@@ -210,6 +178,14 @@ class Executor:
             except TimeoutError:
                 raise SdoAbort(ABORT_TIMEOUT) from None
 
+    @staticmethod
+    def _check_local(index: int, sub: int, data: bytes) -> None:
+        """What the gateway refuses in its own dictionary beyond the entry's own limits."""
+        if (index, sub) == (0x1006, 0) and len(data) == 4:
+            period = int.from_bytes(data, "little")
+            if 0 < period < SYNC_PERIOD_MIN_US:
+                raise SdoAbort(ABORT_VALUE_RANGE)
+
     def _local_uint(self, index: int, sub: int) -> int:
         return int.from_bytes(self.backend.local_read(index, sub), "little")
 
@@ -218,9 +194,9 @@ class Executor:
 
     # ---- requests
 
-    async def _run(self, session: Session, request: Request) -> list[str]:
+    async def _run(self, session: Session, request: Request) -> str:
         seq = request.seq
-        ok = [f"[{seq}] OK"]
+        ok = f"[{seq}] OK"
         if isinstance(request, SdoRead):
             node = self._node(session, request)
             data = await self._upload(session, node, request.index, request.sub)
@@ -228,17 +204,16 @@ class Executor:
                 text = format_value(request.type, data)
             except ValueError:
                 raise SdoAbort(0x06070010) from None  # length does not match the type
-            return [f"[{seq}] {text}"]
+            return f"[{seq}] {text}"
         if isinstance(request, SdoWrite):
             node = self._node(session, request)
             await self._download(session, node, request.index, request.sub, request.data)
             return ok
         if isinstance(request, Nmt):
             node = self._node(session, request, allow_all=True)
+            await self.backend.nmt(node, request.command)
             if node == self.backend.node_id:
                 await self.backend.local_nmt(request.command)
-            else:
-                await self.backend.nmt(node, request.command)
             return ok
         if isinstance(request, Set):
             return self._set(session, request)
@@ -271,39 +246,35 @@ class Executor:
             self._net(session, request)
             values = mapped_values(self.backend.local_read, 0x1600 + request.num - 1)
             text = " ".join(f"0x{v:X}" for v in values)
-            return [f"[{seq}] {self.net} pdo {len(values)}" + (f" {text}" if text else "")]
+            return f"[{seq}] {self.net} pdo {len(values)}" + (f" {text}" if text else "")
         if isinstance(request, PdoWrite):
             self._net(session, request)
             await self._pdo_write(request)
             return ok
         if isinstance(request, InfoVersion):
-            return [f"[{seq}] {self._version()}"]
+            return f"[{seq}] {self._version()}"
         if isinstance(request, Help):
-            text = {"": HELP, "datatype": HELP_DATATYPE, "lss": HELP_LSS}[request.topic]
-            first, *rest = text.splitlines()
-            return [f"[{seq}] {first}", *rest]
+            return f"[{seq}] {TOPICS[request.topic]}"
         if isinstance(request, Init):
             self._net(session, request)
             raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "init")
         if isinstance(request, Lss):
             self._net(session, request)
-            return await self._lss(request)
+            return await self._lss.run(request)
         raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, type(request).__name__)
 
-    def _set(self, session: Session, request: Set) -> list[str]:
-        ok = [f"[{request.seq}] OK"]
+    def _set(self, session: Session, request: Set) -> str:
+        ok = f"[{request.seq}] OK"
         what, value = request.what, request.value
         if what == "network":
-            if value != self.net:
+            if value not in (0, self.net):
                 raise GatewayFailure(GatewayError.UNSUPPORTED_NET, f"network {value}")
-            session.net = value
+            session.net = self.net
             return ok
         self._net(session, request)
         if what == "node":
             session.node = value
         elif what == "sdo_timeout":
-            if value == 0:
-                raise GatewayFailure(GatewayError.SYNTAX, "time-out 0")
             session.sdo_timeout_ms = value
         elif what == "sdo_block":
             session.sdo_block = bool(value)
@@ -318,95 +289,6 @@ class Executor:
         else:  # "id": the master's node-ID is fixed at start-up
             raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"set {what}")
         return ok
-
-    async def _lss(self, request: Lss) -> list[str]:
-        seq, args, command = request.seq, request.args, request.command
-        lss = self.backend.lss
-
-        def arity(*counts: int) -> None:
-            if len(args) not in counts:
-                raise GatewayFailure(GatewayError.SYNTAX, f"{command}: {len(args)} arguments")
-
-        if command == "lss_switch_glob":
-            arity(1)
-            if args[0] > 1:
-                raise GatewayFailure(GatewayError.SYNTAX, "lss_switch_glob 0|1")
-            await lss("switch_global", args)
-        elif command == "lss_switch_sel":
-            arity(4)
-            await lss("select", args)
-        elif command == "lss_set_node":
-            arity(1)
-            if not (1 <= args[0] <= 127 or args[0] == 0xFF):
-                raise GatewayFailure(GatewayError.LSS_NODE_ID_NOT_SUPPORTED, f"{args[0]}")
-            await lss("set_node", args)
-        elif command == "lss_store":
-            arity(0)
-            await lss("store")
-        elif command == "lss_inquire_addr":
-            arity(0, 1)
-            if args and args[0] > 3:
-                raise GatewayFailure(GatewayError.SYNTAX, "lss_inquire_addr 0..3")
-            values = [(await lss("inquire", (sub,)))[0] for sub in (args or (0, 1, 2, 3))]
-            return [f"[{seq}] " + " ".join(f"0x{v:08X}" for v in values)]
-        elif command == "lss_get_node":
-            arity(0)
-            (node,) = await lss("inquire", (4,))
-            return [f"[{seq}] 0x{node & 0xFF:02X}"]
-        elif command == "_lss_fastscan":
-            arity(0, 1)
-            found = await lss("fastscan", (self._scan_timeout(args),))
-            if not found:
-                raise GatewayFailure(GatewayError.TIMEOUT, "no device without node-ID")
-            return [f"[{seq}] " + " ".join(f"0x{v:08X}" for v in found)]
-        elif command == "lss_allnodes":
-            return await self._lss_allnodes(request)
-        else:  # bit timing (not exposed by the LSS master), identify, slowscan
-            raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, command)
-        return [f"[{seq}] OK"]
-
-    @staticmethod
-    def _scan_timeout(args: tuple[int, ...]) -> int:
-        timeout = args[0] if args else LSS_SCAN_TIMEOUT_MS
-        if not 1 <= timeout <= 0xFFFF:
-            raise GatewayFailure(GatewayError.SYNTAX, f"LSS time-out {timeout} ms")
-        return timeout
-
-    async def _lss_allnodes(self, request: Lss) -> list[str]:
-        """Fastscan, configure the next node-ID (skipping the gateway's), store if asked,
-        switch to waiting (the device boots); until no device without node-ID answers."""
-        args, lss = request.args, self.backend.lss
-        if len(args) not in (0, 1, 3, 11):
-            raise GatewayFailure(GatewayError.SYNTAX, f"lss_allnodes: {len(args)} arguments")
-        timeout = self._scan_timeout(args)
-        node, store = (args[1], args[2]) if len(args) >= 3 else (1, 0)
-        if not 1 <= node <= 127 or store > 1:
-            raise GatewayFailure(GatewayError.SYNTAX, "lss_allnodes: node 1..127, store 0|1")
-        if len(args) == 11 and any(args[i] for i in (3, 5, 7, 9)):
-            raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "scan types other than 0")
-        lines: list[str] = []
-        count = 0
-        while True:
-            if node == self.backend.node_id:
-                node += 1
-            if node > 127:
-                lines.append("# Not all nodes scanned!")
-                break
-            found = await lss("fastscan", (timeout,))
-            if not found:
-                lines.append(f"# Found {count} nodes, search finished.")
-                break
-            try:
-                await lss("set_node", (node,))
-                if store:
-                    await lss("store")
-            finally:
-                await lss("switch_global", (0,))
-            lines.append(f"# Node-ID {node} assigned to: "
-                         + " ".join(f"0x{v:08X}" for v in found))
-            count += 1
-            node += 1
-        return [*lines, f"[{request.seq}] OK"]
 
     def _version(self) -> str:
         ident = []

@@ -7,10 +7,10 @@ bytes as hexadecimal pairs).
 
 - Integers are read as C writes them: decimal, ``0x`` hexadecimal or ``0`` octal, with a
   sign for the signed types; they are shown in decimal (``x*``: ``0x`` and hex digits).
-- ``vs`` is shown between double quotes; a double quote inside is doubled, and control
-  characters and the backslash are escaped (``\\n``, ``\\r``, ``\\t``, ``\\\\``,
-  ``\\xHH``), so that no value can break the line protocol. A single word may be written
-  without quotes.
+- ``vs`` is shown between double quotes; a double quote inside is doubled, CR, LF, the
+  backslash and the other control characters are escaped (``\\r``, ``\\n``, ``\\\\``,
+  ``\\xHH``), so that no value can break the line protocol; a TAB stays a TAB. A single
+  word may be written without quotes; ``\\t`` and ``\\"`` are read too.
 - ``os``, ``us`` (the UTF-16LE bytes) and ``d`` are base64 (RFC 2045 alphabet, one line).
 - ``t`` and ``td`` (TIME_OF_DAY / TIME_DIFFERENCE) are ``<ms> <days>``: milliseconds
   after midnight and days since 1984-01-01, in the order of the wire.
@@ -70,6 +70,7 @@ TYPES: dict[str, TypeSpec] = {
     "hex": TypeSpec("hex", 0x0F, 0, "raw"),
 }
 
+_HEX_RE = re.compile(r"[0-9a-fA-F]*+")
 _INT_RE = re.compile(r"([+-]?)(0[xX][0-9a-fA-F]+|0[0-7]*|[1-9][0-9]*)\Z")
 
 
@@ -77,7 +78,7 @@ def parse_int(text: str) -> int:
     """An integer in C syntax (decimal, 0x hexadecimal, 0 octal), optionally signed."""
     m = _INT_RE.match(text)
     if m is None:
-        raise ValueError(f"not an integer: {text!r}")
+        raise ValueError(f"not an integer: {text[:40]!r}")
     sign, digits = m.groups()
     if digits[:2] in ("0x", "0X"):
         value = int(digits[2:], 16)
@@ -88,61 +89,48 @@ def parse_int(text: str) -> int:
     return -value if sign == "-" else value
 
 
-_ESCAPES = {"\\": "\\\\", "\n": "\\n", "\r": "\\r", "\t": "\\t"}
-_UNESCAPES = {"\\": "\\", "n": "\n", "r": "\r", "t": "\t", '"': '"'}
+# vs text. Shown: a double quote doubled, CR, LF and the backslash escaped, other control
+# characters as \xHH; a TAB stays a TAB (as CANopenNode's gateway shows it).
+_QUOTE_TABLE = str.maketrans({'"': '""', "\\": "\\\\", "\n": "\\n", "\r": "\\r",
+                              **{chr(c): f"\\x{c:02X}" for c in (*range(0x20), 0x7F)
+                                 if c not in (0x09, 0x0A, 0x0D)}})
+# Read: a single word (no blank, no quote), or between double quotes with "" for a quote;
+# in both, the escapes \\ \n \r \t \" (quoted only) and \xHH. Possessive patterns: no
+# backtracking, so checking a value is linear in its length.
+_ESCAPE = r'\\(?:x[0-9a-fA-F]{2}|[\\nrt])'
+_VS_WORD = re.compile(rf'(?:[^\s"\\]++|{_ESCAPE})++')
+_VS_QUOTED = re.compile(rf'"((?:[^"\\]++|""|\\"|{_ESCAPE})*+)"')
 
 
 def _quote(text: str) -> str:
-    out = ['"']
-    for ch in text:
-        if ch == '"':
-            out.append('""')
-        elif ch in _ESCAPES:
-            out.append(_ESCAPES[ch])
-        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
-            out.append(f"\\x{ord(ch):02X}")
-        else:
-            out.append(ch)
-    out.append('"')
-    return "".join(out)
+    return f'"{text.translate(_QUOTE_TABLE)}"'
+
+
+def _unescape(body: str) -> str:
+    """``body`` (checked by _VS_WORD or _VS_QUOTED) with its doubled quotes and escapes
+    resolved in a few passes over the text, none of them a Python loop per character.
+
+    Halving the runs of double quotes first is right: in a checked body a run is either
+    pairs, or one escaped quote (after an escaping backslash) and pairs, and halving keeps
+    each run after the character it followed. The escapes left are Python's own; every
+    other non-ASCII character goes through as a Python escape too."""
+    if "\\" not in body:
+        return body.replace('""', '"')
+    ascii_text = body.replace('""', '"').encode("ascii", "backslashreplace")
+    return ascii_text.decode("unicode_escape")
 
 
 def _unquote(text: str) -> str:
-    if not text.startswith('"'):
-        if not text or any(ch.isspace() or ch == '"' for ch in text):
-            raise ValueError("a string with blanks or quotes must be between double quotes")
-        body, closed = text, True
-    else:
-        body, closed = text[1:], False
-    out: list[str] = []
-    i = 0
-    while i < len(body):
-        ch = body[i]
-        if ch == '"' and text.startswith('"'):
-            if body[i + 1:i + 2] == '"':
-                out.append('"')
-                i += 2
-                continue
-            if i != len(body) - 1:
-                raise ValueError("text after the closing double quote")
-            closed = True
-            break
-        if ch == "\\":
-            nxt = body[i + 1:i + 2]
-            if nxt in _UNESCAPES:
-                out.append(_UNESCAPES[nxt])
-                i += 2
-                continue
-            if nxt == "x" and re.fullmatch(r"[0-9a-fA-F]{2}", body[i + 2:i + 4]):
-                out.append(chr(int(body[i + 2:i + 4], 16)))
-                i += 4
-                continue
-            raise ValueError("unknown escape sequence")
-        out.append(ch)
-        i += 1
-    if not closed:
-        raise ValueError("missing closing double quote")
-    return "".join(out)
+    if text.startswith('"'):
+        m = _VS_QUOTED.fullmatch(text)
+        if m is None:
+            raise ValueError('a quoted string ends with a lone double quote ("" for a quote; '
+                             'escapes \\\\ \\n \\r \\t \\" \\xHH)')
+        return _unescape(m.group(1))
+    if _VS_WORD.fullmatch(text) is None:
+        raise ValueError("a string with blanks or quotes must be between double quotes "
+                         "(escapes \\\\ \\n \\r \\t \\xHH)")
+    return _unescape(text)
 
 
 def _b64decode(text: str) -> bytes:
@@ -150,6 +138,12 @@ def _b64decode(text: str) -> bytes:
         return base64.b64decode(text, validate=True)
     except binascii.Error as exc:
         raise ValueError(f"not base64: {exc}") from None
+
+
+# C's strtod syntax without hexadecimal floats: [sign] (inf | infinity | nan | digits with
+# an optional point and exponent). Possessive: linear whatever the text.
+_REAL_RE = re.compile(r"[+-]?+(?:inf(?:inity)?+|nan|(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)"
+                      r"(?:[eE][+-]?+[0-9]++)?+)", re.IGNORECASE)
 
 
 def parse_value(type_name: str, text: str) -> bytes:
@@ -174,17 +168,16 @@ def parse_value(type_name: str, text: str) -> bytes:
             raise ValueError(f"{value} is out of range for {spec.name}")
         return value.to_bytes(spec.size, "little", signed=kind == "int")
     if kind == "real":
-        if not re.fullmatch(r"[+-]?(inf|infinity|nan|[0-9]*\.?[0-9]*([eE][+-]?[0-9]+)?)", text,
-                            re.IGNORECASE) or not any(c.isdigit() or c in "nN" for c in text):
-            raise ValueError(f"not a real number: {text!r}")
+        if _REAL_RE.fullmatch(text) is None:
+            raise ValueError(f"not a real number: {text[:40]!r}")
         number = float(text)
         if spec.size == 4:
             if math.isfinite(number) and abs(number) > 3.4028235677973366e38:
-                raise ValueError(f"{text} is out of range for r32")
+                raise ValueError(f"{text[:40]} is out of range for r32")
             return struct.pack("<f", number)
         return struct.pack("<d", number)
     if kind == "time":
-        parts = text.split()
+        parts = text.split(maxsplit=2)
         if len(parts) != 2:
             raise ValueError("a time is '<ms> <days>'")
         ms, days = parse_int(parts[0]), parse_int(parts[1])
@@ -192,12 +185,15 @@ def parse_value(type_name: str, text: str) -> bytes:
             raise ValueError("time out of range (ms < 2^28, days < 65536)")
         return ms.to_bytes(4, "little") + days.to_bytes(2, "little")
     if kind == "vs":
-        return _unquote(text).encode("utf-8")
+        try:
+            return _unquote(text).encode("utf-8")
+        except UnicodeEncodeError:
+            raise ValueError("a string that is not Unicode text (a lone surrogate)") from None
     if kind == "b64":
         return _b64decode(text)
     # raw hexadecimal pairs, blanks allowed between bytes
     digits = "".join(text.split())
-    if len(digits) % 2 or not re.fullmatch(r"[0-9a-fA-F]*", digits):
+    if len(digits) % 2 or _HEX_RE.fullmatch(digits) is None:
         raise ValueError("hex data is pairs of hexadecimal digits")
     return bytes.fromhex(digits)
 

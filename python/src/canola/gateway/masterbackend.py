@@ -52,6 +52,19 @@ def _answer_s(timeout_ms: int) -> float | None:
     return min(timeout_ms, 0xFFFF) / 1000 if timeout_ms else None
 
 _INQUIRE = ("vendor", "product", "revision", "serial", "node_id")
+_REFUSED = {"set_node": GatewayError.LSS_NODE_ID_NOT_SUPPORTED,
+            "store": GatewayError.LSS_STORE_FAILED}
+
+
+def _lss_error(op: LssOp, status: str, error: int) -> GatewayError:
+    """The CiA 309-3 code of a failed LSS request, as CANopenNode's gateway gives it."""
+    if status == "time-out":
+        return GatewayError.TIMEOUT
+    if status.startswith("refused"):
+        if error == 0xFF:  # the device's own reason, in the manufacturer-specific byte
+            return GatewayError.LSS_MANUFACTURER
+        return _REFUSED.get(op, GatewayError.LSS_MANUFACTURER)
+    return GatewayError.INTERNAL_STATE
 
 
 class MasterBackend:
@@ -72,6 +85,10 @@ class MasterBackend:
     @property
     def node_id(self) -> int:
         return self.master.node_id
+
+    @property
+    def has_lss(self) -> bool:
+        return True
 
     # ---- SDO
 
@@ -138,20 +155,9 @@ class MasterBackend:
                 except Error as exc:  # no device with that address answered
                     raise GatewayFailure(GatewayError.TIMEOUT, str(exc)) from None
             elif op == "set_node":
-                try:
-                    lss.configure_node_id(args[0])
-                except LssError as exc:
-                    if exc.status.startswith("refused"):
-                        raise GatewayFailure(GatewayError.LSS_NODE_ID_NOT_SUPPORTED,
-                                             str(exc)) from None
-                    raise
+                lss.configure_node_id(args[0])
             elif op == "store":
-                try:
-                    lss.store()
-                except LssError as exc:
-                    if exc.status.startswith("refused"):
-                        raise GatewayFailure(GatewayError.LSS_STORE_FAILED, str(exc)) from None
-                    raise
+                lss.store()
             elif op == "inquire":
                 return (lss.inquire_value(_INQUIRE[args[0]]),)
             elif op == "fastscan":
@@ -167,9 +173,7 @@ class MasterBackend:
             else:
                 raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"LSS {op}")
         except LssError as exc:
-            code = GatewayError.TIMEOUT if exc.status == "time-out" \
-                else GatewayError.LSS_MANUFACTURER
-            raise GatewayFailure(code, str(exc)) from None
+            raise GatewayFailure(_lss_error(op, exc.status, exc.error), str(exc)) from None
         return ()
 
     # ---- events

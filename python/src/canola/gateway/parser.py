@@ -54,17 +54,17 @@ from canola.gateway.requests import (
 
 __all__ = ["LSS_COMMANDS", "SET_NAMES", "ParseError", "parse_line", "read_seq"]
 
-#: ``set <name> <value>`` names and the largest value each takes.
-SET_NAMES: dict[str, int] = {
-    "network": 0xFFFF,
-    "node": 127,
-    "sdo_timeout": 0xFFFFFFFF,
-    "sdo_block": 1,
-    "heartbeat": 0xFFFF,
-    "id": 0xFF,
-    "command_timeout": 0xFFFFFFFF,
-    "command_size": 0xFFFFFFFF,
-    "events": 1,
+#: ``set <name> <value>`` names and the values each takes (outside: ERROR:101).
+SET_NAMES: dict[str, tuple[int, int]] = {
+    "network": (0, 0xFFFF),
+    "node": (1, 127),
+    "sdo_timeout": (1, 0xFFFFFFFF),
+    "sdo_block": (0, 1),
+    "heartbeat": (0, 0xFFFF),
+    "id": (0, 0xFF),
+    "command_timeout": (0, 0xFFFFFFFF),
+    "command_size": (0, 0xFFFFFFFF),
+    "events": (0, 1),
 }
 
 #: The LSS commands of CiA 309-3 (and CANopenNode's non-standard ones).
@@ -81,6 +81,14 @@ _GLOBAL = frozenset({"info", "help"})
 _NOT_SUPPORTED = frozenset({"led", "log"})
 
 _SEQ_RE = re.compile(r"\s*\[\s*([0-9]{1,10})\s*\]")
+# What comes before a comment: words (a '#' inside or at the end of one is text), blanks
+# not followed by '#', and double-quoted runs. Possessive everywhere: no backtracking, so
+# the match is linear in the line's length whatever the line.
+_BEFORE_COMMENT = re.compile(r'(?:[^"\s#]++|\s++(?!#)|(?<=\S)#|"[^"]*+"?)*+')
+_WORD = re.compile(r"\s*+(\S++)")
+
+#: The most arguments an LSS command takes (lss_allnodes with its scan types).
+_LSS_ARGS_MAX = 11
 
 
 class ParseError(Exception):
@@ -103,53 +111,62 @@ def read_seq(text: str) -> int | None:
 
 
 def _strip_comment(line: str) -> str:
-    quoted = False
-    for i, ch in enumerate(line):
-        if ch == '"':
-            quoted = not quoted
-        elif ch == "#" and not quoted and (i == 0 or line[i - 1].isspace()):
-            return line[:i]
-    return line
+    """``line`` without its comment: a ``#`` outside double quotes, at the start of the line
+    or after a blank, to the end."""
+    if "#" not in line:
+        return line
+    m = _BEFORE_COMMENT.match(line)
+    assert m is not None  # the pattern matches the empty string
+    return line[:m.end()]
 
 
 class _Cursor:
-    """Whitespace-separated words of the text after the sequence number."""
+    """The whitespace-separated words of a line, read from a position: each word is
+    looked at once, so reading a line costs time linear in its length."""
 
-    def __init__(self, text: str, seq: int) -> None:
+    def __init__(self, text: str, pos: int, seq: int) -> None:
         self.text = text
+        self.pos = pos
         self.seq = seq
+        self._next: re.Match[str] | None = None
 
     def fail(self, detail: str, code: GatewayError = GatewayError.SYNTAX) -> ParseError:
         return ParseError(code, self.seq, detail)
 
+    def _match(self) -> re.Match[str] | None:
+        if self._next is None or self._next.start() != self.pos:
+            self._next = _WORD.match(self.text, self.pos)
+        return self._next
+
     def peek(self) -> str | None:
-        parts = self.text.split(None, 1)
-        return parts[0] if parts else None
+        m = self._match()
+        return m.group(1) if m else None
 
     def word(self, what: str) -> str:
-        parts = self.text.split(None, 1)
-        if not parts:
+        m = self._match()
+        if m is None:
             raise self.fail(f"expected {what}")
-        self.text = parts[1] if len(parts) > 1 else ""
-        return parts[0]
+        self.pos = m.end()
+        return m.group(1)
 
-    def number(self, what: str, limit: int) -> int:
+    def number(self, what: str, limit: int, low: int = 0) -> int:
         text = self.word(what)
         try:
             value = parse_int(text)
         except ValueError:
-            raise self.fail(f"expected {what}, got {text!r}") from None
-        if not 0 <= value <= limit:
-            raise self.fail(f"{what} {value} is out of range 0..{limit}")
+            raise self.fail(f"expected {what}, got {text[:40]!r}") from None
+        if not low <= value <= limit:
+            raise self.fail(f"{what} {value} is out of range {low}..{limit}")
         return value
 
     def rest(self) -> str:
-        text, self.text = self.text.strip(), ""
+        text, self.pos = self.text[self.pos:].strip(), len(self.text)
         return text
 
     def end(self) -> None:
-        if self.text.strip():
-            raise self.fail(f"unexpected {self.text.strip()!r} at the end of the request")
+        if self.peek() is not None:
+            raise self.fail(f"unexpected {self.text[self.pos:].strip()[:40]!r} at the end of "
+                            "the request")
 
 
 def _is_number(word: str | None) -> bool:
@@ -173,7 +190,7 @@ def parse_line(line: str) -> Request | None:
     seq = int(m.group(1))
     if seq > 0xFFFFFFFF:
         raise ParseError(GatewayError.SYNTAX, None, "sequence number out of range")
-    cur = _Cursor(text[m.end():], seq)
+    cur = _Cursor(text, m.end(), seq)
     numbers: list[int] = []
     while _is_number(cur.peek()):
         if len(numbers) == 2:
@@ -296,8 +313,10 @@ def _command(cur: _Cursor, command: str, net: int | None, node: int | None) -> R
             raise cur.fail("help topics: datatype, lss")
         return Help(seq, topic=topic)
     assert command in LSS_COMMANDS
-    args = []
+    args: list[int] = []
     while cur.peek() is not None:
+        if len(args) == _LSS_ARGS_MAX:
+            raise cur.fail(f"more than {_LSS_ARGS_MAX} arguments")
         args.append(cur.number("LSS argument", 0xFFFFFFFF))
     return Lss(seq, net, None, command=command, args=tuple(args))
 
@@ -342,7 +361,8 @@ def _set(cur: _Cursor, net: int | None) -> Request:
                        inhibit=inhibit, event=event, sync=sync, mapping=mapping)
     if what not in SET_NAMES:
         raise cur.fail(f"cannot set {what!r}", GatewayError.REQUEST_NOT_SUPPORTED)
-    value = cur.number(what, SET_NAMES[what])
+    low, high = SET_NAMES[what]
+    value = cur.number(what, high, low)
     cur.end()
     return Set(seq, net, None, what=what, value=value)
 

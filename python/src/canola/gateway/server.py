@@ -1,9 +1,5 @@
-"""The gateway's transport: clients over TCP, a Unix socket or stdio, one session each.
-
-Each client gets its own :class:`~canola.gateway.executor.Session` and three small
-tasks: the reader splits its bytes into lines (at most ``max_line`` bytes each; a longer
-line is answered ``ERROR:600`` and skipped, the connection stays usable), the worker runs
-its requests one after the other, in order, and the writer sends replies and events.
+"""The gateway's transport: clients over TCP, a Unix socket or stdio, one
+:class:`~canola.gateway.connection.Connection` (session, reader, worker, writer) each.
 Clients never wait for each other (except for SDO transfers to one and the same node).
 
 A socket client that goes away (end of stream or reset) is dropped at once: the request
@@ -11,123 +7,62 @@ it was waiting for is cancelled, which aborts an SDO transfer in progress on the
 stdio, the end of input lets pending requests finish first (``canola gateway --listen
 stdio < script`` answers every line).
 
-At most ``max_clients`` clients at once; one more is answered ``ERROR:102`` and closed.
+Bounds (docs/security.md): at most ``max_clients`` socket clients at once; one more takes
+the slot of the client idle longest (that one is dropped and the log says so), or, when
+every client has a request running, is answered ``[0] ERROR:102`` and closed. A socket
+client idle for ``idle_timeout`` seconds is dropped (logged), unless it asked for events
+(it then stays until its slot is needed). :meth:`GatewayServer.close` drops every client
+at once, whatever it is doing.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import os
 import socket
 import stat
 import sys
-from collections.abc import Awaitable, Callable
-from dataclasses import dataclass
 
 from canola.gateway.codes import GatewayError
+from canola.gateway.connection import Connection, LineSplitter, Read, Write, off_loop
 from canola.gateway.events import EventHub
 from canola.gateway.executor import Executor, error_reply
-from canola.gateway.parser import ParseError, parse_line, read_seq
-from canola.gateway.requests import Request
+from canola.gateway.listen import DEFAULT_LISTEN, Listen, parse_listen
 
-__all__ = ["DEFAULT_LISTEN", "GatewayServer", "LineSplitter", "Listen", "parse_listen"]
+__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "GatewayServer",
+           "LineSplitter", "Listen", "parse_listen"]
 
-DEFAULT_LISTEN = "tcp:127.0.0.1:6000"
 MAX_LINE = 4 * 1024 * 1024  # a 1 MiB domain in base64 fits three times over
 MAX_CLIENTS = 16
-_QUEUED_LINES = 1024  # per client: replies and events not yet sent
+IDLE_TIMEOUT = 60.0  # seconds
 
-
-@dataclass(frozen=True)
-class Listen:
-    """Where to listen: ``kind`` is "tcp" (host, port), "unix" (path) or "stdio"."""
-
-    kind: str
-    host: str = ""
-    port: int = 0
-    path: str = ""
-
-    def __str__(self) -> str:
-        if self.kind == "tcp":
-            host = f"[{self.host}]" if ":" in self.host else self.host
-            return f"tcp:{host}:{self.port}"
-        return f"unix:{self.path}" if self.kind == "unix" else "stdio"
-
-
-def parse_listen(text: str) -> Listen:
-    """``tcp:HOST:PORT``, ``tcp:PORT`` (loopback), ``unix:PATH`` or ``stdio``."""
-    if text == "stdio":
-        return Listen("stdio")
-    kind, _, rest = text.partition(":")
-    if kind == "unix" and rest:
-        return Listen("unix", path=rest)
-    if kind == "tcp" and rest:
-        host, _, port = rest.rpartition(":")
-        host = host.strip("[]") or "127.0.0.1"
-        if port.isdigit() and 0 <= int(port) <= 65535:
-            return Listen("tcp", host=host, port=int(port))
-    raise ValueError(f"cannot listen on {text!r} (tcp:HOST:PORT, unix:PATH or stdio)")
-
-
-class LineSplitter:
-    """Bytes in, lines out; a line longer than ``limit`` comes out as ``None`` items'
-    sequence number (see :meth:`feed`)."""
-
-    def __init__(self, limit: int) -> None:
-        self.limit = limit
-        self._buf = bytearray()
-        self._skipping = False
-
-    def feed(self, data: bytes) -> list[bytes | tuple[int | None]]:
-        """Complete lines (without the line feed); ``(seq,)`` for each line that was too
-        long (``seq`` read from its start, if any)."""
-        out: list[bytes | tuple[int | None]] = []
-        start = 0
-        while start < len(data):
-            nl = data.find(b"\n", start)
-            end = len(data) if nl < 0 else nl
-            if self._skipping:
-                if nl >= 0:
-                    self._skipping = False
-            elif len(self._buf) + end - start > self.limit:
-                head = bytes(self._buf[:32] or data[start:start + 32])
-                out.append((read_seq(head.decode("latin-1")),))
-                self._buf.clear()
-                self._skipping = nl < 0
-            else:
-                self._buf += data[start:end]
-                if nl >= 0:
-                    out.append(bytes(self._buf))
-                    self._buf.clear()
-            start = end + 1 if nl >= 0 else len(data)
-        return out
-
-    def tail(self) -> bytes | None:
-        """What is left at the end of the stream (a last line without line feed)."""
-        if self._skipping or not self._buf:
-            return None
-        data = bytes(self._buf)
-        self._buf.clear()
-        return data
-
-
-Read = Callable[[], Awaitable[bytes]]
-Write = Callable[[bytes], Awaitable[None]]
+log = logging.getLogger("canola.gateway")
 
 
 class GatewayServer:
     """Serves an :class:`Executor` (and its :class:`EventHub`) to clients."""
 
     def __init__(self, executor: Executor, hub: EventHub | None = None, *,
-                 max_clients: int = MAX_CLIENTS, max_line: int = MAX_LINE) -> None:
+                 max_clients: int = MAX_CLIENTS, max_line: int = MAX_LINE,
+                 idle_timeout: float = IDLE_TIMEOUT) -> None:
         self.executor = executor
         self.hub = hub
         self.max_clients = max_clients
         self.max_line = max_line
-        self.clients = 0
+        self.idle_timeout = idle_timeout  # 0: never
         self._servers: list[asyncio.Server] = []
+        self._connections: set[Connection] = set()
+        self._sockets: set[Connection] = set()
         self._tasks: set[asyncio.Task[None]] = set()
+        self._watch: asyncio.Task[None] | None = None
+        self._count = 0
+
+    @property
+    def clients(self) -> int:
+        """Clients served now."""
+        return len(self._connections)
 
     # ---- listening
 
@@ -144,6 +79,8 @@ class GatewayServer:
         else:
             raise ValueError("stdio is served with serve_stdio()")
         self._servers.append(server)
+        if self.idle_timeout > 0 and self._watch is None:
+            self._watch = asyncio.create_task(self._watch_idle())
         return server
 
     @staticmethod
@@ -155,46 +92,97 @@ class GatewayServer:
         return str(Listen("tcp", host=host, port=port))
 
     async def serve_stdio(self) -> None:
-        """Serve one client on stdin/stdout until the end of its input."""
-        loop = asyncio.get_running_loop()
+        """Serve one client on stdin/stdout until the end of its input (reads and writes
+        in daemon threads: a blocked terminal never holds up the end of the process)."""
         fd_in, fd_out = sys.stdin.fileno(), sys.stdout.fileno()
 
         async def read() -> bytes:
-            return await loop.run_in_executor(None, os.read, fd_in, 65536)
+            try:
+                return await off_loop(os.read, fd_in, 65536)
+            except OSError:
+                return b""
 
         async def write(data: bytes) -> None:
             view = memoryview(data)
             while view:
-                n = await loop.run_in_executor(None, os.write, fd_out, view)
+                n = await off_loop(os.write, fd_out, view)
                 view = view[n:]
 
-        await self.serve_stream(read, write, eof_cancels=False)
+        await self.serve_stream(read, write, eof_cancels=False, name="stdio")
+
+    async def serve_stream(self, read: Read, write: Write, *, eof_cancels: bool,
+                           name: str = "stream") -> None:
+        """Serve one client reading with ``read`` (b"" at the end) and writing with
+        ``write`` (no idle time-out). ``eof_cancels``: the end of input drops pending
+        requests (sockets)."""
+        await self._serve(Connection(name, self.executor, self.hub, self.max_line), read,
+                          write, eof_cancels=eof_cancels)
 
     async def close(self) -> None:
-        """Stop listening and drop every client (their transfers are aborted)."""
+        """Stop listening and drop every client at once (their transfers are aborted)."""
         for server in self._servers:
             server.close()
+        if self._watch is not None:
+            self._watch.cancel()
+        for conn in list(self._connections):
+            conn.drop("the gateway stops", logging.INFO)
         for task in list(self._tasks):
             task.cancel()
-        for task in list(self._tasks):
+        for task in [*self._tasks, *([self._watch] if self._watch else [])]:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
         for server in self._servers:
             with contextlib.suppress(Exception):
                 await server.wait_closed()
         self._servers.clear()
+        self._watch = None
+
+    # ---- clients
+
+    async def _serve(self, conn: Connection, read: Read, write: Write, *,
+                     eof_cancels: bool) -> None:
+        conn.task = asyncio.current_task()
+        self._connections.add(conn)
+        try:
+            await conn.serve(read, write, eof_cancels=eof_cancels)
+        finally:
+            self._connections.discard(conn)
+            self._sockets.discard(conn)
+
+    def _idlest(self) -> tuple[Connection, float] | None:
+        """The socket client idle longest (none with a request running), and for how long."""
+        now = asyncio.get_running_loop().time()
+        idle = [(conn, t) for conn in self._sockets
+                if conn.dropped is None and (t := conn.idle_for(now)) is not None]
+        return max(idle, key=lambda pair: pair[1], default=None)
+
+    def _peer(self, writer: asyncio.StreamWriter) -> str:
+        self._count += 1
+        peer = writer.get_extra_info("peername")
+        if isinstance(peer, tuple) and len(peer) >= 2:
+            host = f"[{peer[0]}]" if ":" in str(peer[0]) else peer[0]
+            return f"client {self._count} ({host}:{peer[1]})"
+        return f"client {self._count} (unix socket)"
 
     async def _socket_client(self, reader: asyncio.StreamReader,
                              writer: asyncio.StreamWriter) -> None:
         task = asyncio.current_task()
         assert task is not None
         self._tasks.add(task)
+        name = self._peer(writer)
+        conn: Connection | None = None
         try:
-            if self.clients >= self.max_clients:
-                writer.write(f"{error_reply(None, GatewayError.INTERNAL_STATE)}\r\n".encode())
-                with contextlib.suppress(ConnectionError):
-                    await writer.drain()
-                return
+            if sum(conn.dropped is None for conn in self._sockets) >= self.max_clients:
+                idlest = self._idlest()
+                if idlest is None:
+                    log.warning("%s refused: all %d client slots have a request running",
+                                name, self.max_clients)
+                    writer.write(f"{error_reply(0, GatewayError.INTERNAL_STATE)}\r\n".encode())
+                    with contextlib.suppress(ConnectionError):
+                        await writer.drain()
+                    return
+                victim, idle = idlest
+                victim.drop(f"idle for {idle:.1f} s, its slot goes to {name}")
 
             async def read() -> bytes:
                 try:
@@ -206,95 +194,26 @@ class GatewayServer:
                 writer.write(data)
                 await writer.drain()
 
-            await self.serve_stream(read, write, eof_cancels=True)
+            conn = Connection(name, self.executor, self.hub, self.max_line)
+            self._sockets.add(conn)
+            await self._serve(conn, read, write, eof_cancels=True)
         except asyncio.CancelledError:
-            pass  # close() drops the client; the task ends here, not with an error
+            pass  # dropped: the task ends here, not with an error
         finally:
             self._tasks.discard(task)
+            if conn is not None and conn.dropped is not None:
+                writer.transport.abort()  # what it did not read is not worth waiting for
             writer.close()
             with contextlib.suppress(Exception):
-                await writer.wait_closed()
+                await asyncio.wait_for(writer.wait_closed(), 1.0)
 
-    # ---- one client
-
-    async def serve_stream(self, read: Read, write: Write, *, eof_cancels: bool) -> None:
-        """Serve one client reading with ``read`` (b"" at the end) and writing with
-        ``write``. ``eof_cancels``: the end of input drops pending requests (sockets)."""
-        self.clients += 1
-        session = self.executor.new_session()
-        # replies and events on their way out; a client that does not read fills it, then
-        # its own requests wait (and its events are dropped), nobody else's
-        out: asyncio.Queue[str | None] = asyncio.Queue(maxsize=_QUEUED_LINES)
-        requests: asyncio.Queue[Request | list[str] | None] = asyncio.Queue(maxsize=64)
-
-        def deliver(line: str) -> None:
-            if not out.full():
-                out.put_nowait(line)
-
-        token = None
-        if self.hub is not None:
-            hub = self.hub
-            token = hub.add_sink(deliver)
-            session.on_events_changed = lambda kinds: hub.set_kinds(token, kinds)
-
-        async def writer() -> None:
-            while (line := await out.get()) is not None:
-                try:
-                    await write(line.encode("utf-8") + b"\r\n")
-                except (ConnectionError, OSError):
-                    return
-
-        async def worker() -> None:
-            while (item := await requests.get()) is not None:
-                lines = item if isinstance(item, list) else await self.executor.execute(
-                    session, item)
-                for line in lines:
-                    await out.put(line)
-
-        write_task = asyncio.create_task(writer())
-        work_task = asyncio.create_task(worker())
-        splitter = LineSplitter(self.max_line)
-        try:
-            while True:
-                chunk = await read()
-                items = splitter.feed(chunk) if chunk else []
-                if not chunk and (last := splitter.tail()) is not None:
-                    items.append(last)
-                for item in items:
-                    if isinstance(item, tuple):
-                        await requests.put([error_reply(item[0], GatewayError.OUT_OF_MEMORY)])
-                        continue
-                    parsed = self._parse(item)
-                    if parsed is not None:
-                        await requests.put(parsed)
-                if not chunk:
-                    break
-            if eof_cancels:
-                work_task.cancel()
-            else:
-                await requests.put(None)
-            with contextlib.suppress(asyncio.CancelledError):
-                await work_task
-        finally:
-            work_task.cancel()  # the client is gone: abort what it was doing
-            with contextlib.suppress(asyncio.CancelledError):
-                await work_task
-            if token is not None and self.hub is not None:
-                self.hub.remove_sink(token)
-            try:
-                out.put_nowait(None)
-            except asyncio.QueueFull:
-                write_task.cancel()
-            try:  # the last replies, unless the client does not read them
-                await asyncio.wait_for(write_task, 5.0)
-            except (TimeoutError, asyncio.CancelledError):
-                write_task.cancel()
-            self.clients -= 1
-
-    @staticmethod
-    def _parse(raw: bytes) -> Request | list[str] | None:
-        text = raw.decode("utf-8", "replace")
-        try:
-            return parse_line(text)
-        except ParseError as exc:
-            return [error_reply(exc.seq, exc.code)]
+    async def _watch_idle(self) -> None:
+        """Drop socket clients idle for ``idle_timeout`` (not those that wait for events)."""
+        period = min(1.0, self.idle_timeout / 4)
+        while True:
+            await asyncio.sleep(period)
+            now = asyncio.get_running_loop().time()
+            for conn in list(self._sockets):
+                idle = conn.idle_for(now)
+                if idle is not None and idle >= self.idle_timeout and not conn.listening:
+                    conn.drop(f"idle for {idle:.1f} s (time-out {self.idle_timeout:g} s)")

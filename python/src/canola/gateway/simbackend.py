@@ -14,6 +14,8 @@ import contextlib
 import time
 from collections.abc import Callable, Iterator
 
+from canola._core import ffi, lib
+from canola._nodebase import nmt_command
 from canola.core import Node, SimBus
 from canola.errors import Error, SdoAbort
 from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener, Listeners, LssOp
@@ -66,6 +68,10 @@ class SimBackend:
     def node_id(self) -> int:
         return self.node.node_id
 
+    @property
+    def has_lss(self) -> bool:
+        return False  # canola.core's Node has no LSS master binding
+
     # ---- SDO
 
     @contextlib.contextmanager
@@ -102,17 +108,24 @@ class SimBackend:
     # ---- NMT
 
     async def nmt(self, node: int, command: NmtCommand) -> None:
-        self.node.nmt(NMT_NAMES[command], node)
+        # the frame alone (Node.nmt would also apply a broadcast to the master itself)
+        frame = ffi.new("co_frame_t *")
+        frame.id, frame.flags, frame.len = 0x000, 0, 2
+        frame.data[0:2] = [nmt_command(NMT_NAMES[command]), node]
+        if int(lib.co_node_send(self.node._node, frame)):
+            raise GatewayFailure(GatewayError.INTERNAL_STATE, "NMT frame not sent")
+        self.bus.run_until(self.bus.now_us)
         self._report()
 
     async def local_nmt(self, command: NmtCommand) -> None:
-        del command  # canola.core has no binding for co_nmt_apply yet
-        raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, "NMT to the gateway itself")
+        lib.co_nmt_apply(self.node._node, nmt_command(NMT_NAMES[command]))
+        self.bus.run_until(self.bus.now_us)
+        self._report()
 
     # ---- LSS
 
     async def lss(self, op: LssOp, args: tuple[int, ...] = ()) -> tuple[int, ...]:
-        del args  # canola.core's Node has no LSS master binding
+        del args
         raise GatewayFailure(GatewayError.REQUEST_NOT_SUPPORTED, f"LSS {op}")
 
     # ---- events

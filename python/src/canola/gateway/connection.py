@@ -1,0 +1,259 @@
+"""One client of the gateway: its session, and the three small tasks that serve it.
+
+The reader splits the client's bytes into lines (at most ``max_line`` bytes each; a longer
+line is answered ``ERROR:600`` and skipped, the connection stays usable) and parses them
+in order: every parse takes time linear in the line's length, and a line longer than
+:data:`INLINE_PARSE` characters is parsed in a thread of its own, so that no line holds up
+the event loop and the other clients. The worker runs the requests one after the other;
+the writer sends replies and events.
+
+Every line gets exactly one reply, ended by one CR LF (a reply of several lines has LF
+between them, as CANopenNode's gateway does): an empty or comment-only line gets an empty
+reply, and a line without a readable ``[seq]`` is answered with the sequence number of
+this client's last line that had one (0 before any), as CANopenNode's gateway does too.
+
+For the idle time-out: a client is active when a complete line comes in or a reply has
+been written to it, and while one of its requests is running (a long transfer); the bytes
+of a line that does not end do not count.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import threading
+from collections.abc import Awaitable, Callable
+from typing import TypeVar
+
+from canola.gateway.codes import GatewayError
+from canola.gateway.events import EventHub
+from canola.gateway.executor import Executor, error_reply
+from canola.gateway.parser import ParseError, parse_line, read_seq
+from canola.gateway.requests import Request
+
+__all__ = ["INLINE_PARSE", "Connection", "LineSplitter", "Read", "Write", "off_loop"]
+
+#: Lines up to this many bytes are parsed on the event loop (microseconds); longer ones in
+#: a thread.
+INLINE_PARSE = 4096
+_QUEUED_LINES = 1024  # per client: replies and events not yet sent
+_FLUSH_S = 5.0  # the last replies to a client that left, unless it does not read them
+
+log = logging.getLogger("canola.gateway")
+T = TypeVar("T")
+Read = Callable[[], Awaitable[bytes]]
+Write = Callable[[bytes], Awaitable[None]]
+
+
+def off_loop(fn: Callable[..., T], *args: object) -> asyncio.Future[T]:
+    """``fn(*args)`` in a daemon thread of its own: awaitable, and never in the way of the
+    process's exit (unlike the default executor, which the end of asyncio.run waits for)."""
+    loop = asyncio.get_running_loop()
+    future: asyncio.Future[T] = loop.create_future()
+
+    def settle(result: T | None, error: BaseException | None) -> None:
+        if future.done():  # cancelled meanwhile
+            return
+        if error is not None:
+            future.set_exception(error)
+        else:
+            future.set_result(result)  # type: ignore[arg-type]
+
+    def run() -> None:
+        try:
+            result, error = fn(*args), None
+        except BaseException as exc:  # handed to the awaiting task
+            result, error = None, exc
+        with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
+            loop.call_soon_threadsafe(settle, result, error)
+
+    threading.Thread(target=run, name=f"gateway-{getattr(fn, '__name__', 'call')}",
+                     daemon=True).start()
+    return future
+
+
+class LineSplitter:
+    """Bytes in, lines out; a line longer than ``limit`` comes out as ``None`` items'
+    sequence number (see :meth:`feed`)."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self._buf = bytearray()
+        self._skipping = False
+
+    def feed(self, data: bytes) -> list[bytes | tuple[int | None]]:
+        """Complete lines (without the line feed); ``(seq,)`` for each line that was too
+        long (``seq`` read from its start, if any)."""
+        out: list[bytes | tuple[int | None]] = []
+        start = 0
+        while start < len(data):
+            nl = data.find(b"\n", start)
+            end = len(data) if nl < 0 else nl
+            if self._skipping:
+                if nl >= 0:
+                    self._skipping = False
+            elif len(self._buf) + end - start > self.limit:
+                head = bytes(self._buf[:32] or data[start:start + 32])
+                out.append((read_seq(head.decode("latin-1")),))
+                self._buf.clear()
+                self._skipping = nl < 0
+            else:
+                self._buf += data[start:end]
+                if nl >= 0:
+                    out.append(bytes(self._buf))
+                    self._buf.clear()
+            start = end + 1 if nl >= 0 else len(data)
+        return out
+
+    def tail(self) -> bytes | None:
+        """What is left at the end of the stream (a last line without line feed)."""
+        if self._skipping or not self._buf:
+            return None
+        data = bytes(self._buf)
+        self._buf.clear()
+        return data
+
+
+def _parse(raw: bytes) -> Request | ParseError | None:
+    try:
+        return parse_line(raw.decode("utf-8", "replace"))
+    except ParseError as exc:
+        return exc
+
+
+class Connection:
+    """One client: ``name`` (for the log), its session, its activity."""
+
+    def __init__(self, name: str, executor: Executor, hub: EventHub | None,
+                 max_line: int) -> None:
+        self.name = name
+        self.executor = executor
+        self.hub = hub
+        self.max_line = max_line
+        self.session = executor.new_session()
+        self.last_seq = 0
+        self.last_active = asyncio.get_running_loop().time()
+        self.running = False  # a request of this client is being executed
+        self.dropped: str | None = None
+        self.task: asyncio.Task[None] | None = None
+
+    @property
+    def listening(self) -> bool:
+        """Whether the client asked for events (it may stay silent, waiting for them)."""
+        return bool(self.session.events)
+
+    def idle_for(self, now: float) -> float | None:
+        """Seconds since the client was last active; None while a request runs."""
+        return None if self.running else now - self.last_active
+
+    def drop(self, reason: str, level: int = logging.WARNING) -> None:
+        """Close the connection now (its request, if any, is cancelled); logs why."""
+        if self.dropped is not None:
+            return
+        self.dropped = reason
+        log.log(level, "%s dropped: %s", self.name, reason)
+        if self.task is not None:
+            self.task.cancel()
+
+    def _touch(self) -> None:
+        self.last_active = asyncio.get_running_loop().time()
+
+    async def _request(self, item: bytes | tuple[int | None]) -> Request | str:
+        """A line's request, or the reply it gets without running (errors, empty lines)."""
+        if isinstance(item, tuple):
+            if item[0] is not None:
+                self.last_seq = item[0]
+            return error_reply(self.last_seq, GatewayError.OUT_OF_MEMORY)
+        parsed = _parse(item) if len(item) <= INLINE_PARSE else await off_loop(_parse, item)
+        if parsed is None:
+            return ""
+        if isinstance(parsed, ParseError):
+            if parsed.seq is not None:
+                self.last_seq = parsed.seq
+            return error_reply(self.last_seq, parsed.code)
+        self.last_seq = parsed.seq
+        return parsed
+
+    async def serve(self, read: Read, write: Write, *, eof_cancels: bool) -> None:
+        """Serve the client reading with ``read`` (b"" at the end) and writing with
+        ``write``. ``eof_cancels``: the end of input drops pending requests (sockets)."""
+        session = self.session
+        # replies and events on their way out; a client that does not read fills it, then
+        # its own requests wait (and its events are dropped), nobody else's
+        out: asyncio.Queue[str | None] = asyncio.Queue(maxsize=_QUEUED_LINES)
+        requests: asyncio.Queue[Request | str | None] = asyncio.Queue(maxsize=64)
+
+        def deliver(line: str) -> None:
+            if not out.full():
+                out.put_nowait(line)
+
+        token = None
+        if self.hub is not None:
+            hub = self.hub
+            token = hub.add_sink(deliver)
+            session.on_events_changed = lambda kinds: hub.set_kinds(token, kinds)
+
+        async def writer() -> None:
+            while (line := await out.get()) is not None:
+                try:
+                    await write(line.encode("utf-8") + b"\r\n")
+                except (ConnectionError, OSError):
+                    return
+                self._touch()
+
+        async def worker() -> None:
+            while (item := await requests.get()) is not None:
+                if isinstance(item, str):
+                    await out.put(item)
+                    continue
+                self.running = True
+                try:
+                    reply = await self.executor.execute(session, item)
+                finally:
+                    self.running = False
+                    self._touch()
+                await out.put(reply)
+
+        write_task = asyncio.create_task(writer())
+        work_task = asyncio.create_task(worker())
+        splitter = LineSplitter(self.max_line)
+        try:
+            while True:
+                chunk = await read()
+                items = splitter.feed(chunk) if chunk else []
+                if not chunk and (last := splitter.tail()) is not None:
+                    items.append(last)
+                for item in items:
+                    self._touch()
+                    await requests.put(await self._request(item))
+                if not chunk:
+                    break
+            if eof_cancels:
+                work_task.cancel()
+            else:
+                await requests.put(None)
+            with contextlib.suppress(asyncio.CancelledError):
+                await work_task
+        finally:
+            work_task.cancel()  # the client is gone: abort what it was doing
+            with contextlib.suppress(asyncio.CancelledError):
+                await work_task
+            if token is not None and self.hub is not None:
+                self.hub.remove_sink(token)
+            await self._finish(out, write_task)
+
+    async def _finish(self, out: asyncio.Queue[str | None],
+                      write_task: asyncio.Task[None]) -> None:
+        """The last replies to a client that left on its own; none to a dropped one."""
+        if self.dropped is not None:
+            write_task.cancel()
+        else:
+            try:
+                out.put_nowait(None)
+            except asyncio.QueueFull:
+                write_task.cancel()
+        try:
+            await asyncio.wait_for(write_task, _FLUSH_S)
+        except (TimeoutError, asyncio.CancelledError):
+            write_task.cancel()
