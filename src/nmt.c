@@ -56,6 +56,7 @@ static CO_INLINE void enter(co_node_t *node, co_nmt_state_t state)
  * communication, boot-up once, pre-operational (or operational when self-starting). */
 void co_nmt_reset(co_node_t *node, bool application)
 {
+    co_manager_reset_comm(node); /* first: leaving SDO's states ends the boot's transfers */
     enter(node, CO_NMT_INITIALISING);
     co_lss_slave_reset(node, application);
     /* $NODEID defaults of an unconfigured node (0xFF) stay at their base values. */
@@ -80,7 +81,7 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_time_reset_comm(node);
     co_emcy_reset_comm(node);
     co_pdo_reset_comm(node);
-    co_manager_reset_comm(node);
+    co_manager_routes(node);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);
     }

@@ -134,6 +134,13 @@ static bool same_object(const co_sdo_client_t *c, const uint8_t *d)
     return co_get_u16(&d[1]) == c->index && d[3] == c->sub;
 }
 
+/* The request that opens a transfer is out: its answer (or abort) names the object. */
+static bool awaits_initiate_answer(const co_sdo_client_t *c)
+{
+    return c->state == UP_INIT || c->state == BUP_INIT || c->state == DN_INIT ||
+           c->state == BDN_INIT;
+}
+
 static co_abort_t on_block_upload_init(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     c->size_known = (d[0] & CO_SDO_BLK_SIZE) != 0;
@@ -158,9 +165,6 @@ static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint
                  (b & ~(CO_SDO_BLK_CRC | CO_SDO_BLK_SIZE)) == (CO_SDO_SCS_BLK_UP | CO_SDO_BLK_INI);
     if (!block && (b & CO_SDO_CS_MASK) != CO_SDO_SCS_UP_INI) {
         return CO_ABORT_COMMAND;
-    }
-    if (!same_object(c, d)) {
-        return CO_ABORT_GENERAL;
     }
     if (block) {
         return on_block_upload_init(node, c, d);
@@ -323,9 +327,6 @@ static co_abort_t on_download_init(co_node_t *node, co_sdo_client_t *c, const ui
     if (d[0] != CO_SDO_SCS_DN_INI) {
         return CO_ABORT_COMMAND;
     }
-    if (!same_object(c, d)) {
-        return CO_ABORT_GENERAL;
-    }
     if (c->mode == CO_SDO_EXPEDITED) {
         finish(node, c, CO_ABORT_NONE, c->cap);
         return CO_ABORT_NONE;
@@ -359,9 +360,6 @@ static co_abort_t on_block_download_init(co_node_t *node, co_sdo_client_t *c, co
 {
     if ((d[0] & ~CO_SDO_BLK_CRC) != (CO_SDO_SCS_BLK_DN | CO_SDO_BLK_INI)) {
         return CO_ABORT_COMMAND;
-    }
-    if (!same_object(c, d)) {
-        return CO_ABORT_GENERAL;
     }
     if (d[4] == 0 || d[4] > CO_SDO_BLKSIZE_MAX) {
         return CO_ABORT_BLOCK_SIZE;
@@ -507,6 +505,9 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         return;
     }
     const uint8_t *d = frame->data;
+    if (awaits_initiate_answer(c) && !same_object(c, d)) {
+        return; /* a late answer to an earlier request, or to another client of the server */
+    }
     if (d[0] == CO_SDO_CS_ABORT) { /* never a valid block segment: seqno 0 */
         co_abort_t code = co_get_u32(&d[4]);
         finish(node, c, code ? code : CO_ABORT_GENERAL, 0);
