@@ -113,6 +113,14 @@ def test_whole_line_comments_are_skipped() -> None:
     assert eds.parse(text, strict=True)[0x1000].subs[0].default == 0x20192
 
 
+def test_hash_comment_lines_are_skipped() -> None:
+    # seen in real files (kacanopen's 301.eds): "# Category: Mandatory" inside a section
+    text = "# leading\n" + make(mandatory=VAR_1000 + "  # DefaultValue=5\n#\n")
+    od = eds.parse(text, strict=True)
+    assert od[0x1000].subs[0].default == 0x20192
+    assert "#" not in od[0x1000].subs[0].extra
+
+
 def test_semicolon_after_a_number_is_dropped_with_a_warning() -> None:
     text = make(mandatory=VAR_1000.replace("0x00020192", "0x10 ; note"))
     od = eds.parse(text)
@@ -354,7 +362,7 @@ def test_error_tree() -> None:
 def test_line_that_is_neither_section_key_nor_comment_is_an_error() -> None:
     err = broken(make(mandatory=VAR_1000 + "garbage here\n"))
     assert str(err) == ("bad.eds:20: [1000] line is neither [section], key=value nor "
-                        "';' comment: 'garbage here'")
+                        "comment: 'garbage here'")
     assert (err.file, err.line, err.section, err.key) == ("bad.eds", 20, "1000", None)
 
 

@@ -3,7 +3,7 @@
 ``parse(source, strict=False, node_id=None)`` builds an :class:`ObjectDictionary`;
 ``write(od, dcf=False)`` gives the file text back. Problems come in two kinds:
 
-- a broken file (a line that is not ``[section]``, ``key=value`` or a ``;`` comment, a
+- a broken file (a line that is not ``[section]``, ``key=value`` or a ``;``/``#`` comment, a
   duplicate section, a sub-object section without its object, a number that the structure
   needs, such as ObjectType, DataType, CompactSubObj or an object-list entry, that cannot be
   read) raises :class:`~canola.errors.EdsError` naming file and line, in both modes;
@@ -24,8 +24,8 @@ file drives a loop beyond the file's own size.
 Accepted forms: section and key names in any case (``[1a00]``, ``[1018SUB1]``,
 ``parametername``), spaces around ``=`` and at line ends, CRLF/LF/CR, UTF-8 or Latin-1 text,
 numbers in decimal, ``0x`` hex or leading-``0`` octal with an optional sign, ``$NODEID``
-(any case) added to or subtracted from constants on either side. A ``;`` starts a comment only
-at the start of a line; a ``;`` after a *numeric* value (``DefaultValue=0x180 ; note``) is
+(any case) added to or subtracted from constants on either side. A ``;`` or ``#`` starts a
+comment only at the start of a line; a ``;`` after a *numeric* value (``DefaultValue=0x180 ; note``) is
 dropped with a warning, while in strings it is kept as text.
 """
 
