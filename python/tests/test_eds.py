@@ -18,9 +18,9 @@ VendorNumber=0x1234
 ProductNumber=1
 
 [MandatoryObjects]
-SupportedObjects=1
+SupportedObjects=2
 1=0x1000
-
+2=0x1001
 """
 
 VAR_1000 = """[1000]
@@ -33,15 +33,28 @@ PDOMapping=0
 """
 
 
+VAR_1001 = """[1001]
+ParameterName=Error register
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+PDOMapping=1
+"""
+
+
 def make(body: str = "", mandatory: str = VAR_1000, optional: str = "") -> str:
-    """An EDS with [1000] plus ``optional`` objects (listed in [OptionalObjects]), and the
-    identity object [1018] (RECORD_1018, below) unless the test brings its own."""
+    """An EDS with [1000] plus ``optional`` objects (listed in [OptionalObjects]), the
+    identity object [1018] (RECORD_1018, below) unless the test brings its own, and [1001]
+    last (lines before it keep their numbers)."""
     if "[1018]" in body + optional + mandatory:
-        return HEADER + optional + mandatory + "\n" + body
-    # the listing takes the blank line's place: line numbers stay those of HEADER
-    header = HEADER.replace("SupportedObjects=1\n1=0x1000\n\n",
-                            "SupportedObjects=2\n1=0x1000\n2=0x1018\n")
-    return header + optional + mandatory + "\n" + RECORD_1018 + "\n" + body
+        return HEADER + optional + mandatory + "\n" + body + "\n" + VAR_1001
+    # the listing's extra line takes a blank line's place: lines after the listing
+    # keep the numbers they have in HEADER
+    header = HEADER.replace("EDSVersion=4.0\n\n", "EDSVersion=4.0\n").replace(
+        "SupportedObjects=2\n1=0x1000\n2=0x1001\n",
+        "SupportedObjects=3\n1=0x1000\n2=0x1001\n3=0x1018\n")
+    return (header + optional + mandatory + "\n" + RECORD_1018 + "\n" + body + "\n"
+            + VAR_1001)
 
 
 def optional_list(*indices: int) -> str:
@@ -271,9 +284,9 @@ def test_missing_mandatory_key_of_a_var_is_reported(key: str) -> None:
 
 
 def test_supported_objects_count_mismatch_is_reported() -> None:
-    text = make().replace("SupportedObjects=2", "SupportedObjects=3")
+    text = make().replace("SupportedObjects=3", "SupportedObjects=4")
     assert strict_problems(text) == [
-        "t.eds:10: [MandatoryObjects] SupportedObjects: SupportedObjects=3 but 2 entries"]
+        "t.eds:9: [MandatoryObjects] SupportedObjects: SupportedObjects=4 but 3 entries"]
 
 
 def test_listed_object_without_section_is_reported() -> None:

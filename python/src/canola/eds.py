@@ -11,7 +11,7 @@
   that do not match, unknown AccessType or DataType, values that are not numbers of their
   type, limits out of range, a synthesised sub0, an empty file, a section named like an
   object whose index is beyond 0xFFFF or sub-index beyond 0xFF (kept as an other section),
-  a SubNumber that is no UNSIGNED8, no 0x1000 or 0x1018, ...) is collected: ``strict=True``
+  a SubNumber that is no UNSIGNED8, no 0x1000, 0x1001 or 0x1018, ...) is collected: ``strict=True``
   raises one EdsError listing all of them, one per line; otherwise they are in
   ``od.warnings``.
 
@@ -160,7 +160,7 @@ _COMPACT = re.compile(r"([0-9a-f]{4})(name|value|denotation)", re.IGNORECASE)
 _OBJECT_LIKE = re.compile(r"([0-9a-f]+)(?:sub([0-9a-f]*)|name|value|denotation)?",
                           re.IGNORECASE)
 #: CiA 301 objects every device has: a device without them is refused when strict.
-_REQUIRED = {0x1000: "Device type", 0x1018: "Identity object"}
+_REQUIRED = {0x1000: "Device type", 0x1001: "Error register", 0x1018: "Identity object"}
 _LISTS = {"mandatoryobjects": "mandatory", "optionalobjects": "optional",
           "manufacturerobjects": "manufacturer"}
 _VAR_KEYS = ("parametername", "objecttype", "datatype", "accesstype", "defaultvalue",
