@@ -11,9 +11,9 @@
   that do not match, unknown AccessType or DataType, values that are not numbers of their
   type, limits out of range, a synthesised sub0, an empty file, a section named like an
   object whose index is beyond 0xFFFF or sub-index beyond 0xFF (kept as an other section),
-  a SubNumber that is no UNSIGNED8, no 0x1000, 0x1001 or 0x1018, ...) is collected: ``strict=True``
-  raises one EdsError listing all of them, one per line; otherwise they are in
-  ``od.warnings``.
+  a SubNumber that is no UNSIGNED8, no 0x1000, 0x1001 or 0x1018, a PDO mapping that breaks
+  CiA 301 (see :mod:`canola._eds_pdo`), ...) is collected: ``strict=True`` raises one
+  EdsError listing all of them, one per line; otherwise they are in ``od.warnings``.
 
 Every problem is a :class:`~canola.errors.Diagnostic` (message, file, line, section, key),
 so that a tool can print or sort them. Whatever the input and its size, :func:`parse`
@@ -25,8 +25,8 @@ Accepted forms: section and key names in any case (``[1a00]``, ``[1018SUB1]``,
 ``parametername``), spaces around ``=`` and at line ends, CRLF/LF/CR, UTF-8 or Latin-1 text,
 numbers in decimal, ``0x`` hex or leading-``0`` octal with an optional sign, ``$NODEID``
 (any case) added to or subtracted from constants on either side. A ``;`` or ``#`` starts a
-comment only at the start of a line; a ``;`` after a *numeric* value (``DefaultValue=0x180 ; note``) is
-dropped with a warning, while in strings it is kept as text.
+comment only at the start of a line; a ``;`` after a *numeric* value
+(``DefaultValue=0x180 ; note``) is dropped with a warning, while in strings it is kept as text.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from pathlib import Path
 
+from canola._eds_pdo import mapping_problems
 from canola._ini import Entry, Section, decode, read_sections
 from canola.datatypes import (
     DATA_TYPES,
@@ -380,6 +381,7 @@ def _build(sections: list[Section], file: str, strict: bool,
         if obj is None or obj.compact_sub_obj is None:
             b.warn(f"[{index:04X}{kind.capitalize()}] belongs to no CompactSubObj object", sec)
     _check_lists(b, od, lists)
+    b.diags += mapping_problems(od)
     for index, what in _REQUIRED.items():
         if index not in od.objects:
             where = lists.get("mandatory")
