@@ -12,6 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import can
+import canopen
 import pytest
 from cli_helpers import cli, one_line_error
 from test_eds import VAR_1001, make
@@ -340,3 +341,36 @@ def test_diff_against_an_absent_node(capsys: Capsys, device_bus: tuple[list[str]
     assert (code, out) == (1, "")
     one_line_error(err)
     assert err == "canola: no response from node 9 (SDO time-out 200 ms)\n"
+
+
+@pytest.mark.realtime
+def test_diff_against_a_python_canopen_local_node(capsys: Capsys) -> None:
+    channel = f"canola-eds-pc-{os.getpid()}-{next(_channels)}"
+    network = canopen.Network()
+    network.connect(interface="virtual", channel=channel)
+    try:
+        node = canopen.LocalNode(5, str(EDS))
+        network.add_node(node)
+        opts = ["--node", "5", "--bus", f"virtual://{channel}", "--sdo-timeout", "5000"]
+        code, out, err = cli(capsys, "eds", "diff", str(EDS), *opts)
+        assert (code, out, err) == (0, "", "")
+        node.sdo[0x2001].raw = 12
+        code, out, err = cli(capsys, "eds", "diff", str(EDS), *opts)
+        assert (code, out, err) == (0, "0x2001:00 Parameter i16: value: A -5, B 12\n", "")
+    finally:
+        network.disconnect()
+
+
+@pytest.mark.realtime
+def test_a_made_dcf_boots_its_device(capsys: Capsys, tmp_path: Path,
+                                     device_bus: tuple[list[str], Device]) -> None:
+    """canola boot downloads every value canola eds dcf put into the DCF."""
+    opts, dev = device_bus
+    dcf = tmp_path / "five.dcf"
+    code, _, err = cli(capsys, "eds", "dcf", str(EDS), "--node-id", "5", "--set",
+                       "0x2001:0=-7", "--set", "0x2003=2.25", "--set", "0x2002=configured",
+                       "-o", str(dcf))
+    assert (code, err) == (0, "")
+    code, out, _ = cli(capsys, "boot", str(dcf), *opts)
+    assert code == 0 and out.splitlines() == ["node 5 (mandatory): running", "network started"]
+    assert (dev.od[0x2001, 0], dev.od[0x2003, 0], dev.od[0x2002, 0]) == (-7, 2.25, "configured")
