@@ -112,8 +112,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                                         "default or value differ. With --node, B is the "
                                         "device: every readable entry of A with a value is "
                                         "read by SDO and compared.")
-    f.add_argument("a", metavar="A")
-    f.add_argument("b", nargs="?", metavar="B")
+    f.add_argument("a", metavar="A", help="EDS or DCF")
+    f.add_argument("b", nargs="?", metavar="B", help="EDS or DCF (without --node)")
     f.add_argument("--node", type=node_id, metavar="N", help="compare with node N's values")
     add_bus_options(f, required=False)
     add_master_options(f)
