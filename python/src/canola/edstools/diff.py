@@ -63,13 +63,18 @@ def diff(a: eds.ObjectDictionary, b: eds.ObjectDictionary) -> list[Difference]:
     for index in sorted(a.objects.keys() | b.objects.keys()):
         obj_a, obj_b = a.objects.get(index), b.objects.get(index)
         if obj_a is None or obj_b is None:
-            only = obj_a or obj_b
-            assert only is not None
-            out.append(Difference(index, None, only.name, "only in A" if obj_b is None
-                                  else "only in B"))
+            out.append(_only(index, None, obj_a, obj_b))
             continue
         out += _object_differences(obj_a, obj_b)
     return out
+
+
+def _only(index: int, sub: int | None, in_a: eds.Object | eds.Variable | None,
+          in_b: eds.Object | eds.Variable | None) -> Difference:
+    """The difference of an object or entry that only one side has."""
+    only = in_a or in_b
+    assert only is not None
+    return Difference(index, sub, only.name, "only in A" if in_b is None else "only in B")
 
 
 def _object_differences(obj_a: eds.Object, obj_b: eds.Object) -> Iterator[Difference]:
@@ -82,10 +87,7 @@ def _object_differences(obj_a: eds.Object, obj_b: eds.Object) -> Iterator[Differ
     for sub in sorted(obj_a.subs.keys() | obj_b.subs.keys()):
         var_a, var_b = obj_a.subs.get(sub), obj_b.subs.get(sub)
         if var_a is None or var_b is None:
-            only = var_a or var_b
-            assert only is not None
-            yield Difference(index, sub, only.name, "only in A" if var_b is None
-                             else "only in B")
+            yield _only(index, sub, var_a, var_b)
             continue
         for what, text_a, text_b in _differing(var_a, var_b):
             yield Difference(index, sub, var_a.name, what, text_a, text_b)
