@@ -333,6 +333,20 @@ def test_limit_outside_the_type_range_is_reported() -> None:
         "t.eds:20: [1000] HighLimit: 256 is outside the range of UNSIGNED8 [0, 255]"]
 
 
+@pytest.mark.parametrize(("default", "problem"), [
+    ("$NODEID+0xFF", "256 with node-ID 1 is outside the range of UNSIGNED8 [0, 255]"),
+    ("$NODEID+0x81", "256 with node-ID 127 is outside the range of UNSIGNED8 [0, 255]"),
+    ("$NODEID-2", "-1 with node-ID 1 is outside the range of UNSIGNED8 [0, 255]"),
+])
+def test_a_nodeid_default_must_fit_for_every_node_id(default: str, problem: str) -> None:
+    text = make(mandatory=VAR_1000.replace("DataType=0x0007", "DataType=0x0005")
+                .replace("0x00020192", default))
+    assert strict_problems(text) == [f"t.eds:18: [1000] DefaultValue: {problem}"]
+    fits = text.replace(default, "$NODEID+0x80")
+    assert eds.parse(fits, strict=True)[0x1000].subs[0].default is None  # no node-ID known
+    assert eds.parse(fits, node_id=127)[0x1000].subs[0].default == 255
+
+
 def test_hex_bit_pattern_of_a_signed_limit_is_its_twos_complement() -> None:
     text = make(mandatory=VAR_1000.replace("DataType=0x0007", "DataType=0x0003")
                 .replace("0x00020192", "0") + "LowLimit=0x8000\n")

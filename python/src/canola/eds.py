@@ -9,7 +9,8 @@
   read) raises :class:`~canola.errors.EdsError` naming file and line, in both modes;
 - a deviation from CiA 306 that still leaves a usable model (missing mandatory keys, counts
   that do not match, unknown AccessType or DataType, values that are not numbers of their
-  type, limits out of range, a synthesised sub0, an empty file, a section named like an
+  type or out of its range (a ``$NODEID`` value with the node-ID unknown: for node-ID 1 or
+  127), limits out of range, a synthesised sub0, an empty file, a section named like an
   object whose index is beyond 0xFFFF or sub-index beyond 0xFF (kept as an other section),
   a SubNumber that is no UNSIGNED8, no 0x1000, 0x1001 or 0x1018, a PDO mapping that breaks
   CiA 301 (see :mod:`canola._eds_pdo`), ...) is collected: ``strict=True`` raises one
@@ -214,13 +215,29 @@ class _Builder:
         except NumberError as exc:
             self.warn(f"not a number of type {DATA_TYPES[data_type or 0].name}: {exc}", sec, ent)
             return None
+        if value is None and node_id is None and data_type in INTEGER_TYPES:
+            # $NODEID with the node-ID unknown: the value must fit for every node-ID
+            for some_id in (1, 127):
+                if not self._in_range(parse_value(text, data_type, some_id), text, data_type,
+                                      sec, ent, note=f" with node-ID {some_id}"):
+                    break
         if isinstance(value, int) and data_type in INTEGER_TYPES:
             value = fit_signed(value, text, data_type)
-            info = DATA_TYPES[data_type]
-            if not info.min <= value <= info.max:
-                self.warn(f"{value} is outside the range of {info.name} "
-                          f"[{info.min}, {info.max}]", sec, ent)
+            self._in_range(value, text, data_type, sec, ent)
         return value
+
+    def _in_range(self, value: Value | None, text: str, data_type: int, sec: Section,
+                  ent: Entry, *, note: str = "") -> bool:
+        """Whether an integer ``value`` fits ``data_type``; a warning when it does not."""
+        if not isinstance(value, int):
+            return True
+        value = fit_signed(value, text, data_type)
+        info = DATA_TYPES[data_type]
+        if info.min <= value <= info.max:
+            return True
+        self.warn(f"{value}{note} is outside the range of {info.name} "
+                  f"[{info.min}, {info.max}]", sec, ent)
+        return False
 
     def variable(self, sec: Section, index: int, sub: int, base: Section | None = None,
                  name: str | None = None) -> Variable:
