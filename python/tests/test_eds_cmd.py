@@ -282,7 +282,7 @@ def test_diff_two_files(capsys: Capsys, tmp_path: Path) -> None:
 
 def test_diff_usage_errors(capsys: Capsys) -> None:
     for args in ([str(EDS)], [str(EDS), str(EDS), "--node", "5", "--bus", "virtual://x"],
-                 [str(EDS), "--node", "5"], [str(EDS), str(EDS), "--bus", "virtual://x"],
+                 [str(EDS), str(EDS), "--bus", "virtual://x"],
                  [str(EDS), "--node", "200", "--bus", "virtual://x"]):
         code, out, err = cli(capsys, "eds", "diff", *args)
         assert (code, out) == (2, ""), args

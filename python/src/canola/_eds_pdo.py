@@ -14,25 +14,13 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from canola.datatypes import DATA_TYPES
+from canola.datatypes import DATA_TYPES, type_bits
 from canola.errors import Diagnostic
 
 if TYPE_CHECKING:
     from canola.eds import Object, ObjectDictionary, Variable
 
 __all__ = ["mapping_problems"]
-
-#: Bits of the types whose size is fixed but not an integer's.
-_OTHER_BITS = {0x0008: 32, 0x0011: 64, 0x000C: 48, 0x000D: 48}
-
-
-def _bits(data_type: int | None) -> int | None:
-    """The size of a mapped value of ``data_type`` (None: any whole number of bytes)."""
-    if data_type in _OTHER_BITS:
-        return _OTHER_BITS[data_type]
-    info = DATA_TYPES.get(data_type or 0)
-    return info.bits if info is not None and info.bits else None
-
 
 def _given(var: Variable) -> int | None:
     value = var.value if var.value is not None else var.default
@@ -94,7 +82,7 @@ def _entry_problem(od: ObjectDictionary, value: int, *, rpdo: bool) -> str | Non
     if bits == 0:
         return f"maps {where} with length 0"
     if 0x0001 <= index <= 0x0007 and sub == 0:  # a dummy: the data type says its size
-        want = _bits(index)
+        want = type_bits(index)
         if want is not None and bits != want:
             return f"maps dummy {where} ({DATA_TYPES[index].name}) with {bits} bits, not {want}"
         return None
@@ -109,7 +97,7 @@ def _entry_problem(od: ObjectDictionary, value: int, *, rpdo: bool) -> str | Non
         return f"an RPDO maps {named}, which cannot be written (AccessType={var.access_type})"
     if not rpdo and var.access_type == "wo":
         return f"a TPDO maps {named}, which cannot be read (AccessType=wo)"
-    want = _bits(var.data_type)
+    want = type_bits(var.data_type)
     if want is not None and bits != want:
         name = DATA_TYPES[var.data_type or 0].name
         return f"maps {named} with {bits} bits, but {name} has {want}"
