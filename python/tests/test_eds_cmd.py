@@ -43,8 +43,7 @@ def test_check_a_clean_file_and_hash_comments(capsys: Capsys, tmp_path: Path) ->
     clean = write(tmp_path, "clean.eds", "# written by hand\n" + make()
                   .replace("[1000]\n", "[1000]\n# Category: Mandatory\n"))
     code, out, err = cli(capsys, "eds", "check", clean, str(EDS))
-    assert (code, out) == (0, "")
-    assert err == "canola eds check: 2 files, 0 errors, 0 warnings\n"
+    assert (code, out, err) == (0, "", "")
 
 
 #: (file text, the section, key and message of the one warning it gets)
@@ -260,15 +259,15 @@ def test_dcf_checks_limits_and_needs_its_arguments(capsys: Capsys, tmp_path: Pat
 def test_diff_two_files(capsys: Capsys, tmp_path: Path) -> None:
     b_text = (EDS.read_text().replace("DefaultValue=100", "DefaultValue=0x64")  # same value
               .replace("ParameterName=Parameter i16", "ParameterName=Offset")
-              .replace("DefaultValue=hello", "DefaultValue=hello world"))
+              .replace("DefaultValue=hello", "DefaultValue=hello, world"))
     b_text = re.sub(r"\[2005\][^\[]*", "", b_text).replace("AccessType=rw\nDefaultValue=1.5",
                                                             "AccessType=ro\nDefaultValue=1.5")
     b = write(tmp_path, "b.eds", b_text)
     code, out, err = cli(capsys, "eds", "diff", str(EDS), b)
     assert (code, err) == (0, "")
     assert out.splitlines() == [
-        "0x2001:00 Parameter i16: name: A 'Parameter i16', B Offset",
-        "0x2002:00 Parameter string: default: A hello, B 'hello world'",
+        "0x2001:00 Parameter i16: name: A Parameter i16, B Offset",
+        "0x2002:00 Parameter string: default: A hello, B 'hello, world'",
         "0x2003:00 Parameter real: access: A rw, B ro",
         "0x2005 Read-only value: only in A"]
     code, out, _ = cli(capsys, "eds", "diff", b, str(EDS), "--json", "--exit-code")
@@ -319,7 +318,7 @@ def test_diff_against_a_device(capsys: Capsys, tmp_path: Path,
     code, out, err = cli(capsys, "eds", "diff", a, "--node", "5", *opts, "--exit-code")
     assert (code, err) == (1, "")
     assert out.splitlines() == [
-        "0x1017:00 Producer heartbeat time: value: A 100, B 250",
+        "0x1017:00 Producer heartbeat time: value: A 100 (0x64), B 250 (0xFA)",
         "0x2002:00 Parameter string: value: A hello, B bye",
         "0x2100 Not on the device: only in A"]
     # a DCF's ParameterValue is what the device should have; $NODEID is node 5's
@@ -356,7 +355,7 @@ def test_diff_against_a_python_canopen_local_node(capsys: Capsys) -> None:
         assert (code, out, err) == (0, "", "")
         node.sdo[0x2001].raw = 12
         code, out, err = cli(capsys, "eds", "diff", str(EDS), *opts)
-        assert (code, out, err) == (0, "0x2001:00 Parameter i16: value: A -5, B 12\n", "")
+        assert (code, out, err) == (0, "0x2001:00 Parameter i16: value: A -5, B 12 (0xC)\n", "")
     finally:
         network.disconnect()
 

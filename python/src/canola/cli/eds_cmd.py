@@ -70,8 +70,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         "check", help="list every deviation from CiA 306 (a linter)",
         description="Print each problem of each file as FILE:LINE: [SECTION] KEY: "
                     "error|warning: MESSAGE. An error is a file the parser refuses; a "
-                    "warning a deviation it reads past. Exit code 0 without errors, 1 "
-                    "with errors.")
+                    "warning a deviation it reads past; then a count on stderr. A clean "
+                    "file prints nothing. Exit code 0 without errors, 1 with errors.")
     c.add_argument("files", nargs="+", metavar="FILE")
     c.add_argument("--strict", action="store_true", help="every warning is an error")
     c.set_defaults(func=run_check)
@@ -130,9 +130,11 @@ def run_check(args: argparse.Namespace) -> int:
             print(finding)
             errors += finding.error
             warnings += not finding.error
-    files = len(args.files)
-    print(f"canola eds check: {files} file{'s' * (files != 1)}, {errors} error"
-          f"{'s' * (errors != 1)}, {warnings} warning{'s' * (warnings != 1)}", file=sys.stderr)
+    if errors or warnings:  # a clean check says nothing
+        files = len(args.files)
+        print(f"canola eds check: {files} file{'s' * (files != 1)}, {errors} error"
+              f"{'s' * (errors != 1)}, {warnings} warning{'s' * (warnings != 1)}",
+              file=sys.stderr)
     return 1 if errors else 0
 
 

@@ -54,7 +54,10 @@ class Difference:
 
 
 def _shown(text: str | None) -> str:
-    return "(none)" if text is None else repr(text) if text == "" or " " in text else text
+    """A text as the line shows it: quoted where it would not read as one."""
+    if text is None:
+        return "(none)"
+    return repr(text) if text == "" or ", " in text or text != text.strip() else text
 
 
 def diff(a: eds.ObjectDictionary, b: eds.ObjectDictionary) -> list[Difference]:
@@ -165,8 +168,12 @@ def _live_entry(var: eds.Variable, read: Callable[[int, int], bytes],
 
 
 def _text(code: int, data: bytes) -> str:
-    """Wire bytes as the value's text; their hex when they are not of the type."""
+    """Wire bytes as the value's text (a number above 9 in hex too: COB-IDs, mappings);
+    their hex when they are not of the type."""
     try:
-        return values.to_text(code, values.decode(code, data))
+        value = values.decode(code, data)
     except values.ValueFormatError:
         return data.hex()
+    if isinstance(value, int) and not isinstance(value, bool) and value > 9:
+        return f"{value} (0x{value:X})"
+    return values.to_text(code, value)
