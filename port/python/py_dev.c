@@ -159,3 +159,19 @@ co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub, con
     const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, &abort);
     return e ? co_node_write_entry(node, e, data, len) : abort;
 }
+
+int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel)
+{
+    uint64_t cobs[2];
+    for (uint8_t sub = 1; sub <= 2; sub++) {
+        if (co_node_get_uint(node, (uint16_t)(0x1280u + channel), sub, &cobs[sub - 1]) !=
+            CO_OK) {
+            return 0;
+        }
+    }
+    if ((cobs[0] | cobs[1]) >> 31) {
+        return 0;
+    }
+    uint64_t n = cobs[0] - 0x600u;
+    return n >= 1 && n <= 127 && cobs[1] == 0x580u + n ? (int)n : -1;
+}

@@ -194,6 +194,7 @@ co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint
                               uint32_t cap, uint32_t *len, uint8_t *type);
 co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub,
                                const uint8_t *data, uint32_t len);
+int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel);
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
 void canola_py_bus_free(co_sim_bus_t *bus);
 uint64_t canola_py_bus_now(const co_sim_bus_t *bus);

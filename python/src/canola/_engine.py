@@ -29,7 +29,7 @@ import time
 import weakref
 from collections import deque
 from collections.abc import Callable, Iterator
-from typing import Any
+from typing import Any, TypeVar
 
 import can
 
@@ -45,6 +45,7 @@ log = logging.getLogger("canola")
 MAX_WAIT_S = 0.01
 
 Bus = SimBus | can.BusABC
+T = TypeVar("T")
 
 
 class Frame:
@@ -193,6 +194,8 @@ class Link:
         the lock, so that python-can sees the frames in order)."""
         c = self.c
         n = int(lib.canola_py_link_run(c, now_us))
+        if not n and self._unsent:
+            self._send(b"")
         while n:
             self._send(bytes(ffi.buffer(c.frames, n * _FRAME.size)))
             if not lib.canola_py_link_clear(c):
@@ -201,13 +204,13 @@ class Link:
             n = int(c.count)
 
     def _send(self, frames: bytes) -> None:
-        unsent = self._unsent
+        """Hand ``frames`` (co_frame_t's bytes) to python-can after those it refused."""
+        unsent, bus = self._unsent, self.bus
         for can_id, flags, length, data in _FRAME.iter_unpack(frames):
             rtr = bool(flags & _RTR)
             unsent.append(can.Message(arbitration_id=can_id, is_extended_id=bool(flags & _EXT),
                                       is_remote_frame=rtr, dlc=length,
                                       data=b"" if rtr else data[:length]))
-        bus = self.bus
         while unsent:
             try:
                 bus.send(unsent[0], timeout=0.05)
@@ -313,7 +316,7 @@ class Engine:
         self.name = name
         self.sim = isinstance(bus, SimBus)
         self.link = Link.of(bus) if isinstance(bus, can.BusABC) else None
-        self._lock = self.link.lock if self.link is not None else threading.Lock()
+        self.lock = self.link.lock if self.link is not None else threading.Lock()
         self._events = self.link.events if self.link is not None else deque()
         self._handle = ffi.new_handle(self)
         self.frame_listeners: list[Callable[[Frame], None]] = []
@@ -358,7 +361,7 @@ class Engine:
         inside reach the other nodes afterwards: on a SimBus at the same virtual instant,
         on python-can's link at once (and python-can). The callbacks run after the lock."""
         if isinstance(self.bus, SimBus):
-            with self._lock:
+            with self.lock:
                 yield self.node
                 lib.canola_py_dev_touch(self.dev)
             self.bus.run_until(self.bus.now_us)
@@ -372,7 +375,25 @@ class Engine:
                 yield self.node
             finally:
                 link.flush(now)
-        link.dispatch()
+        if link.events:
+            link.dispatch()
+
+    def call(self, fn: Callable[[Any], T]) -> T:
+        """``fn(node)`` as inside :meth:`locked` (the short way, for the hot paths)."""
+        link = self.link
+        if link is None:
+            with self.locked() as node:
+                return fn(node)
+        with link.lock:
+            now = link.enter()
+            lib.co_node_poll(self.node, now)
+            try:
+                result = fn(self.node)
+            finally:
+                link.flush(now)
+        if link.events:
+            link.dispatch()
+        return result
 
     def later(self, fn: Callable[[], None]) -> None:
         """Run ``fn`` after the current C call, outside the lock (see the module doc)."""
@@ -430,7 +451,7 @@ class Engine:
         """``fn(Frame)`` for every frame other nodes send (outside the lock, in order)."""
         self.frame_listeners.append(fn)
         if self.link is not None:
-            with self._lock:
+            with self.lock:
                 lib.canola_py_dev_set_raw(self.dev, True)
 
     def frame_seen(self, frame: Frame) -> None:

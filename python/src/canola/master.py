@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
 from canola._core import ffi, lib
-from canola._engine import Bus, Frame, _Timer
+from canola._engine import Bus, Engine, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
     EmcyEvent,
@@ -94,14 +94,24 @@ class _SdoTransfer(_Transfer):
     def __init__(self, answer_ms: int) -> None:
         super().__init__()
         self.answer_ms = answer_ms  # time-out per answer; 0: the master's
-        self.event = threading.Event()
+        self.event: threading.Event | None = None  # made when a thread has to wait
         self.keep: list[Any] = []
         self.waker: Callable[[], None] | None = None
 
-    def notify(self) -> None:
-        self.event.set()
+    def notify(self) -> None:  # under the engine's lock
+        if self.event is not None:
+            self.event.set()
         if self.waker is not None:
             self.waker()
+
+    def waitable(self, engine: Engine) -> threading.Event:
+        """The event :meth:`notify` sets (already set when the transfer is done)."""
+        with engine.lock:
+            if self.event is None:
+                self.event = threading.Event()
+                if self.done:
+                    self.event.set()
+            return self.event
 
 
 class SdoClient:
@@ -121,6 +131,7 @@ class SdoClient:
         self._master = master
         self.node = node
         self._busy = threading.Lock()
+        self._buf: Any = None
 
     # ---- blocking
 
@@ -167,12 +178,20 @@ class SdoClient:
 
     # ---- machinery
 
+    def _buffer(self, size: int) -> Any:
+        """The upload buffer: one per client, made again for another size (transfers of
+        a client are one at a time; the result is copied out before the next)."""
+        buf = self._buf
+        if buf is None or len(buf) != size:
+            buf = self._buf = ffi.new("uint8_t[]", size)
+        return buf
+
     def _start_upload(self, t: _SdoTransfer, index: int, sub: int, block: bool,
                       max_size: int) -> None:
         _check_address(index, sub)
         if not 1 <= max_size <= 0xFFFFFFFF:
             raise Error(f"max_size {max_size} is outside 1..2**32-1")
-        buf = ffi.new("uint8_t[]", max_size)
+        buf = self._buffer(max_size)
         handle = ffi.new_handle(t)
         t.keep[:] = [buf, handle]
         self._master._start(self.node, lambda node, ch: lib.co_sdo_upload(
@@ -239,12 +258,13 @@ class SdoClient:
                         master._abort(self.node)
                         break
                     bus.run_until(bus.now_us + 1000)
-            else:
+            elif not t.done:  # else answered at once: a node of the same bus object
                 end = None if limit is None else time.monotonic() + limit
-                while not t.event.wait(0.05):
+                event = t.waitable(engine)
+                while not event.wait(0.05):
                     if end is not None and time.monotonic() >= end:
                         master._abort(self.node)  # completes the transfer with 0x05040000
-                        t.event.wait(5.0)
+                        event.wait(5.0)
                         break
                     if not engine.running:
                         master._abort(self.node)
@@ -302,19 +322,9 @@ class SdoClient:
 
 
 def _server(node: Any, channel: int) -> int:
-    """Whom client channel ``channel`` of the C node talks to now, by its COB-IDs in
-    0x1280 + channel: node n (0x600 + n, 0x580 + n), 0 for nobody (not valid), -1 for
-    COB-IDs of someone else's choosing."""
-    value = ffi.new("uint64_t *")
-    cobs = []
-    for sub in (1, 2):
-        if lib.co_node_get_uint(node, 0x1280 + channel, sub, value) != lib.CO_OK:
-            return 0
-        cobs.append(int(value[0]))
-    if any(cob >> 31 for cob in cobs):
-        return 0
-    n = cobs[0] - 0x600
-    return n if 1 <= n <= 127 and cobs[1] == 0x580 + n else -1
+    """Whom client channel ``channel`` of the C node talks to now: node n, 0 for nobody,
+    -1 for COB-IDs of someone else's choosing (see canola_py_sdo_client_server)."""
+    return int(lib.canola_py_sdo_client_server(node, channel))
 
 
 def _check_address(index: int, sub: int) -> None:
@@ -352,7 +362,6 @@ class Master(NodeBase):
         self._channels: dict[int, int] = {}  # node -> client channel
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
-        self._engine.add_frame_listener(self._frame)
         self._time_timer: _Timer | None = None
 
     def __enter__(self) -> Master:
@@ -387,12 +396,12 @@ class Master(NodeBase):
                answer_ms: int = 0) -> None:
         """Start a transfer on the channel of ``node_id``, whose time-out per answer is
         ``answer_ms`` (0: ``sdo_timeout_ms``)."""
-        with self._engine.locked() as node:
+        def start(node: Any) -> int:
             channel = self._channel(node, node_id)
             check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
                   "co_sdo_client_set_timeout")
-            err = int(begin(node, channel))
-        check(err, f"{what} of node {node_id}")
+            return int(begin(node, channel))
+        check(self._engine.call(start), f"{what} of node {node_id}")
 
     def _channel(self, node: Any, node_id: int) -> int:
         """The client channel talking to ``node_id`` (under the lock). The table is a
@@ -452,6 +461,7 @@ class Master(NodeBase):
 
     def on_bootup(self, fn: F) -> F:
         """``fn(node)`` for every boot-up frame (any node, monitored or not)."""
+        self._listen()
         self._bootup_cbs.append(fn)
         return fn
 
@@ -460,8 +470,15 @@ class Master(NodeBase):
     def on_frame(self, fn: F, cob_id: int | None = None) -> F:
         """``fn(Frame)`` for every frame other nodes send (or only those on ``cob_id``):
         TPDOs of devices, for instance."""
+        self._listen()
         self._frame_cbs.append((cob_id, fn))
         return fn
+
+    def _listen(self) -> None:
+        """Frames of other nodes come to :meth:`_frame` from the first callback on (a
+        master nobody asks for them does not pay for them)."""
+        if not self._bootup_cbs and not self._frame_cbs:
+            self._engine.add_frame_listener(self._frame)
 
     def _frame(self, frame: Frame) -> None:  # runs outside the lock, in order
         if 0x701 <= frame.can_id <= 0x77F and frame.data == b"\x00" and not frame.rtr:
