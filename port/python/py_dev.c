@@ -164,8 +164,7 @@ int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel)
 {
     uint64_t cobs[2];
     for (uint8_t sub = 1; sub <= 2; sub++) {
-        if (co_node_get_uint(node, (uint16_t)(0x1280u + channel), sub, &cobs[sub - 1]) !=
-            CO_OK) {
+        if (co_node_get_uint(node, (uint16_t)(0x1280u + channel), sub, &cobs[sub - 1]) != CO_OK) {
             return 0;
         }
     }
