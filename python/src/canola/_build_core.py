@@ -181,7 +181,7 @@ void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
 void canola_py_dev_set_active(canola_py_dev_t *dev, bool active);
 void canola_py_dev_set_raw(canola_py_dev_t *dev, bool raw);
 #define CANOLA_PY_LINK_FRAMES ...
-struct canola_py_link { co_frame_t frames[...]; ...; };
+struct canola_py_link { co_frame_t frames[...]; uint32_t count; ...; };
 canola_py_link_t *canola_py_link_new(void);
 void canola_py_link_free(canola_py_link_t *link);
 co_err_t canola_py_link_attach(canola_py_link_t *link, canola_py_dev_t *dev);
