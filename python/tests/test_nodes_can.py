@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -166,3 +167,14 @@ def test_callbacks_of_a_shared_bus_run_in_order_outside_the_lock(
         assert wait_until(lambda: len(seen) == 3)
         assert seen == [1, 2, 3]
         assert master.sdo(5).read(0x2005, 0, "u8") == 3
+
+
+def test_asyncio_on_a_shared_bus(can_bus: Callable[[], can.BusABC]) -> None:
+    shared = can_bus()
+    with Device(INTEROP, 5, shared) as device, Master(shared, node_id=1) as master:
+        async def main() -> list[bytes]:
+            await master.sdo(5).adownload(0x2006, 0, b"\x39\x05")
+            return await asyncio.gather(*(master.sdo(5).aupload(0x1018, 4) for _ in range(20)))
+
+        assert asyncio.run(main()) == [b"\x78\x56\x34\x12"] * 20
+        assert device.od[0x2006][0] == 0x539

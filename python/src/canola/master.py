@@ -104,6 +104,14 @@ class _SdoTransfer(_Transfer):
         if self.waker is not None:
             self.waker()
 
+    def wake_with(self, engine: Engine, waker: Callable[[], None]) -> bool:
+        """Call ``waker`` once the transfer is done; False when it is done already."""
+        with engine.lock:
+            if self.done:
+                return False
+            self.waker = waker
+            return True
+
     def waitable(self, engine: Engine) -> threading.Event:
         """The event :meth:`notify` sets (already set when the transfer is done)."""
         with engine.lock:
@@ -298,8 +306,9 @@ class SdoClient:
                     loop.call_soon_threadsafe(resolve)
 
             t = _SdoTransfer(answer_ms)
-            t.waker = wake
             start(t, *args)
+            if t.done or not t.wake_with(master._engine, wake):
+                return self._finish(t, timeout)  # answered at once: same bus object
             try:
                 end = None if timeout is None else loop.time() + timeout
                 while not fut.done():
