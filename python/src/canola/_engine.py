@@ -33,8 +33,9 @@ from typing import Any, TypeVar
 
 import can
 
-from canola._core import ffi, lib
-from canola.core import Od, SimBus, _check
+from canola._c import check as _check
+from canola._c import ffi, lib
+from canola.core import Od, SimBus
 from canola.errors import Error
 
 __all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame", "Link"]
@@ -497,7 +498,7 @@ def _call(ctx: Any, method: str, *args: Any) -> None:
         fn(*args)
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_state(user: Any, state: int) -> None:
     try:
         _call(user, "_on_state", int(state))
@@ -505,7 +506,7 @@ def canola_py_on_state(user: Any, state: int) -> None:
         log.exception("canola: state callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_errctl(user: Any, event: Any) -> None:
     try:
         _call(user, "_on_errctl", int(event.kind), int(event.node_id), int(event.state),
@@ -514,7 +515,7 @@ def canola_py_on_errctl(user: Any, event: Any) -> None:
         log.exception("canola: error control callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_error(user: Any, error: int) -> None:
     try:
         _call(user, "_on_error", int(error))
@@ -522,7 +523,7 @@ def canola_py_on_error(user: Any, error: int) -> None:
         log.exception("canola: node error callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_emcy(user: Any, emcy: Any) -> None:
     try:
         _call(user, "_on_emcy", int(emcy.cob_id), int(emcy.code), int(emcy.reg),
@@ -531,7 +532,7 @@ def canola_py_on_emcy(user: Any, emcy: Any) -> None:
         log.exception("canola: EMCY callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_sync(user: Any, counter: int) -> None:
     try:
         _call(user, "_on_sync", int(counter))
@@ -539,7 +540,7 @@ def canola_py_on_sync(user: Any, counter: int) -> None:
         log.exception("canola: SYNC callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_time(user: Any, tod: Any) -> None:
     try:
         _call(user, "_on_time", int(tod.ms), int(tod.days))
@@ -547,7 +548,7 @@ def canola_py_on_time(user: Any, tod: Any) -> None:
         log.exception("canola: TIME callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_rpdo(user: Any, rpdo: int) -> None:
     try:
         _call(user, "_on_rpdo", int(rpdo))
@@ -555,7 +556,7 @@ def canola_py_on_rpdo(user: Any, rpdo: int) -> None:
         log.exception("canola: RPDO callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_written(ctx: Any, entry: Any) -> None:
     try:
         engine = _engine(ctx)
@@ -565,7 +566,7 @@ def canola_py_written(ctx: Any, entry: Any) -> None:
         log.exception("canola: write callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_raw_rx(ctx: Any, now_us: int, frame: Any) -> None:
     try:
         engine = _engine(ctx)

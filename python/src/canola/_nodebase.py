@@ -10,9 +10,10 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from canola import eds, values
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola._engine import Bus, Engine, Frame
-from canola.core import NMT_CMDS, Od, _check
+from canola.core import NMT_CMDS, Od
 from canola.errors import Error, SdoAbort
 from canola.odgen import GenerateOptions
 

@@ -1,6 +1,6 @@
 """The canola C core, from Python: object dictionaries, nodes and the simulated bus.
 
-Built on the cffi extension ``canola._core`` (see ``_build_core.py``). Everything runs on
+Built on the cffi extension ``canola._core`` (through ``canola._c``). Everything runs on
 a :class:`SimBus` with a virtual clock; nothing depends on wall time.
 
 - :meth:`Od.from_eds` turns a parsed EDS/DCF (:func:`canola.eds.parse`) into an entry
@@ -21,7 +21,8 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from canola import eds
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola.datatypes import DATA_TYPES
 from canola.errors import Error, SdoAbort
 from canola.odgen import (
@@ -65,22 +66,6 @@ NMT_STATES: dict[int, str] = {
     for v in (lib.CO_NMT_INITIALISING, lib.CO_NMT_STOPPED, lib.CO_NMT_OPERATIONAL,
               lib.CO_NMT_PRE_OPERATIONAL)
 }
-
-_ERRORS = {
-    int(lib.CO_ERR_ARG): "bad argument",
-    int(lib.CO_ERR_BUSY): "busy",
-    int(lib.CO_ERR_CONFIG): "inconsistent configuration or object dictionary",
-    int(lib.CO_ERR_STATE): "not allowed in the current state",
-    int(lib.CO_ERR_NOT_FOUND): "not found",
-    int(lib.CO_ERR_FULL): "no room",
-    int(lib.CO_ERR_ABORT): "object dictionary access failed",
-}
-
-
-def _check(err: int, what: str) -> None:
-    if err != lib.CO_OK:
-        raise Error(f"{what}: {_ERRORS.get(err, 'error')} ({err})")
-
 
 # ---------------------------------------------------------------------------------------
 # object dictionary
@@ -232,7 +217,7 @@ def _limits(gen: _Gen, var: eds.Variable, kind: int) -> Any:
 # bus
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_trace(ctx: Any, line: Any) -> None:
     trace: list[str] = ffi.from_handle(ctx)
     trace.append(ffi.string(line).decode("ascii", "replace"))
@@ -305,7 +290,7 @@ class _Transfer:
         """Called (from the C completion) once ``done``, ``abort`` and ``length`` are set."""
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_sdo_done(ctx: Any, channel: int, abort: int, length: int) -> None:
     del channel
     t: _Transfer = ffi.from_handle(ctx)

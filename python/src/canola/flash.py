@@ -16,9 +16,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola._waiting import Waiter
-from canola.core import _check
 from canola.errors import ABORT_TEXT, Error
 
 if TYPE_CHECKING:
@@ -72,14 +72,14 @@ class _Download:
         self.bytes = 0
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_flash_progress(ctx: Any, done: int, total: int) -> None:
     d: _Download = ffi.from_handle(ctx)
     del total
     d.latest = max(d.latest, int(done))
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_flash_done(ctx: Any, result: Any) -> None:
     d: _Download = ffi.from_handle(ctx)
     d.stage = int(result.stage)

@@ -30,9 +30,9 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola._waiting import Waiter
-from canola.core import _check
 from canola.errors import Error
 
 if TYPE_CHECKING:
@@ -126,7 +126,7 @@ class _Call:
         self.address = LssAddress(0, 0, 0, 0)
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_lss_done(ctx: Any, result: Any) -> None:
     call: _Call = ffi.from_handle(ctx)
     call.status = int(result.status)

@@ -24,9 +24,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola._waiting import Waiter
-from canola.core import _check
 from canola.errors import ABORT_TEXT, Error
 from canola.network import Network
 
@@ -141,7 +141,7 @@ class SlaveStatus:
                 "index": self.index, "sub": self.sub, "value": self.value}
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_mgr_event(ctx: Any, event: Any) -> None:
     manager: NetworkManager = ffi.from_handle(ctx)
     reason = int(event.reason)

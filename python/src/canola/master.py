@@ -44,7 +44,7 @@ from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola._engine import Bus, Engine, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,

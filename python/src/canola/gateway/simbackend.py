@@ -14,7 +14,7 @@ import contextlib
 import time
 from collections.abc import Callable, Iterator
 
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola._nodebase import nmt_command
 from canola.core import Node, SimBus
 from canola.errors import Error, SdoAbort
