@@ -36,7 +36,7 @@ from canola._waiting import Waiter
 from canola.errors import Error
 
 if TYPE_CHECKING:
-    from canola.master import Master
+    from canola._engine import Engine
 
 __all__ = ["UNCONFIGURED", "FastscanTimeLimitError", "Lss", "LssAddress", "LssError"]
 
@@ -151,9 +151,8 @@ class Lss:
     """The LSS master of ``master`` (``master.lss``). One request at a time; every method
     blocks until the devices answered or the time-out passed."""
 
-    def __init__(self, master: Master, timeout_ms: int = 100) -> None:
-        self._master = master
-        self._engine = master._engine
+    def __init__(self, engine: Engine, timeout_ms: int = 100) -> None:
+        self._engine = engine
         self._waiter = Waiter(self._engine)
         self._lock = threading.Lock()
         self._timeout_ms = 0

@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
 from canola._c import ffi, lib
+from canola._channels import SdoChannels
 from canola._engine import Bus, Engine, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
@@ -71,7 +72,6 @@ __all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoC
 #: Path of the master's default EDS inside the package.
 MASTER_EDS = str(resources.files("canola") / "data" / "master.eds")
 
-_CHANNELS = 16
 _EPOCH = dt.datetime(1984, 1, 1, tzinfo=dt.UTC)
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -138,7 +138,7 @@ class SdoClient:
     def __init__(self, master: Master, node: int) -> None:
         self._master = master
         self.node = node
-        self._busy = threading.Lock()
+        self._busy = master._sdo.lock_of(node)
         self._buf: Any = None
 
     # ---- blocking
@@ -263,7 +263,7 @@ class SdoClient:
                 begin = bus.now_us
                 while not t.done:
                     if limit is not None and bus.now_us - begin >= limit * 1e6:
-                        master._abort(self.node)
+                        master._sdo.abort(self.node)
                         break
                     bus.run_until(bus.now_us + 1000)
             elif not t.done:  # else answered at once: a node of the same bus object
@@ -271,11 +271,11 @@ class SdoClient:
                 event = t.waitable(engine)
                 while not event.wait(0.05):
                     if end is not None and time.monotonic() >= end:
-                        master._abort(self.node)  # completes the transfer with 0x05040000
+                        master._sdo.abort(self.node)  # completes the transfer with 0x05040000
                         event.wait(5.0)
                         break
                     if not engine.running:
-                        master._abort(self.node)
+                        master._sdo.abort(self.node)
                         raise Error("the master was stopped during an SDO transfer")
             if not t.done:  # pragma: no cover -- the core always completes on abort
                 raise SdoTimeout(self.node, self._timeout_ms(timeout, answer_ms))
@@ -316,24 +316,18 @@ class SdoClient:
                         await asyncio.wait_for(asyncio.shield(fut), 0.05)
                     except TimeoutError:
                         if end is not None and loop.time() >= end:
-                            master._abort(self.node)  # completes it with 0x05040000
+                            master._sdo.abort(self.node)  # completes it with 0x05040000
                             end = None
                         elif not master._engine.running:
-                            master._abort(self.node)
+                            master._sdo.abort(self.node)
                             raise Error("the master was stopped during an SDO transfer") \
                                 from None
             except asyncio.CancelledError:
-                master._abort(self.node)  # ends the transfer before the channel is reused
+                master._sdo.abort(self.node)  # ends the transfer before the channel is reused
                 raise
             return self._finish(t, timeout)
         finally:
             self._busy.release()
-
-
-def _server(node: Any, channel: int) -> int:
-    """Whom client channel ``channel`` of the C node talks to now: node n, 0 for nobody,
-    -1 for COB-IDs of someone else's choosing (see canola_py_sdo_client_server)."""
-    return int(lib.canola_py_sdo_client_server(node, channel))
 
 
 def _check_address(index: int, sub: int) -> None:
@@ -368,10 +362,13 @@ class Master(NodeBase):
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms, store_dir=None,
                          raw_frames=True, quiet=not announce)
         self._clients: dict[int, SdoClient] = {}
-        self._channels: dict[int, int] = {}  # node -> client channel
+        self._sdo = SdoChannels(self._engine)
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
         self._time_timer: _Timer | None = None
+        self._lss: Lss | None = None
+        self._manager: NetworkManager | None = None
+        self._managers: list[NetworkManager] = []  # the node points to them: kept alive
 
     def __enter__(self) -> Master:
         self.start()
@@ -406,49 +403,16 @@ class Master(NodeBase):
         """Start a transfer on the channel of ``node_id``, whose time-out per answer is
         ``answer_ms`` (0: ``sdo_timeout_ms``)."""
         def start(node: Any) -> int:
-            channel = self._channel(node, node_id)
+            channel = self._sdo.channel(node, node_id)
             check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
                   "co_sdo_client_set_timeout")
             return int(begin(node, channel))
         check(self._engine.call(start), f"{what} of node {node_id}")
 
-    def _channel(self, node: Any, node_id: int) -> int:
-        """The client channel talking to ``node_id`` (under the lock). The table is a
-        memo of the core's channels, checked on every use: a reset communication of the
-        master (an NMT command from anyone) reloads 0x1280.. from their power-on values,
-        and an SDO client may write them."""
-        channel = self._channels.get(node_id)
-        if channel is not None and _server(node, channel) == node_id:
-            return channel
-        self._channels = {n: c for n, c in self._channels.items()
-                          if n == 0 or _server(node, c) == n}  # 0: the manager's channel
-        used = set(self._channels.values())
-        servers = {c: _server(node, c) for c in range(_CHANNELS) if c not in used}
-        for c, server in servers.items():  # set up to it by someone else (0x1280 written)
-            if server == node_id:
-                self._channels[node_id] = c
-                return c
-        free = [c for c, server in servers.items() if server == 0]
-        if not free:  # take the channel of a node that has no transfer open
-            for other, c in list(self._channels.items()):
-                if not lib.co_sdo_client_busy(node, c):
-                    del self._channels[other]
-                    free = [c]
-                    break
-        if not free:
-            raise Error(f"all {_CHANNELS} SDO client channels are busy")
-        channel = free[0]
-        check(int(lib.co_sdo_client_setup(node, channel, node_id)), "co_sdo_client_setup")
-        self._channels[node_id] = channel
-        return channel
-
-    def _abort(self, node_id: int) -> None:
-        channel = self._channels.get(node_id)
-        if channel is None:
-            return
-        with self._engine.locked() as node:
-            if lib.co_sdo_client_busy(node, channel):
-                lib.co_sdo_client_abort(node, channel, 0x05040000)
+    @property
+    def _channels(self) -> dict[int, int]:
+        """Server node-ID -> SDO client channel (see :class:`canola._channels.SdoChannels`)."""
+        return self._sdo.table
 
     # ---- heartbeat consumer, boot-up, EMCY consumer
 
@@ -582,17 +546,21 @@ class Master(NodeBase):
         if not isinstance(network, net.Network):
             paths = [network] if isinstance(network, str | os.PathLike) else list(network)
             network = net.from_files(paths, node_id_of_master=self.node_id)
-        return manager.boot(self, network, on_event=on_event, wait=wait, timeout=timeout)
+        mgr = manager.boot(self._sdo, network, self._manager, on_event=on_event, wait=wait,
+                           timeout=timeout)
+        if mgr is not self._manager:
+            self._managers.append(mgr)
+            self._manager = mgr
+        return mgr
 
     @property
     def lss(self) -> Lss:
         """The LSS master (CiA 305): fastscan, set_node_id, inquire. See :mod:`canola.lss`."""
         from canola.lss import Lss  # noqa: PLC0415
 
-        lss: Lss | None = getattr(self, "_lss", None)
-        if lss is None:
-            lss = self._lss = Lss(self)
-        return lss
+        if self._lss is None:
+            self._lss = Lss(self._engine)
+        return self._lss
 
     def flash(self, node: int, data: bytes, *, progress: Callable[[int, int], None] | None
               = None, program: int = 1, clear: bool = True, ident: int | None = None,
@@ -602,7 +570,7 @@ class Master(NodeBase):
         :mod:`canola.flash`."""
         from canola.flash import flash  # noqa: PLC0415
 
-        return flash(self, node, data, progress=progress, program=program, clear=clear,
+        return flash(self._sdo, node, data, progress=progress, program=program, clear=clear,
                      ident=ident, timeout=timeout)
 
     def wait(self, seconds: float) -> None:
