@@ -6,12 +6,10 @@
  * stream), which is what a binding layer is allowed to do. Every function here is
  * declared again, for cffi, in _build_core.py's CDEF.
  *
- * Three kinds of node:
- * - canola_py_node_t: a bare node on a simulated bus (canola.core.Node);
- * - canola_py_dev_t: canola.Device / canola.Master, every callback routed to Python, on a
- *   simulated bus or on a python-can bus through a link;
- * - a link (canola_py_link_t) joins the devs on one python-can bus object: a frame one of
- *   them sends is delivered to the others in C, at once, and queued for python-can. */
+ * One kind of node, canola_py_dev_t (canola.Device, canola.Master, canola.simnode.Node):
+ * every callback routed to Python, on a simulated bus or on a python-can bus through a
+ * link (canola_py_link_t), which joins the devs on one python-can bus object: a frame one
+ * of them sends is delivered to the others in C, at once, and queued for python-can. */
 #ifndef CANOLA_PY_H
 #define CANOLA_PY_H
 
@@ -43,23 +41,11 @@ co_abort_t canola_py_stream_read(void *handle, uint32_t offset, uint8_t *buf, ui
 co_abort_t canola_py_stream_write(void *handle, uint32_t offset, const uint8_t *data, uint32_t n,
                                   uint32_t total, bool last);
 
-/* ---- simulated bus and bare nodes (py_sim.c) */
+/* ---- the simulated bus (py_sim.c) */
 
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
 void canola_py_bus_free(co_sim_bus_t *bus);
 uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
-
-typedef struct canola_py_node {
-    co_node_t node;
-    co_sim_port_t port;
-} canola_py_node_t;
-
-/* A node on its own port of `bus`; the entries must outlive it. NULL with *err set on
- * failure. The port stays attached to the bus: free the node only with its bus. */
-canola_py_node_t *canola_py_node_new(co_sim_bus_t *bus, const co_od_entry_t *entries,
-                                     uint32_t count, uint8_t node_id, co_err_t *err);
-void canola_py_node_free(canola_py_node_t *node);
-co_node_t *canola_py_node_ptr(canola_py_node_t *node);
 
 /* ---- canola.Device / canola.Master (py_dev.c) */
 

@@ -95,7 +95,6 @@ typedef struct co_od { const co_od_entry_t *entries; uint32_t count; void *hook_
 
 typedef struct co_node co_node_t;
 typedef struct co_sim_bus co_sim_bus_t;
-typedef struct canola_py_node canola_py_node_t;
 
 typedef void (*co_sdo_done_fn)(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
 typedef void (*co_sim_trace_fn)(void *ctx, const char *line);
@@ -198,10 +197,6 @@ int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel);
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
 void canola_py_bus_free(co_sim_bus_t *bus);
 uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
-canola_py_node_t *canola_py_node_new(co_sim_bus_t *bus, const co_od_entry_t *entries,
-                                     uint32_t count, uint8_t node_id, co_err_t *err);
-void canola_py_node_free(canola_py_node_t *node);
-co_node_t *canola_py_node_ptr(canola_py_node_t *node);
 
 /* callbacks into Python */
 extern "Python+C" void canola_py_trace(void *ctx, const char *line);

@@ -4,19 +4,46 @@ program download. They share the node's engine and this allocator, not the maste
 
 from __future__ import annotations
 
+import logging
 import threading
+from typing import Any
 
-from canola._c import CData, check, lib
+from canola._c import CData, check, ffi, lib
 from canola._engine import Engine
 from canola.errors import Error
 
-__all__ = ["CHANNELS", "SdoChannels"]
+__all__ = ["CHANNELS", "SdoChannels", "Transfer"]
+
+log = logging.getLogger("canola")
 
 #: SDO client channels of the C node (0x1280..0x128F; CO_SDO_CLIENTS_MAX in the extension).
 CHANNELS = 16
 
 #: 0x1280 + channel, sub-indices 1 and 2: COB-ID not valid.
 _INVALID = (0x80000000).to_bytes(4, "little")
+
+
+class Transfer:
+    """One SDO transfer of a client channel, as its completion (canola_py_sdo_done) left
+    it: ``done``, ``abort`` (0: none) and ``length`` (bytes moved)."""
+
+    def __init__(self) -> None:
+        self.done = False
+        self.abort = 0
+        self.length = 0
+
+    def notify(self) -> None:
+        """Called (from the C completion) once ``done``, ``abort`` and ``length`` are set."""
+
+
+@ffi.def_extern(onerror=lambda *_: log.exception("canola: SDO completion failed"))
+def canola_py_sdo_done(ctx: Any, channel: int, abort: int, length: int) -> None:
+    del channel
+    t: Transfer = ffi.from_handle(ctx)
+    t.abort = int(abort)
+    t.length = int(length)
+    t.done = True
+    t.notify()
 
 
 def server(node: CData, channel: int) -> int:

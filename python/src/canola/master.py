@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
 from canola._c import ffi, lib
-from canola._channels import SdoChannels
+from canola._channels import SdoChannels, Transfer
 from canola._engine import Bus, Engine, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
@@ -56,7 +56,7 @@ from canola._nodebase import (
     load_od,
     nmt_command,
 )
-from canola.core import SimBus, _Transfer
+from canola.core import SimBus
 from canola.errors import Error, SdoAbort
 from canola.odgen import GenerateOptions
 
@@ -90,7 +90,7 @@ class SdoTimeout(SdoAbort):
         return str(self.args[0])
 
 
-class _SdoTransfer(_Transfer):
+class _SdoTransfer(Transfer):
     def __init__(self, answer_ms: int) -> None:
         super().__init__()
         self.answer_ms = answer_ms  # time-out per answer; 0: the master's
