@@ -44,7 +44,7 @@ from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
-from canola._c import ffi, lib
+from canola._c import check, ffi, lib
 from canola._channels import SdoChannels, Transfer
 from canola._engine import Bus, Engine, Frame, _Timer
 from canola._nodebase import (
@@ -52,7 +52,6 @@ from canola._nodebase import (
     EmcyEvent,
     HeartbeatEvent,
     NodeBase,
-    check,
     load_od,
     nmt_command,
 )
