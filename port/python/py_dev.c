@@ -1,7 +1,7 @@
 /* canola.Device / canola.Master: a node with every callback routed to Python, on a
  * simulated bus or on a link (see canola_py.h). */
 #include "canola_py.h"
-#include "internal.h"
+#include "node_internal.h" /* co_node_write_entry, the node's parts */
 
 #include <stdlib.h>
 #include <string.h>

@@ -3,7 +3,7 @@
  * that find their co_program_t from the hooks pointer, and the program's callbacks go to
  * Python. */
 #include "canola_py.h"
-#include "internal.h"
+#include "node_internal.h" /* the SDO clients of the node */
 
 #include <stddef.h>
 #include <stdlib.h>
