@@ -39,8 +39,9 @@ _SOURCES = [
 _INCLUDES = [os.path.join(_ROOT, "include"), os.path.join(_ROOT, "src"),
              os.path.join(_ROOT, "port", "python"),
              os.path.join(_ROOT, "port", "sim"), os.path.join(_ROOT, "port", "linux")]
-_HEADERS = [p for d in _INCLUDES
-            for p in sorted(glob.glob(os.path.join(d, "**", "*.h"), recursive=True))]
+# Headers and the tables the sources include (src/crc16_tables.inc): an sdist needs them all.
+_HEADERS = [p for d in _INCLUDES for pattern in ("*.h", "*.inc")
+            for p in sorted(glob.glob(os.path.join(d, "**", pattern), recursive=True))]
 
 
 def c_files() -> tuple[str, list[str]]:
