@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from canola import values
-from canola.datatypes import DATA_TYPES
+from canola.datatypes import DATA_TYPES, type_bits
 from canola.eds import ObjectDictionary, Variable
 from canola.errors import Error, SdoAbort
 from canola.odnames import entry_name, find_entry, parse_address
@@ -137,18 +137,6 @@ def pdos_from_od(od: ObjectDictionary) -> list[Pdo]:
                              _number(comm.subs.get(6)),
                              [_mapped(od, w) for w in words if w]))
     return found
-
-
-#: Sizes in bits of the types whose DATA_TYPES entry has none (0: no fixed size).
-_FIXED_BITS = {0x01: 1, 0x08: 32, 0x11: 64, 0x0C: 48, 0x0D: 48}
-
-
-def type_bits(code: int | None) -> int | None:
-    """The size in bits a mapping of data type ``code`` takes, None when the type has no
-    fixed size (strings, DOMAIN) or is unknown."""
-    if code is None or code not in DATA_TYPES:
-        return None
-    return _FIXED_BITS.get(code, DATA_TYPES[code].bits) or None
 
 
 def _typed(m: Mapped, raw: int) -> values.Value:

@@ -1,6 +1,7 @@
 """The ``canola`` command: one sub-command group per module of this package.
 
     canola odgen DEVICE.eds -o DIR            C object dictionary from an EDS/DCF
+    canola eds check|show|dcf|diff            check, show, configure, compare EDS/DCF files
     canola bus serve [--host H] [--port P]    software CAN bus (socketcand hub)
     canola nmt CMD NODE|all                   NMT commands
     canola sdo read|write|upload|download     SDO client
@@ -38,6 +39,7 @@ from canola.cli import (
     demo_cmd,
     device_cmd,
     dump_cmd,
+    eds_cmd,
     flash_cmd,
     gateway_cmd,
     lss_cmd,
@@ -57,7 +59,7 @@ _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
     dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
     demo_cmd.register, boot_cmd.register, flash_cmd.register, lss_cmd.register,
-    pdo_cmd.register, sync_cmd.register,
+    pdo_cmd.register, sync_cmd.register, eds_cmd.register,
 )
 
 
