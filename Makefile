@@ -69,6 +69,7 @@ test-configs:
 # Installed again (the cffi extension rebuilt) when the package's build inputs change.
 PY_VENV = build-py/venv
 PY_INPUTS = python/pyproject.toml python/setup.py python/src/canola/_build_core.py \
+            $(wildcard port/python/*.[ch]) \
             $(wildcard src/*.[ch] include/canola/*.h port/sim/*.[ch] port/linux/file_storage.c)
 py-env: build-py/env.stamp
 build-py/env.stamp: $(PY_INPUTS)

@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 
 from canola import Error, SdoAbort, eds
-from canola.core import Node, Od, SimBus
+from canola.core import Od, SimBus
 from canola.odgen import GenerateOptions
+from canola.simnode import Node
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 MODES = ("auto", "segmented", "block")

@@ -10,10 +10,11 @@ import pytest
 
 from canola import eds
 from canola.candump import CandumpError, LogFrame, parse_line, read_log
-from canola.core import Node, Od, SimBus
+from canola.core import Od, SimBus
 from canola.decode import Decoder, emcy_text, format_value
 from canola.emcycodes import emcy_class, emcy_line, register_text
 from canola.odgen import GenerateOptions
+from canola.simnode import Node
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 

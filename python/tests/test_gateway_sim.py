@@ -14,11 +14,12 @@ import pytest
 from gateway_helpers import Client, run, serving
 
 from canola import eds
-from canola.core import Node, Od, SimBus
+from canola.core import Od, SimBus
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import BootUp, Emcy, Heartbeat
 from canola.gateway.simbackend import SimBackend, frame_event
 from canola.odgen import GenerateOptions
+from canola.simnode import Node
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 MIB = 1024 * 1024

@@ -22,7 +22,8 @@ import pytest
 
 from canola import EdsError, SdoAbort, eds, odgen
 from canola._build_core import _CONFIG
-from canola.core import Node, Od, SimBus
+from canola.core import Od, SimBus
+from canola.simnode import Node
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]

@@ -1,36 +1,44 @@
-"""One C node and what drives it: a simulated bus (virtual time) or a python-can bus
-(a background thread, real time). Shared by :class:`canola.Device` and
-:class:`canola.Master`; not public.
+"""The C nodes and what drives them: a simulated bus (virtual time) or a python-can bus
+(real time). Shared by :class:`canola.Device` and :class:`canola.Master`; not public.
 
-Threading (python-can): one lock guards every call into the C node. The bus thread
-receives with a time-out equal to the node's next deadline (``co_node_poll``'s return),
-capped at :data:`MAX_WAIT_S` so that deadlines that application calls move earlier are
-met within that cap. Callbacks of the C node only record events; the application's
-callbacks run afterwards in the bus thread (python-can) or inside :meth:`SimBus.run_until`
-(simulated bus), never under the lock, in the order the events happened, and may call
-any method of the node. They must not block: a blocking SDO call of the same master from
-its callback raises :class:`~canola.errors.Error`; one that waits for another node whose
-answer needs the calling thread (a device's callback reading that device through a
-master) only ends with the SDO time-out.
+python-can: one :class:`Link` per bus object drives every canola node on it, with one
+lock and one thread (not one per node). A frame one node sends reaches the other canola
+nodes of the same bus object at once, in C (``port/python/py_link.c``), in the thread
+that caused it: an SDO request of a :class:`~canola.Master` to a :class:`~canola.Device`
+of the same bus object is answered before the call that sent it returns, with no thread
+hand-off. Python hands the same frames to python-can, for every other listener. The
+thread receives the frames of others with a time-out equal to the nodes' next deadline,
+capped at :data:`MAX_WAIT_S` so that deadlines that application calls move earlier are met
+within that cap; each received frame (or time-out) is one acquisition of the lock.
+
+Callbacks of the C nodes only record events; the application's callbacks run afterwards,
+never under the lock, in the order the events happened, by the thread that released the
+lock (the bus thread, or the application's thread whose call made the nodes work), one
+thread at a time; on a SimBus inside :meth:`SimBus.run_until`. They may call any method of
+the nodes. They must not block on a node that only the bus thread can answer: a blocking
+SDO call run by the bus thread raises :class:`~canola.errors.Error`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import struct
 import threading
 import time
+import weakref
 from collections import deque
 from collections.abc import Callable, Iterator
-from typing import Any
+from typing import Any, TypeVar
 
 import can
 
-from canola._core import ffi, lib
-from canola.core import Od, SimBus, _check
+from canola._c import check as _check
+from canola._c import ffi, lib
+from canola.core import Od, SimBus
 from canola.errors import Error
 
-__all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame"]
+__all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame", "Link"]
 
 log = logging.getLogger("canola")
 
@@ -38,6 +46,7 @@ log = logging.getLogger("canola")
 MAX_WAIT_S = 0.01
 
 Bus = SimBus | can.BusABC
+T = TypeVar("T")
 
 
 class Frame:
@@ -73,6 +82,223 @@ def _frame_in(frame: Any, timestamp: float) -> Frame:
                  extended=bool(frame.flags & lib.CO_FRAME_EXT), timestamp=timestamp)
 
 
+_FRAME = struct.Struct("<IBB8s2x")  # co_frame_t: id, flags, len, data (and padding)
+assert ffi.sizeof("co_frame_t") == _FRAME.size and ffi.offsetof("co_frame_t", "data") == 6
+_EXT = int(lib.CO_FRAME_EXT)
+_RTR = int(lib.CO_FRAME_RTR)
+_NEVER = int(lib.CO_TIME_NEVER)
+
+
+def _free_link(raw: Any, retired: deque[Any]) -> None:
+    while retired:
+        lib.canola_py_dev_free(retired.popleft())
+    lib.canola_py_link_free(raw)
+
+
+#: id(bus object) -> its link, while the link lives (its nodes hold it).
+_LINKS: weakref.WeakValueDictionary[int, Link] = weakref.WeakValueDictionary()
+_LINKS_LOCK = threading.Lock()
+
+
+class Link:
+    """One python-can bus object and the canola nodes on it (see the module doc): the C
+    link, the lock, the bus thread, the events of every node on it in order."""
+
+    @classmethod
+    def of(cls, bus: can.BusABC) -> Link:
+        """The link of ``bus`` (made on first use; it holds the bus while it lives)."""
+        with _LINKS_LOCK:
+            link = _LINKS.get(id(bus))
+            if link is None or link.bus is not bus:
+                link = _LINKS[id(bus)] = cls(bus)
+            return link
+
+    def __init__(self, bus: can.BusABC) -> None:
+        raw = lib.canola_py_link_new()
+        if raw == ffi.NULL:
+            raise Error("out of memory for a python-can link")
+        self.bus = bus
+        self.c = raw
+        self.lock = threading.Lock()
+        self.events: deque[Callable[[], None]] = deque()
+        self.engines: list[Engine] = []  # the active ones (running), in attach order
+        self.timers: list[Engine] = []  # engines with Python timers (running or not)
+        self._dispatching = threading.Lock()
+        self._retired: deque[Any] = deque()  # devs of engines that are gone: freed here
+        self._unsent: deque[can.Message] = deque()
+        self._t0 = time.monotonic_ns()
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._frame = ffi.new("co_frame_t *")
+        weakref.finalize(self, _free_link, raw, self._retired)
+
+    def now_us(self) -> int:
+        return (time.monotonic_ns() - self._t0) // 1000
+
+    # ---- nodes
+
+    def attach(self, engine: Engine, dev: Any) -> None:
+        with self.lock:
+            _check(int(lib.canola_py_link_attach(self.c, dev)), "attach the node to the bus")
+        weakref.finalize(engine, self._retired.append, dev)
+
+    def activate(self, engine: Engine) -> None:
+        """``engine`` receives and is polled; the bus thread runs while one is."""
+        with self.lock:
+            if engine not in self.engines:
+                self.engines.append(engine)
+                lib.canola_py_dev_set_active(engine.dev, True)
+            self._name_thread()
+        if self._thread is None:
+            self._stop = threading.Event()
+            self._thread = threading.Thread(target=self._run, args=(self._stop,),
+                                            name=self._thread_name(), daemon=True)
+            self._thread.start()
+
+    def deactivate(self, engine: Engine, timeout: float) -> None:
+        """``engine`` is left alone; the bus thread stops with the last one (waits up to
+        ``timeout`` s unless called from it)."""
+        with self.lock:
+            if engine in self.engines:
+                self.engines.remove(engine)
+                lib.canola_py_dev_set_active(engine.dev, False)
+            self._name_thread()
+            thread = self._thread if not self.engines else None
+            if thread is not None:
+                self._stop.set()
+                self._thread = None
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout)
+            if thread.is_alive():
+                raise Error(f"{engine.name}: the bus thread did not stop within {timeout} s")
+
+    def _thread_name(self) -> str:
+        return "canola-" + "+".join(e.name.removeprefix("canola-") for e in self.engines)
+
+    def _name_thread(self) -> None:
+        if self._thread is not None and self.engines:
+            self._thread.name = self._thread_name()
+
+    def in_thread(self) -> bool:
+        return self._thread is not None and threading.current_thread() is self._thread
+
+    # ---- under the lock
+
+    def enter(self) -> int:
+        """First thing under the lock: free the devs of engines gone; the time now."""
+        while self._retired:
+            lib.canola_py_dev_free(self._retired.popleft())
+        return self.now_us()
+
+    def flush(self, now_us: int) -> None:
+        """Deliver what the nodes sent to the others, then hand it to python-can (under
+        the lock, so that python-can sees the frames in order)."""
+        c = self.c
+        n = int(lib.canola_py_link_run(c, now_us))
+        if not n and self._unsent:
+            self._send(b"")
+        while n:
+            self._send(bytes(ffi.buffer(c.frames, n * _FRAME.size)))
+            if not lib.canola_py_link_clear(c):
+                break
+            lib.canola_py_link_poll(c, now_us)  # refused frames wait in the cores' queues
+            n = int(c.count)
+
+    def _send(self, frames: bytes) -> None:
+        """Hand ``frames`` (co_frame_t's bytes) to python-can after those it refused."""
+        unsent, bus = self._unsent, self.bus
+        for can_id, flags, length, data in _FRAME.iter_unpack(frames):
+            rtr = bool(flags & _RTR)
+            unsent.append(can.Message(arbitration_id=can_id, is_extended_id=bool(flags & _EXT),
+                                      is_remote_frame=rtr, dlc=length,
+                                      data=b"" if rtr else data[:length]))
+        while unsent:
+            try:
+                bus.send(unsent[0], timeout=0.05)
+            except can.CanOperationError:  # full: the rest waits for the next flush
+                if len(unsent) > _UNSENT_MAX:
+                    log.warning("python-can refuses frames: %d dropped", len(unsent))
+                    unsent.clear()
+                return
+            except can.CanError as exc:
+                log.warning("send failed: %s", exc)
+            unsent.popleft()
+
+    # ---- callbacks, outside the lock
+
+    def dispatch(self) -> None:
+        """Run the queued callbacks in order, one thread at a time: another thread that
+        is running them takes these too."""
+        events = self.events
+        while events:
+            if not self._dispatching.acquire(blocking=False):
+                return
+            try:
+                while events:
+                    fn = events.popleft()
+                    try:
+                        fn()
+                    except Exception:
+                        log.exception("canola: a callback raised")
+            finally:
+                self._dispatching.release()
+
+    # ---- the bus thread
+
+    def _run(self, stop: threading.Event) -> None:
+        while not stop.is_set():
+            try:
+                self._loop(stop)
+            except Exception:  # never let the bus thread die silently
+                log.exception("%s: bus thread error", self._thread_name())
+                stop.wait(0.05)
+
+    def _loop(self, stop: threading.Event) -> None:
+        bus, c, frame = self.bus, self.c, self._frame
+        msg: can.Message | None = None
+        while not stop.is_set():
+            with self.lock:
+                now = self.enter()
+                if msg is not None:
+                    lib.canola_py_link_ingest(c, now, frame)
+                due = int(lib.canola_py_link_poll(c, now))
+                self.flush(now)
+            for engine in self.timers:
+                engine.run_timers(now)
+            self.dispatch()
+            for engine in self.timers:
+                timer = engine.next_timer_us()
+                due = min(due, timer) if timer is not None else due
+            wait = MAX_WAIT_S
+            if due != _NEVER:
+                wait = min(MAX_WAIT_S, max(0.0, (due - self.now_us()) / 1e6))
+            try:
+                msg = bus.recv(wait)
+            except can.CanError as exc:
+                log.warning("%s: receive failed: %s", self._thread_name(), exc)
+                stop.wait(0.05)
+                msg = None
+                continue
+            if msg is None or msg.is_error_frame or msg.is_fd or msg.dlc > 8:
+                msg = None
+                continue
+            frame.id = msg.arbitration_id
+            frame.flags = (_EXT if msg.is_extended_id else 0) | (_RTR if msg.is_remote_frame
+                                                                 else 0)
+            frame.len = msg.dlc
+            data = b"" if msg.is_remote_frame else bytes(msg.data)
+            ffi.memmove(frame.data, data.ljust(8, b"\0")[:8], 8)
+            for engine in self.engines:
+                if engine.frame_listeners:
+                    engine.frame_seen(Frame(msg.arbitration_id, data, rtr=msg.is_remote_frame,
+                                            extended=msg.is_extended_id,
+                                            timestamp=msg.timestamp))
+
+
+#: Frames python-can refused that wait for the next flush, at most.
+_UNSENT_MAX = 4096
+
+
 class Engine:
     """A C node (``canola_py_dev_t``) on ``bus``; ``owner`` gets the C callbacks through
     its ``_on_*`` methods (called under the lock; they queue work with :meth:`later`)."""
@@ -90,27 +316,28 @@ class Engine:
         self.owner = owner
         self.name = name
         self.sim = isinstance(bus, SimBus)
-        self._lock = threading.Lock()
-        self._events: deque[Callable[[], None]] = deque()
+        self.link = Link.of(bus) if isinstance(bus, can.BusABC) else None
+        self.lock = self.link.lock if self.link is not None else threading.Lock()
+        self._events = self.link.events if self.link is not None else deque()
         self._handle = ffi.new_handle(self)
-        self._frame_listeners: list[Callable[[Frame], None]] = []
+        self.frame_listeners: list[Callable[[Frame], None]] = []
         self.app_writing = False
         err = ffi.new("co_err_t *")
         store = ffi.new("char[]", store_dir.encode()) if store_dir is not None else ffi.NULL
         raw = lib.canola_py_dev_new(bus._bus if isinstance(bus, SimBus) else ffi.NULL,
-                                    od.entries, od.count, node_id, sdo_timeout_ms, store,
-                                    raw_frames, self._handle, err)
+                                    ffi.NULL, od.entries, od.count, node_id, sdo_timeout_ms,
+                                    store, raw_frames, self._handle, err)
         if raw == ffi.NULL:
             if store_dir is not None:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
             _check(int(err[0]), "create the node")
+        self.dev = raw
         if isinstance(bus, SimBus):
             bus._nodes.append((raw, od))  # ports stay attached: freed with the bus
             bus._nodes.append((self._handle, self))
             bus._engines.append(self)
-            self._dev = raw
-        else:
-            self._dev = ffi.gc(raw, lib.canola_py_dev_free)
+        elif self.link is not None:
+            self.link.attach(self, raw)  # freed by the link once this engine is gone
         if int(err[0]) != lib.CO_OK:
             if store_dir is not None and int(err[0]) == lib.CO_ERR_ARG:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
@@ -118,37 +345,65 @@ class Engine:
         self.node = lib.canola_py_dev_node(raw)
         lib.canola_py_dev_set_quiet(raw, quiet)  # before the start: its boot-up stays off
         self._timers: list[_Timer] = []
-        self._t0 = time.monotonic_ns()
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
         self._started = False
+        self._active = False
 
     # ---- time and locking
 
     def now_us(self) -> int:
         if isinstance(self.bus, SimBus):
             return self.bus.now_us
-        return (time.monotonic_ns() - self._t0) // 1000
+        assert self.link is not None
+        return self.link.now_us()
 
     @contextlib.contextmanager
     def locked(self) -> Iterator[Any]:
-        """The C node, under the lock, its clock brought to now first. On a SimBus the
-        frames sent inside are delivered (at the same virtual instant) afterwards."""
+        """The C node, under the lock, its clock brought to now first. The frames sent
+        inside reach the other nodes afterwards: on a SimBus at the same virtual instant,
+        on python-can's link at once (and python-can). The callbacks run after the lock."""
         if isinstance(self.bus, SimBus):
-            with self._lock:
+            with self.lock:
                 yield self.node
-                lib.canola_py_dev_touch(self._dev)
+                lib.canola_py_dev_touch(self.dev)
             self.bus.run_until(self.bus.now_us)
-        else:
-            with self._lock:
-                lib.co_node_poll(self.node, self.now_us())
+            return
+        link = self.link
+        assert link is not None
+        with link.lock:
+            now = link.enter()
+            lib.co_node_poll(self.node, now)
+            try:
                 yield self.node
+            finally:
+                link.flush(now)
+        if link.events:
+            link.dispatch()
+
+    def call(self, fn: Callable[[Any], T]) -> T:
+        """``fn(node)`` as inside :meth:`locked` (the short way, for the hot paths)."""
+        link = self.link
+        if link is None:
+            with self.locked() as node:
+                return fn(node)
+        with link.lock:
+            now = link.enter()
+            lib.co_node_poll(self.node, now)
+            try:
+                result = fn(self.node)
+            finally:
+                link.flush(now)
+        if link.events:
+            link.dispatch()
+        return result
 
     def later(self, fn: Callable[[], None]) -> None:
         """Run ``fn`` after the current C call, outside the lock (see the module doc)."""
         self._events.append(fn)
 
     def dispatch(self) -> None:
+        if self.link is not None:
+            self.link.dispatch()
+            return
         while self._events:
             fn = self._events.popleft()
             try:
@@ -162,6 +417,8 @@ class Engine:
         """Run ``fn`` every ``period_us`` (first one period from now), like a callback."""
         timer = _Timer(self.now_us() + period_us, period_us, fn)
         self._timers.append(timer)
+        if self.link is not None and self not in self.link.timers:
+            self.link.timers = [*self.link.timers, self]
         return timer
 
     def remove_timer(self, timer: _Timer) -> None:
@@ -169,9 +426,13 @@ class Engine:
             self._timers.remove(timer)
 
     def next_timer_us(self) -> int | None:
+        if not self._active and not self.sim:
+            return None
         return min((t.due_us for t in self._timers), default=None)
 
     def run_timers(self, now_us: int) -> None:
+        if not self._active and not self.sim:
+            return
         for timer in list(self._timers):
             if timer.due_us <= now_us:
                 timer.due_us += timer.period_us
@@ -180,7 +441,7 @@ class Engine:
                 self.later(timer.fn)
 
     def in_bus_thread(self) -> bool:
-        return self._thread is not None and threading.current_thread() is self._thread
+        return self.link is not None and self.link.in_thread()
 
     def check_may_block(self) -> None:
         if self.in_bus_thread():
@@ -188,105 +449,37 @@ class Engine:
                         "use the asyncio form or do it from another thread")
 
     def add_frame_listener(self, fn: Callable[[Frame], None]) -> None:
-        self._frame_listeners.append(fn)
+        """``fn(Frame)`` for every frame other nodes send (outside the lock, in order)."""
+        self.frame_listeners.append(fn)
+        if self.link is not None:
+            with self.lock:
+                lib.canola_py_dev_set_raw(self.dev, True)
 
     def frame_seen(self, frame: Frame) -> None:
-        for fn in self._frame_listeners:
+        for fn in self.frame_listeners:
             self.later(lambda fn=fn: fn(frame))  # type: ignore[misc]
 
     # ---- life cycle
 
     def start(self) -> None:
+        if self.link is not None:
+            self.link.activate(self)  # it receives its own boot-up's answers
+            self._active = True
         if not self._started:
-            with self._lock:
-                _check(lib.co_node_start(self.node, self.now_us()), "co_node_start")
+            with self.locked() as node:
+                _check(lib.co_node_start(node, self.now_us()), "co_node_start")
             self._started = True
-            if isinstance(self.bus, SimBus):
-                self.bus.run_until(self.bus.now_us)
-        if isinstance(self.bus, can.BusABC) and self._thread is None:
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name=self.name, daemon=True)
-            self._thread.start()
 
     def stop(self, timeout: float = 2.0) -> None:
-        thread = self._thread
-        if thread is None:
+        if self.link is None or not self._active:
             return
-        self._stop.set()
-        if thread is not threading.current_thread():
-            thread.join(timeout)
-            if thread.is_alive():
-                raise Error(f"{self.name}: the bus thread did not stop within {timeout} s")
-        self._thread = None
+        self._active = False
+        self.link.deactivate(self, timeout)
 
     @property
     def running(self) -> bool:
-        return self._started and (self.sim or self._thread is not None)
+        return self._started and (self.sim or self._active)
 
-    # ---- the python-can side
-
-    def send_can(self, frame: Any) -> int:
-        """tx of the driver: hand one frame to python-can (called under the lock)."""
-        assert isinstance(self.bus, can.BusABC)
-        msg = can.Message(arbitration_id=int(frame.id),
-                          is_extended_id=bool(frame.flags & lib.CO_FRAME_EXT),
-                          is_remote_frame=bool(frame.flags & lib.CO_FRAME_RTR),
-                          dlc=int(frame.len),
-                          data=b"" if frame.flags & lib.CO_FRAME_RTR
-                          else bytes(frame.data[0:frame.len]))
-        try:
-            self.bus.send(msg, timeout=0.05)
-        except can.CanOperationError:
-            return int(lib.CO_ERR_BUSY)
-        except can.CanError as exc:
-            log.warning("%s: send failed: %s", self.name, exc)
-            return int(lib.CO_ERR_ARG)
-        return int(lib.CO_OK)
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                self._loop()
-            except Exception:  # never let the bus thread die silently
-                log.exception("%s: bus thread error", self.name)
-                self._stop.wait(0.05)
-
-    def _loop(self) -> None:
-        bus = self.bus
-        assert isinstance(bus, can.BusABC)
-        frame = ffi.new("co_frame_t *")
-        while not self._stop.is_set():
-            with self._lock:
-                due = int(lib.co_node_poll(self.node, self.now_us()))
-            self.run_timers(self.now_us())
-            self.dispatch()
-            timer = self.next_timer_us()
-            if timer is not None:
-                due = min(due, timer)
-            wait = MAX_WAIT_S
-            if due != lib.CO_TIME_NEVER:
-                wait = min(MAX_WAIT_S, max(0.0, (due - self.now_us()) / 1e6))
-            try:
-                msg = bus.recv(wait)
-            except can.CanError as exc:
-                log.warning("%s: receive failed: %s", self.name, exc)
-                self._stop.wait(0.05)
-                continue
-            if msg is None or msg.is_error_frame or msg.is_fd or msg.dlc > 8:
-                continue
-            frame.id = msg.arbitration_id
-            frame.flags = ((lib.CO_FRAME_EXT if msg.is_extended_id else 0)
-                           | (lib.CO_FRAME_RTR if msg.is_remote_frame else 0))
-            frame.len = msg.dlc
-            data = b"" if msg.is_remote_frame else bytes(msg.data)
-            ffi.memmove(frame.data, data.ljust(8, b"\0")[:8], 8)
-            if self._frame_listeners:
-                self.frame_seen(Frame(msg.arbitration_id, data, rtr=msg.is_remote_frame,
-                                      extended=msg.is_extended_id,
-                                      timestamp=msg.timestamp))
-            with self._lock:
-                lib.co_node_ingest(self.node, self.now_us(), frame)
-            self.dispatch()
 
 
 # ---------------------------------------------------------------------------------------
@@ -298,11 +491,6 @@ def _engine(ctx: Any) -> Engine:
     return engine
 
 
-@ffi.def_extern(onerror=lambda *_: log.exception("canola: tx callback failed"))  # type: ignore[untyped-decorator]
-def canola_py_tx(ctx: Any, frame: Any) -> int:
-    return _engine(ctx).send_can(frame)
-
-
 def _call(ctx: Any, method: str, *args: Any) -> None:
     engine = _engine(ctx)
     fn = getattr(engine.owner, method, None)
@@ -310,7 +498,7 @@ def _call(ctx: Any, method: str, *args: Any) -> None:
         fn(*args)
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_state(user: Any, state: int) -> None:
     try:
         _call(user, "_on_state", int(state))
@@ -318,7 +506,7 @@ def canola_py_on_state(user: Any, state: int) -> None:
         log.exception("canola: state callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_errctl(user: Any, event: Any) -> None:
     try:
         _call(user, "_on_errctl", int(event.kind), int(event.node_id), int(event.state),
@@ -327,7 +515,7 @@ def canola_py_on_errctl(user: Any, event: Any) -> None:
         log.exception("canola: error control callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_error(user: Any, error: int) -> None:
     try:
         _call(user, "_on_error", int(error))
@@ -335,7 +523,7 @@ def canola_py_on_error(user: Any, error: int) -> None:
         log.exception("canola: node error callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_emcy(user: Any, emcy: Any) -> None:
     try:
         _call(user, "_on_emcy", int(emcy.cob_id), int(emcy.code), int(emcy.reg),
@@ -344,7 +532,7 @@ def canola_py_on_emcy(user: Any, emcy: Any) -> None:
         log.exception("canola: EMCY callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_sync(user: Any, counter: int) -> None:
     try:
         _call(user, "_on_sync", int(counter))
@@ -352,7 +540,7 @@ def canola_py_on_sync(user: Any, counter: int) -> None:
         log.exception("canola: SYNC callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_time(user: Any, tod: Any) -> None:
     try:
         _call(user, "_on_time", int(tod.ms), int(tod.days))
@@ -360,7 +548,7 @@ def canola_py_on_time(user: Any, tod: Any) -> None:
         log.exception("canola: TIME callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_on_rpdo(user: Any, rpdo: int) -> None:
     try:
         _call(user, "_on_rpdo", int(rpdo))
@@ -368,7 +556,7 @@ def canola_py_on_rpdo(user: Any, rpdo: int) -> None:
         log.exception("canola: RPDO callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_written(ctx: Any, entry: Any) -> None:
     try:
         engine = _engine(ctx)
@@ -378,11 +566,11 @@ def canola_py_written(ctx: Any, entry: Any) -> None:
         log.exception("canola: write callback")
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_raw_rx(ctx: Any, now_us: int, frame: Any) -> None:
     try:
         engine = _engine(ctx)
-        if engine._frame_listeners:
-            engine.frame_seen(_frame_in(frame, now_us / 1e6))
+        if engine.frame_listeners:  # a frame of another canola node: python-can's clock
+            engine.frame_seen(_frame_in(frame, now_us / 1e6 if engine.sim else time.time()))
     except Exception:
         log.exception("canola: frame callback")

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from canola import eds, values
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola._engine import Bus, Engine, Frame
-from canola.core import NMT_CMDS, Od, _check
+from canola.core import NMT_CMDS, Od
 from canola.errors import Error, SdoAbort
 from canola.odgen import GenerateOptions
 
@@ -389,6 +389,3 @@ class _ObjectView:
     def value(self, value: values.Value) -> None:
         self._od.set(self.index, 0, value)
 
-
-def check(err: int, what: str) -> None:
-    _check(err, what)

@@ -1,6 +1,6 @@
 """The canola C core, from Python: object dictionaries, nodes and the simulated bus.
 
-Built on the cffi extension ``canola._core`` (see ``_build_core.py``). Everything runs on
+Built on the cffi extension ``canola._core`` (through ``canola._c``). Everything runs on
 a :class:`SimBus` with a virtual clock; nothing depends on wall time.
 
 - :meth:`Od.from_eds` turns a parsed EDS/DCF (:func:`canola.eds.parse`) into an entry
@@ -8,9 +8,8 @@ a :class:`SimBus` with a virtual clock; nothing depends on wall time.
   :mod:`canola.odgen`.
 - :class:`SimBus` is the simulated bus; ``trace`` collects every delivered frame as a
   candump line (``(0.001000) sim0 701#00``).
-- :class:`Node` is one node on the bus: local reads and writes as the network would do
-  them, NMT master commands, and an SDO client (channel 0) that runs the bus until the
-  transfer is done.
+- the nodes on it: :class:`canola.Device`, :class:`canola.Master` and the bare
+  :class:`canola.simnode.Node`.
 """
 
 from __future__ import annotations
@@ -18,12 +17,13 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 from canola import eds
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola.datatypes import DATA_TYPES
-from canola.errors import Error, SdoAbort
+from canola.errors import Error
 from canola.odgen import (
     _BOOL,
     _DOMAIN,
@@ -39,16 +39,7 @@ from canola.odgen import (
     _Gen,
 )
 
-__all__ = ["NMT_CMDS", "NMT_STATES", "Node", "Od", "SdoMode", "SimBus"]
-
-SdoMode = Literal["auto", "expedited", "segmented", "block"]
-
-_MODES: dict[str, int] = {
-    "auto": lib.CO_SDO_AUTO,
-    "expedited": lib.CO_SDO_EXPEDITED,
-    "segmented": lib.CO_SDO_SEGMENTED,
-    "block": lib.CO_SDO_BLOCK,
-}
+__all__ = ["NMT_CMDS", "NMT_STATES", "Od", "SimBus"]
 
 #: NMT command names -> command specifier.
 NMT_CMDS: dict[str, int] = {
@@ -65,22 +56,6 @@ NMT_STATES: dict[int, str] = {
     for v in (lib.CO_NMT_INITIALISING, lib.CO_NMT_STOPPED, lib.CO_NMT_OPERATIONAL,
               lib.CO_NMT_PRE_OPERATIONAL)
 }
-
-_ERRORS = {
-    int(lib.CO_ERR_ARG): "bad argument",
-    int(lib.CO_ERR_BUSY): "busy",
-    int(lib.CO_ERR_CONFIG): "inconsistent configuration or object dictionary",
-    int(lib.CO_ERR_STATE): "not allowed in the current state",
-    int(lib.CO_ERR_NOT_FOUND): "not found",
-    int(lib.CO_ERR_FULL): "no room",
-    int(lib.CO_ERR_ABORT): "object dictionary access failed",
-}
-
-
-def _check(err: int, what: str) -> None:
-    if err != lib.CO_OK:
-        raise Error(f"{what}: {_ERRORS.get(err, 'error')} ({err})")
-
 
 # ---------------------------------------------------------------------------------------
 # object dictionary
@@ -232,7 +207,7 @@ def _limits(gen: _Gen, var: eds.Variable, kind: int) -> Any:
 # bus
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_trace(ctx: Any, line: Any) -> None:
     trace: list[str] = ffi.from_handle(ctx)
     trace.append(ffi.string(line).decode("ascii", "replace"))
@@ -289,152 +264,3 @@ class SimBus:
     def run_for(self, us: int) -> None:
         """Advance virtual time by ``us``."""
         self.run_until(self.now_us + us)
-
-
-# ---------------------------------------------------------------------------------------
-# node
-
-
-class _Transfer:
-    def __init__(self) -> None:
-        self.done = False
-        self.abort = 0
-        self.length = 0
-
-    def notify(self) -> None:
-        """Called (from the C completion) once ``done``, ``abort`` and ``length`` are set."""
-
-
-@ffi.def_extern()  # type: ignore[untyped-decorator]
-def canola_py_sdo_done(ctx: Any, channel: int, abort: int, length: int) -> None:
-    del channel
-    t: _Transfer = ffi.from_handle(ctx)
-    t.abort = int(abort)
-    t.length = int(length)
-    t.done = True
-    t.notify()
-
-
-class Node:
-    """A canola node on ``bus`` with dictionary ``od`` (kept alive with the bus).
-
-    ``node_id`` defaults to the dictionary's (a DCF's NodeID). Call :meth:`start` to power
-    it on (boot-up frame, pre-operational).
-    """
-
-    def __init__(self, bus: SimBus, od: Od, node_id: int | None = None) -> None:
-        nid = node_id if node_id is not None else od.node_id
-        if nid is None:
-            raise Error("no node-ID: pass node_id")
-        err = ffi.new("co_err_t *")
-        raw = lib.canola_py_node_new(bus._bus, od.entries, od.count, nid, err)
-        if raw == ffi.NULL:
-            _check(int(err[0]), "attach to the bus")
-        bus._nodes.append((raw, od))  # freed with the bus, never before
-        _check(int(err[0]), "co_node_init")
-        self.bus = bus
-        self.od = od
-        self._node = lib.canola_py_node_ptr(raw)
-        self._server: int | None = None
-
-    @property
-    def node_id(self) -> int:
-        return int(lib.co_node_id(self._node))
-
-    def start(self) -> None:
-        """Power on at the bus's current time (the boot-up frame goes out on the next run)."""
-        _check(lib.co_node_start(self._node, self.bus.now_us), "co_node_start")
-        self.bus.run_until(self.bus.now_us)
-
-    @property
-    def state(self) -> int:
-        """The NMT state (0 initialising, 4 stopped, 5 operational, 0x7F pre-operational)."""
-        return int(lib.co_nmt_state(self._node))
-
-    @property
-    def state_name(self) -> str:
-        return NMT_STATES.get(self.state, "unknown")
-
-    # ---- local access, as the network would do it
-
-    def read(self, index: int, sub: int, cap: int = 4096) -> bytes:
-        """Read an entry's wire value (access rights apply). Raises SdoAbort."""
-        buf = ffi.new("uint8_t[]", cap)
-        n = ffi.new("uint32_t *")
-        code = int(lib.co_node_read_net(self._node, index, sub, buf, cap, n))
-        if code:
-            raise SdoAbort(code)
-        return bytes(ffi.buffer(buf, int(n[0])))
-
-    def write(self, index: int, sub: int, data: bytes) -> None:
-        """Write an entry's wire value (access rights, length, limits). Raises SdoAbort."""
-        code = int(lib.co_node_write_net(self._node, index, sub, data, len(data)))
-        if code:
-            raise SdoAbort(code)
-
-    def get_uint(self, index: int, sub: int) -> int:
-        """The native value of an integer entry (application access)."""
-        out = ffi.new("uint64_t *")
-        _check(lib.co_node_get_uint(self._node, index, sub, out), "co_node_get_uint")
-        return int(out[0])
-
-    def set_uint(self, index: int, sub: int, value: int) -> None:
-        """Application write of an integer entry (no access rights). Raises SdoAbort."""
-        code = int(lib.co_node_set_uint(self._node, index, sub, value))
-        if code:
-            raise SdoAbort(code)
-
-    # ---- NMT master
-
-    def nmt(self, cmd: str | int, target: int = 0) -> None:
-        """Send an NMT command (``"start"``, ``"stop"``, ``"pre-operational"``,
-        ``"reset-node"``, ``"reset-communication"`` or the specifier) to ``target``
-        (0: all nodes) and let the bus deliver it."""
-        spec = NMT_CMDS[cmd] if isinstance(cmd, str) else cmd
-        _check(lib.co_nmt_send(self._node, spec, target), "co_nmt_send")
-        self.bus.run_until(self.bus.now_us)
-
-    # ---- SDO client (channel 0)
-
-    def _setup(self, server_id: int) -> None:
-        if self._server != server_id:
-            _check(lib.co_sdo_client_setup(self._node, 0, server_id), "co_sdo_client_setup")
-            self._server = server_id
-
-    def _wait(self, t: _Transfer, timeout_us: int, what: str) -> None:
-        deadline = self.bus.now_us + timeout_us
-        while not t.done and self.bus.now_us < deadline:
-            self.bus.run_until(min(self.bus.now_us + 1000, deadline))
-        if not t.done:
-            lib.co_sdo_client_abort(self._node, 0, 0x05040000)
-            raise Error(f"{what}: no completion within {timeout_us} us of simulated time")
-        if t.abort:
-            raise SdoAbort(t.abort)
-
-    def sdo_upload(self, server_id: int, index: int, sub: int, mode: SdoMode = "auto", *,
-                   cap: int = 4096, timeout_us: int = 10_000_000) -> bytes:
-        """Read (index, sub) of node ``server_id`` over SDO; runs the bus until done.
-
-        Raises SdoAbort on an abort, Error when the transfer does not end within
-        ``timeout_us`` of simulated time.
-        """
-        self._setup(server_id)
-        buf = ffi.new("uint8_t[]", cap)
-        t = _Transfer()
-        handle = ffi.new_handle(t)
-        _check(lib.co_sdo_upload(self._node, 0, index, sub, _MODES[mode], buf, cap,
-                                 lib.canola_py_sdo_done, handle), "co_sdo_upload")
-        self._wait(t, timeout_us, f"SDO upload 0x{index:04X} sub {sub} of node {server_id}")
-        return bytes(ffi.buffer(buf, t.length))
-
-    def sdo_download(self, server_id: int, index: int, sub: int, data: bytes,
-                     mode: SdoMode = "auto", *, timeout_us: int = 10_000_000) -> None:
-        """Write ``data`` to (index, sub) of node ``server_id`` over SDO; runs the bus
-        until done. Raises as :meth:`sdo_upload`."""
-        self._setup(server_id)
-        src = ffi.new("uint8_t[]", data)
-        t = _Transfer()
-        handle = ffi.new_handle(t)
-        _check(lib.co_sdo_download(self._node, 0, index, sub, _MODES[mode], src, len(data),
-                                   lib.canola_py_sdo_done, handle), "co_sdo_download")
-        self._wait(t, timeout_us, f"SDO download 0x{index:04X} sub {sub} of node {server_id}")

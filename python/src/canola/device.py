@@ -17,9 +17,9 @@ from __future__ import annotations
 import os
 
 from canola import eds
-from canola._core import lib
+from canola._c import check, lib
 from canola._engine import Bus
-from canola._nodebase import NodeBase, StoreRejectedEvent, check, load_od, nmt_command
+from canola._nodebase import NodeBase, StoreRejectedEvent, load_od, nmt_command
 from canola.errors import Error
 from canola.odgen import GenerateOptions
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola.device import Device
 from canola.errors import Error, SdoAbort
 
@@ -37,7 +37,7 @@ ABORT_TOO_LONG = 0x06070012
 _UNKNOWN = 0xFFFFFFFF
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_stream_read(handle: Any, offset: int, buf: Any, cap: int, n: Any,  # noqa: PLR0917
                           total: Any) -> int:
     stream: DomainStream = ffi.from_handle(handle)
@@ -54,7 +54,7 @@ def canola_py_stream_read(handle: Any, offset: int, buf: Any, cap: int, n: Any, 
     return 0
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_stream_write(handle: Any, offset: int, data: Any, n: int,  # noqa: PLR0917
                            total: int, last: bool) -> int:
     stream: DomainStream = ffi.from_handle(handle)

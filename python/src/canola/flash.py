@@ -16,13 +16,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola._waiting import Waiter
-from canola.core import _check
 from canola.errors import ABORT_TEXT, Error
 
 if TYPE_CHECKING:
-    from canola.master import Master
+    from canola._channels import SdoChannels
 
 __all__ = ["FlashError", "FlashResult", "flash"]
 
@@ -72,14 +72,14 @@ class _Download:
         self.bytes = 0
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_flash_progress(ctx: Any, done: int, total: int) -> None:
     d: _Download = ffi.from_handle(ctx)
     del total
     d.latest = max(d.latest, int(done))
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_flash_done(ctx: Any, result: Any) -> None:
     d: _Download = ffi.from_handle(ctx)
     d.stage = int(result.stage)
@@ -91,7 +91,7 @@ def canola_py_flash_done(ctx: Any, result: Any) -> None:
     d.waiter.wake()
 
 
-def flash(master: Master, node: int, data: bytes, *, progress: Progress | None = None,
+def flash(channels: SdoChannels, node: int, data: bytes, *, progress: Progress | None = None,
           program: int = 1, clear: bool = True, ident: int | None = None,
           timeout: float | None = None) -> FlashResult:
     """Download ``data`` as program ``program`` of ``node`` (see the module doc).
@@ -101,7 +101,7 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
     SDO step is bounded by the master's SDO time-out."""
     if isinstance(node, bool) or not isinstance(node, int) or not 1 <= node <= 127:
         raise Error(f"node-ID {node!r} is outside 1..127")
-    if node == master.node_id:
+    if node == channels.node_id:
         raise Error(f"node {node} is the master itself")
     if not isinstance(data, bytes | bytearray | memoryview):
         raise Error(f"the image is bytes, not {type(data).__name__}")
@@ -114,11 +114,11 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
         raise Error(f"identification {ident!r} is outside 0..0xFFFFFFFF")
     if timeout is not None and timeout <= 0:
         raise Error(f"timeout must be positive, got {timeout}")
-    engine = master._engine
+    engine = channels.engine
     waiter = Waiter(engine)
     waiter.check()
-    client = master.sdo(node)
-    if not client._busy.acquire(timeout=600):
+    busy = channels.lock_of(node)  # one transfer at a time to the node, Master.sdo's too
+    if not busy.acquire(timeout=600):
         raise Error(f"SDO client of node {node} stays busy")
     try:
         d = _Download(waiter, progress, len(image))
@@ -127,7 +127,7 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
         ffi.memmove(buf, image, len(image))
         state = ffi.new("co_flash_t *")
         with engine.locked() as c_node:
-            channel = master._channel(c_node, node)
+            channel = channels.channel(c_node, node)
             request = ffi.new("co_flash_request_t *", {
                 "channel": channel, "server": node, "program": program, "clear": clear,
                 "check_ident": ident is not None, "ident": ident or 0, "data": buf,
@@ -150,7 +150,7 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
             return d.done
 
         if not waiter.wait(finished, timeout):
-            master._abort(node)  # ends the step in progress: done runs with the abort
+            channels.abort(node)  # ends the step in progress: done runs with the abort
             waiter.wait(lambda: d.done, 5.0)
         if not d.done:  # pragma: no cover -- the core always completes on abort
             raise Error(f"program download to node {node} did not end")
@@ -159,4 +159,4 @@ def flash(master: Master, node: int, data: bytes, *, progress: Progress | None =
             raise FlashError(node, stage, d.abort, d.ident, d.bytes)
         return FlashResult(node, d.bytes, d.ident)
     finally:
-        client._busy.release()
+        busy.release()

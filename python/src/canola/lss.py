@@ -30,13 +30,13 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
 from canola._waiting import Waiter
-from canola.core import _check
 from canola.errors import Error
 
 if TYPE_CHECKING:
-    from canola.master import Master
+    from canola._engine import Engine
 
 __all__ = ["UNCONFIGURED", "FastscanTimeLimitError", "Lss", "LssAddress", "LssError"]
 
@@ -126,7 +126,7 @@ class _Call:
         self.address = LssAddress(0, 0, 0, 0)
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_lss_done(ctx: Any, result: Any) -> None:
     call: _Call = ffi.from_handle(ctx)
     call.status = int(result.status)
@@ -151,9 +151,8 @@ class Lss:
     """The LSS master of ``master`` (``master.lss``). One request at a time; every method
     blocks until the devices answered or the time-out passed."""
 
-    def __init__(self, master: Master, timeout_ms: int = 100) -> None:
-        self._master = master
-        self._engine = master._engine
+    def __init__(self, engine: Engine, timeout_ms: int = 100) -> None:
+        self._engine = engine
         self._waiter = Waiter(self._engine)
         self._lock = threading.Lock()
         self._timeout_ms = 0

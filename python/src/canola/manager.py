@@ -22,16 +22,14 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
-from canola._core import ffi, lib
+from canola._c import check as _check
+from canola._c import ffi, lib
+from canola._channels import SdoChannels, unset
 from canola._waiting import Waiter
-from canola.core import _check
 from canola.errors import ABORT_TEXT, Error
 from canola.network import Network
-
-if TYPE_CHECKING:
-    from canola.master import Master
 
 __all__ = ["BootEvent", "NetworkManager", "SlaveStatus", "boot"]
 
@@ -141,7 +139,7 @@ class SlaveStatus:
                 "index": self.index, "sub": self.sub, "value": self.value}
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_mgr_event(ctx: Any, event: Any) -> None:
     manager: NetworkManager = ffi.from_handle(ctx)
     reason = int(event.reason)
@@ -152,32 +150,20 @@ def canola_py_mgr_event(ctx: Any, event: Any) -> None:
         value=int(event.value)))
 
 
-_INVALID = (0x80000000).to_bytes(4, "little")
-
-
-def _unset_channel(node: Any, channel: int) -> None:
-    """Point SDO client channel ``channel`` at no server (0x1280 + channel), under the
-    lock; co_sdo_client_setup() gives it one again."""
-    for sub, data in ((1, _INVALID), (2, _INVALID), (3, b"\x00")):
-        lib.canola_py_app_write(node, 0x1280 + channel, sub, data, len(data))
-
-
 class NetworkManager:
-    """The manager of ``master`` for ``network`` (:meth:`canola.Master.boot` makes one).
+    """The manager for ``network`` on the master's node whose SDO client ``channels`` these
+    are (:meth:`canola.Master.boot` makes one). It uses a channel of its own (reserved
+    among ``channels``)."""
 
-    ``sdo_channel``: the master's SDO client channel it uses (default: a free one, kept
-    for the manager).
-    """
-
-    def __init__(self, master: Master, network: Network) -> None:
+    def __init__(self, channels: SdoChannels, network: Network) -> None:
         if not isinstance(network, Network):
             raise Error(f"a canola.network.Network is needed, not {type(network).__name__}")
-        own = network.slave(master.node_id)
+        own = network.slave(channels.node_id)
         if own is not None:
             raise Error(f"{network.source}: node {own.node_id} is the master itself")
-        self.master = master
+        self.channels = channels
         self.network = network
-        self._engine = master._engine
+        self._engine = channels.engine
         self._waiter = Waiter(self._engine)
         self._lock = threading.Lock()
         self.events: list[BootEvent] = []
@@ -237,7 +223,7 @@ class NetworkManager:
             startup |= lib.CO_MGR_NO_SELF_START
         with self._engine.locked() as node:
             self._release_clients(node)
-            channel = self._reserve_channel()
+            channel = self.channels.reserve()
             self._channel = channel
             config = ffi.new("co_manager_config_t *", {
                 "nmt_startup": startup, "slaves": self._slaves, "sdo_channel": channel,
@@ -248,17 +234,8 @@ class NetworkManager:
         self._started = True
 
     def _release_clients(self, node: Any) -> None:
-        """Free the master's SDO client channels to the slaves (under the lock): a server
-        is talked to by one client channel at a time, and the manager needs its own."""
-        channels: dict[int, int] = self.master._channels
-        for spec in self.network.slaves:
-            channel = channels.get(spec.node_id)
-            if channel is None:
-                continue
-            if lib.co_sdo_client_busy(node, channel):
-                raise Error(f"an SDO transfer to node {spec.node_id} is in progress")
-            _unset_channel(node, channel)
-            del channels[spec.node_id]
+        """Free the master's SDO client channels to the slaves (under the lock)."""
+        self.channels.release(node, [spec.node_id for spec in self.network.slaves])
 
     def _idle(self) -> None:
         """After a boot settled: the manager's channel lets go of the last slave, so that
@@ -266,22 +243,7 @@ class NetworkManager:
         boot)."""
         with self._engine.locked() as node:
             if self._settled_locked() and not lib.co_sdo_client_busy(node, self._channel):
-                _unset_channel(node, self._channel)
-
-    def _reserve_channel(self) -> int:
-        """An SDO client channel of the master for the manager (under the lock): the one
-        kept under key 0 (no SDO server has node-ID 0), else a free one."""
-        from canola.master import _CHANNELS  # noqa: PLC0415 -- master imports this module
-
-        channels: dict[int, int] = self.master._channels
-        if 0 in channels:
-            return channels[0]
-        used = set(channels.values())
-        free = [c for c in range(_CHANNELS) if c not in used]
-        if not free:
-            raise Error("no free SDO client channel for the manager")
-        channels[0] = free[-1]
-        return free[-1]
+                unset(node, self._channel)
 
     def _settled_locked(self) -> bool:
         states = [(spec, int(lib.co_manager_slave_state(self._mgr, spec.node_id)))
@@ -335,21 +297,18 @@ class NetworkManager:
         return [self.status(spec.node_id) for spec in self.network.slaves]
 
 
-def boot(master: Master, network: Network, *, on_event: Callable[[BootEvent], None] | None
-         = None, wait: bool = True, timeout: float | None = None) -> NetworkManager:
-    """Boot ``network`` with ``master`` (see :meth:`canola.Master.boot`)."""
-    previous: NetworkManager | None = getattr(master, "_manager", None)
+def boot(channels: SdoChannels, network: Network, previous: NetworkManager | None, *,
+         on_event: Callable[[BootEvent], None] | None = None, wait: bool = True,
+         timeout: float | None = None) -> NetworkManager:
+    """Boot ``network`` on the node of ``channels`` (see :meth:`canola.Master.boot`), unless
+    the ``previous`` boot is still in progress. The node points to the manager returned:
+    keep it alive as long as the node."""
     if previous is not None and previous._started and not previous.settled():
         raise Error("a network boot is in progress")
-    manager = NetworkManager(master, network)
+    manager = NetworkManager(channels, network)
     if on_event is not None:
         manager.on_event(on_event)
     manager.start()
-    # the node points to the manager: keep it (and the ones before) alive with the master
-    keep: list[NetworkManager] = getattr(master, "_managers", [])
-    keep.append(manager)
-    master._managers = keep  # type: ignore[attr-defined]
-    master._manager = manager  # type: ignore[attr-defined]
     if wait:
         manager.wait(timeout)
     return manager

@@ -44,18 +44,18 @@ from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola import eds, values
-from canola._core import ffi, lib
-from canola._engine import Bus, Frame, _Timer
+from canola._c import check, ffi, lib
+from canola._channels import SdoChannels, Transfer
+from canola._engine import Bus, Engine, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
     EmcyEvent,
     HeartbeatEvent,
     NodeBase,
-    check,
     load_od,
     nmt_command,
 )
-from canola.core import SimBus, _Transfer
+from canola.core import SimBus
 from canola.errors import Error, SdoAbort
 from canola.odgen import GenerateOptions
 
@@ -71,7 +71,6 @@ __all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoC
 #: Path of the master's default EDS inside the package.
 MASTER_EDS = str(resources.files("canola") / "data" / "master.eds")
 
-_CHANNELS = 16
 _EPOCH = dt.datetime(1984, 1, 1, tzinfo=dt.UTC)
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -90,18 +89,36 @@ class SdoTimeout(SdoAbort):
         return str(self.args[0])
 
 
-class _SdoTransfer(_Transfer):
+class _SdoTransfer(Transfer):
     def __init__(self, answer_ms: int) -> None:
         super().__init__()
         self.answer_ms = answer_ms  # time-out per answer; 0: the master's
-        self.event = threading.Event()
+        self.event: threading.Event | None = None  # made when a thread has to wait
         self.keep: list[Any] = []
         self.waker: Callable[[], None] | None = None
 
-    def notify(self) -> None:
-        self.event.set()
+    def notify(self) -> None:  # under the engine's lock
+        if self.event is not None:
+            self.event.set()
         if self.waker is not None:
             self.waker()
+
+    def wake_with(self, engine: Engine, waker: Callable[[], None]) -> bool:
+        """Call ``waker`` once the transfer is done; False when it is done already."""
+        with engine.lock:
+            if self.done:
+                return False
+            self.waker = waker
+            return True
+
+    def waitable(self, engine: Engine) -> threading.Event:
+        """The event :meth:`notify` sets (already set when the transfer is done)."""
+        with engine.lock:
+            if self.event is None:
+                self.event = threading.Event()
+                if self.done:
+                    self.event.set()
+            return self.event
 
 
 class SdoClient:
@@ -120,7 +137,8 @@ class SdoClient:
     def __init__(self, master: Master, node: int) -> None:
         self._master = master
         self.node = node
-        self._busy = threading.Lock()
+        self._busy = master._sdo.lock_of(node)
+        self._buf: Any = None
 
     # ---- blocking
 
@@ -167,12 +185,20 @@ class SdoClient:
 
     # ---- machinery
 
+    def _buffer(self, size: int) -> Any:
+        """The upload buffer: one per client, made again for another size (transfers of
+        a client are one at a time; the result is copied out before the next)."""
+        buf = self._buf
+        if buf is None or len(buf) != size:
+            buf = self._buf = ffi.new("uint8_t[]", size)
+        return buf
+
     def _start_upload(self, t: _SdoTransfer, index: int, sub: int, block: bool,
                       max_size: int) -> None:
         _check_address(index, sub)
         if not 1 <= max_size <= 0xFFFFFFFF:
             raise Error(f"max_size {max_size} is outside 1..2**32-1")
-        buf = ffi.new("uint8_t[]", max_size)
+        buf = self._buffer(max_size)
         handle = ffi.new_handle(t)
         t.keep[:] = [buf, handle]
         self._master._start(self.node, lambda node, ch: lib.co_sdo_upload(
@@ -236,18 +262,19 @@ class SdoClient:
                 begin = bus.now_us
                 while not t.done:
                     if limit is not None and bus.now_us - begin >= limit * 1e6:
-                        master._abort(self.node)
+                        master._sdo.abort(self.node)
                         break
                     bus.run_until(bus.now_us + 1000)
-            else:
+            elif not t.done:  # else answered at once: a node of the same bus object
                 end = None if limit is None else time.monotonic() + limit
-                while not t.event.wait(0.05):
+                event = t.waitable(engine)
+                while not event.wait(0.05):
                     if end is not None and time.monotonic() >= end:
-                        master._abort(self.node)  # completes the transfer with 0x05040000
-                        t.event.wait(5.0)
+                        master._sdo.abort(self.node)  # completes the transfer with 0x05040000
+                        event.wait(5.0)
                         break
                     if not engine.running:
-                        master._abort(self.node)
+                        master._sdo.abort(self.node)
                         raise Error("the master was stopped during an SDO transfer")
             if not t.done:  # pragma: no cover -- the core always completes on abort
                 raise SdoTimeout(self.node, self._timeout_ms(timeout, answer_ms))
@@ -278,8 +305,9 @@ class SdoClient:
                     loop.call_soon_threadsafe(resolve)
 
             t = _SdoTransfer(answer_ms)
-            t.waker = wake
             start(t, *args)
+            if t.done or not t.wake_with(master._engine, wake):
+                return self._finish(t, timeout)  # answered at once: same bus object
             try:
                 end = None if timeout is None else loop.time() + timeout
                 while not fut.done():
@@ -287,34 +315,18 @@ class SdoClient:
                         await asyncio.wait_for(asyncio.shield(fut), 0.05)
                     except TimeoutError:
                         if end is not None and loop.time() >= end:
-                            master._abort(self.node)  # completes it with 0x05040000
+                            master._sdo.abort(self.node)  # completes it with 0x05040000
                             end = None
                         elif not master._engine.running:
-                            master._abort(self.node)
+                            master._sdo.abort(self.node)
                             raise Error("the master was stopped during an SDO transfer") \
                                 from None
             except asyncio.CancelledError:
-                master._abort(self.node)  # ends the transfer before the channel is reused
+                master._sdo.abort(self.node)  # ends the transfer before the channel is reused
                 raise
             return self._finish(t, timeout)
         finally:
             self._busy.release()
-
-
-def _server(node: Any, channel: int) -> int:
-    """Whom client channel ``channel`` of the C node talks to now, by its COB-IDs in
-    0x1280 + channel: node n (0x600 + n, 0x580 + n), 0 for nobody (not valid), -1 for
-    COB-IDs of someone else's choosing."""
-    value = ffi.new("uint64_t *")
-    cobs = []
-    for sub in (1, 2):
-        if lib.co_node_get_uint(node, 0x1280 + channel, sub, value) != lib.CO_OK:
-            return 0
-        cobs.append(int(value[0]))
-    if any(cob >> 31 for cob in cobs):
-        return 0
-    n = cobs[0] - 0x600
-    return n if 1 <= n <= 127 and cobs[1] == 0x580 + n else -1
 
 
 def _check_address(index: int, sub: int) -> None:
@@ -349,11 +361,13 @@ class Master(NodeBase):
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms, store_dir=None,
                          raw_frames=True, quiet=not announce)
         self._clients: dict[int, SdoClient] = {}
-        self._channels: dict[int, int] = {}  # node -> client channel
+        self._sdo = SdoChannels(self._engine)
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
-        self._engine.add_frame_listener(self._frame)
         self._time_timer: _Timer | None = None
+        self._lss: Lss | None = None
+        self._manager: NetworkManager | None = None
+        self._managers: list[NetworkManager] = []  # the node points to them: kept alive
 
     def __enter__(self) -> Master:
         self.start()
@@ -387,50 +401,17 @@ class Master(NodeBase):
                answer_ms: int = 0) -> None:
         """Start a transfer on the channel of ``node_id``, whose time-out per answer is
         ``answer_ms`` (0: ``sdo_timeout_ms``)."""
-        with self._engine.locked() as node:
-            channel = self._channel(node, node_id)
+        def start(node: Any) -> int:
+            channel = self._sdo.channel(node, node_id)
             check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
                   "co_sdo_client_set_timeout")
-            err = int(begin(node, channel))
-        check(err, f"{what} of node {node_id}")
+            return int(begin(node, channel))
+        check(self._engine.call(start), f"{what} of node {node_id}")
 
-    def _channel(self, node: Any, node_id: int) -> int:
-        """The client channel talking to ``node_id`` (under the lock). The table is a
-        memo of the core's channels, checked on every use: a reset communication of the
-        master (an NMT command from anyone) reloads 0x1280.. from their power-on values,
-        and an SDO client may write them."""
-        channel = self._channels.get(node_id)
-        if channel is not None and _server(node, channel) == node_id:
-            return channel
-        self._channels = {n: c for n, c in self._channels.items()
-                          if n == 0 or _server(node, c) == n}  # 0: the manager's channel
-        used = set(self._channels.values())
-        servers = {c: _server(node, c) for c in range(_CHANNELS) if c not in used}
-        for c, server in servers.items():  # set up to it by someone else (0x1280 written)
-            if server == node_id:
-                self._channels[node_id] = c
-                return c
-        free = [c for c, server in servers.items() if server == 0]
-        if not free:  # take the channel of a node that has no transfer open
-            for other, c in list(self._channels.items()):
-                if not lib.co_sdo_client_busy(node, c):
-                    del self._channels[other]
-                    free = [c]
-                    break
-        if not free:
-            raise Error(f"all {_CHANNELS} SDO client channels are busy")
-        channel = free[0]
-        check(int(lib.co_sdo_client_setup(node, channel, node_id)), "co_sdo_client_setup")
-        self._channels[node_id] = channel
-        return channel
-
-    def _abort(self, node_id: int) -> None:
-        channel = self._channels.get(node_id)
-        if channel is None:
-            return
-        with self._engine.locked() as node:
-            if lib.co_sdo_client_busy(node, channel):
-                lib.co_sdo_client_abort(node, channel, 0x05040000)
+    @property
+    def _channels(self) -> dict[int, int]:
+        """Server node-ID -> SDO client channel (see :class:`canola._channels.SdoChannels`)."""
+        return self._sdo.table
 
     # ---- heartbeat consumer, boot-up, EMCY consumer
 
@@ -452,6 +433,7 @@ class Master(NodeBase):
 
     def on_bootup(self, fn: F) -> F:
         """``fn(node)`` for every boot-up frame (any node, monitored or not)."""
+        self._listen()
         self._bootup_cbs.append(fn)
         return fn
 
@@ -460,8 +442,15 @@ class Master(NodeBase):
     def on_frame(self, fn: F, cob_id: int | None = None) -> F:
         """``fn(Frame)`` for every frame other nodes send (or only those on ``cob_id``):
         TPDOs of devices, for instance."""
+        self._listen()
         self._frame_cbs.append((cob_id, fn))
         return fn
+
+    def _listen(self) -> None:
+        """Frames of other nodes come to :meth:`_frame` from the first callback on (a
+        master nobody asks for them does not pay for them)."""
+        if not self._bootup_cbs and not self._frame_cbs:
+            self._engine.add_frame_listener(self._frame)
 
     def _frame(self, frame: Frame) -> None:  # runs outside the lock, in order
         if 0x701 <= frame.can_id <= 0x77F and frame.data == b"\x00" and not frame.rtr:
@@ -556,17 +545,21 @@ class Master(NodeBase):
         if not isinstance(network, net.Network):
             paths = [network] if isinstance(network, str | os.PathLike) else list(network)
             network = net.from_files(paths, node_id_of_master=self.node_id)
-        return manager.boot(self, network, on_event=on_event, wait=wait, timeout=timeout)
+        mgr = manager.boot(self._sdo, network, self._manager, on_event=on_event, wait=wait,
+                           timeout=timeout)
+        if mgr is not self._manager:
+            self._managers.append(mgr)
+            self._manager = mgr
+        return mgr
 
     @property
     def lss(self) -> Lss:
         """The LSS master (CiA 305): fastscan, set_node_id, inquire. See :mod:`canola.lss`."""
         from canola.lss import Lss  # noqa: PLC0415
 
-        lss: Lss | None = getattr(self, "_lss", None)
-        if lss is None:
-            lss = self._lss = Lss(self)
-        return lss
+        if self._lss is None:
+            self._lss = Lss(self._engine)
+        return self._lss
 
     def flash(self, node: int, data: bytes, *, progress: Callable[[int, int], None] | None
               = None, program: int = 1, clear: bool = True, ident: int | None = None,
@@ -576,7 +569,7 @@ class Master(NodeBase):
         :mod:`canola.flash`."""
         from canola.flash import flash  # noqa: PLC0415
 
-        return flash(self, node, data, progress=progress, program=program, clear=clear,
+        return flash(self._sdo, node, data, progress=progress, program=program, clear=clear,
                      ident=ident, timeout=timeout)
 
     def wait(self, seconds: float) -> None:

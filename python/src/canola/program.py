@@ -22,7 +22,7 @@ import zlib
 from collections.abc import Callable
 from typing import Any
 
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola.device import Device
 from canola.errors import Error
 
@@ -34,7 +34,7 @@ ABORT_HARDWARE = 0x06060000
 _COMMANDS = {0: "stop", 1: "start", 2: "reset", 3: "clear"}
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_prog_write(ctx: Any, offset: int, data: Any, n: int, total: int,  # noqa: PLR0917
                          last: bool) -> int:
     slot: ProgramSlot = ffi.from_handle(ctx)
@@ -45,7 +45,7 @@ def canola_py_prog_write(ctx: Any, offset: int, data: Any, n: int, total: int,  
         return ABORT_GENERAL
 
 
-@ffi.def_extern()  # type: ignore[untyped-decorator]
+@ffi.def_extern()
 def canola_py_prog_control(ctx: Any, command: int) -> int:
     slot: ProgramSlot = ffi.from_handle(ctx)
     try:

@@ -22,7 +22,7 @@ import argparse
 import asyncio
 from collections.abc import Callable
 
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola._nodebase import EmcyEvent, HeartbeatEvent, nmt_command
 from canola.core import SimBus
 from canola.errors import Error, SdoAbort

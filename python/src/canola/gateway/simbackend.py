@@ -1,6 +1,6 @@
 """A :class:`~canola.gateway.backend.Backend` over a canola.core node on a simulated bus.
 
-The master is a :class:`canola.core.Node` on a :class:`canola.core.SimBus`; its SDO client
+The master is a :class:`canola.simnode.Node` on a :class:`canola.core.SimBus`; its SDO client
 runs the bus (virtual time) until a transfer is done, so transfers take no wall time and
 are never left half-way. :meth:`SimBackend.advance` moves virtual time on and reports the
 frames seen since as events (boot-up, heartbeat, EMCY); :meth:`SimBackend.run` does that
@@ -14,13 +14,14 @@ import contextlib
 import time
 from collections.abc import Callable, Iterator
 
-from canola._core import ffi, lib
+from canola._c import ffi, lib
 from canola._nodebase import nmt_command
-from canola.core import Node, SimBus
+from canola.core import SimBus
 from canola.errors import Error, SdoAbort
 from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat, Listener, Listeners, LssOp
 from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.requests import NmtCommand
+from canola.simnode import Node
 
 __all__ = ["NMT_NAMES", "SimBackend", "frame_event"]
 

@@ -1,0 +1,163 @@
+/* The binding layer between the core and the Python package (canola._core, built by
+ * python/src/canola/_build_core.py with cffi): what Python allocates, and the C ends of
+ * the callbacks that go to Python.
+ *
+ * The core never allocates; these helpers do (one calloc per bus, node, program or
+ * stream), which is what a binding layer is allowed to do. Every function here is
+ * declared again, for cffi, in _build_core.py's CDEF.
+ *
+ * One kind of node, canola_py_dev_t (canola.Device, canola.Master, canola.simnode.Node):
+ * every callback routed to Python, on a simulated bus or on a python-can bus through a
+ * link (canola_py_link_t), which joins the devs on one python-can bus object: a frame one
+ * of them sends is delivered to the others in C, at once, and queued for python-can. */
+#ifndef CANOLA_PY_H
+#define CANOLA_PY_H
+
+#include "canola/canola.h"
+#include "canola/file_storage.h"
+#include "canola/sim.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* ---- callbacks into Python (cffi defines them: extern "Python+C" in the CDEF) */
+
+void canola_py_trace(void *ctx, const char *line);
+void canola_py_sdo_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
+void canola_py_on_state(void *user, co_nmt_state_t state);
+void canola_py_on_errctl(void *user, const co_ec_event_t *event);
+void canola_py_on_error(void *user, co_node_error_t error);
+void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
+void canola_py_on_sync(void *user, uint8_t counter);
+void canola_py_on_time(void *user, const co_time_of_day_t *time);
+void canola_py_on_rpdo(void *user, uint16_t rpdo);
+void canola_py_written(void *ctx, const co_od_entry_t *entry);
+void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
+co_abort_t canola_py_prog_write(void *ctx, uint32_t offset, const uint8_t *data, uint32_t n,
+                                uint32_t total, bool last);
+co_abort_t canola_py_prog_control(void *ctx, uint8_t command);
+co_abort_t canola_py_stream_read(void *handle, uint32_t offset, uint8_t *buf, uint32_t cap,
+                                 uint32_t *n, uint32_t *total);
+co_abort_t canola_py_stream_write(void *handle, uint32_t offset, const uint8_t *data, uint32_t n,
+                                  uint32_t total, bool last);
+
+/* ---- the simulated bus (py_sim.c) */
+
+co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
+void canola_py_bus_free(co_sim_bus_t *bus);
+uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
+
+/* ---- canola.Device / canola.Master (py_dev.c) */
+
+typedef struct canola_py_link canola_py_link_t;
+
+/* Frames a dev sent on the simulated bus that its raw port has not seen come back. */
+#define CANOLA_PY_OWN_FRAMES 64
+
+typedef struct canola_py_dev {
+    co_node_t node;
+    co_sim_port_t port;
+    co_sim_port_t raw;
+    co_file_storage_t fs;
+    co_od_hooks_t hooks;
+    void *user;
+    bool sim;        /* on the simulated bus, else on a link (python-can) */
+    bool quiet;      /* a tool, not a network member: no boot-up, heartbeat or guarding answer */
+    bool raw_frames; /* on a link: the frames of the others go to canola_py_raw_rx too */
+    bool active;     /* on a link: receives and is polled (canola.Device.start .. stop) */
+    canola_py_link_t *link;
+    /* the raw port skips the node's own frames (python-can does not hand a bus its own
+     * frames either) */
+    co_frame_t own[CANOLA_PY_OWN_FRAMES];
+    uint32_t own_head, own_count;
+} canola_py_dev_t;
+
+/* A node with every callback routed to Python (`user` is the Python object's handle), on
+ * the simulated bus `bus` (with a raw port that sees every frame when `raw_port`), or on
+ * `link` (bus NULL). NULL with *err set when out of memory or the storage folder fails;
+ * otherwise *err is co_node_init's result (the dev must then be kept, not used). */
+canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
+                                   co_od_entry_t *entries, uint32_t count, uint8_t node_id,
+                                   uint16_t sdo_timeout_ms, const char *store_dir, bool raw_port,
+                                   void *user, co_err_t *err);
+void canola_py_dev_free(canola_py_dev_t *dev);
+co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+/* The application changed the node between two runs of the simulated bus: poll it at the
+ * next instant the bus runs (its deadline may have moved). */
+void canola_py_dev_touch(canola_py_dev_t *dev);
+void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
+
+/* Application access: no access rights; writes take the node's path (limits, service
+ * checks, event-driven TPDOs mapping the entry). */
+co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                              uint32_t cap, uint32_t *len, uint8_t *type);
+co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                               uint32_t len);
+
+/* ---- a python-can bus object and the devs on it (py_link.c) */
+
+/* Room for frames sent during one run of the link (python-can takes them after it). */
+#define CANOLA_PY_LINK_FRAMES 512
+#define CANOLA_PY_LINK_DEVS 128
+
+struct canola_py_link {
+    canola_py_dev_t *devs[CANOLA_PY_LINK_DEVS];
+    uint32_t dev_count;
+    /* frames sent, in order: [0, delivered) went to the other devs already; Python takes
+     * [0, count) to python-can after each run and empties the queue */
+    co_frame_t frames[CANOLA_PY_LINK_FRAMES];
+    canola_py_dev_t *senders[CANOLA_PY_LINK_FRAMES];
+    uint32_t count, delivered;
+    bool refused;    /* a tx found the queue full: the core keeps the frame, poll again */
+    uint64_t due_us; /* the earliest deadline of the active devs at the last poll */
+};
+
+canola_py_link_t *canola_py_link_new(void);
+void canola_py_link_free(canola_py_link_t *link);
+co_err_t canola_py_link_attach(canola_py_link_t *link, canola_py_dev_t *dev);
+void canola_py_link_detach(canola_py_link_t *link, canola_py_dev_t *dev);
+/* A dev's tx on its link: queue the frame (CO_ERR_BUSY when the queue is full). */
+co_err_t canola_py_link_tx(canola_py_dev_t *dev, const co_frame_t *frame);
+/* A dev receives and is polled (true) or is left alone (false, stopped). */
+void canola_py_dev_set_active(canola_py_dev_t *dev, bool active);
+/* The dev's frames from others go to canola_py_raw_rx too (a master's frame listeners). */
+void canola_py_dev_set_raw(canola_py_dev_t *dev, bool raw);
+/* A frame from python-can: every active dev ingests it, then the link runs. */
+void canola_py_link_ingest(canola_py_link_t *link, uint64_t now_us, const co_frame_t *frame);
+/* Poll every active dev, then run the link; the earliest deadline of them. */
+uint64_t canola_py_link_poll(canola_py_link_t *link, uint64_t now_us);
+/* Deliver the queued frames to the other active devs, what they answer too, and poll
+ * the active devs after each round until none is left; the number of frames queued for
+ * python-can. A frame reaches every dev but its sender, in the order they were sent. */
+uint32_t canola_py_link_run(canola_py_link_t *link, uint64_t now_us);
+/* Python sent the queue: empty it; true when a tx was refused meanwhile (poll again). */
+bool canola_py_link_clear(canola_py_link_t *link);
+
+/* ---- program download, device side, on a canola.Device (py_prog.c) */
+
+typedef struct canola_py_prog canola_py_prog_t;
+/* Hook program `program` (sub-index of 0x1F50/51/56/57) of the entries; NULL when 0x1F50
+ * or 0x1F51 lacks that sub-index (or no memory). The entries keep pointing to the result:
+ * free it only with them. */
+canola_py_prog_t *canola_py_prog_new(co_od_entry_t *entries, uint32_t count, uint8_t program,
+                                     bool running, uint32_t ident, void *handle);
+void canola_py_prog_free(canola_py_prog_t *p);
+void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident);
+uint32_t canola_py_prog_ident(const canola_py_prog_t *p);
+uint32_t canola_py_prog_status(const canola_py_prog_t *p);
+uint8_t canola_py_prog_state(const canola_py_prog_t *p);
+/* Bytes a client channel's transfer has moved so far (the server acknowledged, for a
+ * block download): program download progress sampled by the waiting thread. */
+uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel);
+
+/* ---- streamed DOMAIN entries of a canola.Device (py_stream.c) */
+
+typedef struct canola_py_stream canola_py_stream_t;
+/* Stream DOMAIN entry (index, sub) through Python (canola.domain.DomainStream): any size,
+ * no buffer. NULL when the entry is missing, not a DOMAIN, or no memory. The entry keeps
+ * pointing to the result: free it only with it. */
+canola_py_stream_t *canola_py_stream_new(co_od_entry_t *entries, uint32_t count, uint16_t index,
+                                         uint8_t sub, void *handle);
+void canola_py_stream_free(canola_py_stream_t *s);
+
+#endif
