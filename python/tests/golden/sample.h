@@ -15,8 +15,8 @@
 
 #include "canola/od.h"
 
-#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 3
-#error "sample.h was generated for object dictionary format 3: regenerate it with the odgen of this canola"
+#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 4
+#error "sample.h was generated for object dictionary format 4: regenerate it with the odgen of this canola"
 #endif
 
 #ifdef __cplusplus
