@@ -31,14 +31,14 @@ static const co_od_limits_t k_limits[] = {
 
 /* Records: position (2 bytes), length (1), wire bytes; trailing zeros left out. */
 static const uint8_t k_image[] = {
-    0, 0, 2, 0x91, 0x01,             /* 0x1000: 0x191 */
-    1, 0, 2, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
-    2, 0, 3, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
-    3, 0, 4, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
-    4, 0, 2, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
-    5, 0, 2, 'h', 'i',               /* 0x2004: "hi" */
-    6, 0, 2, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
-    0xFF, 0xFF, 0,                   /* end */
+    0,    0,    2, 0x91, 0x01,             /* 0x1000: 0x191 */
+    1,    0,    2, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
+    2,    0,    3, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    3,    0,    4, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
+    4,    0,    2, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
+    5,    0,    2, 'h',  'i',              /* 0x2004: "hi" */
+    6,    0,    2, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
+    0xFF, 0xFF, 0,                         /* end */
 };
 
 #define ENTRY(idx, t, a, sz, val)                                                                  \
@@ -71,7 +71,10 @@ static co_od_entry_t entries[] = {
 
 static co_od_t make_od(void)
 {
-    co_od_t od = {.entries = entries, .count = COUNT, .defaults = k_image, .limits = k_limits,
+    co_od_t od = {.entries = entries,
+                  .count = COUNT,
+                  .defaults = k_image,
+                  .limits = k_limits,
                   .limits_count = 2};
     memset(&v, 0x5A, sizeof v);
     v.log.data = v.log_data;
@@ -125,8 +128,8 @@ static void test_domain_without_record_kept(void)
     od.defaults = empty;
     v.log.len = 3;
     co_od_reset(&od, 0x0000, 0xFFFF, 0);
-    CHECK_EQ(v.log.len, 3u);  /* a DOMAIN without a power-on value keeps its own */
-    CHECK_EQ(v.offset, 0);    /* every other value: zero */
+    CHECK_EQ(v.log.len, 3u); /* a DOMAIN without a power-on value keeps its own */
+    CHECK_EQ(v.offset, 0);   /* every other value: zero */
     CHECK_EQ(v.name[0], 0);
     od.defaults = NULL; /* no image at all: zeros */
     v.device_type = 7;
@@ -170,8 +173,8 @@ static void test_validate_limits_and_image(void)
     static const uint8_t out_of_order[] = {3, 0, 1, 1, 1, 0, 1, 1, 0xFF, 0xFF, 0};
     static const uint8_t past_table[] = {8, 0, 1, 1, 0xFF, 0xFF, 0};
     static const uint8_t string_cap[] = {5, 0, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0xFF, 0xFF, 0};
-    static const uint8_t long_form[] = {5, 0, 255, 8, 0, 'a', 'b', 'c', 'd',
-                                        'e', 'f', 'g', 'h', 0xFF, 0xFF, 0};
+    static const uint8_t long_form[] = {5,   0,   255, 8,   0,   'a',  'b',  'c',
+                                        'd', 'e', 'f', 'g', 'h', 0xFF, 0xFF, 0};
     od = make_od();
     od.defaults = too_long;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);

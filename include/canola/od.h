@@ -238,9 +238,11 @@ typedef struct co_od {
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
  *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
  *  every entry with an empty slot left (keys and hash not in a core built for size, which
- *  does not use them: see co_od_t). Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
- *  to the offending entry's position, or to `count` for a bad hash, when `bad` is not
- *  NULL). O(n) plus O(slots). */
+ *  does not use them: see co_od_t); in the compact form also every limits number within
+ *  co_od_t.limits and the power-on values' records in entry order, each fitting its entry.
+ *  Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's position, or
+ *  to `count` for a bad hash or a record past the table, when `bad` is not NULL). O(n)
+ *  plus O(slots). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),
@@ -307,7 +309,9 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /** Copy power-on values into every entry with index in [first, last] that has a default
  *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
- *  O(entries in range). */
+ *  O(entries in range). The compact form: every entry in the range but a DOMAIN is zeroed,
+ *  then given its record of co_od_t.defaults, if any (O(entries in range + records before
+ *  the range's end)). */
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
 
 /* ---- Native access for the application and the services (no access rules, no hooks,

@@ -12,10 +12,20 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   become a nested struct whose members are their sub-indices, sub-index 0 included (a plain
   UNSIGNED8 entry as the EDS describes it).
 - ``<name>_values``: the one static instance that holds the RAM values, zero-initialised;
-  ``<name>_od``: a const ``co_od_t`` whose const entry table points into it. Power-on values
-  are a const ``<name>_values_t`` in the ``.c`` file; call ``co_od_reset(&<name>_od, 0x0000,
-  0xFFFF, node_id)`` once before use. One node per generated dictionary: generate again under
-  another name for a second node in the same program.
+  ``<name>_od``: a const ``co_od_t`` whose const entry table points into it. Call
+  ``co_od_reset(&<name>_od, 0x0000, 0xFFFF, node_id)`` once before use. One node per
+  generated dictionary: generate again under another name for a second node in the same
+  program.
+- The ``.c`` file holds the tables in both forms of ``canola/od.h``, chosen by the core's
+  ``CO_CONFIG_OD_COMPACT`` (the dictionary and the library must agree, as for every
+  configuration value). The compact form (1), the smaller: 12-byte entries (32-bit
+  targets: value pointer, index, 16-bit size, sub-index, type, attributes, limits number),
+  the power-on values as one byte image ``k_defaults`` (a record per entry whose value is
+  not all zeros: position, length, wire bytes; see ``co_od_t.defaults``), the distinct
+  limits once each in ``k_limits``. The general form (0): 28-byte entries with pointers to
+  the value, its power-on value in a const ``<name>_values_t``, its limits and hooks
+  (NULL), and the dense key array ``k_keys``. Both share the look-up hash ``k_hash``, left
+  out where the core does not read it (``CO_SHORT_PATHS`` 0, a build for size).
 - Power-on values come from ``ParameterValue`` when present (DCF), else ``DefaultValue``,
   else zero / empty. A value using ``$NODEID`` is stored without the node-ID and the entry
   gets ``CO_OD_NODEID``: ``co_od_reset`` adds the node-ID (``$NODEID+0x180`` -> 0x180).
@@ -446,7 +456,8 @@ def _header(name: str, source: str, struct: list[str], skipped: Sequence[eds.Var
         " *",
         f" * {name}_values holds every value in RAM (one static instance: one node per",
         f" * generated dictionary); {name}_od is a const table (it can live in flash) whose",
-        f" * entries point into {name}_values and at const power-on values. The values start",
+        f" * entries point into {name}_values, in either form of canola/od.h (the core's",
+        " * CO_CONFIG_OD_COMPACT chooses; the compact one is the smaller). The values start",
         f" * at zero: call co_od_reset(&{name}_od, 0x0000, 0xFFFF, node_id) once before use;",
         " * entries whose EDS default uses $NODEID (CO_OD_NODEID) get the node-ID added then.",
         *_skipped_note(skipped),

@@ -3,7 +3,8 @@
  *
  * sample_values holds every value in RAM (one static instance: one node per
  * generated dictionary); sample_od is a const table (it can live in flash) whose
- * entries point into sample_values and at const power-on values. The values start
+ * entries point into sample_values, in either form of canola/od.h (the core's
+ * CO_CONFIG_OD_COMPACT chooses; the compact one is the smaller). The values start
  * at zero: call co_od_reset(&sample_od, 0x0000, 0xFFFF, node_id) once before use;
  * entries whose EDS default uses $NODEID (CO_OD_NODEID) get the node-ID added then.
  * DOMAIN entries left out (generated with --domain-size 0); the application
