@@ -213,9 +213,9 @@ typedef struct co_od {
      *  writes the records' values (numbers through their wire form, so the image does not
      *  depend on the target's byte order). NULL: every value resets to zero. */
     const uint8_t *defaults;
-    /** The limits that entries refer to (co_od_entry_t.limits: 1 + position), or NULL. */
+    /** The limits that entries refer to (co_od_entry_t.limits: 1 + position), or NULL;
+     *  limits_count of them (below). */
     const co_od_limits_t *limits;
-    uint8_t limits_count;
 #else
     /** Optional (NULL: look-up searches the entries): keys[i] = CO_OD_KEY of entries[i].
      *  A dense array of 4 bytes per entry that the binary search walks instead of the
@@ -233,6 +233,9 @@ typedef struct co_od {
      * emits it; co_od_hash_build builds one at run time; co_od_validate checks it. */
     const uint16_t *hash;
     uint16_t hash_mask; /**< slots - 1: 2^bits - 1 with 1 <= bits <= 16 */
+#if CO_CONFIG_OD_COMPACT
+    uint8_t limits_count; /**< limits in `limits` (here: no padding after hash_mask) */
+#endif
 } co_od_t;
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
