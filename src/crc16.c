@@ -9,7 +9,8 @@
  * Eight bytes a step with CO_CONFIG_CRC16_FAST (4 KiB of const tables, about 3
  * instructions a byte), two otherwise (1 KiB, about 7).
  */
-#include "sdo_internal.h"
+#include "crc16.h"
+#include "build.h" /* CO_CONFIG_CRC16_FAST */
 
 #if CO_CONFIG_CRC16_FAST
 #define CRC16_SLICES 8

@@ -2,7 +2,7 @@
  * emcy_queue.c -- the EMCY inhibit time (0x1015, units of 100 us): frames raised faster
  * wait in a queue of CO_EMCY_QUEUE_LEN and leave one inhibit time apart, and frames raised
  * while the NMT state holds EMCY back leave on entering pre-operational or operational.
- * Left out with CO_EMCY_QUEUE_LEN 0 (internal.h: every frame then leaves at once).
+ * Left out with CO_EMCY_QUEUE_LEN 0 (emcy_internal.h: every frame then leaves at once).
  */
 #include <string.h>
 

@@ -155,7 +155,8 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 
 /* ---- time */
 
-static uint64_t poll_due(co_node_t *node, uint64_t now_us)
+/* Out of line: co_node_poll's idle path (below) then saves no registers. */
+static CO_FAST_NOINLINE uint64_t poll_due(co_node_t *node, uint64_t now_us)
 {
     node->now_us = now_us;
     if (node->txq_count) {

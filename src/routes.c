@@ -37,117 +37,93 @@ static uint16_t kind_service(uint8_t kind)
     }
 }
 
-/* The place of the route of `kind` and `slot`, or route_count when it has none. */
-static uint16_t owned(const co_node_t *node, uint8_t kind, uint8_t slot)
+/* The route of `kind` and `slot`, or NULL when it has none. */
+static co_route_t *owned(co_node_t *node, uint8_t kind, uint8_t slot)
 {
-    uint16_t i = 0;
-    while (i < node->route_count &&
-           (node->routes[i].kind != kind || node->routes[i].slot != slot)) {
-        i++;
-    }
-    return i;
-}
-
-/* Route `r` comes before (key, kind, slot). */
-static bool before(const co_route_t *r, uint32_t key, uint8_t kind, uint8_t slot)
-{
-    if (r->key != key) {
-        return r->key < key;
-    }
-    return r->kind != kind ? r->kind < kind : r->slot < slot;
-}
-
-static void remove_at(co_node_t *node, uint16_t at)
-{
-    node->route_count--;
-    for (uint16_t i = at; i < node->route_count; i++) {
-        co_copy(&node->routes[i], &node->routes[i + 1u], sizeof node->routes[0]);
-    }
-}
-
-/* The set of routes changed: the hint starts over at the first route (the first of its key,
- * as a hint must be), and the driver hears of it. */
-static void changed(co_node_t *node)
-{
-    node->route_hint = 0;
-    if (node->cfg.driver.on_routes_changed) {
-        node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
-    }
-}
-
-/* Insert a route where its order puts it (the caller made room). */
-static void insert(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
-{
-    /* Insertion keeps the array sorted; n is small and this runs only on changes. */
-    uint16_t at = node->route_count;
-    while (at > 0 && !before(&node->routes[at - 1u], key, kind, slot)) {
-        co_copy(&node->routes[at], &node->routes[at - 1u], sizeof node->routes[0]);
-        at--;
-    }
-    /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
-    co_route_t *r = &node->routes[at];
-    r->key = key;
-    r->service = kind_service(kind);
-    r->kind = kind;
-    r->slot = slot;
-    node->route_count++;
-    /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
-    node->route_groups |= co_route_group(key);
-}
-
-/* Route `at` moves to `key` (its place in the order with it). */
-static void rekey(co_node_t *node, uint16_t at, uint32_t key)
-{
-    uint8_t kind = node->routes[at].kind;
-    uint8_t slot = node->routes[at].slot;
-    remove_at(node, at);
-    insert(node, key, kind, slot);
-}
-
-/* The owner of `key` went: the first that waits behind it (the lowest kind: the order puts
- * it first) takes the frames. */
-static void next_owner(co_node_t *node, uint32_t key)
-{
-    for (uint16_t i = 0; i < node->route_count; i++) {
-        if (node->routes[i].key == (key | SHADOW)) {
-            rekey(node, i, key);
-            return;
+    for (co_route_t *r = node->routes; r < node->routes + node->route_count; r++) {
+        if (r->kind == kind && r->slot == slot) {
+            return r;
         }
     }
+    return NULL;
 }
 
-/* A new route of `key`: it takes the frames, unless an owner of a lower kind has them. */
-static void add(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
+/* Route `a` comes before route `b` among the owners of one key: the lower kind, then slot. */
+static bool lower(const co_route_t *a, const co_route_t *b)
 {
-    if (node->route_count >= CO_RX_ROUTES_MAX) {
-        return; /* a full table drops the route */
+    return a->kind != b->kind ? a->kind < b->kind : a->slot < b->slot;
+}
+
+/* The routes of `key` (none: CO_ROUTE_OFF, which no masked key equals): the lowest takes
+ * the frames, the others wait behind it, their key marked SHADOW. */
+static void settle(co_node_t *node, uint32_t key)
+{
+    co_route_t *owner = NULL;
+    for (co_route_t *r = node->routes; r < node->routes + node->route_count; r++) {
+        if ((r->key & ~SHADOW) == key) {
+            r->key = key | SHADOW;
+            owner = owner == NULL || lower(r, owner) ? r : owner;
+        }
     }
-    const co_route_t *owner = co_routes_find(node, key);
-    if (owner != NULL && !before(owner, key, kind, slot)) {
-        rekey(node, (uint16_t)(owner - node->routes), key | SHADOW); /* it waits now */
-        owner = NULL;
+    if (owner != NULL) {
+        owner->key = key;
     }
-    insert(node, owner != NULL ? key | SHADOW : key, kind, slot);
+}
+
+/* The routes in their order again (key, then kind and slot): an insertion sort, as few
+ * routes are out of place and this runs only on changes. (co_copy, not struct copies: those
+ * would call memcpy on Cortex-M0.) */
+static void sort(co_node_t *node)
+{
+    for (uint16_t i = 1; i < node->route_count; i++) {
+        co_route_t r;
+        co_copy(&r, &node->routes[i], sizeof r);
+        uint16_t at = i;
+        for (; at > 0; at--) {
+            const co_route_t *prev = &node->routes[at - 1u];
+            if (prev->key < r.key || (prev->key == r.key && lower(prev, &r))) {
+                break;
+            }
+            co_copy(&node->routes[at], prev, sizeof r);
+        }
+        co_copy(&node->routes[at], &r, sizeof r);
+    }
 }
 
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 {
-    uint16_t at = owned(node, kind, slot);
-    bool had = at < node->route_count;
-    if (had ? (node->routes[at].key & ~SHADOW) == key : key == CO_ROUTE_OFF) {
-        return; /* nothing changes */
-    }
-    if (had) {
-        uint32_t old = node->routes[at].key;
-        remove_at(node, at);
-        if (!(old & SHADOW)) {
-            next_owner(node, old);
+    co_route_t *r = owned(node, kind, slot);
+    uint32_t old = CO_ROUTE_OFF;
+    if (r != NULL) {
+        old = r->key & ~SHADOW;
+        if (old == key) {
+            return; /* nothing changes */
         }
+    } else {
+        if (key == CO_ROUTE_OFF || node->route_count >= CO_RX_ROUTES_MAX) {
+            return; /* nothing changes, or a full table drops the new route */
+        }
+        r = &node->routes[node->route_count++];
+        r->service = kind_service(kind);
+        r->kind = kind;
+        r->slot = slot;
     }
-    if (key != CO_ROUTE_OFF) {
-        add(node, kind, slot, key);
+    r->key = key;
+    settle(node, old); /* its next owner takes the frames */
+    settle(node, key);
+    sort(node); /* a route going (CO_ROUTE_OFF, above every key) ends up last: it goes */
+    if (key == CO_ROUTE_OFF) {
+        node->route_count--;
+    } else {
+        /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
+        node->route_groups |= co_route_group(key);
     }
-    changed(node);
+    /* The hint starts over at the first route (the first of its key, as a hint must be),
+     * and the driver hears of the change. */
+    node->route_hint = 0;
+    if (node->cfg.driver.on_routes_changed) {
+        node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
+    }
 }
 
 const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)

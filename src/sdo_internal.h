@@ -21,10 +21,6 @@ static inline uint64_t co_sdo_timeout_us(const co_node_t *node)
     return co_ms_to_us(ms ? ms : (uint16_t)1000u);
 }
 
-/* crc16.c: CRC-16-CCITT (polynomial 0x1021, no reflection, no final XOR), continued from
- * `crc` (start with 0). */
-uint16_t co_crc16(uint16_t crc, const uint8_t *data, uint32_t len);
-
 /* sdo_server.c */
 void co_sdo_server_reset_comm(co_node_t *node);
 void co_sdo_server_stop(co_node_t *node); /* SDO not allowed now: transfers end silently */

@@ -17,6 +17,7 @@
  */
 #include <string.h>
 
+#include "crc16.h"
 #include "od_plain.h"
 #include "sdo_internal.h"
 #include "sdo_protocol.h"

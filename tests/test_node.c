@@ -1,6 +1,7 @@
 /* test_node.c -- node lifecycle, transmit queue, receive routes, OD access through the node. */
 #include "check.h"
 #include "harness.h"
+#include "kernel.h" /* the routes */
 
 #define MS 1000ull
 
@@ -189,6 +190,56 @@ static void test_two_owners_of_one_cob_id(void)
     CHECK_EQ(t.od.outputs[0], 0x11);
 }
 
+/* The routes' own order: the owners of one key, set in any order, are ranked by kind, then
+ * slot; the first takes the frames, the next takes over when it goes or moves, and the
+ * table stays sorted by key for the search. */
+static bool routes_sorted(const co_node_t *node)
+{
+    for (uint32_t i = 1; i < node->route_count; i++) {
+        if (node->routes[i - 1].key > node->routes[i].key) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static bool owner_is(const co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+{
+    const co_route_t *r = co_routes_find(node, key);
+    return r != NULL && r->kind == kind && r->slot == slot;
+}
+
+static void test_route_owners_ranked_by_kind_then_slot(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint32_t count = co_node_route_count(&t.node);
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 7, 0x123);
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 3, 0x123); /* a lower slot, set later */
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_MGR_BOOTUP, 3));
+    co_route_set(&t.node, CO_ROUTE_SYNC, 1, 0x123); /* a lower kind */
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_SYNC, 1));
+    CHECK_EQ(co_node_route_count(&t.node), count + 3);
+    uint32_t listed = 0;
+    for (uint32_t i = 0; i < count + 3; i++) {
+        listed += co_node_route_id(&t.node, i) == 0x123;
+    }
+    CHECK_EQ(listed, 3);
+    CHECK(routes_sorted(&t.node));
+
+    co_route_set(&t.node, CO_ROUTE_SYNC, 1, CO_ROUTE_OFF);
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_MGR_BOOTUP, 3));
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 3, 0x124); /* moves: alone on its new key */
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_MGR_BOOTUP, 7));
+    CHECK(owner_is(&t.node, 0x124, CO_ROUTE_MGR_BOOTUP, 3));
+    CHECK(routes_sorted(&t.node));
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 7, CO_ROUTE_OFF);
+    CHECK(co_routes_find(&t.node, 0x123) == NULL);
+    CHECK_EQ(co_node_route_count(&t.node), count + 1);
+    CHECK(routes_sorted(&t.node));
+}
+
 static void test_od_access_through_node(void)
 {
     test_node_t t;
@@ -359,6 +410,7 @@ int main(void)
     RUN(test_driver_error_drops_frame);
     RUN(test_routes_and_acceptance);
     RUN(test_two_owners_of_one_cob_id);
+    RUN(test_route_owners_ranked_by_kind_then_slot);
     RUN(test_od_access_through_node);
     RUN(test_node_init_arguments);
     RUN(test_local_reads_of_the_wrong_kind);
