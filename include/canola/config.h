@@ -140,9 +140,10 @@
 #endif
 #endif
 
-/** The SDO block CRC eight bytes a step (4 KiB of const tables, about 3 instructions a
- *  byte) instead of two (1 KiB, about 7). Only with CO_CONFIG_SDO_BLOCK. By default as
- *  CO_SHORT_PATHS: off in a build for size, where the 3 KiB count more than the cycles. */
+/** The CRC-16 of SDO block transfers and stored images eight bytes a step (4 KiB of const
+ *  tables, about 3 instructions a byte) instead of a nibble a step (32 bytes of table,
+ *  about 12). By default as CO_SHORT_PATHS: off in a build for size, where the 4 KiB
+ *  count more than the cycles. */
 #ifndef CO_CONFIG_CRC16_FAST
 #define CO_CONFIG_CRC16_FAST CO_SHORT_PATHS
 #endif
