@@ -7,7 +7,7 @@
  * the CRC c in one step to
  *   T_n[(c >> 8) ^ b0] ^ T_(n-1)[(c & 0xFF) ^ b1] ^ T_(n-2)[b2] ^ ... ^ T_1[b(n-1)].
  * Eight bytes a step with CO_CONFIG_CRC16_FAST (4 KiB of const tables, about 3
- * instructions a byte). Otherwise a nibble a step (a 32-byte table, about 12 instructions a
+ * instructions a byte). Otherwise a nibble a step (a 32-byte table, about 18 instructions a
  * byte): a build for size, where the CRC serves stored images and, if built, SDO block
  * transfers, and the kilobytes count more than the cycles.
  */

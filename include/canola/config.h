@@ -142,7 +142,7 @@
 
 /** The CRC-16 of SDO block transfers and stored images eight bytes a step (4 KiB of const
  *  tables, about 3 instructions a byte) instead of a nibble a step (32 bytes of table,
- *  about 12). By default as CO_SHORT_PATHS: off in a build for size, where the 4 KiB
+ *  about 18). By default as CO_SHORT_PATHS: off in a build for size, where the 4 KiB
  *  count more than the cycles. */
 #ifndef CO_CONFIG_CRC16_FAST
 #define CO_CONFIG_CRC16_FAST CO_SHORT_PATHS

@@ -163,8 +163,8 @@ def core_lib(request: pytest.FixtureRequest,
     objects = []
     for src in sources:  # the core's own warnings are the C build's business
         obj = out / f"{src.stem}.o"
-        _run([cc, "-std=c11", "-O1", *CONFIG, *form, f"-I{INCLUDE}", f"-I{REPO / 'port' / 'sim'}", "-c",
-              str(src), "-o", str(obj)], src.name)
+        _run([cc, "-std=c11", "-O1", *CONFIG, *form, f"-I{INCLUDE}",
+              f"-I{REPO / 'port' / 'sim'}", "-c", str(src), "-o", str(obj)], src.name)
         objects.append(str(obj))
     lib = out / "libcanola_sim.a"
     _run(["ar", "rcs", str(lib), *objects], "ar")
@@ -179,7 +179,8 @@ def _check_file(path: Path, core: tuple[Path, list[str]], tmp_path: Path) -> int
     (tmp_path / "od.h").write_text(header)
     (tmp_path / "od.c").write_text(code)
     (tmp_path / "main.c").write_text(HARNESS)
-    flags = [*WARNINGS, *CONFIG, *form, f"-I{INCLUDE}", f"-I{REPO / 'port' / 'sim'}", f"-I{tmp_path}"]
+    flags = [*WARNINGS, *CONFIG, *form, f"-I{INCLUDE}", f"-I{REPO / 'port' / 'sim'}",
+             f"-I{tmp_path}"]
     for name in ("od", "main"):
         _run([cc, *flags, "-c", str(tmp_path / f"{name}.c"), "-o", str(tmp_path / f"{name}.o")],
              f"{path.name}: {name}.c with -Werror")
