@@ -314,7 +314,8 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
  *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
  *  O(entries in range). The compact form: every entry in the range but a DOMAIN is zeroed,
  *  then given its record of co_od_t.defaults, if any (O(entries in range + records before
- *  the range's end)). */
+ *  the range's end)); the records are trusted as they are (co_od_validate checks them, as
+ *  the general form's power-on values are trusted to match their entries). */
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
 
 /* ---- Native access for the application and the services (no access rules, no hooks,
