@@ -70,21 +70,26 @@ static void settle(co_node_t *node, uint32_t key)
     }
 }
 
-/* The routes in their order again (key, then kind and slot): an insertion sort, as few
- * routes are out of place and this runs only on changes. (co_copy, not struct copies: those
- * would call memcpy on Cortex-M0.) */
+/* Route `a` may come before route `b` in the table: key, then kind and slot. */
+static CO_SIZE_NOINLINE bool in_order(const co_route_t *a, const co_route_t *b)
+{
+    return a->key != b->key ? a->key < b->key : lower(a, b);
+}
+
+/* The routes in their order again: an insertion sort, as few routes are out of place and
+ * this runs only on changes. (co_copy, not struct copies: those would call memcpy on
+ * Cortex-M0.) */
 static void sort(co_node_t *node)
 {
     for (uint16_t i = 1; i < node->route_count; i++) {
+        if (in_order(&node->routes[i - 1u], &node->routes[i])) {
+            continue; /* in place: most are */
+        }
         co_route_t r;
         co_copy(&r, &node->routes[i], sizeof r);
         uint16_t at = i;
-        for (; at > 0; at--) {
-            const co_route_t *prev = &node->routes[at - 1u];
-            if (prev->key < r.key || (prev->key == r.key && lower(prev, &r))) {
-                break;
-            }
-            co_copy(&node->routes[at], prev, sizeof r);
+        for (; at > 0 && !in_order(&node->routes[at - 1u], &r); at--) {
+            co_copy(&node->routes[at], &node->routes[at - 1u], sizeof r);
         }
         co_copy(&node->routes[at], &r, sizeof r);
     }
