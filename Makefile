@@ -219,7 +219,10 @@ cortex-m:
 	  mkdir -p build-arm && for f in src/*.c; do \
 	    arm-none-eabi-gcc $(ARM_FLAGS) -c $$f -o build-arm/$$(basename $$f .c).o || exit 1; \
 	  done && arm-none-eabi-gcc $(ARM_FLAGS) -DCO_CONFIG_FILE='"'$(CURDIR)/configs/minimal.h'"' \
-	    -c src/node.c -o build-arm/node-minimal.o && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)"; \
+	    -c src/node.c -o build-arm/node-minimal.o && for f in src/od*.c; do \
+	    arm-none-eabi-gcc $(ARM_FLAGS) -DCO_CONFIG_OD_COMPACT=1 -c $$f \
+	      -o build-arm/$$(basename $$f .c)-compact.o || exit 1; \
+	  done && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)"; \
 	else echo "cortex-m: SKIPPED (arm-none-eabi-gcc not installed; .ci/run installs it as root)"; fi
 
 # A 32-bit host build of the core and the tests (gcc -m32, from gcc-multilib), tests run.

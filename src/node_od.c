@@ -111,8 +111,9 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
         o->written(node, entry); /* the new value takes effect at once */
     }
     co_pdo_changed(node, entry); /* change of state: event-driven TPDOs mapping it */
-    if (entry->hooks && entry->hooks->written) {
-        entry->hooks->written(od->hook_ctx, entry);
+    const co_od_hooks_t *hooks = co_od_hooks_of(entry);
+    if (hooks && hooks->written) {
+        hooks->written(od->hook_ctx, entry);
     }
     return CO_ABORT_NONE;
 }

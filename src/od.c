@@ -118,9 +118,31 @@ static bool wire_is_native(const type_info_t *t)
 }
 #endif
 
-static bool has_read_hook(const co_od_entry_t *e) { return e->hooks && e->hooks->read; }
+static bool has_read_hook(const co_od_entry_t *e)
+{
+    const co_od_hooks_t *h = co_od_hooks_of(e);
+    return h && h->read;
+}
 
-static bool has_write_hook(const co_od_entry_t *e) { return e->hooks && e->hooks->write; }
+static bool has_write_hook(const co_od_entry_t *e)
+{
+    const co_od_hooks_t *h = co_od_hooks_of(e);
+    return h && h->write;
+}
+
+/* The limits of an entry, or NULL (none, or left out of the build). */
+static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e)
+{
+    if (!CO_CONFIG_OD_LIMITS) {
+        return NULL;
+    }
+#if CO_CONFIG_OD_COMPACT
+    return e->limits != 0 ? &od->limits[e->limits - 1u] : NULL;
+#else
+    (void)od;
+    return e->limits;
+#endif
+}
 
 /* ---- Bit patterns. */
 
@@ -280,7 +302,7 @@ static bool storage_ok(const co_od_entry_t *e, const type_info_t *t)
     return rd || wr; /* an entry with neither storage nor hooks holds nothing */
 }
 
-static bool entry_ok(const co_od_entry_t *e)
+static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
 {
     const type_info_t *t = type_info(e->type);
     if (t->kind == K_NONE) {
@@ -292,12 +314,19 @@ static bool entry_ok(const co_od_entry_t *e)
     if (is_ustring(t) && (e->size & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
-    if (!CO_CONFIG_OD_LIMITS && e->limits != NULL) {
+    if (!CO_CONFIG_OD_LIMITS && co_od_has_limits(e)) {
         return false; /* limits are left out of this build */
     }
-    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && e->limits != NULL) {
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && co_od_has_limits(e)) {
         return false; /* REAL limits are left out of this build */
     }
+#if CO_CONFIG_OD_COMPACT
+    if (e->limits > od->limits_count || (e->limits != 0 && od->limits == NULL)) {
+        return false; /* refers to limits the table does not have */
+    }
+#else
+    (void)od;
+#endif
     return storage_ok(e, t);
 }
 
@@ -306,10 +335,34 @@ static bool entry_fits(const co_od_t *od, uint32_t i)
 {
     const co_od_entry_t *entries = od->entries;
     bool sorted = i == 0 || entry_key(&entries[i]) > entry_key(&entries[i - 1u]);
+#if !CO_CONFIG_OD_COMPACT
     if (CO_SHORT_PATHS && od->keys != NULL && od->keys[i] != entry_key(&entries[i])) {
         return false; /* (a build for size does not use the keys: see co_od_t) */
     }
-    return sorted && entry_ok(&entries[i]);
+#endif
+    return sorted && entry_ok(od, &entries[i]);
+}
+
+/* The key of entry i: from the dense key array of the general form, or the entry itself
+ * in the compact form (which has none). */
+static uint32_t key_at(const co_od_t *od, uint32_t i)
+{
+#if CO_CONFIG_OD_COMPACT
+    return entry_key(&od->entries[i]);
+#else
+    return od->keys[i];
+#endif
+}
+
+/* The general form's hash needs the dense keys (the compact form's compares entries). */
+static bool key_at_missing(const co_od_t *od)
+{
+#if CO_CONFIG_OD_COMPACT
+    (void)od;
+    return false;
+#else
+    return od->keys == NULL;
+#endif
 }
 
 /* The hash slot that holds `key` (a validated hash: keys exist, a slot is empty, slots
@@ -318,7 +371,7 @@ static uint32_t hash_probe(const co_od_t *od, uint32_t key)
 {
     uint32_t mask = od->hash_mask;
     uint32_t slot = CO_OD_HASH_HOME(key, mask);
-    for (uint32_t at; (at = od->hash[slot]) != 0 && od->keys[at - 1u] != key;) {
+    for (uint32_t at; (at = od->hash[slot]) != 0 && key_at(od, at - 1u) != key;) {
         slot = (slot + 1u) & mask;
     }
     return slot;
@@ -332,7 +385,10 @@ static bool hash_fits(const co_od_t *od)
         return true;
     }
     uint32_t slots = (uint32_t)od->hash_mask + 1u;
-    if (od->keys == NULL || (slots & (slots - 1u)) != 0 || slots < 2u) {
+    if (key_at_missing(od)) {
+        return false; /* the general form's hash compares the dense keys */
+    }
+    if ((slots & (slots - 1u)) != 0 || slots < 2u) {
         return false; /* the mask must be 2^bits - 1, bits >= 1 */
     }
     uint32_t empty = 0;
@@ -346,12 +402,16 @@ static bool hash_fits(const co_od_t *od)
         return false; /* a missing key would probe forever */
     }
     for (uint32_t i = 0; i < od->count; i++) {
-        if (od->hash[hash_probe(od, od->keys[i])] != i + 1u) {
+        if (od->hash[hash_probe(od, key_at(od, i))] != i + 1u) {
             return false;
         }
     }
     return true;
 }
+
+#if CO_CONFIG_OD_COMPACT
+static bool image_fits(const co_od_t *od, uint32_t *bad);
+#endif
 
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 {
@@ -365,6 +425,14 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     /* A build for size reads neither keys nor hash (look-ups search the entries): it does
      * not check them either. */
     if (i == od->count && (!CO_SHORT_PATHS || hash_fits(od))) {
+#if CO_CONFIG_OD_COMPACT
+        if (!image_fits(od, &i)) { /* the power-on values (i: the entry they do not fit) */
+            if (bad != NULL) {
+                *bad = i;
+            }
+            return CO_ERR_CONFIG;
+        }
+#endif
         return CO_OK;
     }
     if (bad != NULL) {
@@ -373,7 +441,7 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     return CO_ERR_CONFIG;
 }
 
-#if CO_SHORT_PATHS
+#if CO_SHORT_PATHS && !CO_CONFIG_OD_COMPACT
 /* The largest power of two <= n (n >= 1). */
 static inline uint32_t pow2_floor(uint32_t n)
 {
@@ -424,9 +492,11 @@ static uint32_t lower_bound(const co_od_t *od, uint32_t key)
     if (od->count == 0) {
         return 0;
     }
+#if !CO_CONFIG_OD_COMPACT
     if (od->keys != NULL) {
         return lower_bound_keys(od->keys, od->count, key);
     }
+#endif
     const co_od_entry_t *base = od->entries;
     uint32_t n = od->count;
     while (n > 1u) {
@@ -552,7 +622,8 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
     *n = 0;
     if (has_read_hook(entry)) {
         /* the hook always gets a place for the total, even when the caller has none */
-        co_abort_t abort = entry->hooks->read(od->hook_ctx, entry, offset, buf, cap, n, &whole);
+        co_abort_t abort =
+            co_od_hooks_of(entry)->read(od->hook_ctx, entry, offset, buf, cap, n, &whole);
         if (total != NULL) {
             *total = whole;
         }
@@ -650,7 +721,7 @@ co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint
     const type_info_t *t = type_info(entry->type);
     co_abort_t abort = check_len(entry, t, len);
     /* a number with limits, or a BOOLEAN (0 or 1), is decoded; others need not be */
-    const co_od_limits_t *limits = CO_CONFIG_OD_LIMITS ? entry->limits : NULL;
+    const co_od_limits_t *limits = limits_of(od, entry);
     if (abort == CO_ABORT_NONE && is_number(t) && (limits || t->kind == K_BOOL)) {
         bits_t bits = wire_number(t, data);
         if (t->kind == K_BOOL && bits > 1u) {
@@ -659,8 +730,9 @@ co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint
             abort = check_limits(limits, t, bits);
         }
     }
-    if (abort == CO_ABORT_NONE && entry->hooks && entry->hooks->check) {
-        abort = entry->hooks->check(od->hook_ctx, entry, data, len);
+    const co_od_hooks_t *hooks = co_od_hooks_of(entry);
+    if (abort == CO_ABORT_NONE && hooks && hooks->check) {
+        abort = hooks->check(od->hook_ctx, entry, data, len);
     }
     return abort;
 }
@@ -670,7 +742,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
 {
     if (entry->value == NULL) {
         if (has_write_hook(entry)) {
-            return entry->hooks->write(od->hook_ctx, entry, 0, data, len, len, true);
+            return co_od_hooks_of(entry)->write(od->hook_ctx, entry, 0, data, len, len, true);
         }
         return CO_ABORT_UNSUPPORTED;
     }
@@ -701,8 +773,9 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
 
 static void notify_written(const co_od_t *od, const co_od_entry_t *entry)
 {
-    if (entry->hooks && entry->hooks->written) {
-        entry->hooks->written(od->hook_ctx, entry);
+    const co_od_hooks_t *hooks = co_od_hooks_of(entry);
+    if (hooks && hooks->written) {
+        hooks->written(od->hook_ctx, entry);
     }
 }
 
@@ -725,7 +798,8 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
     if (!has_write_hook(entry)) {
         return CO_ABORT_UNSUPPORTED;
     }
-    co_abort_t abort = entry->hooks->write(od->hook_ctx, entry, offset, data, n, total, last);
+    co_abort_t abort =
+        co_od_hooks_of(entry)->write(od->hook_ctx, entry, offset, data, n, total, last);
     if (abort == CO_ABORT_NONE && last) {
         notify_written(od, entry);
     }
@@ -734,6 +808,15 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* ---- Power-on values. */
 
+static void add_node_id(const co_od_entry_t *e, uint8_t node_id)
+{
+    const type_info_t *t = type_info(e->type);
+    if ((e->attr & CO_OD_NODEID) && is_integer(t) && e->value != NULL) {
+        native_set(e->value, t, native_get(e->value, t) + node_id);
+    }
+}
+
+#if !CO_CONFIG_OD_COMPACT
 static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
 {
     if (e->dflt == NULL || e->value == NULL) {
@@ -749,9 +832,7 @@ static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
         return;
     }
     co_copy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
-    if ((e->attr & CO_OD_NODEID) && is_integer(t)) {
-        native_set(e->value, t, native_get(e->value, t) + node_id);
-    }
+    add_node_id(e, node_id);
 }
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
@@ -761,6 +842,106 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
         reset_entry(&od->entries[i], node_id);
     }
 }
+#else
+/* Bytes of storage an entry's power-on value may fill: a number's wire size, the capacity
+ * of the others. */
+static uint32_t default_cap(const co_od_entry_t *e)
+{
+    const type_info_t *t = type_info(e->type);
+    return t->wire != 0 ? t->wire : e->size;
+}
+
+/* One record of the image (co_od_t.defaults) at `p`: its entry's position and value; the
+ * next record after it. */
+typedef struct record {
+    uint32_t pos;
+    uint32_t len;
+    const uint8_t *data;
+} record_t;
+
+static const uint8_t *read_record(const uint8_t *p, record_t *r)
+{
+    r->pos = (uint32_t)p[0] | (uint32_t)p[1] << 8;
+    r->len = p[2];
+    p += 3;
+    if (r->len == 255u) {
+        r->len = (uint32_t)p[0] | (uint32_t)p[1] << 8;
+        p += 2;
+    }
+    r->data = p;
+    return p + r->len;
+}
+
+#define END_OF_IMAGE 0xFFFFu
+
+/* A storage of zeros, except a DOMAIN's (kept, as the general form keeps one without a
+ * default). */
+static void zero_entry(const co_od_entry_t *e)
+{
+    const type_info_t *t = type_info(e->type);
+    if (e->value != NULL && t->kind != K_DOMAIN) {
+        co_zero(e->value, t->width != 0 ? t->width : e->size);
+    }
+}
+
+static void set_default(const co_od_entry_t *e, const uint8_t *data, uint32_t len)
+{
+    const type_info_t *t = type_info(e->type);
+    if (is_number(t)) {
+        uint8_t wire[8] = {0};
+        co_copy(wire, data, len);
+        native_set(e->value, t, wire_number(t, wire));
+    } else if (is_domain(t)) {
+        co_od_domain_t *d = e->value;
+        co_copy(d->data, data, len);
+        d->len = len;
+    } else if (t->kind != K_DOMAIN) {
+        co_copy(e->value, data, len);
+    }
+}
+
+void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
+{
+    uint32_t from = lower_bound(od, key_of(first, 0));
+    uint32_t end = from;
+    for (; end < od->count && od->entries[end].index <= last; end++) {
+        zero_entry(&od->entries[end]);
+    }
+    record_t r;
+    for (const uint8_t *p = od->defaults; p != NULL;) {
+        p = read_record(p, &r);
+        if (r.pos == END_OF_IMAGE || r.pos >= end) {
+            break;
+        }
+        if (r.pos >= from) {
+            set_default(&od->entries[r.pos], r.data, r.len);
+        }
+    }
+    for (uint32_t i = from; i < end; i++) {
+        add_node_id(&od->entries[i], node_id);
+    }
+}
+
+/* The image's records name entries in order and fit them; `*bad` gets the position of the
+ * entry whose record does not (or count for a record past the table). */
+static bool image_fits(const co_od_t *od, uint32_t *bad)
+{
+    uint32_t next = 0;
+    record_t r;
+    for (const uint8_t *p = od->defaults; p != NULL;) {
+        p = read_record(p, &r);
+        if (r.pos == END_OF_IMAGE) {
+            return true;
+        }
+        if (r.pos < next || r.pos >= od->count || r.len > default_cap(&od->entries[r.pos])) {
+            *bad = r.pos < od->count ? r.pos : od->count;
+            return false;
+        }
+        next = r.pos + 1u;
+    }
+    return true;
+}
+#endif
 
 /* ---- Native integer access. */
 

@@ -48,8 +48,9 @@ static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
  * `value`): the SDO server answers from it without co_od_read. */
 static inline bool co_od_reads_plain(const co_od_entry_t *e)
 {
+    const co_od_hooks_t *hooks = co_od_hooks_of(e);
     return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) &&
-           (e->hooks == NULL || e->hooks->read == NULL);
+           (hooks == NULL || hooks->read == NULL);
 }
 
 /* A writable entry whose new value is just its `size` wire bytes copied into storage: no
@@ -57,8 +58,8 @@ static inline bool co_od_reads_plain(const co_od_entry_t *e)
  * would copy it). */
 static inline bool co_od_writes_plain(const co_od_entry_t *e)
 {
-    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && e->hooks == NULL &&
-           e->limits == NULL && e->value != NULL;
+    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && co_od_hooks_of(e) == NULL &&
+           !co_od_has_limits(e) && e->value != NULL;
 }
 
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no

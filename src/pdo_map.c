@@ -30,7 +30,8 @@ static bool mappable(const co_od_entry_t *e, uint32_t size, bool tpdo)
     if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > PDO_VALUE_MAX) {
         return false;
     }
-    bool hook = e->hooks && (tpdo ? e->hooks->read != NULL : e->hooks->write != NULL);
+    const co_od_hooks_t *hooks = co_od_hooks_of(e);
+    bool hook = hooks && (tpdo ? hooks->read != NULL : hooks->write != NULL);
     return e->value != NULL || hook;
 }
 
@@ -65,7 +66,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     out->map_entry[k] = e;
     /* A whole number stored as it travels (and no hook to run): the short paths copy it
      * straight to and from the frame. */
-    if (CO_SHORT_PATHS && bits == 8u * size && e->hooks == NULL && e->value != NULL &&
+    if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL && e->value != NULL &&
         ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u)) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }

@@ -41,8 +41,9 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint
     if (co_od_store(od, e, value, size) != CO_ABORT_NONE) {
         return false;
     }
-    if (e->hooks && e->hooks->written) {
-        e->hooks->written(od->hook_ctx, e);
+    const co_od_hooks_t *hooks = co_od_hooks_of(e);
+    if (hooks && hooks->written) {
+        hooks->written(od->hook_ctx, e);
     }
     return true;
 }

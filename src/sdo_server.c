@@ -188,7 +188,8 @@ static uint32_t received(const co_sdo_server_t *s) { return s->done + s->buf_len
 
 static bool streams(const co_sdo_server_t *s)
 {
-    return s->entry->value == NULL && s->entry->hooks && s->entry->hooks->write;
+    const co_od_hooks_t *hooks = co_od_hooks_of(s->entry);
+    return s->entry->value == NULL && hooks && hooks->write;
 }
 
 /* The RAM bytes of a DOMAIN or string (a value of no fixed size, kept in storage): a

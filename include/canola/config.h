@@ -140,9 +140,10 @@
 #endif
 #endif
 
-/** The SDO block CRC eight bytes a step (4 KiB of const tables, about 3 instructions a
- *  byte) instead of two (1 KiB, about 7). Only with CO_CONFIG_SDO_BLOCK. By default as
- *  CO_SHORT_PATHS: off in a build for size, where the 3 KiB count more than the cycles. */
+/** The CRC-16 of SDO block transfers and stored images eight bytes a step (4 KiB of const
+ *  tables, about 3 instructions a byte) instead of a nibble a step (32 bytes of table,
+ *  about 18). By default as CO_SHORT_PATHS: off in a build for size, where the 4 KiB
+ *  count more than the cycles. */
 #ifndef CO_CONFIG_CRC16_FAST
 #define CO_CONFIG_CRC16_FAST CO_SHORT_PATHS
 #endif
@@ -215,6 +216,16 @@
 #define CO_CONFIG_OD_UNICODE 1
 #endif
 
+/** The compact form of the dictionary (canola/od.h): 12-byte entries (32-bit targets) that
+ *  keep only their value pointer, power-on values as one image without zeros
+ *  (co_od_t.defaults), limits in a table of their own, no hooks, and a look-up hash that
+ *  compares the entries themselves (no key array). The form canola.odgen's dictionaries
+ *  are smallest in (they compile in both); hand-written tables with hooks need the
+ *  general form (0). */
+#ifndef CO_CONFIG_OD_COMPACT
+#define CO_CONFIG_OD_COMPACT 0
+#endif
+
 /** Dictionary types wider than 32 bits: INTEGER40..64, UNSIGNED40..64 and REAL64. Without
  *  them co_od_validate refuses a dictionary holding one, and the dictionary's arithmetic is
  *  32-bit (no 64-bit helpers on a 32-bit MCU); the API keeps its uint64_t values. */
@@ -249,7 +260,8 @@
     (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1) ||                                  \
     (CO_CONFIG_OD_LIMITS != 0 && CO_CONFIG_OD_LIMITS != 1) ||                                      \
     (CO_CONFIG_OD_DOMAIN != 0 && CO_CONFIG_OD_DOMAIN != 1) ||                                      \
-    (CO_CONFIG_OD_UNICODE != 0 && CO_CONFIG_OD_UNICODE != 1)
+    (CO_CONFIG_OD_UNICODE != 0 && CO_CONFIG_OD_UNICODE != 1) ||                                    \
+    (CO_CONFIG_OD_COMPACT != 0 && CO_CONFIG_OD_COMPACT != 1)
 #error "CO_CONFIG_* feature switches are 0 or 1"
 #endif
 #if CO_CONFIG_REAL_LIMITS && !CO_CONFIG_OD_LIMITS

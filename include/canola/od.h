@@ -27,7 +27,8 @@
  *
  * Threading: none inside. One OD belongs to one node; guard it with the node.
  * Memory: 28 bytes of const data per entry on 32-bit targets (48 on 64-bit hosts), plus
- * the values themselves.
+ * the values themselves; in the compact form (CO_CONFIG_OD_COMPACT, see co_od_entry) 12
+ * (16), plus the power-on values' image and the limits that entries have.
  */
 #ifndef CANOLA_OD_H
 #define CANOLA_OD_H
@@ -41,9 +42,9 @@ extern "C" {
 
 /** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
  *  refuse to compile against a library whose layout differs. 2: co_od_t.keys;
- *  3: co_od_t.hash. */
+ *  3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT). */
 #ifndef CO_OD_FORMAT
-#define CO_OD_FORMAT 3
+#define CO_OD_FORMAT 4
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
@@ -135,7 +136,9 @@ typedef struct co_od_hooks {
     void (*written)(void *ctx, const co_od_entry_t *entry);
 } co_od_hooks_t;
 
-/** One (index, sub-index) of the dictionary. Tables are sorted by index, then sub-index. */
+#if !CO_CONFIG_OD_COMPACT
+/** One (index, sub-index) of the dictionary. Tables are sorted by index, then sub-index.
+ *  The general form (CO_CONFIG_OD_COMPACT 0): every entry carries its own pointers. */
 struct co_od_entry {
     uint16_t index;
     uint8_t sub;
@@ -147,6 +150,43 @@ struct co_od_entry {
     const co_od_limits_t *limits; /**< numeric limits, or NULL */
     const co_od_hooks_t *hooks;   /**< application hooks, or NULL */
 };
+#else
+/** One (index, sub-index) of the dictionary. Tables are sorted by index, then sub-index.
+ *  The compact form (CO_CONFIG_OD_COMPACT 1, what a generated dictionary is made for): 12
+ *  bytes on 32-bit targets. Power-on values are one image for the whole table
+ *  (co_od_t.defaults), limits a table of their own that only entries with limits refer
+ *  to, and there are no hooks. */
+struct co_od_entry {
+    void *value; /**< native storage (never NULL in this form: no hooks to replace it) */
+    uint16_t index;
+    uint16_t size; /**< bytes on the wire; capacity for strings and domains */
+    uint8_t sub;
+    uint8_t type;   /**< co_type_t */
+    uint8_t attr;   /**< CO_OD_* attributes */
+    uint8_t limits; /**< 0, or 1 + the position of its limits in co_od_t.limits */
+};
+#endif
+
+/** The hooks of an entry, or NULL (a compact dictionary has none). */
+static inline const co_od_hooks_t *co_od_hooks_of(const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    (void)entry;
+    return NULL;
+#else
+    return entry->hooks;
+#endif
+}
+
+/** Whether an entry has limits. */
+static inline bool co_od_has_limits(const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    return entry->limits != 0;
+#else
+    return entry->limits != NULL;
+#endif
+}
 
 /** Key of (index, sub) in co_od_t.keys. */
 #define CO_OD_KEY(index, sub) (((uint32_t)(index) << 8) | (uint32_t)(sub))
@@ -164,12 +204,27 @@ typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;
     void *hook_ctx;
+#if CO_CONFIG_OD_COMPACT
+    /** The power-on values of the compact form, one record per entry whose power-on value
+     *  is not all zeros, in entry order, ended by position 0xFFFF: the entry's position
+     *  (2 bytes, little-endian), the length n of its value (1 byte; 255: the length in the
+     *  2 bytes that follow, little-endian), then n bytes of its wire value (trailing zero
+     *  bytes may be left out). co_od_reset zeroes every entry that is not a DOMAIN, then
+     *  writes the records' values (numbers through their wire form, so the image does not
+     *  depend on the target's byte order). NULL: every value resets to zero. */
+    const uint8_t *defaults;
+    /** The limits that entries refer to (co_od_entry_t.limits: 1 + position), or NULL;
+     *  limits_count of them (below). */
+    const co_od_limits_t *limits;
+#else
     /** Optional (NULL: look-up searches the entries): keys[i] = CO_OD_KEY of entries[i].
      *  A dense array of 4 bytes per entry that the binary search walks instead of the
      *  28/48-byte entries: about a third of the instructions per look-up, and fewer cache
      *  lines. The generator (canola.odgen) emits it; co_od_validate checks it. */
     const uint32_t *keys;
-    /** Optional (NULL: no hash; needs `keys`): an open-addressing hash table of
+#endif
+    /** Optional (NULL: no hash; in the general form it needs `keys`, the compact form
+     *  compares the entries' own index and sub-index): an open-addressing hash table of
      *  hash_mask + 1 slots, each 0 (empty) or 1 + the position of an entry. An entry sits in the
      * first slot that is free from its home (CO_OD_HASH_HOME) on, wrapping around; at least one
      *  slot is empty. With about twice as many slots as entries a look-up reads one or two
@@ -178,14 +233,19 @@ typedef struct co_od {
      * emits it; co_od_hash_build builds one at run time; co_od_validate checks it. */
     const uint16_t *hash;
     uint16_t hash_mask; /**< slots - 1: 2^bits - 1 with 1 <= bits <= 16 */
+#if CO_CONFIG_OD_COMPACT
+    uint8_t limits_count; /**< limits in `limits` (here: no padding after hash_mask) */
+#endif
 } co_od_t;
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
  *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
  *  every entry with an empty slot left (keys and hash not in a core built for size, which
- *  does not use them: see co_od_t). Returns CO_OK or CO_ERR_CONFIG (with `*bad` set
- *  to the offending entry's position, or to `count` for a bad hash, when `bad` is not
- *  NULL). O(n) plus O(slots). */
+ *  does not use them: see co_od_t); in the compact form also every limits number within
+ *  co_od_t.limits and the power-on values' records in entry order, each fitting its entry.
+ *  Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's position, or
+ *  to `count` for a bad hash or a record past the table, when `bad` is not NULL). O(n)
+ *  plus O(slots). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),
@@ -252,7 +312,10 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /** Copy power-on values into every entry with index in [first, last] that has a default
  *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
- *  O(entries in range). */
+ *  O(entries in range). The compact form: every entry in the range but a DOMAIN is zeroed,
+ *  then given its record of co_od_t.defaults, if any (O(entries in range + records before
+ *  the range's end)); the records are trusted as they are (co_od_validate checks them, as
+ *  the general form's power-on values are trusted to match their entries). */
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
 
 /* ---- Native access for the application and the services (no access rules, no hooks,

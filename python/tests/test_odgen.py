@@ -72,11 +72,17 @@ def test_generation_is_reproducible(tmp_path: Path) -> None:
 
 def test_entries_sorted_with_attributes() -> None:
     _, code = odgen.generate(eds.parse(SAMPLE), "sample")
-    rows = [line for line in code.splitlines() if line.startswith("    {.index = ")]
-    keys = [(int(r.split(".index = ")[1].split(",")[0], 16), int(r.split(".sub = ")[1]
-             .split(",")[0])) for r in rows]
-    assert keys == sorted(keys)
-    assert len(keys) == len(set(keys))
+    compact, general = code.split("#else /* the general form */")
+    for table in (compact, general):  # both forms: one row per entry, in order
+        rows = [line for line in table.splitlines() if line.startswith("    {.index = ")]
+        keys = [(int(r.split(".index = ")[1].split(",")[0], 16), int(r.split(".sub = ")[1]
+                 .split(",")[0])) for r in rows]
+        assert keys == sorted(keys)
+        assert len(keys) == len(set(keys))
+    compact_rows = dict(zip(keys, [r for r in compact.splitlines()
+                                   if r.startswith("    {.index = ")], strict=True))
+    assert ".limits = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
+    assert "/* 0x1014 sub 0 */ 0x03, 0x00, 0x01, 0x80," in compact  # $NODEID+0x80: 0x80
     by_key = dict(zip(keys, rows, strict=True))
     assert ".attr = CO_OD_RW | CO_OD_NODEID," in by_key[(0x1014, 0)]
     assert ".attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID," in by_key[(0x2300, 1)]
@@ -91,10 +97,15 @@ def test_entries_sorted_with_attributes() -> None:
 # --- C: compile, link, run ---------------------------------------------------------------
 
 
-def test_sample_compiles_with_strict_warnings(tmp_path: Path) -> None:
+# The generated code compiles in both forms of the dictionary (canola/od.h).
+FORMS = [(), ("-DCO_CONFIG_OD_COMPACT=1",)]
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_sample_compiles_with_strict_warnings(tmp_path: Path, form: tuple[str, ...]) -> None:
     cc = compiler()
     _, code = generate_sample(tmp_path, domain_size=32)
-    result = compile_c(cc, code, tmp_path)
+    result = compile_c(cc, code, tmp_path, form)
     assert result.returncode == 0, result.stderr
 
 
@@ -158,10 +169,20 @@ int main(void)
         memcmp(slots, sample_od.hash, sizeof slots[0] * (sample_od.hash_mask + 1u)) != 0) {
         return 18;
     }
-#else
+#elif !CO_CONFIG_OD_COMPACT
     /* A build for size reads no look-up tables: the dictionary has none. */
     if (sample_od.keys != NULL || sample_od.hash != NULL) {
         return 19;
+    }
+#else
+    if (sample_od.hash != NULL) {
+        return 19;
+    }
+#endif
+#if CO_CONFIG_OD_COMPACT
+    /* The compact form: entries of a pointer and 8 bytes, the power-on values' image. */
+    if (sizeof(co_od_entry_t) != sizeof(void *) + 8u || sample_od.defaults == NULL) {
+        return 20;
     }
 #endif
     return 0;
@@ -169,10 +190,13 @@ int main(void)
 """
 
 
-# -O0: the short paths and the look-up tables; -Os: a build for size, neither.
+# -O0: the short paths and the look-up tables; -Os: a build for size, neither; each in the
+# general and the compact form of the dictionary (canola/od.h).
+@pytest.mark.parametrize("form", FORMS)
 @pytest.mark.parametrize("optimise", ["-O0", "-Os"])
 @pytest.mark.slow
-def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str) -> None:
+def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str,
+                                             form: tuple[str, ...]) -> None:
     cc = compiler()
     if not CORE_SOURCES:
         pytest.skip("no core sources")
@@ -182,12 +206,12 @@ def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str) -> N
     objects = []
     for src in CORE_SOURCES:  # the core's own warnings are the C build's business
         obj = tmp_path / f"core_{src.stem}.o"
-        result = subprocess.run([cc, "-std=c11", optimise, f"-I{INCLUDE}", "-c", str(src), "-o",
-                                 str(obj)], capture_output=True, text=True, check=False)
+        result = subprocess.run([cc, "-std=c11", optimise, *form, f"-I{INCLUDE}", "-c", str(src),
+                                 "-o", str(obj)], capture_output=True, text=True, check=False)
         assert result.returncode == 0, f"core source {src.name}: {result.stderr[:300]}"
         objects.append(str(obj))
     for src in (code, main_c):
-        result = compile_c(cc, src, tmp_path, (optimise,))
+        result = compile_c(cc, src, tmp_path, (optimise, *form))
         assert result.returncode == 0, result.stderr
         objects.append(str(tmp_path / (src.stem + ".o")))
     exe = tmp_path / "sample_test"
@@ -342,8 +366,9 @@ def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> No
         out.mkdir()
         (out / "od.h").write_text(header)
         (out / "od.c").write_text(code)
-        result = compile_c(cc, out / "od.c", out)
-        assert result.returncode == 0, f"{path.name}:\n{result.stderr[:2000]}"
+        for form in FORMS:
+            result = compile_c(cc, out / "od.c", out, form)
+            assert result.returncode == 0, f"{path.name} {form}:\n{result.stderr[:2000]}"
         compiled.append(path.name)
     print(f"\nodgen corpus: {len(compiled)} generated and compiled, {len(refused)} refused")
     for line in refused:
@@ -364,9 +389,10 @@ def test_bench_eds_and_size_firmware_compile_cleanly(tmp_path: Path) -> None:
     cc = compiler()
     _, code = odgen.generate_files(BENCH_EDS, "ds301", tmp_path)
     firmware = REPO / "bench" / "size_firmware.c"
-    for source, flags in ((code, ()), (firmware, (f"-I{tmp_path}", f"-I{REPO / 'src'}"))):
-        r = compile_c(cc, source, tmp_path, flags)
-        assert r.returncode == 0, f"{source.name}:\n{r.stderr}"
+    for form in FORMS:
+        for source, flags in ((code, ()), (firmware, (f"-I{tmp_path}", f"-I{REPO / 'src'}"))):
+            r = compile_c(cc, source, tmp_path, (*flags, *form))
+            assert r.returncode == 0, f"{source.name} {form}:\n{r.stderr}"
 
 
 def test_bench_eds_gives_the_dictionary_of_canopennodes_profile() -> None:

@@ -148,31 +148,40 @@ def _run(cmd: list[str], what: str) -> None:
     assert done.returncode == 0, f"{what}:\n{done.stderr[:3000]}"
 
 
-@pytest.fixture(scope="module")
-def core_lib(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The core and the simulated bus as one static library (built once)."""
+# The two forms of the dictionary (canola/od.h) the generated code compiles in.
+FORMS = {"general": [], "compact": ["-DCO_CONFIG_OD_COMPACT=1"]}
+
+
+@pytest.fixture(scope="module", params=sorted(FORMS))
+def core_lib(request: pytest.FixtureRequest,
+             tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[str]]:
+    """The core and the simulated bus as one static library (built once per form of the
+    dictionary), with the flags of that form."""
     cc = _cc()
-    out = tmp_path_factory.mktemp("core")
+    form = FORMS[request.param]
+    out = tmp_path_factory.mktemp(f"core_{request.param}")
     sources = [*sorted((REPO / "src").glob("*.c")), REPO / "port" / "sim" / "sim.c"]
     objects = []
     for src in sources:  # the core's own warnings are the C build's business
         obj = out / f"{src.stem}.o"
-        _run([cc, "-std=c11", "-O1", *CONFIG, f"-I{INCLUDE}", f"-I{REPO / 'port' / 'sim'}", "-c",
-              str(src), "-o", str(obj)], src.name)
+        _run([cc, "-std=c11", "-O1", *CONFIG, *form, f"-I{INCLUDE}",
+              f"-I{REPO / 'port' / 'sim'}", "-c", str(src), "-o", str(obj)], src.name)
         objects.append(str(obj))
     lib = out / "libcanola_sim.a"
     _run(["ar", "rcs", str(lib), *objects], "ar")
-    return lib
+    return lib, form
 
 
-def _check_file(path: Path, core_lib: Path, tmp_path: Path) -> int:
+def _check_file(path: Path, core: tuple[Path, list[str]], tmp_path: Path) -> int:
     cc = _cc()
+    core_lib, form = core
     model = eds.parse(path)
     header, code = odgen.generate(model, "od", OPTIONS)
     (tmp_path / "od.h").write_text(header)
     (tmp_path / "od.c").write_text(code)
     (tmp_path / "main.c").write_text(HARNESS)
-    flags = [*WARNINGS, *CONFIG, f"-I{INCLUDE}", f"-I{REPO / 'port' / 'sim'}", f"-I{tmp_path}"]
+    flags = [*WARNINGS, *CONFIG, *form, f"-I{INCLUDE}", f"-I{REPO / 'port' / 'sim'}",
+             f"-I{tmp_path}"]
     for name in ("od", "main"):
         _run([cc, *flags, "-c", str(tmp_path / f"{name}.c"), "-o", str(tmp_path / f"{name}.o")],
              f"{path.name}: {name}.c with -Werror")
@@ -212,12 +221,14 @@ def _check_file(path: Path, core_lib: Path, tmp_path: Path) -> int:
 
 @pytest.mark.parametrize("name", ["golden/sample.eds", "data/interop.eds"])
 @pytest.mark.slow
-def test_generated_device_answers_every_entry(name: str, core_lib: Path, tmp_path: Path) -> None:
+def test_generated_device_answers_every_entry(name: str, core_lib: tuple[Path, list[str]],
+                                           tmp_path: Path) -> None:
     assert _check_file(HERE / name, core_lib, tmp_path) > 20
 
 
 @pytest.mark.slow
-def test_corpus_devices_answer_every_entry(core_lib: Path, tmp_path: Path) -> None:
+def test_corpus_devices_answer_every_entry(core_lib: tuple[Path, list[str]],
+                                           tmp_path: Path) -> None:
     if not CORPUS.is_dir():
         pytest.skip(f"no corpus at {CORPUS}")
     checked = 0

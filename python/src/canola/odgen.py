@@ -12,10 +12,20 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   become a nested struct whose members are their sub-indices, sub-index 0 included (a plain
   UNSIGNED8 entry as the EDS describes it).
 - ``<name>_values``: the one static instance that holds the RAM values, zero-initialised;
-  ``<name>_od``: a const ``co_od_t`` whose const entry table points into it. Power-on values
-  are a const ``<name>_values_t`` in the ``.c`` file; call ``co_od_reset(&<name>_od, 0x0000,
-  0xFFFF, node_id)`` once before use. One node per generated dictionary: generate again under
-  another name for a second node in the same program.
+  ``<name>_od``: a const ``co_od_t`` whose const entry table points into it. Call
+  ``co_od_reset(&<name>_od, 0x0000, 0xFFFF, node_id)`` once before use. One node per
+  generated dictionary: generate again under another name for a second node in the same
+  program.
+- The ``.c`` file holds the tables in both forms of ``canola/od.h``, chosen by the core's
+  ``CO_CONFIG_OD_COMPACT`` (the dictionary and the library must agree, as for every
+  configuration value). The compact form (1), the smaller: 12-byte entries (32-bit
+  targets: value pointer, index, 16-bit size, sub-index, type, attributes, limits number),
+  the power-on values as one byte image ``k_defaults`` (a record per entry whose value is
+  not all zeros: position, length, wire bytes; see ``co_od_t.defaults``), the distinct
+  limits once each in ``k_limits``. The general form (0): 28-byte entries with pointers to
+  the value, its power-on value in a const ``<name>_values_t``, its limits and hooks
+  (NULL), and the dense key array ``k_keys``. Both share the look-up hash ``k_hash``, left
+  out where the core does not read it (``CO_SHORT_PATHS`` 0, a build for size).
 - Power-on values come from ``ParameterValue`` when present (DCF), else ``DefaultValue``,
   else zero / empty. A value using ``$NODEID`` is stored without the node-ID and the entry
   gets ``CO_OD_NODEID``: ``co_od_reset`` adds the node-ID (``$NODEID+0x180`` -> 0x180).
@@ -49,6 +59,7 @@ import argparse
 import math
 import os
 import re
+import struct
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -59,7 +70,7 @@ from canola.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 3  # 2: co_od_t.keys, the dense key array; 3: co_od_t.hash
+OD_FORMAT = 4  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT)
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -128,6 +139,7 @@ class _Entry:
     init: str | None  # C initializer of the default, None for none
     limits: str | None
     kind: int
+    default: bytes = b""  # wire bytes of the power-on value, trailing zeros left out
 
 
 # ---------------------------------------------------------------------------------------
@@ -266,20 +278,24 @@ class _Gen:
         limits = None
         array = 0
         size = wire
+        data = b""  # the power-on value's wire bytes
         if kind in (_BOOL, _SIGNED, _UNSIGNED, _REAL):
             value, uses_node = self.number(var, text, key, kind, kind != _REAL)
             if uses_node:
                 attr.append("CO_OD_NODEID")
             if kind == _REAL:
                 init = _real_literal(value, wire)
+                data = struct.pack("<f" if wire == 4 else "<d", float(value))
             else:
                 assert isinstance(value, int)
                 init = _int_literal(value, kind)
+                data = (value & ((1 << (8 * wire)) - 1)).to_bytes(wire, "little")
             limits = self.limits(var, kind, wire)
         elif kind == _RAW:
             value, _ = self.number_raw(var, text, key)
             array = size = 6
-            init = _bytes_init(value.to_bytes(6, "little"))
+            data = value.to_bytes(6, "little")
+            init = _bytes_init(data)
         elif kind == _VSTRING:
             data = self.encode(var, text, key)
             array = size = max(len(data) + 1, 1, self.opts.min_string_size)
@@ -301,7 +317,8 @@ class _Gen:
             init = None
         if kind in (_OSTRING, _USTRING) and init is None:
             init = "{0}"
-        return _Entry(var, member, ctype, array, size, " | ".join(attr), init, limits, kind)
+        return _Entry(var, member, ctype, array, size, " | ".join(attr), init, limits, kind,
+                      data.rstrip(b"\0"))
 
     def number_raw(self, var: eds.Variable, text: str, key: str) -> tuple[int, bool]:
         text = text.partition(";")[0].strip()
@@ -439,7 +456,8 @@ def _header(name: str, source: str, struct: list[str], skipped: Sequence[eds.Var
         " *",
         f" * {name}_values holds every value in RAM (one static instance: one node per",
         f" * generated dictionary); {name}_od is a const table (it can live in flash) whose",
-        f" * entries point into {name}_values and at const power-on values. The values start",
+        f" * entries point into {name}_values, in either form of canola/od.h (the core's",
+        " * CO_CONFIG_OD_COMPACT chooses; the compact one is the smaller). The values start",
         f" * at zero: call co_od_reset(&{name}_od, 0x0000, 0xFFFF, node_id) once before use;",
         " * entries whose EDS default uses $NODEID (CO_OD_NODEID) get the node-ID added then.",
         *_skipped_note(skipped),
@@ -507,6 +525,99 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     else:
         out.append(f"{name}_values_t {name}_values;")
     out.append("")
+    if not entries:
+        out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
+        out.append("")
+        return "\n".join(out)
+    out.append("#if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */")
+    out += _compact_tables(name, entries)
+    out.append("#else /* the general form */")
+    out += _general_tables(name, entries)
+    out.append("#endif")
+    out.append("")
+    # The look-up's hash, left out where the core does not read it (CO_SHORT_PATHS 0, a
+    # build for size): entry position + 1 per slot, 0 = empty; the same in both forms.
+    slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
+    if slots:
+        out.append("#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which does not "
+                   "read it */")
+        out.append(f"static const uint16_t k_hash[{len(slots)}] = {{")
+        for i in range(0, len(slots), 16):
+            out.append("    " + ", ".join(str(v) for v in slots[i:i + 16]) + ",")
+        out.append("};")
+        out.append("#endif")
+        out.append("")
+    limits = _distinct_limits(entries)
+    out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
+               ".hook_ctx = NULL,")
+    out.append("#if CO_CONFIG_OD_COMPACT")
+    lim = f"k_limits, .limits_count = {len(limits)}u" if limits else "NULL, .limits_count = 0"
+    out.append(f"    .defaults = k_defaults, .limits = {lim},")
+    out.append("#endif")
+    out.append("#if CO_SHORT_PATHS")
+    out.append("#if !CO_CONFIG_OD_COMPACT")
+    out.append("    .keys = k_keys,")
+    out.append("#endif")
+    if slots:
+        out.append(f"    .hash = k_hash, .hash_mask = {len(slots) - 1}u")
+    out.append("#endif")
+    out.append("};")
+    out.append("")
+    return "\n".join(out)
+
+
+def _distinct_limits(entries: list[_Entry]) -> list[str]:
+    """The different limits of the entries, in the order of their first entry."""
+    return list(dict.fromkeys(e.limits for e in entries if e.limits))
+
+
+def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
+    """The compact form's tables: power-on values as one image without zeros (co_od_t's
+    defaults), the distinct limits, 12-byte entries (32-bit targets) that point at their
+    value only."""
+    out = ["/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per",
+           " * entry whose value is not all zeros: position (2 bytes), length (1), wire bytes. */",
+           "static const uint8_t k_defaults[] = {"]
+    for pos, e in enumerate(entries):
+        if e.default and e.kind != _DOMAIN:
+            n = len(e.default)
+            head = [pos & 0xFF, pos >> 8] + ([n] if n < 255 else [255, n & 0xFF, n >> 8])
+            v = e.var
+            out.append(f"    /* 0x{v.index:04X} sub {v.subindex} */ "
+                       + ", ".join(f"0x{b:02X}" for b in head + list(e.default)) + ",")
+    out.append("    0xFF, 0xFF, 0x00, /* end */")
+    out.append("};")
+    out.append("")
+    limits = _distinct_limits(entries)
+    if len(limits) > 255:
+        out.append('#error "more than 255 different limits: the compact form refers to at most '
+                   '255 (use the general form, CO_CONFIG_OD_COMPACT 0)"')
+    if limits:
+        out.append("static const co_od_limits_t k_limits[] = {")
+        out += [f"    {text}," for text in limits]
+        out.append("};")
+        out.append("")
+    number = {text: i + 1 for i, text in enumerate(limits)}
+    if any(e.size > 0xFFFF for e in entries):
+        out.append('#error "an entry larger than 65535 bytes: the compact form holds sizes of 16 '
+                   'bits (use the general form, CO_CONFIG_OD_COMPACT 0)"')
+    out.append("static const co_od_entry_t k_entries[] = {")
+    for e in entries:
+        v = e.var
+        amp = "" if e.array else "&"
+        lim = f", .limits = {number[e.limits]}" if e.limits else ""
+        out.append(
+            f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, "
+            f".type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, "
+            f".size = {e.size}, .value = {amp}{name}_values.{e.member}{lim}}},")
+    out.append("};")
+    return out
+
+
+def _general_tables(name: str, entries: list[_Entry]) -> list[str]:
+    """The general form's tables: power-on values as a copy of the values, limits and a
+    28-byte entry (32-bit targets) of pointers each, the dense key array."""
+    out = []
     with_init = [e for e in entries if e.init is not None]
     out.append("/* Power-on values (without the node-ID where CO_OD_NODEID is set). */")
     if with_init:
@@ -521,53 +632,29 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         out.append(f"static const co_od_limits_t {_limits_name(e)} = {e.limits};")
     if limited:
         out.append("")
-    if entries:
-        out.append("static const co_od_entry_t k_entries[] = {")
-        for e in entries:
-            v = e.var
-            amp = "" if e.array else "&"
-            dflt = "NULL" if e.init is None else f"{amp}k_defaults.{e.member}"
-            lim = f"&{_limits_name(e)}" if e.limits else "NULL"
-            out.append(
-                f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, "
-                f".type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, "
-                f".size = {e.size}, .value = {amp}{name}_values.{e.member}, .dflt = {dflt}, "
-                f".limits = {lim}, .hooks = NULL}},")
-        out.append("};")
-        out.append("")
-        # The look-up tables, left out where the core does not read them (CO_SHORT_PATHS 0,
-        # a build for size). The dense key array the look-up searches (co_od_t.keys): 4
-        # bytes per entry.
-        out.append("#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which reads "
-                   "neither */")
-        out.append("static const uint32_t k_keys[] = {")
-        keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]
-        for i in range(0, len(keys), 8):
-            out.append("    " + ", ".join(keys[i:i + 8]) + ",")
-        out.append("};")
-        out.append("")
-        slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
-        hashed = ""
-        if slots:
-            # The look-up's hash (co_od_t.hash): entry position + 1 per slot, 0 = empty.
-            out.append(f"static const uint16_t k_hash[{len(slots)}] = {{")
-            for i in range(0, len(slots), 16):
-                out.append("    " + ", ".join(str(v) for v in slots[i:i + 16]) + ",")
-            out.append("};")
-            out.append("")
-            hashed = f", .hash = k_hash, .hash_mask = {len(slots) - 1}u"
-        out.append("#endif")
-        out.append("")
-        out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
-                   ".hook_ctx = NULL,")
-        out.append("#if CO_SHORT_PATHS")
-        out.append(f"    .keys = k_keys{hashed}")
-        out.append("#endif")
-        out.append("};")
-    else:
-        out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
+    out.append("static const co_od_entry_t k_entries[] = {")
+    for e in entries:
+        v = e.var
+        amp = "" if e.array else "&"
+        dflt = "NULL" if e.init is None else f"{amp}k_defaults.{e.member}"
+        lim = f"&{_limits_name(e)}" if e.limits else "NULL"
+        out.append(
+            f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, "
+            f".type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, "
+            f".size = {e.size}, .value = {amp}{name}_values.{e.member}, .dflt = {dflt}, "
+            f".limits = {lim}, .hooks = NULL}},")
+    out.append("};")
     out.append("")
-    return "\n".join(out)
+    # The dense key array the look-up searches (co_od_t.keys), 4 bytes per entry, left out
+    # where the core does not read it (CO_SHORT_PATHS 0, a build for size).
+    out.append("#if CO_SHORT_PATHS")
+    out.append("static const uint32_t k_keys[] = {")
+    keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]
+    for i in range(0, len(keys), 8):
+        out.append("    " + ", ".join(keys[i:i + 8]) + ",")
+    out.append("};")
+    out.append("#endif")
+    return out
 
 
 def _hash_table(keys: list[int]) -> list[int]:

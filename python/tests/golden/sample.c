@@ -10,6 +10,108 @@
 
 sample_values_t sample_values;
 
+#if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */
+/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per
+ * entry whose value is not all zeros: position (2 bytes), length (1), wire bytes. */
+static const uint8_t k_defaults[] = {
+    /* 0x1000 sub 0 */ 0x00, 0x00, 0x02, 0x91, 0x01,
+    /* 0x1008 sub 0 */ 0x02, 0x00, 0x0D, 0x63, 0x61, 0x6E, 0x6F, 0x6C, 0x61, 0x20, 0x73, 0x61, 0x6D, 0x70, 0x6C, 0x65,
+    /* 0x1014 sub 0 */ 0x03, 0x00, 0x01, 0x80,
+    /* 0x1017 sub 0 */ 0x04, 0x00, 0x02, 0xE8, 0x03,
+    /* 0x1018 sub 0 */ 0x05, 0x00, 0x01, 0x04,
+    /* 0x1018 sub 1 */ 0x06, 0x00, 0x02, 0xA0, 0x0C,
+    /* 0x1018 sub 2 */ 0x07, 0x00, 0x02, 0x34, 0x12,
+    /* 0x1018 sub 3 */ 0x08, 0x00, 0x03, 0x02, 0x00, 0x01,
+    /* 0x1800 sub 0 */ 0x0A, 0x00, 0x01, 0x02,
+    /* 0x1800 sub 1 */ 0x0B, 0x00, 0x02, 0x80, 0x01,
+    /* 0x1800 sub 2 */ 0x0C, 0x00, 0x01, 0xFE,
+    /* 0x2000 sub 0 */ 0x0D, 0x00, 0x01, 0x01,
+    /* 0x2001 sub 0 */ 0x0E, 0x00, 0x01, 0xFB,
+    /* 0x2002 sub 0 */ 0x0F, 0x00, 0x02, 0xFE, 0xFF,
+    /* 0x2003 sub 0 */ 0x10, 0x00, 0x03, 0x00, 0x00, 0x80,
+    /* 0x2004 sub 0 */ 0x11, 0x00, 0x04, 0x00, 0x00, 0x00, 0x80,
+    /* 0x2005 sub 0 */ 0x12, 0x00, 0x05, 0x00, 0x00, 0x00, 0x00, 0x80,
+    /* 0x2006 sub 0 */ 0x13, 0x00, 0x06, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F,
+    /* 0x2007 sub 0 */ 0x14, 0x00, 0x07, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
+    /* 0x2008 sub 0 */ 0x15, 0x00, 0x08, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80,
+    /* 0x2009 sub 0 */ 0x16, 0x00, 0x01, 0xC8,
+    /* 0x200A sub 0 */ 0x17, 0x00, 0x02, 0xEF, 0xBE,
+    /* 0x200B sub 0 */ 0x18, 0x00, 0x03, 0xFF, 0xFF, 0xFF,
+    /* 0x200D sub 0 */ 0x1A, 0x00, 0x05, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
+    /* 0x200E sub 0 */ 0x1B, 0x00, 0x06, 0xBC, 0x9A, 0x78, 0x56, 0x34, 0x12,
+    /* 0x200F sub 0 */ 0x1C, 0x00, 0x07, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
+    /* 0x2010 sub 0 */ 0x1D, 0x00, 0x08, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
+    /* 0x2011 sub 0 */ 0x1E, 0x00, 0x04, 0x00, 0x00, 0xAC, 0x41,
+    /* 0x2012 sub 0 */ 0x1F, 0x00, 0x08, 0xFC, 0xA9, 0xF1, 0xD2, 0x4D, 0x62, 0x50, 0x3F,
+    /* 0x2013 sub 0 */ 0x20, 0x00, 0x05, 0x61, 0x22, 0x62, 0x5C, 0x63,
+    /* 0x2014 sub 0 */ 0x21, 0x00, 0x04, 0x01, 0x02, 0xAB, 0xFF,
+    /* 0x2100 sub 0 */ 0x23, 0x00, 0x01, 0x03,
+    /* 0x2100 sub 2 */ 0x25, 0x00, 0x02, 0xFF, 0xFF,
+    /* 0x2100 sub 3 */ 0x26, 0x00, 0x02, 0xFF, 0x7F,
+    /* 0x2300 sub 0 */ 0x27, 0x00, 0x01, 0x02,
+    /* 0x2300 sub 1 */ 0x28, 0x00, 0x01, 0x64,
+    /* 0x2300 sub 2 */ 0x29, 0x00, 0x01, 0x07,
+    /* 0x6000 sub 0 */ 0x2A, 0x00, 0x01, 0x01,
+    0xFF, 0xFF, 0x00, /* end */
+};
+
+static const co_od_limits_t k_limits[] = {
+    {.low = {.i = -100}, .high = {.i = 100}},
+    {.low = {.i = (-2147483647 - 1)}, .high = {.i = 2147483647}},
+    {.low = {.i = INT64_MIN}, .high = {.i = 0}},
+    {.low = {.u = 0u}, .high = {.u = 0xFAu}},
+    {.low = {.u = 0x100u}, .high = {.u = 0xFFFFu}},
+    {.low = {.f = -40.0}, .high = {.f = 125.0}},
+    {.low = {.f = 0.0}, .high = {.f = DBL_MAX}},
+    {.low = {.i = -1000}, .high = {.i = 1000}},
+};
+
+static const co_od_entry_t k_entries[] = {
+    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.device_type},
+    {.index = 0x1001, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO | CO_OD_TPDO, .size = 1, .value = &sample_values.error_register},
+    {.index = 0x1008, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_CO, .size = 14, .value = sample_values.manufacturer_device_name},
+    {.index = 0x1014, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .size = 4, .value = &sample_values.cob_id_emcy},
+    {.index = 0x1017, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .size = 2, .value = &sample_values.producer_heartbeat_time},
+    {.index = 0x1018, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1, .value = &sample_values.identity_object.highest_sub_index_supported},
+    {.index = 0x1018, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.vendor_id},
+    {.index = 0x1018, .sub = 2, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.product_code},
+    {.index = 0x1018, .sub = 3, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.revision_number},
+    {.index = 0x1018, .sub = 4, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.serial_number},
+    {.index = 0x1800, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO, .size = 1, .value = &sample_values.tpdo_communication_parameter.highest_sub_index_supported},
+    {.index = 0x1800, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .size = 4, .value = &sample_values.tpdo_communication_parameter.cob_id_used_by_tpdo},
+    {.index = 0x1800, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.tpdo_communication_parameter.transmission_type},
+    {.index = 0x2000, .sub = 0, .type = CO_TYPE_BOOLEAN, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .size = 1, .value = &sample_values.flag},
+    {.index = 0x2001, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .size = 1, .value = &sample_values.int8_value, .limits = 1},
+    {.index = 0x2002, .sub = 0, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RWW | CO_OD_RPDO, .size = 2, .value = &sample_values.int16_value},
+    {.index = 0x2003, .sub = 0, .type = CO_TYPE_INTEGER24, .attr = CO_OD_RW, .size = 3, .value = &sample_values.int24_value},
+    {.index = 0x2004, .sub = 0, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWR | CO_OD_TPDO, .size = 4, .value = &sample_values.int32_value, .limits = 2},
+    {.index = 0x2005, .sub = 0, .type = CO_TYPE_INTEGER40, .attr = CO_OD_RW, .size = 5, .value = &sample_values.int40_value},
+    {.index = 0x2006, .sub = 0, .type = CO_TYPE_INTEGER48, .attr = CO_OD_RW, .size = 6, .value = &sample_values.int48_value},
+    {.index = 0x2007, .sub = 0, .type = CO_TYPE_INTEGER56, .attr = CO_OD_RW, .size = 7, .value = &sample_values.int56_value},
+    {.index = 0x2008, .sub = 0, .type = CO_TYPE_INTEGER64, .attr = CO_OD_RW, .size = 8, .value = &sample_values.int64_value, .limits = 3},
+    {.index = 0x2009, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_WO | CO_OD_RPDO, .size = 1, .value = &sample_values.unsigned8_value, .limits = 4},
+    {.index = 0x200A, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .size = 2, .value = &sample_values.unsigned16_value, .limits = 5},
+    {.index = 0x200B, .sub = 0, .type = CO_TYPE_UNSIGNED24, .attr = CO_OD_RW, .size = 3, .value = &sample_values.unsigned24_value},
+    {.index = 0x200C, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO | CO_OD_NODEID, .size = 4, .value = &sample_values.unsigned32_value},
+    {.index = 0x200D, .sub = 0, .type = CO_TYPE_UNSIGNED40, .attr = CO_OD_RW, .size = 5, .value = &sample_values.unsigned40_value},
+    {.index = 0x200E, .sub = 0, .type = CO_TYPE_UNSIGNED48, .attr = CO_OD_RW, .size = 6, .value = &sample_values.unsigned48_value},
+    {.index = 0x200F, .sub = 0, .type = CO_TYPE_UNSIGNED56, .attr = CO_OD_RW, .size = 7, .value = &sample_values.unsigned56_value},
+    {.index = 0x2010, .sub = 0, .type = CO_TYPE_UNSIGNED64, .attr = CO_OD_RW, .size = 8, .value = &sample_values.unsigned64_value},
+    {.index = 0x2011, .sub = 0, .type = CO_TYPE_REAL32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .size = 4, .value = &sample_values.temperature_degc, .limits = 6},
+    {.index = 0x2012, .sub = 0, .type = CO_TYPE_REAL64, .attr = CO_OD_RW, .size = 8, .value = &sample_values.gain, .limits = 7},
+    {.index = 0x2013, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .size = 6, .value = sample_values.user_label},
+    {.index = 0x2014, .sub = 0, .type = CO_TYPE_OCTET_STRING, .attr = CO_OD_RO, .size = 4, .value = sample_values.key_bytes},
+    {.index = 0x2015, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .size = 1, .value = sample_values.empty_text},
+    {.index = 0x2100, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1, .value = &sample_values.analog_inputs.number_of_inputs},
+    {.index = 0x2100, .sub = 1, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .size = 2, .value = &sample_values.analog_inputs.input},
+    {.index = 0x2100, .sub = 2, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .size = 2, .value = &sample_values.analog_inputs.input_2},
+    {.index = 0x2100, .sub = 3, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .size = 2, .value = &sample_values.analog_inputs.input_3},
+    {.index = 0x2300, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1, .value = &sample_values.setpoints.highest_sub_index_supported},
+    {.index = 0x2300, .sub = 1, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID, .size = 4, .value = &sample_values.setpoints.speed, .limits = 8},
+    {.index = 0x2300, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.setpoints.default_},
+    {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.mode},
+};
+#else /* the general form */
 /* Power-on values (without the node-ID where CO_OD_NODEID is set). */
 static const sample_values_t k_defaults = {
     .device_type = 0x191u,
@@ -112,7 +214,7 @@ static const co_od_entry_t k_entries[] = {
     {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.mode, .dflt = &k_defaults.mode, .limits = NULL, .hooks = NULL},
 };
 
-#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which reads neither */
+#if CO_SHORT_PATHS
 static const uint32_t k_keys[] = {
     0x100000u, 0x100100u, 0x100800u, 0x101400u, 0x101700u, 0x101800u, 0x101801u, 0x101802u,
     0x101803u, 0x101804u, 0x180000u, 0x180001u, 0x180002u, 0x200000u, 0x200100u, 0x200200u,
@@ -121,7 +223,10 @@ static const uint32_t k_keys[] = {
     0x201300u, 0x201400u, 0x201500u, 0x210000u, 0x210001u, 0x210002u, 0x210003u, 0x230000u,
     0x230001u, 0x230002u, 0x600000u,
 };
+#endif
+#endif
 
+#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which does not read it */
 static const uint16_t k_hash[128] = {
     19, 0, 0, 0, 0, 0, 13, 18, 37, 2, 0, 0, 0, 17, 0, 0,
     1, 4, 0, 16, 0, 0, 0, 0, 11, 15, 0, 35, 0, 0, 0, 9,
@@ -132,11 +237,16 @@ static const uint16_t k_hash[128] = {
     24, 43, 0, 0, 0, 0, 0, 8, 23, 0, 41, 0, 0, 22, 0, 0,
     0, 0, 0, 21, 0, 0, 0, 39, 6, 0, 20, 0, 0, 0, 5, 0,
 };
-
 #endif
 
 const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL,
+#if CO_CONFIG_OD_COMPACT
+    .defaults = k_defaults, .limits = k_limits, .limits_count = 8u,
+#endif
 #if CO_SHORT_PATHS
-    .keys = k_keys, .hash = k_hash, .hash_mask = 127u
+#if !CO_CONFIG_OD_COMPACT
+    .keys = k_keys,
+#endif
+    .hash = k_hash, .hash_mask = 127u
 #endif
 };

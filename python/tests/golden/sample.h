@@ -3,7 +3,8 @@
  *
  * sample_values holds every value in RAM (one static instance: one node per
  * generated dictionary); sample_od is a const table (it can live in flash) whose
- * entries point into sample_values and at const power-on values. The values start
+ * entries point into sample_values, in either form of canola/od.h (the core's
+ * CO_CONFIG_OD_COMPACT chooses; the compact one is the smaller). The values start
  * at zero: call co_od_reset(&sample_od, 0x0000, 0xFFFF, node_id) once before use;
  * entries whose EDS default uses $NODEID (CO_OD_NODEID) get the node-ID added then.
  * DOMAIN entries left out (generated with --domain-size 0); the application
@@ -15,8 +16,8 @@
 
 #include "canola/od.h"
 
-#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 3
-#error "sample.h was generated for object dictionary format 3: regenerate it with the odgen of this canola"
+#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 4
+#error "sample.h was generated for object dictionary format 4: regenerate it with the odgen of this canola"
 #endif
 
 #ifdef __cplusplus

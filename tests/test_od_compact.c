@@ -1,0 +1,227 @@
+/* test_od_compact.c -- the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1, the core
+ * built so: tests/CMakeLists.txt): power-on values from the image without zeros (numbers
+ * through their wire form, strings, the node-ID, index ranges, DOMAINs kept), limits
+ * referred to by position, the checks co_od_validate makes of both, and look-ups through
+ * a hash that compares the entries (no key array). */
+#include "canola/od.h"
+#include "check.h"
+
+#if !CO_CONFIG_OD_COMPACT
+#error "test_od_compact.c needs the core built with CO_CONFIG_OD_COMPACT 1"
+#endif
+
+typedef struct values {
+    uint32_t device_type;
+    int16_t offset;
+    int32_t i24;
+    float gain;
+    uint32_t cob;
+    char name[8];
+    uint8_t log_data[4];
+    co_od_domain_t log;
+    uint8_t level;
+} values_t;
+
+static values_t v;
+
+static const co_od_limits_t k_limits[] = {
+    {.low = {.i = -100}, .high = {.i = 100}},
+    {.low = {.u = 1}, .high = {.u = 9}},
+};
+
+/* Records: position (2 bytes), length (1), wire bytes; trailing zeros left out. */
+static const uint8_t k_image[] = {
+    0,    0,    2, 0x91, 0x01,             /* 0x1000: 0x191 */
+    1,    0,    2, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
+    2,    0,    3, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    3,    0,    4, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
+    4,    0,    2, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
+    5,    0,    2, 'h',  'i',              /* 0x2004: "hi" */
+    6,    0,    2, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
+    0xFF, 0xFF, 0,                         /* end */
+};
+
+#define ENTRY(idx, t, a, sz, val)                                                                  \
+    {                                                                                              \
+        .index = (idx), .sub = 0, .type = (t), .attr = (a), .size = (sz), .value = (val)           \
+    }
+
+static co_od_entry_t entries[] = {
+    ENTRY(0x1000, CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &v.device_type),
+    {.index = 0x2000,
+     .type = CO_TYPE_INTEGER16,
+     .attr = CO_OD_RW,
+     .size = 2,
+     .value = &v.offset,
+     .limits = 1},
+    ENTRY(0x2001, CO_TYPE_INTEGER24, CO_OD_RW, 3, &v.i24),
+    ENTRY(0x2002, CO_TYPE_REAL32, CO_OD_RW, 4, &v.gain),
+    ENTRY(0x2003, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &v.cob),
+    ENTRY(0x2004, CO_TYPE_VISIBLE_STRING, CO_OD_RW, 8, v.name),
+    ENTRY(0x2005, CO_TYPE_DOMAIN, CO_OD_RW, 4, &v.log),
+    {.index = 0x2006,
+     .type = CO_TYPE_UNSIGNED8,
+     .attr = CO_OD_RW,
+     .size = 1,
+     .value = &v.level,
+     .limits = 2},
+};
+
+#define COUNT ((uint32_t)(sizeof entries / sizeof entries[0]))
+
+static co_od_t make_od(void)
+{
+    co_od_t od = {.entries = entries,
+                  .count = COUNT,
+                  .defaults = k_image,
+                  .limits = k_limits,
+                  .limits_count = 2};
+    memset(&v, 0x5A, sizeof v);
+    v.log.data = v.log_data;
+    v.log.len = 0;
+    return od;
+}
+
+static void test_entry_is_compact(void)
+{
+    /* a pointer, index, size, sub-index, type, attributes, limits: no per-entry pointers to
+     * defaults, limits or hooks */
+    CHECK_EQ(sizeof(co_od_entry_t), sizeof(void *) + 8u);
+    CHECK(co_od_hooks_of(&entries[0]) == NULL);
+    CHECK(!co_od_has_limits(&entries[0]));
+    CHECK(co_od_has_limits(&entries[1]));
+}
+
+static void test_reset_from_image(void)
+{
+    co_od_t od = make_od();
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    co_od_reset(&od, 0x0000, 0xFFFF, 5);
+    CHECK_EQ(v.device_type, 0x191u);
+    CHECK_EQ(v.offset, -5);
+    CHECK_EQ(v.i24, -8388608);
+    CHECK(v.gain == 21.5f);
+    CHECK_EQ(v.cob, 0x185u); /* the node-ID added */
+    CHECK_STR(v.name, "hi");
+    CHECK_EQ(v.name[7], 0); /* the rest of the string zeroed */
+    CHECK_EQ(v.level, 0);   /* no record: zero */
+    CHECK_EQ(v.log.len, 2u);
+    CHECK_EQ(v.log_data[1], 0xCDu);
+}
+
+static void test_reset_range(void)
+{
+    co_od_t od = make_od();
+    co_od_reset(&od, 0x2001, 0x2003, 1);
+    CHECK_EQ(v.device_type, 0x5A5A5A5Au); /* outside the range: as it was */
+    CHECK_EQ((uint16_t)v.offset, 0x5A5Au);
+    CHECK_EQ(v.i24, -8388608);
+    CHECK_EQ(v.cob, 0x181u);
+    CHECK_EQ(v.name[0], 0x5A);
+    CHECK_EQ(v.level, 0x5Au);
+}
+
+static void test_domain_without_record_kept(void)
+{
+    static const uint8_t empty[] = {0xFF, 0xFF, 0};
+    co_od_t od = make_od();
+    od.defaults = empty;
+    v.log.len = 3;
+    co_od_reset(&od, 0x0000, 0xFFFF, 0);
+    CHECK_EQ(v.log.len, 3u); /* a DOMAIN without a power-on value keeps its own */
+    CHECK_EQ(v.offset, 0);   /* every other value: zero */
+    CHECK_EQ(v.name[0], 0);
+    od.defaults = NULL; /* no image at all: zeros */
+    v.device_type = 7;
+    co_od_reset(&od, 0x0000, 0xFFFF, 0);
+    CHECK_EQ(v.device_type, 0u);
+}
+
+static void test_limits_by_position(void)
+{
+    co_od_t od = make_od();
+    co_od_reset(&od, 0x0000, 0xFFFF, 0);
+    const co_od_entry_t *e = co_od_find(&od, 0x2000, 0, NULL);
+    uint8_t high[2] = {101, 0};
+    uint8_t low[2] = {0x9B, 0xFF}; /* -101 */
+    uint8_t ok[2] = {100, 0};
+    CHECK_EQ(co_od_write(&od, e, high, 2), CO_ABORT_VALUE_HIGH);
+    CHECK_EQ(co_od_write(&od, e, low, 2), CO_ABORT_VALUE_LOW);
+    CHECK_EQ(co_od_write(&od, e, ok, 2), CO_ABORT_NONE);
+    CHECK_EQ(v.offset, 100);
+    e = co_od_find(&od, 0x2006, 0, NULL);
+    uint8_t zero = 0;
+    CHECK_EQ(co_od_write(&od, e, &zero, 1), CO_ABORT_VALUE_LOW);
+    e = co_od_find(&od, 0x2001, 0, NULL); /* no limits */
+    uint8_t any[3] = {0xFF, 0xFF, 0x7F};
+    CHECK_EQ(co_od_write(&od, e, any, 3), CO_ABORT_NONE);
+}
+
+static void test_validate_limits_and_image(void)
+{
+    co_od_t od = make_od();
+    uint32_t bad = 0;
+    od.limits_count = 1; /* 0x2006 refers to limits 2 */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 7u);
+    od = make_od();
+    od.limits = NULL;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 1u);
+
+    static const uint8_t too_long[] = {1, 0, 3, 1, 2, 3, 0xFF, 0xFF, 0}; /* 3 bytes, INTEGER16 */
+    static const uint8_t out_of_order[] = {3, 0, 1, 1, 1, 0, 1, 1, 0xFF, 0xFF, 0};
+    static const uint8_t past_table[] = {8, 0, 1, 1, 0xFF, 0xFF, 0};
+    static const uint8_t string_cap[] = {5, 0, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0xFF, 0xFF, 0};
+    static const uint8_t long_form[] = {5,   0,   255, 8,   0,   'a',  'b',  'c',
+                                        'd', 'e', 'f', 'g', 'h', 0xFF, 0xFF, 0};
+    od = make_od();
+    od.defaults = too_long;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 1u);
+    od.defaults = out_of_order;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 1u);
+    od.defaults = past_table;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, COUNT);
+    od.defaults = string_cap;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 5u);
+    od.defaults = long_form; /* a length of 255 or more: in the 2 bytes after 255 */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
+    co_od_reset(&od, 0x2004, 0x2004, 0);
+    CHECK(memcmp(v.name, "abcdefgh", 8) == 0);
+}
+
+static void test_hash_compares_entries(void)
+{
+    co_od_t od = make_od();
+    uint16_t slots[16];
+    CHECK_EQ(co_od_hash_build(&od, slots, co_od_hash_bits(od.count)), CO_OK);
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    for (uint32_t i = 0; i < COUNT; i++) {
+        CHECK(co_od_find(&od, entries[i].index, 0, NULL) == &entries[i]);
+    }
+    co_abort_t abort = CO_ABORT_NONE;
+    CHECK(co_od_find(&od, 0x2003, 1, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_SUB);
+    CHECK(co_od_find(&od, 0x3000, 0, &abort) == NULL);
+    CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
+#if CO_SHORT_PATHS
+    slots[CO_OD_HASH_HOME(CO_OD_KEY(0x2003, 0), od.hash_mask)] = 0; /* 0x2003 lost */
+    CHECK_EQ(co_od_validate(&od, NULL), CO_ERR_CONFIG);
+#endif
+}
+
+int main(void)
+{
+    RUN(test_entry_is_compact);
+    RUN(test_reset_from_image);
+    RUN(test_reset_range);
+    RUN(test_domain_without_record_kept);
+    RUN(test_limits_by_position);
+    RUN(test_validate_limits_and_image);
+    RUN(test_hash_compares_entries);
+    return check_summary();
+}
