@@ -20,7 +20,6 @@ Failures are :class:`BusError` with a one-line message; nothing waits longer tha
 
 from __future__ import annotations
 
-import logging
 import os
 import select
 import socket
@@ -39,10 +38,6 @@ __all__ = ["BUS_ENV", "BusError", "NoBusError", "connection_lost", "default_bus"
 BUS_ENV = "CANOLA_BUS"
 
 DEFAULT_SOCKETCAND_PORT = 29536
-
-# python-can's socketcand client warns whenever a TCP read ends inside an element, which is
-# ordinary on a busy stream: keep its real errors only.
-logging.getLogger("can.interfaces.socketcand.socketcand").setLevel(logging.ERROR)
 
 
 class BusError(Error):
