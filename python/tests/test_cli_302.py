@@ -17,7 +17,9 @@ from conftest import wait_until
 from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model, write_dcf
 
+import canola.cli.common
 from canola import Device
+from canola.core import SimBus
 from canola.lss import UNCONFIGURED
 from canola.program import ProgramSlot
 
@@ -213,69 +215,79 @@ def test_flash_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str])
 
 # ---- canola lss
 
+#: LSS time-out of the CLI tests on python-can (ms): requests that end on an answer wait
+#: for it, so it only bounds them, generously for starved threads (a device that is absent
+#: costs it once).
+LSS_MS = "2000"
 
-#: LSS time-out of the CLI tests (ms). A fastscan waits out 133 of them per device (and
-#: reads a late answer as a 1 bit): generous, as python-can threads on a starved machine
-#: answer late (50 ms was not enough at a load of 10 on 2 cores).
-LSS_MS = "250"
+
+class _SharedSimBus(SimBus):
+    """A simulated bus that outlives the commands: each ``canola lss`` shuts its bus down
+    when it ends; the devices stay on this one for the next command."""
+
+    def shutdown(self) -> None:
+        """Nothing to release: the bus lives as long as the test."""
 
 
-@pytest.mark.slow
-def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str], net: Net) -> None:
-    opts, device = net
-    dev = device(UNCONFIGURED, serial=0x11)
-    device(9, serial=0x22)  # has a node-ID: fastscan does not find it
+@pytest.fixture
+def sim_net(monkeypatch: pytest.MonkeyPatch) -> tuple[list[str], SimBus]:
+    """Bus options for the CLI that open one simulated bus (virtual time), and that bus.
+    Fastscan reads a missing answer as a 1 bit, and 134 steps each wait out the LSS
+    time-out: on python-can's threads a starved machine delivers an answer in the next
+    step and corrupts the scan (and it takes 134 time-outs of wall clock per device). On
+    the simulated bus the commands run the same code in virtual time: exact and quick."""
+    bus = _SharedSimBus(500_000)
+    monkeypatch.setattr(canola.cli.common, "open_bus",
+                        lambda *, iface=None, url=None, timeout=3.0: bus)
+    return ["--bus", "virtual://simulated"], bus
+
+
+def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str],
+                                 sim_net: tuple[list[str], SimBus]) -> None:
+    opts, bus = sim_net
+    dev = Device(model(serial=0x11), UNCONFIGURED, bus)
+    dev.start()
+    Device(model(serial=0x22), 9, bus).start()  # has a node-ID: fastscan does not find it
     address = f"{VENDOR:08X}:{PRODUCT:08X}:{REVISION:08X}:00000011"
-    code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS)
+    code, out, err = cli(capsys, "lss", "scan", *opts)
     assert (code, err) == (0, "")
     assert out.splitlines()[0] == address
     assert out.splitlines()[1].startswith("1 device(s) without node-ID (fastscan took ")
 
-    code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--timeout", LSS_MS)
+    code, out, _ = cli(capsys, "lss", "inquire", address, *opts)
     assert code == 0
     assert out == (f"vendor 0x{VENDOR:08X} product 0x{PRODUCT:08X} revision "
                    f"0x{REVISION:08X} serial 0x00000011 node-ID none\n")
 
-    code, out, err = cli(capsys, "lss", "set-id", "ca0:302:10000:11", "40", *opts,
-                         "--timeout", LSS_MS)
+    code, out, err = cli(capsys, "lss", "set-id", "ca0:302:10000:11", "40", *opts)
     assert (code, err) == (0, "")
     assert out == f"{address}: node-ID 40\n"
-    assert wait_until(lambda: dev.nmt_state == "PRE-OPERATIONAL")
-    assert dev.node_id == 40
+    bus.run_for(100_000)  # the device boots with its node-ID
+    assert (dev.nmt_state, dev.node_id) == ("PRE-OPERATIONAL", 40)
 
     other = f"{VENDOR:X}:{PRODUCT:X}:{REVISION:X}:22"
-    code, out, _ = cli(capsys, "lss", "set-id", other, "41", *opts, "--timeout", LSS_MS,
-                       "--json")
+    code, out, _ = cli(capsys, "lss", "set-id", other, "41", *opts, "--json")
     assert json.loads(out) == {"address": f"{VENDOR:08X}:{PRODUCT:08X}:{REVISION:08X}:00000022",
                                "node_id": 41, "stored": False}
-    code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--timeout", LSS_MS,
-                       "--json")
+    code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--json")
     assert json.loads(out)["node_id"] == 40
-    code, out, _ = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS, "--json")
+    code, out, _ = cli(capsys, "lss", "scan", *opts, "--json")
     assert (code, json.loads(out)) == (0, [])
 
 
 def test_lss_scan_ends_against_slaves_that_answer_in_configuration(
-        capsys: pytest.CaptureFixture[str], net: Net) -> None:
-    opts, _ = net
-    channel = opts[1].removeprefix("virtual://")
-    bus = can.Bus(interface="virtual", channel=channel)
-    try:
-        slave = ChattyLssSlave(bus, (0x2E0, 0x17, 3, 0x100), port_id=100)
-        code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS,
-                             "--max-devices", "3")
-        assert (code, err) == (0, "")
-        assert out.splitlines()[0] == "000002E0:00000017:00000003:00000100"
-        assert out.splitlines()[1].startswith("1 device(s) without node-ID")
-        # bounded: the limit reached is said, with what was found and the advice
-        code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS,
-                             "--time-limit", "1")
-        assert (code, out) == (1, "")
-        assert "not done within 1 s" in err and "--time-limit" in err and "--timeout" in err
-        one_line_error(err)
-        slave.stop()
-    finally:
-        bus.shutdown()
+        capsys: pytest.CaptureFixture[str], sim_net: tuple[list[str], SimBus]) -> None:
+    opts, bus = sim_net
+    ChattyLssSlave(bus, (0x2E0, 0x17, 3, 0x100), port_id=100)
+    code, out, err = cli(capsys, "lss", "scan", *opts, "--max-devices", "3")
+    assert (code, err) == (0, "")
+    assert out.splitlines()[0] == "000002E0:00000017:00000003:00000100"
+    assert out.splitlines()[1].startswith("1 device(s) without node-ID")
+    # bounded (1 s of virtual time): the limit reached is said, with the advice
+    code, out, err = cli(capsys, "lss", "scan", *opts, "--time-limit", "1")
+    assert (code, out) == (1, "")
+    assert "not done within 1 s" in err and "--time-limit" in err and "--timeout" in err
+    one_line_error(err)
 
 
 def test_lss_failures(capsys: pytest.CaptureFixture[str], net: Net) -> None:

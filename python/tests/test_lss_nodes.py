@@ -135,8 +135,8 @@ def test_refused_node_id() -> None:
 def test_lss_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
     """LSS over python-can's threads: identify, select, configure, inquire, the device boots.
     Requests that end on an answer wait for it (the time-out only bounds them); a fastscan
-    reads a missing answer as a bit, so it runs in virtual time above, and on python-can
-    with a generous time-out in test_cli_302.test_lss_scan_set_id_inquire."""
+    reads a missing answer as a bit, so it runs in virtual time only (above, and the CLI's
+    in test_cli_302)."""
     master = Master(can_bus(), node_id=1)
     device = Device(model(serial=0x100), UNCONFIGURED, can_bus())
     with master, device:

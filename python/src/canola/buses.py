@@ -20,7 +20,6 @@ Failures are :class:`BusError` with a one-line message; nothing waits longer tha
 
 from __future__ import annotations
 
-import logging
 import os
 import select
 import socket
@@ -30,6 +29,7 @@ from typing import Any
 import can
 
 from canola.errors import Error
+from canola.socketcand_bus import SocketcandBus
 
 __all__ = ["BUS_ENV", "BusError", "NoBusError", "connection_lost", "default_bus", "open_bus",
            "parse_bus_url"]
@@ -38,10 +38,6 @@ __all__ = ["BUS_ENV", "BusError", "NoBusError", "connection_lost", "default_bus"
 BUS_ENV = "CANOLA_BUS"
 
 DEFAULT_SOCKETCAND_PORT = 29536
-
-# python-can's socketcand client warns whenever a TCP read ends inside an element, which is
-# ordinary on a busy stream: keep its real errors only.
-logging.getLogger("can.interfaces.socketcand.socketcand").setLevel(logging.ERROR)
 
 
 class BusError(Error):
@@ -138,29 +134,22 @@ def _reason(exc: BaseException) -> str:
 
 def _open_socketcand(host: str, port: int, channel: str, timeout: float) -> can.BusABC:
     where = f"socketcand://{host}:{port}/{channel}"
-    # python-can retries a refused connection for 10 s and waits for the greeting without a
-    # limit: check the server first, and bound every socket operation of the handshake.
     try:
-        with socket.create_connection((host, port), timeout=timeout):
-            pass
+        return SocketcandBus(host, port, channel, timeout)
     except OSError as exc:
         raise BusError(f"cannot connect to {where}: {_reason(exc)}") from exc
-    previous = socket.getdefaulttimeout()
-    socket.setdefaulttimeout(timeout)
-    try:
-        return can.Bus(interface="socketcand", host=host, port=port, channel=channel)
-    except (OSError, can.CanError, TimeoutError) as exc:
+    except can.CanError as exc:
         raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
-    finally:
-        socket.setdefaulttimeout(previous)
 
 
 def connection_lost(bus: can.BusABC) -> bool:
     """True when ``bus`` is a socketcand connection the server has closed.
 
-    python-can's socketcand client does not report a closed connection (its receive just
-    returns nothing, at once, forever): peek at its socket.
+    Receives just return nothing once the server is gone: canola's client says so
+    (:class:`SocketcandBus`); for python-can's, peek at its socket.
     """
+    if isinstance(bus, SocketcandBus):
+        return bus.lost
     sock = getattr(bus, "_SocketCanDaemonBus__socket", None)
     if not isinstance(sock, socket.socket):
         return False

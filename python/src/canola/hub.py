@@ -63,8 +63,10 @@ log = logging.getLogger("canola.hub")
 #: socketcand's usual port.
 DEFAULT_PORT = 29536
 
-#: Delay between the ``< ok >`` of ``< rawmode >`` and the first frame: python-can reads
-#: the ok with a single recv() and compares it whole, so a frame must not share its segment.
+#: Delay between the ``< ok >`` of ``< rawmode >`` and the first frame: python-can's client
+#: reads the ok with a single recv() and compares it whole, so a frame must not share its
+#: segment. Only a mitigation: a client run later than this still fails (canola's own
+#: client, :mod:`canola.socketcand_bus`, reads a stream and needs no delay).
 RAW_SETTLE_S = 0.05
 
 

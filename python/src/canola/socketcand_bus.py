@@ -1,0 +1,128 @@
+"""canola's socketcand client: a python-can bus on a socketcand server (``canola bus serve``
+or the daemon) in raw mode, for the buses :func:`canola.buses.open_bus` opens.
+
+It reads the server's stream as a stream: the handshake's ``< ok >`` and the frames that
+follow it may arrive in one TCP segment (a server sends frames as soon as the channel is
+joined, and a busy machine runs the client late), and frames cut anywhere are joined.
+python-can's own socketcand client compares each handshake reply with what one recv()
+returned, so a frame that shares the reply's segment fails the connection (``Expected
+'< ok >' got: '< ok >< frame ... >'``).
+"""
+
+from __future__ import annotations
+
+import collections
+import select
+import socket
+import threading
+import time
+from typing import Any
+
+import can
+
+from canola.socketcand import (
+    Frame,
+    ProtocolError,
+    format_send,
+    parse_server_element,
+    split_elements,
+)
+
+__all__ = ["SocketcandBus"]
+
+_READ = 4096
+
+
+class SocketcandBus(can.BusABC):
+    """Connected, channel ``channel`` opened and in raw mode once constructed; every step of
+    the connection bounded by ``timeout`` seconds. Raises OSError (no server to connect to)
+    or can.CanError (no answer, a refusal, not the protocol)."""
+
+    def __init__(self, host: str, port: int, channel: str, timeout: float = 3.0,
+                 **kwargs: Any) -> None:
+        self._channel = channel
+        self._rest = b""
+        self._frames: collections.deque[can.Message] = collections.deque()
+        self._send_lock = threading.Lock()
+        #: True once the server closed the connection (seen by a receive).
+        self.lost = False
+        self._sock = socket.create_connection((host, port), timeout=timeout)
+        try:
+            deadline = time.monotonic() + timeout
+            self._expect("hi", deadline)
+            self._sock.sendall(f"< open {channel} >".encode("ascii"))
+            self._expect("ok", deadline)
+            self._sock.sendall(b"< rawmode >")
+            self._expect("ok", deadline)
+            self._sock.settimeout(None)
+        except BaseException:
+            self._sock.close()
+            raise
+        self.channel_info = f"socketcand {channel} on {host}:{port}"
+        super().__init__(channel=channel, **kwargs)
+
+    # ---- the stream
+
+    def _read(self, wait: float | None) -> list[str]:
+        """The elements completed by what arrives within ``wait`` seconds (None: block);
+        frames among them are queued, the rest returned."""
+        ready, _, _ = select.select([self._sock], [], [], wait)
+        if not ready:
+            return []
+        data = self._sock.recv(_READ)
+        if not data:
+            self.lost = True
+            return []
+        try:
+            elements, self._rest = split_elements(self._rest + data)
+            others = []
+            for element in elements:
+                _, frame, stamp = parse_server_element(element)
+                if frame is None:
+                    others.append(element)
+                else:
+                    self._frames.append(_message(frame, stamp, self._channel))
+        except ProtocolError as exc:
+            self._rest = b""
+            raise can.CanOperationError(f"socketcand server sent {exc}") from None
+        return others
+
+    def _expect(self, verb: str, deadline: float) -> None:
+        while not self.lost:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise can.CanInitializationError(f"no '< {verb} >' from the server")
+            for element in self._read(left):
+                if element.split()[1] != verb:
+                    raise can.CanInitializationError(f"expected '< {verb} >', got {element!r}")
+                verb = ""  # one reply consumed: later ones are out of turn
+            if not verb:
+                return
+        raise can.CanInitializationError("the server closed the connection")
+
+    # ---- python-can
+
+    def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
+        if not self._frames and not self.lost:
+            self._read(timeout)  # replies in raw mode (an echo, an error) are not frames
+        return (self._frames.popleft() if self._frames else None), False
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        frame = Frame(msg.arbitration_id, b"" if msg.is_remote_frame else bytes(msg.data),
+                      extended=msg.is_extended_id, rtr=msg.is_remote_frame, dlc=msg.dlc)
+        with self._send_lock:
+            try:
+                self._sock.sendall(format_send(frame).encode("ascii"))
+            except OSError as exc:
+                raise can.CanOperationError(f"socketcand send failed: {exc}") from exc
+
+    def shutdown(self) -> None:
+        super().shutdown()
+        self._sock.close()
+
+
+def _message(frame: Frame, stamp: float, channel: str) -> can.Message:
+    return can.Message(timestamp=stamp, arbitration_id=frame.can_id,
+                       is_extended_id=frame.extended, is_remote_frame=frame.rtr,
+                       dlc=frame.dlc if frame.rtr else len(frame.data),
+                       data=None if frame.rtr else frame.data, channel=channel)
