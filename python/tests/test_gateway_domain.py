@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import base64
 import os
-import time
 from pathlib import Path
 
 import pytest
@@ -38,14 +37,12 @@ def test_one_mib_domain_block_write_and_read_back() -> None:
             assert await c.ask("[1] set sdo_block 1") == "[1] OK"
             data = os.urandom(1 << 20)
             text = base64.b64encode(data).decode()
-            started = time.monotonic()
             assert await c.ask(f"[2] 2 w 0x2200 0 d {text}", timeout=60) == "[2] OK"
             assert blob.value == data
             bus.run_for(1000)
             assert written == [(0x2200, 0, data)]
             assert device.od.read(0x2200, 0) == data
             assert await c.ask("[3] 2 r 0x2200 0 d", timeout=60) == f"[3] {text}"
-            assert time.monotonic() - started < 30
             # segmented too (small), and a download over max_size is refused, value kept
             assert await c.ask("[4] set sdo_block 0") == "[4] OK"
             assert await c.ask("[5] 2 w 0x2200 0 hex 01 02 03 04 05 06 07 08 09") == "[5] OK"
