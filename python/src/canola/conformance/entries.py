@@ -1,0 +1,82 @@
+"""The EDS from the checks' side: which entries are readable, writable, of fixed size,
+PDO-mappable, and the values the EDS fixes."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from canola import eds, values
+from canola.datatypes import DATA_TYPES, INTEGER_TYPES
+
+__all__ = ["VARIABLE_TYPES", "describe", "fixed_size", "integer_range", "mappable",
+           "readable", "value_text", "variables", "writable"]
+
+#: Data types whose length is the value's (strings, DOMAIN).
+VARIABLE_TYPES = frozenset({0x0009, 0x000A, 0x000B, 0x000F})
+
+_SIZES = {0x0001: 1, 0x0008: 4, 0x0011: 8, 0x000C: 6, 0x000D: 6}
+
+
+def variables(od: eds.ObjectDictionary) -> Iterator[eds.Variable]:
+    """Every entry of the EDS (VARs and sub-indices), in index order."""
+    for index in sorted(od.objects):
+        obj = od.objects[index]
+        for sub in sorted(obj.subs):
+            yield obj.subs[sub]
+
+
+def readable(var: eds.Variable) -> bool:
+    return var.access_type in ("ro", "rw", "rwr", "rww", "const")
+
+
+def writable(var: eds.Variable) -> bool:
+    return var.access_type in ("wo", "rw", "rwr", "rww")
+
+
+def fixed_size(var: eds.Variable) -> int | None:
+    """The wire size of the entry's type in bytes; None for strings, DOMAIN and unknown
+    types."""
+    code = var.data_type
+    if code is None or code in VARIABLE_TYPES:
+        return None
+    if code in _SIZES:
+        return _SIZES[code]
+    info = DATA_TYPES.get(code)
+    return info.bits // 8 if info is not None and info.bits else None
+
+
+def integer_range(var: eds.Variable) -> tuple[int, int] | None:
+    """The range of an integer entry's type; None for other types."""
+    if var.data_type not in INTEGER_TYPES or var.data_type == 0x0001:
+        return None
+    info = DATA_TYPES[var.data_type]
+    return info.min, info.max
+
+
+def mappable(var: eds.Variable, *, tpdo: bool) -> bool:
+    """PDO-mappable per the EDS, in the direction of a TPDO (readable) or an RPDO
+    (writable), and of a size a mapping entry can give (1..64 bits, whole bytes)."""
+    size = fixed_size(var)
+    if not var.pdo_mapping or size is None or not 1 <= size <= 8:
+        return False
+    return readable(var) if tpdo else writable(var)
+
+
+def describe(var: eds.Variable) -> str:
+    """``0x1018:1 (Vendor-ID, ro UNSIGNED32)``."""
+    kind = DATA_TYPES[var.data_type].name if var.data_type in DATA_TYPES else "?"
+    name = f"{var.name}, " if var.name else ""
+    return f"0x{var.index:04X}:{var.subindex} ({name}{var.access_type} {kind})"
+
+
+def value_text(var: eds.Variable, data: bytes) -> str:
+    """``data`` as a value of the entry's type (hex for integers), or hex bytes."""
+    if var.data_type in DATA_TYPES:
+        try:
+            value = values.decode(var.data_type, data)
+        except values.ValueFormatError:
+            return f"[{data.hex(' ').upper()}]"
+        if isinstance(value, int) and not isinstance(value, bool):
+            return f"0x{value:X}" if value >= 0 else str(value)
+        return repr(value)
+    return f"[{data.hex(' ').upper()}]"

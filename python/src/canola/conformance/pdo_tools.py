@@ -1,0 +1,270 @@
+"""PDOs from the checks' side: which PDOs the EDS has, their configuration read from the
+node, and the CiA 301 re-mapping procedure (§7.5.2.36/38) to change and restore them:
+invalidate (COB-ID bit 31), mapping count 0, entries, count, parameters, COB-ID valid."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from canola import SdoAbort, eds, values
+from canola.conformance.context import Context
+from canola.conformance.entries import (
+    describe,
+    fixed_size,
+    mappable,
+    readable,
+    variables,
+    writable,
+)
+from canola.conformance.rawsdo import NoAnswer, ProtocolViolation
+
+__all__ = ["INVALID", "check_values", "sync_cob", "tpdo_frames", "Mapped", "Pdo", "PdoConfig", "configure", "dynamic", "entry_of", "keep",
+           "mapped", "pdos", "read_config", "rpdo_payload", "try_mapping", "usable_pdo",
+           "write_config"]
+
+INVALID = 0x80000000
+#: Parameter sub-indices of a communication record besides the COB-ID (1).
+PARAMS = (2, 3, 5, 6)
+
+
+@dataclass(frozen=True)
+class Pdo:
+    """PDO ``n`` (0-based) of one direction: its communication and mapping indices."""
+
+    tpdo: bool
+    n: int
+
+    @property
+    def comm(self) -> int:
+        return (0x1800 if self.tpdo else 0x1400) + self.n
+
+    @property
+    def mapping(self) -> int:
+        return self.comm + 0x200
+
+    @property
+    def name(self) -> str:
+        return f"{'TPDO' if self.tpdo else 'RPDO'}{self.n + 1}"
+
+
+@dataclass
+class PdoConfig:
+    """A PDO's configuration as the node has it: COB-ID, parameters (sub-index -> value,
+    those the EDS has), mapping count and every mapping entry the EDS has (1-based)."""
+
+    cob: int
+    params: dict[int, int] = field(default_factory=dict)
+    count: int = 0
+    entries: dict[int, int] = field(default_factory=dict)
+
+    @property
+    def valid(self) -> bool:
+        return not self.cob & INVALID
+
+    @property
+    def mapped(self) -> list[int]:
+        return [self.entries[i] for i in range(1, self.count + 1) if i in self.entries]
+
+
+def pdos(ctx: Context, *, tpdo: bool) -> list[Pdo]:
+    """The PDOs of a direction whose communication and mapping records the EDS has."""
+    found = []
+    for n in range(512):
+        pdo = Pdo(tpdo, n)
+        if ctx.var(pdo.comm, 1) is not None and ctx.var(pdo.mapping, 0) is not None:
+            found.append(pdo)
+    return found
+
+
+def dynamic(ctx: Context, pdo: Pdo) -> bool:
+    """The EDS lets the mapping be written."""
+    var = ctx.var(pdo.mapping, 0)
+    return var is not None and writable(var) and ctx.var(pdo.mapping, 1) is not None
+
+
+def _size(ctx: Context, index: int, sub: int) -> int:
+    var = ctx.var(index, sub)
+    return (fixed_size(var) or 4) if var is not None else 4
+
+
+def read_config(ctx: Context, pdo: Pdo) -> PdoConfig:
+    cfg = PdoConfig(ctx.read_uint(pdo.comm, 1))
+    for sub in PARAMS:
+        if ctx.var(pdo.comm, sub) is not None:
+            cfg.params[sub] = ctx.read_uint(pdo.comm, sub)
+    cfg.count = ctx.read_uint(pdo.mapping, 0)
+    obj = ctx.od.objects[pdo.mapping]
+    for sub in sorted(obj.subs):
+        if sub:
+            cfg.entries[sub] = ctx.read_uint(pdo.mapping, sub)
+    return cfg
+
+
+def default_cob(ctx: Context, pdo: Pdo, cfg: PdoConfig) -> int:
+    """A valid COB-ID for the PDO: its own without bit 31, else the pre-defined one."""
+    cob = cfg.cob & ~INVALID
+    if cob & 0x7FF:
+        return cob
+    if pdo.n < 4:
+        return (0x180 if pdo.tpdo else 0x200) + 0x100 * pdo.n + ctx.node_id
+    ctx.skip(f"{pdo.name} has no COB-ID and none pre-defined")
+
+
+def write_config(ctx: Context, pdo: Pdo, cfg: PdoConfig, *, touch_mapping: bool) -> None:
+    """Write ``cfg`` by the re-mapping procedure (each step must succeed, or the check
+    ends). ``touch_mapping``: write the mapping (count 0, entries, count)."""
+    ctx.write_uint(pdo.comm, 1, read_cob(ctx, pdo) | INVALID, 4)
+    if touch_mapping:
+        ctx.write_uint(pdo.mapping, 0, 0, 1)
+        for sub, entry in cfg.entries.items():
+            if sub <= cfg.count:
+                ctx.write_uint(pdo.mapping, sub, entry, 4)
+        ctx.write_uint(pdo.mapping, 0, cfg.count, 1)
+    for sub, value in cfg.params.items():
+        ctx.write_uint(pdo.comm, sub, value, _size(ctx, pdo.comm, sub))
+    ctx.write_uint(pdo.comm, 1, cfg.cob, 4)
+
+
+def read_cob(ctx: Context, pdo: Pdo) -> int:
+    return ctx.read_uint(pdo.comm, 1)
+
+
+def keep(ctx: Context, pdo: Pdo) -> PdoConfig:
+    """The PDO's configuration, written back after the check."""
+    original = read_config(ctx, pdo)
+    touch = dynamic(ctx, pdo)
+    ctx.on_undo(f"restore {pdo.name}",
+                lambda: write_config(ctx, pdo, original, touch_mapping=touch))
+    return original
+
+
+def configure(ctx: Context, pdo: Pdo, *, entries: Sequence[int] | None = None,
+              **params: int) -> PdoConfig:
+    """Give the PDO ``entries`` (None: keep its mapping) and parameters by name
+    (``type``, ``inhibit``, ``event``, ``sync_start``), valid; restored after the check."""
+    original = keep(ctx, pdo)
+    subs = {"type": 2, "inhibit": 3, "event": 5, "sync_start": 6}
+    cfg = PdoConfig(default_cob(ctx, pdo, original), dict(original.params), original.count,
+                    dict(original.entries))
+    for name, value in params.items():
+        if ctx.var(pdo.comm, subs[name]) is None:
+            ctx.skip(f"the EDS has no {pdo.name} {name} (0x{pdo.comm:04X}:{subs[name]})")
+        cfg.params[subs[name]] = value
+    if entries is not None:
+        cfg.count = len(entries)
+        cfg.entries.update(dict(enumerate(entries, start=1)))
+    write_config(ctx, pdo, cfg, touch_mapping=entries is not None)
+    return cfg
+
+
+def entry_of(var: eds.Variable) -> int:
+    """The mapping entry of an entry: index << 16 | sub << 8 | length in bits."""
+    return var.index << 16 | var.subindex << 8 | 8 * (fixed_size(var) or 0)
+
+
+@dataclass(frozen=True)
+class Mapped:
+    """One mapped entry of a PDO: the EDS entry (None: a dummy or unknown entry) and its
+    place in the frame."""
+
+    var: eds.Variable | None
+    offset: int
+    size: int
+
+
+def mapped(ctx: Context, entries: Sequence[int]) -> list[Mapped]:
+    """The mapped entries of a mapping, byte-aligned (bit lengths that are not whole bytes
+    give None entries)."""
+    out, offset = [], 0
+    for entry in entries:
+        bits = entry & 0xFF
+        size = bits // 8
+        out.append(Mapped(ctx.var(entry >> 16, (entry >> 8) & 0xFF) if bits % 8 == 0 else None,
+                          offset, size))
+        offset += size
+    return out
+
+
+def usable_pdo(ctx: Context, *, tpdo: bool, need_writable: bool = False
+               ) -> tuple[Pdo, list[int]] | None:
+    """A PDO of the direction and a mapping for it whose entries the EDS knows (and that
+    SDO can read back, and for ``need_writable`` write): the node's own mapping when it
+    fits, else the first mappable entry, where the mapping can be written."""
+    def fits(var: eds.Variable | None) -> bool:
+        return var is not None and readable(var) and (writable(var) or not need_writable) \
+            and fixed_size(var) is not None
+
+    for pdo in pdos(ctx, tpdo=tpdo):
+        cfg = read_config(ctx, pdo)
+        entries = cfg.mapped
+        if entries and all(fits(m.var) for m in mapped(ctx, entries)):
+            return pdo, entries
+        if dynamic(ctx, pdo):
+            var = next((v for v in variables(ctx.od) if mappable(v, tpdo=tpdo) and fits(v)),
+                       None)
+            if var is not None:
+                return pdo, [entry_of(var)]
+    return None
+
+
+def try_mapping(ctx: Context, pdo: Pdo, entries: Sequence[int]) -> BaseException | None:
+    """Invalidate the PDO and map ``entries`` (count 0, entries, count): what the first
+    refused step raised, or None."""
+    steps = [(pdo.comm, 1, (read_cob(ctx, pdo) | INVALID).to_bytes(4, "little")),
+             (pdo.mapping, 0, b"\0"),
+             *((pdo.mapping, sub, entry.to_bytes(4, "little"))
+               for sub, entry in enumerate(entries, start=1)),
+             (pdo.mapping, 0, bytes([len(entries)]))]
+    for index, sub, data in steps:
+        try:
+            ctx.sdo.download(index, sub, data)
+        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+            return exc
+    return None
+
+
+def rpdo_payload(ctx: Context, entries: Sequence[int]
+                 ) -> tuple[bytes, list[tuple[eds.Variable, bytes]]]:
+    """An RPDO frame for ``entries`` whose values differ from the node's (each entry's
+    value + 1, wrapped), and what each entry should read back."""
+    frame = bytearray()
+    expected: list[tuple[eds.Variable, bytes]] = []
+    for m in mapped(ctx, entries):
+        if m.var is None or m.var.data_type is None:
+            frame += bytes(m.size)
+            continue
+        now = ctx.read(m.var.index, m.var.subindex)
+        value = (int.from_bytes(now, "little") + 1) % (1 << (8 * m.size))
+        if m.var.data_type == 0x0001:
+            value = int(not now[0])
+        data = value.to_bytes(m.size, "little")
+        if m.var.data_type in (0x0008, 0x0011):
+            data = values.encode(m.var.data_type, 1.5 if values.decode(
+                m.var.data_type, now) != 1.5 else 2.5)
+        frame += data
+        expected.append((m.var, data))
+    return bytes(frame), expected
+
+
+def sync_cob(ctx: Context) -> int:
+    """The COB-ID the node takes SYNC on (0x1005, else 0x080)."""
+    if ctx.var(0x1005, 0) is None:
+        return 0x080
+    return ctx.read_uint(0x1005, 0) & 0x7FF
+
+
+def tpdo_frames(ctx: Context, cob: int, mark: int) -> list[float]:
+    """The times of the TPDO frames on ``cob`` after ``mark``."""
+    return [s.t for s in ctx.link.frames_since(mark, lambda f: f.can_id == cob and not f.rtr)]
+
+
+def check_values(ctx: Context, expected: list[tuple[eds.Variable, bytes]], *, applied: bool,
+                 when: str) -> None:
+    """Read each entry back: a finding where it is (not) what the RPDO carried."""
+    for var, data in expected:
+        got = ctx.read(var.index, var.subindex)
+        if (got == data) != applied:
+            ctx.finding(f"{describe(var)} {when}",
+                        f"[{data.hex(' ').upper()}]" if applied else "its value before",
+                        f"[{got.hex(' ').upper()}]")
