@@ -14,6 +14,8 @@ __all__ = ["VARIABLE_TYPES", "describe", "fixed_size", "integer_range", "mappabl
 #: Data types whose length is the value's (strings, DOMAIN).
 VARIABLE_TYPES = frozenset({0x0009, 0x000A, 0x000B, 0x000F})
 
+_TPDO_ACCESS = ("ro", "const", "rw", "rwr")
+_RPDO_ACCESS = ("wo", "rw", "rww")
 _SIZES = {0x0001: 1, 0x0008: 4, 0x0011: 8, 0x000C: 6, 0x000D: 6}
 
 
@@ -54,12 +56,13 @@ def integer_range(var: eds.Variable) -> tuple[int, int] | None:
 
 
 def mappable(var: eds.Variable, *, tpdo: bool) -> bool:
-    """PDO-mappable per the EDS, in the direction of a TPDO (readable) or an RPDO
-    (writable), and of a size a mapping entry can give (1..64 bits, whole bytes)."""
+    """PDO-mappable per the EDS, in the direction its access type allows (CiA 306: rww is
+    an output, RPDOs only; rwr an input, TPDOs only), and of a size a mapping entry can
+    give (1..64 bits, whole bytes)."""
     size = fixed_size(var)
     if not var.pdo_mapping or size is None or not 1 <= size <= 8:
         return False
-    return readable(var) if tpdo else writable(var)
+    return var.access_type in (_TPDO_ACCESS if tpdo else _RPDO_ACCESS)
 
 
 def describe(var: eds.Variable) -> str:

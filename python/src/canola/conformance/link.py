@@ -29,6 +29,9 @@ __all__ = ["TRACE_FRAMES", "Link", "Seen"]
 TRACE_FRAMES = 40
 
 _SIM_STEP_US = 1000
+#: python-can buses that cannot send a remote frame (the socketcand client sends every
+#: frame as data).
+_NO_REMOTE_FRAMES = ("SocketCanDaemonBus",)
 
 
 @dataclass(frozen=True)
@@ -50,6 +53,8 @@ class Link:
         self.master = master
         bus = master.bus
         self.sim: SimBus | None = bus if isinstance(bus, SimBus) else None
+        #: False when the bus cannot send remote frames (RTR).
+        self.remote_frames = type(bus).__name__ not in _NO_REMOTE_FRAMES
         self._cond = threading.Condition()
         self._frames: list[Seen] = []
         self._trace: deque[Seen] = deque(maxlen=TRACE_FRAMES)

@@ -19,6 +19,9 @@ from canola.conformance.registry import check
 
 #: Value lengths around the frame boundaries: expedited (4), one segment (7), two (14).
 SIZES = (1, 4, 5, 7, 8, 14, 15, 21, 22)
+#: For block transfer also around a sub-block of 127 segments (889 bytes), where the
+#: entry takes them.
+BLOCK_SIZES = (*SIZES, 889, 890)
 _ACTING = frozenset({0x1010, 0x1011, *range(0x1F50, 0x1F60)})
 _PATTERN = b"canola conformance SDO probe: 0123456789 abcdefghijklmnopqrstuvwxyz"
 
@@ -38,10 +41,17 @@ _VARIABLE_ORDER = (0x000F, 0x0009, 0x000B, 0x000A)
 
 
 def variable_entry(ctx: Context) -> eds.Variable | None:
-    """A readable, writable DOMAIN or string (its length is the value's)."""
+    """A readable, writable DOMAIN or string (its length is the value's) that reads now
+    (what a check writes to it is written back)."""
     found = [v for v in _rw(ctx) if v.data_type in VARIABLE_TYPES]
     found.sort(key=lambda v: _VARIABLE_ORDER.index(v.data_type or 0x000F))
-    return found[0] if found else None
+    for var in found:
+        try:
+            ctx.sdo.upload(var.index, var.subindex)
+        except (SdoAbort, NoAnswer, ProtocolViolation):
+            continue
+        return var
+    return None
 
 
 def long_entry(ctx: Context) -> eds.Variable | None:
@@ -80,13 +90,14 @@ def _same(var: eds.Variable, wrote: bytes, got: bytes) -> bool:
     return got == wrote
 
 
-def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str) -> list[int]:
+def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str,
+                  sizes: tuple[int, ...] = SIZES) -> list[int]:
     """Write (``write``: segmented or block) then read back (``read``: segmented or
-    block) values of each of :data:`SIZES` bytes; the sizes that went through. A value
-    too long for the entry (0x06070012) ends the series."""
+    block) values of each of ``sizes`` bytes; the sizes that went through. A value too
+    long for the entry (0x06070012) ends the series once more than a segment went."""
     ctx.keep(var.index, var.subindex)
     done: list[int] = []
-    for size in SIZES:
+    for size in sizes:
         data = _probe(size)
         try:
             if write == "block":
@@ -324,7 +335,7 @@ def _block_target(ctx: Context) -> eds.Variable:
 def block_download(ctx: Context) -> None:
     var = _block_target(ctx)
     if var.data_type in VARIABLE_TYPES:
-        done = _sized_series(ctx, var, "block", "segmented")
+        done = _sized_series(ctx, var, "block", "segmented", BLOCK_SIZES)
         ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
         return
     data = ctx.read(var.index, var.subindex)
@@ -341,7 +352,7 @@ def block_download(ctx: Context) -> None:
 def block_upload(ctx: Context) -> None:
     var = variable_entry(ctx)
     if var is not None:
-        done = _sized_series(ctx, var, "segmented", "block")
+        done = _sized_series(ctx, var, "segmented", "block", BLOCK_SIZES)
         ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
         return
     found = long_readable(ctx)
@@ -381,11 +392,12 @@ def block_crc(ctx: Context) -> None:
        title="block size 0 is aborted with 0x05040002; the server keeps to the client's "
              "block size in every sub-block")
 def block_size(ctx: Context) -> None:
-    var = variable_entry(ctx)
-    if var is not None:
-        ctx.write_temp(var.index, var.subindex, _probe(SIZES[-1]))
-    found = long_readable(ctx)
-    target = found[0] if found is not None else ctx.need(0x1000, why="device type")
+    target = variable_entry(ctx)
+    if target is not None:
+        ctx.write_temp(target.index, target.subindex, _probe(SIZES[-1]))
+    else:
+        found = long_readable(ctx)
+        target = found[0] if found is not None else ctx.need(0x1000, why="device type")
     ctx.expect_abort(f"block upload of {describe(target)} with block size 0", (0x05040002,),
                      lambda: ctx.sdo.block_upload(target.index, target.subindex, blksize=0))
     try:
