@@ -188,9 +188,15 @@ def error_history(ctx: Context) -> None:
              "next EMCY uses it")
 def cob_id(ctx: Context) -> None:
     _writable_entry(ctx, 0x1014, "COB-ID EMCY")
-    original = int.from_bytes(ctx.keep(0x1014, 0), "little")
+    original = ctx.read_uint(0x1014)
     if original & _INVALID:
         ctx.skip(f"the EMCY producer is off (0x1014 = 0x{original:08X})")
+
+    def back() -> None:  # a valid COB-ID changes through "not valid"
+        for value in (original | _INVALID, original):
+            ctx.sdo.download(0x1014, 0, value.to_bytes(4, "little"))
+
+    ctx.on_undo("write back 0x1014:0", back)
     other = 0x80 + (ctx.node_id % 127) + 1
     ctx.expect_abort(f"write 0x{other:X} to 0x1014 while 0x{original:X} is valid", None,
                      lambda: ctx.sdo.download(0x1014, 0, other.to_bytes(4, "little")),
