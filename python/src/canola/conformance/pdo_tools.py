@@ -120,6 +120,8 @@ def write_config(ctx: Context, pdo: Pdo, cfg: PdoConfig, *, touch_mapping: bool)
         for sub, entry in cfg.entries.items():
             if sub <= cfg.count:
                 ctx.write_uint(pdo.mapping, sub, entry, 4)
+            else:  # unused: its value back where it takes it (a node may refuse stale ones)
+                ctx.try_write(pdo.mapping, sub, entry.to_bytes(4, "little"))
         ctx.write_uint(pdo.mapping, 0, cfg.count, 1)
     for sub, value in cfg.params.items():
         ctx.write_uint(pdo.comm, sub, value, _size(ctx, pdo.comm, sub))

@@ -1,0 +1,194 @@
+"""canola.conformance in virtual time on the simulated bus: canola.Device passes every
+check (with canola-node's dictionary too), leaves its values as it found them, each check
+runs alone with the same outcome; a device that deviates from its EDS and a hand-written
+responder with protocol gaps fail exactly the checks they should, with the frames that
+prove it; SKIPPED says why; the reports."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from conformance_fakes import FAKE_EDS, FakeNode
+
+import canola.conformance as cc
+from canola import Device, Error, eds
+from canola.conformance import Options, Status
+from canola.core import SimBus
+
+ROOT = Path(__file__).resolve().parents[2]
+INTEROP = Path(__file__).parent / "data" / "interop.eds"
+EXAMPLE = ROOT / "examples" / "example_od.eds"
+NODE = 5
+#: Entries a run may leave changed: the error state its EMCY checks cause on purpose.
+ERROR_STATE = {0x1001, 0x1003}
+
+
+def device_run(eds_file: Path | eds.ObjectDictionary, device_eds: Path = INTEROP,
+               **kw: object) -> cc.Report:
+    bus = SimBus()
+    Device(device_eds, NODE, bus).start()
+    return cc.run(bus, NODE, eds_file, **kw)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("path", "skipped"), [
+    (INTEROP, {"nmt.node_guarding", "nmt.store_restore"}),  # interop.eds: no 0x100C/0x100D
+    (EXAMPLE, {"nmt.store_restore"}),
+], ids=["interop.eds", "example_od.eds"])
+def test_canola_device_passes(path: Path, skipped: set[str]) -> None:
+    report = device_run(path, path)
+    assert report.names(Status.FAILED) == set(), cc.markdown(report)
+    assert report.names(Status.SKIPPED) == skipped
+    assert report.count(Status.PASSED) == len(cc.CHECKS) - len(skipped)
+    assert report.result("nmt.store_restore").reason == (
+        "saves or restores stored parameters: run with --destructive")
+    assert "1, 4, 5, 7, 8, 14, 15, 21, 22" in report.result("sdo.segmented_download").summary
+
+
+def test_store_restore_with_destructive(tmp_path: Path) -> None:
+    bus = SimBus()
+    Device(EXAMPLE, NODE, bus, store_dir=tmp_path).start()
+    report = cc.run(bus, NODE, EXAMPLE, only=["nmt.store_restore"],
+                    options=Options(destructive=True))
+    assert report.names(Status.PASSED) == {"nmt.store_restore"}, cc.markdown(report)
+    # without storage the node says it does not save on command (0x1010): skipped, not passed
+    report = device_run(EXAMPLE, EXAMPLE, only=["nmt.store_restore"],
+                        options=Options(destructive=True))
+    assert report.result("nmt.store_restore").status is Status.SKIPPED
+    assert "does not save on command" in report.result("nmt.store_restore").reason
+
+
+def test_a_run_leaves_the_values_as_it_found_them() -> None:
+    bus = SimBus()
+    dev = Device(INTEROP, NODE, bus)
+    dev.start()
+    before = {key: dev.od.read(*key) for key in dev.od}
+    report = cc.run(bus, NODE, INTEROP)
+    assert report.passed
+    after = {key: dev.od.read(*key) for key in dev.od}
+    changed = {key for key in before if before[key] != after[key]}
+    assert {index for index, _ in changed} <= ERROR_STATE, changed
+    assert dev.nmt_state == "PRE-OPERATIONAL"
+
+
+def test_the_node_is_left_in_its_state() -> None:
+    bus = SimBus()
+    dev = Device(EXAMPLE, NODE, bus)
+    dev.start()
+    dev.nmt_apply("start")
+    report = cc.run(bus, NODE, EXAMPLE, only=["nmt.states", "pdo.rpdo_applied"])
+    assert report.passed
+    assert "NMT state before the run: OPERATIONAL" in report.notes
+    assert dev.nmt_state == "OPERATIONAL"
+
+
+def test_each_check_alone_ends_as_in_a_full_run() -> None:
+    full = {r.check.name: r.status for r in device_run(EXAMPLE, EXAMPLE).results}
+    alone = {}
+    for chk in cc.select():
+        alone[chk.name] = device_run(EXAMPLE, EXAMPLE, only=[chk.name]).results[0].status
+    assert alone == full
+
+
+def _deviating_eds() -> eds.ObjectDictionary:
+    """interop.eds, but the device it describes is not what runs: 0x200D read-only, another
+    vendor-ID, an object 0x2103 more."""
+    od = eds.parse(INTEROP, node_id=NODE)
+    od.objects[0x200D].subs[0].access_type = "ro"
+    od.device_info["VendorNumber"] = "0xBAD"
+    od.objects[0x2103] = eds.Object(0x2103, "Not there", eds.ObjectType.VAR, {0: eds.Variable(
+        0x2103, 0, "Not there", 0x0005, "rw", "0", default=0)})
+    return od
+
+
+def test_a_device_unlike_its_eds_fails_exactly_those_checks() -> None:
+    report = device_run(_deviating_eds())
+    assert report.names(Status.FAILED) == {"dictionary.entries", "dictionary.write_read_only",
+                                           "dictionary.identity"}, cc.markdown(report)
+    ro = report.result("dictionary.write_read_only").findings
+    assert len(ro) == 1
+    assert ro[0].what.startswith("write its own value to 0x200D:0")
+    assert (ro[0].expected, ro[0].got) == (
+        "abort 0x06010002 (Attempt to write a read only object)", "success")
+    # the frames prove it: the (segmented) download of 0x200D and the server's confirmations
+    assert "-> 605  21 0D 20 00 06 00 00 00" in ro[0].frames[-4]
+    assert "<- 585  60 0D 20 00 00 00 00 00" in ro[0].frames[-3]
+    assert "<- 585  20 00 00 00 00 00 00 00" in ro[0].frames[-1]
+    missing = report.result("dictionary.entries").findings
+    assert [(f.what[:12], f.got) for f in missing] == [
+        ("read 0x2103:", "abort 0x06020000 (Object does not exist in the object dictionary)")]
+    vendor = report.result("dictionary.identity").findings
+    assert [(f.expected, f.got) for f in vendor] == [
+        ("0xBAD ([DeviceInfo] VendorNumber)", "0xCA0")]
+
+
+@pytest.mark.parametrize("checks_toggle", [True, False], ids=["toggle checked", "toggle ignored"])
+def test_a_responder_with_gaps_fails_exactly_those_checks(checks_toggle: bool) -> None:
+    bus = SimBus()
+    FakeNode(bus, 20, checks_toggle=checks_toggle).start()
+    report = cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20), only=["dictionary", "sdo", "nmt"])
+    gaps = {"sdo.block_download", "sdo.block_upload", "sdo.block_crc", "sdo.block_size",
+            "sdo.server_timeout"}
+    assert report.names(Status.FAILED) == gaps | (set() if checks_toggle
+                                                  else {"sdo.toggle_download"})
+    assert report.result("sdo.block_upload").findings[0].got == (
+        "abort 0x05040001 (Client/server command specifier not valid or unknown)")
+    if not checks_toggle:
+        toggle = report.result("sdo.toggle_download").findings[0]
+        assert (toggle.expected, toggle.got) == (
+            "abort 0x05030000 (Toggle bit not alternated)", "[30 00 00 00 00 00 00 00]")
+        assert "-> 614  10 63 61 6E 6F 6C 61 20" in toggle.frames[-2]
+        assert "<- 594  30 00 00 00 00 00 00 00" in toggle.frames[-1]
+
+
+def test_skipped_says_why_and_is_never_passed() -> None:
+    bus = SimBus()
+    FakeNode(bus, 20).start()
+    report = cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20), only=["nmt", "pdo", "sync",
+                                                                      "emcy", "time"])
+    reasons = {r.check.name: r.reason for r in report.results if r.status is Status.SKIPPED}
+    assert reasons["nmt.states"] == "the EDS has no 0x1017:0 (no heartbeat producer)"
+    assert reasons["pdo.remap"] == "no PDO has a writable mapping and a mappable entry"
+    assert reasons["emcy.heartbeat_loss"] == (
+        "the EDS has no 0x1016:1 (no heartbeat consumer to cause an EMCY with)")
+    assert reasons["time.consumer"] == "the EDS has no 0x1012:0 (no TIME object)"
+    assert report.names(Status.PASSED) == {"nmt.bootup_reset_node", "nmt.bootup_reset_comm",
+                                           "nmt.sdo_gating"}
+    assert all(not r.findings for r in report.results if r.status is Status.SKIPPED)
+
+
+def test_reports() -> None:
+    bus = SimBus()
+    FakeNode(bus, 20, checks_toggle=False).start()
+    report = cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20), only=["sdo"])
+    text = cc.markdown(report)
+    assert "- result: **FAILED** (7 passed, 6 failed, 0 skipped)" in text
+    assert "## sdo: SDO protocol" in text
+    assert "| `sdo.unknown_command` | CiA 301 §7.2.4.3.17 | PASSED |" in text
+    assert "### `sdo.toggle_download` (CiA 301 §7.2.4.3.4, §7.2.4.3.17)" in text
+    assert "  - expected: abort 0x05030000 (Toggle bit not alternated)" in text
+    root = ET.fromstring(cc.junit(report))
+    assert (root.get("tests"), root.get("failures"), root.get("skipped")) == ("13", "6", "0")
+    cases = {c.get("name"): c for c in root.iter("testcase")}
+    assert cases["sdo.toggle_download"].find("failure") is not None
+    assert "got: [30 00 00 00 00 00 00 00]" in (cases["sdo.toggle_download"].find(
+        "failure").text or "")  # type: ignore[union-attr]
+    assert cases["sdo.unknown_command"].find("failure") is None
+    prop = cases["sdo.unknown_command"].find("properties/property")
+    assert prop is not None and prop.get("value") == "CiA 301 §7.2.4.3.17"
+
+
+def test_check_list_and_selection() -> None:
+    text = cc.check_list(cc.select())
+    for chk in cc.CHECKS:
+        assert f"  {chk.name} " in text and chk.clause in text
+    assert "nmt.store_restore" in text and "[--destructive]" in text
+    assert [c.name for c in cc.select(["time", "sdo.toggle_upload"])] == [
+        "sdo.toggle_upload", "time.consumer"]
+    with pytest.raises(Error, match="unknown group or check 'nope'"):
+        cc.select(["nope"])
+    with pytest.raises(Error, match="node-ID 0 is outside 1..127"):
+        cc.run(SimBus(), 0, INTEROP)
+    with pytest.raises(Error, match="node-ID 5 is the node's"):
+        cc.run(SimBus(), 5, INTEROP, master_id=5)
