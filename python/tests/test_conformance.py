@@ -188,7 +188,7 @@ def test_check_list_and_selection() -> None:
         "sdo.toggle_upload", "time.consumer"]
     with pytest.raises(Error, match="unknown group or check 'nope'"):
         cc.select(["nope"])
-    with pytest.raises(Error, match="node-ID 0 is outside 1..127"):
+    with pytest.raises(Error, match=r"node-ID 0 is outside 1\.\.127"):
         cc.run(SimBus(), 0, INTEROP)
     with pytest.raises(Error, match="node-ID 5 is the node's"):
         cc.run(SimBus(), 5, INTEROP, master_id=5)

@@ -17,7 +17,7 @@ from typing import NoReturn
 from canola import SdoAbort, eds
 from canola.conformance.entries import describe
 from canola.conformance.link import Link
-from canola.conformance.rawsdo import NoAnswer, ProtocolViolation, RawSdo
+from canola.conformance.rawsdo import NoAnswerError, RawSdo, SdoProtocolError
 from canola.conformance.results import Finding
 from canola.errors import ABORT_TEXT, Error
 
@@ -30,7 +30,7 @@ NMT_CS = {"start": 0x01, "stop": 0x02, "preop": 0x80, "reset-node": 0x81,
 #: NMT states as error control frames carry them.
 STATES = {0x00: "BOOT-UP", 0x04: "STOPPED", 0x05: "OPERATIONAL", 0x7F: "PRE-OPERATIONAL"}
 
-_TRACE_PER_FINDING = 16
+_TRACE_PER_FINDING = 20
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,8 @@ class Options:
     """How a run behaves. Times in seconds (virtual on a SimBus).
 
     ``timeout``: how long an answer may take (SDO, a heartbeat, a PDO after its SYNC).
-    ``boot_timeout``: how long a reset may take until the boot-up frame. ``server_timeout``: how long the server may keep a half-done SDO transfer open before
+    ``boot_timeout``: how long a reset may take until the boot-up frame.
+    ``server_timeout``: how long the server may keep a half-done SDO transfer open before
     its own time-out aborts it. ``quiet``: how long "no frame comes" is watched.
     ``tolerance``: the share a measured period may differ from the configured one.
     ``destructive``: run the checks that save or restore stored parameters.
@@ -126,7 +127,7 @@ class Context:
         """Upload (index, sub); an abort, no answer or a protocol error ends the check."""
         try:
             return self.sdo.upload(index, sub)
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             self.fail(f"read 0x{index:04X}:{sub}", "its value", outcome(exc))
 
     def read_uint(self, index: int, sub: int = 0) -> int:
@@ -136,7 +137,7 @@ class Context:
         """Download (index, sub); any failure ends the check."""
         try:
             self.sdo.download(index, sub, data)
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             self.fail(f"write [{data.hex(' ').upper()}] to 0x{index:04X}:{sub}", "success",
                       outcome(exc))
 
@@ -147,7 +148,7 @@ class Context:
         """Download and return what went wrong (None: success)."""
         try:
             self.sdo.download(index, sub, data)
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             return exc
         return None
 
@@ -180,7 +181,7 @@ class Context:
                 return True
             self.finding(what, _codes(codes), outcome(exc))
             return False
-        except (NoAnswer, ProtocolViolation) as exc:
+        except (NoAnswerError, SdoProtocolError) as exc:
             self.finding(what, _codes(codes), outcome(exc))
             return False
         self.finding(what, _codes(codes), "success")

@@ -143,15 +143,28 @@ class Link:
 
     def trace(self, last: int = TRACE_FRAMES) -> list[str]:
         """The latest frames as text lines, oldest first, each with its CANopen meaning:
-        ``+1.2345 s  -> 605  40 00 10 00 00 00 00 00   SDO ...``."""
+        ``+1.2345 s  -> 605  40 00 10 00 00 00 00 00   SDO ...``. A run of one frame
+        received again and again (heartbeats) is one line with its count, so that the
+        frames that matter stay in view."""
         with self._cond:
-            seen = list(self._trace)[-last:]
+            seen = list(self._trace)
+        runs: list[list[Seen]] = []
+        for s in seen:
+            prev = runs[-1][-1] if runs else None
+            if (prev is not None and not s.sent and not prev.sent
+                    and (s.frame.can_id, s.frame.data, s.frame.rtr)
+                    == (prev.frame.can_id, prev.frame.data, prev.frame.rtr)):
+                runs[-1].append(s)
+            else:
+                runs.append([s])
         decoder = Decoder()
         lines = []
-        for s in seen:
+        for run in runs[-last:]:
+            s = run[0]
             f = s.frame
             arrow = "->" if s.sent else "<-"
             body = "RTR" if f.rtr else (f.data.hex(" ").upper() or "(no data)")
             meaning = decoder.decode(f.can_id, f.data, rtr=f.rtr).text
-            lines.append(f"{s.t:+10.4f} s {arrow} {f.can_id:03X}  {body:<23}  {meaning}")
+            more = f" (x{len(run)} until {run[-1].t:+.4f} s)" if len(run) > 1 else ""
+            lines.append(f"{s.t:+10.4f} s {arrow} {f.can_id:03X}  {body:<23}  {meaning}{more}")
         return lines

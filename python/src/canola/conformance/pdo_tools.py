@@ -17,11 +17,11 @@ from canola.conformance.entries import (
     variables,
     writable,
 )
-from canola.conformance.rawsdo import NoAnswer, ProtocolViolation
+from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 
-__all__ = ["INVALID", "check_values", "sync_cob", "tpdo_frames", "Mapped", "Pdo", "PdoConfig", "configure", "dynamic", "entry_of", "keep",
-           "mapped", "pdos", "read_config", "rpdo_payload", "try_mapping", "usable_pdo",
-           "write_config"]
+__all__ = ["INVALID", "Mapped", "Pdo", "PdoConfig", "check_values", "configure", "dynamic",
+           "entry_of", "keep", "mapped", "pdos", "read_config", "rpdo_payload", "sync_cob",
+           "tpdo_frames", "try_mapping", "usable_pdo", "write_config"]
 
 INVALID = 0x80000000
 #: Parameter sub-indices of a communication record besides the COB-ID (1).
@@ -221,7 +221,7 @@ def try_mapping(ctx: Context, pdo: Pdo, entries: Sequence[int]) -> BaseException
     for index, sub, data in steps:
         try:
             ctx.sdo.download(index, sub, data)
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             return exc
     return None
 

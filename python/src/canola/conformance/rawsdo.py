@@ -7,8 +7,8 @@ against CiA 301 §7.2.4.3 as it arrives.
 - :meth:`RawSdo.block_download` / :meth:`RawSdo.block_upload`: block transfer with CRC;
 - :meth:`RawSdo.request`: one request frame, its answer frame (protocol-level checks).
 
-A server abort raises :class:`canola.SdoAbort`; no answer :class:`NoAnswer`; an answer
-that breaks the protocol :class:`ProtocolViolation`. After a failure in the middle of a
+A server abort raises :class:`canola.SdoAbort`; no answer :class:`NoAnswerError`; an answer
+that breaks the protocol :class:`SdoProtocolError`. After a failure in the middle of a
 transfer the client aborts it (0x05040000 or 0x08000000), so the server is idle again.
 """
 
@@ -18,13 +18,13 @@ from canola import SdoAbort
 from canola.conformance.link import Link
 from canola.errors import Error
 
-__all__ = ["NoAnswer", "ProtocolViolation", "RawSdo", "abort_frame", "crc16"]
+__all__ = ["NoAnswerError", "RawSdo", "SdoProtocolError", "abort_frame", "crc16"]
 
 ABORT_TIMEOUT = 0x05040000
 ABORT_GENERAL = 0x08000000
 
 
-class NoAnswer(Error):
+class NoAnswerError(Error):
     """The server did not answer ``what`` within the time-out."""
 
     def __init__(self, what: str, timeout: float) -> None:
@@ -32,7 +32,7 @@ class NoAnswer(Error):
         self.what = what
 
 
-class ProtocolViolation(Error):
+class SdoProtocolError(Error):
     """An answer that breaks the SDO protocol (the message says how)."""
 
 
@@ -75,16 +75,16 @@ class RawSdo:
         return mark
 
     def answer(self, since: int, what: str, timeout: float | None = None) -> bytes:
-        """The next answer of the server after ``since``. Raises NoAnswer."""
+        """The next answer of the server after ``since``. Raises NoAnswerError."""
         return self.answer_at(since, what, timeout)[0]
 
     def answer_at(self, since: int, what: str,
                   timeout: float | None = None) -> tuple[bytes, int]:
-        """The next answer after ``since`` and the mark just after it. Raises NoAnswer."""
+        """The next answer after ``since`` and the mark just after it. Raises NoAnswerError."""
         limit = self.timeout if timeout is None else timeout
         seen = self.link.wait_frame(lambda f: f.can_id == self.tx and not f.rtr, limit, since)
         if seen is None:
-            raise NoAnswer(what, limit)
+            raise NoAnswerError(what, limit)
         return seen.frame.data, seen.pos + 1
 
     def request(self, data: bytes, what: str, timeout: float | None = None) -> bytes:
@@ -100,16 +100,16 @@ class RawSdo:
         """Check an answer: 8 bytes, not an abort, command specifier ``scs`` (bits 7..5),
         and, for initiate answers (``index`` given), the multiplexer echoed."""
         if len(data) != 8:
-            raise ProtocolViolation(f"{what}: answer of {len(data)} bytes (SDO frames have 8)")
+            raise SdoProtocolError(f"{what}: answer of {len(data)} bytes (SDO frames have 8)")
         if data[0] == 0x80:
             code = int.from_bytes(data[4:8], "little")
             raise SdoAbort(code)
         if data[0] >> 5 != scs:
-            raise ProtocolViolation(f"{what}: command byte 0x{data[0]:02X} (server command "
+            raise SdoProtocolError(f"{what}: command byte 0x{data[0]:02X} (server command "
                                     f"specifier {data[0] >> 5}, expected {scs})")
         if index is not None and data[1:4] != _mux(index, sub):
             got = int.from_bytes(data[1:3], "little")
-            raise ProtocolViolation(f"{what}: answer names 0x{got:04X}:{data[3]} instead of "
+            raise SdoProtocolError(f"{what}: answer names 0x{got:04X}:{data[3]} instead of "
                                     f"0x{index:04X}:{sub}")
         return data
 
@@ -127,7 +127,7 @@ class RawSdo:
         size = int.from_bytes(first[4:8], "little") if sized else None
         try:
             return self._upload_segments(index, sub, size, where)
-        except (NoAnswer, ProtocolViolation):
+        except (NoAnswerError, SdoProtocolError):
             self.abort(index, sub, ABORT_GENERAL)
             raise
 
@@ -139,17 +139,17 @@ class RawSdo:
             seg = self._expect(self.request(bytes([0x60 | toggle << 4]), what), None, sub,
                                what, 0)
             if (seg[0] >> 4) & 1 != toggle:
-                raise ProtocolViolation(f"{what}: toggle bit {(seg[0] >> 4) & 1}, expected "
+                raise SdoProtocolError(f"{what}: toggle bit {(seg[0] >> 4) & 1}, expected "
                                         f"{toggle}")
             data += seg[1:8 - ((seg[0] >> 1) & 7)]
             if seg[0] & 1:
                 break
             if size is not None and len(data) >= size:
-                raise ProtocolViolation(f"{what}: {len(data)} of {size} bytes sent and "
+                raise SdoProtocolError(f"{what}: {len(data)} of {size} bytes sent and "
                                         "still no last segment")
             toggle ^= 1
         if size is not None and len(data) != size:
-            raise ProtocolViolation(f"{where}: {len(data)} bytes in the segments, "
+            raise SdoProtocolError(f"{where}: {len(data)} bytes in the segments, "
                                     f"{size} announced")
         return bytes(data)
 
@@ -166,7 +166,7 @@ class RawSdo:
                      where, 3)
         try:
             self._download_segments(data, where)
-        except (NoAnswer, ProtocolViolation):
+        except (NoAnswerError, SdoProtocolError):
             self.abort(index, sub, ABORT_GENERAL)
             raise
 
@@ -179,7 +179,7 @@ class RawSdo:
             what = f"{where}, segment {start // 7 + 1}"
             ack = self._expect(self.request(bytes([cmd]) + piece, what), None, 0, what, 1)
             if (ack[0] >> 4) & 1 != toggle:
-                raise ProtocolViolation(f"{what}: answer toggle bit {(ack[0] >> 4) & 1}, "
+                raise SdoProtocolError(f"{what}: answer toggle bit {(ack[0] >> 4) & 1}, "
                                         f"expected {toggle}")
             toggle ^= 1
 
@@ -194,7 +194,7 @@ class RawSdo:
                                          + len(data).to_bytes(4, "little"), where),
                             index, sub, where, 5)
         if init[0] & 0x03:
-            raise ProtocolViolation(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
+            raise SdoProtocolError(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
         crc_on = bool(init[0] & 0x04)
         blksize = first_blksize = init[4]
         try:
@@ -202,18 +202,19 @@ class RawSdo:
             sent = 0
             while sent < len(seq_data):
                 if not 1 <= blksize <= 127:
-                    raise ProtocolViolation(f"{where}: block size {blksize} (1..127)")
+                    raise SdoProtocolError(f"{where}: block size {blksize} (1..127)")
                 chunk = seq_data[sent:sent + blksize]
                 mark = self.link.mark()
                 for n, piece in enumerate(chunk, start=1):
                     last = sent + n == len(seq_data)
                     self.link.send(self.rx, bytes([int(last) << 7 | n]) + piece.ljust(7, b"\0"))
-                what = f"{where}, sub-block ending at byte {min(len(data), (sent + len(chunk)) * 7)}"
+                upto = min(len(data), (sent + len(chunk)) * 7)
+                what = f"{where}, sub-block ending at byte {upto}"
                 ack = self._expect(self.answer(mark, what), None, 0, what, 5)
                 if ack[0] & 0x03 != 2:
-                    raise ProtocolViolation(f"{what}: answer 0x{ack[0]:02X} (expected 0xA2)")
+                    raise SdoProtocolError(f"{what}: answer 0x{ack[0]:02X} (expected 0xA2)")
                 if ack[1] > len(chunk):
-                    raise ProtocolViolation(f"{what}: ackseq {ack[1]} of {len(chunk)} sent")
+                    raise SdoProtocolError(f"{what}: ackseq {ack[1]} of {len(chunk)} sent")
                 sent += ack[1]  # the server asks again for what it did not take
                 blksize = ack[2]
             n = (7 - len(data) % 7) % 7 if data else 7
@@ -222,8 +223,8 @@ class RawSdo:
             end = self._expect(self.request(bytes([0xC1 | n << 2]) + crc.to_bytes(2, "little"),
                                             what), None, 0, what, 5)
             if end[0] & 0x03 != 1:
-                raise ProtocolViolation(f"{what}: answer 0x{end[0]:02X} (expected 0xA1)")
-        except (NoAnswer, ProtocolViolation):
+                raise SdoProtocolError(f"{what}: answer 0x{end[0]:02X} (expected 0xA1)")
+        except (NoAnswerError, SdoProtocolError):
             self.abort(index, sub, ABORT_GENERAL)
             raise
         return first_blksize
@@ -239,7 +240,7 @@ class RawSdo:
                                          + bytes([blksize, 0, 0, 0]), where),
                             index, sub, where, 6)
         if init[0] & 0x01:
-            raise ProtocolViolation(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
+            raise SdoProtocolError(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
         crc_on = bool(init[0] & 0x04)
         size = int.from_bytes(init[4:8], "little") if init[0] & 0x02 else None
         data = bytearray()
@@ -259,18 +260,18 @@ class RawSdo:
             what = f"{where}, end"
             end = self._expect(self.answer(mark, what), None, 0, what, 6)
             if end[0] & 0x03 != 1:
-                raise ProtocolViolation(f"{what}: frame 0x{end[0]:02X} (expected an end, "
+                raise SdoProtocolError(f"{what}: frame 0x{end[0]:02X} (expected an end, "
                                         "0xC1 | n << 2)")
             unused = (end[0] >> 2) & 7
             if unused:
                 del data[len(data) - unused:]
             if size is not None and len(data) != size:
-                raise ProtocolViolation(f"{where}: {len(data)} bytes, {size} announced")
+                raise SdoProtocolError(f"{where}: {len(data)} bytes, {size} announced")
             if crc_on and int.from_bytes(end[1:3], "little") != crc16(bytes(data)):
-                raise ProtocolViolation(f"{where}: CRC 0x{int.from_bytes(end[1:3], 'little'):04X}"
+                raise SdoProtocolError(f"{where}: CRC 0x{int.from_bytes(end[1:3], 'little'):04X}"
                                         f", computed 0x{crc16(bytes(data)):04X}")
             self.send(bytes([0xA1]))
-        except (NoAnswer, ProtocolViolation):
+        except (NoAnswerError, SdoProtocolError):
             self.abort(index, sub, ABORT_GENERAL)
             raise
         return bytes(data), blocks
@@ -283,12 +284,12 @@ class RawSdo:
             what = f"{where}, segment {len(frames) + 1} of a sub-block of {blksize}"
             seg, mark = self.answer_at(mark, what)
             if len(seg) != 8:
-                raise ProtocolViolation(f"{what}: {len(seg)} bytes (SDO frames have 8)")
+                raise SdoProtocolError(f"{what}: {len(seg)} bytes (SDO frames have 8)")
             if seg[0] == 0x80 and not frames:
                 raise SdoAbort(int.from_bytes(seg[4:8], "little"))
             seqno = seg[0] & 0x7F
             if seqno != len(frames) + 1:
-                raise ProtocolViolation(f"{what}: sequence number {seqno}, expected "
+                raise SdoProtocolError(f"{what}: sequence number {seqno}, expected "
                                         f"{len(frames) + 1}")
             frames.append(seg[1:8])
             if seg[0] & 0x80:

@@ -13,7 +13,7 @@ from typing import Any
 from canola import Master, SdoAbort, eds
 from canola.conformance.context import STATES, CheckEnded, Context, Options, Skipped, outcome
 from canola.conformance.link import Link
-from canola.conformance.rawsdo import NoAnswer, ProtocolViolation
+from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import Check, select
 from canola.conformance.results import Report, Result, Status
 from canola.core import SimBus
@@ -101,7 +101,7 @@ class _Run:
         state = None
         try:
             period = int.from_bytes(ctx.sdo.upload(0x1017, 0), "little")
-        except (SdoAbort, NoAnswer, ProtocolViolation):
+        except (SdoAbort, NoAnswerError, SdoProtocolError):
             period = None
         if period:
             state = ctx.wait_error_control(mark, period / 1000 * 1.5 + self.options.timeout)
@@ -111,7 +111,7 @@ class _Run:
                 state = ctx.wait_error_control(mark, _PROBE_HEARTBEAT_MS / 1000 * 1.5
                                                + self.options.timeout)
                 ctx.sdo.download(0x1017, 0, b"\0\0")
-            except (SdoAbort, NoAnswer, ProtocolViolation):
+            except (SdoAbort, NoAnswerError, SdoProtocolError):
                 pass
         else:  # no answer: a stopped node says so in its heartbeat, if it has one
             state = ctx.wait_error_control(mark, self.options.timeout)
@@ -146,7 +146,7 @@ class _Run:
             status, reason = Status.SKIPPED, str(exc)
         except CheckEnded as exc:
             reason = str(exc)
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             ctx.finding("an SDO transfer of the check", "success", outcome(exc))
         except Error as exc:
             ctx.finding("the check", "no error", f"error of the tester: {exc}")
@@ -166,5 +166,5 @@ class _Run:
         for label, fn in reversed(ctx.undo):
             try:
                 fn()
-            except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+            except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
                 ctx.finding(label, "success", outcome(exc))

@@ -4,6 +4,9 @@ fixes, the mandatory objects."""
 
 from __future__ import annotations
 
+from functools import partial
+from itertools import chain
+
 from canola import SdoAbort, eds, values
 from canola.conformance.context import Context, outcome
 from canola.conformance.entries import (
@@ -15,7 +18,7 @@ from canola.conformance.entries import (
     variables,
     writable,
 )
-from canola.conformance.rawsdo import NoAnswer, ProtocolViolation
+from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
 
 _MANDATORY = ((0x1000, 0), (0x1001, 0), (0x1018, 0), (0x1018, 1))
@@ -40,7 +43,7 @@ def mandatory(ctx: Context) -> None:
             ctx.finding(f"EDS entry 0x{index:04X}:{sub}", "present (mandatory)", "missing")
         try:
             ctx.sdo.upload(index, sub)
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             ctx.finding(f"read 0x{index:04X}:{sub}", "its value", outcome(exc))
 
 
@@ -60,7 +63,7 @@ def entries(ctx: Context) -> None:
             expected = "abort 0x06010001 (write only)" if var.access_type == "wo" else "a value"
             ctx.finding(what, expected, outcome(exc))
             continue
-        except (NoAnswer, ProtocolViolation) as exc:
+        except (NoAnswerError, SdoProtocolError) as exc:
             ctx.finding(what, "a value", outcome(exc))
             continue
         size = fixed_size(var)
@@ -79,7 +82,7 @@ def read_write_only(ctx: Context) -> None:
         ctx.skip("the EDS has no write-only entry")
     for var in targets:
         ctx.expect_abort(f"read {describe(var)}", (0x06010001,),
-                         lambda var=var: ctx.sdo.upload(var.index, var.subindex))
+                         partial(ctx.sdo.upload, var.index, var.subindex))
     ctx.note(f"{len(targets)} entries")
 
 
@@ -92,12 +95,11 @@ def write_read_only(ctx: Context) -> None:
     for var in targets:
         try:
             data = ctx.sdo.upload(var.index, var.subindex)
-        except (SdoAbort, NoAnswer, ProtocolViolation):
+        except (SdoAbort, NoAnswerError, SdoProtocolError):
             continue  # dictionary.entries reports it
         # the value it has: a wrongly accepted write changes nothing
         ctx.expect_abort(f"write its own value to {describe(var)}", (0x06010002,),
-                         lambda var=var, data=data: ctx.sdo.download(var.index, var.subindex,
-                                                                     data))
+                         partial(ctx.sdo.download, var.index, var.subindex, data))
     ctx.note(f"{len(targets)} entries")
 
 
@@ -110,14 +112,13 @@ def _length_check(ctx: Context, *, longer: bool) -> None:
     for var in targets:
         try:
             original = ctx.sdo.upload(var.index, var.subindex)
-        except (SdoAbort, NoAnswer, ProtocolViolation):
+        except (SdoAbort, NoAnswerError, SdoProtocolError):
             continue  # dictionary.entries reports it
         probe = original + b"\0" if longer else original[:-1]
         ctx.expect_abort(
             f"write {len(probe)} bytes to {describe(var)}", codes,
-            lambda var=var, probe=probe: ctx.sdo.download(var.index, var.subindex, probe),
-            restore=lambda var=var, original=original: ctx.sdo.download(
-                var.index, var.subindex, original))
+            partial(ctx.sdo.download, var.index, var.subindex, probe),
+            restore=partial(ctx.sdo.download, var.index, var.subindex, original))
     ctx.note(f"{len(targets)} entries")
 
 
@@ -147,7 +148,7 @@ def limits(ctx: Context) -> None:
         assert var.data_type is not None
         try:
             original = ctx.sdo.upload(var.index, var.subindex)
-        except (SdoAbort, NoAnswer, ProtocolViolation):
+        except (SdoAbort, NoAnswerError, SdoProtocolError):
             continue  # dictionary.entries reports it
         tested += 1
 
@@ -164,10 +165,10 @@ def limits(ctx: Context) -> None:
             outside = bound + step
             if span[0] <= outside <= span[1]:
                 ctx.expect_abort(f"write {outside} to {describe(var)} (limit {bound})",
-                                 (code, 0x06090030), lambda v=outside: put(v), restore=back)
+                                 (code, 0x06090030), partial(put, outside), restore=back)
             try:
                 put(bound)
-            except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+            except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
                 ctx.finding(f"write the limit {bound} to {describe(var)}", "success",
                             outcome(exc))
         ctx.on_undo(f"write back {describe(var)}", back)
@@ -179,7 +180,7 @@ def limits(ctx: Context) -> None:
 
 def _absent_index(od: eds.ObjectDictionary) -> int:
     """An index the EDS does not have (the manufacturer area from its top first)."""
-    for index in (*range(0x5FFF, 0x1FFF, -1), *range(0x9FFF, 0x5FFF, -1)):
+    for index in chain(range(0x5FFF, 0x1FFF, -1), range(0x9FFF, 0x5FFF, -1)):
         if index not in od.objects:
             return index
     return next(i for i in range(0x1000, 0x10000) if i not in od.objects)
@@ -210,7 +211,7 @@ def missing_sub(ctx: Context) -> None:
             continue  # a VAR: 0x1000 stands for them all
         tested += 1
         ctx.expect_abort(f"read 0x{index:04X}:{sub} (beyond the EDS's sub-indices)",
-                         (0x06090011,), lambda index=index, sub=sub: ctx.sdo.upload(index, sub))
+                         (0x06090011,), partial(ctx.sdo.upload, index, sub))
     ctx.note(f"{tested} objects")
 
 
@@ -223,7 +224,7 @@ def _compare(ctx: Context, var: eds.Variable, expected: values.Value | None,
     try:
         data = ctx.sdo.upload(var.index, var.subindex)
         got: values.Value = values.decode(var.data_type, data)
-    except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
         ctx.finding(f"read {describe(var)}", f"{expected!r} ({source})", outcome(exc))
         return True
     except values.ValueFormatError as exc:

@@ -5,6 +5,8 @@ gating, what the resets do to the values, the heartbeat period, node guarding, a
 from __future__ import annotations
 
 import statistics
+from functools import partial
+from itertools import pairwise
 
 from canola import eds, values
 from canola.conformance import pdo_tools as pt
@@ -127,7 +129,7 @@ def heartbeat_period(ctx: Context) -> None:
     if len(stamps) <= _INTERVALS:
         ctx.fail(f"heartbeats at {period} ms", f"{_INTERVALS + 1} heartbeats",
                  f"{len(stamps)}")
-    gaps = [b - a for a, b in zip(stamps, stamps[1:], strict=False)][:_INTERVALS]
+    gaps = [b - a for a, b in pairwise(stamps)][:_INTERVALS]
     mean = statistics.fmean(gaps)
     if abs(mean - p) > tol * p:
         ctx.finding(f"mean heartbeat interval (0x1017 = {period} ms)",
@@ -261,7 +263,7 @@ def node_guarding(ctx: Context) -> None:
             ctx.fail(f"guarding answer in {STATES[state]}",
                      f"1 byte, state 0x{state:02X}", f"[{data.hex(' ').upper()}]")
         toggles.append(data[0] >> 7)
-    if any(a == b for a, b in zip(toggles, toggles[1:], strict=False)):
+    if any(a == b for a, b in pairwise(toggles)):
         ctx.finding("toggle bits of consecutive guarding answers", "alternating",
                     " ".join(map(str, toggles)))
     ctx.note(f"toggles {' '.join(map(str, toggles))}")
@@ -282,7 +284,7 @@ def store_restore(ctx: Context) -> None:
     ctx.keep(comm.index, comm.subindex)
     for index in (0x1010, 0x1011):
         ctx.expect_abort(f"write a wrong signature to 0x{index:04X}:{sub}", (0x08000020,),
-                         lambda index=index: ctx.sdo.download(index, sub, b"nope"))
+                         partial(ctx.sdo.download, index, sub, b"nope"))
     saved = _changed(comm, comm.default)
     _put(ctx, comm, saved)
     ctx.write_uint(0x1010, sub, _SAVE, 4)

@@ -6,12 +6,13 @@ too short."""
 from __future__ import annotations
 
 import statistics
+from functools import partial
+from itertools import pairwise
 
 from canola import SdoAbort
 from canola.conformance import pdo_tools as pt
 from canola.conformance.context import Context, abort_text, outcome
 from canola.conformance.entries import describe, fixed_size, mappable, readable, variables
-from canola.conformance.rawsdo import NoAnswer, ProtocolViolation
 from canola.conformance.registry import check
 
 _EVENT_MS = 100
@@ -41,16 +42,13 @@ def valid_locked(ctx: Context) -> None:
         tested += 1
         if pt.dynamic(ctx, pdo):
             ctx.expect_abort(f"write {pdo.name} mapping count {cfg.count} while valid",
-                             None, lambda pdo=pdo, cfg=cfg: ctx.sdo.download(
-                                 pdo.mapping, 0, bytes([cfg.count])),
-                             restore=lambda pdo=pdo, cfg=cfg: pt.write_config(
-                                 ctx, pdo, cfg, touch_mapping=True))
+                             None, partial(ctx.sdo.download, pdo.mapping, 0, bytes([cfg.count])),
+                             restore=partial(pt.write_config, ctx, pdo, cfg, touch_mapping=True))
         other = cfg.cob ^ 0x1
         ctx.expect_abort(f"change {pdo.name} COB-ID 0x{cfg.cob:X} to 0x{other:X} while valid",
-                         None, lambda pdo=pdo, other=other: ctx.sdo.download(
-                             pdo.comm, 1, other.to_bytes(4, "little")),
-                         restore=lambda pdo=pdo, cfg=cfg: ctx.sdo.download(
-                             pdo.comm, 1, cfg.cob.to_bytes(4, "little")))
+                         None, partial(ctx.sdo.download, pdo.comm, 1, other.to_bytes(4, "little")),
+                         restore=partial(ctx.sdo.download, pdo.comm, 1,
+                                         cfg.cob.to_bytes(4, "little")))
     if not tested:
         ctx.skip("no PDO is valid")
     ctx.note(f"{tested} valid PDOs")
@@ -217,7 +215,7 @@ def _measure(ctx: Context, cob: int, count: int, period: float) -> list[float]:
     ctx.link.wait_until(lambda: len(pt.tpdo_frames(ctx, cob, mark)) > count,
                         (count + 1) * period * (1 + 2 * tol) + ctx.options.timeout)
     times = [s.frame.timestamp for s in ctx.link.frames_since(mark, lambda f: f.can_id == cob)]
-    return [b - a for a, b in zip(times, times[1:], strict=False)][:count]
+    return [b - a for a, b in pairwise(times)][:count]
 
 
 def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) -> int:

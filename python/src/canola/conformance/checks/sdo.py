@@ -14,7 +14,7 @@ from canola.conformance.entries import (
     variables,
     writable,
 )
-from canola.conformance.rawsdo import NoAnswer, ProtocolViolation
+from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
 
 #: Value lengths around the frame boundaries: expedited (4), one segment (7), two (14).
@@ -48,7 +48,7 @@ def variable_entry(ctx: Context) -> eds.Variable | None:
     for var in found:
         try:
             ctx.sdo.upload(var.index, var.subindex)
-        except (SdoAbort, NoAnswer, ProtocolViolation):
+        except (SdoAbort, NoAnswerError, SdoProtocolError):
             continue
         return var
     return None
@@ -77,7 +77,7 @@ def long_readable(ctx: Context) -> tuple[eds.Variable, bytes] | None:
     for var in _long_candidates(ctx):
         try:
             data = ctx.sdo.upload(var.index, var.subindex)
-        except (SdoAbort, NoAnswer, ProtocolViolation):
+        except (SdoAbort, NoAnswerError, SdoProtocolError):
             continue
         if len(data) > 4:
             return var, data
@@ -110,14 +110,14 @@ def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str,
             ctx.finding(f"{write} download of {size} bytes to {describe(var)}", "success",
                         outcome(exc))
             continue
-        except (NoAnswer, ProtocolViolation) as exc:
+        except (NoAnswerError, SdoProtocolError) as exc:
             ctx.finding(f"{write} download of {size} bytes to {describe(var)}", "success",
                         outcome(exc))
             continue
         try:
             got = (ctx.sdo.block_upload(var.index, var.subindex)[0] if read == "block"
                    else ctx.sdo.upload(var.index, var.subindex))
-        except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
             ctx.finding(f"{read} upload of {size} bytes from {describe(var)}", "success",
                         outcome(exc))
             continue
@@ -138,8 +138,8 @@ def expedited_upload(ctx: Context) -> None:
             ctx.fail(f"upload 0x{index:04X}:0", "a value", abort_text(int.from_bytes(
                 data[4:8], "little")))
         expected = 0x43 | (4 - size) << 2
-        if len(data) != 8 or data[:4] != bytes([expected, index & 0xFF, index >> 8, 0]) \
-                and data[:4] != bytes([0x42, index & 0xFF, index >> 8, 0]):
+        mux = bytes([index & 0xFF, index >> 8, 0])
+        if len(data) != 8 or data[:4] not in (bytes([expected]) + mux, b"\x42" + mux):
             ctx.finding(f"answer to an upload of 0x{index:04X}:0 ({size} bytes)",
                         f"{expected:02X} {index & 0xFF:02X} {index >> 8:02X} 00 + data "
                         "(or 42: size not indicated)", data.hex(" ").upper())
@@ -177,7 +177,7 @@ def segmented_download(ctx: Context) -> None:
     data = ctx.read(var.index, var.subindex)
     try:
         ctx.sdo.download(var.index, var.subindex, data, segmented=True)
-    except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
         ctx.fail(f"segmented download of its own value to {describe(var)}", "success",
                  outcome(exc))
     ctx.note(f"{describe(var)}: its own {len(data)} bytes")
@@ -194,7 +194,7 @@ def segmented_upload(ctx: Context) -> None:
             data = ctx.sdo.upload(cand.index, cand.subindex)
         except SdoAbort:
             continue  # an empty DOMAIN, say: dictionary.entries judges that
-        except (NoAnswer, ProtocolViolation) as exc:
+        except (NoAnswerError, SdoProtocolError) as exc:
             ctx.fail(f"upload {describe(cand)}", "a segmented upload", outcome(exc))
         if len(data) > 4:
             ctx.note(f"{describe(cand)}: {len(data)} bytes")
@@ -232,7 +232,7 @@ def _initiate(ctx: Context, var: eds.Variable, upload: bool) -> None:
 def _served_again(ctx: Context, after: str) -> None:
     try:
         ctx.sdo.upload(0x1000, 0)
-    except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
         ctx.finding(f"read 0x1000:0 after {after}", "its value", outcome(exc))
 
 
@@ -341,7 +341,7 @@ def block_download(ctx: Context) -> None:
     data = ctx.read(var.index, var.subindex)
     try:
         blksize = ctx.sdo.block_download(var.index, var.subindex, data)
-    except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
         ctx.fail(f"block download of its own value to {describe(var)}", "success",
                  outcome(exc))
     ctx.note(f"{describe(var)}: its own {len(data)} bytes, block size {blksize}")
@@ -360,7 +360,7 @@ def block_upload(ctx: Context) -> None:
                                                     ctx.read(0x1000, 0))
     try:
         got, _ = ctx.sdo.block_upload(target.index, target.subindex)
-    except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
         ctx.fail(f"block upload of {describe(target)}", "its value", outcome(exc))
     if got != data:
         ctx.finding(f"block upload of {describe(target)}", f"[{data.hex(' ').upper()}]",
@@ -381,7 +381,7 @@ def block_crc(ctx: Context) -> None:
             ctx.finding(f"block download to {describe(var)} with a wrong CRC",
                         abort_text(0x05040004), outcome(exc))
         return
-    except (NoAnswer, ProtocolViolation) as exc:
+    except (NoAnswerError, SdoProtocolError) as exc:
         ctx.fail(f"block download to {describe(var)} with a wrong CRC",
                  abort_text(0x05040004), outcome(exc))
     ctx.finding(f"block download to {describe(var)} with a wrong CRC",
@@ -403,7 +403,7 @@ def block_size(ctx: Context) -> None:
     try:
         _, blocks = ctx.sdo.block_upload(target.index, target.subindex, blksize=1,
                                          next_blksize=2)
-    except (SdoAbort, NoAnswer, ProtocolViolation) as exc:
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
         ctx.fail(f"block upload of {describe(target)}, block size 1 then 2", "its value",
                  outcome(exc))
     if blocks[0] != 1 or any(n > 2 for n in blocks[1:]):

@@ -5,6 +5,8 @@ producer, a TPDO's SYNC start value; EMCY on a heartbeat consumer time-out (0x10
 from __future__ import annotations
 
 import statistics
+from functools import partial
+from itertools import pairwise
 
 from canola.conformance import pdo_tools as pt
 from canola.conformance.context import Context, outcome
@@ -41,7 +43,7 @@ def counter_overflow(ctx: Context) -> None:
     _no_sync_period(ctx)
     for value in (1, 241):
         ctx.expect_abort(f"write {value} to 0x1019", (0x06090030,),
-                         lambda value=value: ctx.sdo.download(0x1019, 0, bytes([value])))
+                         partial(ctx.sdo.download, 0x1019, 0, bytes([value])))
     for value in (2, 240, 0):
         ctx.write(0x1019, 0, bytes([value]))
         if ctx.read_uint(0x1019) != value:
@@ -81,7 +83,7 @@ def producer(ctx: Context) -> None:
     if len(seen) < _SYNC_FRAMES:
         ctx.fail(f"SYNC frames on 0x{sync:03X} (period {_SYNC_US // 1000} ms)",
                  f"{_SYNC_FRAMES}", f"{len(seen)}")
-    gaps = [b.frame.timestamp - a.frame.timestamp for a, b in zip(seen, seen[1:], strict=False)]
+    gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
     mean = statistics.fmean(gaps)
     if abs(mean - p) > tol * p:
         ctx.finding("mean SYNC interval", f"{p * 1000:g} ms ± {tol * 100:g} %",
