@@ -6,6 +6,7 @@ import argparse
 import os
 import sys
 
+from canola import eds
 from canola.cli.common import (
     CliError,
     Parser,
@@ -89,11 +90,12 @@ def run_command(args: argparse.Namespace) -> int:
                          "(see canola conformance --help)")
     if not os.path.isfile(args.eds):
         raise CliError(f"cannot read {args.eds}: no such file")
+    model = eds.parse(args.eds, node_id=args.node_id)  # a broken EDS: said before the bus
     options = Options(timeout=args.timeout, tolerance=args.tolerance / 100,
                       destructive=args.destructive)
     bus = bus_from_args(args)
     try:
-        report = run(bus, args.node_id, args.eds, only=args.only or (), options=options,
+        report = run(bus, args.node_id, model, only=args.only or (), options=options,
                      master_id=args.master_id, progress=LiveProgress(sys.stdout))
     finally:
         bus.shutdown()
