@@ -1,17 +1,24 @@
 # canola -- the commands of the README. Everything builds out of tree with CMake.
 #   make demo    the demo network (canola demo, from the Python environment)
 #   make demo-c  the C demo network on the simulated bus, as a candump log
-#   make test    every test: normal build, ASan+UBSan build, format check
+#   make test    every test stage (tests/run-stages), then one summary table
+#   make check   the fast inner loop: plain build + ctest, the fast Python tests
 #   make bench   instruction counts (valgrind) as a Markdown table (BENCH_QUICK=1: quick)
 #   make format  rewrite the sources with clang-format
 
 BUILD      ?= build
 BUILD_SAN  ?= build-san
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+# Tests run side by side: most of the C tests' and Python tests' time is waiting.
+JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
+PY_WORKERS ?= 4
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
-.PHONY: all demo demo-c test test-plain test-san test-configs test-python test-vcan format format-check bench fuzz fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 test-clang analyse clean
+.PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
+        test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
+        fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
+        test-clang analyse clean
 
 all: $(BUILD)/build.stamp
 
@@ -22,39 +29,52 @@ $(BUILD)/build.stamp: FORCE
 demo-c: all
 	./$(BUILD)/sim_network
 
-test: test-plain test-san test-configs test-python test-vcan format-check
+# Every stage runs, even after one failed; tests/run-stages prints the summary table
+# (SKIP="vcan san" make test leaves stages out).
+test:
+	@tests/run-stages
+
+check:
+	@tests/run-stages plain pytest-fast
 
 test-plain:
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	cmake --build $(BUILD)
-	cd $(BUILD) && ctest --output-on-failure
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-san:
 	cmake -S . -B $(BUILD_SAN) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCANOLA_SANITIZE=ON >/dev/null
 	cmake --build $(BUILD_SAN)
-	cd $(BUILD_SAN) && UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure
+	cd $(BUILD_SAN) && UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 
-# The core must build warning-free with every configuration in configs/.
+# The core must build warning-free with every configuration in configs/ (and clang's view).
 test-configs:
-	@for cfg in configs/*.h; do \
+	@rc=0; for cfg in configs/*.h; do \
 	  name=$$(basename $$cfg .h); \
-	  cmake -S . -B build-config-$$name $(CMAKE_GEN) -DCANOLA_TESTS=OFF \
-	    -DCANOLA_CONFIG_FILE=$(CURDIR)/$$cfg >/dev/null && \
-	  cmake --build build-config-$$name --target canola >/dev/null && \
-	  echo "config $$name: core builds" || exit 1; \
-	done
-	@if command -v clang >/dev/null 2>&1; then \
-	  for f in src/*.c; do \
+	  if cmake -S . -B build-config-$$name $(CMAKE_GEN) -DCANOLA_TESTS=OFF \
+	       -DCANOLA_CONFIG_FILE=$(CURDIR)/$$cfg >/dev/null && \
+	     cmake --build build-config-$$name --target canola >/dev/null; then \
+	    echo "config $$name: core builds"; else echo "config $$name: FAILED"; rc=1; fi; \
+	done; \
+	if command -v clang >/dev/null 2>&1; then \
+	  ok=1; for f in src/*.c; do \
 	    clang -std=c11 -Wall -Wextra -Wconversion -Wshadow -Werror -pedantic -Iinclude -Isrc \
-	      -fsyntax-only $$f || exit 1; \
-	  done && echo "clang: core builds"; \
-	else echo "clang: SKIPPED (not installed; .ci/run installs it)"; fi
+	      -fsyntax-only $$f || ok=0; \
+	  done; \
+	  if [ $$ok = 1 ]; then echo "clang: core builds"; else echo "clang: FAILED"; rc=1; fi; \
+	else echo "clang: NOT RUN (not installed; .ci/run installs it)"; fi; \
+	exit $$rc
 
 # The Python package (python/): its own virtual environment, pinned tools, pytest, ruff, mypy.
+# Installed again (the cffi extension rebuilt) when the package's build inputs change.
 PY_VENV = build-py/venv
-py-env:
+PY_INPUTS = python/pyproject.toml python/setup.py python/src/canola/_build_core.py \
+            $(wildcard src/*.[ch] include/canola/*.h port/sim/*.[ch] port/linux/file_storage.c)
+py-env: build-py/env.stamp
+build-py/env.stamp: $(PY_INPUTS)
 	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)
 	$(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[test]'
+	@touch $@
 
 # The README's main command: a master and three devices through boot-up, the CiA 302-2 manager,
 # SYNC and PDOs, EMCY and heartbeat loss, decoded and checked (canola demo --help).
@@ -62,8 +82,17 @@ demo:
 	@test -x $(PY_VENV)/bin/canola || $(MAKE) --no-print-directory py-env
 	$(PY_VENV)/bin/canola demo
 
-test-python: py-env
-	cd python && ../$(PY_VENV)/bin/python -m pytest -q tests
+# pytest (markers in python/pyproject.toml: slow, realtime, vcan), then ruff and mypy.
+test-python: test-pytest test-python-lint
+
+test-pytest: py-env
+	cd python && ../$(PY_VENV)/bin/python -m pytest -q -n $(PY_WORKERS) tests
+
+# make check's share: the tests not marked slow.
+test-pytest-fast: py-env
+	cd python && ../$(PY_VENV)/bin/python -m pytest -q -n $(PY_WORKERS) -m 'not slow' tests
+
+test-python-lint: py-env
 	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src
 
 # Coverage of the core by the C tests (gcovr from the Python environment's pinned tools).
@@ -193,7 +222,7 @@ analyse: lint cortex-m test-m32 test-clang
 
 # The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
 # candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
-# one canvm run (../shared/tools/canvm), else reported NOT RUN.
+# one canvm run (CANOLA_CANVM, else ../shared/tools/canvm/canvm), else reported NOT RUN.
 test-vcan:
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	cmake --build $(BUILD) --target test_socketcan canola-node
@@ -203,7 +232,7 @@ format-check:
 	@if command -v clang-format >/dev/null 2>&1; then \
 	  clang-format --dry-run --Werror $(FORMAT_SRC) && echo "format check: ok"; \
 	else \
-	  echo "format check: SKIPPED (clang-format not installed; .ci/run installs it)"; \
+	  echo "format check: NOT RUN (clang-format not installed; .ci/run installs it)"; \
 	fi
 
 format:
@@ -214,6 +243,6 @@ bench:
 	BENCH_QUICK=$(BENCH_QUICK) ./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-bench build-config-* build-py build-cov build-fuzz build-vcan build-arm build-m32 build-clang
+	rm -rf $(BUILD) $(BUILD_SAN) build-logs build-load build-bench build-config-* build-py build-cov build-fuzz build-vcan build-arm build-m32 build-clang
 
 FORCE:

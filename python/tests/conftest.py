@@ -5,6 +5,9 @@ channel of the test's own by default; SocketCAN on the interface named by the en
 variable ``CANOLA_VCAN`` (e.g. ``vcan0``) when it is set, as the SocketCAN tier does
 (``CANOLA_VCAN=vcan0 pytest -m vcan``). Every bus made is shut down after the test.
 ``wait_until`` polls a condition of such a test for a while.
+
+Every test is checked for processes it left running (``leftovers``): such a test errors,
+naming them, and they are killed.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from collections.abc import Callable, Iterator
 
 import can
 import pytest
+from leftovers import SESSION_VAR, TEST_VAR, describe, left_running
 
 _channels = itertools.count()
 
@@ -26,6 +30,29 @@ VCAN = os.environ.get("CANOLA_VCAN") or None
 #: emulated VM (canvm, no KVM) where python-canopen takes more than a second to work
 #: through a block of 127 segments before it acknowledges it.
 SDO_TIMEOUT_MS = 5000 if VCAN else 1000
+
+
+os.environ[SESSION_VAR] = str(os.getpid())
+
+
+@pytest.fixture(autouse=True)
+def _nothing_left_running(request: pytest.FixtureRequest) -> Iterator[None]:
+    """Mark the processes this test starts; after it, none may still run."""
+    mark = f"{os.getpid()}:{request.node.nodeid}"
+    os.environ[TEST_VAR] = mark
+    yield
+    del os.environ[TEST_VAR]
+    found = left_running(TEST_VAR, mark)
+    if found:
+        pytest.fail(f"processes left running (killed now): {describe(found)}")
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """The processes of module- and session-wide fixtures are gone too."""
+    found = left_running(SESSION_VAR, str(os.getpid()))
+    if found:
+        print(f"\nprocesses left running by the tests (killed now): {describe(found)}")
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
 
 @pytest.fixture
@@ -47,9 +74,9 @@ def can_bus() -> Iterator[Callable[[], can.BusABC]]:
         bus.shutdown()
 
 
-def wait_until(check: Callable[[], bool], timeout: float = 3.0) -> bool:
+def wait_until(check: Callable[[], bool], timeout: float = 30.0) -> bool:
     """Poll ``check`` every 5 ms until it is true or ``timeout`` seconds have passed; its
-    last answer."""
+    last answer. The bound is for a starved machine: the wait ends when ``check`` holds."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         if check():

@@ -17,6 +17,8 @@ from pathlib import Path
 import pytest
 from cli_helpers import cli
 
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
+
 EDS = Path(__file__).parent / "data" / "cli_device.eds"
 PY = sys.executable
 
@@ -56,14 +58,18 @@ def test_device_and_cli_processes(capsys: pytest.CaptureFixture[str], tmp_path: 
     dev = subprocess.Popen([PY, "-m", "canola.cli", "device", "--eds", str(EDS), "--node-id",
                             "33", "--sdo-timeout", "5000", *bus_opts], stdout=subprocess.PIPE,
                            text=True)
+    # answers come late under emulation (the SocketCAN tier) or on a busy machine: the
+    # time-outs are generous (an answer ends the wait)
+    slow = ["--timeout", "5000"]
     try:
         _wait_line(dev, "node 33: PRE-OPERATIONAL")
-        assert cli(capsys, "sdo", "read", "33", "0x1018:1", *bus_opts)[:2] == (0, "0x00000CA0\n")
-        assert cli(capsys, "sdo", "write", "33", "0x2001:0", "i16", "-42", *bus_opts)[0] == 0
-        assert cli(capsys, "sdo", "read", "33", "0x2001:0", "i16", *bus_opts)[1] == "-42\n"
+        assert cli(capsys, "sdo", "read", "33", "0x1018:1", *bus_opts, *slow)[:2] == (
+            0, "0x00000CA0\n")
+        assert cli(capsys, "sdo", "write", "33", "0x2001:0", "i16", "-42", *bus_opts,
+                   *slow)[0] == 0
+        assert cli(capsys, "sdo", "read", "33", "0x2001:0", "i16", *bus_opts, *slow)[1] == "-42\n"
         blob = os.urandom(1500)
         (tmp_path / "in.bin").write_bytes(blob)
-        slow = ["--timeout", "5000"]  # the SocketCAN tier runs under emulation: slow answers
         assert cli(capsys, "sdo", "download", "33", "0x2004:0", str(tmp_path / "in.bin"),
                    *bus_opts, *slow)[::2] == (0, "")
         assert cli(capsys, "sdo", "upload", "33", "0x2004:0", str(tmp_path / "out.bin"),
@@ -73,11 +79,11 @@ def test_device_and_cli_processes(capsys: pytest.CaptureFixture[str], tmp_path: 
                              *bus_opts)
         assert (code, out, err) == (1, "", "canola: no response from node 34 (SDO time-out "
                                            "200 ms)\n")
-        code, out, _ = cli(capsys, "scan", *bus_opts, "--json")
+        code, out, _ = cli(capsys, "scan", *bus_opts, "--json", *slow)  # collects for 5 s
         assert 33 in [n["node"] for n in json.loads(out)]
         assert cli(capsys, "nmt", "start", "33", *bus_opts)[0] == 0
         _wait_line(dev, "node 33: OPERATIONAL")
-        code, out, _ = cli(capsys, "monitor", *bus_opts, "--json", "--duration", "0.5")
+        code, out, _ = cli(capsys, "monitor", *bus_opts, "--json", "--duration", "2")
         nodes = {n["node"]: n for n in json.loads(out)["nodes"]}
         assert nodes[33]["state"] == "OPERATIONAL"
     finally:

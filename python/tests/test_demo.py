@@ -226,6 +226,8 @@ def test_bad_input_is_one_line(capsys: pytest.CaptureFixture[str], args: list[st
     assert "== summary" not in out
 
 
+@pytest.mark.realtime
+@pytest.mark.slow
 def test_realtime_is_paced(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = demo(capsys, "--realtime", "--quiet")
     assert code == 0
@@ -328,6 +330,8 @@ def hub() -> Iterator[int]:
             proc.wait(5)
 
 
+@pytest.mark.realtime
+@pytest.mark.slow
 def test_demo_on_a_hub_watched_by_python_can(capsys: pytest.CaptureFixture[str],
                                              hub: int) -> None:
     url = f"socketcand://127.0.0.1:{hub}/demo"
@@ -344,6 +348,8 @@ def test_demo_on_a_hub_watched_by_python_can(capsys: pytest.CaptureFixture[str],
 
 
 @pytest.mark.vcan
+@pytest.mark.realtime
+@pytest.mark.slow
 def test_demo_on_socketcan_or_virtual(capsys: pytest.CaptureFixture[str]) -> None:
     vcan = os.environ.get("CANOLA_VCAN")
     if vcan:
@@ -363,6 +369,8 @@ def test_demo_on_socketcan_or_virtual(capsys: pytest.CaptureFixture[str]) -> Non
     _assert_watched(watcher.frames)
 
 
+@pytest.mark.realtime
+@pytest.mark.slow
 def test_runs_as_a_program_on_an_ascii_terminal() -> None:
     done = subprocess.run([PY, "-m", "canola.cli", "demo", "--quiet"], capture_output=True,
                           text=True, timeout=60, check=False,

@@ -436,6 +436,7 @@ def corpus_files() -> list[Path]:
     return sorted(p for p in CORPUS.iterdir() if p.suffix.lower() in (".eds", ".dcf"))
 
 
+@pytest.mark.slow
 def test_corpus_files_parse_or_fail_with_file_and_line() -> None:
     files = corpus_files()
     if not files:

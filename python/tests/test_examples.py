@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
@@ -16,6 +18,7 @@ def _run(*args: str) -> str:
     return done.stdout
 
 
+@pytest.mark.slow
 def test_master_example() -> None:
     out = _run(str(EXAMPLES / "master_example.py"))
     assert "node 5: 'canola interop', vendor 0xCA0" in out
@@ -28,6 +31,8 @@ def test_master_example() -> None:
     assert out == _run(str(EXAMPLES / "master_example.py"))  # virtual time: deterministic
 
 
+@pytest.mark.slow
+@pytest.mark.realtime
 def test_device_example() -> None:
     out = _run(str(EXAMPLES / "device_example.py"), "--seconds", "2.2",
                "--channel", "canola-example-test")

@@ -107,6 +107,7 @@ def test_flash_errors(net: tuple[SimBus, Master, Device, ProgramSlot]) -> None:
     assert master.flash(5, b"ok").bytes == 2  # the device is usable after an abort
 
 
+@pytest.mark.realtime
 def test_flash_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
     master = Master(can_bus(), node_id=1, sdo_timeout_ms=5000)
     device = Device(model(), 5, can_bus())

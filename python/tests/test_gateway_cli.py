@@ -11,16 +11,20 @@ import sys
 from pathlib import Path
 
 import can
+import pytest
 from gateway_helpers import Client, gateway_process, run
 
 from canola import Device
 from canola.cli import main as canola_main
 from canola.gateway.cli import _serve
 
+pytestmark = pytest.mark.realtime
+
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 SIM = ["--simulate", str(SAMPLE), "--sim-node", "2", "--sim-node", "3"]
 
 
+@pytest.mark.slow
 def test_stdio_script() -> None:
     script = ("[1] 2 r 0x1008 0 vs\n# comment\n[2] set node 3\n[3] r 0x1000 0 u32\n"
               "[4] 2 w 0x200C 0 u32 0x10\n[5] 2 r 0x200C 0 x32\nnonsense\n[6] 9 9 9 r\n"
@@ -34,6 +38,7 @@ def test_stdio_script() -> None:
         "[5] ERROR:101", "[6] ERROR:101", "[7] OK", "[8] 0", ""]
 
 
+@pytest.mark.slow
 def test_tcp_process_and_sigterm() -> None:
     with gateway_process(*SIM) as (proc, address):
         async def main() -> None:

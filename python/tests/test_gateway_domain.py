@@ -21,6 +21,7 @@ SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 GW = 127
 
 
+@pytest.mark.slow
 def test_one_mib_domain_block_write_and_read_back() -> None:
     async def main() -> None:
         bus = SimBus()

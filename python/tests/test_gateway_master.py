@@ -12,6 +12,7 @@ from collections.abc import AsyncIterator, Callable
 from pathlib import Path
 
 import can
+import pytest
 from gateway_helpers import Client, run, serving
 
 from canola import Device, Master
@@ -128,6 +129,7 @@ def test_sim_sdo_timeout_per_client() -> None:
     run(main())
 
 
+@pytest.mark.slow
 def test_sim_events() -> None:
     async def main() -> None:
         _, master, devices = _sim()
@@ -149,6 +151,8 @@ def test_sim_events() -> None:
     run(main())
 
 
+@pytest.mark.realtime
+@pytest.mark.slow
 def test_python_can_other_clients_not_stalled_and_abort_on_disconnect(
         can_bus: Callable[[], can.BusABC]) -> None:
     watch = can_bus()

@@ -10,6 +10,7 @@ import struct
 from collections.abc import AsyncIterator
 from pathlib import Path
 
+import pytest
 from gateway_helpers import Client, run, serving
 
 from canola import eds
@@ -120,6 +121,7 @@ def test_local_node_has_no_frames() -> None:
     run(main())
 
 
+@pytest.mark.slow
 def test_nmt_boot_up_and_heartbeat_events() -> None:
     async def main() -> None:
         async with gateway() as (address, _, nodes):

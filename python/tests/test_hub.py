@@ -14,6 +14,8 @@ import pytest
 from canola.hub import HubThread
 from canola.socketcand import Frame, parse_server_element, split_elements
 
+pytestmark = pytest.mark.realtime
+
 
 @pytest.fixture
 def hub() -> Iterator[HubThread]:
@@ -160,6 +162,7 @@ def test_slow_client_loses_frames_but_stalls_nobody(hub: HubThread) -> None:
         slow.close()
 
 
+@pytest.mark.slow
 def test_serve_command_in_a_subprocess() -> None:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
@@ -182,6 +185,7 @@ def test_serve_command_in_a_subprocess() -> None:
         assert proc.wait(10) == 0
 
 
+@pytest.mark.slow
 def test_port_in_use_is_one_line_error() -> None:
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))

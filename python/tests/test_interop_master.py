@@ -19,7 +19,7 @@ from conftest import wait_until
 from canola import Device, Master, SdoAbort, SdoTimeout
 from canola.master import EmcyEvent, Frame, HeartbeatEvent
 
-pytestmark = pytest.mark.vcan
+pytestmark = [pytest.mark.realtime, pytest.mark.vcan]
 
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
 LOCAL = 10
@@ -74,17 +74,18 @@ def test_sdo_abort_from_python_canopen(net: Net) -> None:
     assert net.master.sdo(LOCAL).read(0x1018, 2, "u32") == 0x1E0  # the channel still works
 
 
+@pytest.mark.slow
 def test_sdo_timeout(net: Net) -> None:
     began = time.monotonic()
     with pytest.raises(SdoTimeout) as exc:
         net.master.sdo(99).upload(0x1000, 0)
     assert exc.value.code == 0x05040000
     assert str(exc.value) == "no response from node 99 (SDO time-out 1000 ms)"
-    assert 0.9 < time.monotonic() - began < 5
+    assert time.monotonic() - began >= 0.9  # never before its time-out (later: load)
     began = time.monotonic()
-    with pytest.raises(SdoTimeout, match="SDO time-out 150 ms"):
+    with pytest.raises(SdoTimeout, match="SDO time-out 150 ms"):  # the request's own
         net.master.sdo(99).upload(0x1000, 0, timeout=0.15)
-    assert time.monotonic() - began < 0.9
+    assert time.monotonic() - began >= 0.1
 
 
 def test_nmt(net: Net) -> None:
@@ -184,7 +185,11 @@ def test_periodic_time(net: Net) -> None:
     net.master.start_time(50)
     assert wait_until(lambda: len(times) >= 4)
     net.master.stop_time()
-    time.sleep(0.2)
+    # A frame sent after the stop: once it arrived, so did every TIME frame before it.
+    marks: list[bytes] = []
+    net.network.subscribe(0x7F0, lambda can_id, data, ts: marks.append(data))
+    net.master.send(0x7F0, b"\x01")
+    assert wait_until(lambda: marks == [b"\x01"], 30)
     count = len(times)
-    time.sleep(0.2)
+    time.sleep(0.3)  # six periods
     assert len(times) == count  # stopped

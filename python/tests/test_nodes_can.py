@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -12,6 +11,8 @@ import pytest
 from conftest import wait_until
 
 from canola import Device, Error, Master
+
+pytestmark = pytest.mark.realtime
 
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
 
@@ -72,7 +73,8 @@ def test_blocking_call_from_own_callback_is_refused(can_bus: Callable[[], can.Bu
 
 
 def test_stop_during_a_transfer_ends_it(can_bus: Callable[[], can.BusABC]) -> None:
-    master = Master(can_bus(), node_id=1, sdo_timeout_ms=5000)
+    master = Master(can_bus(), node_id=1, sdo_timeout_ms=60000)
+    watch = can_bus()
     result: list[BaseException | bytes] = []
 
     def read() -> None:
@@ -84,7 +86,10 @@ def test_stop_during_a_transfer_ends_it(can_bus: Callable[[], can.BusABC]) -> No
     with master:
         reader = threading.Thread(target=read)
         reader.start()
-        time.sleep(0.1)
-    reader.join(3.0)
+        # the request is on the bus: the transfer is under way (nobody answers node 42)
+        while (msg := watch.recv(30)) is not None and msg.arbitration_id != 0x600 + 42:
+            pass
+        assert msg is not None
+    reader.join(30)
     assert not reader.is_alive()
     assert isinstance(result[0], Error) and "stopped" in str(result[0])

@@ -171,6 +171,7 @@ int main(void)
 
 # -O0: the short paths and the look-up tables; -Os: a build for size, neither.
 @pytest.mark.parametrize("optimise", ["-O0", "-Os"])
+@pytest.mark.slow
 def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str) -> None:
     cc = compiler()
     if not CORE_SOURCES:
@@ -317,6 +318,7 @@ def corpus_files() -> list[Path]:
     return sorted(p for p in CORPUS.iterdir() if p.suffix.lower() in (".eds", ".dcf"))
 
 
+@pytest.mark.slow
 def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> None:
     files = corpus_files()
     if not files:

@@ -210,10 +210,12 @@ def _check_file(path: Path, core_lib: Path, tmp_path: Path) -> int:
 
 
 @pytest.mark.parametrize("name", ["golden/sample.eds", "data/interop.eds"])
+@pytest.mark.slow
 def test_generated_device_answers_every_entry(name: str, core_lib: Path, tmp_path: Path) -> None:
     assert _check_file(HERE / name, core_lib, tmp_path) > 20
 
 
+@pytest.mark.slow
 def test_corpus_devices_answer_every_entry(core_lib: Path, tmp_path: Path) -> None:
     if not CORPUS.is_dir():
         pytest.skip(f"no corpus at {CORPUS}")

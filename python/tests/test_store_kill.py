@@ -7,11 +7,20 @@ the previous generation of values or the new one, never defaults, a mix inside o
 an error. CANOLA_STORE_LOOPS sets the number of rounds (default 200).
 
 To keep a round cheap the devices are forked from a driver process that has canola
-imported already (a fork takes milliseconds, a fresh interpreter about a second).
+imported already (a fork takes milliseconds, a fresh interpreter about a second). The driver
+runs in a process group of its own: the test ends it and every device it forked, pass or
+fail.
+
+The master sends "save" and does not wait for the answer; a device killed after answering
+may have that answer still on its way through the hub when the next round's device is
+asked. So the rounds alternate between node-IDs 5 and 6 (a late answer belongs to the
+other node's SDO channel), and each round waits until the hub has let the killed device go
+(so its last frames were passed on before the round after next).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import random
 import signal
@@ -19,7 +28,7 @@ import subprocess
 import sys
 import textwrap
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import can
@@ -31,6 +40,8 @@ from canola.device import Device
 from canola.hub import HubThread
 from canola.master import Master
 
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
+
 EDS = Path(__file__).parent / "data" / "cli_device.eds"
 LOOPS = int(os.environ.get("CANOLA_STORE_LOOPS", "200"))
 
@@ -41,11 +52,11 @@ DRIVER = textwrap.dedent("""
     from canola.device import Device
     model = eds.parse(sys.argv[1])
     for line in sys.stdin:
-        url, store = line.split()
+        url, store, node_id = line.split()
         pid = os.fork()
         if pid == 0:
             bus = open_bus(url=url)
-            dev = Device(model, 5, bus, store_dir=store)
+            dev = Device(model, int(node_id), bus, store_dir=store)
             dev.start()
             print(f"ready {os.getpid()}", flush=True)
             while True:
@@ -60,6 +71,7 @@ DRIVER = textwrap.dedent("""
 """)
 
 SAVE = bytes([0x23, 0x10, 0x10, 0x01]) + b"save"
+NODES = (5, 6)  # the rounds' devices, in turn
 
 
 def _values(gen: int) -> tuple[int, int, int]:
@@ -81,11 +93,23 @@ def _loaded(model: eds.ObjectDictionary, store: Path) -> tuple[int, int, int]:
 @pytest.fixture
 def driver() -> Iterator[subprocess.Popen[str]]:
     proc = subprocess.Popen([sys.executable, "-c", DRIVER, str(EDS)], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, text=True)
-    yield proc
-    assert proc.stdin is not None
-    proc.stdin.close()
-    proc.wait(10)
+                            stdout=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        yield proc
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)  # the driver and any device it forked
+        proc.wait(10)
+        for pipe in (proc.stdin, proc.stdout):
+            if pipe is not None:
+                pipe.close()
+
+
+def _wait(check: Callable[[], bool], what: str, timeout: float = 30.0) -> None:
+    end = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < end, f"{what}: not within {timeout} s"
+        time.sleep(0.005)
 
 
 def test_sigkill_during_save_keeps_old_or_new(tmp_path: Path,
@@ -99,43 +123,48 @@ def test_sigkill_during_save_keeps_old_or_new(tmp_path: Path,
     with HubThread() as hub:
         url = f"socketcand://127.0.0.1:{hub.port}/store"
         bus = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="store")
-        master = Master(bus, 127, sdo_timeout_ms=2000)
+        master = Master(bus, 127, sdo_timeout_ms=10000)  # a starved device answers late
         master.start()
         try:
             app_gen = comm_gen = 0
 
-            def spawn() -> int:
-                driver.stdin.write(f"{url} {store}\n")  # type: ignore[union-attr]
+            def spawn(node_id: int) -> int:
+                driver.stdin.write(f"{url} {store} {node_id}\n")  # type: ignore[union-attr]
                 driver.stdin.flush()  # type: ignore[union-attr]
                 line = driver.stdout.readline()  # type: ignore[union-attr]
                 assert line.startswith("ready "), line
                 return int(line.split()[1])
 
-            def write(gen: int) -> None:
+            def kill(pid: int) -> None:
+                """SIGKILL, then wait until the hub has let the device go."""
+                os.kill(pid, signal.SIGKILL)
+                _wait(lambda: len(hub.hub.clients()) == 1, "the hub drops the killed device")
+
+            def write(gen: int, node_id: int) -> None:
                 u32, i16, hb = _values(gen)
-                sdo = master.sdo(5)
+                sdo = master.sdo(node_id)
                 sdo.write(0x2000, 0, "u32", u32)
                 sdo.write(0x2001, 0, "i16", i16)
                 sdo.write(0x1017, 0, "u16", hb)
 
             # generation 0 saved properly; and how long a save takes, to aim the kills
-            pid = spawn()
-            write(0)
+            pid = spawn(NODES[0])
+            write(0, NODES[0])
             start = time.monotonic()
-            master.sdo(5).download(0x1010, 1, b"save")
+            master.sdo(NODES[0]).download(0x1010, 1, b"save")
             save_s = time.monotonic() - start
-            os.kill(pid, signal.SIGKILL)
+            kill(pid)
             assert _loaded(model, store) == _values(0)
             started = time.monotonic()
             for gen in range(1, LOOPS + 1):
                 for leftover in store.glob("*.tmp"):  # so that a .tmp below is this round's
                     leftover.unlink()
-                pid = spawn()
-                write(gen)
-                master.send(0x605, SAVE)  # no waiting for the answer
+                node_id = NODES[gen % 2]
+                pid = spawn(node_id)
+                write(gen, node_id)
+                master.send(0x600 + node_id, SAVE)  # no waiting for the answer
                 time.sleep(rng.uniform(0, 2 * save_s))
-                os.kill(pid, signal.SIGKILL)
-                time.sleep(0.005)  # the kernel has finished the process
+                kill(pid)  # the kernel has finished the process too
                 if any(store.glob("*.tmp")):  # killed between writing and renaming
                     outcomes["mid-save"] += 1
                 got = _loaded(model, store)

@@ -7,7 +7,7 @@
  * Checks: boot-up, an NMT start seen in the heartbeat, an SDO "save" with --store DIR
  * writing the parameter files and a restart reading them back, the NMT state changes on stderr, a
  * clean exit 0 on SIGTERM and SIGINT, exit 1 when the server goes away, one-line errors and exit 2
- * for bad arguments. Bounded: every wait has a time-out; alarm(30).
+ * for bad arguments. Bounded: every wait has a time-out; alarm(180).
  */
 #define _GNU_SOURCE
 
@@ -28,6 +28,11 @@
 #include <unistd.h>
 
 static const char *prog;
+
+/* How long a wait for the program may take (ms): a bound for a starved machine, where a
+ * program under ASan may need seconds to start; the waits end when the awaited text or
+ * exit comes. */
+#define WAIT_MS 20000
 
 static long now_ms(void)
 {
@@ -153,16 +158,16 @@ static void start_node(child_t *c, conn_t *k, const char *store, int *listener)
     }
     spawn(c, argv);
     memset(k, 0, sizeof *k);
-    k->fd = accept_within(ls, 5000);
+    k->fd = accept_within(ls, WAIT_MS);
     CHECK(k->fd >= 0);
     *listener = ls;
     if (k->fd < 0) {
         return;
     }
     send_text(k, "< hi >");
-    CHECK(wait_text(k, 0, "< open vcan0 >", 3000) >= 0);
+    CHECK(wait_text(k, 0, "< open vcan0 >", WAIT_MS) >= 0);
     send_text(k, "< ok >");
-    CHECK(wait_text(k, 0, "< rawmode >", 3000) >= 0);
+    CHECK(wait_text(k, 0, "< rawmode >", WAIT_MS) >= 0);
     send_text(k, "< ok >");
 }
 
@@ -174,26 +179,26 @@ static void test_runs_on_a_socketcand_bus(void)
     char dir[] = "/tmp/canola-node-test-XXXXXX";
     CHECK(mkdtemp(dir) != NULL);
     start_node(&c, &k, dir, &ls);
-    long boot = wait_text(&k, 0, "< send 707 1 00 >", 3000);
+    long boot = wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS);
     CHECK(boot >= 0);
-    long hb = wait_text(&k, (size_t)(boot + 1), "< send 707 1 7F >", 3000);
+    long hb = wait_text(&k, (size_t)(boot + 1), "< send 707 1 7F >", WAIT_MS);
     CHECK(hb >= 0);
     /* NMT start node 7. */
     send_text(&k, "< frame 000 1.000000 0107 >");
-    CHECK(wait_text(&k, (size_t)hb, "< send 707 1 05 >", 3000) >= 0);
+    CHECK(wait_text(&k, (size_t)hb, "< send 707 1 05 >", WAIT_MS) >= 0);
     /* 0x1017 = 250 ms, then 0x1010 sub1 = "save": the parameters land in --store. */
     size_t from = k.len;
     send_text(&k, "< frame 607 2.000000 2B171000FA000000 >");
-    CHECK(wait_text(&k, from, "< send 587 8 60 17 10 00 00 00 00 00 >", 3000) >= 0);
+    CHECK(wait_text(&k, from, "< send 587 8 60 17 10 00 00 00 00 00 >", WAIT_MS) >= 0);
     from = k.len;
     send_text(&k, "< frame 607 2.100000 2310100173617665 >");
-    CHECK(wait_text(&k, from, "< send 587 8 60 10 10 01 00 00 00 00 >", 3000) >= 0);
+    CHECK(wait_text(&k, from, "< send 587 8 60 10 10 01 00 00 00 00 >", WAIT_MS) >= 0);
     char path[128];
     struct stat st;
     snprintf(path, sizeof path, "%s/comm.params", dir);
     CHECK(stat(path, &st) == 0 && st.st_size > 0);
     kill(c.pid, SIGTERM);
-    CHECK_EQ(finish(&c, 3000), 0);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
     CHECK(strstr(c.text, "node 7 on socketcand://") != NULL);
     CHECK(strstr(c.text, ": pre-operational\n") != NULL);
     CHECK(strstr(c.text, ": operational\n") != NULL);
@@ -204,12 +209,12 @@ static void test_runs_on_a_socketcand_bus(void)
 
     /* Power cycle: the stored 250 ms beats --heartbeat 100. */
     start_node(&c, &k, dir, &ls);
-    CHECK(wait_text(&k, 0, "< send 707 1 00 >", 3000) >= 0);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS) >= 0);
     from = k.len;
     send_text(&k, "< frame 607 3.000000 4017100000000000 >");
-    CHECK(wait_text(&k, from, "< send 587 8 4B 17 10 00 FA 00 00 00 >", 3000) >= 0);
+    CHECK(wait_text(&k, from, "< send 587 8 4B 17 10 00 FA 00 00 00 >", WAIT_MS) >= 0);
     kill(c.pid, SIGTERM);
-    CHECK_EQ(finish(&c, 3000), 0);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
     close(k.fd);
     close(ls);
     unlink(path);
@@ -224,17 +229,17 @@ static void test_sigint_and_server_gone(void)
     conn_t k;
     int ls;
     start_node(&c, &k, NULL, &ls);
-    CHECK(wait_text(&k, 0, "< send 707 1 00 >", 3000) >= 0);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS) >= 0);
     kill(c.pid, SIGINT);
-    CHECK_EQ(finish(&c, 3000), 0);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
     CHECK(strstr(c.text, "stopped by SIGINT") != NULL);
     close(k.fd);
     close(ls);
 
     start_node(&c, &k, NULL, &ls);
-    CHECK(wait_text(&k, 0, "< send 707 1 00 >", 3000) >= 0);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS) >= 0);
     close(k.fd); /* the server goes away */
-    CHECK_EQ(finish(&c, 3000), 1);
+    CHECK_EQ(finish(&c, WAIT_MS), 1);
     CHECK(strstr(c.text, "closed the connection") != NULL);
     close(ls);
 }
@@ -244,7 +249,7 @@ static void expect_error(int want, const char *part, char *const argv[])
 {
     child_t c;
     spawn(&c, argv);
-    int rc = finish(&c, 3000);
+    int rc = finish(&c, WAIT_MS);
     int lines = 0;
     for (const char *p = c.text; *p; p++) {
         lines += *p == '\n';
@@ -286,7 +291,7 @@ static void test_bad_arguments(void)
 
 int main(int argc, char **argv)
 {
-    alarm(30);
+    alarm(180);
     setvbuf(stdout, NULL, _IOLBF, 0);
     signal(SIGPIPE, SIG_IGN);
     if (argc != 2) {

@@ -6,7 +6,9 @@
  * Then the event loop runs a second node (node-ID 6) on its own socket, and error frames
  * written to vcan0 by the peer go to the bus events (when this kernel delivers error
  * frames that a socket wrote: it says which). Run by tests/linux/vcan-tier.sh (natively
- * or inside canvm). Bounded: alarm(10).
+ * or inside canvm, an emulated machine that may also be busy): every wait ends when what
+ * it waits for comes, within a bound of seconds; order and counts are checked, never how
+ * soon something came. Bounded: alarm(120).
  */
 #define _GNU_SOURCE
 
@@ -15,6 +17,7 @@
 #include "canola/socketcan.h"
 #include "check.h"
 #include "example_od.h"
+#include "loop_wait.h"
 
 #include <errno.h>
 #include <linux/can.h>
@@ -36,7 +39,7 @@ static co_socketcan_t can;
 static int peer = -1;
 
 /* Frames the peer saw, with the time they arrived. */
-#define LOG_MAX 256
+#define LOG_MAX 4096
 static struct can_frame seen[LOG_MAX];
 static uint64_t seen_us[LOG_MAX];
 static int seen_count;
@@ -116,6 +119,9 @@ static int find_seen(int from, uint32_t id, const uint8_t *data, uint8_t len)
     return -1;
 }
 
+/* How long a wait may take (ms) before what it waits for counts as missing. */
+#define WAIT_MS LOOP_WAIT_BOUND_MS
+
 /* Pump until such a frame appears (index) or `ms` passed (-1). */
 static int wait_for(int from, uint32_t id, const uint8_t *data, uint8_t len, unsigned ms)
 {
@@ -167,7 +173,7 @@ static void test_boot_up(void)
 {
     CHECK_EQ(co_node_start(&node, co_linux_now_us()), CO_OK);
     const uint8_t boot[1] = {0x00};
-    CHECK(wait_for(0, 0x700u + NODE_ID, boot, 1, 500) >= 0);
+    CHECK(wait_for(0, 0x700u + NODE_ID, boot, 1, WAIT_MS) >= 0);
 }
 
 static void test_unrouted_id_filtered(void)
@@ -186,14 +192,9 @@ static void test_nmt_start_shows_in_heartbeat(void)
     pump_until(co_linux_now_us() + 1000u);
     int from = seen_count;
     const uint8_t start[2] = {0x01, NODE_ID};
-    uint64_t t0 = co_linux_now_us();
     peer_send(0x000, start, 2);
     const uint8_t operational[1] = {0x05};
-    int i = wait_for(from, 0x700u + NODE_ID, operational, 1, 400);
-    CHECK(i >= 0);
-    if (i >= 0) {
-        CHECK(seen_us[i] - t0 < 250000u);
-    }
+    CHECK(wait_for(from, 0x700u + NODE_ID, operational, 1, WAIT_MS) >= 0);
     CHECK_EQ(co_node_stats(&node)->rx_frames, before + 1);
 }
 
@@ -203,19 +204,32 @@ static void test_sdo_upload_device_type(void)
     const uint8_t req[8] = {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0};
     peer_send(0x600u + NODE_ID, req, 8);
     const uint8_t resp[8] = {0x43, 0x00, 0x10, 0x00, 0x91, 0x01, 0x00, 0x00};
-    CHECK(wait_for(from, 0x580u + NODE_ID, resp, 8, 500) >= 0);
+    CHECK(wait_for(from, 0x580u + NODE_ID, resp, 8, WAIT_MS) >= 0);
 }
 
-static void test_heartbeat_period(void)
+static int beats_since(int from)
 {
-    /* Heartbeats keep coming about every 100 ms. */
-    int from = seen_count;
-    pump_until(co_linux_now_us() + 450000u);
     int beats = 0;
     for (int i = from; i < seen_count; i++) {
         beats += seen[i].can_id == 0x700u + NODE_ID;
     }
-    CHECK(beats >= 3 && beats <= 6);
+    return beats;
+}
+
+static void test_heartbeat_period(void)
+{
+    /* Heartbeats keep coming, and never faster than every 100 ms (how much slower depends
+     * on the machine's load: not checked). */
+    int from = seen_count;
+    uint64_t t0 = co_linux_now_us();
+    uint64_t end = t0 + WAIT_MS * 1000ull;
+    while (beats_since(from) < 3 && co_linux_now_us() < end) {
+        pump_until(co_linux_now_us() + 10000u);
+    }
+    int beats = beats_since(from);
+    uint64_t took = co_linux_now_us() - t0;
+    CHECK(beats >= 3);
+    CHECK((uint64_t)beats <= took / 100000u + 1);
 }
 
 static void test_error_frames(void)
@@ -232,7 +246,12 @@ static void test_error_frames(void)
     cf.len = CAN_ERR_DLC;
     cf.data[1] = CAN_ERR_CRTL_RX_PASSIVE;
     ssize_t n = write(peer, &cf, sizeof cf);
-    pump_until(co_linux_now_us() + 100000u);
+    /* A delivered error frame comes at once; one not delivered never: 2 s decide it. */
+    uint64_t end = co_linux_now_us() + 2000000u;
+    while (n == (ssize_t)sizeof cf && can.rx_errors == before && co_linux_now_us() < end) {
+        pump_until(co_linux_now_us() + 10000u);
+    }
+    pump_until(co_linux_now_us() + 1000u); /* and the EMCY it makes */
     if (n != (ssize_t)sizeof cf || can.rx_errors == before) {
         printf("  vcan0: an error frame written by a socket was %s: not delivered to the node "
                "(the mapping is tested natively by test_can_errors)\n",
@@ -252,7 +271,11 @@ static void test_error_frames(void)
     cf.can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED;
     cf.data[1] = 0;
     CHECK(write(peer, &cf, sizeof cf) == (ssize_t)sizeof cf);
-    pump_until(co_linux_now_us() + 100000u);
+    end = co_linux_now_us() + WAIT_MS * 1000ull;
+    while (can.rx_errors == before + 1 && co_linux_now_us() < end) {
+        pump_until(co_linux_now_us() + 10000u);
+    }
+    pump_until(co_linux_now_us() + 1000u);
     CHECK(co_emcy_active(&node, 0x8140));
     CHECK(!co_emcy_active(&node, 0x8120));
 }
@@ -264,12 +287,27 @@ static example_od_t od6;
 static co_node_t node6;
 static co_socketcan_t can6;
 
+static int loop_from;  /* frames seen before the loop's node started */
+static int loop_beats; /* operational heartbeats of node 6 to wait for (then stop) */
+
+static int node6_seen(uint8_t state)
+{
+    int n = 0;
+    for (int i = loop_from; i < seen_count; i++) {
+        n += seen[i].can_id == 0x706 && seen[i].data[0] == state;
+    }
+    return n;
+}
+
 static void loop_peer_ready(void *ctx, int fd, uint32_t events)
 {
     (void)ctx;
     (void)fd;
     (void)events;
     drain_peer();
+    if (loop_beats > 0 ? node6_seen(0x05) >= loop_beats : node6_seen(0x00) >= 1) {
+        co_loop_stop(&loop);
+    }
 }
 
 static void test_event_loop_on_vcan0(void)
@@ -282,27 +320,24 @@ static void test_event_loop_on_vcan0(void)
     cfg.od = example_od_init(&od6, 100);
     CHECK_EQ(co_loop_add_node(&loop, &node6, &cfg, &can6.transport), CO_OK);
     CHECK_EQ(co_loop_add_fd(&loop, peer, EPOLLIN, loop_peer_ready, NULL), CO_OK);
-    int from = seen_count;
-    uint64_t t0 = co_linux_now_us();
-    CHECK_EQ(co_node_start(&node6, t0), CO_OK);
-    const uint8_t boot[1] = {0x00};
-    CHECK_EQ(co_loop_run_until(&loop, t0 + 50000u), CO_LOOP_DEADLINE);
-    CHECK(find_seen(from, 0x706, boot, 1) >= 0);
-    /* NMT start from the peer: the loop reads it from the kernel (filter = routes). */
+    loop_from = seen_count;
+    loop_beats = 0; /* first the boot-up */
+    CHECK_EQ(co_node_start(&node6, co_linux_now_us()), CO_OK);
+    uint64_t bound = WAIT_MS * 1000ull;
+    CHECK_EQ(co_loop_run_until(&loop, co_linux_now_us() + bound), CO_LOOP_STOPPED);
+    CHECK(node6_seen(0x00) >= 1);
+    /* NMT start from the peer: the loop reads it from the kernel (filter = routes); then
+     * ten operational heartbeats, each costing the loop a wake-up or two, not a tick's. */
     const uint8_t start[2] = {0x01, 6};
     peer_send(0x000, start, 2);
     uint32_t w0 = co_loop_stats(&loop)->wakeups;
-    CHECK_EQ(co_loop_run_until(&loop, t0 + 1050000u), CO_LOOP_DEADLINE);
+    loop_beats = 10;
+    CHECK_EQ(co_loop_run_until(&loop, co_linux_now_us() + bound), CO_LOOP_STOPPED);
     uint32_t woke = co_loop_stats(&loop)->wakeups - w0;
-    const uint8_t operational[1] = {0x05};
-    int beats = 0;
-    for (int i = from; i < seen_count; i++) {
-        beats += seen[i].can_id == 0x706 && seen[i].data[0] == 0x05;
-    }
-    printf("  loop on vcan0: %d heartbeats in 1 s, %u wake-ups\n", beats, woke);
-    CHECK(find_seen(from, 0x706, operational, 1) >= 0);
-    CHECK(beats >= 8 && beats <= 11);
-    CHECK(woke <= 2 * 11 + 4); /* timer + peer per beat: no tick */
+    int beats = node6_seen(0x05);
+    printf("  loop on vcan0: %d operational heartbeats, %u wake-ups\n", beats, woke);
+    CHECK(beats >= 10);
+    CHECK(woke <= 2u * (unsigned)beats + 4); /* timer + peer per beat: no tick */
     CHECK(co_loop_stats(&loop)->frames_in >= 1);
     co_loop_close(&loop);
     co_socketcan_close(&can6);
@@ -310,7 +345,7 @@ static void test_event_loop_on_vcan0(void)
 
 int main(void)
 {
-    alarm(10); /* bounded run time: SIGALRM ends a hung run with a failure */
+    alarm(120); /* bounded run time: SIGALRM ends a hung run with a failure */
     setvbuf(stdout, NULL, _IOLBF, 0);
     co_err_t rc = co_socketcan_open(&can, IFNAME);
     if (rc != CO_OK) {

@@ -140,11 +140,13 @@ daemon_part
 py=$root/build-py/venv/bin/python
 if [[ -x $py ]]; then
     rc=0
-    (cd "$root/python" && CANOLA_VCAN=vcan0 timeout 600 "$py" -m pytest -m vcan -q tests) \
+    (cd "$root/python" && CANOLA_VCAN=vcan0 timeout 1200 "$py" -m pytest -m vcan -q \
+        --durations=10 tests) \
         >"$tmp/py.log" 2>&1 || rc=$?
     last=$(tail -n 1 "$tmp/py.log")
     case $rc in
-        0) summary "Python pytest -m vcan" PASS "$last" ;;
+        0) summary "Python pytest -m vcan" PASS "$last"
+           grep -A 10 "slowest 10 durations" "$tmp/py.log" | sed 's/^/  /' ;;
         5) summary "Python pytest -m vcan" PASS "no tests marked vcan yet" ;;
         *) cat "$tmp/py.log"; summary "Python pytest -m vcan" FAIL "exit $rc: $last" ;;
     esac
