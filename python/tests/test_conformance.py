@@ -83,6 +83,7 @@ def test_the_node_is_left_in_its_state() -> None:
     assert dev.nmt_state == "OPERATIONAL"
 
 
+@pytest.mark.slow  # a run per check
 def test_each_check_alone_ends_as_in_a_full_run() -> None:
     full = {r.check.name: r.status for r in device_run(EXAMPLE, EXAMPLE).results}
     alone = {}

@@ -75,6 +75,7 @@ def test_missing_files(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> No
     assert f"{broken}:3: [1000] line is neither" in err
 
 
+@pytest.mark.realtime
 def test_a_passing_run_and_its_reports(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                        device_channel: str) -> None:
     md, xml = tmp_path / "report.md", tmp_path / "report.xml"
@@ -91,6 +92,7 @@ def test_a_passing_run_and_its_reports(capsys: pytest.CaptureFixture[str], tmp_p
     assert (root.get("tests"), root.get("failures")) == ("13", "0")
 
 
+@pytest.mark.realtime
 def test_a_failing_run_exits_1(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                device_channel: str) -> None:
     other = tmp_path / "other_vendor.eds"

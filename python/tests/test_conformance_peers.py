@@ -31,6 +31,8 @@ ROOT = Path(__file__).resolve().parents[2]
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
 EXAMPLE = ROOT / "examples" / "example_od.eds"
 NODE_BIN = Path(os.environ.get("CANOLA_NODE_BIN", ROOT / "build" / "canola-node"))
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]  # whole runs on the wall clock
+
 #: Answers under an emulated VM (the SocketCAN tier) take long.
 OPTIONS = Options(timeout=5.0 if VCAN else 2.0, tolerance=1.0, quiet=0.3)
 
