@@ -193,3 +193,10 @@ def test_check_list_and_selection() -> None:
         cc.run(SimBus(), 0, INTEROP)
     with pytest.raises(Error, match="node-ID 5 is the node's"):
         cc.run(SimBus(), 5, INTEROP, master_id=5)
+
+
+def test_the_docs_list_every_check() -> None:
+    text = (ROOT / "docs" / "conformance.md").read_text()
+    listed = {line.split("`")[1] for line in text.splitlines() if line.startswith("| `")}
+    assert listed == {c.name for c in cc.CHECKS}
+    assert f"{len(cc.CHECKS)} checks in {len(cc.GROUPS)} groups" in text

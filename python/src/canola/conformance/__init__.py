@@ -22,6 +22,7 @@ values, as at a power cycle), writes of values and PDO parameters that are resto
 RPDOs, SYNC and TIME frames, heartbeats as the tester's node-ID. See docs/conformance.md.
 """
 
+from canola.conformance import checks  # registers the checks
 from canola.conformance.context import Options
 from canola.conformance.registry import CHECKS, GROUPS, Check, select
 from canola.conformance.reporters import LiveProgress, check_list, junit, markdown
@@ -29,4 +30,4 @@ from canola.conformance.results import Finding, Report, Result, Status
 from canola.conformance.runner import run
 
 __all__ = ["CHECKS", "GROUPS", "Check", "Finding", "LiveProgress", "Options", "Report",
-           "Result", "Status", "check_list", "junit", "markdown", "run", "select"]
+           "Result", "Status", "check_list", "checks", "junit", "markdown", "run", "select"]

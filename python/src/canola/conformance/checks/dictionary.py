@@ -47,7 +47,7 @@ def mandatory(ctx: Context) -> None:
             ctx.finding(f"read 0x{index:04X}:{sub}", "its value", outcome(exc))
 
 
-@check("dictionary.entries", clause="CiA 306 §4.5.2, CiA 301 §7.4",
+@check("dictionary.entries", clause="CiA 306 §4.5.2 (object descriptions)",
        title="every entry of the EDS exists; readable ones read with their type's length")
 def entries(ctx: Context) -> None:
     count = 0
