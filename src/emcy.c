@@ -190,8 +190,8 @@ void co_emcy_reset_comm(co_node_t *node)
 
 /* CiA 301 7.5.2.17: the identifier of a valid COB-ID EMCY does not change; a new one goes
  * through "not valid" (bit 31). */
-co_abort_t co_emcy_cob_check_write(co_node_t *node, const co_od_entry_t *entry,
-                                   const uint8_t *data, uint32_t len)
+co_abort_t co_emcy_cob_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                                   uint32_t len)
 {
     (void)node;
     if (len != 4) {

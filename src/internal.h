@@ -400,8 +400,8 @@ static inline bool co_guard_life_lost(const co_node_t *node) { return node->life
 void co_emcy_reset_comm(co_node_t *node);
 void co_emcy_written(co_node_t *node, const co_od_entry_t *entry);
 bool co_emcy_producer_off(const co_node_t *node); /* 0x1014 bit 31 */
-co_abort_t co_emcy_cob_check_write(co_node_t *node, const co_od_entry_t *entry,
-                                   const uint8_t *data, uint32_t len); /* 0x1014 */
+co_abort_t co_emcy_cob_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                                   uint32_t len); /* 0x1014 */
 void co_emcy_frame_send(co_node_t *node, const uint8_t data[8]);
 
 /* emcy_queue.c: the inhibit time (CO_EMCY_QUEUE_LEN > 0); without it frames leave at once. */
