@@ -8,8 +8,8 @@ from collections.abc import Iterator
 from canola import eds, values
 from canola.datatypes import DATA_TYPES, INTEGER_TYPES
 
-__all__ = ["VARIABLE_TYPES", "describe", "fixed_size", "integer_range", "mappable",
-           "readable", "value_text", "variables", "writable"]
+__all__ = ["VARIABLE_TYPES", "another_number", "another_value", "describe", "fixed_size",
+           "integer_range", "mappable", "readable", "value_text", "variables", "writable"]
 
 #: Data types whose length is the value's (strings, DOMAIN).
 VARIABLE_TYPES = frozenset({0x0009, 0x000A, 0x000B, 0x000F})
@@ -83,3 +83,32 @@ def value_text(var: eds.Variable, data: bytes) -> str:
             return f"0x{value:X}" if value >= 0 else str(value)
         return repr(value)
     return f"[{data.hex(' ').upper()}]"
+
+
+def another_number(var: eds.Variable, value: int) -> int:
+    """Another value of an integer entry, within its type and limits (+1, else -1; 1000 for
+    a time in ms that is 0, 0x1017 and 0x100C, so that no 1 ms heartbeat floods the bus)."""
+    low, high = integer_range(var) or (0, 0)
+    if isinstance(var.low, int):
+        low = max(low, var.low)
+    if isinstance(var.high, int):
+        high = min(high, var.high)
+    if value == 0 and var.index in (0x1017, 0x100C) and high >= 1000:
+        return 1000
+    return value + 1 if value + 1 <= high else max(low, value - 1)
+
+
+def another_value(var: eds.Variable, data: bytes) -> bytes:
+    """Wire bytes of another value of the entry than ``data`` (its type's and limits')."""
+    code = var.data_type
+    if code is None or not data:
+        return data
+    if code == 0x0001:
+        return bytes([int(not data[0])])
+    if code in (0x0008, 0x0011):
+        return values.encode(code, 2.5 if values.decode(code, data) == 1.5 else 1.5)
+    if integer_range(var) is not None:
+        number = values.decode(code, data)
+        assert isinstance(number, int)
+        return values.encode(code, another_number(var, number))
+    return bytes([data[0] ^ 1]) + data[1:]

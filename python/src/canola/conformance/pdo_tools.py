@@ -7,9 +7,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from canola import SdoAbort, eds, values
+from canola import SdoAbort, eds
 from canola.conformance.context import Context
 from canola.conformance.entries import (
+    another_value,
     describe,
     fixed_size,
     mappable,
@@ -229,21 +230,15 @@ def try_mapping(ctx: Context, pdo: Pdo, entries: Sequence[int]) -> BaseException
 def rpdo_payload(ctx: Context, entries: Sequence[int]
                  ) -> tuple[bytes, list[tuple[eds.Variable, bytes]]]:
     """An RPDO frame for ``entries`` whose values differ from the node's (each entry's
-    value + 1, wrapped), and what each entry should read back."""
+    :func:`~canola.conformance.entries.another_value`), and what each entry should read
+    back."""
     frame = bytearray()
     expected: list[tuple[eds.Variable, bytes]] = []
     for m in mapped(ctx, entries):
         if m.var is None or m.var.data_type is None:
             frame += bytes(m.size)
             continue
-        now = ctx.read(m.var.index, m.var.subindex)
-        value = (int.from_bytes(now, "little") + 1) % (1 << (8 * m.size))
-        if m.var.data_type == 0x0001:
-            value = int(not now[0])
-        data = value.to_bytes(m.size, "little")
-        if m.var.data_type in (0x0008, 0x0011):
-            data = values.encode(m.var.data_type, 1.5 if values.decode(
-                m.var.data_type, now) != 1.5 else 2.5)
+        data = another_value(m.var, ctx.read(m.var.index, m.var.subindex))
         frame += data
         expected.append((m.var, data))
     return bytes(frame), expected

@@ -82,14 +82,16 @@ class _Run:
 
     def go(self, checks: list[Check], progress: Progress | None) -> None:
         initial = self.start()
-        for n, chk in enumerate(checks):
-            if progress is not None:
-                progress(n, len(checks), chk, None)
-            result = self.one(chk)
-            self.report.results.append(result)
-            if progress is not None:
-                progress(n + 1, len(checks), chk, result)
-        self.finish(initial)
+        try:
+            for n, chk in enumerate(checks):
+                if progress is not None:
+                    progress(n, len(checks), chk, None)
+                result = self.one(chk)
+                self.report.results.append(result)
+                if progress is not None:
+                    progress(n + 1, len(checks), chk, result)
+        finally:  # an interrupted run restores the state too
+            self.finish(initial)
 
     # ---- the node's state before and after
 
@@ -142,6 +144,9 @@ class _Run:
         try:
             ctx.read(0x1000, 0)  # is the node there?
             chk.run(ctx)
+        except KeyboardInterrupt:
+            self.undo(ctx)  # what the interrupted check changed goes back first
+            raise
         except Skipped as exc:
             status, reason = Status.SKIPPED, str(exc)
         except CheckEnded as exc:

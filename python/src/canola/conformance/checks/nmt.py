@@ -11,7 +11,13 @@ from itertools import pairwise
 from canola import eds, values
 from canola.conformance import pdo_tools as pt
 from canola.conformance.context import STATES, Context, abort_text
-from canola.conformance.entries import describe, integer_range, variables, writable
+from canola.conformance.entries import (
+    another_number,
+    describe,
+    integer_range,
+    variables,
+    writable,
+)
 from canola.conformance.registry import check
 
 __all__ = ["heartbeat", "reset"]
@@ -150,18 +156,6 @@ def heartbeat_period(ctx: Context) -> None:
                         f"{len(beats())}")
 
 
-def _changed(var: eds.Variable, value: int) -> int:
-    """Another value of the entry's type and limits (1000 for a time in ms that is 0)."""
-    low, high = integer_range(var) or (0, 0)
-    if isinstance(var.low, int):
-        low = max(low, var.low)
-    if isinstance(var.high, int):
-        high = min(high, var.high)
-    if value == 0 and var.index in (0x1017, 0x100C) and high >= 1000:
-        return 1000
-    return value + 1 if value + 1 <= high else value - 1
-
-
 def _comm_entry(ctx: Context) -> eds.Variable:
     for index in _COMM_CANDIDATES:
         var = ctx.var(index, 0)
@@ -206,13 +200,13 @@ def _reset_values(ctx: Context, command: str, app_restored: bool) -> None:
     reset(ctx, command)  # the power-on values (defaults, or stored ones)
     comm0 = _number(ctx, comm)
     app0 = _number(ctx, app) if app is not None else 0
-    _put(ctx, comm, _changed(comm, comm0))
+    _put(ctx, comm, another_number(comm, comm0))
     if app is not None:
-        _put(ctx, app, _changed(app, app0))
+        _put(ctx, app, another_number(app, app0))
     reset(ctx, command)
     _expect_value(ctx, comm, comm0, f"NMT {command}")
     if app is not None:
-        _expect_value(ctx, app, app0 if app_restored else _changed(app, app0),
+        _expect_value(ctx, app, app0 if app_restored else another_number(app, app0),
                       f"NMT {command}")
     ctx.note(f"{describe(comm)}" + (f", {describe(app)}" if app is not None else
                                     " (the EDS has no plain writable application integer)"))
@@ -285,10 +279,10 @@ def store_restore(ctx: Context) -> None:
     for index in (0x1010, 0x1011):
         ctx.expect_abort(f"write a wrong signature to 0x{index:04X}:{sub}", (0x08000020,),
                          partial(ctx.sdo.download, index, sub, b"nope"))
-    saved = _changed(comm, comm.default)
+    saved = another_number(comm, comm.default)
     _put(ctx, comm, saved)
     ctx.write_uint(0x1010, sub, _SAVE, 4)
-    _put(ctx, comm, _changed(comm, saved))
+    _put(ctx, comm, another_number(comm, saved))
     reset(ctx, "reset-comm")
     _expect_value(ctx, comm, saved, "save and reset communication")
     ctx.write_uint(0x1011, sub, _LOAD, 4)

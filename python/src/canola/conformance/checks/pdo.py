@@ -12,7 +12,14 @@ from itertools import pairwise
 from canola import SdoAbort
 from canola.conformance import pdo_tools as pt
 from canola.conformance.context import Context, abort_text, outcome
-from canola.conformance.entries import describe, fixed_size, mappable, readable, variables
+from canola.conformance.entries import (
+    another_value,
+    describe,
+    fixed_size,
+    mappable,
+    readable,
+    variables,
+)
 from canola.conformance.registry import check
 
 _EVENT_MS = 100
@@ -192,7 +199,7 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     ctx.link.send(sync)
     ctx.link.wait(ctx.options.quiet)
     mark = ctx.link.mark()
-    changed = bytes([original[0] ^ 1]) + original[1:]
+    changed = another_value(var, original)
     ctx.write(var.index, var.subindex, changed)
     ctx.link.wait(ctx.options.quiet)
     early = pt.tpdo_frames(ctx, cob, mark)
