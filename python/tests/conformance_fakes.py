@@ -105,12 +105,15 @@ def _abort(index: int, sub: int, code: int) -> bytes:
 
 class FakeNode:
     """Node ``node_id`` on ``bus``, answering through a Master at ``port_id``.
-    ``checks_toggle=False``: download segments are taken whatever their toggle bit."""
+    ``checks_toggle=False``: download segments are taken whatever their toggle bit.
+    ``late_abort``: an abort naming another entry goes before each initiate answer (as
+    the late answer of an earlier exchange would over a slow link)."""
 
     def __init__(self, bus: SimBus, node_id: int, *, port_id: int = 100,
-                 checks_toggle: bool = True) -> None:
+                 checks_toggle: bool = True, late_abort: bool = False) -> None:
         self.node_id = node_id
         self.checks_toggle = checks_toggle
+        self.late_abort = late_abort
         self.values = {(0x1000, 0): (0x191).to_bytes(4, "little"), (0x1001, 0): b"\0",
                        (0x1008, 0): b"a fake responder", (0x1018, 0): b"\x02",
                        (0x1018, 1): (0x12345).to_bytes(4, "little"),
@@ -156,6 +159,8 @@ class FakeNode:
             return
         index, sub = int.from_bytes(data[1:3], "little"), data[3]
         key = (index, sub)
+        if self.late_abort:
+            self._send(_abort(0, 0, 0x05040001))
         if ccs not in (1, 2):
             self._send(_abort(index, sub, 0x05040001))
             return

@@ -143,6 +143,23 @@ def test_a_responder_with_gaps_fails_exactly_those_checks(checks_toggle: bool) -
         assert "<- 594  30 00 00 00 00 00 00 00" in toggle.frames[-1]
 
 
+def test_a_late_answer_of_an_earlier_exchange_is_passed_over() -> None:
+    bus = SimBus()
+    FakeNode(bus, 20, late_abort=True).start()
+    report = cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20),
+                    only=["dictionary.identity", "sdo.expedited_download",
+                          "sdo.segmented_download"])
+    assert report.passed, cc.markdown(report)
+    # an answer that names another entry, and nothing else: wrong
+    bus = SimBus()
+    fake = FakeNode(bus, 20)
+    fake.start()
+    fake._send = lambda data: fake.port.send(0x594, data[:1] + b"\0\0\0" + data[4:])  # type: ignore[method-assign]
+    report = cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20), only=["dictionary.mandatory"])
+    assert report.result("dictionary.mandatory").findings[0].got == (
+        "upload 0x1000:0: answer names 0x0000:0 instead of 0x1000:0")
+
+
 def test_skipped_says_why_and_is_never_passed() -> None:
     bus = SimBus()
     FakeNode(bus, 20).start()

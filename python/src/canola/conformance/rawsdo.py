@@ -95,6 +95,27 @@ class RawSdo:
         """Abort the transfer in progress (no answer expected)."""
         self.send(abort_frame(index, sub, code))
 
+    def initiate(self, data: bytes, index: int, sub: int, what: str, scs: int) -> bytes:
+        """Send an initiate request and return its answer, checked (:meth:`_expect`). An
+        answer that names another multiplexer is a late one of an earlier exchange (over a
+        slow link) and is passed over; if no other comes, it is the answer, and wrong."""
+        since = self.send(data)
+        mux = _mux(index, sub)
+        end = self.link.now() + self.timeout
+        stray: bytes | None = None
+        while True:
+            try:
+                answer, since = self.answer_at(since, what, max(0.0, end - self.link.now()))
+            except NoAnswerError:
+                if stray is None:
+                    raise
+                answer = stray
+                break
+            if len(answer) != 8 or answer[1:4] == mux:
+                break
+            stray = answer
+        return self._expect(answer, index, sub, what, scs)
+
     def _expect(self, data: bytes, index: int | None, sub: int, what: str,
                 scs: int) -> bytes:
         """Check an answer: 8 bytes, not an abort, command specifier ``scs`` (bits 7..5),
@@ -118,8 +139,7 @@ class RawSdo:
     def upload(self, index: int, sub: int) -> bytes:
         """Read (index, sub): expedited or segmented, as the server chooses."""
         where = f"upload 0x{index:04X}:{sub}"
-        first = self._expect(self.request(bytes([0x40]) + _mux(index, sub), where),
-                             index, sub, where, 2)
+        first = self.initiate(bytes([0x40]) + _mux(index, sub), index, sub, where, 2)
         cmd = first[0]
         expedited, sized = bool(cmd & 0x02), bool(cmd & 0x01)
         if expedited:
@@ -158,12 +178,10 @@ class RawSdo:
         where = f"download 0x{index:04X}:{sub} ({len(data)} bytes)"
         if len(data) <= 4 and not segmented and data:
             cmd = 0x23 | (4 - len(data)) << 2
-            self._expect(self.request(bytes([cmd]) + _mux(index, sub) + data, where), index,
-                         sub, where, 3)
+            self.initiate(bytes([cmd]) + _mux(index, sub) + data, index, sub, where, 3)
             return
-        self._expect(self.request(bytes([0x21]) + _mux(index, sub)
-                                  + len(data).to_bytes(4, "little"), where), index, sub,
-                     where, 3)
+        self.initiate(bytes([0x21]) + _mux(index, sub) + len(data).to_bytes(4, "little"),
+                      index, sub, where, 3)
         try:
             self._download_segments(data, where)
         except (NoAnswerError, SdoProtocolError):
@@ -190,9 +208,8 @@ class RawSdo:
         """Write ``data`` by block transfer with CRC (a wrong CRC with ``bad_crc``); the
         block size the server asked for first."""
         where = f"block download 0x{index:04X}:{sub} ({len(data)} bytes)"
-        init = self._expect(self.request(bytes([0xC6]) + _mux(index, sub)
-                                         + len(data).to_bytes(4, "little"), where),
-                            index, sub, where, 5)
+        init = self.initiate(bytes([0xC6]) + _mux(index, sub) + len(data).to_bytes(4, "little"),
+                             index, sub, where, 5)
         if init[0] & 0x03:
             raise SdoProtocolError(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
         crc_on = bool(init[0] & 0x04)
@@ -236,9 +253,8 @@ class RawSdo:
         segments per sub-block, then ``next_blksize``. The data and the number of segments
         in each sub-block."""
         where = f"block upload 0x{index:04X}:{sub}"
-        init = self._expect(self.request(bytes([0xA4]) + _mux(index, sub)
-                                         + bytes([blksize, 0, 0, 0]), where),
-                            index, sub, where, 6)
+        init = self.initiate(bytes([0xA4]) + _mux(index, sub) + bytes([blksize, 0, 0, 0]),
+                             index, sub, where, 6)
         if init[0] & 0x01:
             raise SdoProtocolError(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
         crc_on = bool(init[0] & 0x04)

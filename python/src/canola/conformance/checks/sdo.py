@@ -133,16 +133,16 @@ def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str,
        title="an expedited upload answer has scs 2, e = 1, the right n and the multiplexer")
 def expedited_upload(ctx: Context) -> None:
     for index, size in ((0x1000, 4), (0x1001, 1)):
-        data = ctx.sdo.request(bytes([0x40, index & 0xFF, index >> 8, 0]), f"upload 0x{index:04X}")
-        if data[0] == 0x80:
-            ctx.fail(f"upload 0x{index:04X}:0", "a value", abort_text(int.from_bytes(
-                data[4:8], "little")))
+        what = f"upload 0x{index:04X}:0 ({size} bytes)"
+        try:
+            data = ctx.sdo.initiate(bytes([0x40, index & 0xFF, index >> 8, 0]), index, 0, what,
+                                    2)
+        except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
+            ctx.fail(what, "a value", outcome(exc))
         expected = 0x43 | (4 - size) << 2
-        mux = bytes([index & 0xFF, index >> 8, 0])
-        if len(data) != 8 or data[:4] not in (bytes([expected]) + mux, b"\x42" + mux):
-            ctx.finding(f"answer to an upload of 0x{index:04X}:0 ({size} bytes)",
-                        f"{expected:02X} {index & 0xFF:02X} {index >> 8:02X} 00 + data "
-                        "(or 42: size not indicated)", data.hex(" ").upper())
+        if data[0] not in (expected, 0x42):
+            ctx.finding(f"command byte of the answer to an {what}",
+                        f"{expected:02X} (or 42: size not indicated)", f"{data[0]:02X}")
 
 
 @check("sdo.expedited_download", clause="CiA 301 §7.2.4.3.3",
@@ -153,11 +153,14 @@ def expedited_download(ctx: Context) -> None:
         ctx.skip("the EDS has no readable and writable entry of 1..4 bytes")
     data = ctx.read(var.index, var.subindex)  # its own value: nothing changes
     mux = bytes([var.index & 0xFF, var.index >> 8, var.subindex])
-    answer = ctx.sdo.request(bytes([0x23 | (4 - len(data)) << 2]) + mux + data,
-                             f"download {describe(var)}")
-    if answer[:4] != bytes([0x60]) + mux:
-        ctx.fail(f"answer to an expedited download of {describe(var)}",
-                 f"60 {mux.hex(' ').upper()} ...", answer.hex(" ").upper())
+    what = f"expedited download of {describe(var)}"
+    try:
+        answer = ctx.sdo.initiate(bytes([0x23 | (4 - len(data)) << 2]) + mux + data,
+                                  var.index, var.subindex, what, 3)
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
+        ctx.fail(what, "answer 60 with the multiplexer", outcome(exc))
+    if answer[0] != 0x60:
+        ctx.finding(f"command byte of the answer to an {what}", "60", f"{answer[0]:02X}")
     if ctx.read(var.index, var.subindex) != data:
         ctx.finding(f"read back {describe(var)}", data.hex(" ").upper(), "another value")
     ctx.note(describe(var))
