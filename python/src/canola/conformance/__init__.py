@@ -22,12 +22,31 @@ values, as at a power cycle), writes of values and PDO parameters that are resto
 RPDOs, SYNC and TIME frames, heartbeats as the tester's node-ID. See docs/conformance.md.
 """
 
-from canola.conformance import checks  # registers the checks
-from canola.conformance.context import Options
-from canola.conformance.registry import CHECKS, GROUPS, Check, select
-from canola.conformance.reporters import LiveProgress, check_list, junit, markdown
-from canola.conformance.results import Finding, Report, Result, Status
-from canola.conformance.runner import run
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from canola.conformance.options import Options
+    from canola.conformance.registry import CHECKS, GROUPS, Check, select
+    from canola.conformance.reporters import LiveProgress, check_list, junit, markdown
+    from canola.conformance.results import Finding, Report, Result, Status
+    from canola.conformance.runner import run
 
 __all__ = ["CHECKS", "GROUPS", "Check", "Finding", "LiveProgress", "Options", "Report",
-           "Result", "Status", "check_list", "checks", "junit", "markdown", "run", "select"]
+           "Result", "Status", "check_list", "junit", "markdown", "run", "select"]
+
+_MODULES = {
+    "Options": "options", "CHECKS": "registry", "GROUPS": "registry", "Check": "registry",
+    "select": "registry", "LiveProgress": "reporters", "check_list": "reporters",
+    "junit": "reporters", "markdown": "reporters", "Finding": "results", "Report": "results",
+    "Result": "results", "Status": "results", "run": "runner",
+}
+
+
+def __getattr__(name: str) -> Any:
+    # Loaded on first use: the command line reads GROUPS and Options without the suite.
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module 'canola.conformance' has no attribute {name!r}")
+    importlib.import_module("canola.conformance.checks")  # registers every check
+    return getattr(importlib.import_module(f"canola.conformance.{module}"), name)

@@ -17,6 +17,7 @@ from typing import NoReturn
 from canola import SdoAbort, eds
 from canola.conformance.entries import describe
 from canola.conformance.link import Link
+from canola.conformance.options import Options
 from canola.conformance.rawsdo import NoAnswerError, RawSdo, SdoProtocolError
 from canola.conformance.results import Finding
 from canola.errors import ABORT_TEXT, Error
@@ -31,26 +32,6 @@ NMT_CS = {"start": 0x01, "stop": 0x02, "preop": 0x80, "reset-node": 0x81,
 STATES = {0x00: "BOOT-UP", 0x04: "STOPPED", 0x05: "OPERATIONAL", 0x7F: "PRE-OPERATIONAL"}
 
 _TRACE_PER_FINDING = 20
-
-
-@dataclass(frozen=True)
-class Options:
-    """How a run behaves. Times in seconds (virtual on a SimBus).
-
-    ``timeout``: how long an answer may take (SDO, a heartbeat, a PDO after its SYNC).
-    ``boot_timeout``: how long a reset may take until the boot-up frame.
-    ``server_timeout``: how long the server may keep a half-done SDO transfer open before
-    its own time-out aborts it. ``quiet``: how long "no frame comes" is watched.
-    ``tolerance``: the share a measured period may differ from the configured one.
-    ``destructive``: run the checks that save or restore stored parameters.
-    """
-
-    timeout: float = 2.0
-    boot_timeout: float = 5.0
-    server_timeout: float = 5.0
-    quiet: float = 0.5
-    tolerance: float = 0.25
-    destructive: bool = False
 
 
 class Skipped(Exception):  # noqa: N818 -- an outcome, not an error

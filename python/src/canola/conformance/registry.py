@@ -1,7 +1,7 @@
 """The checks of the suite: what each is called, its group, the clause it tests, and the
 function that runs it. Check modules register with :func:`check` when
-:mod:`canola.conformance.checks` is imported (``import canola.conformance`` does); the
-runner and ``--list`` read :data:`CHECKS` (grouped by :data:`GROUPS`)."""
+:mod:`canola.conformance.checks` is imported (:func:`select` and ``canola.conformance.CHECKS``
+do that); the runner and ``--list`` read :data:`CHECKS` (grouped by :data:`GROUPS`)."""
 
 from __future__ import annotations
 
@@ -65,6 +65,8 @@ def check(name: str, *, clause: str, title: str,
 def select(only: Iterable[str] = ()) -> list[Check]:
     """The checks to run, grouped in :data:`GROUPS` order: all of them, or those whose
     group or name is in ``only``. Raises Error naming an unknown group or check."""
+    from canola.conformance import checks  # noqa: F401, PLC0415 -- registers them
+
     wanted = list(only)
     names = {c.name for c in CHECKS}
     for item in wanted:

@@ -11,8 +11,9 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from canola import Master, SdoAbort, eds
-from canola.conformance.context import STATES, CheckEnded, Context, Options, Skipped, outcome
+from canola.conformance.context import STATES, CheckEnded, Context, Skipped, outcome
 from canola.conformance.link import Link
+from canola.conformance.options import Options
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import Check, select
 from canola.conformance.results import Report, Result, Status
