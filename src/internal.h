@@ -585,6 +585,7 @@ uint64_t co_manager_poll(co_node_t *node, uint64_t now_us);
 void co_manager_bootup(co_node_t *node, uint8_t n, const co_frame_t *frame);
 void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev);
 void co_manager_add_routes(co_node_t *node);
+void co_manager_reset_comm(co_node_t *node);
 uint64_t co_flash_poll(co_node_t *node, uint64_t now_us); /* program_master.c: progress */
 #else
 static inline uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
@@ -600,6 +601,7 @@ static inline void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev)
     (void)ev;
 }
 static inline void co_manager_add_routes(co_node_t *node) { (void)node; }
+#define co_manager_reset_comm co_none_node
 static inline uint64_t co_flash_poll(co_node_t *node, uint64_t now_us)
 {
     (void)node;

@@ -8,6 +8,7 @@
 
 #define DEFAULT_TIMEOUT_MS 100u
 #define SCAN_RESET_PART 0xFFu /* fastscan: the reset step, before part 0 */
+#define SCAN_PROBE_PART 4u    /* fastscan: the final verify repeated, after part 3 */
 
 static uint32_t timeout_ms(const co_lss_master_t *m)
 {
@@ -144,12 +145,23 @@ static void scan_send(co_node_t *node, uint8_t bit, uint8_t next)
     arm(node);
 }
 
+/* The whole address matched and its slave is in configuration: the final verify once
+ * more. No slave in waiting matches it (addresses are unique), so an answer comes from
+ * the slave found, which answers fastscan in configuration too (CANopenNode's do). */
+static void scan_probe(co_node_t *node)
+{
+    co_lss_master_t *m = &node->lss_master;
+    uint8_t p[7] = {0, 0, 0, 0, 0, 3, 0};
+    co_put_u32(p, m->scan[3]);
+    send(node, CO_LSS_CS_FASTSCAN, p, 7);
+    arm(node);
+}
+
 static void scan_part(co_node_t *node)
 {
     co_lss_master_t *m = &node->lss_master;
-    if (m->sub == 4) {
-        m->result.address = (co_lss_address_t){m->scan[0], m->scan[1], m->scan[2], m->scan[3]};
-        finish(node, CO_LSS_OK);
+    if (m->sub == SCAN_PROBE_PART) {
+        scan_probe(node);
         return;
     }
     if (m->known & (1u << m->sub)) {
@@ -165,6 +177,12 @@ static void scan_part(co_node_t *node)
 static void scan_step(co_node_t *node)
 {
     co_lss_master_t *m = &node->lss_master;
+    if (m->sub == SCAN_PROBE_PART) {
+        m->result.address = (co_lss_address_t){m->scan[0], m->scan[1], m->scan[2], m->scan[3]};
+        m->result.keeps_answering = m->heard;
+        finish(node, CO_LSS_OK);
+        return;
+    }
     if (m->sub == SCAN_RESET_PART) {
         if (!m->heard) {
             finish(node, CO_LSS_TIMEOUT);

@@ -101,6 +101,9 @@ static void on_value(void *ctx, uint8_t channel, co_abort_t abort, uint64_t valu
     (void)channel;
     (void)len;
     co_manager_t *m = ctx;
+    if (m->current == 0) {
+        return; /* ended by the master's own reset: that boot is over */
+    }
     const co_mgr_slave_t *d = slave(m, m->current);
     uint32_t v = (uint32_t)value;
     static const uint8_t letter[] = {CO_BOOT_VENDOR, CO_BOOT_PRODUCT, CO_BOOT_REVISION,
@@ -165,6 +168,9 @@ static void on_downloaded(void *ctx, uint8_t channel, co_abort_t abort, uint32_t
     (void)channel;
     (void)len;
     co_manager_t *m = ctx;
+    if (m->current == 0) {
+        return; /* ended by the master's own reset: that boot is over */
+    }
     if (abort != CO_ABORT_NONE) {
         fail(m, CO_BOOT_CONFIG, abort, 0);
     } else if (m->dcf_left == 0) {
@@ -348,11 +354,17 @@ static uint8_t next_waiting(const co_manager_t *m)
     return 0;
 }
 
+static void begin(co_manager_t *m);
+
 uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
 {
     co_manager_t *m = node->manager;
     if (m == NULL || !m->running) {
         return CO_TIME_NEVER;
+    }
+    if (m->restart) { /* after the master's reset, once its boot-up is out */
+        m->restart = false;
+        begin(m);
     }
     if (m->current != 0 && m->step == STEP_EC && now_us >= m->deadline_us) {
         fail(m, CO_BOOT_HEARTBEAT_START, 0, 0);
@@ -377,6 +389,20 @@ uint64_t co_manager_poll(co_node_t *node, uint64_t now_us)
         run_step(m);
     }
     return m->current != 0 && m->step == STEP_EC ? m->deadline_us : CO_TIME_NEVER;
+}
+
+/* The master's own reset communication (before the services forget their state): the
+ * boot in progress ends without a verdict on its slave, and the manager starts over at
+ * the next poll (CiA 302-2: the master's start-up follows its reset; the heartbeat
+ * watches it set up are gone with the reset). */
+void co_manager_reset_comm(co_node_t *node)
+{
+    co_manager_t *m = node->manager;
+    if (m != NULL && m->running) {
+        m->current = 0;
+        m->restart = true;
+        co_node_schedule(node, node->now_us);
+    }
 }
 
 /* A boot-up (or a heartbeat event) from slave n. */
@@ -463,15 +489,11 @@ co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_co
     return CO_OK;
 }
 
-co_err_t co_manager_start(co_manager_t *mgr)
+/* Every listed slave waits for its boot; the network is not started. */
+static void begin(co_manager_t *mgr)
 {
-    if (!mgr->node->started) {
-        return CO_ERR_STATE;
-    }
-    if (mgr->current != 0) {
-        return CO_ERR_BUSY; /* a slave's boot is in progress */
-    }
     mgr->running = true;
+    mgr->restart = false;
     mgr->network_started = false;
     for (uint8_t n = 1; n <= 127; n++) {
         bool slave_n = listed(mgr, n) && n != mgr->node->node_id;
@@ -483,6 +505,17 @@ co_err_t co_manager_start(co_manager_t *mgr)
         }
     }
     co_node_schedule(mgr->node, mgr->node->now_us);
+}
+
+co_err_t co_manager_start(co_manager_t *mgr)
+{
+    if (!mgr->node->started) {
+        return CO_ERR_STATE;
+    }
+    if (mgr->current != 0) {
+        return CO_ERR_BUSY; /* a slave's boot is in progress */
+    }
+    begin(mgr);
     return CO_OK;
 }
 

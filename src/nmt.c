@@ -61,6 +61,7 @@ static void enter(co_node_t *node, co_nmt_state_t state)
  * communication, boot-up once, pre-operational (or operational when self-starting). */
 void co_nmt_reset(co_node_t *node, bool application)
 {
+    co_manager_reset_comm(node); /* first: leaving SDO's states ends its transfers */
     enter(node, CO_NMT_INITIALISING);
     co_lss_slave_reset(node, application);
     /* $NODEID defaults of an unconfigured node (0xFF) stay at their base values. */

@@ -156,20 +156,27 @@ static uint64_t poll_due(co_node_t *node, uint64_t now_us)
         return CO_TIME_NEVER;
     }
     /* Services may schedule work while they run (a reset, a new watch): start from
-     * "never" and let co_node_schedule lower it, then add what the services return. */
-    node->next_due_us = CO_TIME_NEVER;
-    uint64_t next = co_lss_slave_poll(node, now_us); /* first: it may end a quiet time */
-    next = co_min_u64(next, co_hb_poll(node, now_us));
-    next = co_min_u64(next, co_guard_poll(node, now_us));
-    next = co_min_u64(next, co_sdo_server_poll(node, now_us));
-    next = co_min_u64(next, co_sdo_client_poll(node, now_us));
-    next = co_min_u64(next, co_sync_poll(node, now_us));
-    next = co_min_u64(next, co_emcy_poll(node, now_us));
-    next = co_min_u64(next, co_pdo_poll(node, now_us));
-    next = co_min_u64(next, co_lss_master_poll(node, now_us));
-    next = co_min_u64(next, co_manager_poll(node, now_us));
-    next = co_min_u64(next, co_flash_poll(node, now_us));
-    co_node_schedule(node, next);
+     * "never" and let co_node_schedule lower it, then add what the services return.
+     * Work one service scheduled for now while the pass ran (an SDO time-out that ends a
+     * manager's boot step) is done by another pass, so the deadline returned lies ahead. */
+    for (uint32_t pass = 0; pass < 3; pass++) {
+        node->next_due_us = CO_TIME_NEVER;
+        uint64_t next = co_lss_slave_poll(node, now_us); /* first: it may end a quiet time */
+        next = co_min_u64(next, co_hb_poll(node, now_us));
+        next = co_min_u64(next, co_guard_poll(node, now_us));
+        next = co_min_u64(next, co_sdo_server_poll(node, now_us));
+        next = co_min_u64(next, co_sdo_client_poll(node, now_us));
+        next = co_min_u64(next, co_sync_poll(node, now_us));
+        next = co_min_u64(next, co_emcy_poll(node, now_us));
+        next = co_min_u64(next, co_pdo_poll(node, now_us));
+        next = co_min_u64(next, co_lss_master_poll(node, now_us));
+        next = co_min_u64(next, co_manager_poll(node, now_us));
+        next = co_min_u64(next, co_flash_poll(node, now_us));
+        co_node_schedule(node, next);
+        if (node->next_due_us > now_us) {
+            break;
+        }
+    }
     return node->next_due_us;
 }
 

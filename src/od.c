@@ -684,12 +684,16 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
         native_set(value, t, wire_number(t, data));
     } else if (is_domain(t)) {
         co_od_domain_t *d = entry->value;
-        co_copy(d->data, data, len);
+        if (d->data != data) { /* an SDO download larger than its buffer came in place */
+            co_copy(d->data, data, len);
+        }
         d->len = len;
     } else {
         /* the value as it came; strings get their tail zeroed, so that a shorter
          * VISIBLE_STRING ends in NUL (fixed types fill their wire size exactly) */
-        co_copy(value, data, len);
+        if (value != data) {
+            co_copy(value, data, len);
+        }
         co_zero(value + len, (t->wire != 0 ? t->wire : entry->size) - len);
     }
     return CO_ABORT_NONE;

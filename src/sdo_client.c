@@ -134,6 +134,13 @@ static bool same_object(const co_sdo_client_t *c, const uint8_t *d)
     return co_get_u16(&d[1]) == c->index && d[3] == c->sub;
 }
 
+/* The request that opens a transfer is out: its answer (or abort) names the object. */
+static bool awaits_initiate_answer(const co_sdo_client_t *c)
+{
+    return c->state == UP_INIT || c->state == BUP_INIT || c->state == DN_INIT ||
+           c->state == BDN_INIT;
+}
+
 static co_abort_t on_block_upload_init(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     c->size_known = (d[0] & 0x02) != 0;
@@ -157,9 +164,6 @@ static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint
     bool block = c->state == BUP_INIT && (b & 0xF9) == 0xC0;
     if (!block && (b & 0xE0) != 0x40) {
         return CO_ABORT_COMMAND;
-    }
-    if (!same_object(c, d)) {
-        return CO_ABORT_GENERAL;
     }
     if (block) {
         return on_block_upload_init(node, c, d);
@@ -319,9 +323,6 @@ static co_abort_t on_download_init(co_node_t *node, co_sdo_client_t *c, const ui
     if (d[0] != 0x60) {
         return CO_ABORT_COMMAND;
     }
-    if (!same_object(c, d)) {
-        return CO_ABORT_GENERAL;
-    }
     if (c->mode == CO_SDO_EXPEDITED) {
         finish(node, c, CO_ABORT_NONE, c->cap);
         return CO_ABORT_NONE;
@@ -355,9 +356,6 @@ static co_abort_t on_block_download_init(co_node_t *node, co_sdo_client_t *c, co
 {
     if ((d[0] & 0xFB) != 0xA0) {
         return CO_ABORT_COMMAND;
-    }
-    if (!same_object(c, d)) {
-        return CO_ABORT_GENERAL;
     }
     if (d[4] == 0 || d[4] > BLKSIZE_MAX) {
         return CO_ABORT_BLOCK_SIZE;
@@ -493,6 +491,9 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         return;
     }
     const uint8_t *d = frame->data;
+    if (awaits_initiate_answer(c) && !same_object(c, d)) {
+        return; /* a late answer to an earlier request, or to another client of the server */
+    }
     if (d[0] == 0x80) { /* server abort (never a valid block segment: seqno 0) */
         co_abort_t code = co_get_u32(&d[4]);
         finish(node, c, code ? code : CO_ABORT_GENERAL, 0);

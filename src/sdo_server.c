@@ -3,7 +3,8 @@
  * both directions (see canola/sdo.h for the behaviour).
  *
  * One state machine per channel. Downloads collect into the channel buffer and
- * are stored whole at the end, unless the entry streams through a write hook;
+ * are stored whole at the end, unless the entry streams through a write hook or
+ * is a DOMAIN/string in RAM larger than the buffer (received into its storage);
  * uploads read the dictionary piece by piece at an offset, so a retransmission
  * in block upload simply reads the same offset again.
  *
@@ -183,9 +184,37 @@ static void begin(co_sdo_server_t *s)
 
 /* ---- download */
 
+static uint32_t received(const co_sdo_server_t *s) { return s->done + s->buf_len; }
+
 static bool streams(const co_sdo_server_t *s)
 {
     return s->entry->value == NULL && s->entry->hooks && s->entry->hooks->write;
+}
+
+/* The RAM bytes of a DOMAIN or string (a value of no fixed size, kept in storage): a
+ * download larger than the buffer is received straight into them, up to the entry's
+ * size (the buffer frames the transfer, it does not bound the value). NULL otherwise. */
+static uint8_t *own_storage(const co_sdo_server_t *s)
+{
+    const co_od_entry_t *e = s->entry;
+    if (e->value == NULL || co_type_size((co_type_t)e->type) != 0) {
+        return NULL;
+    }
+    return e->type == CO_TYPE_DOMAIN ? ((co_od_domain_t *)e->value)->data : (uint8_t *)e->value;
+}
+
+/* Move the buffered bytes into the entry's own storage (own_storage), after those moved
+ * before: false when they would not fit. */
+static bool spill(co_sdo_server_t *s)
+{
+    uint8_t *storage = own_storage(s);
+    if (storage == NULL || s->done + s->buf_len > s->entry->size) {
+        return false;
+    }
+    co_copy(storage + s->done, s->buf, s->buf_len);
+    s->done += s->buf_len;
+    s->buf_len = 0;
+    return true;
 }
 
 /* Size checks at initiate: what the entry and the buffer can take. */
@@ -201,17 +230,25 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
     if (fixed == 0 && s->entry->value != NULL && s->size > s->entry->size) {
         return CO_ABORT_LEN_HIGH;
     }
-    if (!streams(s) && s->size > CO_SDO_BUF_SIZE) {
+    if (!streams(s) && s->size > CO_SDO_BUF_SIZE && own_storage(s) == NULL) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
     return CO_ABORT_NONE;
 }
 
-/* Pass the buffered bytes on: to the write hook as a piece, or (last) store them whole. */
+/* Pass the buffered bytes on: to the write hook as a piece, or (last) store them whole:
+ * from the buffer, or from the entry's storage when earlier parts went there (spill). */
 static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 {
     if (!streams(s)) {
-        return last ? write_value(node, s, s->buf, s->buf_len) : CO_ABORT_NONE;
+        if (!last) {
+            return spill(s) ? CO_ABORT_NONE : CO_ABORT_LEN_HIGH;
+        }
+        if (s->done == 0) {
+            return write_value(node, s, s->buf, s->buf_len);
+        }
+        uint32_t len = received(s);
+        return spill(s) ? write_value(node, s, own_storage(s), len) : CO_ABORT_LEN_HIGH;
     }
     uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
     co_abort_t abort =
@@ -228,11 +265,8 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
     /* a block's last segment may carry up to 6 bytes of padding past the value */
     uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
     if (s->buf_len + n > room) {
-        if (!streams(s)) {
-            return s->entry->value && co_type_size((co_type_t)s->entry->type) == 0 &&
-                           s->buf_len + n > s->entry->size
-                       ? CO_ABORT_LEN_HIGH
-                       : CO_ABORT_OUT_OF_MEMORY;
+        if (!streams(s) && own_storage(s) == NULL) {
+            return CO_ABORT_OUT_OF_MEMORY;
         }
         if (CO_CONFIG_SDO_BLOCK && s->crc_on) { /* the CRC covers data as it leaves the buffer */
             s->crc = co_crc16(s->crc, s->buf, s->buf_len);
@@ -246,8 +280,6 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
     s->buf_len += n;
     return CO_ABORT_NONE;
 }
-
-static uint32_t received(const co_sdo_server_t *s) { return s->done + s->buf_len; }
 
 /* The length of an expedited download that does not indicate it: the type's, else 4. */
 static uint32_t unsized_length(const co_od_entry_t *e)
@@ -293,7 +325,7 @@ static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
     if (s->size_known && received(s) != s->size) {
         return received(s) > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
     }
-    if (!streams(s) && s->buf_len > CO_SDO_BUF_SIZE) {
+    if (!streams(s) && own_storage(s) == NULL && s->buf_len > CO_SDO_BUF_SIZE) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
     return flush(node, s, true);

@@ -551,12 +551,13 @@ static void test_fastscan_finds_the_slave(void)
     CHECK_EQ(log.r[0].address.revision, 0x00020003);
     CHECK_EQ(log.r[0].address.serial, 0x80000001);
     CHECK_EQ(co_lss_slave_mode(&p->node[1]), CO_LSS_CONFIGURATION);
+    CHECK(!log.r[0].keeps_answering); /* quiet in configuration, as CiA 305 has it */
     /* Known vendor and product: only revision and serial are scanned bit by bit. */
     co_lss_switch_global(&p->node[0], CO_LSS_WAITING);
     co_lss_fastscan_t scan = {.address = {0xCA0, 0xBEEF, 0, 0}, .known = 0x3};
     co_sim_run_until(&p->bus, 2100 * MS);
     CHECK_EQ(co_lss_fastscan(&p->node[0], &scan, on_done, &log), CO_OK);
-    co_sim_run_until(&p->bus, 2100 * MS + (1 + 2 + 64 + 2) * 5 * MS);
+    co_sim_run_until(&p->bus, 2100 * MS + (1 + 2 + 64 + 2 + 1) * 5 * MS);
     CHECK_EQ(log.n, 2);
     CHECK_EQ(log.r[1].status, CO_LSS_OK);
     CHECK_EQ(log.r[1].address.serial, 0x80000001);
@@ -568,6 +569,110 @@ static void test_fastscan_finds_the_slave(void)
     co_sim_run_until(&p->bus, 4000 * MS);
     CHECK_EQ(log.r[2].status, CO_LSS_SCAN_FAILED);
     free(p);
+}
+
+/* ---- a slave that answers every fastscan request in configuration (as CANopenNode's
+ * slaves do): a model on a raw port of the simulated bus */
+
+typedef struct chatty_slave {
+    co_sim_port_t port;
+    uint32_t address[4];
+    bool configuration;
+    uint8_t pos;
+    uint32_t answers;
+} chatty_slave_t;
+
+static void chatty_answer(chatty_slave_t *c)
+{
+    co_frame_t f = frm(0x7E4, "4F 00 00 00 00 00 00 00");
+    CHECK_EQ(co_sim_send(&c->port, &f), CO_OK);
+    c->answers++;
+}
+
+static void chatty_rx(void *ctx, uint64_t now_us, const co_frame_t *f)
+{
+    (void)now_us;
+    chatty_slave_t *c = ctx;
+    if (f->id != 0x7E5 || f->len != 8) {
+        return;
+    }
+    const uint8_t *d = f->data;
+    if (d[0] == 0x04) { /* switch state global */
+        c->configuration = d[1] == 1;
+        return;
+    }
+    if (d[0] != 0x51) {
+        return;
+    }
+    if (c->configuration) { /* every fastscan request is answered */
+        chatty_answer(c);
+        return;
+    }
+    uint8_t bit = d[5], sub = d[6], next = d[7];
+    if (bit == 0x80) {
+        c->pos = 0;
+        chatty_answer(c);
+        return;
+    }
+    if (bit > 31 || sub > 3 || next > 3 || sub != c->pos) {
+        return;
+    }
+    uint32_t mask = 0xFFFFFFFFu << bit;
+    if (((co_get_u32(d + 1) ^ c->address[sub]) & mask) == 0) {
+        chatty_answer(c);
+        c->pos = next;
+        if (bit == 0 && next < sub) {
+            c->configuration = true;
+        }
+    }
+}
+
+static void test_fastscan_tells_a_slave_that_keeps_answering(void)
+{
+    typedef struct rig {
+        co_sim_bus_t bus;
+        example_od_t od;
+        co_node_t node;
+        co_sim_port_t port;
+    } rig_t;
+    rig_t *r = calloc(1, sizeof *r);
+    co_sim_bus_t *bus = &r->bus;
+    static chatty_slave_t chatty;
+    memset(&chatty, 0, sizeof chatty);
+    chatty.address[0] = 0x2E0;
+    chatty.address[1] = 0x17;
+    chatty.address[2] = 0x3;
+    chatty.address[3] = 0x12345678;
+    co_sim_bus_init(bus, 500000);
+    CHECK_EQ(co_sim_port_attach_raw(bus, &chatty.port, chatty_rx, &chatty), CO_OK);
+    co_node_config_t cfg = {.node_id = 1, .od = example_od_init(&r->od, 0)};
+    co_sim_port_attach(bus, &r->port);
+    cfg.driver = co_sim_port_driver(&r->port);
+    CHECK_EQ(co_node_init(&r->node, &cfg), CO_OK);
+    co_sim_port_bind(&r->port, &r->node);
+    co_node_start(&r->node, 0);
+    co_node_t *master = &r->node;
+    co_lss_master_set_timeout(master, 5);
+    done_log_t log = {0};
+    CHECK_EQ(co_lss_fastscan(master, NULL, on_done, &log), CO_OK);
+    co_sim_run_until(bus, 2000 * MS);
+    CHECK_EQ(log.n, 1);
+    CHECK_EQ(log.r[0].status, CO_LSS_OK);
+    CHECK_EQ(log.r[0].address.vendor, 0x2E0);
+    CHECK_EQ(log.r[0].address.serial, 0x12345678);
+    CHECK(log.r[0].keeps_answering);
+    CHECK(chatty.configuration);
+    /* Left in configuration it would confirm every bit: switched back to waiting, the next
+     * scan finds it again, the same address (not the all-zero one). */
+    co_lss_switch_global(master, CO_LSS_WAITING);
+    co_sim_run_until(bus, 2010 * MS);
+    CHECK_EQ(co_lss_fastscan(master, NULL, on_done, &log), CO_OK);
+    co_sim_run_until(bus, 4000 * MS);
+    CHECK_EQ(log.n, 2);
+    CHECK_EQ(log.r[1].status, CO_LSS_OK);
+    CHECK_EQ(log.r[1].address.product, 0x17);
+    CHECK_EQ(log.r[1].address.serial, 0x12345678);
+    free(r);
 }
 
 /* ---- scenario: eight unconfigured devices, found one by one and given node-IDs 10..17 */
@@ -902,6 +1007,7 @@ int main(void)
     RUN(test_master_identify_counts_answers);
     RUN(test_master_fastscan_frames);
     RUN(test_fastscan_finds_the_slave);
+    RUN(test_fastscan_tells_a_slave_that_keeps_answering);
     RUN(test_eight_devices_found_by_fastscan_then_boot);
     RUN(test_master_arguments);
     RUN(test_master_every_request_busy_and_timed_out);

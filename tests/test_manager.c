@@ -296,15 +296,13 @@ static void test_ten_devices_boot_from_one_description(void)
     }
     CHECK_EQ(co_manager_slave_state(&n->mgr, 9), CO_MGR_MISSING);
 
-    /* The master resets its communication (its heartbeat watches are gone) and starts the
-     * manager over: the slaves are booted and watched again, node 9 is still missing. */
+    /* The master resets its communication (its heartbeat watches are gone): the manager
+     * starts over by itself, the slaves are booted and watched again, node 9 is still
+     * missing. */
     co_sim_set_bus_off(&n->dev[9 - FIRST].port, false);
     co_node_set_uint(dev(n, 9), 0x1017, 0, 0); /* it stays silent */
     co_nmt_apply(&n->master.node, CO_NMT_CMD_RESET_COMMUNICATION);
     uint32_t before = n->event_count;
-    while (co_manager_start(&n->mgr) == CO_ERR_BUSY) {
-        co_sim_run_until(&n->bus, n->bus.now_us + 10 * MS);
-    }
     co_sim_run_until(&n->bus, n->bus.now_us + 5000 * MS);
     uint32_t booted = 0, k = 0;
     for (uint32_t i = before; i < n->event_count; i++) {
@@ -1430,9 +1428,185 @@ static void test_heartbeat_during_configuration_does_not_end_the_boot(void)
     free(n);
 }
 
+/* ---- late slaves, late answers, the master's own reset */
+
+/* A tap that plays a slow device's late answer: when the slave answers the vendor-ID
+ * read, the answer to a device-type read it received before its boot-up follows. */
+typedef struct late_tap {
+    co_sim_port_t port;
+    uint32_t sent;
+} late_tap_t;
+
+static void late_tap_rx(void *ctx, uint64_t now_us, const co_frame_t *frame)
+{
+    (void)now_us;
+    late_tap_t *tap = ctx;
+    if (tap->sent == 0 && frame->id == 0x582 && frame->data[0] == 0x43 && frame->data[1] == 0x18 &&
+        frame->data[2] == 0x10 && frame->data[3] == 0x01) {
+        co_frame_t stale = frm(0x582, "43 00 10 00 91 01 00 00");
+        CHECK_EQ(co_sim_send(&tap->port, &stale), CO_OK);
+        tap->sent++;
+    }
+}
+
+/* A slave missing at boot (B) that boots later and then, being slow, also answers the
+ * request it got before its boot-up: booted all the same, optional or mandatory, started
+ * with the running network or starting the network (each and all). */
+static void test_late_slave_with_a_late_answer(void)
+{
+    static const uint32_t startups[] = {0, CO_MGR_START_ALL};
+    for (uint32_t mandatory = 0; mandatory <= 1; mandatory++) {
+        for (uint32_t k = 0; k < 2; k++) {
+            net_t *n = small_net(1);
+            static late_tap_t tap;
+            memset(&tap, 0, sizeof tap);
+            CHECK_EQ(co_sim_port_attach_raw(&n->bus, &tap.port, late_tap_rx, &tap), CO_OK);
+            co_mgr_slave_t *s = &n->slaves[2 - 1];
+            s->assignment |= CO_MGR_BOOT_ON_BOOTUP | (mandatory ? CO_MGR_MANDATORY : 0u);
+            s->device_type = 0x191;
+            s->vendor = 0xCA0;
+            s->product = 0x102;
+            small_init(n, CO_MGR_NMT_MASTER | startups[k]);
+            co_node_start(&n->master.node, 0);
+            co_sim_run_until(&n->bus, 10 * MS);
+            co_manager_start(&n->mgr);
+            co_sim_run_until(&n->bus, 2000 * MS);
+            const co_mgr_event_t *e = find(n, 2, CO_MGR_FAILED);
+            CHECK(e != NULL && e->reason == 'B');
+            CHECK_EQ(co_manager_network_started(&n->mgr), !mandatory);
+            uint32_t before = n->event_count;
+            co_node_start(dev(n, 2), n->bus.now_us);
+            co_sim_run_until(&n->bus, 3000 * MS);
+            CHECK_EQ(tap.sent, 1);
+            uint32_t failed = 0;
+            for (uint32_t i = before; i < n->event_count; i++) {
+                failed += n->events[i].kind == CO_MGR_FAILED;
+            }
+            CHECK_EQ(failed, 0);
+            CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_RUNNING);
+            CHECK_EQ(co_nmt_state(dev(n, 2)), CO_NMT_OPERATIONAL);
+            CHECK(co_manager_network_started(&n->mgr));
+            CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+            free(n);
+        }
+    }
+}
+
+/* The master's own reset communication (an NMT reset from anyone), with the network
+ * running or in the middle of a slave's boot: no failure of a slave; the manager starts
+ * over, as CiA 302-2 has the master's start-up follow its reset, and boots and watches
+ * every slave again. */
+static void test_master_reset_starts_the_boot_over(void)
+{
+    net_t *n = small_net(2);
+    for (uint8_t id = 2; id <= 3; id++) {
+        n->slaves[id - 1].assignment |= CO_MGR_MANDATORY;
+        n->slaves[id - 1].vendor = 0xCA0;
+        n->slaves[id - 1].heartbeat_ms = 300;
+    }
+    small_init(n, CO_MGR_NMT_MASTER);
+    small_start_all(n, 2);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 1000 * MS);
+    CHECK(co_manager_network_started(&n->mgr));
+    /* an NMT reset communication to all nodes: the master is reset with its slaves */
+    co_sim_run_until(&n->bus, 1100 * MS);
+    co_frame_t reset_all = frm(0x000, "82 00");
+    for (uint8_t i = 0; i < 2; i++) {
+        co_node_ingest(&n->dev[i].node, n->bus.now_us, &reset_all);
+    }
+    co_node_ingest(&n->master.node, n->bus.now_us, &reset_all);
+    uint32_t before = n->event_count;
+    co_sim_run_until(&n->bus, 3000 * MS);
+    uint32_t failed = 0, booted = 0;
+    for (uint32_t i = before; i < n->event_count; i++) {
+        failed += n->events[i].kind == CO_MGR_FAILED;
+        booted += n->events[i].kind == CO_MGR_BOOTED;
+    }
+    CHECK_EQ(failed, 0);
+    CHECK_EQ(booted, 2);
+    CHECK(co_manager_network_started(&n->mgr));
+    CHECK_EQ(co_nmt_state(&n->master.node), CO_NMT_OPERATIONAL);
+    CHECK_EQ(co_nmt_state(dev(n, 2)), CO_NMT_OPERATIONAL);
+    /* watched again: node 3 falls silent and is reported lost */
+    co_sim_set_bus_off(&n->dev[1].port, true);
+    co_sim_run_until(&n->bus, 4000 * MS);
+    CHECK(find(n, 3, CO_MGR_LOST) != NULL);
+
+    /* a reset while a slave's boot step waits for its answer */
+    net_t *m = small_net(1);
+    m->slaves[2 - 1].vendor = 0xCA0;
+    small_init(m, CO_MGR_NMT_MASTER);
+    co_node_start(&m->master.node, 0);
+    co_sim_run_until(&m->bus, 10 * MS);
+    co_manager_start(&m->mgr);
+    co_sim_run_until(&m->bus, 500 * MS); /* node 2 is off: the device-type read waits */
+    CHECK_EQ(co_manager_slave_state(&m->mgr, 2), CO_MGR_BOOTING);
+    co_node_start(&m->dev[0].node, m->bus.now_us);
+    co_frame_t reset_master = frm(0x000, "82 01");
+    co_node_ingest(&m->master.node, m->bus.now_us, &reset_master);
+    co_sim_run_until(&m->bus, 1500 * MS);
+    for (uint32_t i = 0; i < m->event_count; i++) {
+        CHECK(m->events[i].kind != CO_MGR_FAILED);
+    }
+    CHECK_EQ(co_manager_slave_state(&m->mgr, 2), CO_MGR_RUNNING);
+
+    /* a reset in the middle of the configuration download */
+    net_t *k = small_net(1);
+    uint32_t off = 0;
+    for (uint32_t v = 1; v <= 8; v++) {
+        dcf_u32(k->dcf[0], &off, 0x2000, 0, v);
+    }
+    k->slaves[2 - 1].dcf = k->dcf[0];
+    k->slaves[2 - 1].dcf_len = off;
+    small_init(k, CO_MGR_NMT_MASTER);
+    small_start_all(k, 1);
+    co_manager_start(&k->mgr);
+    while (k->sdo_requests < 4) { /* the device-type read, then into the download */
+        co_sim_run_until(&k->bus, k->bus.now_us + 100);
+    }
+    co_node_ingest(&k->master.node, k->bus.now_us, &reset_master);
+    co_sim_run_until(&k->bus, k->bus.now_us + 1000 * MS);
+    for (uint32_t i = 0; i < k->event_count; i++) {
+        CHECK(k->events[i].kind != CO_MGR_FAILED); /* of no slave, node 0 neither */
+    }
+    CHECK_EQ(co_manager_slave_state(&k->mgr, 2), CO_MGR_RUNNING);
+    CHECK_EQ(k->dev[0].od.app_u32, 8);
+    free(k);
+    free(m);
+    free(n);
+}
+
+/* The deadline poll returns after a boot step ended by the SDO time-out lies ahead: the
+ * manager's follow-up runs in the same poll. */
+static void test_poll_after_sdo_timeout_returns_a_future_deadline(void)
+{
+    net_t *n = small_net(2);
+    small_init(n, CO_MGR_NMT_MASTER);
+    co_node_start(&n->master.node, 0);
+    co_node_start(&n->dev[1].node, 0); /* node 3 is there, node 2 is not */
+    co_sim_run_until(&n->bus, 10 * MS);
+    co_manager_start(&n->mgr);
+    co_sim_run_until(&n->bus, 20 * MS);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_BOOTING);
+    uint64_t now = 20 * MS;
+    for (uint32_t polls = 0; polls < 100 && co_manager_slave_state(&n->mgr, 2) == CO_MGR_BOOTING;
+         polls++) {
+        uint64_t next = co_node_poll(&n->master.node, now);
+        CHECK(next > now);
+        now = next;
+    }
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 2), CO_MGR_FAILED_STATE);
+    CHECK_EQ(co_manager_slave_state(&n->mgr, 3), CO_MGR_BOOTING);
+    free(n);
+}
+
 int main(void)
 {
     RUN(test_dcf_put_and_check);
+    RUN(test_late_slave_with_a_late_answer);
+    RUN(test_master_reset_starts_the_boot_over);
+    RUN(test_poll_after_sdo_timeout_returns_a_future_deadline);
     RUN(test_reason_texts);
     RUN(test_init_arguments);
     RUN(test_description_from_the_master_dictionary);

@@ -6,7 +6,8 @@
  * Responses are checked byte for byte as candump strings ("585#4300200078563412").
  * Two dictionaries serve: the example OD of the harness, and a small "rig" OD
  * built here for what the example lacks (a BOOLEAN, 3-byte values, a string larger
- * than the channel buffer, a check hook, and DOMAINs whose hooks stream a
+ * than the channel buffer, a RAM DOMAIN larger than it with a check hook, a check hook,
+ * and DOMAINs whose hooks stream a
  * pseudo-random byte sequence of any length, to push large transfers through the
  * small channel buffer).
  */
@@ -63,8 +64,10 @@ static uint16_t crc_of(const uint8_t *bytes, uint32_t len)
 #define RIG_UNSIZED 0x2105 /* DOMAIN ro, read hook with size CO_OD_SIZE_UNKNOWN */
 #define RIG_CHECKED 0x2106 /* UNSIGNED32 rw with a check hook */
 #define RIG_UNICODE 0x2107 /* UNICODE_STRING, capacity 8 */
+#define RIG_BLOB 0x2108    /* DOMAIN in RAM, capacity 2000 (> CO_SDO_BUF_SIZE), check hook */
 #define RIG_BIG_CAP 1000u
-#define RIG_ENTRIES 8
+#define RIG_BLOB_CAP 2000u
+#define RIG_ENTRIES 9
 
 typedef struct rig {
     fake_bus_t bus;
@@ -77,6 +80,8 @@ typedef struct rig {
     char big[RIG_BIG_CAP];
     uint32_t checked;
     uint8_t unicode[8];
+    uint8_t blob_bytes[RIG_BLOB_CAP];
+    co_od_domain_t blob;
     /* read hooks */
     uint32_t up_len;       /* bytes of gen() the read hooks produce */
     co_abort_t read_abort; /* returned by the read hooks when not 0 */
@@ -226,6 +231,13 @@ static srv_t rig_srv(rig_t *r, uint16_t timeout_ms)
                                       .attr = CO_OD_RW,
                                       .size = 8,
                                       .value = r->unicode};
+    r->blob = (co_od_domain_t){.data = r->blob_bytes};
+    r->entries[n++] = (co_od_entry_t){.index = RIG_BLOB,
+                                      .type = CO_TYPE_DOMAIN,
+                                      .attr = CO_OD_RW,
+                                      .size = RIG_BLOB_CAP,
+                                      .value = &r->blob,
+                                      .hooks = &k_check_hooks};
     r->cfg.node_id = 5;
     r->cfg.od = (co_od_t){.entries = r->entries, .count = n, .hook_ctx = r};
     r->cfg.driver = fake_driver(&r->bus);
@@ -789,6 +801,8 @@ static void test_segmented_download_size_mismatch(void)
     CHECK_STR(t.od.app_string, "hello");
 }
 
+/* A string in RAM larger than the channel buffer: the download is received into the
+ * entry's own storage, up to its capacity (the buffer frames the transfer only). */
 static void test_segmented_download_larger_than_buffer_without_write_hook(void)
 {
     rig_t r;
@@ -797,32 +811,35 @@ static void test_segmented_download_larger_than_buffer_without_write_hook(void)
     for (uint32_t i = 0; i < sizeof text; i++) {
         text[i] = (uint8_t)('a' + i % 26);
     }
-    /* CO_SDO_BUF_SIZE bytes fit */
     CHECK_EQ(CO_SDO_BUF_SIZE, 889);
     CHECK_EQ(client_segmented_download(&s, RIG_BIG, 0, text, CO_SDO_BUF_SIZE), 0);
     CHECK_EQ(strlen(r.big), CO_SDO_BUF_SIZE);
     CHECK(memcmp(r.big, text, CO_SDO_BUF_SIZE) == 0);
-    /* 1000 bytes (the capacity) do not: refused at initiate */
-    XFER(&s, "21 03 21 00 E8 03 00 00", "585#8003210005000405");
-    XFER(&s, "21 03 21 00 7A 03 00 00", "585#8003210005000405"); /* 890 */
+    /* 890 and 1000 bytes (the capacity) fit the entry, if not the buffer */
+    CHECK_EQ(client_segmented_download(&s, RIG_BIG, 0, text, 890), 0);
+    CHECK_EQ(strlen(r.big), 890);
+    CHECK_EQ(client_segmented_download(&s, RIG_BIG, 0, text, RIG_BIG_CAP), 0);
+    CHECK(memcmp(r.big, text, RIG_BIG_CAP) == 0);
+    /* a shorter value after it ends in NUL as ever */
+    CHECK_EQ(client_segmented_download(&s, RIG_BIG, 0, text + 1, 900), 0);
+    CHECK_EQ(strlen(r.big), 900);
+    CHECK(memcmp(r.big, text + 1, 900) == 0);
     XFER(&s, "21 03 21 00 E9 03 00 00", "585#8003210012000706"); /* 1001: too long */
-    /* without size: refused when the buffer overflows */
+    /* without size: refused when it ends longer than the entry */
     XFER(&s, "20 03 21 00 00 00 00 00", "585#6003210000000000");
     uint8_t toggle = 0;
-    for (uint32_t seg = 0; seg < 127; seg++) {
+    for (uint32_t seg = 0; seg < 142; seg++) { /* 994 bytes */
         uint8_t d[8] = {(uint8_t)(toggle << 4), 'x', 'x', 'x', 'x', 'x', 'x', 'x'};
         req_data(&s, d);
         uint8_t want[8] = {(uint8_t)(0x20 | (toggle << 4))};
         CHECK(got(&s, want));
         toggle ^= 1;
     }
-    XFER(&s, "10 78 78 78 78 78 78 78", "585#8003210005000405");
-    CHECK_EQ(strlen(r.big), CO_SDO_BUF_SIZE);
-    CHECK(memcmp(r.big, text, CO_SDO_BUF_SIZE) == 0);
+    XFER(&s, "01 78 78 78 78 78 78 78", "585#8003210012000706"); /* 1001 */
 }
 
-/* Without an indicated size, a value one byte over CO_SDO_BUF_SIZE must be refused as it is
- * with the size indicated (the buffer collects at most CO_SDO_BUF_SIZE bytes). */
+/* Without an indicated size, a value one byte over the entry's capacity is refused as it is
+ * with the size indicated, however the buffer is filled. */
 static void test_segmented_download_without_size_one_byte_over_buffer(void)
 {
     rig_t r;
@@ -836,8 +853,47 @@ static void test_segmented_download_without_size_one_byte_over_buffer(void)
         CHECK(got(&s, want));
         toggle ^= 1;
     }
-    XFER(&s, "1D 7A 00 00 00 00 00 00", "585#8003210005000405"); /* byte 890 */
-    CHECK_EQ(strlen(r.big), 0);
+    XFER(&s, "1D 7A 00 00 00 00 00 00", "585#3000000000000000"); /* byte 890, the last */
+    CHECK_EQ(strlen(r.big), 890);
+    CHECK_EQ(r.big[889], 'z');
+}
+
+/* A RAM DOMAIN larger than the buffer, segmented and block: the whole value, its length,
+ * its check hook asked once with all of it; a refused value keeps the old length. */
+static void test_download_into_ram_domain_larger_than_buffer(void)
+{
+    rig_t r;
+    srv_t s = rig_srv(&r, 0);
+    static uint8_t bytes[RIG_BLOB_CAP];
+    for (uint32_t i = 0; i < sizeof bytes; i++) {
+        bytes[i] = gen(i + 7);
+    }
+    CHECK_EQ(client_segmented_download(&s, RIG_BLOB, 0, bytes, 1500), 0);
+    CHECK_EQ(r.blob.len, 1500);
+    CHECK(memcmp(r.blob_bytes, bytes, 1500) == 0);
+    CHECK_EQ(r.checks, 1);
+    CHECK_EQ(client_block_download(&s, RIG_BLOB, 0, bytes + 1, RIG_BLOB_CAP - 1, true), 0);
+    CHECK_EQ(r.blob.len, RIG_BLOB_CAP - 1);
+    CHECK(memcmp(r.blob_bytes, bytes + 1, RIG_BLOB_CAP - 1) == 0);
+    CHECK_EQ(client_block_download(&s, RIG_BLOB, 0, bytes, RIG_BLOB_CAP, false), 0);
+    CHECK_EQ(r.blob.len, RIG_BLOB_CAP);
+    CHECK_EQ(r.checks, 3);
+    XFER(&s, "C6 08 21 00 D1 07 00 00", "585#8008210012000706"); /* 2001 */
+    XFER(&s, "21 08 21 00 D1 07 00 00", "585#8008210012000706");
+    /* the application refuses the value: its abort code, the length stays */
+    r.check_abort = CO_ABORT_VALUE;
+    XFER(&s, "21 08 21 00 B0 04 00 00", "585#6008210000000000"); /* 1200 bytes */
+    uint8_t toggle = 0;
+    for (uint32_t seg = 0; seg < 171; seg++) {
+        uint8_t d[8] = {(uint8_t)(toggle << 4), 1, 2, 3, 4, 5, 6, 7};
+        req_data(&s, d);
+        uint8_t want[8] = {(uint8_t)(0x20 | (toggle << 4))};
+        CHECK(got(&s, want));
+        toggle ^= 1;
+    }
+    XFER(&s, "19 01 02 03 00 00 00 00", "585#8008210030000906"); /* the last 3 bytes */
+    CHECK_EQ(r.checks, 4);
+    CHECK_EQ(r.blob.len, RIG_BLOB_CAP);
 }
 
 static void test_segmented_download_to_ram_domain(void)
@@ -992,7 +1048,14 @@ static void test_block_download_of_889_bytes_without_write_hook(void)
     CHECK_EQ(client_block_download(&s, RIG_BIG, 0, text, sizeof text, true), 0);
     CHECK_EQ(strlen(r.big), CO_SDO_BUF_SIZE);
     CHECK(memcmp(r.big, text, sizeof text) == 0);
-    XFER(&s, "C6 03 21 00 7A 03 00 00", "585#8003210005000405"); /* 890 */
+    static uint8_t more[RIG_BIG_CAP]; /* past the buffer, up to the entry's capacity */
+    for (uint32_t i = 0; i < sizeof more; i++) {
+        more[i] = (uint8_t)('a' + i % 26);
+    }
+    CHECK_EQ(client_block_download(&s, RIG_BIG, 0, more, 890, true), 0);
+    CHECK_EQ(strlen(r.big), 890);
+    CHECK_EQ(client_block_download(&s, RIG_BIG, 0, more, sizeof more, true), 0);
+    CHECK(memcmp(r.big, more, sizeof more) == 0);
     XFER(&s, "C6 03 21 00 E9 03 00 00", "585#8003210012000706"); /* 1001 */
 }
 
@@ -1812,6 +1875,7 @@ int main(void)
     RUN(test_segmented_download_larger_than_buffer_without_write_hook);
     RUN(test_segmented_download_without_size_one_byte_over_buffer);
     RUN(test_segmented_download_to_ram_domain);
+    RUN(test_download_into_ram_domain_larger_than_buffer);
     RUN(test_segmented_download_streams_100k);
     RUN(test_segmented_download_streams_without_size);
     /* block download */

@@ -44,8 +44,9 @@
 #endif
 
 /** Bytes of buffer per SDO channel: the largest value a download collects before storing
- *  it whole (larger values need a write hook), and one block of a block transfer
- *  (block size = min(127, CO_SDO_BUF_SIZE / 7)). 7..65535. */
+ *  it whole (larger values go to a write hook, or into a RAM DOMAIN's or string's own
+ *  storage up to its size), and one block of a block transfer (block size = min(127,
+ *  CO_SDO_BUF_SIZE / 7)). 7..65535. */
 #ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 889
 #endif

@@ -53,9 +53,9 @@
  * gets a co_lss_result_t. Every request with an answer times out after the master's
  * time-out (co_lss_master_set_timeout, default 100 ms); requests whose answer may come
  * from several slaves (identify, fastscan steps) always wait the whole time-out, so an
- * answer that arrives late never counts for the next step. Fastscan costs 133 time-outs
- * per device (the reset, 32 bits and a verify per address part); a part given as known
- * skips its 32 bit checks.
+ * answer that arrives late never counts for the next step. Fastscan costs 134 time-outs
+ * per device (the reset, 32 bits and a verify per address part, the last verify once
+ * more); a part given as known skips its 32 bit checks.
  *
  * Threading and memory as the node (canola/node.h): the slave's state is 56 bytes and
  * the master's 80 bytes inside co_node_t (x86-64); no allocation.
@@ -174,6 +174,8 @@ typedef struct co_lss_result {
     uint8_t spec_error;       /**< ... and its manufacturer-specific error */
     uint32_t value;           /**< inquire: the value (node-ID in the low byte) */
     uint16_t answers;         /**< identify: answers counted during the time-out */
+    bool keeps_answering;     /**< fastscan: the slave found answers fastscan in
+                                   configuration too (see co_lss_fastscan) */
     co_lss_address_t address; /**< fastscan: the address found */
 } co_lss_result_t;
 
@@ -245,7 +247,11 @@ co_err_t co_lss_identify_remote(co_node_t *node, const co_lss_address_t *low,
 co_err_t co_lss_identify_non_configured(co_node_t *node, co_lss_done_fn done, void *ctx);
 /** Find one slave without node-ID by fastscan: OK with its address (that slave is now
  *  in configuration), TIMEOUT when no slave answered the reset, SCAN_FAILED when the
- *  answers stopped half-way. `scan` may be NULL (nothing known). */
+ *  answers stopped half-way. `scan` may be NULL (nothing known). A slave that answers
+ *  every fastscan request while in configuration (CANopenNode's) would confirm every bit
+ *  of the next scan: the final verify is sent once more, and result.keeps_answering says
+ *  that it answered; switch that slave back to waiting (co_lss_switch_global) before the
+ *  next scan, which then finds it again unless it was given a node-ID. */
 co_err_t co_lss_fastscan(co_node_t *node, const co_lss_fastscan_t *scan, co_lss_done_fn done,
                          void *ctx);
 

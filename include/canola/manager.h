@@ -164,6 +164,7 @@ typedef struct co_manager {
     uint8_t step;
     bool running;
     bool network_started;
+    bool restart; /**< the master was reset: start over at the next poll */
     uint8_t state[127];
     uint8_t reason[127];
 } co_manager_t;
@@ -183,9 +184,11 @@ co_err_t co_manager_load_od(const co_od_t *od, co_mgr_slave_t *slaves, uint32_t 
 
 /** Start the boot of every listed slave (the node must be started). Called again, it
  *  starts over: every slave booted anew, the network started again once the mandatory
- *  ones are back (after the master's own reset communication, which forgets the heartbeat
- *  watches, for example). Returns CO_ERR_STATE when the node is not started, CO_ERR_BUSY
- *  while a slave's boot is in progress. */
+ *  ones are back. The master's own reset (reset communication or reset node, from an NMT
+ *  command of anyone) starts it over by itself, as CiA 302-2 has the master's start-up
+ *  follow its reset: a boot step that the reset cut short is no failure of its slave.
+ *  Returns CO_ERR_STATE when the node is not started, CO_ERR_BUSY while a slave's boot is
+ *  in progress. */
 co_err_t co_manager_start(co_manager_t *mgr);
 
 /** The state and last failure reason of slave `node_id` (1..127). */

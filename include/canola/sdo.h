@@ -17,9 +17,14 @@
  *
  * Downloads of values up to CO_SDO_BUF_SIZE bytes are collected in the channel's
  * buffer and handed to the object dictionary whole, when the transfer completes:
- * an aborted transfer changes nothing. Entries that take their value through a
- * write hook (co_od_hooks_t.write) get it in pieces as it arrives, so a DOMAIN of
- * any size streams through a buffer of a few hundred bytes. Uploads read the
+ * an aborted transfer changes nothing. A DOMAIN or string kept in RAM takes values
+ * up to its own size: what does not fit the buffer is received into the entry's
+ * storage, and the whole value is checked and stored at the end as usual (its
+ * check hook sees all of it; a DOMAIN's length changes only then), but an aborted
+ * or refused transfer of that size leaves the bytes received so far in storage.
+ * Entries that take their value through a write hook (co_od_hooks_t.write) get it
+ * in pieces as it arrives, so a DOMAIN of any size streams through a buffer of a
+ * few hundred bytes. Uploads read the
  * dictionary piece by piece (co_od_read with an offset), so read hooks stream too.
  *
  * Block transfer: CRC-16-CCITT (0x1021, initial 0) when both sides support it;
@@ -34,7 +39,10 @@
  * and reset communication reloads it from its power-on values, as it does every
  * communication object; a channel without 0x1280 + i keeps its setup). Transfers are asynchronous:
  * start one, the node's ingest/poll drive it, and a completion callback reports the abort code
- * (CO_ABORT_NONE on success) and the bytes transferred. A channel whose server is
+ * (CO_ABORT_NONE on success) and the bytes transferred. While a transfer waits for the
+ * answer to its initiate request, a frame naming another object (index, sub-index) is
+ * not its answer: a server's late answer to an earlier request, or another client's
+ * answer, is ignored (only the time-out ends the wait). A channel whose server is
  * the node itself reads and writes the node's own dictionary, with no frames.
  *
  * Memory: each server channel holds a CO_SDO_BUF_SIZE + 6 byte buffer and 68 bytes of

@@ -6,11 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from managed import PRODUCT, VENDOR, model, write_dcf
+from managed import DEVICE_TYPE, PRODUCT, VENDOR, model, write_dcf
 
-from canola import Device, Error, Master
+from canola import Device, Error, Master, SdoAbort
 from canola.core import SimBus
 from canola.manager import BootEvent, NetworkManager
+from canola.master import Frame
 from canola.network import Identity, Network, NetworkError, SlaveSpec
 
 PLANT = """
@@ -206,3 +207,64 @@ def test_reset_slaves_first() -> None:
     frames = [line.split()[-1] for line in bus.trace]
     assert "000#8202" in frames and "000#8203" not in frames  # keep-alive spared
     assert devices[3].od[0x2001, 0] == 99
+
+
+def test_dcf_that_remaps_pdos_boots_a_device_that_enforces_the_procedure(
+        tmp_path: Path) -> None:
+    """A DCF made from an EDS re-maps TPDO1 and RPDO1; the device refuses a mapping
+    written while its PDO is valid, as CiA 301 has it: the concise DCF follows the
+    re-mapping procedure, and the PDOs work afterwards."""
+    from test_network import INTEROP, _remapping_dcf  # noqa: PLC0415
+
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    device = Device(INTEROP, 5, bus)
+    device.start()
+    bus.run_for(10_000)
+    with pytest.raises(SdoAbort):  # the device enforces the procedure
+        master.sdo(5).write(0x1A00, 0, "u8", 0)
+    mgr = master.boot([_remapping_dcf(tmp_path)])
+    assert mgr.started, [str(s) for s in mgr.slaves()]
+    assert device.od[0x1A00, 1] == 0x20070020 and device.od[0x1A00, 0] == 1
+    assert device.od[0x1600, 1] == 0x20010008 and device.od[0x1800, 1] == 0x185
+    seen: list[bytes] = []
+    master.on_frame(lambda f: seen.append(f.data), cob_id=0x185)
+    device.od[0x2007, 0] = 0x01020304
+    master.start_sync(10_000)
+    bus.run_for(50_000)
+    assert seen and seen[-1] == (0x01020304).to_bytes(4, "little")
+
+
+@pytest.mark.parametrize("start", ["each", "all"])
+@pytest.mark.parametrize("mandatory", [False, True])
+def test_late_slave_that_answers_late_too(mandatory: bool, start: str) -> None:
+    """A slave missing at boot (B) boots later; being slow, it also answers the request it
+    got before its boot-up while its identity is read. Booted all the same: an optional
+    one joins the running network, a mandatory one lets the network start."""
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    slow = Master(bus, node_id=100, announce=False)  # plays the slave's late answer
+    slow.start()
+    late_answers: list[int] = []
+
+    def answer_late(frame: Frame) -> None:
+        if frame.data[:4] == bytes.fromhex("43181001") and not late_answers:
+            late_answers.append(1)
+            slow.send(0x584, bytes.fromhex("43001000") + DEVICE_TYPE.to_bytes(4, "little"))
+
+    slow.on_frame(answer_late, cob_id=0x584)
+    net = Network((SlaveSpec(4, mandatory=mandatory,
+                             identity=Identity(vendor=VENDOR, product=PRODUCT)),), start=start)
+    mgr = master.boot(net)
+    assert mgr.status(4).reason == "B" and mgr.started is not mandatory
+    device = Device(model(serial=4), 4, bus)
+    device.start()
+    for _ in range(200):  # fine steps: the late answer follows the vendor-ID's at once
+        bus.run_for(100)
+    bus.run_for(2_000_000)
+    assert late_answers == [1]
+    kinds = [e.kind for e in mgr.events if e.node == 4 and e.kind != "network-halted"]
+    assert kinds == ["failed", "booted", "started"]
+    assert mgr.started and device.nmt_state == "OPERATIONAL"

@@ -14,6 +14,7 @@ import can
 import pytest
 from cli_helpers import cli, one_line_error
 from conftest import wait_until
+from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model, write_dcf
 
 from canola import Device
@@ -227,7 +228,8 @@ def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str], net: Net) -
     address = f"{VENDOR:08X}:{PRODUCT:08X}:{REVISION:08X}:00000011"
     code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS)
     assert (code, err) == (0, "")
-    assert out.splitlines() == [address, "1 device(s) without node-ID"]
+    assert out.splitlines()[0] == address
+    assert out.splitlines()[1].startswith("1 device(s) without node-ID (fastscan took ")
 
     code, out, _ = cli(capsys, "lss", "inquire", address, *opts, "--timeout", LSS_MS)
     assert code == 0
@@ -253,6 +255,29 @@ def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str], net: Net) -
     assert (code, json.loads(out)) == (0, [])
 
 
+def test_lss_scan_ends_against_slaves_that_answer_in_configuration(
+        capsys: pytest.CaptureFixture[str], net: Net) -> None:
+    opts, _ = net
+    channel = opts[1].removeprefix("virtual://")
+    bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        slave = ChattyLssSlave(bus, (0x2E0, 0x17, 3, 0x100), port_id=100)
+        code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS,
+                             "--max-devices", "3")
+        assert (code, err) == (0, "")
+        assert out.splitlines()[0] == "000002E0:00000017:00000003:00000100"
+        assert out.splitlines()[1].startswith("1 device(s) without node-ID")
+        # bounded: the limit reached is said, with what was found and the advice
+        code, out, err = cli(capsys, "lss", "scan", *opts, "--timeout", LSS_MS,
+                             "--time-limit", "1")
+        assert (code, out) == (1, "")
+        assert "not done within 1 s" in err and "--time-limit" in err and "--timeout" in err
+        one_line_error(err)
+        slave.stop()
+    finally:
+        bus.shutdown()
+
+
 def test_lss_failures(capsys: pytest.CaptureFixture[str], net: Net) -> None:
     opts, device = net
     device(7, serial=0x77)
@@ -270,6 +295,8 @@ def test_lss_failures(capsys: pytest.CaptureFixture[str], net: Net) -> None:
     ["lss"],
     ["lss", "scan"],
     ["lss", "scan", "--bus", "virtual://x", "--timeout", "0"],
+    ["lss", "scan", "--bus", "virtual://x", "--time-limit", "0"],
+    ["lss", "scan", "--bus", "virtual://x", "--max-devices", "128"],
     ["lss", "set-id", "1:2:3", "5", "--bus", "virtual://x"],
     ["lss", "set-id", "1:2:3:4:5", "5", "--bus", "virtual://x"],
     ["lss", "set-id", "1:2:3:g", "5", "--bus", "virtual://x"],
@@ -300,3 +327,44 @@ def test_boot_gives_up_at_the_timeout(capsys: pytest.CaptureFixture[str], net: N
     assert out.splitlines()[-1] == "network not started: the boot did not end within 0.3 s"
     code, out, _ = cli(capsys, "boot", str(dcf), *opts, "--timeout", "0.3", "--json")
     assert code == 1 and json.loads(out)["settled"] is False
+
+
+# ---- who announces itself on the bus
+
+
+def _own_frames(listener: can.BusABC, master_id: int = 127) -> list[str]:
+    """Error control frames (boot-up, heartbeat) of node ``master_id`` seen so far."""
+    seen = []
+    while (msg := listener.recv(0.05)) is not None:
+        if msg.arbitration_id == 0x700 + master_id:
+            seen.append(f"{msg.arbitration_id:03X}#{bytes(msg.data).hex().upper()}")
+    return seen
+
+
+def test_one_shot_commands_are_silent_unless_asked(capsys: pytest.CaptureFixture[str],
+                                                    net: Net, tmp_path: Path) -> None:
+    opts, device = net
+    device(5, serial=5)
+    listener = can.Bus(interface="virtual", channel=opts[1].removeprefix("virtual://"))
+    try:
+        _own_frames(listener)
+        for args in (["sdo", "read", "5", "0x1018:1"], ["sdo", "write", "5", "0x1017:0", "u16",
+                                                       "0"],
+                     ["scan", "--nodes", "1-8", "--timeout", "200"], ["nmt", "preop", "all"],
+                     ["lss", "scan", "--timeout", "10", "--max-devices", "1"],
+                     ["dump", "--duration", "0.2"]):
+            code, _, err = cli(capsys, *args, *opts)
+            assert (code, err) == (0, ""), args
+            assert _own_frames(listener) == [], args  # no boot-up 77F#00, no heartbeat
+        # asked to: the master takes part (its boot-up)
+        assert cli(capsys, "sdo", "read", "5", "0x1018:1", *opts, "--announce")[0] == 0
+        assert _own_frames(listener) == ["77F#00"]
+        code, _, _ = cli(capsys, "sdo", "read", "5", "0x1018:1", *opts, "--announce",
+                         "--master-id", "100")
+        assert code == 0 and _own_frames(listener, 100) == ["764#00"]
+        # the master of canola boot runs the network: it announces itself
+        dcf = write_dcf(tmp_path / "n5.dcf", 5, {}, serial=5)
+        assert cli(capsys, "boot", str(dcf), *opts)[0] == 0
+        assert _own_frames(listener)[:1] == ["77F#00"]
+    finally:
+        listener.shutdown()

@@ -139,6 +139,13 @@ def test_sdo_read(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]
         0, "canola cli test\n", "")
     assert cli(capsys, "sdo", "read", "5", "0x1008:0", "--bus", url)[1] == (
         "'canola cli test' (15 bytes)\n")
+    # four bytes of letters are still a number; UTF-8 text is shown as text
+    assert cli(capsys, "sdo", "write", "5", "0x2000:0", "u32", "0x44434241", "--bus", url)[0] == 0
+    assert cli(capsys, "sdo", "read", "5", "0x2000:0", "--bus", url)[1] == "0x44434241\n"
+    assert cli(capsys, "sdo", "write", "5", "0x2002:0", "vs", "2 € each", "--bus", url)[0] == 0
+    assert cli(capsys, "sdo", "read", "5", "0x2002:0", "--bus", url)[1] == (
+        "'2 € each' (10 bytes)\n")
+    assert cli(capsys, "sdo", "read", "5", "0x2002:0", "vs", "--bus", url)[1] == "2 € each\n"
     code, out, _ = cli(capsys, "sdo", "read", "5", "0x2001:0", "i16", "--bus", url, "--json")
     assert code == 0
     assert json.loads(out) == {"node": 5, "index": 0x2001, "sub": 0, "raw": "fbff",
@@ -355,3 +362,48 @@ def test_commands_end_when_the_hub_goes_away(procs: Callable[..., Proc]) -> None
     for proc in (device, dump, monitor):
         assert proc.popen.wait(60) == 1
         proc.wait_for("^canola: the bus connection was closed by the server$")
+
+
+def test_device_domain_and_string_sizes(capsys: pytest.CaptureFixture[str],
+                                        net: tuple[str, list[Proc]], tmp_path: Path) -> None:
+    """canola device --domain-size/--string-size: values larger than the SDO buffer go
+    into the entries' RAM, by block and segmented download; a default device refuses them
+    with the CiA code for 'too long'."""
+    url = net[0]
+    dev = Proc("device", "--eds", str(EDS), "--node-id", "22", "--bus", url,
+               "--domain-size", "65536", "--string-size", "10000")
+    try:
+        dev.wait_for("node 22: PRE-OPERATIONAL")
+        data = os.urandom(10 * 1024)
+        (tmp_path / "in.bin").write_bytes(data)
+        for extra in ([], ["--no-block"]):
+            code, _, err = cli(capsys, "sdo", "download", "22", "0x2004:0",
+                               str(tmp_path / "in.bin"), "--bus", url, *extra)
+            assert (code, err) == (0, "")
+            code, _, err = cli(capsys, "sdo", "upload", "22", "0x2004:0",
+                               str(tmp_path / "out.bin"), "--bus", url, *extra)
+            assert (code, err) == (0, "")
+            assert (tmp_path / "out.bin").read_bytes() == data
+        text = "x" * 9000
+        slow = ["--bus", url, "--timeout", "30000"]  # a whole segmented transfer's bound
+        assert cli(capsys, "sdo", "write", "22", "0x2002:0", "vs", text, *slow)[0] == 0
+        assert cli(capsys, "sdo", "read", "22", "0x2002:0", "vs", *slow)[1] == text + "\n"
+        # device 5 runs with the default 4096-byte DOMAIN
+        code, _, err = cli(capsys, "sdo", "download", "5", "0x2004:0",
+                           str(tmp_path / "in.bin"), "--bus", url)
+        assert code == 1 and "0x06070012" in err
+    finally:
+        assert dev.stop() == 0
+
+
+def test_device_size_options_in_help_and_checked(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = cli(capsys, "device", "--help")
+    assert code == 0
+    assert "--domain-size BYTES" in out and "--string-size BYTES" in out
+    assert "1..67108864" in out and "1..65535" in out
+    for bad in (["--domain-size", "0"], ["--domain-size", "67108865"],
+                ["--string-size", "65536"]):
+        code, out, err = cli(capsys, "device", "--eds", str(EDS), "--node-id", "5",
+                             "--bus", "virtual://x", *bad)
+        assert (code, out) == (2, "")
+        one_line_error(err)

@@ -53,6 +53,19 @@ def test_emcy_names_and_values() -> None:
     assert format_value(bytes(40)).endswith("... ] (40 bytes)".replace(" ]", "]"))
 
 
+def test_untyped_values_numbers_and_utf8_text() -> None:
+    # four bytes are a number, even when they happen to be letters
+    assert format_value(b"ABCD") == "0x44434241"
+    assert format_value(b"abc") == "0x636261"
+    assert format_value(b"\x00\x10\x00\x20") == "0x20001000"
+    # longer values read as text when they are printable UTF-8
+    assert format_value("2 €uro".encode()) == "'2 €uro' (8 bytes)"
+    assert format_value("Größe µm".encode()) == "'Größe µm' (11 bytes)"
+    assert format_value(b"canola\x00\x00") == "'canola' (8 bytes)"
+    assert format_value(b"\x01\x02\x03\x04\x05") == "0x0504030201"
+    assert format_value(b"\xe2\x82abcdefgh") == "[E2 82 61 62 63 64 65 66 67 68] (10 bytes)"
+
+
 def test_sdo_expedited_and_abort_by_hand() -> None:
     assert _texts([
         "(1.0) can0 605#4018100100000000", "(1.0) can0 585#4318100104000000",

@@ -53,8 +53,12 @@ def test_every_step_passes(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = demo(capsys)
     assert (code, err) == (0, "")
     assert set(summary_marks(out).values()) == {"\u2713"}
-    assert "10/10 steps passed" in out
+    assert "11/11 steps passed" in out
     for line in (
+        # the master's online status: its boot-up as node 0x3F, labelled, checked
+        "73F#00               node 63 boot-up: the master's online status",
+        "1. the master's online status (its boot-up, 0x73F)     73F#00: the master, node 63 "
+        "(0x3F), is online",
         "702#00               node 2 boot-up",
         "NMT preop all",
         # the manager: identity, concise DCF, heartbeat watch, network start
@@ -81,12 +85,12 @@ def test_every_step_passes(capsys: pytest.CaptureFixture[str]) -> None:
     ):
         assert line in out, line
     # the flow in its order
-    marks = [out.index(s) for s in ("node 4 boot-up", "NMT preop all", "0x1000:00",
+    marks = [out.index(s) for s in ("73F#00", "node 4 boot-up", "NMT preop all", "0x1000:00",
                                     "0x1017:00 = 0x0064", "manager: node 3 (drive) booted",
                                     "NMT start all", "manager: network started", "SYNC",
                                     "RPDO applied", "EMCY node 3", "HEARTBEAT LOST")]
     assert marks == sorted(marks)
-    assert "manager:" not in out[out.index("== 4."):out.index("== 10.")]  # no failure
+    assert "manager:" not in out[out.index("== 5."):out.index("== 11.")]  # no failure
 
 
 def test_manager_configures_in_the_cia301_order(capsys: pytest.CaptureFixture[str]) -> None:
@@ -104,7 +108,7 @@ def test_manager_configures_in_the_cia301_order(capsys: pytest.CaptureFixture[st
         "0x1600:02 = 0x60FF0020", "0x1600:00 = 0x02", "0x1400:02 = 0xFF",
         "0x1400:01 = 0x00000203",
     ]
-    assert "manager: node 3 (drive) booted" in out.split("== 4.")[0]
+    assert "manager: node 3 (drive) booted" in out.split("== 5.")[0]
 
 
 def test_network_description_comes_from_the_eds_files() -> None:
@@ -181,7 +185,7 @@ def test_manager_refuses_a_device_of_another_vendor(
     code, out, err = demo(capsys, "--fault", "drive-wrong-vendor")
     assert code == 1
     assert err.startswith("canola demo: step 'manager' failed: node 3 (drive) failed: D: ")
-    step3 = out[out.index("== 3."):out.index("== 4.")]
+    step3 = out[out.index("== 4."):out.index("== 5.")]
     for line in ("583#43181001AD0B0000 SDO upload 0x1018:01 = 0x00000BAD (node 3)",
                  "manager: node 3 (drive) failed: D: vendor-ID does not match "
                  "(0x1018:01 is 0x00000BAD)",
@@ -231,7 +235,7 @@ def test_bad_input_is_one_line(capsys: pytest.CaptureFixture[str], args: list[st
 def test_realtime_is_paced(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = demo(capsys, "--realtime", "--quiet")
     assert code == 0
-    assert "10/10 steps passed" in out
+    assert "11/11 steps passed" in out
 
 
 def test_eds_files_are_strict_cia306() -> None:
@@ -376,4 +380,4 @@ def test_runs_as_a_program_on_an_ascii_terminal() -> None:
                           text=True, timeout=60, check=False,
                           env={**os.environ, "PYTHONIOENCODING": "ascii"})
     assert done.returncode == 0, done.stderr
-    assert " ok 1. boot-ups seen by the master" in done.stdout  # no check marks in ASCII
+    assert " ok 2. boot-ups seen by the master" in done.stdout  # no check marks in ASCII

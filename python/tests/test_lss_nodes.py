@@ -8,11 +8,12 @@ from collections.abc import Callable
 import can
 import pytest
 from conftest import wait_until
+from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model
 
 from canola import Device, Error, Master
 from canola.core import SimBus
-from canola.lss import UNCONFIGURED, LssAddress, LssError
+from canola.lss import UNCONFIGURED, FastscanTimeLimitError, LssAddress, LssError
 from canola.network import Identity, Network, SlaveSpec
 
 SERIALS = (0x300, 0x100, 0x200)
@@ -147,3 +148,47 @@ def test_lss_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
         assert device.node_id == 30
         assert master.lss.inquire(address)["node_id"] == 30
         assert master.sdo(30).read(0x1018, 4, "u32") == 0x100
+
+
+# ---- slaves that answer every fastscan request in configuration (CANopenNode's)
+
+CHATTY = ((0x2E0, 0x17, 3, 0x100), (0x2E0, 0x17, 3, 0x200))
+
+
+def test_fastscan_against_slaves_that_answer_in_configuration() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    slaves = [ChattyLssSlave(bus, a, port_id=100 + i) for i, a in enumerate(CHATTY)]
+    master.lss.timeout_ms = 10
+    # the one found is switched back to waiting (left in configuration it would confirm
+    # every bit: the all-zero address, again and again); found again, it ends the list
+    began = bus.now_us
+    assert master.lss.fastscan(max_devices=3) == [LssAddress(*CHATTY[0])]
+    assert bus.now_us - began < 2 * 140 * 10_000 + 100_000  # two scans, not three
+    bus.run_for(10_000)
+    assert not any(s.configuration for s in slaves)
+    # each one given a node-ID makes way for the next
+    given = master.lss.assign([30, 31, 32])
+    assert given == {LssAddress(*CHATTY[0]): 30, LssAddress(*CHATTY[1]): 31}
+    assert [s.node_id for s in slaves] == [30, 31]
+    assert master.lss.fastscan() == []
+
+
+def test_fastscan_time_limit() -> None:
+    bus = SimBus(500_000)
+    master = Master(bus, node_id=1)
+    master.start()
+    _unconfigured(bus)
+    master.lss.timeout_ms = 10
+    began = bus.now_us
+    with pytest.raises(FastscanTimeLimitError) as exc:
+        master.lss.fastscan(time_limit=2.0)  # 134 steps of 10 ms per device: one fits
+    assert exc.value.found == [LssAddress(VENDOR, PRODUCT, REVISION, 0x100)]
+    assert "not done within 2 s (found so far: 00000CA0:00000302:00010000:00000100)" in str(
+        exc.value)
+    assert bus.now_us - began <= 2_100_000
+    with pytest.raises(Error, match="time_limit must be positive"):
+        master.lss.fastscan(time_limit=0)
+    with pytest.raises(Error, match="max_devices 0 is outside"):
+        master.lss.fastscan(max_devices=0)

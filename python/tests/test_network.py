@@ -169,3 +169,51 @@ DataType=0x000A
 AccessType=rw
 ParameterValue=0x01FF
 """
+
+
+INTEROP = Path(__file__).parent / "data" / "interop.eds"
+
+
+def _remapping_dcf(tmp_path: Path, node_id: int = 5) -> Path:
+    """A DCF of interop.eds that re-maps TPDO1 and RPDO1 (ParameterValues)."""
+    m = eds.parse(INTEROP)
+    m.device_commissioning = {"NodeID": str(node_id), "NodeName": "remapped"}
+    values = {(0x1017, 0): "100",
+              (0x1800, 1): "$NODEID+0x180", (0x1800, 2): "1", (0x1800, 3): "10",
+              (0x1A00, 0): "1", (0x1A00, 1): "0x20070020",
+              (0x1400, 1): "$NODEID+0x200", (0x1600, 0): "1", (0x1600, 1): "0x20010008",
+              (0x2005, 0): "9"}
+    for (index, sub), text in values.items():
+        m.objects[index].subs[sub].parameter_value = text
+    path = tmp_path / "remapped.dcf"
+    path.write_text(eds.write(m, dcf=True), encoding="latin-1")
+    return path
+
+
+def test_concise_dcf_puts_pdos_in_the_remapping_order(tmp_path: Path) -> None:
+    records = concise.from_dcf(eds.parse(_remapping_dcf(tmp_path)))
+    u32 = lambda v: struct.pack("<I", v)  # noqa: E731
+    assert records == [
+        (0x1017, 0, struct.pack("<H", 100)),
+        # RPDO1: off, mapping count 0, entries, count, the rest, on
+        (0x1400, 1, u32(0x80000205)), (0x1600, 0, b"\x00"), (0x1600, 1, u32(0x20010008)),
+        (0x1600, 0, b"\x01"), (0x1400, 1, u32(0x205)),
+        # TPDO1 likewise, with its transmission type and inhibit time
+        (0x1800, 1, u32(0x80000185)), (0x1A00, 0, b"\x00"), (0x1A00, 1, u32(0x20070020)),
+        (0x1A00, 0, b"\x01"), (0x1800, 2, b"\x01"), (0x1800, 3, b"\x0a\x00"),
+        (0x1800, 1, u32(0x185)),
+        (0x2005, 0, b"\x09"),
+    ]
+
+
+def test_pdo_order_without_cob_id_or_count() -> None:
+    mapping = [(0x1A01, 2, b"\x10\x00\x06\x20"), (0x1A01, 1, b"\x08\x00\x05\x20")]
+    # the COB-ID from cob_ids (a DCF's DefaultValue), the count from the entries
+    assert concise.pdo_order(mapping, {0x1801: struct.pack("<I", 0x286)}) == [
+        (0x1801, 1, struct.pack("<I", 0x80000286)), (0x1A01, 0, b"\x00"),
+        (0x1A01, 1, b"\x08\x00\x05\x20"), (0x1A01, 2, b"\x10\x00\x06\x20"),
+        (0x1A01, 0, b"\x02"), (0x1801, 1, struct.pack("<I", 0x286))]
+    # no COB-ID known: the mapping alone; a COB-ID given as off stays off
+    assert concise.pdo_order(mapping)[0] == (0x1A01, 0, b"\x00")
+    off = struct.pack("<I", 0x80000190)
+    assert concise.pdo_order([(0x1802, 1, off)]) == [(0x1802, 1, off), (0x1802, 1, off)]

@@ -16,6 +16,7 @@ from canola.values import TimeOfDay
 
 DATA = Path(__file__).parent / "data"
 INTEROP = DATA / "interop.eds"
+SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 
 
 @pytest.fixture
@@ -311,3 +312,58 @@ def test_deterministic() -> None:
         return bus.trace
 
     assert run() == run()
+
+
+def test_values_larger_than_the_sdo_buffer_into_ram_entries() -> None:
+    """A DOMAIN (and a string) in RAM takes SDO downloads up to its own size, by segmented
+    and by block transfer: the server's buffer (4 KiB here) frames the transfer only."""
+    bus = SimBus()
+    master = Master(bus, node_id=1)
+    device = Device(SAMPLE, 2, bus, domain_size=65536, string_size=10_000)
+    master.start()
+    device.start()
+    bus.run_for(10_000)
+    data = bytes(range(256)) * 20  # 5,120 bytes
+    master.sdo(2).download(0x2200, 0, data[:5000])
+    assert device.od.read(0x2200, 0) == data[:5000]
+    big = data * 12 + data[:4096]  # 65,536 bytes: the whole room
+    master.sdo(2).download(0x2200, 0, big, block=True)
+    assert device.od.read(0x2200, 0) == big
+    assert master.sdo(2).upload(0x2200, 0, block=True, max_size=70_000) == big
+    with pytest.raises(SdoAbort) as exc:
+        master.sdo(2).download(0x2200, 0, big + b"!")
+    assert exc.value.code == 0x06070012  # longer than the entry: its own abort code
+    text = "canola " * 1400  # 9,800 characters
+    master.sdo(2).write(0x2013, 0, "vs", text)
+    assert master.sdo(2).read(0x2013, 0, "vs", max_size=20_000) == text
+
+
+def test_visible_string_in_utf8(net: tuple[SimBus, Master, Device]) -> None:
+    _, master, device = net
+    master.sdo(5).write(0x2009, 0, "vs", "2 € / µm")
+    assert device.od.read(0x2009, 0).rstrip(b"\0") == "2 € / µm".encode()
+    assert device.od[0x2009, 0] == "2 € / µm"
+    assert master.sdo(5).read(0x2009, 0, "vs") == "2 € / µm"
+
+
+def test_master_announces_itself_unless_told_not_to() -> None:
+    bus = SimBus()
+    member = Master(bus, node_id=0x3F)
+    tool = Master(bus, node_id=0x7F, announce=False)
+    device = Device(INTEROP, 5, bus)
+    for node in (member, tool, device):
+        node.start()
+    for master in (member, tool):
+        master.od[0x1017, 0] = 50  # a heartbeat every 50 ms
+    bus.run_for(200_000)
+    tool.send(0x73F, rtr=True)  # node guarding of the tool's node: no answer either
+    member.send(0x77F, rtr=True)
+    bus.run_for(100_000)
+    frames = _frames(bus)
+    assert frames[0] == "73F#00" and frames.count("73F#7F") >= 3  # boot-up, heartbeats
+    assert [f for f in frames if f.startswith("77F#")] == ["77F#R"]  # the request only
+    assert tool.sdo(5).read(0x1018, 1, "u32") == 0xCA0  # it works all the same
+    tool.nmt(0, "reset-communication")  # its own reset (from the member) stays quiet too
+    member.nmt(0x7F, "reset-communication")
+    bus.run_for(10_000)
+    assert not any(f.startswith("77F#") and f != "77F#R" for f in _frames(bus))

@@ -53,7 +53,7 @@ def test_every_cia309_name_and_code() -> None:
     ("u8", 256, "outside UNSIGNED8"), ("i8", -129, "outside INTEGER8"),
     ("u16", 1.0, "takes an int"), ("u16", True, "takes an int"), ("b", 2, "BOOLEAN"),
     ("r32", 1e39, "does not fit REAL32"), ("vs", b"x", "takes a str"),
-    ("vs", "€", "cannot hold"), ("os", "x", "takes bytes"), ("t", (1, 2, 3), "TimeOfDay"),
+    ("vs", "\ud800", "cannot hold"), ("os", "x", "takes bytes"), ("t", (1, 2, 3), "TimeOfDay"),
     ("t", TimeOfDay(2**28, 0), "ms must be"),
 ])
 def test_encode_errors(name: str, value: object, message: str) -> None:
@@ -83,3 +83,10 @@ def test_text_forms() -> None:
     assert from_text("os", "01 ff") == b"\x01\xff"
     assert math.isnan(float(from_text("r64", "nan")))  # type: ignore[arg-type]
     assert decode("vs", b"ab\0cd") == "ab"  # a terminator ends a visible string
+
+
+def test_visible_string_utf8() -> None:
+    assert encode("vs", "2 €") == b"2 \xe2\x82\xac"
+    assert decode("vs", b"2 \xe2\x82\xac\x00\x00") == "2 €"
+    assert decode("vs", b"caf\xe9") == "café"  # not UTF-8: a character per byte
+    assert decode("vs", encode("vs", "Größe")) == "Größe"

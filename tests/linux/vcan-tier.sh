@@ -68,14 +68,24 @@ stop_by_sigterm() {
     wait "$pid" 2>/dev/null || rc=$?
     ((rc == 0)) || stop_why="exit $rc after SIGTERM"
 }
+# start_candump LOG: candump on vcan0 into LOG, returning once it is listening (a marker
+# frame it logged), so a boot-up sent right after is not missed on a starved machine.
+start_candump() {
+    candump -L vcan0 >"$1" 2>&1 &
+    pids+=($!)
+    local end=$((SECONDS + 30))
+    until grep -q " 7FF#CA" "$1" 2>/dev/null; do
+        ((SECONDS >= end)) && return 1
+        cansend vcan0 7FF#CA
+        sleep 0.2
+    done
+}
 node_part() {
     if ! command -v candump >/dev/null || ! command -v cansend >/dev/null; then
         summary "canola-node on vcan0" FAIL "can-utils (candump, cansend) not installed"
         return
     fi
-    candump -L vcan0 >"$tmp/candump.log" 2>&1 &
-    pids+=($!)
-    sleep 0.3
+    start_candump "$tmp/candump.log" || { summary "canola-node on vcan0" FAIL "candump did not start"; return; }
     "$build/canola-node" --iface vcan0 --node-id 5 --heartbeat 100 2>"$tmp/node.err" &
     local node=$!
     pids+=("$node")
@@ -107,15 +117,15 @@ daemon_part() {
         summary "canola device on vcan0" "NOT RUN" "no build-py/venv: make py-env"
         return
     fi
-    candump -L vcan0 >"$tmp/candump-dev.log" 2>&1 &
-    pids+=($!)
-    sleep 0.3
+    start_candump "$tmp/candump-dev.log" || { summary "canola device on vcan0" FAIL "candump did not start"; return; }
     "$canola" device --eds "$root/python/src/canola/data/demo/sensor.eds" --node-id 5 \
         --iface vcan0 >"$tmp/device.out" 2>&1 &
     local dev=$!
     pids+=("$dev")
     local why="" log=$tmp/candump-dev.log
-    wait_for "$log" " 705#00" 60 || why="no boot-up 705#00 in candump"
+    # Python's start-up in an emulated VM on a busy host took more than a minute: the
+    # bound is for a process that never boots, not for a slow one.
+    wait_for "$log" " 705#00" 300 || why="no boot-up 705#00 in candump"
     # SDO expedited download 0x1017:00 = 100 ms from cansend, then heartbeats
     [[ -z $why ]] && { cansend vcan0 605#2B17100064000000 || why="cansend failed"; }
     [[ -z $why ]] && { wait_for "$log" " 585#6017100000000000" 10 || why="no SDO download response"; }

@@ -45,7 +45,7 @@ _CONFIG = [
     ("CO_TPDO_MAX", "64"),
     ("CO_TX_QUEUE_LEN", "64"),
     ("CO_EMCY_QUEUE_LEN", "16"),
-    ("CO_SDO_BUF_SIZE", "4096"),  # values up to 4 KiB downloaded into RAM entries
+    ("CO_SDO_BUF_SIZE", "4096"),  # frames a transfer; RAM entries take up to their size
 ]
 
 CDEF = """
@@ -164,6 +164,7 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, co_od_entry_t *entries, ui
 void canola_py_dev_free(canola_py_dev_t *dev);
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
 void canola_py_dev_touch(canola_py_dev_t *dev);
+void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
 co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                               uint32_t cap, uint32_t *len, uint8_t *type);
 co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub,
@@ -273,6 +274,8 @@ typedef struct canola_py_dev {
     co_file_storage_t fs;
     co_od_hooks_t hooks;
     void *user;
+    bool sim;   /* on the simulated bus, else python-can (canola_py_tx) */
+    bool quiet; /* a tool, not a network member: no boot-up, heartbeat or guarding answer */
     /* frames this node sent on the simulated bus and its raw port has not seen come back:
      * the raw port skips them (python-can does not hand a bus its own frames either) */
     co_frame_t own[64];
@@ -291,6 +294,18 @@ static co_err_t canola_py_sim_tx(void *ctx, const co_frame_t *frame)
         d->own[(d->own_head + d->own_count++) % 64] = *frame;
     }
     return err;
+}
+
+/* Every frame the node sends: a quiet node's error control frames (0x700 + its node-ID:
+ * boot-up, heartbeat, guarding answers) stay off the bus. */
+static co_err_t canola_py_dev_tx(void *ctx, const co_frame_t *frame)
+{
+    canola_py_dev_t *d = ctx;
+    if (d->quiet && !(frame->flags & CO_FRAME_EXT) &&
+        frame->id == 0x700u + co_node_id(&d->node)) {
+        return CO_OK;
+    }
+    return d->sim ? canola_py_sim_tx(d, frame) : canola_py_tx(d->user, frame);
 }
 
 /* The node's routes changed: the bus's delivery index follows (see canola/sim.h). */
@@ -366,13 +381,11 @@ static canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, co_od_entry_t *entr
         if (*err != CO_OK) {
             return d; /* attached ports stay with the bus: the caller keeps d with it */
         }
-        cfg.driver.tx = canola_py_sim_tx;
+        d->sim = true;
         cfg.driver.on_routes_changed = canola_py_sim_routes_changed;
-        cfg.driver.ctx = d;
-    } else {
-        cfg.driver.tx = canola_py_tx;
-        cfg.driver.ctx = user;
     }
+    cfg.driver.tx = canola_py_dev_tx;
+    cfg.driver.ctx = d;
     *err = co_node_init(&d->node, &cfg);
     if (*err != CO_OK) {
         d->port.bus_off = true;
@@ -391,6 +404,8 @@ static co_node_t *canola_py_dev_node(canola_py_dev_t *dev) { return &dev->node; 
 /* The application changed the node between two runs of the simulated bus: poll it at the
  * next instant the bus runs (its deadline may have moved). */
 static void canola_py_dev_touch(canola_py_dev_t *dev) { dev->port.node_due_us = 0; }
+
+static void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet) { dev->quiet = quiet; }
 
 /* Application access: no access rights; writes take the node's path (limits, service
  * checks, event-driven TPDOs mapping the entry). */
@@ -435,8 +450,8 @@ CDEF += """
 typedef struct co_lss_address { uint32_t vendor; uint32_t product; uint32_t revision;
                                 uint32_t serial; } co_lss_address_t;
 typedef struct co_lss_result { uint8_t cs; uint8_t status; uint8_t error; uint8_t spec_error;
-                               uint32_t value; uint16_t answers; co_lss_address_t address;
-                               ...; } co_lss_result_t;
+                               uint32_t value; uint16_t answers; bool keeps_answering;
+                               co_lss_address_t address; ...; } co_lss_result_t;
 typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; ...; }
     co_lss_fastscan_t;
 typedef void (*co_lss_done_fn)(void *ctx, const co_lss_result_t *result);

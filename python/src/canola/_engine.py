@@ -78,7 +78,8 @@ class Engine:
     its ``_on_*`` methods (called under the lock; they queue work with :meth:`later`)."""
 
     def __init__(self, bus: Bus, od: Od, node_id: int, owner: Any, *, sdo_timeout_ms: int,
-                 store_dir: str | None, raw_frames: bool, name: str) -> None:
+                 store_dir: str | None, raw_frames: bool, name: str,
+                 quiet: bool = False) -> None:
         if not isinstance(bus, SimBus | can.BusABC):
             raise Error(f"bus must be a canola.core.SimBus or a python-can BusABC, not "
                         f"{type(bus).__name__}")
@@ -115,6 +116,7 @@ class Engine:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
             _check(int(err[0]), "co_node_init")
         self.node = lib.canola_py_dev_node(raw)
+        lib.canola_py_dev_set_quiet(raw, quiet)  # before the start: its boot-up stays off
         self._timers: list[_Timer] = []
         self._t0 = time.monotonic_ns()
         self._thread: threading.Thread | None = None

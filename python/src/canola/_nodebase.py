@@ -100,7 +100,8 @@ class NodeBase:
     _kind = "node"
 
     def __init__(self, bus: Bus, od: Od, node_id: int, *, sdo_timeout_ms: int,
-                 store_dir: str | os.PathLike[str] | None, raw_frames: bool) -> None:
+                 store_dir: str | os.PathLike[str] | None, raw_frames: bool,
+                 quiet: bool = False) -> None:
         if not 1 <= sdo_timeout_ms <= 0xFFFF:
             raise Error(f"sdo_timeout_ms {sdo_timeout_ms} is outside 1..65535")
         self.sdo_timeout_ms = sdo_timeout_ms
@@ -110,7 +111,7 @@ class NodeBase:
         self._types = {(i.index, i.sub): (i.type, i.size) for i in od.infos}
         self._engine = Engine(bus, od, node_id, self, sdo_timeout_ms=sdo_timeout_ms,
                               store_dir=store, raw_frames=raw_frames,
-                              name=f"canola-{self._kind}-{node_id}")
+                              name=f"canola-{self._kind}-{node_id}", quiet=quiet)
         self.node_id = node_id
         self.od = LocalOd(self)
         self._state_cbs: list[Callable[[str], None]] = []

@@ -4,7 +4,9 @@ slave.
 Layout: u32 number of records, then per record u16 index, u8 sub-index, u32 size and the
 value's wire bytes, all little-endian. :func:`from_dcf` takes the entries of a DCF that
 carry a ``ParameterValue`` and that the network may write (not ``ro``/``const``), in
-index order.
+index order, except PDOs: :func:`pdo_order` puts each PDO's entries in the order of the
+CiA 301 re-mapping procedure, which devices enforce (CANopenNode's refuse a mapping
+while the PDO is valid, and a valid PDO without mapping).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from canola import eds, values
 from canola.datatypes import DATA_TYPES, INTEGER_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
-__all__ = ["Record", "build", "from_dcf", "parse"]
+__all__ = ["Record", "build", "from_dcf", "parse", "pdo_order"]
 
 #: One entry of a concise DCF: (index, sub-index, wire bytes).
 Record = tuple[int, int, bytes]
@@ -82,9 +84,61 @@ def _wire(var: eds.Variable, node_id: int | None) -> bytes:
     return values.encode(code, value)
 
 
+def _pdo_of(index: int) -> tuple[int, bool] | None:
+    """(communication parameter index, is the mapping) of a PDO object, None for others."""
+    if 0x1400 <= index <= 0x15FF or 0x1800 <= index <= 0x19FF:
+        return index, False
+    if 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF:
+        return index - 0x200, True
+    return None
+
+
+def pdo_order(records: Iterable[Record], cob_ids: dict[int, bytes] | None = None
+              ) -> list[Record]:
+    """``records`` with each PDO's entries in the CiA 301 re-mapping order: its COB-ID
+    with bit 31 set (not valid), the mapping count 0, the mapping entries, the count, the
+    other communication parameters, and the COB-ID as given last. The PDOs (RPDOs, then
+    TPDOs, by number) take the place of the first PDO entry; other records keep theirs.
+    ``cob_ids`` gives the COB-ID (wire bytes) of PDOs whose records lack one (a DCF's
+    DefaultValue): without one the PDO is not switched off around its changes."""
+    pdos: dict[int, tuple[dict[int, bytes], dict[int, bytes]]] = {}
+    out: list[Record] = []
+    placed = False
+    for index, sub, data in records:
+        pdo = _pdo_of(index)
+        if pdo is None:
+            out.append((index, sub, data))
+            continue
+        if not placed:
+            out.append((-1, 0, b""))  # where the PDOs go
+            placed = True
+        comm, is_mapping = pdo
+        pdos.setdefault(comm, ({}, {}))[is_mapping][sub] = data
+    ordered: list[Record] = []
+    for comm in sorted(pdos):
+        params, mapping = pdos[comm]
+        cob = params.pop(1, None)
+        first = cob if cob is not None else (cob_ids or {}).get(comm)
+        if first is not None:
+            off = int.from_bytes(first[:4].ljust(4, b"\0"), "little") | 0x80000000
+            ordered.append((comm, 1, off.to_bytes(4, "little")))
+        if mapping:
+            count = mapping.pop(0, None)
+            ordered.append((comm + 0x200, 0, b"\x00"))
+            ordered += [(comm + 0x200, sub, mapping[sub]) for sub in sorted(mapping)]
+            if count is None:
+                count = bytes([max(mapping, default=0)])
+            ordered.append((comm + 0x200, 0, count))
+        ordered += [(comm, sub, params[sub]) for sub in sorted(params)]
+        if first is not None:
+            ordered.append((comm, 1, first))
+    return [r for record in out for r in (ordered if record[0] < 0 else [record])]
+
+
 def from_dcf(model: eds.ObjectDictionary) -> list[Record]:
-    """The records of a parsed DCF: every writable entry with a ParameterValue. Raises
-    :class:`~canola.errors.EdsError` (file, section) for a value that cannot be encoded."""
+    """The records of a parsed DCF: every writable entry with a ParameterValue, PDOs in
+    the re-mapping order (:func:`pdo_order`). Raises :class:`~canola.errors.EdsError`
+    (file, section) for a value that cannot be encoded."""
     records: list[Record] = []
     for index in sorted(model.objects):
         obj = model.objects[index]
@@ -101,4 +155,22 @@ def from_dcf(model: eds.ObjectDictionary) -> list[Record]:
                                file=model.file, line=var.line, section=section,
                                key="ParameterValue") from None
             records.append((index, sub, data))
-    return records
+    return pdo_order(records, _default_cob_ids(model, records))
+
+
+def _default_cob_ids(model: eds.ObjectDictionary, records: list[Record]) -> dict[int, bytes]:
+    """The power-on COB-IDs (DefaultValue of sub1) of the PDOs the records change."""
+    cob_ids: dict[int, bytes] = {}
+    for index, _, _ in records:
+        pdo = _pdo_of(index)
+        obj = model.objects.get(pdo[0]) if pdo else None
+        var = obj.subs.get(1) if obj is not None else None
+        if pdo is None or var is None or var.default_value is None:
+            continue
+        try:
+            value = parse_value(var.default_value, 0x07, model.node_id)
+        except NumberError:
+            continue
+        if isinstance(value, int):
+            cob_ids[pdo[0]] = (value & 0xFFFFFFFF).to_bytes(4, "little")
+    return cob_ids

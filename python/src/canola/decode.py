@@ -51,20 +51,27 @@ def emcy_text(code: int) -> str:
 
 
 def format_value(data: bytes) -> str:
-    """A value as dump prints it: 1..8 bytes as a little-endian hex number, printable text
-    quoted, other data as hex bytes (long data shortened)."""
-    if 1 <= len(data) <= 8 and not _looks_like_text(data):
+    """A value of unknown type as dump and an untyped read print it: up to 4 bytes (what
+    an expedited transfer carries, numbers in practice) a little-endian hex number, 5..8
+    bytes too unless they read as text, printable (UTF-8) text quoted, other data as hex
+    bytes (long data shortened)."""
+    text = _as_text(data) if len(data) > 4 else None
+    if 1 <= len(data) <= 8 and text is None:
         return f"0x{int.from_bytes(data, 'little'):0{2 * len(data)}X}"
-    if _looks_like_text(data):
-        text = data.decode("ascii")
+    if text is not None:
         return repr(text if len(text) <= 80 else text[:80] + "...") + f" ({len(data)} bytes)"
     shown = data[:32].hex(" ").upper()
     return f"[{shown}{' ...' if len(data) > 32 else ''}] ({len(data)} bytes)"
 
 
-def _looks_like_text(data: bytes) -> bool:
-    body = data.rstrip(b"\0")
-    return len(body) >= 3 and all(0x20 <= b < 0x7F for b in body)
+def _as_text(data: bytes) -> str | None:
+    """``data`` as text when it is printable UTF-8 of 3 characters or more (trailing NULs
+    aside), else None."""
+    try:
+        text = data.rstrip(b"\0").decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    return text if len(text) >= 3 and text.isprintable() else None
 
 
 @dataclass(frozen=True)

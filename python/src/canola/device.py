@@ -33,7 +33,9 @@ class Device(NodeBase):
     ``store_dir``: a folder where 0x1010 "save" stores parameters (files comm.params and
     app.params, written atomically); they are loaded at every reset. ``string_size`` is the
     room of each VISIBLE/OCTET/UNICODE_STRING entry (at least its default's length) and
-    ``domain_size`` that of each DOMAIN. ``sdo_timeout_ms``: the SDO server's time-out.
+    ``domain_size`` that of each DOMAIN: the largest value an SDO download (expedited,
+    segmented or block) writes into it, whatever the SDO server's buffer (4 KiB here).
+    ``sdo_timeout_ms``: the SDO server's time-out.
     Call :meth:`start` (or use ``with``) to power it on.
     """
 

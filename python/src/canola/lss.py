@@ -9,9 +9,17 @@ node-ID and give them one.
 A :class:`canola.Device` created with node-ID 0xFF (:data:`UNCONFIGURED`) has none: it
 answers LSS only and boots as soon as a master gives it one.
 
-Fastscan finds one device at a time and costs 133 LSS time-outs per device (``timeout_ms``,
+Fastscan finds one device at a time and costs 134 LSS time-outs per device (``timeout_ms``,
 default 100 ms): about 13 s each in real time at the default; on a SimBus that is
 virtual time. Every request raises :class:`LssError` when it fails (no answer, refused).
+
+A device found stays in LSS configuration, where CiA 305 has it ignore fastscan, so the
+next scan finds the next device. Some slaves (CANopenNode's) answer every fastscan
+request in configuration, which would confirm every bit of the next scan: the scan tells
+(``keeps_answering``), :meth:`Lss.fastscan` switches them back to waiting, and since the
+next scan then finds the same device again, a device found twice ends the list. Such
+devices are found one at a time: give each a node-ID (:meth:`Lss.assign`) to reach the
+next.
 """
 
 from __future__ import annotations
@@ -30,7 +38,7 @@ from canola.errors import Error
 if TYPE_CHECKING:
     from canola.master import Master
 
-__all__ = ["UNCONFIGURED", "Lss", "LssAddress", "LssError"]
+__all__ = ["UNCONFIGURED", "FastscanTimeLimitError", "Lss", "LssAddress", "LssError"]
 
 #: The node-ID of a device that has none yet (LSS gives it one).
 UNCONFIGURED = 0xFF
@@ -85,9 +93,22 @@ class LssError(Error):
         detail = {
             int(lib.CO_LSS_TIMEOUT): "no answer",
             int(lib.CO_LSS_REFUSED): f"refused with error {error} (specific {spec_error})",
-            int(lib.CO_LSS_SCAN_FAILED): "the answers stopped half-way (devices left the bus?)",
+            int(lib.CO_LSS_SCAN_FAILED): "the answers stopped half-way (devices left the bus, "
+                                         "or answer later than the LSS time-out?)",
         }.get(status, self.status)
         super().__init__(f"LSS {what}: {detail}")
+
+
+class FastscanTimeLimitError(Error):
+    """:meth:`Lss.fastscan` reached its ``time_limit``; ``found``: the devices found so
+    far."""
+
+    def __init__(self, time_limit: float, found: list[LssAddress]) -> None:
+        self.time_limit = time_limit
+        self.found = list(found)
+        listed = ", ".join(map(str, found)) or "none"
+        super().__init__(f"LSS fastscan: not done within {time_limit:g} s (found so far: "
+                         f"{listed})")
 
 
 class _Call:
@@ -101,6 +122,7 @@ class _Call:
         self.spec_error = 0
         self.value = 0
         self.answers = 0
+        self.keeps_answering = False
         self.address = LssAddress(0, 0, 0, 0)
 
 
@@ -112,6 +134,7 @@ def canola_py_lss_done(ctx: Any, result: Any) -> None:
     call.spec_error = int(result.spec_error)
     call.value = int(result.value)
     call.answers = int(result.answers)
+    call.keeps_answering = bool(result.keeps_answering)
     a = result.address
     call.address = LssAddress(int(a.vendor), int(a.product), int(a.revision), int(a.serial))
     call.done = True
@@ -151,8 +174,10 @@ class Lss:
 
     # ---- machinery
 
-    def _run(self, what: str, start: Callable[[Any, Any], int], steps: int = 1) -> _Call:
-        """Start one request and wait for its completion (``steps`` time-outs at most)."""
+    def _run(self, what: str, start: Callable[[Any, Any], int], steps: int = 1,
+             limit: float | None = None) -> _Call:
+        """Start one request and wait for its completion (``steps`` time-outs at most, or
+        ``limit`` seconds: then it is cancelled)."""
         self._waiter.check()
         with self._lock:
             call = _Call(self._waiter)
@@ -160,7 +185,8 @@ class Lss:
             with self._engine.locked() as node:
                 err = int(start(node, handle))
             _check(err, f"LSS {what}")
-            limit = steps * self._timeout_ms / 1000 * 1.5 + 2.0
+            if limit is None:
+                limit = steps * self._timeout_ms / 1000 * 1.5 + 2.0
             if not self._waiter.wait(lambda: call.done, limit):
                 with self._engine.locked() as node:
                     lib.co_lss_master_cancel(node)  # completes it (cancelled)
@@ -241,23 +267,51 @@ class Lss:
     def fastscan_one(self) -> LssAddress | None:
         """Find one device without node-ID: its address (it is now in configuration), or
         None when none answered."""
+        call = self._scan(None)
+        return None if call is None else call.address
+
+    def _scan(self, limit: float | None) -> _Call | None:
+        """One fastscan (cancelled after ``limit`` seconds): the call, None when nobody
+        answered; LssError when it failed or was cancelled."""
         call = self._run("fastscan", lambda node, h: lib.co_lss_fastscan(
-            node, ffi.NULL, lib.canola_py_lss_done, h), steps=140)
+            node, ffi.NULL, lib.canola_py_lss_done, h), steps=140, limit=limit)
         if call.status == lib.CO_LSS_TIMEOUT:
             return None
         self._expect_ok("fastscan", call)
-        return call.address
+        return call
 
-    def fastscan(self, max_devices: int = 127) -> list[LssAddress]:
+    def fastscan(self, max_devices: int = 127, *,
+                 time_limit: float | None = None) -> list[LssAddress]:
         """The addresses of every device without node-ID (lowest first, at most
-        ``max_devices``); they are all back in waiting afterwards."""
+        ``max_devices``); they are all back in waiting afterwards. A device found twice
+        ends the list (a slave that answers fastscan in configuration is switched back to
+        waiting, see the module doc). ``time_limit`` (seconds; virtual time on a SimBus)
+        bounds the whole scan: :class:`FastscanTimeLimitError` when it is reached, with the
+        devices found so far."""
+        if not 1 <= max_devices <= 127:
+            raise Error(f"max_devices {max_devices!r} is outside 1..127")
+        if time_limit is not None and not time_limit > 0:
+            raise Error(f"time_limit must be positive, got {time_limit}")
+        began = self._engine.now_us()
         found: list[LssAddress] = []
         try:
             while len(found) < max_devices:
-                address = self.fastscan_one()
-                if address is None:
-                    break
-                found.append(address)  # in configuration: the next scan skips it
+                left = None
+                if time_limit is not None:
+                    left = time_limit - (self._engine.now_us() - began) / 1e6
+                    if left <= 0:
+                        raise FastscanTimeLimitError(time_limit, found)
+                try:
+                    call = self._scan(left)
+                except LssError as exc:
+                    if exc.status == "cancelled" and time_limit is not None:
+                        raise FastscanTimeLimitError(time_limit, found) from None
+                    raise
+                if call is None or call.address in found:
+                    break  # nobody left, or a device put back in waiting found again
+                found.append(call.address)
+                if call.keeps_answering:  # it would confirm every bit of the next scan
+                    self.switch_global("waiting")
         finally:
             if found:
                 self.switch_global("waiting")

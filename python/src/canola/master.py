@@ -21,6 +21,14 @@ package): 16 SDO client channels (0x1280..0x128F), a heartbeat consumer for ever
 every node-ID (0x1028), and the SYNC/TIME producer objects. An EDS rather than entries
 built in code, so the dictionary is inspectable with the same tools as any device's
 (``canola odgen``, a CANopen tool's EDS view) and a user can pass an edited copy.
+
+Like any node, the master takes NMT commands from the bus: a reset communication (or
+reset node) to its node-ID or to all brings its communication objects back to their
+power-on values, the SDO client channels and the heartbeat watches among them. It serves
+every node again afterwards (the channel of a node is looked up in the core, never
+remembered blindly); a running CANopen manager boots the network again (CiA 302-2);
+:meth:`Master.monitor` watches and SYNC/TIME production started before are the
+application's to set again.
 """
 
 from __future__ import annotations
@@ -293,6 +301,22 @@ class SdoClient:
             self._busy.release()
 
 
+def _server(node: Any, channel: int) -> int:
+    """Whom client channel ``channel`` of the C node talks to now, by its COB-IDs in
+    0x1280 + channel: node n (0x600 + n, 0x580 + n), 0 for nobody (not valid), -1 for
+    COB-IDs of someone else's choosing."""
+    value = ffi.new("uint64_t *")
+    cobs = []
+    for sub in (1, 2):
+        if lib.co_node_get_uint(node, 0x1280 + channel, sub, value) != lib.CO_OK:
+            return 0
+        cobs.append(int(value[0]))
+    if any(cob >> 31 for cob in cobs):
+        return 0
+    n = cobs[0] - 0x600
+    return n if 1 <= n <= 127 and cobs[1] == 0x580 + n else -1
+
+
 def _check_address(index: int, sub: int) -> None:
     if not (isinstance(index, int) and 0 <= index <= 0xFFFF):
         raise Error(f"index {index!r} is outside 0x0000..0xFFFF")
@@ -305,19 +329,25 @@ class Master(NodeBase):
 
     ``eds``: another dictionary for the master (default :data:`MASTER_EDS`).
     ``sdo_timeout_ms``: how long an SDO transfer waits for each answer.
+    ``announce``: the master is a member of the network and says so, as every node does:
+    its boot-up (0x700 + node-ID) at start and after a reset, then its heartbeat at the
+    period of its 0x1017 (0, none, in :data:`MASTER_EDS`). A tool that only asks or
+    commands passes ``announce=False``: none of these frames (nor answers to node
+    guarding) go on the bus, so a CiA 302 manager sees no phantom node.
     Call :meth:`start` (or use ``with``).
     """
 
     _kind = "master"
 
     def __init__(self, bus: Bus, node_id: int = 127, *, sdo_timeout_ms: int = 1000,
-                 eds_file: str | os.PathLike[str] | eds.ObjectDictionary | None = None) -> None:
+                 eds_file: str | os.PathLike[str] | eds.ObjectDictionary | None = None,
+                 announce: bool = True) -> None:
         if not isinstance(node_id, int) or not 1 <= node_id <= 127:
             raise Error(f"node-ID {node_id!r} is outside 1..127")
         od = load_od(eds_file if eds_file is not None else MASTER_EDS, node_id,
                      GenerateOptions(min_string_size=64))
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms, store_dir=None,
-                         raw_frames=True)
+                         raw_frames=True, quiet=not announce)
         self._clients: dict[int, SdoClient] = {}
         self._channels: dict[int, int] = {}  # node -> client channel
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
@@ -365,12 +395,22 @@ class Master(NodeBase):
         check(err, f"{what} of node {node_id}")
 
     def _channel(self, node: Any, node_id: int) -> int:
-        """The client channel talking to ``node_id`` (under the lock)."""
+        """The client channel talking to ``node_id`` (under the lock). The table is a
+        memo of the core's channels, checked on every use: a reset communication of the
+        master (an NMT command from anyone) reloads 0x1280.. from their power-on values,
+        and an SDO client may write them."""
         channel = self._channels.get(node_id)
-        if channel is not None:
+        if channel is not None and _server(node, channel) == node_id:
             return channel
+        self._channels = {n: c for n, c in self._channels.items()
+                          if n == 0 or _server(node, c) == n}  # 0: the manager's channel
         used = set(self._channels.values())
-        free = [c for c in range(_CHANNELS) if c not in used]
+        servers = {c: _server(node, c) for c in range(_CHANNELS) if c not in used}
+        for c, server in servers.items():  # set up to it by someone else (0x1280 written)
+            if server == node_id:
+                self._channels[node_id] = c
+                return c
+        free = [c for c, server in servers.items() if server == 0]
         if not free:  # take the channel of a node that has no transfer open
             for other, c in list(self._channels.items()):
                 if not lib.co_sdo_client_busy(node, c):

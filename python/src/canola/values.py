@@ -39,6 +39,7 @@ __all__ = [
     "parse_type",
     "to_text",
     "type_name",
+    "visible_text",
 ]
 
 
@@ -127,7 +128,7 @@ def encode(data_type: str | int, value: Value) -> bytes:
         if not isinstance(value, str):
             raise ValueFormatError(f"VISIBLE_STRING takes a str, not {value!r}")
         try:
-            return value.encode("latin-1")
+            return value.encode("utf-8")
         except UnicodeEncodeError:
             raise ValueFormatError(f"{value!r} has characters a VISIBLE_STRING cannot hold") \
                 from None
@@ -149,6 +150,15 @@ def encode(data_type: str | int, value: Value) -> bytes:
     return ms.to_bytes(4, "little") + days.to_bytes(2, "little")
 
 
+def visible_text(data: bytes) -> str:
+    """A VISIBLE_STRING's text: UTF-8 where the bytes are UTF-8 (devices put it there,
+    beyond CiA 301's ASCII), else one character per byte (Latin-1)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
 def decode(data_type: str | int, data: bytes) -> Value:
     """The Python value of wire bytes ``data`` of ``data_type``. Numbers must have their
     exact size (a ValueFormatError says otherwise)."""
@@ -167,7 +177,7 @@ def decode(data_type: str | int, data: bytes) -> Value:
     if code == 0x11:
         return float(struct.unpack("<d", data)[0])
     if code == 0x09:
-        return data.split(b"\x00", 1)[0].decode("latin-1")
+        return visible_text(data.split(b"\x00", 1)[0])
     if code == 0x0B:
         if len(data) % 2:
             data = data[:-1]

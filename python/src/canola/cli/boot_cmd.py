@@ -30,10 +30,12 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         description="Check every slave's identity, download its configuration (the DCF's "
                     "ParameterValues), watch its heartbeat and start the network. NETWORK "
                     "is one YAML description, or DCF files (one mandatory slave each). Exit "
-                    "code 0 only when the network started.")
+                    "code 0 only when the network started. The master runs the network: it "
+                    "announces itself as node --master-id (boot-up, heartbeat if its 0x1017 "
+                    "says so).")
     p.add_argument("files", nargs="+", metavar="NETWORK.yaml|DCF")
     add_bus_options(p)
-    add_master_options(p)
+    add_master_options(p, announce=False)  # the network's master announces itself
     p.add_argument("--timeout", type=float, default=None, metavar="S",
                    help="give up after S seconds (default: enough for every slave's "
                         "time-outs)")
@@ -60,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     except NetworkError as exc:
         raise CliError(f"canola boot: error: {exc}", 2) from None
     limit = _limit(args, network)
-    with master_from_args(args) as master:
+    with master_from_args(args, announce=True) as master:
         manager = master.boot(network, wait=False)
         manager.wait(limit)
         settled = manager.settled()

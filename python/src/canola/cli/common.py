@@ -21,6 +21,7 @@ __all__ = [
     "CliError",
     "Parser",
     "UsageError",
+    "add_announce_option",
     "add_bus_options",
     "add_master_options",
     "bus_from_args",
@@ -119,24 +120,39 @@ def bus_from_args(args: argparse.Namespace) -> can.BusABC:
         raise CliError(str(exc)) from None
 
 
-def add_master_options(p: argparse.ArgumentParser) -> None:
-    """``--master-id`` and ``--sdo-timeout`` of the commands that run a canola.Master."""
+def add_master_options(p: argparse.ArgumentParser, *, announce: bool = True) -> None:
+    """``--master-id`` and ``--sdo-timeout`` of the commands that run a canola.Master, and
+    ``--announce`` for the tools among them (``announce``)."""
     p.add_argument("--master-id", type=node_id, default=127, metavar="N",
                    help="node-ID the master uses (default 127)")
     p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
                    help="SDO time-out (default 1000 ms)")
+    if announce:
+        add_announce_option(p)
+
+
+def add_announce_option(p: argparse.ArgumentParser) -> None:
+    """``--announce``: a tool's master takes part in the network (boot-up, heartbeat)."""
+    p.add_argument("--announce", action="store_true",
+                   help="take part in the network as node --master-id: send its boot-up "
+                        "(and heartbeat, if configured); by default the command is silent "
+                        "on the bus but for its requests")
 
 
 @contextlib.contextmanager
-def master_from_args(args: argparse.Namespace,
-                     sdo_timeout_ms: int | None = None) -> Iterator[Master]:
+def master_from_args(args: argparse.Namespace, sdo_timeout_ms: int | None = None, *,
+                     announce: bool | None = None) -> Iterator[Master]:
     """A started canola.Master (node-ID ``args.master_id``) on the bus of ``args``; stopped
     and the bus shut down after. The SDO time-out is ``sdo_timeout_ms``, by default
-    ``args.sdo_timeout`` (:func:`add_master_options`)."""
+    ``args.sdo_timeout`` (:func:`add_master_options`). It announces itself (boot-up,
+    heartbeat) when ``announce``, by default when ``args.announce``: a command that only
+    asks or commands is no member of the network."""
     bus = bus_from_args(args)
     try:
         timeout = args.sdo_timeout if sdo_timeout_ms is None else sdo_timeout_ms
-        master = Master(bus, args.master_id, sdo_timeout_ms=timeout)
+        if announce is None:
+            announce = bool(getattr(args, "announce", False))
+        master = Master(bus, args.master_id, sdo_timeout_ms=timeout, announce=announce)
         master.start()
         try:
             yield master

@@ -17,7 +17,7 @@ from canola.demo.trace import Trace
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p = subs.add_parser(
         "demo", help="a master and three devices: boot, configure, PDOs, EMCY, loss",
-        description="A master (node 1) and three devices (an I/O module, a drive, a sensor) "
+        description="A master (node 0x3F) and three devices (an I/O module, a drive, a sensor) "
                     "go through the life of a CANopen network: boot-ups, NMT "
                     "pre-operational, the CiA 302-2 manager checking each device's "
                     "identity, configuring its heartbeat and PDOs by SDO and starting it, "
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         trace = Trace(out, every_frame=args.every_frame)
         faults = FAULTS[args.fault] if args.fault else Faults()
         if out is not None:
-            print(f"canola demo: a master (node 1) and three devices on {net.description}",
+            print(f"canola demo: a master (node 0x3F) and three devices on {net.description}",
                   file=out)
             for spec in DEVICES:
                 print(f"  node {spec.node_id}  {spec.role:<10}  {spec.eds} ({spec.profile})",

@@ -15,6 +15,7 @@ from canola.cli.common import (
     Parser,
     add_bus_options,
     bus_from_args,
+    int_in_range,
     node_id,
     positive_ms,
 )
@@ -23,19 +24,35 @@ from canola.errors import Error
 
 log = logging.getLogger("canola.device")
 
+#: Largest --domain-size: every DOMAIN entry of the device gets this much RAM.
+MAX_DOMAIN = 64 * 1024 * 1024
+
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p = subs.add_parser(
         "device", help="run a device from an EDS/DCF",
         description="Run a canola device with the dictionary of an EDS/DCF on a bus until "
                     "SIGINT/SIGTERM; prints its NMT state changes. With --store, 0x1010 "
-                    "'save' writes the parameters to DIR and resets load them.")
+                    "'save' writes the parameters to DIR and resets load them. DOMAIN and "
+                    "string entries live in RAM of --domain-size/--string-size bytes: an SDO "
+                    "download of any protocol writes values up to that size (larger ones "
+                    "are refused with 0x06070012).")
     p.add_argument("--eds", required=True, metavar="FILE", help="EDS or DCF file")
     p.add_argument("--node-id", type=node_id, required=True, metavar="N", help="1..127")
     add_bus_options(p)
     p.add_argument("--store", metavar="DIR", help="parameter storage folder")
     p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
                    help="the SDO server's time-out (default 1000 ms; max 65535)")
+    p.add_argument("--domain-size", type=lambda t: int_in_range(t, 1, MAX_DOMAIN, "size",
+                                                                "bytes"),
+                   default=4096, metavar="BYTES",
+                   help="RAM of each DOMAIN entry, the largest value an SDO download "
+                        f"may write into it (default 4096; 1..{MAX_DOMAIN})")
+    p.add_argument("--string-size", type=lambda t: int_in_range(t, 1, 0xFFFF, "size",
+                                                                "bytes"),
+                   default=256, metavar="BYTES",
+                   help="RAM of each VISIBLE/OCTET/UNICODE_STRING entry, at least its "
+                        "default's length (default 256; 1..65535)")
     p.set_defaults(func=run)
 
 
@@ -58,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         try:
             device = Device(args.eds, args.node_id, bus, store_dir=args.store,
-                            sdo_timeout_ms=args.sdo_timeout)
+                            sdo_timeout_ms=args.sdo_timeout, domain_size=args.domain_size,
+                            string_size=args.string_size)
         except Error as exc:
             raise CliError(f"{args.eds}: {exc}") from None
 

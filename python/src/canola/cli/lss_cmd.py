@@ -8,9 +8,11 @@
 from __future__ import annotations
 
 import argparse
+import time
 from typing import TYPE_CHECKING
 
 from canola.cli.common import (
+    CliError,
     Parser,
     add_bus_options,
     add_master_options,
@@ -40,7 +42,7 @@ def _lss_timeout(text: str) -> int:
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p = subs.add_parser("lss", help="layer setting services: find devices, give node-IDs",
-                        description="LSS master (CiA 305). Fastscan costs 133 LSS time-outs "
+                        description="LSS master (CiA 305). Fastscan costs 134 LSS time-outs "
                                     "per device (about 13 s each at the default 100 ms).")
     lss_subs = p.add_subparsers(dest="lss_command", metavar="SUBCOMMAND", parser_class=Parser)
     lss_subs.required = True
@@ -55,8 +57,18 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     scan = lss_subs.add_parser("scan", help="list the devices without node-ID (fastscan)",
                                description="Find every device without node-ID by fastscan "
                                            "and print its address "
-                                           "VENDOR:PRODUCT:REVISION:SERIAL (hex).")
+                                           "VENDOR:PRODUCT:REVISION:SERIAL (hex), then how "
+                                           "long the scan took. Devices that answer fastscan "
+                                           "in LSS configuration (CANopenNode's) are found one "
+                                           "at a time: give the one found a node-ID (set-id) "
+                                           "to find the next.")
     common(scan)
+    scan.add_argument("--max-devices", type=lambda t: int_in_range(t, 1, 127, "count"),
+                      default=127, metavar="N", help="stop after N devices (default 127)")
+    scan.add_argument("--time-limit", type=lambda t: int_in_range(t, 1, 86400, "time", "s"),
+                      default=None, metavar="S",
+                      help="give up after S seconds (default: no limit; the scan ends by "
+                           "itself)")
     scan.set_defaults(func=run_scan)
 
     set_id = lss_subs.add_parser("set-id", help="give a device a node-ID",
@@ -80,15 +92,28 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
 
 
 def run_scan(args: argparse.Namespace) -> int:
+    from canola.lss import FastscanTimeLimitError, LssError  # noqa: PLC0415 -- on first use
+
+    began = time.monotonic()
     with master_from_args(args) as master:
         master.lss.timeout_ms = args.timeout
-        found = master.lss.fastscan()
+        try:
+            found = master.lss.fastscan(args.max_devices, time_limit=args.time_limit)
+        except FastscanTimeLimitError as exc:
+            raise CliError(f"canola lss scan: {exc}; allow more with --time-limit S (each "
+                           f"device takes 134 LSS time-outs of {args.timeout} ms, "
+                           f"--timeout MS)") from None
+        except LssError as exc:
+            raise CliError(f"canola lss scan: {exc}; devices that answer slower than the "
+                           f"LSS time-out ({args.timeout} ms) need a longer one: "
+                           "--timeout MS") from None
+    took = time.monotonic() - began
     if args.json:
         emit_json([{**a.as_dict(), "address": str(a)} for a in found])
     else:
         for address in found:
             print(address)
-        print(f"{len(found)} device(s) without node-ID")
+        print(f"{len(found)} device(s) without node-ID (fastscan took {took:.1f} s)")
     return 0
 
 

@@ -18,6 +18,7 @@ from canola import values
 from canola.cli.common import (
     CliError,
     Parser,
+    add_announce_option,
     add_bus_options,
     emit_json,
     master_from_args,
@@ -55,6 +56,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                         help="SDO time-out (default 1000 ms)")
         sp.add_argument("--master-id", type=node_id, default=127, metavar="N",
                         help="node-ID the client uses (default 127)")
+        add_announce_option(sp)
 
     r = sdo_subs.add_parser("read", help="read a value",
                             description="Read an object. Without TYPE the bytes are shown "

@@ -21,7 +21,7 @@ from importlib import resources
 from pathlib import Path
 
 from canola import eds
-from canola.concise import Record
+from canola.concise import Record, pdo_order
 from canola.device import Device
 from canola.network import Identity, identity_of
 
@@ -96,13 +96,10 @@ def _pdo(comm: int, node: int, mapping: tuple[Mapped, ...], transmission: int
     entries, the count, the transmission type, on."""
     mapping_index = comm + 0x200
     cob_id = (0x180 if comm >= 0x1800 else 0x200) + node
-    return [(comm, 1, (0x80000000 | cob_id).to_bytes(4, "little")),
-            (mapping_index, 0, b"\x00"),
-            *((mapping_index, i, m.entry.to_bytes(4, "little"))
-              for i, m in enumerate(mapping, 1)),
-            (mapping_index, 0, bytes([len(mapping)])),
-            (comm, 2, bytes([transmission])),
-            (comm, 1, cob_id.to_bytes(4, "little"))]
+    return pdo_order([(comm, 1, cob_id.to_bytes(4, "little")), (comm, 2, bytes([transmission])),
+                      (mapping_index, 0, bytes([len(mapping)])),
+                      *((mapping_index, i, m.entry.to_bytes(4, "little"))
+                        for i, m in enumerate(mapping, 1))])
 
 
 def configuration(spec: DeviceSpec, heartbeat_ms: int) -> list[Record]:

@@ -10,6 +10,7 @@ __all__ = ["STEPS", "Step", "failure_line", "summary_json", "summary_table"]
 
 #: The steps of the flow, in order: (key, title).
 STEPS: tuple[tuple[str, str], ...] = (
+    ("master-online", "the master's online status (its boot-up, 0x73F)"),
     ("boot-up", "boot-ups seen by the master"),
     ("pre-operational", "NMT enter pre-operational"),
     ("manager", "the CANopen manager boots the network (CiA 302-2)"),

@@ -1,26 +1,28 @@
 """The flow of the demo (seed 001, "Logic Summary"), step by step, each step checked.
 
-A master (node 1, :class:`canola.Master`) and the three devices of
+A master (node 0x3F = 63, :class:`canola.Master`) and the three devices of
 :mod:`canola.demo.devices` (:class:`canola.Device` each, with its application):
 
-1. the devices power on; the master sees their boot-ups (0x700 + node, data 00);
-2. the master sends NMT "enter pre-operational" to all;
-3. the CANopen manager (CiA 302-2, :meth:`canola.Master.boot`) boots the network from its
+1. the master powers on and broadcasts its online status: its boot-up on 0x73F
+   (0x700 + 0x3F), as the node that runs the network announces itself;
+2. the devices power on; the master sees their boot-ups (0x700 + node, data 00);
+3. the master sends NMT "enter pre-operational" to all;
+4. the CANopen manager (CiA 302-2, :meth:`canola.Master.boot`) boots the network from its
    description: for each device it reads 0x1000 and 0x1018 (the identity its EDS gives),
    downloads its concise DCF (0x1017 = 100 ms, then the first TPDO (synchronous) and
    RPDO with the CiA 301 procedure: PDO off, mapping count 0, entries, count,
    transmission type, PDO on), watches its heartbeat (time-out 250 ms); once every device
    booted it starts the network (0x1F80: NMT start all). The step passes on the
    manager's verdict: every node booted, the network started;
-4. the heartbeats: 0x1017 reads back 100 ms on each device, its heartbeats come every
+5. the heartbeats: 0x1017 reads back 100 ms on each device, its heartbeats come every
    100 ms, the master watches them;
-5. the PDO mappings read back from each device;
-6. every heartbeat says OPERATIONAL after the manager's NMT start;
-7. SYNC every 10 ms: every device answers each SYNC with its TPDO;
-8. the master sends RPDOs (drive: controlword, target velocity; I/O module: outputs): the
+6. the PDO mappings read back from each device;
+7. every heartbeat says OPERATIONAL after the manager's NMT start;
+8. SYNC every 10 ms: every device answers each SYNC with its TPDO;
+9. the master sends RPDOs (drive: controlword, target velocity; I/O module: outputs): the
    devices apply them and the new values come back in their TPDOs;
-9. the drive raises an EMCY (0x4310, excess temperature); the master reports it;
-10. the sensor falls silent; the master reports the heartbeat loss.
+10. the drive raises an EMCY (0x4310, excess temperature); the master reports it;
+11. the sensor falls silent; the master reports the heartbeat loss.
 
 A step passes on what the master observes (and, for RPDOs, on the device's dictionary).
 A failing step does not stop the demo: the next steps run and say what they see.
@@ -60,7 +62,7 @@ from canola.network import SlaveSpec
 
 __all__ = ["FAULTS", "Faults", "Scenario"]
 
-MASTER_ID = 1
+MASTER_ID = 0x3F  # its online status (boot-up) is 0x73F
 HEARTBEAT_MS = 100
 CONSUMER_MS = 250
 SYNC_US = 10_000
@@ -138,6 +140,7 @@ class Scenario:
             self.obs.watch_device(spec, dev)
             self.devices[spec.node_id] = dev
         self.obs.watch_master(self.master)
+        trace.master_id = MASTER_ID
 
     def wait(self, seconds: float) -> None:
         self.net.wait(seconds, self.obs.tick)
@@ -157,7 +160,7 @@ class Scenario:
     def run(self) -> list[Step]:
         steps = [Step(key, title) for key, title in STEPS]
         actions: dict[str, Callable[[], tuple[bool, str]]] = {
-            "boot-up": self.boot, "pre-operational": self.preop,
+            "master-online": self.online, "boot-up": self.boot, "pre-operational": self.preop,
             "manager": self.manage, "heartbeat": self.heartbeat, "pdo-mapping": self.pdo_mapping,
             "start": self.start, "sync-tpdo": self.sync_tpdo, "rpdo": self.rpdo,
             "emcy": self.emcy, "heartbeat-loss": self.heartbeat_loss,
@@ -180,8 +183,20 @@ class Scenario:
         for node in (self.master, *self.devices.values()):
             node.stop()
 
-    def boot(self) -> tuple[bool, str]:
+    def online(self) -> tuple[bool, str]:
         self.master.start()
+        cob = 0x700 + MASTER_ID
+
+        def announced() -> bool:
+            return any(frame.can_id == cob and frame.data == b"\x00" and not frame.rtr
+                       for frame, _ in self.trace.events)
+
+        self.wait_until(announced, 0.5)
+        if not announced():
+            return False, f"no boot-up {cob:03X}#00 from the master"
+        return True, f"{cob:03X}#00: the master, node {MASTER_ID} (0x{MASTER_ID:02X}), is online"
+
+    def boot(self) -> tuple[bool, str]:
         for node, dev in self.devices.items():
             if node not in self.faults.never_boots:
                 dev.start()

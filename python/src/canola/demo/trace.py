@@ -32,6 +32,7 @@ class Trace:
         self.full_cycles = full_cycles
         self.annotate = annotate
         self.decoder = Decoder()
+        self.master_id: int | None = None  # its boot-up/heartbeat: the master's online status
         self.frames = 0
         self.hidden = 0
         self.events: list[tuple[TraceFrame, Event]] = []
@@ -64,6 +65,8 @@ class Trace:
             return
         payload = "R" if frame.rtr else frame.data.hex().upper()
         text = event.text
+        if event.kind in ("bootup", "heartbeat") and event.node == self.master_id:
+            text += ": the master's online status"
         extra = self.annotate(frame.can_id, frame.data) if self.annotate else None
         if extra:
             text += f"  [{extra}]"
