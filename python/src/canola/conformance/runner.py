@@ -54,7 +54,9 @@ def run(bus: Any, node_id: int, eds_file: str | os.PathLike[str] | eds.ObjectDic
               f"wall clock: answers within {opts.timeout:g} s, periods within "
               f"±{opts.tolerance * 100:g} %")
     report = Report(node_id, od.file, _bus_name(bus), timing)
-    master = Master(bus, tester_id, sdo_timeout_ms=round(opts.timeout * 1000))
+    # announced (its boot-up; no heartbeat, 0x1017 is 0): a quiet master could not send
+    # the heartbeats of its node-ID that the EMCY checks make the node consume
+    master = Master(bus, tester_id, sdo_timeout_ms=round(opts.timeout * 1000), announce=True)
     master.start()
     try:
         _Run(master, node_id, od, opts, report).go(checks, progress)
