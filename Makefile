@@ -17,7 +17,7 @@ FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find in
 
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
         test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
-        fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
+        fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
         test-clang analyse clean
 
 all: $(BUILD)/build.stamp
@@ -113,24 +113,32 @@ coverage: py-env
 	  if [ $$rc -ne 0 ]; then echo "coverage: branches below $(COV_BRANCH_MIN) % (gcovr exit $$rc)"; fi; \
 	  exit $$rc
 
-# libFuzzer (clang): the frame input path (node) and the SDO client against a hostile server
-# (sdo_client); atheris on the EDS/DCF parser (fuzz/fuzz_eds.py), the CiA 309-3 gateway's
-# line parser (fuzz/fuzz_gateway_parser.py) and the socketcand protocol parser of the hub
-# (fuzz/fuzz_socketcand.py) in the Python environment (the package's 'fuzz' extra pins
-# atheris).
+# libFuzzer (clang): the frame input path (node), the SDO client against a hostile server
+# (sdo_client), the CiA 302-2 manager against hostile slaves (manager) and the socketcand
+# client of port/linux against a hostile server (socketcand_client); atheris on the EDS/DCF
+# parser (fuzz/fuzz_eds.py), the CiA 309-3 gateway's line parser (fuzz/fuzz_gateway_parser.py)
+# and the socketcand protocol parser of the hub (fuzz/fuzz_socketcand.py) in the Python
+# environment (the package's 'fuzz' extra pins atheris).
 # Each target replays its seed corpus (fuzz/corpus/<target>/), then fuzzes for FUZZ_SECONDS.
 # New inputs go to build-fuzz/corpus-<target>/; a finding is a crash file in build-fuzz/
-# (turn it into a regression test). For hours: see docs/security.md.
+# (turn it into a regression test). For hours: make fuzz-long (below), docs/security.md.
 FUZZ_SECONDS ?= 30
-FUZZ_TARGETS = node sdo_client
+FUZZ_TARGETS = node sdo_client manager socketcand_client
 FUZZ_FLAGS = -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+FUZZ_EXTRA_node = examples/example_od.c
+FUZZ_EXTRA_sdo_client = examples/example_od.c
+FUZZ_EXTRA_manager = examples/example_od.c
+FUZZ_EXTRA_socketcand_client = port/linux/socketcand.c port/linux/transport.c
 fuzz: fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand
 
-fuzz-c:
+build-fuzz/fuzz_%: FORCE
+	@mkdir -p build-fuzz
+	@clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples -Iport/linux src/*.c $(FUZZ_EXTRA_$*) \
+	  fuzz/fuzz_$*.c -o $@
+
+fuzz-c: $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
 	@for t in $(FUZZ_TARGETS); do \
 	  mkdir -p build-fuzz/corpus-$$t && \
-	  clang $(FUZZ_FLAGS) -Iinclude -Isrc -Iexamples src/*.c examples/example_od.c \
-	    fuzz/fuzz_$$t.c -o build-fuzz/fuzz_$$t || exit 1; \
 	  build-fuzz/fuzz_$$t -artifact_prefix=build-fuzz/ fuzz/corpus/$$t/* >/dev/null 2>&1 || \
 	    { echo "fuzz_$$t: the seed corpus fails"; exit 1; }; \
 	  build-fuzz/fuzz_$$t -artifact_prefix=build-fuzz/ -max_total_time=$(FUZZ_SECONDS) \
@@ -138,6 +146,16 @@ fuzz-c:
 	  rc=$$?; tail -n 4 build-fuzz/fuzz-$$t.log; echo "fuzz_$$t: exit $$rc"; \
 	  [ $$rc -eq 0 ] || exit $$rc; \
 	done
+
+# Every target (C and Python) for FUZZ_LONG_SECONDS each, one after the other, then one
+# table: executions, coverage, corpus, findings (fuzz/run-long; logs in build-fuzz/long/).
+FUZZ_LONG_SECONDS ?= 600
+FUZZ_LONG_TARGETS ?= $(FUZZ_TARGETS) eds gateway socketcand
+fuzz-long: py-env $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
+	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
+	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
+	  >/dev/null 2>&1 || echo "fuzz-long: atheris not installable here: Python targets NOT RUN"
+	@fuzz/run-long $(FUZZ_LONG_SECONDS) $(FUZZ_LONG_TARGETS)
 
 # atheris has no wheel for every Python: without it the EDS corpus is still replayed.
 fuzz-eds: py-env
@@ -223,7 +241,8 @@ analyse: lint cortex-m test-m32 test-clang
 # The SocketCAN tier (tests/linux/vcan-tier.sh): the C SocketCAN test, canola-node with
 # candump/cansend, and pytest -m vcan, on vcan0 natively when the kernel has it, else in
 # one canvm run (CANOLA_CANVM, else ../shared/tools/canvm/canvm), else reported NOT RUN.
-test-vcan:
+# It needs the Python environment (canola device, pytest -m vcan) complete before it starts.
+test-vcan: py-env
 	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	cmake --build $(BUILD) --target test_socketcan canola-node
 	tests/linux/run-vcan-tier $(BUILD)

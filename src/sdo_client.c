@@ -190,7 +190,8 @@ static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint
     return CO_ABORT_NONE;
 }
 
-/* Upload segment `000t nnnc`: 7 - n bytes, c = last. */
+/* Upload segment `000t nnnc`: 7 - n bytes, c = last. A segment before the last carries
+ * data: empty ones could keep the transfer open forever (each resets the time-out). */
 static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     uint8_t b = d[0];
@@ -201,6 +202,9 @@ static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8
         return CO_ABORT_TOGGLE;
     }
     uint32_t n = SEG - ((b >> 1) & 7u);
+    if (n == 0 && !(b & 0x01)) {
+        return CO_ABORT_COMMAND;
+    }
     uint64_t total = (uint64_t)c->done + n;
     if (c->size_known && total > c->size) {
         return CO_ABORT_LEN_HIGH;

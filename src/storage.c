@@ -26,13 +26,47 @@ static bool is_parameter(const co_od_entry_t *e)
     return e->index != 0x1003 && e->index != 0x1010 && e->index != 0x1011;
 }
 
+/* ---- the image's header */
+
+#define HEADER_CRC_AT 10u         /* the CRC follows the header's other fields */
+#define IMAGE_LEN_MAX 0x7FFFFFFFu /* no offset arithmetic below can wrap */
+static const uint8_t k_magic[4] = {'C', 'N', 'P', 'S'}; /* CO_STORE_MAGIC */
+
+/* Header bytes 0..9 of an image of `group` with `len` bytes of records. */
+static void header_fields(uint8_t hdr[CO_STORE_HEADER_SIZE], co_param_group_t group, uint32_t len)
+{
+    co_copy(hdr, k_magic, sizeof k_magic);
+    hdr[4] = CO_STORE_FORMAT;
+    hdr[5] = (uint8_t)group;
+    co_put_u32(&hdr[6], len);
+}
+
+/* The CRC covers the records, then header bytes 0..9: a save knows the records' CRC only
+ * after its first pass, and writes the header before the records. */
+static uint16_t image_crc(uint16_t records_crc, const uint8_t hdr[CO_STORE_HEADER_SIZE])
+{
+    return co_crc16(records_crc, hdr, HEADER_CRC_AT);
+}
+
+static void group_error_clear(co_node_t *node, co_param_group_t group)
+{
+    (void)co_emcy_clear(node, (uint16_t)(CO_EMCY_STORE_REJECTED + group));
+}
+
 /* ---- saving */
 
-static co_err_t save_group(co_node_t *node, co_param_group_t group)
+/* Length and CRC of the records written (or only counted). */
+typedef struct image_sum {
+    uint32_t len;
+    uint16_t crc;
+} image_sum_t;
+
+/* One pass over the group's parameters: each record summed, and written when `write`. */
+static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write, image_sum_t *sum)
 {
     const co_storage_t *st = storage_of(node);
     const co_od_t *od = &node->cfg.od;
-    co_err_t err = st->begin(st->ctx, group);
+    co_err_t err = CO_OK;
     for (uint32_t i = 0; i < od->count && err == CO_OK; i++) {
         const co_od_entry_t *e = &od->entries[i];
         if (e->index < k_first[group] || e->index > k_last[group] || !is_parameter(e)) {
@@ -48,9 +82,51 @@ static co_err_t save_group(co_node_t *node, co_param_group_t group)
         co_put_u16(rec, e->index);
         rec[2] = e->sub;
         rec[3] = (uint8_t)n;
-        err = st->write(st->ctx, rec, RECORD_HEAD + n);
+        sum->len += RECORD_HEAD + n;
+        sum->crc = co_crc16(sum->crc, rec, RECORD_HEAD + n);
+        if (write) {
+            err = st->write(st->ctx, rec, RECORD_HEAD + n);
+        }
     }
-    return err == CO_OK ? st->commit(st->ctx) : err;
+    return sum->len <= IMAGE_LEN_MAX ? err : CO_ERR_FULL;
+}
+
+/* Two passes: the first sums the records for the header, the second writes header and
+ * records; a dictionary that changed between them fails the save (see canola/storage.h). */
+static co_err_t save_group(co_node_t *node, co_param_group_t group)
+{
+    const co_storage_t *st = storage_of(node);
+    image_sum_t planned = {0, 0};
+    image_sum_t written = {0, 0};
+    co_err_t err = each_record(node, group, false, &planned);
+    if (err != CO_OK) {
+        return err;
+    }
+    uint8_t hdr[CO_STORE_HEADER_SIZE];
+    header_fields(hdr, group, planned.len);
+    co_put_u16(&hdr[HEADER_CRC_AT], image_crc(planned.crc, hdr));
+    err = st->begin(st->ctx, group);
+    if (err != CO_OK) {
+        return err;
+    }
+    err = st->write(st->ctx, hdr, sizeof hdr);
+    if (err == CO_OK) {
+        err = each_record(node, group, true, &written);
+    }
+    if (err == CO_OK && (written.len != planned.len || written.crc != planned.crc)) {
+        err = CO_ERR_STATE;
+    }
+    if (err != CO_OK) {
+        if (st->discard != NULL) {
+            st->discard(st->ctx);
+        }
+        return err;
+    }
+    err = st->commit(st->ctx);
+    if (err == CO_OK) {
+        group_error_clear(node, group);
+    }
+    return err;
 }
 
 co_err_t co_storage_save(co_node_t *node, uint8_t which)
@@ -71,41 +147,124 @@ co_err_t co_storage_save(co_node_t *node, uint8_t which)
     return err;
 }
 
-static co_err_t restore_defaults(co_node_t *node, uint8_t which)
+static co_err_t restore_group(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
-    co_err_t err = CO_OK;
-    if (which != 3) {
-        err = st->erase(st->ctx, CO_PARAMS_COMMUNICATION);
-    }
-    if (err == CO_OK && which != 2) {
-        err = st->erase(st->ctx, CO_PARAMS_APPLICATION);
+    co_err_t err = st->erase(st->ctx, group);
+    if (err == CO_OK) {
+        group_error_clear(node, group);
     }
     return err;
 }
 
-/* ---- loading */
+static co_err_t restore_defaults(co_node_t *node, uint8_t which)
+{
+    co_err_t err = CO_OK;
+    if (which != 3) {
+        err = restore_group(node, CO_PARAMS_COMMUNICATION);
+    }
+    if (err == CO_OK && which != 2) {
+        err = restore_group(node, CO_PARAMS_APPLICATION);
+    }
+    return err;
+}
 
-#if CO_CONFIG_STORAGE
+/* ---- checking and loading */
 
-void co_storage_load(co_node_t *node, co_param_group_t group)
+/* Read exactly `len` bytes at `offset`: CO_STORE_INTACT, or why not. */
+static co_store_fault_t read_exact(const co_storage_t *st, co_param_group_t group, uint32_t offset,
+                                   uint8_t *buf, uint32_t len)
+{
+    uint32_t n = 0;
+    if (st->read(st->ctx, group, offset, buf, len, &n) != CO_OK) {
+        return CO_STORE_READ_ERROR;
+    }
+    return n == len ? CO_STORE_INTACT : CO_STORE_BAD_LENGTH;
+}
+
+/* The records of `len` bytes: their CRC (continued from `crc`), and whether they end
+ * exactly at `len` (each record's length byte read as the bytes stream past). */
+static co_store_fault_t check_records(const co_storage_t *st, co_param_group_t group, uint32_t len,
+                                      uint16_t *crc)
+{
+    uint8_t chunk[64];
+    uint32_t next = 0; /* offset of the next record's head */
+    for (uint32_t at = 0; at < len;) {
+        uint32_t want = len - at < sizeof chunk ? len - at : (uint32_t)sizeof chunk;
+        co_store_fault_t fault = read_exact(st, group, CO_STORE_HEADER_SIZE + at, chunk, want);
+        if (fault != CO_STORE_INTACT) {
+            return fault;
+        }
+        *crc = co_crc16(*crc, chunk, want);
+        for (; next + 3u < at + want; next += RECORD_HEAD + chunk[next + 3u - at]) {
+        }
+        at += want;
+    }
+    /* Nothing may follow the records. */
+    uint32_t n = 0;
+    if (st->read(st->ctx, group, CO_STORE_HEADER_SIZE + len, chunk, 1, &n) != CO_OK) {
+        return CO_STORE_READ_ERROR;
+    }
+    if (n != 0) {
+        return CO_STORE_BAD_LENGTH;
+    }
+    return next == len ? CO_STORE_INTACT : CO_STORE_BAD_RECORDS;
+}
+
+co_store_fault_t co_storage_verify(const co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
     if (st == NULL) {
-        return;
+        return CO_STORE_NONE;
     }
+    uint8_t hdr[CO_STORE_HEADER_SIZE];
+    uint32_t n = 0;
+    co_err_t err = st->read(st->ctx, group, 0, hdr, sizeof hdr, &n);
+    if (err != CO_OK) {
+        return err == CO_ERR_NOT_FOUND ? CO_STORE_NONE : CO_STORE_READ_ERROR;
+    }
+    bool magic = n == sizeof hdr && hdr[0] == k_magic[0] && hdr[1] == k_magic[1] &&
+                 hdr[2] == k_magic[2] && hdr[3] == k_magic[3];
+    if (!magic || hdr[4] != CO_STORE_FORMAT || hdr[5] != (uint8_t)group) {
+        return CO_STORE_BAD_HEADER;
+    }
+    uint32_t len = co_get_u32(&hdr[6]);
+    if (len > IMAGE_LEN_MAX) {
+        return CO_STORE_BAD_LENGTH;
+    }
+    uint16_t crc = 0;
+    co_store_fault_t records = check_records(st, group, len, &crc);
+    if (records == CO_STORE_READ_ERROR || records == CO_STORE_BAD_LENGTH) {
+        return records;
+    }
+    if (image_crc(crc, hdr) != co_get_u16(&hdr[HEADER_CRC_AT])) {
+        return CO_STORE_BAD_CRC;
+    }
+    return records;
+}
+
+#if CO_CONFIG_STORAGE
+
+/* Apply the records of a verified image. False when the storage no longer reads what was
+ * verified (the caller then restores the defaults). */
+static bool apply_records(co_node_t *node, co_param_group_t group)
+{
+    const co_storage_t *st = storage_of(node);
     const co_od_t *od = &node->cfg.od;
-    uint32_t offset = 0;
-    for (;;) {
+    uint8_t hdr[CO_STORE_HEADER_SIZE];
+    if (read_exact(st, group, 0, hdr, sizeof hdr) != CO_STORE_INTACT) {
+        return false;
+    }
+    uint32_t end = CO_STORE_HEADER_SIZE + co_get_u32(&hdr[6]);
+    for (uint32_t offset = CO_STORE_HEADER_SIZE; offset < end;) {
         uint8_t rec[RECORD_HEAD + 255];
-        uint32_t n = 0;
-        if (st->read(st->ctx, group, offset, rec, RECORD_HEAD, &n) != CO_OK || n < RECORD_HEAD) {
-            return; /* nothing stored, or the end */
+        if (read_exact(st, group, offset, rec, RECORD_HEAD) != CO_STORE_INTACT) {
+            return false;
         }
         uint32_t len = rec[3];
-        if (st->read(st->ctx, group, offset + RECORD_HEAD, &rec[RECORD_HEAD], len, &n) != CO_OK ||
-            n < len) {
-            return; /* a truncated image: keep what was applied */
+        if (read_exact(st, group, offset + RECORD_HEAD, &rec[RECORD_HEAD], len) !=
+            CO_STORE_INTACT) {
+            return false;
         }
         offset += RECORD_HEAD + len;
         uint16_t index = co_get_u16(rec);
@@ -114,6 +273,33 @@ void co_storage_load(co_node_t *node, co_param_group_t group)
             co_od_check(od, e, &rec[RECORD_HEAD], len) == CO_ABORT_NONE) {
             (void)co_od_store(od, e, &rec[RECORD_HEAD], len);
         }
+    }
+    return true;
+}
+
+/* A rejected image (the group holds its defaults): an EMCY and on_error. */
+static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fault)
+{
+    const uint8_t mfr[5] = {(uint8_t)fault, 0, 0, 0, 0};
+    (void)co_emcy_raise(node, (uint16_t)(CO_EMCY_STORE_REJECTED + group), mfr);
+    if (node->cfg.on_error) {
+        node->cfg.on_error(node->cfg.user, group == CO_PARAMS_COMMUNICATION
+                                               ? CO_NODE_ERR_STORED_COMM
+                                               : CO_NODE_ERR_STORED_APP);
+    }
+}
+
+/* Called right after the group's defaults were copied (reset application/communication). */
+void co_storage_load(co_node_t *node, co_param_group_t group)
+{
+    co_store_fault_t fault = co_storage_verify(node, group);
+    if (fault == CO_STORE_INTACT && !apply_records(node, group)) {
+        uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id; /* as nmt.c */
+        co_od_reset(&node->cfg.od, k_first[group], k_last[group], id); /* no half image */
+        fault = CO_STORE_READ_ERROR;
+    }
+    if (fault != CO_STORE_INTACT && fault != CO_STORE_NONE) {
+        reject(node, group, fault);
     }
 }
 #endif
@@ -132,29 +318,43 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
         return CO_ABORT_DATA_STORE;
     }
     co_err_t err = store ? co_storage_save(node, entry->sub) : restore_defaults(node, entry->sub);
-    return err == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
+    if (err != CO_OK) {
+        co_storage_reset_comm(node); /* the capability may have gone with the failure */
+        return CO_ABORT_HARDWARE;
+    }
+    return CO_ABORT_NONE;
 }
 
 #if CO_CONFIG_STORAGE
-/* After the command: the entry reads as the capability again, not as the signature. */
-void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry)
+/* What 0x1010/0x1011 subN read: 1 while the storage can save now. */
+static uint64_t capability(const co_node_t *node)
 {
-    if (entry->sub != 0 && entry->value != NULL) {
-        (void)co_od_set_uint(&node->cfg.od, entry->index, entry->sub,
-                             storage_of(node) != NULL ? 1u : 0u);
+    const co_storage_t *st = storage_of(node);
+    return st != NULL && (st->can_save == NULL || st->can_save(st->ctx)) ? 1u : 0u;
+}
+
+static void show_capability(co_node_t *node, const co_od_entry_t *entry, uint64_t value)
+{
+    if (entry != NULL && entry->value != NULL) {
+        (void)co_od_set_uint(&node->cfg.od, entry->index, entry->sub, value);
     }
 }
 
+/* Every sub-index of 0x1010 and 0x1011 reads the capability: at reset communication, and
+ * after each command (which may have shown the storage can, or cannot, save now). */
 void co_storage_reset_comm(co_node_t *node)
 {
+    uint64_t value = capability(node);
     for (uint8_t sub = 1; sub <= 3; sub++) {
-        const co_od_entry_t *e;
-        if ((e = co_od_find(&node->cfg.od, 0x1010, sub, NULL)) != NULL) {
-            co_storage_show_capability(node, e);
-        }
-        if ((e = co_od_find(&node->cfg.od, 0x1011, sub, NULL)) != NULL) {
-            co_storage_show_capability(node, e);
-        }
+        show_capability(node, co_od_find(&node->cfg.od, 0x1010, sub, NULL), value);
+        show_capability(node, co_od_find(&node->cfg.od, 0x1011, sub, NULL), value);
     }
+}
+
+/* After the command: the entries read as the capability again, not as the signature. */
+void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry)
+{
+    (void)entry;
+    co_storage_reset_comm(node);
 }
 #endif

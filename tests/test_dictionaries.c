@@ -183,7 +183,8 @@ static co_err_t st_erase(void *ctx, co_param_group_t group)
     return CO_OK;
 }
 
-static const co_storage_t k_recorder = {st_begin, st_write, st_commit, st_read, st_erase, NULL};
+static const co_storage_t k_recorder = {
+    .begin = st_begin, .write = st_write, .commit = st_commit, .read = st_read, .erase = st_erase};
 
 static bool saved(uint16_t index)
 {
@@ -253,6 +254,62 @@ static void test_save_records_parameters_only(void)
     uint8_t buf[4];
     uint32_t len = 0;
     CHECK_EQ(co_node_read_net(&g.t.node, 0x2101, 0, buf, sizeof buf, &len), CO_ABORT_HARDWARE);
+}
+
+/* A parameter whose read hook answers differently each time (a counter): the two passes
+ * of a save disagree, and the save fails rather than store an image that would not load. */
+static uint32_t g_ticks;
+static int g_commits;
+static int g_discards;
+
+static co_abort_t read_ticks(void *ctx, const co_od_entry_t *e, uint32_t offset, uint8_t *buf,
+                             uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)ctx;
+    (void)e;
+    (void)offset;
+    (void)cap;
+    co_put_u32(buf, ++g_ticks);
+    *n = 4;
+    *total = 4;
+    return CO_ABORT_NONE;
+}
+
+static co_err_t count_commit(void *ctx)
+{
+    (void)ctx;
+    g_commits++;
+    return CO_OK;
+}
+
+static void count_discard(void *ctx)
+{
+    (void)ctx;
+    g_discards++;
+}
+
+static void test_value_changing_during_a_save_fails_it(void)
+{
+    static const co_od_hooks_t k_ticking = {.read = read_ticks};
+    static const co_storage_t k_counting = {.begin = st_begin,
+                                            .write = st_write,
+                                            .commit = count_commit,
+                                            .read = st_read,
+                                            .erase = st_erase,
+                                            .discard = count_discard};
+    const co_od_entry_t extra[] = {
+        {0x2105, 0, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &g_plain, NULL, NULL, &k_ticking},
+    };
+    CHECK_EQ(build(0, 0, extra, 1), CO_OK);
+    g.t.node.cfg.storage = &k_counting;
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    g_commits = 0;
+    CHECK_EQ(co_storage_save(&g.t.node, 2), CO_OK); /* the communication group is steady */
+    CHECK_EQ(g_commits, 1);
+    CHECK_EQ(co_storage_save(&g.t.node, 3), CO_ERR_STATE);
+    CHECK_EQ(g_commits, 1);
+    CHECK_EQ(g_discards, 1);
+    CHECK_EQ(write_u32(&g.t, 0x1010, 3, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
 }
 
 /* ---- streamed values */
@@ -506,6 +563,7 @@ int main(void)
     RUN(test_client_parameters_in_the_dictionary);
     RUN(test_incomplete_client_parameters_are_ignored);
     RUN(test_save_records_parameters_only);
+    RUN(test_value_changing_during_a_save_fails_it);
     RUN(test_streamed_values);
     RUN(test_store_sub_index_beyond_the_groups);
     RUN(test_parameters_of_channels_the_node_lacks);

@@ -1,8 +1,21 @@
 /* test_file_storage.c -- parameter storage in files: saves survive a power cycle, a save
- * cut off before its commit leaves the old image, restore removes it. */
+ * cut off before its commit leaves the old image, restore removes it; damaged files are
+ * refused whole, a link at the temporary name is not followed, a failed save leaves no
+ * temporary file, a read-only folder reads as "cannot save".
+ *
+ * File system failures are injected at link time (-Wl,--wrap, tests/CMakeLists.txt):
+ * while `g_read_only` is set, access(W_OK), open(O_CREAT) and unlink fail with EROFS,
+ * as on a read-only mount (chmod would not stop root). A full disk is a file size limit
+ * (RLIMIT_FSIZE: writes past it fail with EFBIG). */
 #define _POSIX_C_SOURCE 200809L
 
+#include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdarg.h>
 #include <stdlib.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "canola/file_storage.h"
@@ -11,6 +24,48 @@
 
 static char g_dir[64];
 static co_file_storage_t g_fs;
+static bool g_read_only;
+
+int __real_access(const char *path, int mode);
+int __real_open(const char *path, int flags, ...);
+int __real_unlink(const char *path);
+int __wrap_access(const char *path, int mode);
+int __wrap_open(const char *path, int flags, ...);
+int __wrap_unlink(const char *path);
+
+int __wrap_access(const char *path, int mode)
+{
+    if (g_read_only && (mode & W_OK)) {
+        errno = EROFS;
+        return -1;
+    }
+    return __real_access(path, mode);
+}
+
+int __wrap_open(const char *path, int flags, ...)
+{
+    mode_t mode = 0;
+    if (flags & O_CREAT) {
+        va_list ap;
+        va_start(ap, flags);
+        mode = (mode_t)va_arg(ap, int);
+        va_end(ap);
+        if (g_read_only) {
+            errno = EROFS;
+            return -1;
+        }
+    }
+    return __real_open(path, flags, mode);
+}
+
+int __wrap_unlink(const char *path)
+{
+    if (g_read_only) {
+        errno = EROFS;
+        return -1;
+    }
+    return __real_unlink(path);
+}
 
 static void power_on(test_node_t *t)
 {
@@ -26,15 +81,48 @@ static void fresh_dir(void)
     CHECK_EQ(co_file_storage_init(&g_fs, g_dir), CO_OK);
 }
 
+static const char *in_dir(const char *name)
+{
+    static char path[128];
+    snprintf(path, sizeof path, "%s/%s", g_dir, name);
+    return path;
+}
+
 static void clean_dir(void)
 {
-    char path[128];
     const char *names[] = {"comm.params", "app.params", "comm.params.tmp", "app.params.tmp"};
     for (unsigned i = 0; i < 4; i++) {
-        snprintf(path, sizeof path, "%s/%s", g_dir, names[i]);
-        unlink(path);
+        unlink(in_dir(names[i]));
     }
-    rmdir(g_dir);
+    CHECK_EQ(rmdir(g_dir), 0); /* nothing else was left behind */
+}
+
+static bool exists(const char *name)
+{
+    struct stat st;
+    return lstat(in_dir(name), &st) == 0;
+}
+
+/* The whole of file `name` into `buf`; its length. */
+static size_t slurp(const char *name, uint8_t *buf, size_t cap)
+{
+    FILE *f = fopen(in_dir(name), "rb");
+    CHECK(f != NULL);
+    size_t n = f ? fread(buf, 1, cap, f) : 0;
+    if (f) {
+        fclose(f);
+    }
+    return n;
+}
+
+static void spill(const char *name, const uint8_t *buf, size_t len)
+{
+    FILE *f = fopen(in_dir(name), "wb");
+    CHECK(f != NULL);
+    if (f) {
+        CHECK_EQ(fwrite(buf, 1, len, f), len);
+        fclose(f);
+    }
 }
 
 static void test_save_survives_a_power_cycle(void)
@@ -96,11 +184,195 @@ static void test_bad_folder_refused(void)
     CHECK_EQ(co_file_storage_init(&fs, ""), CO_ERR_ARG);
 }
 
+/* ---- damaged files, hostile folders, failing saves */
+
+/* Saved: 0x1017 = 777 and 0x2000 = 0xCAFE, both groups; then a fresh start. */
+static void save_777(test_node_t *t)
+{
+    fresh_dir();
+    power_on(t);
+    co_node_set_uint(&t->node, 0x1017, 0, 777);
+    co_node_set_uint(&t->node, 0x2000, 0, 0xCAFE);
+    CHECK_EQ(write_u32(t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    power_on(t);
+    CHECK_EQ(t->od.hb_period_ms, 777);
+    CHECK_EQ(t->error_count, 0);
+}
+
+/* The communication parameters were refused: defaults, EMCY 0xFF11, on_error. */
+static void check_comm_refused(test_node_t *t)
+{
+    CHECK_EQ(t->od.hb_period_ms, 100);
+    CHECK(co_emcy_active(&t->node, 0xFF11));
+    bool told = false;
+    for (uint32_t i = 0; i < t->error_count; i++) {
+        told |= t->errors[i] == CO_NODE_ERR_STORED_COMM;
+    }
+    CHECK(told);
+}
+
+static void test_flipped_bit_in_the_file_is_refused(void)
+{
+    static test_node_t t;
+    save_777(&t);
+    uint8_t buf[4096];
+    size_t len = slurp("comm.params", buf, sizeof buf);
+    const uint8_t value[] = {0x17, 0x10, 0x00, 2, 0x09, 0x03}; /* 0x1017 = 777 */
+    size_t at = 0;
+    while (at + sizeof value <= len && memcmp(&buf[at], value, sizeof value) != 0) {
+        at++;
+    }
+    CHECK(at + sizeof value <= len);
+    buf[at + 5] ^= 0x01; /* 777 -> 521 */
+    spill("comm.params", buf, len);
+    power_on(&t);
+    check_comm_refused(&t);
+    CHECK_EQ(t.od.app_u32, 0xCAFE); /* the other file is intact */
+    clean_dir();
+}
+
+static void test_truncated_file_is_refused(void)
+{
+    static test_node_t t;
+    save_777(&t);
+    uint8_t buf[4096];
+    size_t len = slurp("comm.params", buf, sizeof buf);
+    for (size_t cut = 1; cut < 8 && cut <= len; cut++) {
+        spill("comm.params", buf, len - cut);
+        power_on(&t);
+        check_comm_refused(&t);
+    }
+    clean_dir();
+}
+
+static void test_random_files_are_refused(void)
+{
+    static test_node_t t;
+    fresh_dir();
+    uint8_t junk[300];
+    uint32_t x = 777;
+    for (int round = 0; round < 20; round++) {
+        size_t len = (size_t)round * 15u;
+        for (size_t i = 0; i < len; i++) {
+            x = x * 1103515245u + 12345u;
+            junk[i] = (uint8_t)(x >> 16);
+        }
+        spill("comm.params", junk, len);
+        spill("app.params", junk, len);
+        power_on(&t);
+        check_comm_refused(&t);
+        CHECK_EQ(t.od.app_u32, 0x12345678);
+        CHECK(co_emcy_active(&t.node, 0xFF12));
+    }
+    clean_dir();
+}
+
+/* A FIFO where a stored file belongs: refused at once, not waited on. */
+static void test_fifo_in_place_of_the_file_does_not_hang(void)
+{
+    static test_node_t t;
+    fresh_dir();
+    CHECK_EQ(mkfifo(in_dir("comm.params"), 0600), 0);
+    power_on(&t);
+    check_comm_refused(&t);
+    clean_dir();
+}
+
+static void test_link_at_the_temporary_name_is_not_followed(void)
+{
+    static test_node_t t;
+    save_777(&t);
+    char victim[64];
+    snprintf(victim, sizeof victim, "/tmp/canola-victim-XXXXXX");
+    int fd = mkstemp(victim);
+    CHECK(fd >= 0);
+    CHECK_EQ(write(fd, "precious", 8), 8);
+    close(fd);
+    CHECK_EQ(symlink(victim, in_dir("comm.params.tmp")), 0);
+    co_node_set_uint(&t.node, 0x1017, 0, 888);
+    CHECK_EQ(write_u32(&t, 0x1010, 2, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    char got[16] = {0};
+    FILE *f = fopen(victim, "rb");
+    CHECK(f != NULL);
+    if (f) {
+        CHECK_EQ(fread(got, 1, sizeof got, f), 8);
+        fclose(f);
+    }
+    CHECK_STR(got, "precious");
+    struct stat st;
+    CHECK_EQ(lstat(in_dir("comm.params"), &st), 0);
+    CHECK(S_ISREG(st.st_mode));
+    CHECK(!exists("comm.params.tmp"));
+    power_on(&t);
+    CHECK_EQ(t.od.hb_period_ms, 888);
+    unlink(victim);
+    clean_dir();
+}
+
+/* A full disk: the save fails with 0x06060000, leaves no temporary file, and the old
+ * image stays. */
+static void test_failed_save_leaves_no_temporary_file(void)
+{
+    static test_node_t t;
+    save_777(&t);
+    co_node_set_uint(&t.node, 0x1017, 0, 999);
+    co_node_set_uint(&t.node, 0x2000, 0, 0xBEEF);
+    struct rlimit old;
+    CHECK_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+    struct rlimit small = {8, old.rlim_max};
+    signal(SIGXFSZ, SIG_IGN); /* the write fails with EFBIG instead of killing us */
+    CHECK_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(write_u32(&t, 0x1010, 3, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(setrlimit(RLIMIT_FSIZE, &old), 0);
+    signal(SIGXFSZ, SIG_DFL);
+    CHECK(!exists("comm.params.tmp"));
+    CHECK(!exists("app.params.tmp"));
+    power_on(&t);
+    CHECK_EQ(t.od.hb_period_ms, 777);
+    CHECK_EQ(t.od.app_u32, 0xCAFE);
+    CHECK_EQ(t.error_count, 0);
+    clean_dir();
+}
+
+/* A read-only folder: 0x1010/0x1011 read 0 ("does not save"), a save is refused with
+ * 0x06060000 and leaves nothing; once writable again they read 1 and saves work. */
+static void test_read_only_folder_reads_as_cannot_save(void)
+{
+    static test_node_t t;
+    save_777(&t);
+    g_read_only = true;
+    power_on(&t);
+    CHECK_EQ(t.od.hb_period_ms, 777); /* what is stored still loads */
+    CHECK_EQ(t.od.store[0], 0);
+    CHECK_EQ(t.od.store[1], 0);
+    CHECK_EQ(t.od.restore[0], 0);
+    co_node_set_uint(&t.node, 0x1017, 0, 555);
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(write_u32(&t, 0x1011, 1, CO_RESTORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(t.od.store[0], 0);
+    g_read_only = false;
+    CHECK(!exists("comm.params.tmp"));
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK_EQ(t.od.store[0], 1);
+    CHECK_EQ(t.od.restore[2], 1);
+    power_on(&t);
+    CHECK_EQ(t.od.hb_period_ms, 555);
+    clean_dir();
+}
+
 int main(void)
 {
     RUN(test_save_survives_a_power_cycle);
     RUN(test_save_cut_before_commit_keeps_the_old_image);
     RUN(test_restore_removes_the_image);
     RUN(test_bad_folder_refused);
+    RUN(test_flipped_bit_in_the_file_is_refused);
+    RUN(test_truncated_file_is_refused);
+    RUN(test_random_files_are_refused);
+    RUN(test_fifo_in_place_of_the_file_does_not_hang);
+    RUN(test_link_at_the_temporary_name_is_not_followed);
+    RUN(test_failed_save_leaves_no_temporary_file);
+    RUN(test_read_only_folder_reads_as_cannot_save);
     return check_summary();
 }

@@ -101,6 +101,29 @@ static void test_response_for_another_sub_index(void)
     CHECK(co_sdo_client_busy(&g_t.node, 0));
 }
 
+/* A server that answers a segmented upload with empty segments (n = 7, not the last)
+ * would keep the transfer open as long as it likes: each resets the time-out. The first
+ * one ends it. */
+static void test_empty_upload_segment_before_the_last_is_refused(void)
+{
+    client();
+    uint8_t buf[8];
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, sizeof buf, sdo_result_done, &g_r);
+    reply("40 00 20 00 00 00 00 00"); /* segmented, size not indicated */
+    CHECK_STR(last_sent(), "605#6000000000000000");
+    reply("0E 00 00 00 00 00 00 00"); /* toggle 0, n = 7, c = 0: no data, more to come */
+    check_aborted(CO_ABORT_COMMAND, "605#8000200001000405");
+    /* An empty last segment still ends a transfer well (all its data came before). */
+    client();
+    co_sdo_upload(&g_t.node, 0, 0x2000, 0, CO_SDO_AUTO, buf, sizeof buf, sdo_result_done, &g_r);
+    reply("40 00 20 00 00 00 00 00");
+    reply("00 01 02 03 04 05 06 07"); /* 7 bytes */
+    reply("1F 00 00 00 00 00 00 00"); /* toggle 1, n = 7, c = 1 */
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+    CHECK_EQ(g_r.len, 7);
+}
+
 static void test_download_initiate_answered_wrongly(void)
 {
     client();
@@ -319,6 +342,7 @@ static void test_reset_communication_ends_a_transfer(void)
 int main(void)
 {
     RUN(test_response_for_another_sub_index);
+    RUN(test_empty_upload_segment_before_the_last_is_refused);
     RUN(test_download_initiate_answered_wrongly);
     RUN(test_block_download_initiate_answered_wrongly);
     RUN(test_block_download_ack_answered_wrongly);

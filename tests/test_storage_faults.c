@@ -1,14 +1,18 @@
 /* test_storage_faults.c -- stored parameters against a storage that fails and images that
- * are damaged or written by another firmware: saves report 0x06060000, loads apply only
- * records that are whole, in their group, and valid for the entry. */
+ * are damaged or written by another firmware: saves report 0x06060000 and leave nothing
+ * behind, loads apply an image whole or not at all, and of an intact image only records
+ * in their group and valid for the entry. */
 #include "check.h"
 #include "harness.h"
+#include "store_image.h"
 
 /* A scripted storage: one image per group, failures on demand, call counts. */
 typedef struct script {
     uint8_t image[3][2048];
     uint32_t len[3];
     bool stored[3];
+    uint8_t records[3][2048]; /* add_record's records, sealed into image at power-on */
+    uint32_t records_len[3];
     uint8_t staging[2048];
     uint32_t staging_len;
     co_param_group_t group;
@@ -16,8 +20,11 @@ typedef struct script {
     int fail_write_at; /* 1-based write call that fails; 0 = none */
     int writes;
     bool fail_erase;
-    bool fail_value_read; /* reads past a record's head fail */
+    int fail_read_at; /* 1-based read call that fails; 0 = none */
+    int reads;
+    bool cannot_save; /* can_save answers false */
     int commits;
+    int discards;
     int erased[3];
 } script_t;
 
@@ -59,7 +66,7 @@ static co_err_t s_read(void *ctx, co_param_group_t group, uint32_t offset, uint8
     if (!s->stored[group]) {
         return CO_ERR_NOT_FOUND;
     }
-    if (s->fail_value_read && offset % 8u == 4u) {
+    if (++s->reads == s->fail_read_at) {
         return CO_ERR_STATE;
     }
     uint32_t left = offset < s->len[group] ? s->len[group] - offset : 0;
@@ -79,7 +86,18 @@ static co_err_t s_erase(void *ctx, co_param_group_t group)
     return CO_OK;
 }
 
-static const co_storage_t k_storage = {s_begin, s_write, s_commit, s_read, s_erase, &g_s};
+static bool s_can_save(void *ctx) { return !((script_t *)ctx)->cannot_save; }
+
+static void s_discard(void *ctx) { ((script_t *)ctx)->discards++; }
+
+static const co_storage_t k_storage = {.begin = s_begin,
+                                       .write = s_write,
+                                       .commit = s_commit,
+                                       .read = s_read,
+                                       .erase = s_erase,
+                                       .ctx = &g_s,
+                                       .can_save = s_can_save,
+                                       .discard = s_discard};
 
 static void power_on(test_node_t *t)
 {
@@ -88,16 +106,18 @@ static void power_on(test_node_t *t)
     CHECK_EQ(co_node_start(&t->node, 0), CO_OK);
 }
 
-/* Append one record (index, sub, value bytes) to the stored image of `group`. */
+/* Append one record (index, sub, value bytes) to the image of `group`, sealed anew. */
 static void add_record(co_param_group_t group, uint16_t index, uint8_t sub, const uint8_t *v,
                        uint8_t len)
 {
-    uint8_t *p = &g_s.image[group][g_s.len[group]];
+    uint8_t *p = &g_s.records[group][g_s.records_len[group]];
     co_put_u16(p, index);
     p[2] = sub;
     p[3] = len;
     memcpy(p + 4, v, len);
-    g_s.len[group] += 4u + len;
+    g_s.records_len[group] += 4u + len;
+    g_s.len[group] =
+        store_image_seal(g_s.image[group], group, g_s.records[group], g_s.records_len[group]);
     g_s.stored[group] = true;
 }
 
@@ -169,7 +189,7 @@ static void test_load_applies_only_valid_records(void)
     CHECK_EQ(t.od.hb_period_ms, 300);
 }
 
-static void test_truncated_image_keeps_what_was_whole(void)
+static void test_truncated_image_is_refused_whole(void)
 {
     static test_node_t t;
     memset(&g_s, 0, sizeof g_s);
@@ -180,27 +200,86 @@ static void test_truncated_image_keeps_what_was_whole(void)
     add_record(CO_PARAMS_APPLICATION, 0x2000, 0, u32, 4);
     g_s.len[CO_PARAMS_APPLICATION] -= 2; /* power cut in the middle of the last value */
     power_on(&t);
-    CHECK_EQ(t.od.app_u32b, 0x1234u);
-    CHECK_EQ(t.od.app_u32, 0x12345678u); /* its default: the record was not whole */
-    /* A cut inside a record's head ends the load the same way. */
-    memset(&g_s, 0, sizeof g_s);
-    add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 4);
-    g_s.len[CO_PARAMS_APPLICATION] += 2; /* two stray bytes */
-    power_on(&t);
-    CHECK_EQ(t.od.app_u32b, 0xBEEFu);
+    CHECK_EQ(t.od.app_u32b, 0); /* the whole record before the cut is not applied either */
+    CHECK_EQ(t.od.app_u32, 0x12345678u);
+    CHECK(co_emcy_active(&t.node, 0xFF12));
+    CHECK_EQ(co_storage_verify(&t.node, CO_PARAMS_APPLICATION), CO_STORE_BAD_LENGTH);
 }
 
-/* A storage that fails while reading a value: the load stops there, defaults stay. */
-static void test_read_error_stops_the_load(void)
+/* A storage that fails to read: while checking, or while applying what it checked. Either
+ * way the group ends with its defaults, none of the records. */
+static void test_read_error_refuses_the_image(void)
 {
     static test_node_t t;
     memset(&g_s, 0, sizeof g_s);
     uint8_t u32[4];
     co_put_u32(u32, 0x1234u);
     add_record(CO_PARAMS_APPLICATION, 0x2007, 0, u32, 4);
-    g_s.fail_value_read = true;
+    co_put_u32(u32, 0xBEEFu);
+    add_record(CO_PARAMS_APPLICATION, 0x2000, 0, u32, 4);
+    g_s.fail_read_at = 2; /* the first chunk of records */
     power_on(&t);
     CHECK_EQ(t.od.app_u32b, 0);
+    CHECK(co_emcy_active(&t.node, 0xFF12));
+    /* Checking reads the header, one chunk and the byte after: 3 reads. Applying reads
+     * the header (4), the first record (5, 6), the second record's head (7). */
+    g_s.reads = 0;
+    g_s.fail_read_at = 7;
+    power_on(&t);
+    CHECK_EQ(g_s.reads, 7);
+    CHECK_EQ(t.od.app_u32b, 0); /* applied, then the defaults again */
+    CHECK_EQ(t.od.app_u32, 0x12345678u);
+    CHECK(co_emcy_active(&t.node, 0xFF12));
+    CHECK_EQ(t.error_count, 1);
+    /* the same image read without failure loads */
+    g_s.fail_read_at = 0;
+    power_on(&t);
+    CHECK_EQ(t.od.app_u32b, 0x1234u);
+    CHECK_EQ(t.od.app_u32, 0xBEEFu);
+    CHECK_EQ(t.error_count, 0);
+}
+
+/* A failed save leaves nothing half-written: the storage hears discard, never commit. */
+static void test_failed_write_discards_the_save(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    power_on(&t);
+    g_s.fail_write_at = 3;
+    CHECK_EQ(write_u32(&t, 0x1010, 3, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(g_s.discards, 1);
+    CHECK_EQ(g_s.commits, 0);
+}
+
+/* 0x1010/0x1011 read what the storage can do now: 0 while it cannot save (a read-only
+ * folder), 1 again once it can; a command is still tried while they read 0. */
+static void test_capability_follows_the_storage(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    g_s.cannot_save = true;
+    power_on(&t);
+    uint64_t v = 9;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1010, 1, &v), CO_OK);
+    CHECK_EQ(v, 0);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1011, 2, &v), CO_OK);
+    CHECK_EQ(v, 0);
+    g_s.cannot_save = false;
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1010, 1, &v), CO_OK);
+    CHECK_EQ(v, 1);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1010, 3, &v), CO_OK);
+    CHECK_EQ(v, 1);
+    /* the storage fails and says it cannot save any more: every sub-index follows */
+    g_s.cannot_save = true;
+    g_s.fail_begin = true;
+    CHECK_EQ(write_u32(&t, 0x1010, 2, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    for (uint8_t sub = 1; sub <= 3; sub++) {
+        CHECK_EQ(co_node_get_uint(&t.node, 0x1010, sub, &v), CO_OK);
+        CHECK_EQ(v, 0);
+        CHECK_EQ(co_node_get_uint(&t.node, 0x1011, sub, &v), CO_OK);
+        CHECK_EQ(v, 0);
+    }
 }
 
 int main(void)
@@ -208,7 +287,9 @@ int main(void)
     RUN(test_failing_storage_aborts_with_hardware_error);
     RUN(test_save_and_restore_by_group);
     RUN(test_load_applies_only_valid_records);
-    RUN(test_truncated_image_keeps_what_was_whole);
-    RUN(test_read_error_stops_the_load);
+    RUN(test_truncated_image_is_refused_whole);
+    RUN(test_read_error_refuses_the_image);
+    RUN(test_failed_write_discards_the_save);
+    RUN(test_capability_follows_the_storage);
     return check_summary();
 }

@@ -70,6 +70,9 @@ typedef struct co_driver {
 typedef enum co_node_error {
     CO_NODE_ERR_TX_OVERFLOW = 1, /**< the tx queue was full: a frame was lost */
     CO_NODE_ERR_TX_DRIVER,       /**< the driver refused a frame with an error */
+    CO_NODE_ERR_STORED_COMM,     /**< stored communication parameters failed their checks:
+                                      ignored, defaults in use (canola/storage.h) */
+    CO_NODE_ERR_STORED_APP,      /**< the same for the application parameters */
 } co_node_error_t;
 
 typedef struct co_node_config {

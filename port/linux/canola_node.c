@@ -134,12 +134,28 @@ static void on_state(void *user, co_nmt_state_t state)
             co_nmt_state_name((uint8_t)state));
 }
 
+static const char *error_text(co_node_error_t error)
+{
+    switch (error) {
+    case CO_NODE_ERR_TX_OVERFLOW:
+        return "transmit queue overflow, a frame was lost";
+    case CO_NODE_ERR_TX_DRIVER:
+        return "the bus refused a frame";
+    case CO_NODE_ERR_STORED_COMM:
+        return "stored communication parameters (comm.params) failed their checks: ignored, "
+               "defaults in use (EMCY 0xFF11)";
+    case CO_NODE_ERR_STORED_APP:
+        return "stored application parameters (app.params) failed their checks: ignored, "
+               "defaults in use (EMCY 0xFF12)";
+    }
+    return "unknown error";
+}
+
 static void on_error(void *user, co_node_error_t error)
 {
     app_t *a = user;
     fprintf(stderr, PROG ": node %u on %s: %s\n", co_node_id(&a->node), a->where,
-            error == CO_NODE_ERR_TX_OVERFLOW ? "transmit queue overflow, a frame was lost"
-                                             : "the bus refused a frame");
+            error_text(error));
 }
 
 int main(int argc, char **argv)

@@ -26,7 +26,7 @@ static int path_of(const co_file_storage_t *fs, co_param_group_t group, bool tmp
 /* Make a rename durable: fsync the folder that holds the entry. */
 static int sync_dir(const co_file_storage_t *fs)
 {
-    int dfd = open(fs->dir, O_RDONLY | O_DIRECTORY);
+    int dfd = open(fs->dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (dfd < 0) {
         return -1;
     }
@@ -35,17 +35,34 @@ static int sync_dir(const co_file_storage_t *fs)
     return rc;
 }
 
+/* The save in progress will not be committed: close and remove its temporary file. */
+static void discard(void *ctx)
+{
+    co_file_storage_t *fs = ctx;
+    char tmp[CO_FILE_STORAGE_PATH_MAX + 32];
+    if (fs->fd < 0) {
+        return;
+    }
+    close(fs->fd);
+    fs->fd = -1;
+    if (path_of(fs, fs->group, true, tmp, sizeof tmp) == 0) {
+        (void)unlink(tmp);
+    }
+}
+
+/* The temporary file is made anew, never opened through whatever stands at its name: a
+ * leftover (an interrupted save, or a link planted there) is removed first, and the
+ * creation is exclusive and follows no link, so a link that reappears fails the save. */
 static co_err_t begin(void *ctx, co_param_group_t group)
 {
     co_file_storage_t *fs = ctx;
     char tmp[CO_FILE_STORAGE_PATH_MAX + 32];
-    if (fs->fd >= 0) {
-        close(fs->fd); /* an earlier save that never committed */
-    }
+    discard(fs); /* an earlier save that never committed */
     fs->group = group;
-    fs->fd = path_of(fs, group, true, tmp, sizeof tmp) == 0
-                 ? open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)
-                 : -1;
+    if (path_of(fs, group, true, tmp, sizeof tmp) != 0 || (unlink(tmp) != 0 && errno != ENOENT)) {
+        return CO_ERR_STATE;
+    }
+    fs->fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
     return fs->fd >= 0 ? CO_OK : CO_ERR_STATE;
 }
 
@@ -58,6 +75,7 @@ static co_err_t write_all(void *ctx, const uint8_t *data, uint32_t len)
             continue;
         }
         if (n <= 0) {
+            discard(fs); /* a full disk leaves no temporary file behind */
             return CO_ERR_STATE;
         }
         data += n;
@@ -79,12 +97,15 @@ static co_err_t commit(void *ctx)
     fs->fd = -1;
     rc |= path_of(fs, fs->group, true, tmp, sizeof tmp);
     rc |= path_of(fs, fs->group, false, final, sizeof final);
-    if (rc != 0 || rename(tmp, final) != 0 || sync_dir(fs) != 0) {
+    if (rc != 0 || rename(tmp, final) != 0) {
+        (void)unlink(tmp);
         return CO_ERR_STATE;
     }
-    return CO_OK;
+    return sync_dir(fs) == 0 ? CO_OK : CO_ERR_STATE;
 }
 
+/* Only a regular file is read: a FIFO or device put in its place is opened without
+ * waiting (O_NONBLOCK) and refused (a read error: the core then starts with defaults). */
 static co_err_t read_at(void *ctx, co_param_group_t group, uint32_t offset, uint8_t *buf,
                         uint32_t cap, uint32_t *n)
 {
@@ -94,11 +115,13 @@ static co_err_t read_at(void *ctx, co_param_group_t group, uint32_t offset, uint
     if (path_of(fs, group, false, final, sizeof final) != 0) {
         return CO_ERR_STATE;
     }
-    int fd = open(final, O_RDONLY | O_CLOEXEC);
+    int fd = open(final, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
         return errno == ENOENT ? CO_ERR_NOT_FOUND : CO_ERR_STATE;
     }
-    ssize_t got = pread(fd, buf, cap, (off_t)offset);
+    struct stat st;
+    ssize_t got =
+        fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? pread(fd, buf, cap, (off_t)offset) : -1;
     close(fd);
     if (got < 0) {
         return CO_ERR_STATE;
@@ -120,6 +143,13 @@ static co_err_t erase(void *ctx, co_param_group_t group)
     return sync_dir(fs) == 0 ? CO_OK : CO_ERR_STATE;
 }
 
+/* A save needs to create and rename files in the folder. */
+static bool can_save(void *ctx)
+{
+    const co_file_storage_t *fs = ctx;
+    return access(fs->dir, W_OK | X_OK) == 0;
+}
+
 co_err_t co_file_storage_init(co_file_storage_t *fs, const char *dir)
 {
     struct stat st;
@@ -135,6 +165,8 @@ co_err_t co_file_storage_init(co_file_storage_t *fs, const char *dir)
                              .commit = commit,
                              .read = read_at,
                              .erase = erase,
-                             .ctx = fs};
+                             .ctx = fs,
+                             .can_save = can_save,
+                             .discard = discard};
     return CO_OK;
 }

@@ -528,8 +528,10 @@ static int wait_fd(int fd, short events, uint64_t end_ms)
     }
 }
 
-/* The next message of the handshake (not a frame: frames before raw mode are dropped). */
-static co_socketcand_msg_t expect(co_socketcand_t *sc, const char *what, uint64_t end_ms)
+/* The next message of the handshake, which must be `want` (< hi > or < ok >): frames,
+ * echo and stat before it are dropped; anything else fails the handshake, saying why. */
+static co_socketcand_msg_t expect(co_socketcand_t *sc, co_socketcand_msg_t want, const char *what,
+                                  uint64_t end_ms)
 {
     for (;;) {
         size_t start, len;
@@ -541,13 +543,14 @@ static co_socketcand_msg_t expect(co_socketcand_t *sc, const char *what, uint64_
             co_frame_t f;
             uint32_t ev = 0;
             co_socketcand_msg_t m = co_socketcand_parse(sc->rx + start, len, &f, &ev);
-            if (m == CO_SCD_BAD || m == CO_SCD_ERROR) {
+            if (m == CO_SCD_BAD || m == CO_SCD_ERROR ||
+                ((m == CO_SCD_HI || m == CO_SCD_OK) && m != want)) {
                 co_transport_fail(&sc->transport, "socketcand: expected %s, the server said '%.*s'",
                                   what, (int)(len > 80 ? 80 : len), sc->rx + start);
                 return CO_SCD_BAD;
             }
             consume(sc, len);
-            if (m == CO_SCD_HI || m == CO_SCD_OK) {
+            if (m == want) {
                 return m;
             }
             continue; /* frames, echo, stat: not the answer yet */
@@ -615,9 +618,9 @@ co_err_t co_socketcand_open_fd(co_socketcand_t *sc, int fd, const char *channel,
     char open_cmd[CO_SOCKETCAND_CHANNEL_MAX + 16];
     (void)snprintf(open_cmd, sizeof open_cmd, "< open %s >", channel);
     uint64_t end = now_ms() + timeout_ms;
-    if (expect(sc, "< hi >", end) != CO_SCD_HI || !say(sc, open_cmd, end) ||
-        expect(sc, "< ok > to open", end) != CO_SCD_OK || !say(sc, "< rawmode >", end) ||
-        expect(sc, "< ok > to rawmode", end) != CO_SCD_OK) {
+    if (expect(sc, CO_SCD_HI, "< hi >", end) != CO_SCD_HI || !say(sc, open_cmd, end) ||
+        expect(sc, CO_SCD_OK, "< ok > to open", end) != CO_SCD_OK || !say(sc, "< rawmode >", end) ||
+        expect(sc, CO_SCD_OK, "< ok > to rawmode", end) != CO_SCD_OK) {
         sd_close(&sc->transport);
         return CO_ERR_STATE;
     }

@@ -34,8 +34,14 @@ PDOMapping=0
 
 
 def make(body: str = "", mandatory: str = VAR_1000, optional: str = "") -> str:
-    """An EDS with [1000] plus ``optional`` objects (listed in [OptionalObjects])."""
-    return HEADER + optional + mandatory + "\n" + body
+    """An EDS with [1000] plus ``optional`` objects (listed in [OptionalObjects]), and the
+    identity object [1018] (RECORD_1018, below) unless the test brings its own."""
+    if "[1018]" in body + optional + mandatory:
+        return HEADER + optional + mandatory + "\n" + body
+    # the listing takes the blank line's place: line numbers stay those of HEADER
+    header = HEADER.replace("SupportedObjects=1\n1=0x1000\n\n",
+                            "SupportedObjects=2\n1=0x1000\n2=0x1018\n")
+    return header + optional + mandatory + "\n" + RECORD_1018 + "\n" + body
 
 
 def optional_list(*indices: int) -> str:
@@ -257,9 +263,9 @@ def test_missing_mandatory_key_of_a_var_is_reported(key: str) -> None:
 
 
 def test_supported_objects_count_mismatch_is_reported() -> None:
-    text = make().replace("SupportedObjects=1", "SupportedObjects=2")
+    text = make().replace("SupportedObjects=2", "SupportedObjects=3")
     assert strict_problems(text) == [
-        "t.eds:10: [MandatoryObjects] SupportedObjects: SupportedObjects=2 but 1 entries"]
+        "t.eds:10: [MandatoryObjects] SupportedObjects: SupportedObjects=3 but 2 entries"]
 
 
 def test_listed_object_without_section_is_reported() -> None:
@@ -359,9 +365,10 @@ def test_duplicate_section_is_an_error() -> None:
 
 def test_sub_object_without_object_is_an_error() -> None:
     body = "[2000sub1]\nParameterName=x\nDataType=0x0005\nAccessType=ro\n"
-    err = broken(make(body))
-    assert str(err) == ("bad.eds:21: [2000sub1] sub-object section without its object "
-                        "section [2000]")
+    text = make(body)
+    line = text.splitlines().index("[2000sub1]") + 1
+    assert str(broken(text)) == (f"bad.eds:{line}: [2000sub1] sub-object section without its "
+                                 "object section [2000]")
 
 
 def test_unreadable_structural_number_is_an_error() -> None:

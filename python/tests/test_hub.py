@@ -10,8 +10,10 @@ from collections.abc import Iterator
 
 import can
 import pytest
+from cli_helpers import cli
 
-from canola.hub import HubThread
+from canola import hub as hub_module
+from canola.hub import Hub, HubThread, exposed_addresses
 from canola.socketcand import Frame, parse_server_element, split_elements
 
 pytestmark = pytest.mark.realtime
@@ -229,3 +231,92 @@ def test_silent_clients_are_closed_but_open_ones_may_idle() -> None:
         assert _recv_until(opened, b"< echo >") == b"< echo >"
         silent.close()
         opened.close()
+
+
+def test_client_that_does_not_read_its_replies_is_disconnected() -> None:
+    """``< echo >`` after ``< echo >`` without reading a reply: the hub's queue for that
+    client stays bounded, the client is disconnected and counted, the others carry on."""
+    with HubThread(queue_limit=64, reply_limit=64, write_buffer=4096) as h:
+        greedy = socket.socket()
+        greedy.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # before connect
+        greedy.connect(("127.0.0.1", h.port))
+        greedy.settimeout(5)
+        assert greedy.recv(64) == b"< hi >"
+        greedy.sendall(b"< open bus0 >")
+        assert _recv_until(greedy, b"< ok >") == b"< ok >"
+        sent = 0
+        deadline = time.monotonic() + 60
+        closed = False
+        while not closed and time.monotonic() < deadline:
+            try:
+                greedy.sendall(b"< echo >" * 64)
+                sent += 64
+            except (ConnectionError, TimeoutError):
+                closed = True
+        greedy.close()
+        assert closed, f"{sent} echoes sent, never disconnected"
+        while h.hub.clients() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert h.hub.clients() == []
+        assert h.hub.overflows == 1
+        stats = h.hub.departed[-1]
+        assert stats.overflowed
+        assert stats.peak <= 64 + 64  # the queue never outgrew its bounds
+        # the hub serves the next client as before
+        s = _raw(h.port)
+        s.sendall(b"< open bus0 >< echo >")
+        assert _recv_until(s, b"< echo >") == b"< ok >< echo >"
+        s.close()
+
+
+def test_replies_to_a_reading_client_are_never_cut() -> None:
+    """A client that pipelines many commands and reads the replies is served in full."""
+    with HubThread(queue_limit=8, reply_limit=8) as h:
+        s = _raw(h.port)
+        s.sendall(b"< open bus0 >")
+        assert _recv_until(s, b"< ok >") == b"< ok >"
+        got = b""
+        for _ in range(50):
+            s.sendall(b"< echo >" * 200)
+            got += _recv_until(s, b"< echo >" * 200)
+        assert got.count(b"< echo >") == 50 * 200
+        s.close()
+        assert h.hub.overflows == 0
+
+
+def test_non_loopback_addresses_are_named() -> None:
+    assert exposed_addresses("0.0.0.0") == ["0.0.0.0"]
+    assert exposed_addresses("192.0.2.7") == ["192.0.2.7"]
+    assert exposed_addresses("::") == ["::"]
+    for loopback in ("127.0.0.1", "127.0.0.2", "::1", "localhost"):
+        assert exposed_addresses(loopback) == [], loopback
+    with pytest.raises(ValueError, match="every address"):
+        exposed_addresses("")
+    with pytest.raises(ValueError, match="every address"):
+        Hub("")
+
+
+def test_serve_warns_for_every_non_loopback_address(capsys: pytest.CaptureFixture[str],
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    served: list[str] = []
+    monkeypatch.setattr(hub_module, "serve", lambda host, port, **kw: served.append(host))
+    for host in ("0.0.0.0", "::", "192.0.2.7"):
+        code, out, err = cli(capsys, "bus", "serve", "--host", host)
+        assert code == 0 and out == ""
+        assert err.startswith(f"canola bus: warning: --host {host}: listening on {host}, not "
+                              "a loopback address: "), err
+        assert len(err.splitlines()) == 1
+    code, _, err = cli(capsys, "bus", "serve", "--host", "127.0.0.1")
+    assert code == 0 and err == ""
+    assert served == ["0.0.0.0", "::", "192.0.2.7", "127.0.0.1"]
+
+
+@pytest.mark.slow
+def test_empty_host_is_refused_in_one_line() -> None:
+    proc = subprocess.run([sys.executable, "-m", "canola.cli", "bus", "serve", "--host", "",
+                           "--port", "0"], capture_output=True, text=True, timeout=30,
+                          check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.splitlines() == [
+        "canola bus serve: error: --host '' would listen on every address: give one "
+        "(127.0.0.1: this machine only)"]

@@ -434,6 +434,15 @@ static void test_handshake_failures(void)
     CHECK(strstr(r->sc.transport.error, "garbage") != NULL);
     close(r->server);
 
+    /* Out of order (found by fuzz_socketcand_client): the failure says why. */
+    CHECK_EQ(rig_connect(r, "< hi > < hi >< ok >< ok >", 1000), CO_ERR_STATE);
+    CHECK_STR(r->sc.transport.error,
+              "socketcand: expected < ok > to open, the server said '< hi >'");
+    close(r->server);
+    CHECK_EQ(rig_connect(r, "< ok >< ok >< ok >", 1000), CO_ERR_STATE);
+    CHECK_STR(r->sc.transport.error, "socketcand: expected < hi >, the server said '< ok >'");
+    close(r->server);
+
     CHECK_EQ(rig_connect(r, "< hi >< ok >< ok >", 1000), CO_OK);
     co_socketcand_close(&r->sc);
     close(r->server);

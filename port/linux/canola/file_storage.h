@@ -2,10 +2,16 @@
  * canola/file_storage.h -- parameter storage in files, for Linux (port/linux).
  *
  * Each group is one file in a folder: comm.params (0x1000..0x1FFF) and app.params
- * (0x2000..0x9FFF). A save writes a temporary file beside it, fsyncs it, renames it over
- * the old one and fsyncs the folder: whenever the power goes, the folder holds the old
- * image or the new one, never a mix. A temporary file left by an interrupted save is
- * ignored (and replaced by the next save).
+ * (0x2000..0x9FFF), each an image in the format of canola/storage.h (header and CRC: a
+ * damaged file is refused whole). A save writes a temporary file beside it
+ * (comm.params.tmp, app.params.tmp), fsyncs it, renames it over the old one and fsyncs
+ * the folder: whenever the power goes, the folder holds the old image or the new one,
+ * never a mix. The temporary file is created exclusively and without following links
+ * (O_CREAT | O_EXCL | O_NOFOLLOW, after removing whatever had its name: a file left by an
+ * interrupted save, or a planted link, whose target stays untouched); a save that fails
+ * (full disk, read-only folder) removes it. Only regular files are read (a FIFO in a
+ * file's place is a read error, not a wait). can_save: the folder is writable
+ * (access(W_OK)), so 0x1010 reads 0 on a read-only folder or mount.
  *
  * Not part of the portable core: uses POSIX file calls. One save at a time per object.
  */

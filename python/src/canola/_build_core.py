@@ -114,6 +114,16 @@ typedef enum co_ec_event_kind { CO_EC_BOOT, CO_EC_REMOTE_RESET, CO_EC_STARTED,
     CO_EC_GUARD_TIMEOUT, CO_EC_GUARD_TOGGLE, CO_EC_GUARD_RESUMED, CO_EC_LIFE_GUARD,
     CO_EC_LIFE_GUARD_RESUMED, ... } co_ec_event_kind_t;
 
+typedef enum co_node_error { CO_NODE_ERR_TX_OVERFLOW, CO_NODE_ERR_TX_DRIVER,
+                             CO_NODE_ERR_STORED_COMM, CO_NODE_ERR_STORED_APP,
+                             ... } co_node_error_t;
+typedef enum co_param_group { CO_PARAMS_COMMUNICATION, CO_PARAMS_APPLICATION,
+                              ... } co_param_group_t;
+typedef enum co_store_fault { CO_STORE_INTACT, CO_STORE_NONE, CO_STORE_BAD_HEADER,
+                              CO_STORE_BAD_LENGTH, CO_STORE_BAD_CRC, CO_STORE_BAD_RECORDS,
+                              CO_STORE_READ_ERROR, ... } co_store_fault_t;
+#define CO_EMCY_STORE_REJECTED ...
+co_store_fault_t co_storage_verify(const co_node_t *node, co_param_group_t group);
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame);
 uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame);
@@ -185,6 +195,7 @@ extern "Python" void canola_py_sdo_done(void *ctx, uint8_t channel, co_abort_t a
 extern "Python" co_err_t canola_py_tx(void *ctx, const co_frame_t *frame);
 extern "Python" void canola_py_on_state(void *user, co_nmt_state_t state);
 extern "Python" void canola_py_on_errctl(void *user, const co_ec_event_t *event);
+extern "Python" void canola_py_on_error(void *user, co_node_error_t error);
 extern "Python" void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
 extern "Python" void canola_py_on_sync(void *user, uint8_t counter);
 extern "Python" void canola_py_on_time(void *user, const co_time_of_day_t *time);
@@ -260,6 +271,7 @@ static co_node_t *canola_py_node_ptr(canola_py_node_t *node) { return &node->nod
 static co_err_t canola_py_tx(void *ctx, const co_frame_t *frame);
 static void canola_py_on_state(void *user, co_nmt_state_t state);
 static void canola_py_on_errctl(void *user, const co_ec_event_t *event);
+static void canola_py_on_error(void *user, co_node_error_t error);
 static void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
 static void canola_py_on_sync(void *user, uint8_t counter);
 static void canola_py_on_time(void *user, const co_time_of_day_t *time);
@@ -354,6 +366,7 @@ static canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, co_od_entry_t *entr
     cfg.user = user;
     cfg.on_state = canola_py_on_state;
     cfg.on_errctl = canola_py_on_errctl;
+    cfg.on_error = canola_py_on_error;
     cfg.on_emcy = canola_py_on_emcy;
     cfg.on_sync = canola_py_on_sync;
     cfg.on_time = canola_py_on_time;

@@ -328,6 +328,14 @@ def canola_py_on_errctl(user: Any, event: Any) -> None:
 
 
 @ffi.def_extern()  # type: ignore[untyped-decorator]
+def canola_py_on_error(user: Any, error: int) -> None:
+    try:
+        _call(user, "_on_error", int(error))
+    except Exception:
+        log.exception("canola: node error callback")
+
+
+@ffi.def_extern()  # type: ignore[untyped-decorator]
 def canola_py_on_emcy(user: Any, emcy: Any) -> None:
     try:
         _call(user, "_on_emcy", int(emcy.cob_id), int(emcy.code), int(emcy.reg),

@@ -3,6 +3,7 @@ state, start/stop, callbacks, and typed local access to the node's own dictionar
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -15,7 +16,10 @@ from canola.core import NMT_CMDS, Od, _check
 from canola.errors import Error, SdoAbort
 from canola.odgen import GenerateOptions
 
-__all__ = ["STATE_NAMES", "EmcyEvent", "Frame", "HeartbeatEvent", "LocalOd", "NodeBase"]
+__all__ = ["STATE_NAMES", "EmcyEvent", "Frame", "HeartbeatEvent", "LocalOd", "NodeBase",
+           "StoreRejectedEvent"]
+
+log = logging.getLogger("canola.node")
 
 #: NMT state value -> the name :attr:`NodeBase.nmt_state` gives.
 STATE_NAMES: dict[int, str] = {
@@ -85,6 +89,37 @@ class EmcyEvent:
     cob_id: int
 
 
+@dataclass(frozen=True)
+class StoreRejectedEvent:
+    """Stored parameters refused at a reset: the file of ``group`` ("communication",
+    comm.params, or "application", app.params) failed a check (``reason``) and was ignored
+    as a whole. The group runs on its defaults; the node raised EMCY ``code`` (0xFF11 or
+    0xFF12), which stays active until a save or restore of the group succeeds."""
+
+    group: str
+    file: str
+    reason: str
+    code: int
+
+
+#: co_node_error_t of a refused group -> (group, file, CO_PARAMS_*).
+_STORE_ERRORS: dict[int, tuple[str, str, int]] = {
+    int(lib.CO_NODE_ERR_STORED_COMM): ("communication", "comm.params",
+                                       int(lib.CO_PARAMS_COMMUNICATION)),
+    int(lib.CO_NODE_ERR_STORED_APP): ("application", "app.params",
+                                      int(lib.CO_PARAMS_APPLICATION)),
+}
+
+#: co_store_fault_t -> what the check found.
+_STORE_FAULTS: dict[int, str] = {
+    int(lib.CO_STORE_BAD_HEADER): "bad header (magic, format version or group)",
+    int(lib.CO_STORE_BAD_LENGTH): "length mismatch (truncated, or bytes after the records)",
+    int(lib.CO_STORE_BAD_CRC): "CRC mismatch",
+    int(lib.CO_STORE_BAD_RECORDS): "records do not end at the stated length",
+    int(lib.CO_STORE_READ_ERROR): "read error (or not a regular file)",
+}
+
+
 F = TypeVar("F", bound=Callable[..., Any])
 
 
@@ -121,6 +156,7 @@ class NodeBase:
         self._rpdo_cbs: list[Callable[[int], None]] = []
         self._hb_cbs: list[Callable[[HeartbeatEvent], None]] = []
         self._emcy_cbs: list[Callable[[EmcyEvent], None]] = []
+        self._store_cbs: list[Callable[[StoreRejectedEvent], None]] = []
 
     @property
     def bus(self) -> Bus:
@@ -188,6 +224,13 @@ class NodeBase:
         self._emcy_cbs.append(fn)
         return fn
 
+    def on_store_rejected(self, fn: F) -> F:
+        """``fn(StoreRejectedEvent)`` when, at a reset (:meth:`start` included), a stored
+        parameter file of ``store_dir`` failed its checks and was ignored: the node runs on
+        defaults. Without any such callback the event is logged as a warning."""
+        self._store_cbs.append(fn)
+        return fn
+
     # ---- C callbacks (under the lock): queue the work for after
 
     def _fire(self, cbs: list[Callable[..., None]], *args: Any) -> None:
@@ -223,6 +266,20 @@ class NodeBase:
 
     def _on_emcy(self, cob_id: int, code: int, reg: int, manufacturer: bytes) -> None:
         self._fire(self._emcy_cbs, EmcyEvent(cob_id & 0x7F, code, reg, manufacturer, cob_id))
+
+    def _on_error(self, error: int) -> None:
+        refused = _STORE_ERRORS.get(error)
+        if refused is None:
+            return  # transmit losses: counted by the core (co_node_stats)
+        group, file, param_group = refused
+        fault = int(lib.co_storage_verify(self._engine.node, param_group))
+        event = StoreRejectedEvent(group, file, _STORE_FAULTS.get(fault, f"fault {fault}"),
+                                   int(lib.CO_EMCY_STORE_REJECTED) + param_group)
+        if not self._store_cbs:
+            log.warning("%s %d: stored %s parameters (%s) refused: %s; defaults in use "
+                        "(EMCY 0x%04X)", self._kind, self.node_id, group, file, event.reason,
+                        event.code)
+        self._fire(self._store_cbs, event)
 
 
 class LocalOd:

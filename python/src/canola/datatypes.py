@@ -73,14 +73,27 @@ class NumberError(ValueError):
     """A text that is not a CiA 306 number (the message says why)."""
 
 
+#: The longest number literal read (digits and prefix): 64 bits need at most 22 octal
+#: digits; the bound leaves room for leading zeros and keeps every number small enough to
+#: print (Python refuses to turn an int of more than 4,300 decimal digits into text).
+MAX_LITERAL = 64
+
+
+def _show(text: str) -> str:
+    """``text`` quoted for a message, cut to a readable length."""
+    return repr(text) if len(text) <= 40 else repr(text[:40]) + f"... ({len(text)} characters)"
+
+
 def _literal(text: str) -> int:
+    if len(text) > MAX_LITERAL:
+        raise NumberError(f"a number of {len(text)} digits (at most {MAX_LITERAL})")
     low = text.lower()
     if low.startswith("0x"):
         return int(low[2:], 16)
     if len(low) > 1 and low.startswith("0"):
         if all(c in "01234567" for c in low):
             return int(low, 8)
-        raise NumberError(f"{text!r} has a leading 0 (octal) but digits 8 or 9")
+        raise NumberError(f"{_show(text)} has a leading 0 (octal) but digits 8 or 9")
     return int(low, 10)
 
 
@@ -100,7 +113,7 @@ def parse_integer(text: str, node_id: int | None = 0) -> int | None:
     while pos < len(stripped):
         m = _TERM.match(stripped, pos)
         if m is None or (pos > 0 and not m.group(1)):
-            raise NumberError(f"{text!r} is not a number")
+            raise NumberError(f"{_show(text)} is not a number")
         sign = -1 if m.group(1) == "-" else 1
         if _NODEID.fullmatch(m.group(2)):
             uses_node = True
@@ -132,10 +145,12 @@ def parse_value(text: str, data_type: int | None, node_id: int | None = 0) -> Va
             return parse_integer(text, node_id)
         except NumberError:
             pass
+        if len(text) > MAX_LITERAL:
+            raise NumberError(f"a number of {len(text)} characters (at most {MAX_LITERAL})")
         try:
             return float(text)
         except ValueError:
-            raise NumberError(f"{text!r} is not a number") from None
+            raise NumberError(f"{_show(text)} is not a number") from None
     return text
 
 

@@ -19,11 +19,11 @@ import os
 from canola import eds
 from canola._core import lib
 from canola._engine import Bus
-from canola._nodebase import NodeBase, check, load_od, nmt_command
+from canola._nodebase import NodeBase, StoreRejectedEvent, check, load_od, nmt_command
 from canola.errors import Error
 from canola.odgen import GenerateOptions
 
-__all__ = ["Device"]
+__all__ = ["Device", "StoreRejectedEvent"]
 
 
 class Device(NodeBase):

@@ -5,12 +5,21 @@
 
 - a broken file (a line that is not ``[section]``, ``key=value`` or a ``;`` comment, a
   duplicate section, a sub-object section without its object, a number that the structure
-  needs, such as ObjectType, DataType, SubNumber, CompactSubObj or an object-list entry, that
-  cannot be read) raises :class:`~canola.errors.EdsError` naming file and line, in both modes;
+  needs, such as ObjectType, DataType, CompactSubObj or an object-list entry, that cannot be
+  read) raises :class:`~canola.errors.EdsError` naming file and line, in both modes;
 - a deviation from CiA 306 that still leaves a usable model (missing mandatory keys, counts
   that do not match, unknown AccessType or DataType, values that are not numbers of their
-  type, limits out of range, a synthesised sub0, ...) is collected: ``strict=True`` raises one
-  EdsError listing all of them, one per line; otherwise they are in ``od.warnings``.
+  type, limits out of range, a synthesised sub0, an empty file, a section named like an
+  object whose index is beyond 0xFFFF or sub-index beyond 0xFF (kept as an other section),
+  a SubNumber that is no UNSIGNED8, no 0x1000 or 0x1018, ...) is collected: ``strict=True``
+  raises one EdsError listing all of them, one per line; otherwise they are in
+  ``od.warnings``.
+
+Every problem is a :class:`~canola.errors.Diagnostic` (message, file, line, section, key),
+so that a tool can print or sort them. Whatever the input and its size, :func:`parse`
+ends in an ObjectDictionary or an EdsError: numbers longer than
+:data:`~canola.datatypes.MAX_LITERAL` characters are not numbers, and no count read from the
+file drives a loop beyond the file's own size.
 
 Accepted forms: section and key names in any case (``[1a00]``, ``[1018SUB1]``,
 ``parametername``), spaces around ``=`` and at line ends, CRLF/LF/CR, UTF-8 or Latin-1 text,
@@ -144,8 +153,14 @@ class ObjectDictionary:
 # parsing
 
 _OBJECT = re.compile(r"([0-9a-f]{4})", re.IGNORECASE)
-_SUB = re.compile(r"([0-9a-f]{4})sub([0-9a-f]{1,2})", re.IGNORECASE)
+_SUB = re.compile(r"([0-9a-f]{4})sub0*([0-9a-f]{1,2})", re.IGNORECASE)
 _COMPACT = re.compile(r"([0-9a-f]{4})(name|value|denotation)", re.IGNORECASE)
+#: Any section named like an object ("1000", "1000sub1", "1000Name"): what the three
+#: above do not take is a misnamed object section (see _misnamed).
+_OBJECT_LIKE = re.compile(r"([0-9a-f]+)(?:sub([0-9a-f]*)|name|value|denotation)?",
+                          re.IGNORECASE)
+#: CiA 301 objects every device has: a device without them is refused when strict.
+_REQUIRED = {0x1000: "Device type", 0x1018: "Identity object"}
 _LISTS = {"mandatoryobjects": "mandatory", "optionalobjects": "optional",
           "manufacturerobjects": "manufacturer"}
 _VAR_KEYS = ("parametername", "objecttype", "datatype", "accesstype", "defaultvalue",
@@ -277,7 +292,8 @@ def _hex(text: str) -> int:
 def _source(source: str | bytes | os.PathLike[str], name: str | None) -> tuple[str, str]:
     if isinstance(source, bytes):
         return decode(source), name or "<bytes>"
-    if isinstance(source, str) and ("\n" in source or "=" in source or "[" in source):
+    if isinstance(source, str) and (not source or "\n" in source or "=" in source
+                                    or "[" in source):
         return source, name or "<string>"
     path = Path(source)
     try:
@@ -291,8 +307,8 @@ def parse(source: str | bytes | os.PathLike[str], *, strict: bool = False,
           node_id: int | None = None, filename: str | None = None) -> ObjectDictionary:
     """Read an EDS or DCF.
 
-    ``source`` is a path (``os.PathLike``, or a ``str`` without newline, ``=`` or ``[``),
-    the file's bytes, or its text. ``filename`` names text/bytes in messages. ``node_id``
+    ``source`` is a path (``os.PathLike``, or a non-empty ``str`` without newline, ``=`` or
+    ``[``), the file's bytes, or its text. ``filename`` names text/bytes in messages. ``node_id``
     evaluates ``$NODEID``; when None, a DCF's ``[DeviceComissioning] NodeID`` is used.
     Raises EdsError (see the module doc) and never another exception for bad input.
     """
@@ -305,6 +321,8 @@ def _build(sections: list[Section], file: str, strict: bool,
            node_id: int | None) -> ObjectDictionary:
     od = ObjectDictionary(file=file)
     b = _Builder(file, node_id)
+    if not sections:
+        b.diags.append(Diagnostic("empty file: no sections, no objects", file, 1))
     objects: dict[int, Section] = {}
     subs: dict[int, dict[int, Section]] = {}
     compact: dict[tuple[int, str], Section] = {}
@@ -340,6 +358,8 @@ def _build(sections: list[Section], file: str, strict: bool,
         elif low in _LISTS:
             lists[_LISTS[low]] = sec
         else:
+            if (why := _misnamed(sec.name)) is not None:
+                b.warn(f"{why}: not an object, kept as an other section", sec)
             od.other_sections[sec.name] = _plain(sec)
     if node_id is None and od.device_commissioning is not None:
         raw = next((v for k, v in od.device_commissioning.items() if k.lower() == "nodeid"), "")
@@ -360,10 +380,35 @@ def _build(sections: list[Section], file: str, strict: bool,
         if obj is None or obj.compact_sub_obj is None:
             b.warn(f"[{index:04X}{kind.capitalize()}] belongs to no CompactSubObj object", sec)
     _check_lists(b, od, lists)
+    for index, what in _REQUIRED.items():
+        if index not in od.objects:
+            where = lists.get("mandatory")
+            b.diags.append(Diagnostic(f"no object 0x{index:04X} ({what}), which every "
+                                      "CANopen device has", file,
+                                      None if where is None else where.line,
+                                      None if where is None else where.name))
     if strict and b.diags:
         raise EdsError(problems=b.diags)
     od.warnings = b.diags
     return od
+
+
+def _misnamed(name: str) -> str | None:
+    """Why a section named like an object is not one (None: it is not named like one)."""
+    m = _OBJECT_LIKE.fullmatch(name)
+    if m is None:
+        return None
+    digits, sub = m.group(1), m.group(2)
+    if len(digits) != 4:
+        index = int(digits[:9], 16) if len(digits) > 8 else int(digits, 16)
+        beyond = " is beyond 0xFFFF" if index > 0xFFFF else " has not 4 hex digits"
+        return f"index 0x{digits[:8].upper()}{'...' if len(digits) > 8 else ''}{beyond}"
+    if sub is not None:
+        if not sub:
+            return "sub-index missing after 'sub'"
+        shown = sub.lstrip("0")[:8].upper()
+        return f"sub-index 0x{shown}{'...' if len(sub.lstrip('0')) > 8 else ''} is beyond 0xFF"
+    return None
 
 
 def _plain(sec: Section) -> dict[str, str]:
@@ -381,10 +426,11 @@ def _dummy_usage(b: _Builder, od: ObjectDictionary, sec: Section) -> None:
 
 def _comments(b: _Builder, sec: Section) -> list[str]:
     count = b.number(sec, "lines") or 0
-    lines = [sec.value(f"line{i}") or "" for i in range(1, count + 1)]
     extra = [e for k, e in sec.entries.items()
              if k != "lines" and not re.fullmatch(r"line[0-9]+", k)]
     numbered = sum(1 for k in sec.entries if re.fullmatch(r"line[0-9]+", k))
+    # no more lines than the section has, whatever Lines says
+    lines = [sec.value(f"line{i}") or "" for i in range(1, min(count, numbered) + 1)]
     if numbered != count or extra:
         b.warn(f"Lines={count} does not match the {numbered} LineN entries", sec, sec.get("lines"))
     return lines
@@ -432,11 +478,28 @@ def _object(b: _Builder, index: int, sec: Section, sub_secs: dict[int, Section],
         obj.subs[0] = Variable(index, 0, "Highest sub-index supported", 0x0005, "ro",
                                str(highest), default=highest, line=sec.line)
         obj.subs = dict(sorted(obj.subs.items()))
-    declared = b.number(sec, "subnumber")
+    declared = _sub_number(b, sec)
     if declared is not None and not n_compact and declared != len(sub_secs):
         b.warn(f"SubNumber={declared} but {len(sub_secs)} sub-object sections", sec,
                sec.get("subnumber"))
     return obj
+
+
+def _sub_number(b: _Builder, sec: Section) -> int | None:
+    """SubNumber, an UNSIGNED8: the sub-object sections make the structure, so a value
+    that is no number, or out of range, is a warning (and ignored)."""
+    ent = sec.get("subnumber")
+    if ent is None:
+        return None
+    try:
+        value = parse_integer(b._strip_comment(sec, ent), 0)
+    except NumberError as exc:
+        b.warn(f"not a number: {exc}", sec, ent)
+        return None
+    if value is None or not 0 <= value <= 0xFF:
+        b.warn(f"SubNumber={value} is outside 0..255 (an UNSIGNED8)", sec, ent)
+        return None
+    return value
 
 
 def _expand_compact(b: _Builder, obj: Object, sec: Section, count: int,

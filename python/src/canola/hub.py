@@ -10,13 +10,25 @@ Robustness rules:
 - A client that breaks the protocol gets ``< error ... >`` and is disconnected; a known
   socketcand command the hub does not offer (BCM jobs, filters, ISO-TP) gets an error and
   the connection stays.
-- Nothing waits on a slow client: each client has a bounded queue of outgoing elements
-  (``queue_limit``); when it is full, new frames for that client are dropped and counted
-  (``ClientStats.dropped``, logged). A client that stops reading entirely therefore costs a
-  bounded amount of memory and never delays the others.
+- Nothing waits on a slow client, and no client grows the hub: each client has one bounded
+  queue of outgoing elements. Frames for it are dropped and counted
+  (``ClientStats.dropped``, logged) once ``queue_limit`` elements wait, as a CAN
+  controller loses frames it has no room for. The hub's replies to the client's own
+  commands (``< ok >``, ``< echo >``, ``< error >``) are never dropped: up to
+  ``reply_limit`` more may wait; a client whose queue grows past ``queue_limit +
+  reply_limit`` (it sends commands and does not read the replies) is disconnected at
+  once, its queue released, and counted (``ClientStats.overflowed``,
+  :attr:`Hub.overflows`, logged). Each client's kernel send buffer and the transport's
+  buffer are fixed (``write_buffer`` bytes each), so a client costs at most about
+  ``(queue_limit + reply_limit) * MAX_ELEMENT + 2 * write_buffer`` bytes of memory.
 - Input is read in bounded chunks and an element is at most
-  :data:`canola.socketcand.MAX_ELEMENT` characters.
+  :data:`canola.socketcand.MAX_ELEMENT` characters; after each chunk the hub lets the
+  other clients run, and after each command whose reply finds the queue beyond
+  ``queue_limit`` it lets the replies go out first: a client that reads its replies is
+  never disconnected, however many commands it sends at once.
 - Clients that do not open a channel within ``handshake_timeout`` seconds are closed.
+- It listens on loopback unless told otherwise; ``canola bus serve`` warns for an address
+  that is not loopback (:func:`exposed_addresses`) and refuses an empty one.
 
 :class:`Hub` runs on an asyncio loop; :class:`HubThread` runs one in a background thread
 (tests, embedding); :func:`serve` is the command's blocking entry point.
@@ -26,6 +38,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import ipaddress
 import logging
 import signal
 import socket
@@ -43,7 +56,7 @@ from canola.socketcand import (
     split_elements,
 )
 
-__all__ = ["DEFAULT_PORT", "ClientStats", "Hub", "HubThread", "serve"]
+__all__ = ["DEFAULT_PORT", "ClientStats", "Hub", "HubThread", "exposed_addresses", "serve"]
 
 log = logging.getLogger("canola.hub")
 
@@ -55,15 +68,28 @@ DEFAULT_PORT = 29536
 RAW_SETTLE_S = 0.05
 
 
+#: Replies (``< ok >``, ``< echo >``, ``< error >``) that may wait for a client beyond its
+#: frame queue before it is disconnected for not reading them.
+DEFAULT_REPLY_LIMIT = 1024
+
+
 @dataclass
 class ClientStats:
-    """Counters of one client (frames in and out, frames dropped for a full queue)."""
+    """Counters of one client: frames in and out, frames dropped for a full queue, the
+    longest its queue grew (``peak``), and whether it was disconnected for letting its
+    replies pile up (``overflowed``)."""
 
     peer: str
     channel: str = ""
     received: int = 0
     delivered: int = 0
     dropped: int = 0
+    peak: int = 0
+    overflowed: bool = False
+
+
+class _OverflowError(Exception):
+    """A client's queue outgrew every bound: it does not read its replies."""
 
 
 @dataclass(eq=False)
@@ -71,33 +97,74 @@ class _Client:
     writer: asyncio.StreamWriter
     stats: ClientStats
     limit: int
+    reply_limit: int
     raw: bool = False
     queue: deque[str] = field(default_factory=deque)
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     closing: bool = False
 
     def push(self, text: str, *, control: bool = False) -> bool:
-        """Queue an element; frames are dropped (False) when the queue is full."""
-        if not control and len(self.queue) >= self.limit:
+        """Queue an element. Frames are dropped (False) once ``limit`` elements wait; a
+        reply past ``limit + reply_limit`` raises :class:`_OverflowError`."""
+        waiting = len(self.queue)
+        if not control and waiting >= self.limit:
             self.stats.dropped += 1
             if self.stats.dropped == 1 or self.stats.dropped % 1000 == 0:
                 log.warning("%s: queue full, %d frame(s) dropped so far", self.stats.peer,
                             self.stats.dropped)
             return False
+        if waiting >= self.limit + self.reply_limit:
+            raise _OverflowError
         self.queue.append(text)
+        self.stats.peak = max(self.stats.peak, waiting + 1)
         self.wake.set()
         return True
+
+
+def exposed_addresses(host: str, port: int = DEFAULT_PORT) -> list[str]:
+    """The addresses a server listening on ``host`` would take that are not loopback
+    (what ``canola bus serve`` warns about): ``0.0.0.0`` and ``::`` (every address), a
+    LAN address, a name that resolves to one. A name that does not resolve gives [] (the
+    listen itself then fails). ``host`` must not be empty (that is every address too, and
+    refused)."""
+    if not host:
+        raise ValueError("an empty host means every address: give one (127.0.0.1: this "
+                         "machine only)")
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
+                                   flags=socket.AI_PASSIVE)
+    except (OSError, UnicodeError):
+        return []
+    exposed: list[str] = []
+    for *_, sockaddr in infos:
+        address = str(sockaddr[0])
+        try:
+            loopback = ipaddress.ip_address(address.split("%", 1)[0]).is_loopback
+        except ValueError:
+            loopback = False
+        if not loopback and address not in exposed:
+            exposed.append(address)
+    return exposed
 
 
 class Hub:
     """The socketcand hub. ``port`` 0 picks a free port (see :attr:`port` once started)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, *,
-                 queue_limit: int = 1024, handshake_timeout: float = 10.0,
-                 read_chunk: int = 4096, write_buffer: int = 16384) -> None:
+                 queue_limit: int = 1024, reply_limit: int = DEFAULT_REPLY_LIMIT,
+                 handshake_timeout: float = 10.0, read_chunk: int = 4096,
+                 write_buffer: int = 16384) -> None:
+        if not host:
+            raise ValueError("an empty host means every address: give one (127.0.0.1: "
+                             "this machine only)")
+        if queue_limit < 1 or reply_limit < 1:
+            raise ValueError("queue_limit and reply_limit must be at least 1")
         self.host = host
         self.port = port
         self.queue_limit = queue_limit
+        self.reply_limit = reply_limit
+        #: Clients disconnected for not reading their replies (see the module's rules).
+        self.overflows = 0
         self.handshake_timeout = handshake_timeout
         self.read_chunk = read_chunk
         self.write_buffer = write_buffer
@@ -158,7 +225,7 @@ class Hub:
         task = asyncio.current_task()
         if task is not None:
             self._tasks.add(task)
-        client = _Client(writer, ClientStats(name), self.queue_limit)
+        client = _Client(writer, ClientStats(name), self.queue_limit, self.reply_limit)
         self._clients.add(client)
         sender = asyncio.create_task(self._send_loop(client))
         try:
@@ -166,9 +233,12 @@ class Hub:
             await self._read_loop(client, reader)
         except (ConnectionError, OSError):
             pass
+        except _OverflowError:
+            self._overflowed(client)
         except ProtocolError as exc:
             log.info("%s: %s; disconnected", name, exc)
-            client.push(format_error(str(exc)), control=True)
+            with contextlib.suppress(_OverflowError):
+                client.push(format_error(str(exc)), control=True)
         finally:
             self._leave(client)
             client.closing = True
@@ -184,8 +254,9 @@ class Hub:
                 self._tasks.discard(task)
             self.departed.append(client.stats)
             s = client.stats
-            log.info("%s left %s: %d in, %d out, %d dropped", name, s.channel or "(no channel)",
-                     s.received, s.delivered, s.dropped)
+            log.info("%s left %s: %d in, %d out, %d dropped%s", name,
+                     s.channel or "(no channel)", s.received, s.delivered, s.dropped,
+                     ", overflowed" if s.overflowed else "")
 
     async def _read_loop(self, client: _Client, reader: asyncio.StreamReader) -> None:
         pending = b""
@@ -202,6 +273,22 @@ class Hub:
             elements, pending = split_elements(pending + chunk)
             for element in elements:
                 self._handle(client, element)
+                if len(client.queue) > client.limit:
+                    # replies pile up: let the sender pass them on before the next command
+                    # (it can unless the client stops reading; then the queue overflows)
+                    await asyncio.sleep(0)
+            await asyncio.sleep(0)  # the other clients run between chunks
+
+    def _overflowed(self, client: _Client) -> None:
+        """Disconnect a client whose queue outgrew every bound: no waiting for it to read,
+        its queue released at once."""
+        self.overflows += 1
+        client.stats.overflowed = True
+        log.warning("%s: %d elements wait and it does not read them (queue %d + replies "
+                    "%d); disconnected", client.stats.peer, len(client.queue), client.limit,
+                    client.reply_limit)
+        client.queue.clear()
+        client.writer.transport.abort()
 
     def _handle(self, client: _Client, element: str) -> None:
         cmd = parse_command(element)
@@ -317,11 +404,11 @@ class HubThread:
 
 
 def serve(host: str, port: int, *, queue_limit: int = 1024,
-          ready: threading.Event | None = None) -> None:
+          reply_limit: int = DEFAULT_REPLY_LIMIT, ready: threading.Event | None = None) -> None:
     """Run a hub until SIGINT or SIGTERM (``canola bus serve``)."""
 
     async def main() -> None:
-        hub = Hub(host, port, queue_limit=queue_limit)
+        hub = Hub(host, port, queue_limit=queue_limit, reply_limit=reply_limit)
         await hub.start()
         print(f"canola bus: socketcand hub on {host}:{hub.port} (Ctrl-C stops)", flush=True)
         if ready is not None:

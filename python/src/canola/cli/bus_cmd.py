@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from canola import hub
 from canola.cli.common import CliError, Parser
@@ -20,12 +21,16 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "interface, canola commands and canola's C client share its channels "
                     "(each channel is one bus). Stops on Ctrl-C or SIGTERM.")
     serve.add_argument("--host", default="127.0.0.1",
-                       help="address to listen on (default 127.0.0.1, this machine only)")
+                       help="address to listen on (default 127.0.0.1, this machine only; "
+                            "any other is reachable from the network: a warning says so)")
     serve.add_argument("--port", type=int, default=hub.DEFAULT_PORT,
                        help=f"TCP port (default {hub.DEFAULT_PORT}; 0 picks a free one)")
     serve.add_argument("--queue", type=int, default=1024, metavar="FRAMES",
                        help="frames queued per client before that client loses frames "
                             "(default 1024)")
+    serve.add_argument("--replies", type=int, default=hub.DEFAULT_REPLY_LIMIT, metavar="N",
+                       help="replies queued beyond that for a client that does not read "
+                            f"them before it is disconnected (default {hub.DEFAULT_REPLY_LIMIT})")
     serve.set_defaults(func=run_serve)
 
 
@@ -34,8 +39,18 @@ def run_serve(args: argparse.Namespace) -> int:
         raise CliError(f"bad port {args.port}: 0..65535", 2)
     if args.queue < 1:
         raise CliError(f"bad queue size {args.queue}", 2)
+    if args.replies < 1:
+        raise CliError(f"bad reply queue size {args.replies}", 2)
+    if not args.host.strip():
+        raise CliError("canola bus serve: error: --host '' would listen on every address: "
+                       "give one (127.0.0.1: this machine only)", 2)
+    for address in hub.exposed_addresses(args.host, args.port):
+        print(f"canola bus: warning: --host {args.host}: listening on {address}, not a "
+              "loopback address: whoever reaches the port can send and receive on every "
+              "channel, without authentication (prefer 127.0.0.1 and an SSH tunnel; see "
+              "docs/security.md)", file=sys.stderr, flush=True)
     try:
-        hub.serve(args.host, args.port, queue_limit=args.queue)
+        hub.serve(args.host, args.port, queue_limit=args.queue, reply_limit=args.replies)
     except OSError as exc:
         raise CliError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}"
                        ) from None

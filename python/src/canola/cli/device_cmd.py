@@ -6,6 +6,7 @@ import argparse
 import logging
 import os
 import signal
+import sys
 import threading
 from types import FrameType
 
@@ -19,7 +20,7 @@ from canola.cli.common import (
     node_id,
     positive_ms,
 )
-from canola.device import Device
+from canola.device import Device, StoreRejectedEvent
 from canola.errors import Error
 
 log = logging.getLogger("canola.device")
@@ -83,7 +84,14 @@ def run(args: argparse.Namespace) -> int:
         def on_state(state: str) -> None:
             print(f"node {args.node_id}: {state}", flush=True)
 
+        def on_store_rejected(event: StoreRejectedEvent) -> None:
+            where = os.path.join(args.store, event.file)
+            print(f"canola device: node {args.node_id}: {where}: {event.reason}; ignored, "
+                  f"{event.group} parameters start with their defaults "
+                  f"(EMCY 0x{event.code:04X})", file=sys.stderr, flush=True)
+
         device.on_state(on_state)
+        device.on_store_rejected(on_store_rejected)
         device.start()
         print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
         try:
