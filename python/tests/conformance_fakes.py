@@ -107,13 +107,19 @@ class FakeNode:
     """Node ``node_id`` on ``bus``, answering through a Master at ``port_id``.
     ``checks_toggle=False``: download segments are taken whatever their toggle bit.
     ``late_abort``: an abort naming another entry goes before each initiate answer (as
-    the late answer of an earlier exchange would over a slow link)."""
+    the late answer of an earlier exchange would over a slow link).
+    ``accepts_read_only``: a write to a read-only entry is answered with success (and the
+    value kept). ``missing_object_code``: the abort code for an object it does not have."""
 
     def __init__(self, bus: SimBus, node_id: int, *, port_id: int = 100,
-                 checks_toggle: bool = True, late_abort: bool = False) -> None:
+                 checks_toggle: bool = True, late_abort: bool = False,
+                 accepts_read_only: bool = False,
+                 missing_object_code: int = 0x06020000) -> None:
         self.node_id = node_id
         self.checks_toggle = checks_toggle
         self.late_abort = late_abort
+        self.accepts_read_only = accepts_read_only
+        self.missing_object_code = missing_object_code
         self.values = {(0x1000, 0): (0x191).to_bytes(4, "little"), (0x1001, 0): b"\0",
                        (0x1008, 0): b"a fake responder", (0x1018, 0): b"\x02",
                        (0x1018, 1): (0x12345).to_bytes(4, "little"),
@@ -166,7 +172,7 @@ class FakeNode:
             return
         if key not in self.values:
             known = any(i == index for i, _ in self.values)
-            self._send(_abort(index, sub, 0x06090011 if known else 0x06020000))
+            self._send(_abort(index, sub, 0x06090011 if known else self.missing_object_code))
             return
         if ccs == 2:
             self._upload(index, sub)
@@ -185,18 +191,22 @@ class FakeNode:
     def _download(self, index: int, sub: int, data: bytes) -> None:
         key = (index, sub)
         mux = index.to_bytes(2, "little") + bytes([sub])
-        if key in _READ_ONLY:
+        if key in _READ_ONLY and not self.accepts_read_only:
             self._send(_abort(index, sub, 0x06010002))
             return
         if data[0] & 0x02:  # expedited
             value = data[4:8 - ((data[0] >> 2) & 3)] if data[0] & 0x01 else data[4:8]
             if not self._fits(key, value):
                 return
-            self.values[key] = value
+            self._store(key, value)
             self._send(bytes([0x60]) + mux)
             return
         self._transfer = _Transfer(key, upload=False)
         self._send(bytes([0x60]) + mux)
+
+    def _store(self, key: tuple[int, int], value: bytes) -> None:
+        if key not in _READ_ONLY:  # a read-only one answered with success keeps its value
+            self.values[key] = value
 
     def _fits(self, key: tuple[int, int], value: bytes) -> bool:
         size = _SIZES.get(key)
@@ -230,5 +240,5 @@ class FakeNode:
             self._transfer = None
             if not self._fits(t.key, t.data):
                 return
-            self.values[t.key] = t.data
+            self._store(t.key, t.data)
         self._send(bytes([0x20 | toggle << 4]))

@@ -143,6 +143,60 @@ def test_a_responder_with_gaps_fails_exactly_those_checks(checks_toggle: bool) -
         assert "<- 594  30 00 00 00 00 00 00 00" in toggle.frames[-1]
 
 
+def _fake_run(**switches: object) -> cc.Report:
+    """The whole suite against a FakeNode (node 20) with ``switches``."""
+    bus = SimBus()
+    FakeNode(bus, 20, **switches).start()  # type: ignore[arg-type]
+    return cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20))
+
+
+@pytest.mark.parametrize(("switches", "check", "what", "expected", "got", "frames"), [
+    ({"accepts_read_only": True}, "dictionary.write_read_only",
+     "write its own value to 0x1000:0",
+     "abort 0x06010002 (Attempt to write a read only object)", "success",
+     ["-> 614  23 00 10 00 91 01 00 00", "<- 594  60 00 10 00 00 00 00 00"]),
+    ({"missing_object_code": 0x06090011}, "dictionary.missing_object", "read 0x5FFF:0",
+     "abort 0x06020000 (Object does not exist in the object dictionary)",
+     "abort 0x06090011 (Sub-index does not exist)",
+     ["-> 614  40 FF 5F 00 00 00 00 00", "<- 594  80 FF 5F 00 11 00 09 06"]),
+], ids=["read-only write succeeds", "wrong abort code"])
+def test_a_broken_node_fails_exactly_the_checks_it_should(
+        switches: dict[str, object], check: str, what: str, expected: str, got: str,
+        frames: list[str]) -> None:
+    baseline = _fake_run()  # what the responder lacks anyway (block transfer, ...)
+    report = _fake_run(**switches)
+    assert report.names(Status.FAILED) == baseline.names(Status.FAILED) | {check}
+    assert check not in baseline.names(Status.FAILED)
+    assert report.names(Status.SKIPPED) == baseline.names(Status.SKIPPED)
+    finding = report.result(check).findings[0]
+    assert finding.what.startswith(what)
+    assert (finding.expected, finding.got) == (expected, got)
+    for line, frame in zip(finding.frames[-2:], frames, strict=True):
+        assert frame in line
+
+
+def test_a_node_that_does_not_answer_is_an_error() -> None:
+    bus = SimBus()
+    began = bus.now_us
+    with pytest.raises(Error, match=r"node 20 does not answer SDO \(no answer to upload "
+                                    r"0x1000:0 within 2 s\), not even after 'enter "
+                                    "pre-operational'"):
+        cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20))
+    assert bus.now_us - began < 10_000_000  # at once, not a time-out per check
+
+
+def test_a_stopped_node_without_heartbeat_is_found_and_left_stopped() -> None:
+    bus = SimBus()
+    fake = FakeNode(bus, 20)
+    fake.start()
+    fake.state = 0x04
+    report = cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20), only=["dictionary.mandatory"])
+    assert report.passed, cc.markdown(report)
+    assert report.notes[0] == ("NMT state before the run: STOPPED (no heartbeat; SDO answered "
+                               "only after 'enter pre-operational')")
+    assert fake.state == 0x04
+
+
 def test_a_late_answer_of_an_earlier_exchange_is_passed_over() -> None:
     bus = SimBus()
     FakeNode(bus, 20, late_abort=True).start()

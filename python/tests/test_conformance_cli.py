@@ -76,6 +76,16 @@ def test_missing_files(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> No
 
 
 @pytest.mark.realtime
+def test_no_node_on_the_bus(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = cli(capsys, "conformance", "--node-id", "9", "--eds", str(EXAMPLE),
+                         "--bus", f"virtual://conformance-cli-{os.getpid()}-empty",
+                         "--timeout", "0.2")
+    assert (code, out) == (1, "")
+    one_line_error(err)
+    assert "node 9 does not answer SDO (no answer to upload 0x1000:0 within 0.2 s)" in err
+
+
+@pytest.mark.realtime
 def test_a_passing_run_and_its_reports(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                        device_channel: str) -> None:
     md, xml = tmp_path / "report.md", tmp_path / "report.xml"

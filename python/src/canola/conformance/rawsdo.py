@@ -108,7 +108,7 @@ class RawSdo:
                 answer, since = self.answer_at(since, what, max(0.0, end - self.link.now()))
             except NoAnswerError:
                 if stray is None:
-                    raise
+                    raise NoAnswerError(what, self.timeout) from None
                 answer = stray
                 break
             if len(answer) != 8 or answer[1:4] == mux:

@@ -100,14 +100,18 @@ class _Run:
 
     def start(self) -> int | None:
         """The node's NMT state (from its heartbeat, switched on for a moment if need be);
-        a STOPPED node is put into PRE-OPERATIONAL so that it answers SDO."""
+        a STOPPED node is put into PRE-OPERATIONAL so that it answers SDO. Raises Error
+        when the node answers neither then nor before (no node to check)."""
         ctx = self.context()
         mark = self.link.mark()
         state = None
         try:
-            period = int.from_bytes(ctx.sdo.upload(0x1017, 0), "little")
-        except (SdoAbort, NoAnswerError, SdoProtocolError):
-            period = None
+            period: int | None = int.from_bytes(ctx.sdo.upload(0x1017, 0), "little")
+            answered = True
+        except (SdoAbort, SdoProtocolError):
+            period, answered = None, True
+        except NoAnswerError:
+            period, answered = None, False
         if period:
             state = ctx.wait_error_control(mark, period / 1000 * 1.5 + self.options.timeout)
         elif period == 0:
@@ -118,8 +122,22 @@ class _Run:
                 ctx.sdo.download(0x1017, 0, b"\0\0")
             except (SdoAbort, NoAnswerError, SdoProtocolError):
                 pass
-        else:  # no answer: a stopped node says so in its heartbeat, if it has one
+        elif not answered:  # a stopped node says so in its heartbeat, if it has one
             state = ctx.wait_error_control(mark, self.options.timeout)
+        ctx.nmt("preop")
+        try:
+            ctx.sdo.upload(0x1000, 0)
+        except (SdoAbort, SdoProtocolError):
+            pass  # it answers: the checks judge how
+        except NoAnswerError as exc:
+            raise Error(f"node {self.node_id} does not answer SDO ({exc}), not even after "
+                        "'enter pre-operational': is the node-ID right, the bus the node's, "
+                        "its bit rate the bus's?") from None
+        if state is None and not answered:  # SDO only after 'enter pre-operational'
+            state = 0x04
+            self.report.notes.append("NMT state before the run: STOPPED (no heartbeat; SDO "
+                                     "answered only after 'enter pre-operational')")
+            return state
         name = STATES.get(state, "unknown") if state is not None else "unknown (no heartbeat)"
         self.report.notes.append(f"NMT state before the run: {name}")
         return state
