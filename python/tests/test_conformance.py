@@ -15,6 +15,7 @@ from conformance_fakes import FAKE_EDS, FakeNode
 import canola.conformance as cc
 from canola import Device, Error, eds
 from canola.conformance import Options, Status
+from canola.conformance.entries import VARIABLE_TYPES
 from canola.core import SimBus
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -44,6 +45,19 @@ def test_canola_device_passes(path: Path, skipped: set[str]) -> None:
     assert report.result("nmt.store_restore").reason == (
         "saves or restores stored parameters: run with --destructive")
     assert "1, 4, 5, 7, 8, 14, 15, 21, 22" in report.result("sdo.segmented_download").summary
+
+
+def test_without_strings_or_domains_fixed_size_entries_serve() -> None:
+    """The SDO checks fall back on entries of fixed size (TIME_OF_DAY's 6 bytes) and
+    announce their size: a segmented download of 14 bytes to them would be refused."""
+    od = eds.parse(INTEROP, node_id=NODE)
+    for index in [i for i, obj in od.objects.items()
+                  if any(v.data_type in VARIABLE_TYPES for v in obj.subs.values())]:
+        del od.objects[index]
+    report = device_run(od, only=["sdo"])
+    assert report.names(Status.FAILED) == set(), cc.markdown(report)
+    assert report.result("sdo.toggle_download").status is Status.PASSED
+    assert report.result("sdo.block_download").summary.startswith("0x200C:0 (TIME_OF_DAY")
 
 
 def test_store_restore_with_destructive(tmp_path: Path) -> None:
@@ -150,28 +164,29 @@ def _fake_run(**switches: object) -> cc.Report:
     return cc.run(bus, 20, eds.parse(FAKE_EDS, node_id=20))
 
 
-@pytest.mark.parametrize(("switches", "check", "what", "expected", "got", "frames"), [
-    ({"accepts_read_only": True}, "dictionary.write_read_only",
-     "write its own value to 0x1000:0",
-     "abort 0x06010002 (Attempt to write a read only object)", "success",
-     ["-> 614  23 00 10 00 91 01 00 00", "<- 594  60 00 10 00 00 00 00 00"]),
-    ({"missing_object_code": 0x06090011}, "dictionary.missing_object", "read 0x5FFF:0",
-     "abort 0x06020000 (Object does not exist in the object dictionary)",
-     "abort 0x06090011 (Sub-index does not exist)",
-     ["-> 614  40 FF 5F 00 00 00 00 00", "<- 594  80 FF 5F 00 11 00 09 06"]),
+@pytest.mark.parametrize(("switches", "check", "finding"), [
+    ({"accepts_read_only": True}, "dictionary.write_read_only", (
+        "write its own value to 0x1000:0",
+        "abort 0x06010002 (Attempt to write a read only object)", "success",
+        ["-> 614  23 00 10 00 91 01 00 00", "<- 594  60 00 10 00 00 00 00 00"])),
+    ({"missing_object_code": 0x06090011}, "dictionary.missing_object", (
+        "read 0x5FFF:0", "abort 0x06020000 (Object does not exist in the object dictionary)",
+        "abort 0x06090011 (Sub-index does not exist)",
+        ["-> 614  40 FF 5F 00 00 00 00 00", "<- 594  80 FF 5F 00 11 00 09 06"])),
 ], ids=["read-only write succeeds", "wrong abort code"])
 def test_a_broken_node_fails_exactly_the_checks_it_should(
-        switches: dict[str, object], check: str, what: str, expected: str, got: str,
-        frames: list[str]) -> None:
+        switches: dict[str, object], check: str,
+        finding: tuple[str, str, str, list[str]]) -> None:
     baseline = _fake_run()  # what the responder lacks anyway (block transfer, ...)
     report = _fake_run(**switches)
     assert report.names(Status.FAILED) == baseline.names(Status.FAILED) | {check}
     assert check not in baseline.names(Status.FAILED)
     assert report.names(Status.SKIPPED) == baseline.names(Status.SKIPPED)
-    finding = report.result(check).findings[0]
-    assert finding.what.startswith(what)
-    assert (finding.expected, finding.got) == (expected, got)
-    for line, frame in zip(finding.frames[-2:], frames, strict=True):
+    what, expected, got, frames = finding
+    first = report.result(check).findings[0]
+    assert first.what.startswith(what)
+    assert (first.expected, first.got) == (expected, got)
+    for line, frame in zip(first.frames[-2:], frames, strict=True):
         assert frame in line
 
 

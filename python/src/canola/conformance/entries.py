@@ -8,9 +8,12 @@ from collections.abc import Iterator
 from canola import eds, values
 from canola.datatypes import DATA_TYPES, INTEGER_TYPES
 
-__all__ = ["VARIABLE_TYPES", "another_number", "another_value", "describe", "fixed_size",
-           "integer_range", "mappable", "readable", "value_text", "variables", "writable"]
+__all__ = ["ACTING", "VARIABLE_TYPES", "another_number", "another_value", "describe",
+           "fixed_size", "integer_range", "mappable", "plain_rw", "readable", "value_text",
+           "variables", "writable"]
 
+#: Entries whose writes act (store, restore, program download): no probe value goes there.
+ACTING = frozenset({0x1010, 0x1011, *range(0x1F50, 0x1F60)})
 #: Data types whose length is the value's (strings, DOMAIN).
 VARIABLE_TYPES = frozenset({0x0009, 0x000A, 0x000B, 0x000F})
 
@@ -33,6 +36,11 @@ def readable(var: eds.Variable) -> bool:
 
 def writable(var: eds.Variable) -> bool:
     return var.access_type in ("wo", "rw", "rwr", "rww")
+
+
+def plain_rw(var: eds.Variable) -> bool:
+    """Readable and writable, and a write only stores the value (not in :data:`ACTING`)."""
+    return readable(var) and writable(var) and var.index not in ACTING
 
 
 def fixed_size(var: eds.Variable) -> int | None:

@@ -13,17 +13,14 @@ from canola.conformance.entries import (
     describe,
     fixed_size,
     integer_range,
-    readable,
+    plain_rw,
     value_text,
     variables,
-    writable,
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
 
 _MANDATORY = ((0x1000, 0), (0x1001, 0), (0x1018, 0), (0x1018, 1))
-#: Entries whose writes act (store, restore, program download): no write of a probe value.
-_ACTING = frozenset({0x1010, 0x1011, *range(0x1F50, 0x1F60)})
 _NOT_THERE = (0x06020000, 0x06090011)
 _DOMAIN = 0x000F
 _COMPOUND = (eds.ObjectType.ARRAY, eds.ObjectType.RECORD, eds.ObjectType.DEFSTRUCT)
@@ -31,8 +28,7 @@ _COMPOUND = (eds.ObjectType.ARRAY, eds.ObjectType.RECORD, eds.ObjectType.DEFSTRU
 
 def _probed(ctx: Context) -> list[eds.Variable]:
     """Readable, writable entries of fixed size whose write only stores a value."""
-    return [v for v in variables(ctx.od) if readable(v) and writable(v)
-            and fixed_size(v) is not None and v.index not in _ACTING]
+    return [v for v in variables(ctx.od) if plain_rw(v) and fixed_size(v) is not None]
 
 
 @check("dictionary.mandatory", clause="CiA 301 §7.5.2.1, §7.5.2.2, §7.5.2.21",

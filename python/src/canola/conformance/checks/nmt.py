@@ -12,6 +12,7 @@ from canola import eds, values
 from canola.conformance import pdo_tools as pt
 from canola.conformance.context import STATES, Context, abort_text
 from canola.conformance.entries import (
+    ACTING,
     another_number,
     describe,
     integer_range,
@@ -168,7 +169,7 @@ def _app_entry(ctx: Context) -> eds.Variable | None:
     """A plain read-write integer entry of the application (0x2000.., manufacturer area
     first), or None."""
     found = [v for v in variables(ctx.od) if v.index >= 0x2000 and v.access_type == "rw"
-             and integer_range(v) is not None and not 0x1F50 <= v.index <= 0x1F5F]
+             and integer_range(v) is not None and v.index not in ACTING]
     found.sort(key=lambda v: not 0x2000 <= v.index <= 0x5FFF)
     return found[0] if found else None
 

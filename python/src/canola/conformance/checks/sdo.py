@@ -4,15 +4,19 @@ specifier, client abort, block CRC and block size, the server's own time-out."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
+from typing import TypeVar
+
 from canola import SdoAbort, eds
 from canola.conformance.context import Context, abort_text, outcome
 from canola.conformance.entries import (
     VARIABLE_TYPES,
     describe,
     fixed_size,
+    plain_rw,
     readable,
     variables,
-    writable,
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
@@ -22,7 +26,7 @@ SIZES = (1, 4, 5, 7, 8, 14, 15, 21, 22)
 #: For block transfer also around a sub-block of 127 segments (889 bytes), where the
 #: entry takes them.
 BLOCK_SIZES = (*SIZES, 889, 890)
-_ACTING = frozenset({0x1010, 0x1011, *range(0x1F50, 0x1F60)})
+T = TypeVar("T")
 _PATTERN = b"canola conformance SDO probe: 0123456789 abcdefghijklmnopqrstuvwxyz"
 
 
@@ -31,8 +35,7 @@ def _probe(size: int) -> bytes:
 
 
 def _rw(ctx: Context) -> list[eds.Variable]:
-    return [v for v in variables(ctx.od) if readable(v) and writable(v)
-            and v.index not in _ACTING]
+    return [v for v in variables(ctx.od) if plain_rw(v)]
 
 
 #: Preference among the entries of variable length: DOMAIN, then the strings (an
@@ -129,6 +132,18 @@ def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str,
     return done
 
 
+def _own_value(ctx: Context, var: eds.Variable, how: str,
+               download: Callable[[bytes], T]) -> tuple[bytes, T]:
+    """Write the entry's own value back to it by ``download`` (nothing changes); the value
+    and what ``download`` gave. A failure ends the check."""
+    data = ctx.read(var.index, var.subindex)
+    try:
+        return data, download(data)
+    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
+        ctx.fail(f"{how} download of its own value to {describe(var)}", "success",
+                 outcome(exc))
+
+
 @check("sdo.expedited_upload", clause="CiA 301 §7.2.4.3.6",
        title="an expedited upload answer has scs 2, e = 1, the right n and the multiplexer")
 def expedited_upload(ctx: Context) -> None:
@@ -177,12 +192,8 @@ def segmented_download(ctx: Context) -> None:
     var = long_entry(ctx)
     if var is None:
         ctx.skip("the EDS has no readable and writable entry longer than 4 bytes")
-    data = ctx.read(var.index, var.subindex)
-    try:
-        ctx.sdo.download(var.index, var.subindex, data, segmented=True)
-    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
-        ctx.fail(f"segmented download of its own value to {describe(var)}", "success",
-                 outcome(exc))
+    data, _ = _own_value(ctx, var, "segmented", partial(ctx.sdo.download, var.index,
+                                                        var.subindex, segmented=True))
     ctx.note(f"{describe(var)}: its own {len(data)} bytes")
 
 
@@ -218,14 +229,19 @@ def _segmented_start(ctx: Context) -> tuple[eds.Variable, bool]:
     return var, False
 
 
+def _download_size(var: eds.Variable) -> int:
+    """The size a segmented download to ``var`` announces: its type's, else 14 bytes."""
+    return fixed_size(var) or 14
+
+
 def _initiate(ctx: Context, var: eds.Variable, upload: bool) -> None:
     mux = bytes([var.index & 0xFF, var.index >> 8, var.subindex])
     if upload:
         answer = ctx.sdo.request(bytes([0x40]) + mux, f"upload {describe(var)}")
         ok = answer[0] & 0xE2 == 0x40  # scs 2, not expedited
     else:
-        answer = ctx.sdo.request(bytes([0x21]) + mux + (14).to_bytes(4, "little"),
-                                 f"download {describe(var)}")
+        size = _download_size(var).to_bytes(4, "little")
+        answer = ctx.sdo.request(bytes([0x21]) + mux + size, f"download {describe(var)}")
         ok = answer[0] == 0x60
     if not ok:
         ctx.fail(f"initiate a segmented {'upload' if upload else 'download'} of "
@@ -247,7 +263,10 @@ def toggle_download(ctx: Context) -> None:
         ctx.skip("the EDS has no readable and writable entry for a segmented download")
     ctx.keep(var.index, var.subindex)
     _initiate(ctx, var, upload=False)
-    answer = ctx.sdo.request(bytes([0x10]) + _probe(7), "a first segment with toggle 1")
+    piece = _probe(min(7, _download_size(var)))
+    last = int(len(piece) == _download_size(var))
+    answer = ctx.sdo.request(bytes([0x10 | (7 - len(piece)) << 1 | last]) + piece,
+                             "a first segment with toggle 1")
     _expect_toggle_abort(ctx, var, answer, "download segment 1 with toggle bit 1")
     _served_again(ctx, "the wrong toggle bit")
 
@@ -342,12 +361,8 @@ def block_download(ctx: Context) -> None:
         done = _sized_series(ctx, var, "block", "segmented", BLOCK_SIZES)
         ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
         return
-    data = ctx.read(var.index, var.subindex)
-    try:
-        blksize = ctx.sdo.block_download(var.index, var.subindex, data)
-    except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
-        ctx.fail(f"block download of its own value to {describe(var)}", "success",
-                 outcome(exc))
+    data, blksize = _own_value(ctx, var, "block",
+                               partial(ctx.sdo.block_download, var.index, var.subindex))
     ctx.note(f"{describe(var)}: its own {len(data)} bytes, block size {blksize}")
 
 

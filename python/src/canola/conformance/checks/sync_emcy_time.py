@@ -19,7 +19,8 @@ __all__ = ["heartbeat_loss"]
 _SYNC_US = 100_000
 _SYNC_FRAMES = 7
 _CONSUMER_MS = 200
-_INVALID = 0x80000000
+#: 0x1012 bit 31: the node consumes TIME.
+_CONSUMER = 0x80000000
 
 
 def _writable_entry(ctx: Context, index: int, why: str) -> None:
@@ -132,7 +133,7 @@ def heartbeat_loss(ctx: Context) -> tuple[int, Seen | None]:
         ctx.skip("0x1016:1 is not writable: no heartbeat consumer to cause an EMCY with")
     ctx.need(0x1014, why="no EMCY producer")
     emcy = ctx.read_uint(0x1014)
-    if emcy & _INVALID:
+    if emcy & pt.INVALID:
         ctx.skip(f"the EMCY producer is off (0x1014 = 0x{emcy:08X})")
     cob = emcy & 0x7FF
     tester = ctx.link.master.node_id
@@ -191,11 +192,11 @@ def error_history(ctx: Context) -> None:
 def cob_id(ctx: Context) -> None:
     _writable_entry(ctx, 0x1014, "COB-ID EMCY")
     original = ctx.read_uint(0x1014)
-    if original & _INVALID:
+    if original & pt.INVALID:
         ctx.skip(f"the EMCY producer is off (0x1014 = 0x{original:08X})")
 
     def back() -> None:  # a valid COB-ID changes through "not valid"
-        for value in (original | _INVALID, original):
+        for value in (original | pt.INVALID, original):
             ctx.sdo.download(0x1014, 0, value.to_bytes(4, "little"))
 
     ctx.on_undo("write back 0x1014:0", back)
@@ -203,8 +204,8 @@ def cob_id(ctx: Context) -> None:
     ctx.expect_abort(f"write 0x{other:X} to 0x1014 while 0x{original:X} is valid", None,
                      lambda: ctx.sdo.download(0x1014, 0, other.to_bytes(4, "little")),
                      restore=lambda: ctx.sdo.download(0x1014, 0, original.to_bytes(4, "little")))
-    ctx.write_uint(0x1014, 0, original | _INVALID, 4)
-    ctx.write_uint(0x1014, 0, other | _INVALID, 4)
+    ctx.write_uint(0x1014, 0, original | pt.INVALID, 4)
+    ctx.write_uint(0x1014, 0, other | pt.INVALID, 4)
     ctx.write_uint(0x1014, 0, other, 4)
     if ctx.var(0x1016, 1) is None:
         ctx.note("no heartbeat consumer to cause an EMCY with: the COB-ID change only")
@@ -222,11 +223,11 @@ def cob_id(ctx: Context) -> None:
 def time_consumer(ctx: Context) -> None:
     var = ctx.need(0x1012, why="no TIME object")
     value = ctx.read_uint(0x1012)
-    if not value & _INVALID:
+    if not value & _CONSUMER:
         if not writable(var):
             ctx.skip("0x1012 is read-only without the consumer bit: no TIME consumer")
-        ctx.write_temp(0x1012, 0, ((value & 0x3FFFFFFF) | _INVALID).to_bytes(4, "little"))
-        if not ctx.read_uint(0x1012) & _INVALID:
+        ctx.write_temp(0x1012, 0, ((value & 0x3FFFFFFF) | _CONSUMER).to_bytes(4, "little"))
+        if not ctx.read_uint(0x1012) & _CONSUMER:
             ctx.finding("0x1012 after setting bit 31", "bit 31 set",
                         f"0x{ctx.read_uint(0x1012):08X}")
     cob = value & 0x7FF
