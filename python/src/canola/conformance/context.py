@@ -114,6 +114,20 @@ class Context:
     def read_uint(self, index: int, sub: int = 0) -> int:
         return int.from_bytes(self.read(index, sub), "little")
 
+    def served(self, when: str) -> bool:
+        """Does the SDO server serve (``when``: "after reset node", say)? Any answer to a
+        read of 0x1000:0 says so, an abort too (the EDS may lack 0x1000:
+        dictionary.mandatory judges that); else a finding, and False."""
+        try:
+            self.sdo.upload(0x1000, 0)
+        except SdoAbort:
+            pass
+        except (NoAnswerError, SdoProtocolError) as exc:
+            self.finding(f"read 0x1000:0 {when}", "an answer (its value or an abort)",
+                         outcome(exc))
+            return False
+        return True
+
     def write(self, index: int, sub: int, data: bytes) -> None:
         """Download (index, sub); any failure ends the check."""
         try:

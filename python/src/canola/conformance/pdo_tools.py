@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 from canola import SdoAbort, eds
 from canola.conformance.context import Context
@@ -20,11 +21,14 @@ from canola.conformance.entries import (
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 
-__all__ = ["INVALID", "Mapped", "Pdo", "PdoConfig", "check_values", "configure", "dynamic",
-           "entry_of", "keep", "mapped", "pdos", "read_config", "rpdo_payload", "sync_cob",
-           "tpdo_frames", "try_mapping", "usable_pdo", "write_config"]
+__all__ = ["INVALID", "PRODUCER", "Mapped", "Pdo", "PdoConfig", "check_values", "configurable",
+           "configure", "dynamic", "entry_of", "keep", "mapped", "pdos", "read_config",
+           "remappable", "restorable", "rpdo_payload", "sync_cob", "tpdo_frames",
+           "try_mapping", "usable_pdo", "write_config"]
 
 INVALID = 0x80000000
+#: 0x1005 bit 30: the node produces SYNC.
+PRODUCER = 0x40000000
 #: Parameter sub-indices of a communication record besides the COB-ID (1).
 PARAMS = (2, 3, 5, 6)
 
@@ -78,10 +82,18 @@ def pdos(ctx: Context, *, tpdo: bool) -> list[Pdo]:
     return found
 
 
+def configurable(ctx: Context, pdo: Pdo) -> bool:
+    """The EDS lets the COB-ID be written (every change of a PDO's configuration begins by
+    making it not valid)."""
+    var = ctx.var(pdo.comm, 1)
+    return var is not None and writable(var)
+
+
 def dynamic(ctx: Context, pdo: Pdo) -> bool:
-    """The EDS lets the mapping be written."""
+    """The EDS lets the mapping be written (and the COB-ID: the procedure needs it)."""
     var = ctx.var(pdo.mapping, 0)
-    return var is not None and writable(var) and ctx.var(pdo.mapping, 1) is not None
+    return (var is not None and writable(var) and ctx.var(pdo.mapping, 1) is not None
+            and configurable(ctx, pdo))
 
 
 def _size(ctx: Context, index: int, sub: int) -> int:
@@ -125,17 +137,38 @@ def write_config(ctx: Context, pdo: Pdo, cfg: PdoConfig, *, touch_mapping: bool)
                 ctx.try_write(pdo.mapping, sub, entry.to_bytes(4, "little"))
         ctx.write_uint(pdo.mapping, 0, cfg.count, 1)
     for sub, value in cfg.params.items():
-        ctx.write_uint(pdo.comm, sub, value, _size(ctx, pdo.comm, sub))
+        var = ctx.var(pdo.comm, sub)
+        if var is not None and writable(var):  # a read-only one is as it was
+            ctx.write_uint(pdo.comm, sub, value, _size(ctx, pdo.comm, sub))
     ctx.write_uint(pdo.comm, 1, cfg.cob, 4)
+
+
+def restorable(ctx: Context, pdo: Pdo, cfg: PdoConfig) -> bool:
+    """The PDO's mapping ``cfg`` can be written back: it maps only entries the EDS marks
+    PDO-mappable in the PDO's direction (or dummy entries, below 0x1000)."""
+    for entry in cfg.mapped:
+        index, sub = entry >> 16, (entry >> 8) & 0xFF
+        var = ctx.var(index, sub)
+        if index >= 0x1000 and (var is None or not mappable(var, tpdo=pdo.tpdo)):
+            return False
+    return True
+
+
+def remappable(ctx: Context, pdo: Pdo) -> bool:
+    """The mapping can be changed and its own written back (:func:`dynamic`,
+    :func:`restorable`)."""
+    return dynamic(ctx, pdo) and restorable(ctx, pdo, read_config(ctx, pdo))
 
 
 def read_cob(ctx: Context, pdo: Pdo) -> int:
     return ctx.read_uint(pdo.comm, 1)
 
 
-def keep(ctx: Context, pdo: Pdo) -> PdoConfig:
-    """The PDO's configuration, written back after the check."""
-    original = read_config(ctx, pdo)
+def keep(ctx: Context, pdo: Pdo, original: PdoConfig | None = None) -> PdoConfig:
+    """The PDO's configuration (``original``, else read now), written back after the
+    check."""
+    if original is None:
+        original = read_config(ctx, pdo)
     touch = dynamic(ctx, pdo)
     ctx.on_undo(f"restore {pdo.name}",
                 lambda: write_config(ctx, pdo, original, touch_mapping=touch))
@@ -144,20 +177,32 @@ def keep(ctx: Context, pdo: Pdo) -> PdoConfig:
 
 def configure(ctx: Context, pdo: Pdo, *, entries: Sequence[int] | None = None,
               **params: int) -> PdoConfig:
-    """Give the PDO ``entries`` (None: keep its mapping) and parameters by name
-    (``type``, ``inhibit``, ``event``, ``sync_start``), valid; restored after the check."""
-    original = keep(ctx, pdo)
+    """Give the PDO ``entries`` (None, or its own: its mapping is not written) and
+    parameters by name (``type``, ``inhibit``, ``event``, ``sync_start``), valid; restored
+    after the check."""
+    if not configurable(ctx, pdo):
+        ctx.skip(f"the EDS has {pdo.name}'s COB-ID (0x{pdo.comm:04X}:1) read-only: its "
+                 "configuration cannot be changed")
+    original = read_config(ctx, pdo)
     subs = {"type": 2, "inhibit": 3, "event": 5, "sync_start": 6}
+    for name, value in params.items():
+        var = ctx.var(pdo.comm, subs[name])
+        where = f"{pdo.name} {name} (0x{pdo.comm:04X}:{subs[name]})"
+        if var is None:
+            ctx.skip(f"the EDS has no {where}")
+        if not writable(var) and original.params.get(subs[name]) != value:
+            ctx.skip(f"the EDS has {where} read-only ({original.params.get(subs[name])}); "
+                     f"the check needs {value}")
+    keep(ctx, pdo, original)
     cfg = PdoConfig(default_cob(ctx, pdo, original), dict(original.params), original.count,
                     dict(original.entries))
     for name, value in params.items():
-        if ctx.var(pdo.comm, subs[name]) is None:
-            ctx.skip(f"the EDS has no {pdo.name} {name} (0x{pdo.comm:04X}:{subs[name]})")
         cfg.params[subs[name]] = value
+    remap = entries is not None and list(entries) != original.mapped
     if entries is not None:
         cfg.count = len(entries)
         cfg.entries.update(dict(enumerate(entries, start=1)))
-    write_config(ctx, pdo, cfg, touch_mapping=entries is not None)
+    write_config(ctx, pdo, cfg, touch_mapping=remap)
     return cfg
 
 
@@ -198,12 +243,12 @@ def usable_pdo(ctx: Context, *, tpdo: bool, need_writable: bool = False
         return var is not None and readable(var) and (writable(var) or not need_writable) \
             and fixed_size(var) is not None
 
-    for pdo in pdos(ctx, tpdo=tpdo):
+    for pdo in filter(partial(configurable, ctx), pdos(ctx, tpdo=tpdo)):
         cfg = read_config(ctx, pdo)
         entries = cfg.mapped
         if entries and all(fits(m.var) for m in mapped(ctx, entries)):
             return pdo, entries
-        if dynamic(ctx, pdo):
+        if dynamic(ctx, pdo) and restorable(ctx, pdo, cfg):
             var = next((v for v in variables(ctx.od) if mappable(v, tpdo=tpdo) and fits(v)),
                        None)
             if var is not None:
@@ -245,10 +290,20 @@ def rpdo_payload(ctx: Context, entries: Sequence[int]
 
 
 def sync_cob(ctx: Context) -> int:
-    """The COB-ID the node takes SYNC on (0x1005, else 0x080)."""
-    if ctx.var(0x1005, 0) is None:
-        return 0x080
-    return ctx.read_uint(0x1005, 0) & 0x7FF
+    """The COB-ID the node takes SYNC on (0x1005; SKIPPED without it: no SYNC consumer).
+    For the check the tester is the only SYNC producer (the node's producer bit 30 off)
+    and a synchronous window (0x1007) is off, where the EDS lets them be written: a node
+    may drop the synchronous PDOs that come after the window (CiA 301 §7.2.5)."""
+    var = ctx.need(0x1005, why="no SYNC consumer")
+    cob = ctx.read_uint(0x1005, 0)
+    if cob & PRODUCER:
+        if not writable(var):
+            ctx.skip(f"the node produces SYNC itself (0x1005 = 0x{cob:08X}, read-only)")
+        ctx.write_temp(0x1005, 0, (cob & ~PRODUCER).to_bytes(4, "little"))
+    window = ctx.var(0x1007, 0)
+    if window is not None and writable(window) and ctx.read_uint(0x1007, 0):
+        ctx.write_temp(0x1007, 0, bytes(fixed_size(window) or 4))
+    return cob & 0x7FF
 
 
 def tpdo_frames(ctx: Context, cob: int, mark: int) -> list[float]:

@@ -163,7 +163,8 @@ class _Run:
         ctx.nmt("preop")
         status, reason = Status.PASSED, ""
         try:
-            ctx.read(0x1000, 0)  # is the node there?
+            if not ctx.served("before the check (is the node there?)"):
+                raise CheckEnded("no node")
             chk.run(ctx)
         except KeyboardInterrupt:
             self.undo(ctx)  # what the interrupted check changed goes back first
@@ -192,5 +193,7 @@ class _Run:
         for label, fn in reversed(ctx.undo):
             try:
                 fn()
+            except CheckEnded:
+                pass  # its finding is recorded; the other undo actions still run
             except (SdoAbort, NoAnswerError, SdoProtocolError) as exc:
                 ctx.finding(label, "success", outcome(exc))

@@ -144,9 +144,19 @@ def limits(ctx: Context) -> None:
         assert var.data_type is not None
         try:
             original = ctx.sdo.upload(var.index, var.subindex)
-        except (SdoAbort, NoAnswerError, SdoProtocolError):
+            now = values.decode(var.data_type, original)
+        except (SdoAbort, NoAnswerError, SdoProtocolError, values.ValueFormatError):
             continue  # dictionary.entries reports it
         tested += 1
+        assert isinstance(now, int)
+        if (isinstance(low, int) and now < low) or (isinstance(high, int) and now > high):
+            # its own value could not be written back: the entry is left as it is
+            bounds = [f"{word} {bound}" for word, bound in (("LowLimit", low),
+                                                            ("HighLimit", high))
+                      if isinstance(bound, int)]
+            ctx.finding(f"value of {describe(var)}", f"within {' .. '.join(bounds)}",
+                        f"{now}")
+            continue
 
         def put(value: int, var: eds.Variable = var) -> None:
             assert var.data_type is not None

@@ -70,7 +70,7 @@ def heartbeat(ctx: Context) -> int:
        title="after reset node: one boot-up frame, then SDO in PRE-OPERATIONAL")
 def bootup_reset_node(ctx: Context) -> None:
     took = reset(ctx, "reset-node")
-    ctx.read(0x1000, 0)
+    ctx.served("after reset node")
     ctx.note(f"boot-up after {took:.3f} s")
 
 
@@ -78,7 +78,7 @@ def bootup_reset_node(ctx: Context) -> None:
        title="after reset communication: one boot-up frame, then SDO in PRE-OPERATIONAL")
 def bootup_reset_comm(ctx: Context) -> None:
     took = reset(ctx, "reset-comm")
-    ctx.read(0x1000, 0)
+    ctx.served("after reset communication")
     ctx.note(f"boot-up after {took:.3f} s")
 
 
@@ -110,9 +110,9 @@ def sdo_gating(ctx: Context) -> None:
         ctx.finding("SDO upload 0x1000:0 in STOPPED", f"no answer within "
                     f"{ctx.options.quiet:g} s", f"[{answers[0].frame.data.hex(' ').upper()}]")
     ctx.nmt("start")
-    ctx.read(0x1000, 0)
+    ctx.served("in OPERATIONAL")
     ctx.nmt("preop")
-    ctx.read(0x1000, 0)
+    ctx.served("in PRE-OPERATIONAL")
 
 
 @check("nmt.heartbeat_period", clause="CiA 301 §7.2.8.3.2.2, §7.5.2.20",

@@ -72,6 +72,10 @@ def remap(ctx: Context) -> None:
         if not pt.dynamic(ctx, pdo):
             continue
         cfg = pt.read_config(ctx, pdo)
+        if not pt.restorable(ctx, pdo, cfg):  # left as it is: it could not be written back
+            ctx.finding(f"{pdo.name}'s own mapping {_hex(cfg.mapped)}", "entries the EDS "
+                        f"marks PDO-mappable for a {pdo.name[:4]}", "others")
+            continue
         entries = cfg.mapped
         if not entries:
             var = next((v for v in variables(ctx.od) if mappable(v, tpdo=pdo.tpdo)), None)
@@ -100,7 +104,7 @@ def _hex(entries: list[int]) -> str:
 def map_every_mappable(ctx: Context) -> None:
     tested = 0
     for tpdo in (True, False):
-        pdo = next((p for p in pt.pdos(ctx, tpdo=tpdo) if pt.dynamic(ctx, p)), None)
+        pdo = next((p for p in pt.pdos(ctx, tpdo=tpdo) if pt.remappable(ctx, p)), None)
         candidates = [v for v in variables(ctx.od) if mappable(v, tpdo=tpdo)]
         if pdo is None or not candidates:
             continue
@@ -120,9 +124,10 @@ def map_every_mappable(ctx: Context) -> None:
              "(0x06040042)")
 def map_refused(ctx: Context) -> None:
     pdo = next((p for p in pt.pdos(ctx, tpdo=True) + pt.pdos(ctx, tpdo=False)
-                if pt.dynamic(ctx, p)), None)
+                if pt.remappable(ctx, p)), None)
     if pdo is None:
-        ctx.skip("no PDO has a writable mapping")
+        ctx.skip("no PDO has a writable mapping (and its own mapping of PDO-mappable "
+                 "entries)")
     pt.keep(ctx, pdo)
     subs = max(ctx.od.objects[pdo.mapping].subs)
     plain = next((v for v in variables(ctx.od) if not v.pdo_mapping and fixed_size(v)
@@ -295,11 +300,12 @@ def rpdo_applied(ctx: Context) -> None:
        title="a synchronous RPDO's data is applied at the next SYNC, not before")
 def rpdo_sync(ctx: Context) -> None:
     pdo, cob, entries = _rpdo(ctx, type=1)
+    sync = pt.sync_cob(ctx)
     ctx.nmt("start")
     frame, expected = pt.rpdo_payload(ctx, entries)
     ctx.link.send(cob, frame)
     pt.check_values(ctx, expected, applied=False, when=f"after {pdo.name} (type 1), before SYNC")
-    ctx.link.send(pt.sync_cob(ctx))
+    ctx.link.send(sync)
     pt.check_values(ctx, expected, applied=True, when=f"after {pdo.name} (type 1) and a SYNC")
     ctx.note(f"{pdo.name} on 0x{cob:03X}")
 

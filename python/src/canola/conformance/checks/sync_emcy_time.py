@@ -17,6 +17,7 @@ from canola.conformance.registry import check
 __all__ = ["heartbeat_loss"]
 
 _SYNC_US = 100_000
+_SYNC_US_LEAST = 10_000
 _SYNC_FRAMES = 7
 _CONSUMER_MS = 200
 #: 0x1012 bit 31: the node consumes TIME.
@@ -29,19 +30,36 @@ def _writable_entry(ctx: Context, index: int, why: str) -> None:
         ctx.skip(f"0x{index:04X} is not writable in the EDS ({why})")
 
 
-def _no_sync_period(ctx: Context) -> None:
-    """0x1006 at 0 for the check (0x1019 changes only then)."""
-    var = ctx.var(0x1006, 0)
-    if var is not None and ctx.read_uint(0x1006) and writable(var):
-        ctx.write_temp(0x1006, 0, bytes(4))
+def _keep_counter(ctx: Context) -> None:
+    """Keep 0x1019 and 0x1006 for the check, 0x1006 at 0 now (0x1019 changes only then),
+    and write them back in that order too: 0x1006 to 0, 0x1019, 0x1006."""
+    period = ctx.var(0x1006, 0)
+    stoppable = period is not None and writable(period)
+    if stoppable:
+        ctx.keep(0x1006, 0)
+    ctx.keep(0x1019, 0)
+    if stoppable:
+        ctx.on_undo("write 0 to 0x1006:0 (0x1019 changes only then)",
+                    partial(ctx.sdo.download, 0x1006, 0, bytes(4)))
+        ctx.write(0x1006, 0, bytes(4))
+
+
+def _period_us(ctx: Context) -> int:
+    """The SYNC period for the producer check: 100 ms, or 0x1006's HighLimit when lower
+    (SKIPPED below 10 ms)."""
+    high = ctx.need(0x1006, why="communication cycle period").high
+    period = min(_SYNC_US, high) if isinstance(high, int) else _SYNC_US
+    if period < _SYNC_US_LEAST:
+        ctx.skip(f"0x1006's HighLimit {period} µs is below the {_SYNC_US_LEAST} µs the check "
+                 "can time")
+    return period
 
 
 @check("sync.counter_overflow", clause="CiA 301 §7.2.5, §7.5.2.22",
        title="0x1019 takes 0 and 2..240 and refuses 1 and 241 (0x06090030)")
 def counter_overflow(ctx: Context) -> None:
     _writable_entry(ctx, 0x1019, "SYNC counter overflow")
-    ctx.keep(0x1019, 0)
-    _no_sync_period(ctx)
+    _keep_counter(ctx)
     for value in (1, 241):
         ctx.expect_abort(f"write {value} to 0x1019", (0x06090030,),
                          partial(ctx.sdo.download, 0x1019, 0, bytes([value])))
@@ -53,26 +71,26 @@ def counter_overflow(ctx: Context) -> None:
 
 
 @check("sync.producer", clause="CiA 301 §7.2.5, §7.5.2.5, §7.5.2.6, §7.5.2.22",
-       title="as SYNC producer (0x1005 bit 30, 0x1006 100 ms) the node sends SYNC at the "
-             "period, its counter running 1..0x1019")
+       title="as SYNC producer (0x1005 bit 30, 0x1006 100 ms or its HighLimit if lower) the "
+             "node sends SYNC at the period, its counter running 1..0x1019")
 def producer(ctx: Context) -> None:
     _writable_entry(ctx, 0x1005, "SYNC COB-ID")
     _writable_entry(ctx, 0x1006, "communication cycle period")
+    period_us = _period_us(ctx)
     counter = ctx.var(0x1019, 0) is not None and writable(ctx.need(0x1019, why="counter"))
     if counter:
-        ctx.keep(0x1019, 0)
-    ctx.keep(0x1006, 0)
-    cob = ctx.keep(0x1005, 0)
-    sync = int.from_bytes(cob, "little") & 0x7FF
-    ctx.write(0x1006, 0, bytes(4))
-    if counter:
+        _keep_counter(ctx)
         ctx.write(0x1019, 0, bytes([3]))
-    ctx.write_uint(0x1006, 0, _SYNC_US, 4)
+    else:
+        ctx.keep(0x1006, 0)
+    cob = ctx.keep(0x1005, 0)  # written back first: the producer stops
+    sync = int.from_bytes(cob, "little") & 0x7FF
+    ctx.write_uint(0x1006, 0, period_us, 4)
     mark = ctx.link.mark()
-    error = ctx.try_write(0x1005, 0, (sync | 0x40000000).to_bytes(4, "little"))
+    error = ctx.try_write(0x1005, 0, (sync | pt.PRODUCER).to_bytes(4, "little"))
     if error is not None:
         ctx.skip(f"0x1005 refuses the producer bit ({outcome(error)}): not a SYNC producer")
-    p = _SYNC_US / 1e6
+    p = period_us / 1e6
     tol = ctx.options.tolerance
 
     def frames() -> list[Seen]:
@@ -82,7 +100,7 @@ def producer(ctx: Context) -> None:
                         _SYNC_FRAMES * p * (1 + 2 * tol) + ctx.options.timeout)
     seen = frames()
     if len(seen) < _SYNC_FRAMES:
-        ctx.fail(f"SYNC frames on 0x{sync:03X} (period {_SYNC_US // 1000} ms)",
+        ctx.fail(f"SYNC frames on 0x{sync:03X} (period {p * 1000:g} ms)",
                  f"{_SYNC_FRAMES}", f"{len(seen)}")
     gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
     mean = statistics.fmean(gaps)
@@ -107,8 +125,7 @@ def start_value(ctx: Context) -> None:
         "no TPDO in the EDS maps (or can map) entries")
     if ctx.var(pdo.comm, 6) is None:
         ctx.skip(f"the EDS has no SYNC start value for {pdo.name}")
-    ctx.keep(0x1019, 0)
-    _no_sync_period(ctx)
+    _keep_counter(ctx)
     ctx.write(0x1019, 0, bytes([5]))
     cob = pt.configure(ctx, pdo, entries=entries, type=1, sync_start=3).cob & 0x7FF
     sync = pt.sync_cob(ctx)
@@ -168,7 +185,7 @@ def heartbeat_loss_emcy(ctx: Context) -> None:
        title="0x1003 records the error (sub 1 = 0x8130); writing 0 to sub 0 clears it, "
              "other values are refused (0x06090030)")
 def error_history(ctx: Context) -> None:
-    ctx.need(0x1003, 0, why="no pre-defined error field")
+    field = ctx.need(0x1003, 0, why="no pre-defined error field")
     ctx.need(0x1003, 1, why="no pre-defined error field")
     _, seen = heartbeat_loss(ctx)
     if seen is None:
@@ -178,6 +195,9 @@ def error_history(ctx: Context) -> None:
     if count < 1 or newest & 0xFFFF != 0x8130:
         ctx.finding("0x1003 after EMCY 0x8130", "sub 0 >= 1, sub 1 & 0xFFFF = 0x8130",
                     f"sub 0 = {count}, sub 1 = 0x{newest:08X}")
+    if not writable(field):  # CiA 301 §7.5.2.4: rw, writing 0 clears
+        ctx.fail("0x1003:0 in the EDS", "rw (writing 0 clears the history)",
+                 str(field.access_type))
     ctx.expect_abort("write 1 to 0x1003:0", (0x06090030,),
                      lambda: ctx.sdo.download(0x1003, 0, b"\x01"))
     ctx.write(0x1003, 0, b"\0")
@@ -239,6 +259,6 @@ def time_consumer(ctx: Context) -> None:
     if emcys:
         ctx.finding(f"TIME frame on 0x{cob:03X}", "no EMCY",
                     f"[{emcys[0].frame.data.hex(' ').upper()}]")
-    ctx.read(0x1000, 0)
+    ctx.served("after the TIME frame")
     ctx.note(f"TIME on 0x{cob:03X}: what the node does with it is not visible over CANopen")
 
