@@ -21,10 +21,32 @@ from canola.conformance.entries import (
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 
-__all__ = ["INVALID", "PRODUCER", "Mapped", "Pdo", "PdoConfig", "check_values", "configurable",
-           "configure", "dynamic", "entry_of", "keep", "mapped", "pdos", "read_config",
-           "remappable", "restorable", "rpdo_payload", "sync_cob", "tpdo_frames",
-           "try_mapping", "usable_pdo", "write_config"]
+__all__ = [
+    "INVALID",
+    "PRODUCER",
+    "Mapped",
+    "Pdo",
+    "PdoConfig",
+    "SyncSource",
+    "check_values",
+    "configurable",
+    "configure",
+    "dynamic",
+    "entry_of",
+    "keep",
+    "mapped",
+    "pdos",
+    "read_config",
+    "remap",
+    "remappable",
+    "restorable",
+    "rpdo_payload",
+    "sync_source",
+    "tpdo_frames",
+    "try_mapping",
+    "usable_pdo",
+    "write_config",
+]
 
 INVALID = 0x80000000
 #: 0x1005 bit 30: the node produces SYNC.
@@ -144,14 +166,24 @@ def write_config(ctx: Context, pdo: Pdo, cfg: PdoConfig, *, touch_mapping: bool)
 
 
 def restorable(ctx: Context, pdo: Pdo, cfg: PdoConfig) -> bool:
-    """The PDO's mapping ``cfg`` can be written back: it maps only entries the EDS marks
-    PDO-mappable in the PDO's direction (or dummy entries, below 0x1000)."""
+    """The PDO's mapping ``cfg`` is one the EDS allows (and so can be written back): its
+    count within the EDS's limits and sub-indices, only entries the EDS marks PDO-mappable
+    in the PDO's direction (or dummy entries, below 0x1000)."""
+    count = ctx.var(pdo.mapping, 0)
+    if (count is None or not _within(count, cfg.count)
+            or cfg.count > max(ctx.od.objects[pdo.mapping].subs)):
+        return False
     for entry in cfg.mapped:
         index, sub = entry >> 16, (entry >> 8) & 0xFF
         var = ctx.var(index, sub)
         if index >= 0x1000 and (var is None or not mappable(var, tpdo=pdo.tpdo)):
             return False
     return True
+
+
+def _within(var: eds.Variable, value: int) -> bool:
+    low, high = var.low, var.high
+    return not ((isinstance(low, int) and value < low) or (isinstance(high, int) and value > high))
 
 
 def remappable(ctx: Context, pdo: Pdo) -> bool:
@@ -206,6 +238,16 @@ def configure(ctx: Context, pdo: Pdo, *, entries: Sequence[int] | None = None,
     return cfg
 
 
+def remap(ctx: Context, pdo: Pdo, entries: Sequence[int]) -> PdoConfig:
+    """Map ``entries`` by the whole procedure (even when they are the PDO's own), valid;
+    restored after the check."""
+    original = keep(ctx, pdo)
+    cfg = PdoConfig(default_cob(ctx, pdo, original), dict(original.params), len(entries),
+                    {**original.entries, **dict(enumerate(entries, start=1))})
+    write_config(ctx, pdo, cfg, touch_mapping=True)
+    return cfg
+
+
 def entry_of(var: eds.Variable) -> int:
     """The mapping entry of an entry: index << 16 | sub << 8 | length in bits."""
     return var.index << 16 | var.subindex << 8 | 8 * (fixed_size(var) or 0)
@@ -238,7 +280,8 @@ def usable_pdo(ctx: Context, *, tpdo: bool, need_writable: bool = False
                ) -> tuple[Pdo, list[int]] | None:
     """A PDO of the direction and a mapping for it whose entries the EDS knows (and that
     SDO can read back, and for ``need_writable`` write): the node's own mapping when it
-    fits, else the first mappable entry, where the mapping can be written."""
+    fits, else the first mappable entry, where the mapping can be written. Only PDOs whose
+    COB-ID can be written and whose own mapping is one the EDS allows."""
     def fits(var: eds.Variable | None) -> bool:
         return var is not None and readable(var) and (writable(var) or not need_writable) \
             and fixed_size(var) is not None
@@ -246,9 +289,11 @@ def usable_pdo(ctx: Context, *, tpdo: bool, need_writable: bool = False
     for pdo in filter(partial(configurable, ctx), pdos(ctx, tpdo=tpdo)):
         cfg = read_config(ctx, pdo)
         entries = cfg.mapped
+        if not restorable(ctx, pdo, cfg):
+            continue  # a mapping unlike its EDS: pdo.remap reports it
         if entries and all(fits(m.var) for m in mapped(ctx, entries)):
             return pdo, entries
-        if dynamic(ctx, pdo) and restorable(ctx, pdo, cfg):
+        if dynamic(ctx, pdo):
             var = next((v for v in variables(ctx.od) if mappable(v, tpdo=tpdo) and fits(v)),
                        None)
             if var is not None:
@@ -289,13 +334,34 @@ def rpdo_payload(ctx: Context, entries: Sequence[int]
     return bytes(frame), expected
 
 
-def sync_cob(ctx: Context) -> int:
-    """The COB-ID the node takes SYNC on (0x1005; SKIPPED without it: no SYNC consumer).
+@dataclass
+class SyncSource:
+    """Sends SYNC on ``cob``: without data, or with the counter 1..``overflow`` (0x1019)."""
+
+    ctx: Context
+    cob: int
+    overflow: int = 0
+    counter: int = 0
+
+    def send(self, counter: int | None = None) -> None:
+        """The next SYNC (with ``counter``, when given, as its counter)."""
+        if not self.overflow:
+            self.ctx.link.send(self.cob)
+            return
+        self.counter = counter if counter is not None else self.counter % self.overflow + 1
+        self.ctx.link.send(self.cob, bytes([self.counter]))
+
+
+def sync_source(ctx: Context) -> SyncSource:
+    """The tester as the SYNC producer of the node (0x1005; SKIPPED without it: no SYNC
+    consumer), with a counter when 0x1019 asks for one.
     For the check the tester is the only SYNC producer (the node's producer bit 30 off)
     and a synchronous window (0x1007) is off, where the EDS lets them be written: a node
     may drop the synchronous PDOs that come after the window (CiA 301 §7.2.5)."""
     var = ctx.need(0x1005, why="no SYNC consumer")
     cob = ctx.read_uint(0x1005, 0)
+    if not cob & 0x7FF:
+        ctx.skip(f"0x1005 = 0x{cob:08X}: SYNC on 0x000 (the NMT's COB-ID) cannot be sent")
     if cob & PRODUCER:
         if not writable(var):
             ctx.skip(f"the node produces SYNC itself (0x1005 = 0x{cob:08X}, read-only)")
@@ -303,7 +369,8 @@ def sync_cob(ctx: Context) -> int:
     window = ctx.var(0x1007, 0)
     if window is not None and writable(window) and ctx.read_uint(0x1007, 0):
         ctx.write_temp(0x1007, 0, bytes(fixed_size(window) or 4))
-    return cob & 0x7FF
+    overflow = ctx.read_uint(0x1019, 0) if ctx.var(0x1019, 0) is not None else 0
+    return SyncSource(ctx, cob & 0x7FF, overflow)
 
 
 def tpdo_frames(ctx: Context, cob: int, mark: int) -> list[float]:

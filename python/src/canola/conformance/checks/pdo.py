@@ -61,6 +61,20 @@ def valid_locked(ctx: Context) -> None:
     ctx.note(f"{tested} valid PDOs")
 
 
+@check("pdo.own_mappings", clause="CiA 301 §7.5.2.36, §7.5.2.38; CiA 306 §4.5.2 (PDOMapping)",
+       title="every PDO's mapping as the node has it is one its EDS allows: count within "
+             "the sub-indices and limits, entries PDO-mappable in the PDO's direction")
+def own_mappings(ctx: Context) -> None:
+    every = pt.pdos(ctx, tpdo=True) + pt.pdos(ctx, tpdo=False)
+    if not every:
+        ctx.skip("the EDS has no PDO")
+    for pdo in every:
+        cfg = pt.read_config(ctx, pdo)
+        if not pt.restorable(ctx, pdo, cfg):
+            ctx.finding(f"{pdo.name}'s mapping (0x{pdo.mapping:04X})",
+                        f"one the EDS allows for a {pdo.name[:4]}",
+                        f"count {cfg.count}, {_hex(cfg.mapped)}")
+    ctx.note(f"{len(every)} PDOs")
 
 
 @check("pdo.remap", clause="CiA 301 §7.5.2.36, §7.5.2.38 (mapping procedure)",
@@ -72,17 +86,15 @@ def remap(ctx: Context) -> None:
         if not pt.dynamic(ctx, pdo):
             continue
         cfg = pt.read_config(ctx, pdo)
-        if not pt.restorable(ctx, pdo, cfg):  # left as it is: it could not be written back
-            ctx.finding(f"{pdo.name}'s own mapping {_hex(cfg.mapped)}", "entries the EDS "
-                        f"marks PDO-mappable for a {pdo.name[:4]}", "others")
-            continue
+        if not pt.restorable(ctx, pdo, cfg):
+            continue  # it could not be written back (pdo.own_mappings reports it)
         entries = cfg.mapped
         if not entries:
             var = next((v for v in variables(ctx.od) if mappable(v, tpdo=pdo.tpdo)), None)
             if var is None:
                 continue
             entries = [pt.entry_of(var)]
-        got = pt.configure(ctx, pdo, entries=entries)
+        got = pt.remap(ctx, pdo, entries)
         again = pt.read_config(ctx, pdo)
         if again.mapped != entries or again.cob != got.cob:
             ctx.finding(f"{pdo.name} after the procedure",
@@ -156,12 +168,13 @@ def _refused(ctx: Context, pdo: pt.Pdo, entries: list[int], code: int, what: str
         ctx.finding(what, abort_text(code), outcome(exc))
 
 
-def _sync_cyclic_pattern(ctx: Context, cob: int, sync: int, gap: float) -> list[int]:
+def _sync_cyclic_pattern(ctx: Context, cob: int, sync: pt.SyncSource,
+                         gap: float) -> list[int]:
     """Send :data:`_SYNCS` SYNCs ``gap`` apart: the number of TPDOs after each."""
     counts = []
     for _ in range(_SYNCS):
         mark = ctx.link.mark()
-        ctx.link.send(sync)
+        sync.send()
         ctx.link.wait(gap)
         counts.append(len(pt.tpdo_frames(ctx, cob, mark)))
     return counts
@@ -174,7 +187,7 @@ def tpdo_sync_cyclic(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True)
     cfg = pt.configure(ctx, pdo, entries=entries, type=2)
     cob = cfg.cob & 0x7FF
-    sync = pt.sync_cob(ctx)
+    sync = pt.sync_source(ctx)
     ctx.nmt("start")
     mark = ctx.link.mark()
     ctx.link.wait(ctx.options.quiet)
@@ -196,12 +209,12 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True, need_writable=True)
     cfg = pt.configure(ctx, pdo, entries=entries, type=0)
     cob = cfg.cob & 0x7FF
-    sync = pt.sync_cob(ctx)
+    sync = pt.sync_source(ctx)
     var = pt.mapped(ctx, entries)[0].var
     assert var is not None
     original = ctx.keep(var.index, var.subindex)
     ctx.nmt("start")
-    ctx.link.send(sync)
+    sync.send()
     ctx.link.wait(ctx.options.quiet)
     mark = ctx.link.mark()
     changed = another_value(var, original)
@@ -212,7 +225,7 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
         ctx.finding(f"{pdo.name} (type 0) after a change of {describe(var)}, before a SYNC",
                     "no frame until the SYNC", f"{len(early)} frames")
     mark = ctx.link.mark()
-    ctx.link.send(sync)
+    sync.send()
     seen = ctx.link.wait_frame(lambda f: f.can_id == cob, ctx.options.timeout, mark)
     if seen is None and not early:
         ctx.skip(f"{pdo.name} of type 0 was not sent after {describe(var)} changed by SDO: "
@@ -300,12 +313,12 @@ def rpdo_applied(ctx: Context) -> None:
        title="a synchronous RPDO's data is applied at the next SYNC, not before")
 def rpdo_sync(ctx: Context) -> None:
     pdo, cob, entries = _rpdo(ctx, type=1)
-    sync = pt.sync_cob(ctx)
+    sync = pt.sync_source(ctx)
     ctx.nmt("start")
     frame, expected = pt.rpdo_payload(ctx, entries)
     ctx.link.send(cob, frame)
     pt.check_values(ctx, expected, applied=False, when=f"after {pdo.name} (type 1), before SYNC")
-    ctx.link.send(sync)
+    sync.send()
     pt.check_values(ctx, expected, applied=True, when=f"after {pdo.name} (type 1) and a SYNC")
     ctx.note(f"{pdo.name} on 0x{cob:03X}")
 

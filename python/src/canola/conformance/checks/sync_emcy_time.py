@@ -128,12 +128,12 @@ def start_value(ctx: Context) -> None:
     _keep_counter(ctx)
     ctx.write(0x1019, 0, bytes([5]))
     cob = pt.configure(ctx, pdo, entries=entries, type=1, sync_start=3).cob & 0x7FF
-    sync = pt.sync_cob(ctx)
+    sync = pt.sync_source(ctx)
     ctx.nmt("start")
     counts = []
     for counter in (1, 2, 3, 4, 5, 1):
         mark = ctx.link.mark()
-        ctx.link.send(sync, bytes([counter]))
+        sync.send(counter)
         ctx.link.wait(ctx.options.quiet)
         counts.append(len(pt.tpdo_frames(ctx, cob, mark)))
     if counts != [0, 0, 1, 1, 1, 1]:
