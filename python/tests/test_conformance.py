@@ -341,6 +341,7 @@ def test_check_list_and_selection() -> None:
     text = cc.check_list(cc.select())
     for chk in cc.CHECKS:
         assert f"  {chk.name} " in text and chk.clause in text
+        assert chk.clause.startswith(("CiA 301 §", "CiA 306 §")), chk
     assert "nmt.store_restore" in text and "[--destructive]" in text
     assert [c.name for c in cc.select(["time", "sdo.toggle_upload"])] == [
         "sdo.toggle_upload", "time.consumer"]

@@ -1,6 +1,7 @@
 """canola.conformance over python-can, against real implementations in other threads and
 processes: canola.Device, canola-node (the C device: through the hub, or on SocketCAN in the
-SocketCAN tier) and python-canopen's LocalNode, whose known gaps it reports as failures.
+SocketCAN tier, the one run there: a whole run in the emulated VM takes about a minute) and
+python-canopen's LocalNode, whose known gaps it reports as failures.
 
 Wall clock: the runs use generous answer time-outs and a timing tolerance of 100 % (a
 period between 0 and twice the configured one, no gap over three periods): the exact
@@ -40,7 +41,6 @@ OPTIONS = Options(timeout=5.0 if VCAN else 2.0, tolerance=1.0, quiet=0.3,
                   server_timeout=2 * SDO_TIMEOUT_MS / 1000)
 
 
-@pytest.mark.vcan
 def test_canola_device(can_bus: Callable[[], can.BusABC]) -> None:
     with Device(EXAMPLE, 21, can_bus(), sdo_timeout_ms=SDO_TIMEOUT_MS):
         report = cc.run(can_bus(), 21, EXAMPLE, options=OPTIONS)

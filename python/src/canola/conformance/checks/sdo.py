@@ -353,7 +353,7 @@ def _block_target(ctx: Context) -> eds.Variable:
     return var
 
 
-@check("sdo.block_download", clause="CiA 301 §7.2.4.3 (SDO block download), §7.2.4.3.16",
+@check("sdo.block_download", clause="CiA 301 §7.2.4.3.9-11, §7.2.4.3.16",
        title="block downloads (1..22 bytes, 889/890 where the entry takes them; CRC) are "
              "acknowledged per sub-block and stored")
 def block_download(ctx: Context) -> None:
@@ -367,7 +367,7 @@ def block_download(ctx: Context) -> None:
     ctx.note(f"{describe(var)}: its own {len(data)} bytes, block size {blksize}")
 
 
-@check("sdo.block_upload", clause="CiA 301 §7.2.4.3 (SDO block upload), §7.2.4.3.16",
+@check("sdo.block_upload", clause="CiA 301 §7.2.4.3.13-15, §7.2.4.3.16",
        title="block uploads (protocol switch threshold 0) give the value with a right CRC")
 def block_upload(ctx: Context) -> None:
     var = variable_entry(ctx)
@@ -388,7 +388,7 @@ def block_upload(ctx: Context) -> None:
     ctx.note(f"{describe(target)}: {len(data)} bytes")
 
 
-@check("sdo.block_crc", clause="CiA 301 §7.2.4.3 (block download end), §7.2.4.3.16",
+@check("sdo.block_crc", clause="CiA 301 §7.2.4.3.11, §7.2.4.3.16",
        title="a block download with a wrong CRC is aborted with 0x05040004")
 def block_crc(ctx: Context) -> None:
     var = _block_target(ctx)
@@ -408,7 +408,7 @@ def block_crc(ctx: Context) -> None:
                 abort_text(0x05040004), "success")
 
 
-@check("sdo.block_size", clause="CiA 301 §7.2.4.3 (SDO block upload), §7.2.4.3.17",
+@check("sdo.block_size", clause="CiA 301 §7.2.4.3.13-14, §7.2.4.3.17",
        title="block size 0 is aborted with 0x05040002; the server keeps to the client's "
              "block size in every sub-block")
 def block_size(ctx: Context) -> None:
