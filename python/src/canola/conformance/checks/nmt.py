@@ -5,6 +5,7 @@ gating, what the resets do to the values, the heartbeat period, node guarding, a
 from __future__ import annotations
 
 import statistics
+from collections.abc import Callable
 from functools import partial
 from itertools import pairwise
 
@@ -66,20 +67,19 @@ def heartbeat(ctx: Context) -> int:
     return period
 
 
-@check("nmt.bootup_reset_node", clause="CiA 301 §7.2.8.3.1, §7.2.8.3.3",
-       title="after reset node: one boot-up frame, then SDO in PRE-OPERATIONAL")
-def bootup_reset_node(ctx: Context) -> None:
-    took = reset(ctx, "reset-node")
-    ctx.served("after reset node")
-    ctx.note(f"boot-up after {took:.3f} s")
+def _bootup(command: str, when: str) -> Callable[[Context], None]:
+    def bootup(ctx: Context) -> None:
+        took = reset(ctx, command)
+        ctx.served(f"after {when}")
+        ctx.note(f"boot-up after {took:.3f} s")
+
+    return bootup
 
 
-@check("nmt.bootup_reset_comm", clause="CiA 301 §7.2.8.3.1, §7.2.8.3.3",
-       title="after reset communication: one boot-up frame, then SDO in PRE-OPERATIONAL")
-def bootup_reset_comm(ctx: Context) -> None:
-    took = reset(ctx, "reset-comm")
-    ctx.served("after reset communication")
-    ctx.note(f"boot-up after {took:.3f} s")
+for _command, _when in (("reset-node", "reset node"), ("reset-comm", "reset communication")):
+    check(f"nmt.bootup_{_command.replace('-', '_')}", clause="CiA 301 §7.2.8.3.1, §7.2.8.3.3",
+          title=f"after {_when}: one boot-up frame, then SDO in PRE-OPERATIONAL")(
+        _bootup(_command, _when))
 
 
 @check("nmt.states", clause="CiA 301 §7.2.8.3.1, §7.3.2",

@@ -94,10 +94,11 @@ def _same(var: eds.Variable, wrote: bytes, got: bytes) -> bool:
 
 
 def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str,
-                  sizes: tuple[int, ...] = SIZES) -> list[int]:
+                  sizes: tuple[int, ...] = SIZES) -> None:
     """Write (``write``: segmented or block) then read back (``read``: segmented or
-    block) values of each of ``sizes`` bytes; the sizes that went through. A value too
-    long for the entry (0x06070012) ends the series once more than a segment went."""
+    block) values of each of ``sizes`` bytes; the sizes that went through make the note. A
+    value too long for the entry (0x06070012) ends the series once more than a segment
+    went."""
     ctx.keep(var.index, var.subindex)
     done: list[int] = []
     for size in sizes:
@@ -129,7 +130,7 @@ def _sized_series(ctx: Context, var: eds.Variable, write: str, read: str,
                         f"[{data.hex(' ').upper()}]", f"[{got.hex(' ').upper()}]")
             continue
         done.append(size)
-    return done
+    ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
 
 
 def _own_value(ctx: Context, var: eds.Variable, how: str,
@@ -190,8 +191,7 @@ def expedited_download(ctx: Context) -> None:
 def segmented_download(ctx: Context) -> None:
     var = variable_entry(ctx)
     if var is not None:
-        done = _sized_series(ctx, var, "segmented", "segmented")
-        ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
+        _sized_series(ctx, var, "segmented", "segmented")
         return
     var = long_entry(ctx)
     if var is None:
@@ -359,8 +359,7 @@ def _block_target(ctx: Context) -> eds.Variable:
 def block_download(ctx: Context) -> None:
     var = _block_target(ctx)
     if var.data_type in VARIABLE_TYPES:
-        done = _sized_series(ctx, var, "block", "segmented", BLOCK_SIZES)
-        ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
+        _sized_series(ctx, var, "block", "segmented", BLOCK_SIZES)
         return
     data, blksize = _own_value(ctx, var, "block",
                                partial(ctx.sdo.block_download, var.index, var.subindex))
@@ -372,8 +371,7 @@ def block_download(ctx: Context) -> None:
 def block_upload(ctx: Context) -> None:
     var = variable_entry(ctx)
     if var is not None:
-        done = _sized_series(ctx, var, "segmented", "block", BLOCK_SIZES)
-        ctx.note(f"{describe(var)}: {', '.join(map(str, done))} bytes")
+        _sized_series(ctx, var, "segmented", "block", BLOCK_SIZES)
         return
     found = long_readable(ctx)
     target, data = found if found is not None else (ctx.need(0x1000, why="device type"),
