@@ -1,5 +1,36 @@
-"""Only there to hook the cffi extension into the build; metadata is in pyproject.toml."""
+"""Hooks the cffi extension into the build and the C core into the sdist; the metadata is in
+pyproject.toml.
+
+The extension is compiled from the repository's C sources around python/ (see
+src/canola/_build_core.py). An sdist is built away from them (and ``python -m build`` builds
+the wheel from the sdist), so the sdist carries a copy in csrc/, where the builder looks first.
+"""
+
+import importlib.util
+import os
+import shutil
 
 from setuptools import setup
+from setuptools.command.sdist import sdist
 
-setup(cffi_modules=["src/canola/_build_core.py:ffibuilder"])
+_BUILDER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "src", "canola",
+                        "_build_core.py")
+
+
+class SdistWithCore(sdist):  # type: ignore[misc]
+    """The sdist, plus the C files the extension is built from, in csrc/."""
+
+    def make_release_tree(self, base_dir: str, files: list[str]) -> None:
+        super().make_release_tree(base_dir, files)
+        spec = importlib.util.spec_from_file_location("_canola_build_core", _BUILDER)
+        assert spec is not None and spec.loader is not None
+        builder = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(builder)
+        root, names = builder.c_files()
+        for name in names:
+            target = os.path.join(base_dir, "csrc", name)
+            os.makedirs(os.path.dirname(target), exist_ok=True)
+            shutil.copy2(os.path.join(root, name), target)
+
+
+setup(cffi_modules=["src/canola/_build_core.py:ffibuilder"], cmdclass={"sdist": SdistWithCore})

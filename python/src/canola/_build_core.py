@@ -3,7 +3,9 @@
 API mode (a compiled extension). Used by setuptools through ``cffi_modules`` in
 ``python/setup.py``; can also be run by hand (``python src/canola/_build_core.py``) to build
 the module in place. The C sources are the repository's own (``../src``, ``../port/sim``),
-found relative to this file, so it builds from a checkout (an editable install).
+found relative to this file, so it builds from a checkout (an editable install, ``pip install
+python``, ``python -m build python``); an sdist carries a copy of them in ``csrc/``
+(``c_files``, copied by ``python/setup.py``), where they are looked for first.
 
 The core never allocates; the small helper section below does (one calloc per bus and per
 node+port), which is what a binding layer is allowed to do.
@@ -17,7 +19,9 @@ import os
 import cffi  # type: ignore[import-untyped]
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
-_ROOT = os.path.normpath(os.path.join(_HERE, "..", "..", ".."))
+_PROJECT = os.path.normpath(os.path.join(_HERE, "..", ".."))  # python/, or an unpacked sdist
+_SDIST_C = os.path.join(_PROJECT, "csrc")
+_ROOT = _SDIST_C if os.path.isdir(_SDIST_C) else os.path.dirname(_PROJECT)
 
 
 def _rel(path: str) -> str:
@@ -33,6 +37,14 @@ _SOURCES = [
 ]
 _INCLUDES = [os.path.join(_ROOT, "include"), os.path.join(_ROOT, "src"),
              os.path.join(_ROOT, "port", "sim"), os.path.join(_ROOT, "port", "linux")]
+_HEADERS = [p for d in _INCLUDES
+            for p in sorted(glob.glob(os.path.join(d, "**", "*.h"), recursive=True))]
+
+
+def c_files() -> tuple[str, list[str]]:
+    """The folder of the C sources and the files the extension is built from (its sources and
+    the headers of its include folders), relative to it: what an sdist carries in csrc/."""
+    return _ROOT, sorted(os.path.relpath(p, _ROOT) for p in {*_SOURCES, *_HEADERS})
 
 # Sizes of the core in the extension: a master watches up to 127 nodes (heartbeat and EMCY
 # consumers), talks SDO to several at once, and devices from real EDS files have many PDOs.
@@ -777,8 +789,7 @@ ffibuilder.set_source(
     include_dirs=[_rel(p) for p in _INCLUDES],
     define_macros=_CONFIG,
     # A header change rebuilds the extension (setuptools only compares sources otherwise).
-    depends=[_rel(p) for d in _INCLUDES for p in sorted(glob.glob(os.path.join(d, "**", "*.h"),
-                                                                  recursive=True))],
+    depends=[_rel(p) for p in _HEADERS],
 )
 
 if __name__ == "__main__":
