@@ -3,10 +3,11 @@ processes: canola.Device, canola-node (the C device: through the hub, or on Sock
 SocketCAN tier, the one run there: a whole run in the emulated VM takes about a minute) and
 python-canopen's LocalNode, whose known gaps it reports as failures.
 
-Wall clock: the runs use generous answer time-outs and a timing tolerance of 100 % (a
-period between 0 and twice the configured one, no gap over three periods): the exact
-timing is pinned in virtual time (test_conformance.py); here the protocol over real
-transports."""
+Wall clock: the runs use generous answer time-outs and a timing tolerance so wide
+(:data:`WALL_CLOCK_TOLERANCE`) that the timing checks only ask that the periodic frames come:
+a starved host, or the emulated VM of the SocketCAN tier, stalls a sender for a second (a
+100 ms event timer measured at 221 ms there). The exact timing is pinned in virtual time
+(test_conformance.py); here the protocol over real transports."""
 
 from __future__ import annotations
 
@@ -34,10 +35,12 @@ EXAMPLE = ROOT / "examples" / "example_od.eds"
 NODE_BIN = Path(os.environ.get("CANOLA_NODE_BIN", ROOT / "build" / "canola-node"))
 pytestmark = [pytest.mark.slow, pytest.mark.realtime]  # whole runs on the wall clock
 
+#: A mean period within 11 times the configured one, no gap over 21 periods.
+WALL_CLOCK_TOLERANCE = 10.0
 #: Answers under an emulated VM (the SocketCAN tier) take long; the servers' own SDO
 #: time-out (SDO_TIMEOUT_MS there, for the tester is slow to acknowledge a sub-block of 127
 #: frames) must come within server_timeout.
-OPTIONS = Options(timeout=5.0 if VCAN else 2.0, tolerance=1.0, quiet=0.3,
+OPTIONS = Options(timeout=5.0 if VCAN else 2.0, tolerance=WALL_CLOCK_TOLERANCE, quiet=0.3,
                   server_timeout=2 * SDO_TIMEOUT_MS / 1000)
 
 
@@ -133,8 +136,8 @@ def test_python_canopen_local_node_gaps(can_bus: Callable[[], can.BusABC],
     local.nmt.state = "PRE-OPERATIONAL"
     try:
         report = cc.run(can_bus(), 10, INTEROP,
-                        options=Options(timeout=2.0, tolerance=1.0, quiet=0.3,
-                                        server_timeout=2.0))
+                        options=Options(timeout=2.0, tolerance=WALL_CLOCK_TOLERANCE,
+                                        quiet=0.3, server_timeout=2.0))
     finally:
         local.nmt.stop_heartbeat()
         network.disconnect()
