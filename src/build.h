@@ -1,7 +1,7 @@
 /*
  * src/build.h -- what the build's goal changes in the core: hints for the compiler, the
  * short paths a build for size (-Os) leaves out, and the copies of a size known only at
- * run time. Not installed; every module includes it (through internal.h, or directly).
+ * run time. Not installed; every module includes it (through kernel.h, or directly).
  */
 #ifndef CANOLA_BUILD_H
 #define CANOLA_BUILD_H

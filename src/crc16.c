@@ -9,7 +9,8 @@
  * Eight bytes a step with CO_CONFIG_CRC16_FAST (4 KiB of const tables, about 3
  * instructions a byte), two otherwise (1 KiB, about 7).
  */
-#include "internal.h"
+#include "crc16.h"
+#include "build.h" /* CO_CONFIG_CRC16_FAST */
 
 #if CO_CONFIG_CRC16_FAST
 #define CRC16_SLICES 8
@@ -17,7 +18,7 @@
 #define CRC16_SLICES 2
 #endif
 
-#include "crc16_tables.h"
+#include "crc16_tables.inc"
 
 uint16_t co_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {

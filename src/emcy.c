@@ -6,7 +6,7 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "emcy_internal.h"
 
 #define EMCY_COB_BASE 0x80u
 #define EMCY_CODE_RESET 0x0000u /* "error reset / no error" */
@@ -79,10 +79,10 @@ bool co_emcy_producer_off(const co_node_t *node)
     return (producer_cob(node) & CO_COB_INVALID) != 0;
 }
 
-void co_emcy_frame_send(co_node_t *node, const uint8_t data[8])
+void co_emcy_frame_send(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 {
     /* a full tx queue counts the loss itself */
-    (void)co_node_send_cob(node, producer_cob(node), data, 8, CO_SVC_EMCY);
+    (void)co_node_send_cob(node, producer_cob(node), data, CO_EMCY_FRAME_LEN, CO_SVC_EMCY);
 }
 
 /* One EMCY frame: out now, or after the inhibit time (emcy_queue.c). */
@@ -91,7 +91,7 @@ static void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[
     if (co_emcy_producer_off(node)) {
         return; /* EMCY off: errors and history are kept, nothing is sent */
     }
-    uint8_t data[8];
+    uint8_t data[CO_EMCY_FRAME_LEN];
     co_put_u16(data, code);
     data[2] = reg;
     co_copy(&data[3], mfr, 5);
@@ -143,37 +143,6 @@ co_err_t co_emcy_clear(co_node_t *node, uint16_t code)
     return CO_OK;
 }
 
-/* ---- bus events */
-
-void co_node_bus_event(co_node_t *node, co_bus_event_t event)
-{
-    switch (event) {
-    case CO_BUS_RX_OVERRUN:
-        /* An event, not a state the driver reports the end of: it stays active until the
-         * application clears it (co_emcy_clear(node, 0x8110)). */
-        (void)co_emcy_raise(node, 0x8110, NULL);
-        break;
-    case CO_BUS_ERROR_PASSIVE:
-        if (!co_emcy_active(node, 0x8120)) { /* a state: reported once while it lasts */
-            (void)co_emcy_raise(node, 0x8120, NULL);
-        }
-        break;
-    case CO_BUS_ERROR_ACTIVE:
-        (void)co_emcy_clear(node, 0x8120);
-        break;
-    case CO_BUS_OFF:
-        co_node_error_behaviour(node); /* nothing can be sent while bus-off: no EMCY */
-        break;
-    case CO_BUS_OFF_RECOVERED:
-        /* Like the overrun, the application clears 0x8140. Recovery restarts the error
-         * counters, so the controller is error active again: 0x8120 ends (after the
-         * raise, so that this costs one frame, not an error reset and a raise). */
-        (void)co_emcy_raise(node, 0x8140, NULL);
-        (void)co_emcy_clear(node, 0x8120);
-        break;
-    }
-}
-
 /* ---- node hooks */
 
 void co_emcy_reset_comm(co_node_t *node)
@@ -221,8 +190,7 @@ void co_emcy_written(co_node_t *node, const co_od_entry_t *entry)
         co_emcy_state_entered(node);
         break;
     case 0x1028:
-        co_emcy_consumers_bind(node);
-        co_routes_rebuild(node);
+        co_emcy_consumers_bind(node); /* and their routes */
         break;
     default:
         break;

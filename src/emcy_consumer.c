@@ -1,43 +1,34 @@
 /*
  * emcy_consumer.c -- the EMCY consumer: 0x1028 subN holds COB-IDs to watch; each EMCY
  * frame received on one of them goes to on_emcy. Left out with CO_EMCY_CONSUMERS_MAX 0
- * (internal.h).
+ * (emcy_internal.h).
  */
 #include <string.h>
 
-#include "internal.h"
+#include "emcy_internal.h"
 
 #if CO_EMCY_CONSUMERS_MAX > 0
 
-/* Bind 0x1028 sub1..N (as many as the OD has, up to CO_EMCY_CONSUMERS_MAX). */
+/* Bind 0x1028 sub1..N (as many as the OD has, up to CO_EMCY_CONSUMERS_MAX), each with its
+ * route (none for a COB-ID marked not valid, or a sub-index the OD lacks). */
 void co_emcy_consumers_bind(co_node_t *node)
 {
     co_emcy_t *e = &node->emcy;
     e->consumer_count = 0;
-    while (e->consumer_count < CO_EMCY_CONSUMERS_MAX) {
-        uint64_t cob = 0;
-        if (co_od_get_uint(&node->cfg.od, 0x1028, (uint8_t)(e->consumer_count + 1), &cob) !=
-            CO_OK) {
-            break;
+    for (uint8_t i = 0; i < CO_EMCY_CONSUMERS_MAX; i++) {
+        uint64_t cob = CO_COB_INVALID;
+        if (e->consumer_count == i &&
+            co_od_get_uint(&node->cfg.od, 0x1028, (uint8_t)(i + 1), &cob) == CO_OK) {
+            e->consumer_cob[e->consumer_count++] = (uint32_t)cob;
         }
-        e->consumer_cob[e->consumer_count++] = (uint32_t)cob;
-    }
-}
-
-void co_emcy_add_routes(co_node_t *node)
-{
-    for (uint8_t i = 0; i < node->emcy.consumer_count; i++) {
-        uint32_t cob = node->emcy.consumer_cob[i];
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add_cob(node, cob, CO_ROUTE_EMCY, i);
-        }
+        co_route_set(node, CO_ROUTE_EMCY, i, co_cob_route((uint32_t)cob));
     }
 }
 
 void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot; /* every consumer entry is handled alike */
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_EMCY_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }

@@ -1,9 +1,9 @@
 /*
  * emcy_history.c -- the EMCY error history 0x1003: every raise recorded, newest at sub1,
  * sub0 the number recorded; writing 0 to sub0 clears it, anything else is refused with
- * 0x06090030. Left out with CO_CONFIG_EMCY_HISTORY 0 (internal.h).
+ * 0x06090030. Left out with CO_CONFIG_EMCY_HISTORY 0 (emcy_internal.h).
  */
-#include "internal.h"
+#include "emcy_internal.h"
 
 #if CO_CONFIG_EMCY_HISTORY
 

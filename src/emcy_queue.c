@@ -2,11 +2,11 @@
  * emcy_queue.c -- the EMCY inhibit time (0x1015, units of 100 us): frames raised faster
  * wait in a queue of CO_EMCY_QUEUE_LEN and leave one inhibit time apart, and frames raised
  * while the NMT state holds EMCY back leave on entering pre-operational or operational.
- * Left out with CO_EMCY_QUEUE_LEN 0 (internal.h: every frame then leaves at once).
+ * Left out with CO_EMCY_QUEUE_LEN 0 (emcy_internal.h: every frame then leaves at once).
  */
 #include <string.h>
 
-#include "internal.h"
+#include "emcy_internal.h"
 
 #if CO_EMCY_QUEUE_LEN > 0
 
@@ -61,7 +61,7 @@ uint64_t co_emcy_poll(co_node_t *node, uint64_t now_us)
     return CO_TIME_NEVER;
 }
 
-void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
+void co_emcy_queue_emit(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 {
     co_emcy_t *e = &node->emcy;
     (void)co_emcy_poll(node, node->now_us); /* make room: frames due may leave first */
@@ -69,7 +69,7 @@ void co_emcy_queue_emit(co_node_t *node, const uint8_t data[8])
         e->dropped++; /* the newest is the one lost: the queue keeps the order of events */
         return;
     }
-    co_copy(e->queue[e->queue_count], data, 8);
+    co_copy(e->queue[e->queue_count], data, CO_EMCY_FRAME_LEN);
     e->queue_count++;
     co_emcy_state_entered(node);
 }

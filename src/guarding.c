@@ -2,7 +2,7 @@
  * guarding.c -- node guarding: the node's answers to guarding RTRs and its life
  * guarding (0x100C x 0x100D), and the master's watch of guarded nodes.
  */
-#include "internal.h"
+#include "errctl_internal.h"
 
 #if CO_CONFIG_GUARDING
 
@@ -30,6 +30,10 @@ void co_guard_reset_comm(co_node_t *node)
     node->life_guarding = false;
     node->life_lost = false;
     node->life_deadline_us = CO_TIME_NEVER;
+    /* the guarding requests to this node-ID (an unconfigured node has none) */
+    bool configured = node->node_id >= 1 && node->node_id <= 127;
+    co_route_set(node, CO_ROUTE_GUARD_RTR, 0,
+                 configured ? GUARD_COB_BASE + node->node_id : CO_ROUTE_OFF);
 }
 
 void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
@@ -67,8 +71,9 @@ void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
     }
 }
 
-void co_guard_written(co_node_t *node)
+void co_guard_written(co_node_t *node, const co_od_entry_t *entry)
 {
+    (void)entry; /* 0x100C or 0x100D: the life time is their product */
     if (!node->life_guarding || node->life_lost) {
         return;
     }
@@ -130,11 +135,13 @@ co_err_t co_guard_watch(co_node_t *node, uint8_t node_id, uint16_t guard_ms, uin
                                .toggle = CO_STATE_NONE,
                                .next_rtr_us = node->now_us,
                                .life_deadline_us = node->now_us};
+    uint8_t watch = (uint8_t)(slot - node->guard_watch);
     if (guard_ms != 0) {
         slot->life_deadline_us = node->now_us + watch_life_us(slot);
         co_node_schedule(node, node->now_us);
     }
-    co_routes_rebuild(node);
+    co_route_set(node, CO_ROUTE_GUARD_REPLY, watch,
+                 guard_ms != 0 ? GUARD_COB_BASE + node_id : CO_ROUTE_OFF);
     return CO_OK;
 }
 
@@ -199,19 +206,6 @@ uint64_t co_guard_poll(co_node_t *node, uint64_t now_us)
         }
     }
     return next;
-}
-
-void co_guard_add_routes(co_node_t *node)
-{
-    if (node->node_id >= 1 && node->node_id <= 127) {
-        co_routes_add(node, GUARD_COB_BASE + node->node_id, CO_ROUTE_GUARD_RTR, 0);
-    }
-    for (uint8_t i = 0; i < co_guard_watch_max(); i++) {
-        const co_guard_watch_t *w = &node->guard_watch[i];
-        if (w->guard_ms != 0) {
-            co_routes_add(node, GUARD_COB_BASE + w->node_id, CO_ROUTE_GUARD_REPLY, i);
-        }
-    }
 }
 
 bool co_guard_watches(const co_node_t *node, uint8_t node_id)

@@ -1,8 +1,8 @@
 /*
  * hb_consumer.c -- the heartbeat consumer (0x1016 sub1..N, see canola/errctl.h). Left out
- * with CO_HB_CONSUMERS_MAX 0 (internal.h): 0x1016 is then a plain entry.
+ * with CO_HB_CONSUMERS_MAX 0 (errctl_internal.h): 0x1016 is then a plain entry.
  */
-#include "internal.h"
+#include "errctl_internal.h"
 
 #if CO_HB_CONSUMERS_MAX > 0
 
@@ -12,8 +12,8 @@ static void consumer_decode(uint32_t value, uint8_t *node_id, uint16_t *time_ms)
     *time_ms = (uint16_t)value;
 }
 
-/* (Re)load one consumer entry from its 0x1016 sub-index; monitoring waits for the
- * first heartbeat again. */
+/* (Re)load one consumer entry from its 0x1016 sub-index, with its route; monitoring waits
+ * for the first heartbeat again. */
 static void consumer_load(co_node_t *node, uint8_t slot)
 {
     co_hb_consumer_t *c = &node->hb_consumers[slot];
@@ -23,6 +23,7 @@ static void consumer_load(co_node_t *node, uint8_t slot)
     c->state = CO_STATE_NONE;
     c->ever_heard = false;
     c->deadline_us = CO_TIME_NEVER;
+    co_route_set(node, CO_ROUTE_HB_CONSUMER, slot, used ? 0x700u + c->node_id : CO_ROUTE_OFF);
 }
 
 co_err_t co_hb_consumers_bind(co_node_t *node)
@@ -48,16 +49,6 @@ void co_hb_consumers_reset(co_node_t *node)
     if (node->cfg.boot_time_ms != 0 && node->hb_consumer_count != 0) {
         node->boot_deadline_us = node->now_us + co_ms_to_us(node->cfg.boot_time_ms);
         co_node_schedule(node, node->boot_deadline_us);
-    }
-}
-
-void co_hb_consumers_add_routes(co_node_t *node)
-{
-    for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
-        const co_hb_consumer_t *c = &node->hb_consumers[i];
-        if (c->watch != CO_HB_WATCH_UNUSED) {
-            co_routes_add(node, 0x700u + c->node_id, CO_ROUTE_HB_CONSUMER, i);
-        }
     }
 }
 
@@ -193,7 +184,6 @@ void co_hb_consumer_written(co_node_t *node, const co_od_entry_t *entry)
 {
     if (entry->index == 0x1016 && entry->sub >= 1 && entry->sub <= node->hb_consumer_count) {
         consumer_load(node, (uint8_t)(entry->sub - 1));
-        co_routes_rebuild(node);
     }
 }
 

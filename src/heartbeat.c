@@ -2,7 +2,7 @@
  * heartbeat.c -- the heartbeat producer (0x1017). The consumer (0x1016) is
  * hb_consumer.c, left out with CO_HB_CONSUMERS_MAX 0.
  */
-#include "internal.h"
+#include "errctl_internal.h"
 
 #define HB_COB_BASE 0x700u
 

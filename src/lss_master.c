@@ -2,7 +2,7 @@
  * lss_master.c -- the LSS master (CiA 305): one request at a time on 0x7E5, answers on
  * 0x7E4, time-outs from the node's poll, fastscan as a walk over the address bits.
  */
-#include "internal.h"
+#include "lss_internal.h"
 
 #if CO_CONFIG_LSS_MASTER
 
@@ -17,8 +17,8 @@ static uint32_t timeout_ms(const co_lss_master_t *m)
 
 static void send(co_node_t *node, uint8_t cs, const uint8_t *payload, uint8_t n)
 {
-    co_frame_t f = {.id = CO_LSS_COB_MASTER, .len = 8, .data = {cs}};
-    for (uint8_t i = 0; i < n && i < 7; i++) {
+    co_frame_t f = {.id = CO_LSS_COB_MASTER, .len = CO_LSS_FRAME_LEN, .data = {cs}};
+    for (uint8_t i = 0; i < n && i < CO_LSS_FRAME_LEN - 1u; i++) {
         f.data[1 + i] = payload[i];
     }
     (void)co_node_send_as(node, &f, CO_SVC_LSS);
@@ -48,7 +48,7 @@ static co_err_t begin(co_node_t *node, uint8_t op, co_lss_done_fn done, void *ct
     }
     if (!m->listening) { /* 0x7E4 is routed from the first request on */
         m->listening = true;
-        co_routes_rebuild(node);
+        co_route_set(node, CO_ROUTE_LSS_MASTER, 0, CO_LSS_COB_SLAVE);
     }
     m->op = op;
     m->done = done;
@@ -96,7 +96,7 @@ void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame
     (void)slot;
     co_lss_master_t *m = &node->lss_master;
     const uint8_t *d = frame->data;
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_LSS_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }

@@ -2,7 +2,7 @@
  * lss_slave.c -- the LSS slave (CiA 305): answers the master on 0x7E5, keeps the
  * pending node-ID and bit timing, and boots an unconfigured node once it has an ID.
  */
-#include "internal.h"
+#include "lss_internal.h"
 
 #if CO_CONFIG_LSS_SLAVE
 
@@ -21,8 +21,8 @@ static uint32_t address_part(const co_node_t *node, uint8_t part)
 
 static void answer(co_node_t *node, uint8_t cs, const uint8_t *payload, uint8_t n)
 {
-    co_frame_t f = {.id = CO_LSS_COB_SLAVE, .len = 8, .data = {cs}};
-    for (uint8_t i = 0; i < n && i < 7; i++) {
+    co_frame_t f = {.id = CO_LSS_COB_SLAVE, .len = CO_LSS_FRAME_LEN, .data = {cs}};
+    for (uint8_t i = 0; i < n && i < CO_LSS_FRAME_LEN - 1u; i++) {
         f.data[1 + i] = payload[i];
     }
     (void)co_node_send_as(node, &f, CO_SVC_LSS);
@@ -51,7 +51,7 @@ static void switch_global(co_node_t *node, uint8_t mode)
     s->mode = CO_LSS_WAITING;
     /* A node without an ID boots as soon as it has one (reset communication takes it). */
     if (node->node_id == CO_NODE_ID_UNCONFIGURED && s->pending_id != CO_NODE_ID_UNCONFIGURED) {
-        co_nmt_reset(node, false);
+        node->wiring->nmt_reset(node, false); /* NMT's reset communication (kernel.h) */
     }
 }
 
@@ -181,7 +181,7 @@ void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot;
     const uint8_t *d = frame->data;
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_LSS_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }
@@ -246,7 +246,7 @@ static bool end_quiet_time(co_node_t *node)
         return false;
     }
     s->quiet_until_us = 0;
-    node->services = co_nmt_services((co_nmt_state_t)node->nmt_state);
+    node->services = co_nmt_gate(node->nmt_state);
     return true;
 }
 
@@ -288,6 +288,7 @@ void co_lss_slave_reset(co_node_t *node, bool application)
         s->fastscan_pos = 0;
     }
     node->node_id = s->pending_id;
+    co_route_set(node, CO_ROUTE_LSS_SLAVE, 0, CO_LSS_COB_MASTER);
 }
 
 co_err_t co_lss_slave_setup(co_node_t *node, const co_lss_slave_config_t *config)

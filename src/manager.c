@@ -7,7 +7,8 @@
  * network. A boot that ends (booted or failed) only marks the manager free; poll
  * begins the next one, so a chain of failures never recurses.
  */
-#include "internal.h"
+#include "manager_internal.h"
+#include "sdo_internal.h" /* co_sdo_clients_max */
 
 #if CO_CONFIG_MANAGER
 
@@ -69,7 +70,7 @@ static void fail(co_manager_t *m, co_boot_reason_t reason, uint32_t abort, uint3
 
 static void start_slave(co_manager_t *m, uint8_t n)
 {
-    (void)co_nmt_send(m->node, CO_NMT_CMD_START, n);
+    (void)m->node->wiring->nmt_send(m->node, CO_NMT_CMD_START, n);
     m->state[n - 1] = CO_MGR_RUNNING;
     report(m, n, CO_MGR_STARTED, CO_BOOT_OK, 0, 0);
 }
@@ -197,18 +198,20 @@ static void download_next(co_manager_t *m)
     }
 }
 
-/* The master's 0x1016 entry for slave n: the one naming it, else the first unused. */
+/* The master's 0x1016 entry for slave n: the one naming it, else the first unused; written
+ * through the node, so that the consumer takes it at once. */
 static bool watch_heartbeat(co_manager_t *m, uint8_t n, uint16_t ms)
 {
+    const co_od_t *od = &m->node->cfg.od;
     uint64_t count = 0;
-    if (co_node_get_uint(m->node, 0x1016, 0, &count) != CO_OK) {
+    if (co_od_get_uint(od, 0x1016, 0, &count) != CO_OK) {
         return false;
     }
     uint8_t free_sub = 0;
     for (uint32_t i = 1; i <= count && i <= 0xFF; i++) { /* 32 bits: 255 entries end the loop */
         uint8_t sub = (uint8_t)i;
         uint64_t v = 0;
-        (void)co_node_get_uint(m->node, 0x1016, sub, &v);
+        (void)co_od_get_uint(od, 0x1016, sub, &v);
         if (((v >> 16) & 0xFF) == n) {
             free_sub = sub;
             break;
@@ -217,8 +220,11 @@ static bool watch_heartbeat(co_manager_t *m, uint8_t n, uint16_t ms)
             free_sub = sub;
         }
     }
-    return free_sub != 0 &&
-           co_node_set_uint(m->node, 0x1016, free_sub, ((uint32_t)n << 16) | ms) == CO_ABORT_NONE;
+    const co_od_entry_t *e = free_sub != 0 ? co_od_find(od, 0x1016, free_sub, NULL) : NULL;
+    uint8_t value[4];
+    co_put_u32(value, ((uint32_t)n << 16) | ms);
+    return e != NULL && e->size == sizeof value &&
+           co_node_write(m->node, e, value, sizeof value) == CO_ABORT_NONE;
 }
 
 static void run_step(co_manager_t *m)
@@ -311,8 +317,8 @@ static void start_network(co_manager_t *m)
     m->network_started = true;
     if (!(startup & CO_MGR_NO_SLAVE_START)) {
         if (startup & CO_MGR_START_ALL) {
-            co_frame_t all = {.id = 0x000, .len = 2, .data = {CO_NMT_CMD_START, 0}};
-            (void)co_node_send(m->node, &all); /* not co_nmt_send: it would start us too */
+            uint8_t all[2] = {CO_NMT_CMD_START, 0}; /* (not nmt_send: it would start us too) */
+            (void)co_node_send_cob(m->node, 0x000, all, sizeof all, 0);
         }
         for (uint8_t n = 1; n <= 127; n++) {
             if (m->state[n - 1] != CO_MGR_CONFIGURED) {
@@ -327,7 +333,7 @@ static void start_network(co_manager_t *m)
         }
     }
     if (!(startup & CO_MGR_NO_SELF_START)) {
-        (void)co_nmt_apply(m->node, CO_NMT_CMD_START);
+        (void)m->node->wiring->nmt_apply(m->node, CO_NMT_CMD_START);
     }
     report(m, 0, CO_MGR_NETWORK_STARTED, CO_BOOT_OK, 0, 0);
 }
@@ -459,16 +465,13 @@ void co_manager_ec_event(co_node_t *node, const co_ec_event_t *ev)
     }
 }
 
-void co_manager_add_routes(co_node_t *node)
+/* The boot-ups of the listed slaves, this node's own ID aside (it may change at a reset). */
+void co_manager_routes(co_node_t *node)
 {
     const co_manager_t *m = node->manager;
-    if (m == NULL) {
-        return;
-    }
-    for (uint8_t n = 1; n <= 127; n++) {
-        if (listed(m, n) && n != node->node_id) {
-            co_routes_add(node, 0x700u + n, CO_ROUTE_MGR_BOOTUP, n);
-        }
+    for (uint8_t n = 1; m != NULL && n <= 127; n++) {
+        bool slave_n = listed(m, n) && n != node->node_id;
+        co_route_set(node, CO_ROUTE_MGR_BOOTUP, n, slave_n ? 0x700u + n : CO_ROUTE_OFF);
     }
 }
 
@@ -485,7 +488,7 @@ co_err_t co_manager_init(co_manager_t *mgr, co_node_t *node, const co_manager_co
     }
     *mgr = (co_manager_t){.cfg = *config, .node = node};
     node->manager = mgr;
-    co_routes_rebuild(node);
+    co_manager_routes(node);
     return CO_OK;
 }
 
@@ -501,7 +504,7 @@ static void begin(co_manager_t *mgr)
         mgr->reason[n - 1] = slave_n ? CO_BOOT_OK : CO_BOOT_NOT_LISTED;
         if (slave_n && mgr->cfg.reset_slaves &&
             !(mgr->cfg.slaves[n - 1].assignment & CO_MGR_KEEP_ALIVE)) {
-            (void)co_nmt_send(mgr->node, CO_NMT_CMD_RESET_COMMUNICATION, n);
+            (void)mgr->node->wiring->nmt_send(mgr->node, CO_NMT_CMD_RESET_COMMUNICATION, n);
         }
     }
     co_node_schedule(mgr->node, mgr->node->now_us);

@@ -1,30 +1,11 @@
 /*
- * nmt.c -- the NMT state machine of a node, and NMT commands as a master.
+ * nmt.c -- the NMT state machine of a node and its fan-out: every service resets its
+ * communication, starts, stops or catches up as the state says; and NMT commands as a master.
+ * (Which services each state allows is the kernel's gate: co_nmt_services, kernel.c.)
  */
-#include "internal.h"
+#include "node_internal.h"
 
-uint16_t co_nmt_services(co_nmt_state_t state)
-{
-    switch (state) {
-    case CO_NMT_INITIALISING:
-        return CO_SVC_BOOTUP | CO_SVC_LSS;
-    case CO_NMT_PRE_OPERATIONAL:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-               CO_SVC_EMCY | CO_SVC_LSS;
-    case CO_NMT_OPERATIONAL:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_SDO | CO_SVC_SYNC | CO_SVC_TIME |
-               CO_SVC_EMCY | CO_SVC_PDO | CO_SVC_LSS;
-    case CO_NMT_STOPPED:
-        return CO_SVC_NMT | CO_SVC_ERROR_CONTROL | CO_SVC_LSS;
-    default:
-        return CO_SVC_LSS;
-    }
-}
-
-bool co_nmt_allows(co_nmt_state_t state, co_service_t service)
-{
-    return (co_nmt_services(state) & (uint16_t)service) != 0;
-}
+#define NMT_FRAME_LEN 2u /* command specifier, node-ID (0: all) */
 
 const char *co_nmt_state_name(uint8_t state)
 {
@@ -44,14 +25,28 @@ const char *co_nmt_state_name(uint8_t state)
 
 co_nmt_state_t co_nmt_state(const co_node_t *node) { return (co_nmt_state_t)node->nmt_state; }
 
-static void enter(co_node_t *node, co_nmt_state_t state)
+/* The state changed: services that depend on it start, stop or catch up. (Out of line: the
+ * state's own change, inline in co_nmt_apply, stays short.) */
+static CO_FAST_NOINLINE void state_changed(co_node_t *node)
+{
+    co_txq_purge(node);
+    if (!(node->services & CO_SVC_SDO)) {
+        co_sdo_server_stop(node);
+        co_sdo_client_stop(node);
+    }
+    co_sync_state_entered(node);
+    co_emcy_state_entered(node);
+    co_pdo_state_entered(node);
+}
+
+static CO_INLINE void enter(co_node_t *node, co_nmt_state_t state)
 {
     if (node->nmt_state == (uint8_t)state) {
         return;
     }
     node->nmt_state = (uint8_t)state;
-    node->services = co_nmt_services(state);
-    co_node_state_changed(node);
+    node->services = co_nmt_gate((uint8_t)state);
+    state_changed(node);
     if (node->cfg.on_state) {
         node->cfg.on_state(node->cfg.user, state);
     }
@@ -61,7 +56,7 @@ static void enter(co_node_t *node, co_nmt_state_t state)
  * communication, boot-up once, pre-operational (or operational when self-starting). */
 void co_nmt_reset(co_node_t *node, bool application)
 {
-    co_manager_reset_comm(node); /* first: leaving SDO's states ends its transfers */
+    co_manager_reset_comm(node); /* first: leaving SDO's states ends the boot's transfers */
     enter(node, CO_NMT_INITIALISING);
     co_lss_slave_reset(node, application);
     /* $NODEID defaults of an unconfigured node (0xFF) stay at their base values. */
@@ -75,6 +70,8 @@ void co_nmt_reset(co_node_t *node, bool application)
     }
     co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, id);
     co_storage_load(node, CO_PARAMS_COMMUNICATION);
+    /* Every service takes its parameters again, and with them its receive routes. */
+    co_route_set(node, CO_ROUTE_NMT, 0, 0x000);
     co_storage_reset_comm(node);
     co_hb_reset_comm(node);
     co_guard_reset_comm(node);
@@ -84,7 +81,7 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_time_reset_comm(node);
     co_emcy_reset_comm(node);
     co_pdo_reset_comm(node);
-    co_routes_rebuild(node);
+    co_manager_routes(node);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);
     }
@@ -124,7 +121,7 @@ co_err_t co_nmt_apply(co_node_t *node, co_nmt_cmd_t cmd)
 void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot;
-    if (frame->len != 2 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != NMT_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }
@@ -149,8 +146,8 @@ co_err_t co_nmt_send(co_node_t *node, co_nmt_cmd_t cmd, uint8_t target)
     if (!known_command(cmd) || target > 127) {
         return CO_ERR_ARG;
     }
-    uint8_t data[2] = {(uint8_t)cmd, target};
-    (void)co_node_send_cob(node, 0x000, data, 2, 0);
+    uint8_t data[NMT_FRAME_LEN] = {(uint8_t)cmd, target};
+    (void)co_node_send_cob(node, 0x000, data, NMT_FRAME_LEN, 0);
     if (target == 0 || target == node->node_id) {
         (void)co_nmt_apply(node, cmd);
     }

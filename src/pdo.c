@@ -117,7 +117,8 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
     bool plain = p->plain && fast_widths(p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
-        co_frame_t f = co_cob_frame(p->cob_id, pdo_bytes(p)); /* the header, built once */
+        co_frame_t f; /* the header, built once */
+        co_frame_address(&f, p->cob_id, pdo_bytes(p));
         p->fast = pdo_active(p) && plain && cyclic ? f.len : 0;
         p->frame_id = f.id;
         p->frame_flags = f.flags;
@@ -131,12 +132,23 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
 #endif
 }
 
+/* Every active RPDO listens to its COB-ID; a TPDO, for its remote requests, when it is sent on
+ * request only (types 252 and 253) and its COB-ID allows them. */
+static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
+{
+    bool rtr_only = p->type == 252 || p->type == 253;
+    bool listens = pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)));
+    co_route_set(node, tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO, (uint8_t)num,
+                 listens ? co_cob_key(p->cob_id) : CO_ROUTE_OFF);
+}
+
 static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
     load_comm(node, p, tpdo, num);
     pdo_load_mapping(node, p, tpdo, num);
     decide_fast(p, tpdo);
     restart(node, p, tpdo);
+    route(node, p, tpdo, num);
 }
 
 /* How many TPDOs an object change can trigger (active, type 0 or event-driven): when
@@ -179,23 +191,6 @@ void co_pdo_reset_comm(co_node_t *node)
         }
     }
     count_listeners(node);
-}
-
-void co_pdo_add_routes(co_node_t *node)
-{
-    /* Every active RPDO; a TPDO for its remote requests (types 252 and 253, RTR allowed). */
-    for (int tpdo = 0; tpdo <= 1; tpdo++) {
-        uint16_t count;
-        const co_pdo_t *table = pdo_table(node, tpdo, &count);
-        for (uint16_t n = 0; n < count; n++) {
-            const co_pdo_t *p = &table[n];
-            bool rtr_only = p->type == 252 || p->type == 253;
-            if (pdo_active(p) && (!tpdo || (rtr_only && !(p->cob_id & PDO_RTR_NOT_ALLOWED)))) {
-                co_routes_add_cob(node, p->cob_id, tpdo ? CO_ROUTE_TPDO_RTR : CO_ROUTE_RPDO,
-                                  (uint8_t)n);
-            }
-        }
-    }
 }
 
 void co_pdo_state_entered(co_node_t *node)
@@ -327,9 +322,6 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     if (p == NULL || (r.mapping && entry->sub != 0)) {
         return; /* not handled, or a mapping entry: it counts when sub0 is written */
     }
-    uint32_t old_cob = p->cob_id;
-    uint8_t old_type = p->type;
-    bool was_active = pdo_active(p);
     if (CO_CONFIG_PDO_DYNAMIC && r.mapping) {
         pdo_load_mapping(node, p, r.tpdo, r.num);
     } else {
@@ -340,7 +332,5 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     decide_fast(p, r.tpdo);
     restart(node, p, r.tpdo);
     count_listeners(node);
-    if (p->cob_id != old_cob || p->type != old_type || pdo_active(p) != was_active) {
-        co_routes_rebuild(node);
-    }
+    route(node, p, r.tpdo, r.num);
 }

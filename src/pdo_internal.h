@@ -1,12 +1,34 @@
 /*
- * src/pdo_internal.h -- what pdo.c (shared), pdo_rx.c and pdo_tx.c tell each other.
+ * src/pdo_internal.h -- the PDO family (see canola/pdo.h): what the node and SYNC call, and what
+ * pdo.c, pdo_map.c, pdo_rx.c, pdo_tx.c and pdo_timers.c tell each other. Not installed.
  */
 #ifndef CANOLA_PDO_INTERNAL_H
 #define CANOLA_PDO_INTERNAL_H
 
 #include <string.h>
 
-#include "internal.h"
+#include "kernel.h"
+#include "od_plain.h"
+#include "standin.h"
+
+/* ---- what the node and SYNC call */
+co_err_t co_pdo_bind(co_node_t *node); /* at init: count the PDOs the dictionary has */
+void co_pdo_reset_comm(co_node_t *node);
+void co_pdo_state_entered(co_node_t *node);
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame);
+void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame);
+void co_pdo_sync(co_node_t *node, uint8_t counter); /* a SYNC taken, sync.last_us its time */
+co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                              uint32_t len);
+void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1BFF */
+void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
+#if CO_CONFIG_PDO_TIMERS
+uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
+#else
+#define co_pdo_poll co_none_poll /* without timers PDOs have nothing to wait for */
+#endif
+
+/* ---- inside the family */
 
 /* co_pdo_t.flags */
 #define PDO_F_PRESENT 0x01u   /* the dictionary has this PDO's communication object */
@@ -16,8 +38,8 @@
 #define PDO_F_WAITING 0x10u   /* RPDO 0..240: data[] waits for the next SYNC */
 #define PDO_F_TIMED_OUT 0x20u /* RPDO: deadline missed and reported, until the next RPDO */
 #define PDO_F_LEN_ERROR 0x40u /* RPDO: raised 0x8210/0x8220, until a frame of the right length */
-
 #define PDO_RTR_NOT_ALLOWED 0x40000000u /* TPDO COB-ID bit 30 */
+#define PDO_VALUE_MAX 8u                /* bytes of the widest mappable value (64 bits) */
 
 static inline void pdo_set(co_pdo_t *p, unsigned f) { p->flags = (uint8_t)(p->flags | f); }
 static inline void pdo_clear(co_pdo_t *p, unsigned f) { p->flags = (uint8_t)(p->flags & ~f); }
@@ -73,13 +95,12 @@ static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uin
     }
 }
 
+/* pdo_map.c: resolving mappings into co_pdo_t, checking a new one; copying `n` bits from bit
+ * `spos` of src to bit `dpos` of dst (LSB first). */
+void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num);
 #if CO_CONFIG_PDO_BIT_MAPPING
-/* pdo_map.c: copy `n` bits from bit `spos` of src to bit `dpos` of dst (LSB first). */
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n);
 #endif
-
-/* pdo_map.c: resolving mappings into co_pdo_t, checking a new one. */
-void pdo_load_mapping(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num);
 #if CO_CONFIG_PDO_DYNAMIC
 /* A write to mapping object sub `sub` of PDO `num` (the re-mapping procedure). */
 co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uint8_t sub,

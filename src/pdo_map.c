@@ -7,7 +7,7 @@
  */
 #include "pdo_internal.h"
 
-#define PDO_MAP_BITS_MAX 64u
+#define PDO_MAP_BITS_MAX (8u * CO_FRAME_DATA_MAX) /* a mapping fills one frame at most */
 
 #if CO_CONFIG_PDO_BIT_MAPPING
 void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spos, uint32_t n)
@@ -27,7 +27,7 @@ void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spo
  * attribute, and storage or a hook to read (TPDO) / take (RPDO) the value. */
 static bool mappable(const co_od_entry_t *e, uint32_t size, bool tpdo)
 {
-    if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > 8) {
+    if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > PDO_VALUE_MAX) {
         return false;
     }
     bool hook = e->hooks && (tpdo ? e->hooks->read != NULL : e->hooks->write != NULL);

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "pdo_internal.h"
+#include "sync_internal.h" /* co_sync_window_open */
 
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
@@ -29,7 +30,7 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint
     uint32_t size = co_type_size((co_type_t)e->type);
     const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
 #if CO_CONFIG_PDO_BIT_MAPPING
-    uint8_t wire[8] = {0};
+    uint8_t wire[PDO_VALUE_MAX] = {0};
     if (pos % 8u != 0 || bits != 8u * size) {
         uint32_t n;
         (void)co_od_read(od, e, 0, wire, sizeof wire, &n, NULL); /* unreadable: zeros */

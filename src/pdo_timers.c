@@ -59,7 +59,7 @@ static uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
     p->next_us = CO_TIME_NEVER; /* reported once, until the next RPDO */
     pdo_set(p, PDO_F_TIMED_OUT);
     (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
-    co_node_error_behaviour(node);
+    node->wiring->error_behaviour(node); /* the error behaviour of 0x1029 (kernel.h) */
     return CO_TIME_NEVER;
 }
 

@@ -23,15 +23,15 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
         return;
     }
 #if CO_CONFIG_PDO_BIT_MAPPING
-    uint8_t wire[8] = {0};
+    uint8_t wire[PDO_VALUE_MAX] = {0};
     (void)co_od_read(od, p->map_entry[i], 0, wire, sizeof wire, &n, NULL);
     pdo_copy_bits(out, pos, wire, 0, bits);
 #endif
 }
 
-static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[8])
+static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_DATA_MAX])
 {
-    co_zero(out, 8);
+    co_zero(out, CO_FRAME_DATA_MAX);
     if (CO_SHORT_PATHS && p->plain) { /* whole values as stored: one copy each */
         uint8_t *at = out;
         for (uint8_t i = 0; i < p->count; i++) {
@@ -55,7 +55,7 @@ static CO_SIZE_NOINLINE void send_data(co_node_t *node, const co_pdo_t *p, const
 
 static void send_fresh(co_node_t *node, const co_pdo_t *p)
 {
-    uint8_t data[8];
+    uint8_t data[CO_FRAME_DATA_MAX];
     pack(node, p, data);
     send_data(node, p, data);
 }

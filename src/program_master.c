@@ -2,7 +2,8 @@
  * program_master.c -- program download, master side (CiA 302-3): stop, clear, block
  * download of 0x1F50, start, check 0x1F56; progress from the SDO client's count.
  */
-#include "internal.h"
+#include "manager_internal.h"
+#include "sdo_internal.h"
 
 #if CO_CONFIG_MANAGER
 

@@ -1,12 +1,16 @@
 /*
- * routes.c -- the receive routes: which service owns which COB-ID.
+ * routes.c -- the receive routes: which service takes the frames of which COB-ID.
  *
- * A small array sorted by key, searched by bisection, rebuilt from the services'
- * configuration whenever a COB-ID object changes (reset communication, a write to
- * 0x1016, a new guarding watch). Frames are dispatched in O(log routes) whatever
- * the number of services.
+ * A small array sorted by key (then kind and slot), searched by bisection: frames are
+ * dispatched in O(log routes) whatever the number of services. Each service sets and clears
+ * its own routes when its COB-ID objects change (reset communication, a write, a new watch),
+ * one per kind and slot. A key with two owners keeps both: the lower kind (kernel.h orders
+ * the kinds) takes the frames, the other waits behind it, its key marked SHADOW (a bit no
+ * frame's key has, so the search never finds it), and takes over when the first goes.
  */
-#include "internal.h"
+#include "kernel.h"
+
+#define SHADOW 0x40000000u /* a route waiting behind another owner of its key */
 
 static uint16_t kind_service(uint8_t kind)
 {
@@ -33,53 +37,95 @@ static uint16_t kind_service(uint8_t kind)
     }
 }
 
-void co_routes_add(co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+/* The route of `kind` and `slot`, or NULL when it has none. */
+static co_route_t *owned(co_node_t *node, uint8_t kind, uint8_t slot)
 {
-    if (node->route_count >= CO_RX_ROUTES_MAX || co_routes_find(node, key)) {
-        return; /* a key has one owner; the first configured keeps it */
+    for (co_route_t *r = node->routes; r < node->routes + node->route_count; r++) {
+        if (r->kind == kind && r->slot == slot) {
+            return r;
+        }
     }
-    /* Insertion keeps the array sorted; n is small and this runs only on changes. */
-    uint16_t at = node->route_count;
-    while (at > 0 && node->routes[at - 1].key > key) {
-        co_copy(&node->routes[at], &node->routes[at - 1], sizeof node->routes[0]);
-        at--;
+    return NULL;
+}
+
+/* Route `a` comes before route `b` among the owners of one key: the lower kind, then slot. */
+static bool lower(const co_route_t *a, const co_route_t *b)
+{
+    return a->kind != b->kind ? a->kind < b->kind : a->slot < b->slot;
+}
+
+/* The routes of `key` (none: CO_ROUTE_OFF, which no masked key equals): the lowest takes
+ * the frames, the others wait behind it, their key marked SHADOW. */
+static void settle(co_node_t *node, uint32_t key)
+{
+    co_route_t *owner = NULL;
+    for (co_route_t *r = node->routes; r < node->routes + node->route_count; r++) {
+        if ((r->key & ~SHADOW) == key) {
+            r->key = key | SHADOW;
+            owner = owner == NULL || lower(r, owner) ? r : owner;
+        }
     }
-    /* (co_copy and field by field: a struct copy would call memcpy on Cortex-M0) */
-    co_route_t *r = &node->routes[at];
+    if (owner != NULL) {
+        owner->key = key;
+    }
+}
+
+/* Route `a` may come before route `b` in the table: key, then kind and slot. */
+static CO_SIZE_NOINLINE bool in_order(const co_route_t *a, const co_route_t *b)
+{
+    return a->key != b->key ? a->key < b->key : lower(a, b);
+}
+
+/* The routes in their order again: an insertion sort, as few routes are out of place and
+ * this runs only on changes. (co_copy, not struct copies: those would call memcpy on
+ * Cortex-M0.) */
+static void sort(co_node_t *node)
+{
+    for (uint16_t i = 1; i < node->route_count; i++) {
+        if (in_order(&node->routes[i - 1u], &node->routes[i])) {
+            continue; /* in place: most are */
+        }
+        co_route_t r;
+        co_copy(&r, &node->routes[i], sizeof r);
+        uint16_t at = i;
+        for (; at > 0 && !in_order(&node->routes[at - 1u], &r); at--) {
+            co_copy(&node->routes[at], &node->routes[at - 1u], sizeof r);
+        }
+        co_copy(&node->routes[at], &r, sizeof r);
+    }
+}
+
+void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
+{
+    co_route_t *r = owned(node, kind, slot);
+    uint32_t old = CO_ROUTE_OFF;
+    if (r != NULL) {
+        old = r->key & ~SHADOW;
+        if (old == key) {
+            return; /* nothing changes */
+        }
+    } else {
+        if (key == CO_ROUTE_OFF || node->route_count >= CO_RX_ROUTES_MAX) {
+            return; /* nothing changes, or a full table drops the new route */
+        }
+        r = &node->routes[node->route_count++];
+        r->service = kind_service(kind);
+        r->kind = kind;
+        r->slot = slot;
+    }
     r->key = key;
-    r->service = kind_service(kind);
-    r->kind = kind;
-    r->slot = slot;
-    node->route_count++;
-    node->route_groups |= co_route_group(key);
-}
-
-void co_routes_add_cob(co_node_t *node, uint32_t cob, uint8_t kind, uint8_t slot)
-{
-    co_routes_add(node, co_cob_key(cob), kind, slot);
-}
-
-void co_routes_rebuild(co_node_t *node)
-{
-    node->route_count = 0;
+    settle(node, old); /* its next owner takes the frames */
+    settle(node, key);
+    sort(node); /* a route going (CO_ROUTE_OFF, above every key) ends up last: it goes */
+    if (key == CO_ROUTE_OFF) {
+        node->route_count--;
+    } else {
+        /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
+        node->route_groups |= co_route_group(key);
+    }
+    /* The hint starts over at the first route (the first of its key, as a hint must be),
+     * and the driver hears of the change. */
     node->route_hint = 0;
-    node->route_groups = 0;
-    co_routes_add(node, 0x000, CO_ROUTE_NMT, 0);
-    co_guard_add_routes(node); /* own guarding RTR, guarded nodes' replies */
-    co_hb_consumers_add_routes(node);
-    co_sdo_server_add_routes(node);
-    co_sdo_client_add_routes(node);
-    co_sync_add_routes(node);
-    co_time_add_routes(node);
-    co_emcy_add_routes(node);
-    co_pdo_add_routes(node);
-    if (CO_CONFIG_LSS_SLAVE) {
-        co_routes_add(node, CO_LSS_COB_MASTER, CO_ROUTE_LSS_SLAVE, 0);
-    }
-    if (co_lss_master_listening(node)) {
-        co_routes_add(node, CO_LSS_COB_SLAVE, CO_ROUTE_LSS_MASTER, 0);
-    }
-    co_manager_add_routes(node); /* last: a consumed node's heartbeat route comes first */
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }
@@ -116,5 +162,5 @@ uint32_t co_node_route_count(const co_node_t *node) { return node->route_count; 
 
 uint32_t co_node_route_id(const co_node_t *node, uint32_t i)
 {
-    return i < node->route_count ? node->routes[i].key : 0;
+    return i < node->route_count ? node->routes[i].key & ~SHADOW : 0;
 }

@@ -16,26 +16,25 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "crc16.h"
+#include "sdo_internal.h"
+#include "sdo_protocol.h"
 
 #if CO_SDO_CLIENTS_MAX > 0
 
 enum client_state {
     IDLE = 0,
-    UP_INIT,  /* 0x40 sent, expect the initiate upload response */
+    UP_INIT,  /* initiate upload sent, expect its response */
     UP_SEG,   /* upload segment requested */
-    DN_INIT,  /* initiate download sent, expect 0x60 */
+    DN_INIT,  /* initiate download sent, expect its response */
     DN_SEG,   /* download segment sent, expect its confirmation */
     BUP_INIT, /* block upload initiate sent (a normal response is a protocol switch) */
     BUP_DATA, /* receiving sub-blocks */
     BUP_END,  /* last segment received, expect the server's end */
     BDN_INIT, /* block download initiate sent, expect the block size */
     BDN_DATA, /* sending a sub-block (paced by the tx queue), then expect its ack */
-    BDN_END,  /* end sent, expect 0xA1 */
+    BDN_END,  /* end sent, expect the server's end */
 };
-
-#define SEG 7u /* data bytes per segment */
-#define BLKSIZE_MAX 127u
 
 static uint8_t channel_of(const co_node_t *node, const co_sdo_client_t *c)
 {
@@ -46,7 +45,7 @@ static uint8_t channel_of(const co_node_t *node, const co_sdo_client_t *c)
 static void apply_defaults(co_sdo_client_t *c)
 {
     if (c->want_blksize == 0) {
-        c->want_blksize = BLKSIZE_MAX;
+        c->want_blksize = CO_SDO_BLKSIZE_MAX;
         c->use_crc = true;
         c->pst = 0;
     }
@@ -80,21 +79,23 @@ static void touch(co_node_t *node, co_sdo_client_t *c)
     co_node_schedule(node, c->deadline_us);
 }
 
-static void transmit(co_node_t *node, const co_sdo_client_t *c, const uint8_t d[8])
+static void transmit(co_node_t *node, const co_sdo_client_t *c, const uint8_t d[CO_SDO_FRAME_LEN])
 {
-    co_frame_t f = co_cob_frame(c->cob_tx, 8);
-    memcpy(f.data, d, 8);
+    co_frame_t f;
+    co_frame_address(&f, c->cob_tx, CO_SDO_FRAME_LEN);
+    memcpy(f.data, d, CO_SDO_FRAME_LEN);
     (void)co_node_send_as(node, &f, CO_SVC_SDO); /* a lost frame ends in the time-out */
 }
 
-static void send8(co_node_t *node, co_sdo_client_t *c, const uint8_t d[8])
+static void send8(co_node_t *node, co_sdo_client_t *c, const uint8_t d[CO_SDO_FRAME_LEN])
 {
     transmit(node, c, d);
     touch(node, c);
 }
 
 /* Command byte, the transfer's index and sub-index, and a 32-bit value. */
-static void cmd_frame(const co_sdo_client_t *c, uint8_t d[8], uint8_t cmd, uint32_t value)
+static void cmd_frame(const co_sdo_client_t *c, uint8_t d[CO_SDO_FRAME_LEN], uint8_t cmd,
+                      uint32_t value)
 {
     d[0] = cmd;
     co_put_u16(&d[1], c->index);
@@ -105,15 +106,15 @@ static void cmd_frame(const co_sdo_client_t *c, uint8_t d[8], uint8_t cmd, uint3
 /* Frames of block transfer without index: command and two parameter bytes. */
 static void send_short(co_node_t *node, co_sdo_client_t *c, uint8_t cmd, uint8_t p1, uint8_t p2)
 {
-    uint8_t d[8] = {cmd, p1, p2, 0, 0, 0, 0, 0};
+    uint8_t d[CO_SDO_FRAME_LEN] = {cmd, p1, p2};
     send8(node, c, d);
 }
 
 /* Abort towards the server, then report the code. */
 static void fail(co_node_t *node, co_sdo_client_t *c, co_abort_t code)
 {
-    uint8_t d[8];
-    cmd_frame(c, d, 0x80, code);
+    uint8_t d[CO_SDO_FRAME_LEN];
+    cmd_frame(c, d, CO_SDO_CS_ABORT, code);
     transmit(node, c, d);
     finish(node, c, code, 0);
 }
@@ -143,17 +144,17 @@ static bool awaits_initiate_answer(const co_sdo_client_t *c)
 
 static co_abort_t on_block_upload_init(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    c->size_known = (d[0] & 0x02) != 0;
+    c->size_known = (d[0] & CO_SDO_BLK_SIZE) != 0;
     c->size = c->size_known ? co_get_u32(&d[4]) : 0;
     if (c->size_known && c->size > c->cap) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
-    c->crc_on = c->use_crc && (d[0] & 0x04);
+    c->crc_on = c->use_crc && (d[0] & CO_SDO_BLK_CRC);
     c->done = 0;
     c->seq = 0;
     c->blksize = c->want_blksize;
     c->state = BUP_DATA;
-    send_short(node, c, 0xA3, 0, 0);
+    send_short(node, c, CO_SDO_CCS_BLK_UP | CO_SDO_BLK_START, 0, 0);
     return CO_ABORT_NONE;
 }
 
@@ -161,15 +162,17 @@ static co_abort_t on_block_upload_init(co_node_t *node, co_sdo_client_t *c, cons
 static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     uint8_t b = d[0];
-    bool block = c->state == BUP_INIT && (b & 0xF9) == 0xC0;
-    if (!block && (b & 0xE0) != 0x40) {
+    bool block = c->state == BUP_INIT &&
+                 (b & ~(CO_SDO_BLK_CRC | CO_SDO_BLK_SIZE)) == (CO_SDO_SCS_BLK_UP | CO_SDO_BLK_INI);
+    if (!block && (b & CO_SDO_CS_MASK) != CO_SDO_SCS_UP_INI) {
         return CO_ABORT_COMMAND;
     }
     if (block) {
         return on_block_upload_init(node, c, d);
     }
-    if (b & 0x02) { /* expedited: n unused bytes when the size is indicated */
-        uint32_t n = (b & 0x01) ? 4u - ((b >> 2) & 3u) : 4u;
+    if (b & CO_SDO_INI_EXPEDITED) { /* n unused bytes when the size is indicated */
+        uint32_t n =
+            (b & CO_SDO_INI_SIZE) ? CO_SDO_EXPEDITED_MAX - CO_SDO_INI_N(b) : CO_SDO_EXPEDITED_MAX;
         if (n > c->cap) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
@@ -178,7 +181,7 @@ static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint
         finish(node, c, CO_ABORT_NONE, n);
         return CO_ABORT_NONE;
     }
-    c->size_known = (b & 0x01) != 0;
+    c->size_known = (b & CO_SDO_INI_SIZE) != 0;
     c->size = c->size_known ? co_get_u32(&d[4]) : 0;
     if (c->size_known && c->size > c->cap) {
         return CO_ABORT_OUT_OF_MEMORY;
@@ -186,7 +189,7 @@ static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint
     c->done = 0;
     c->toggle = 0;
     c->state = UP_SEG;
-    send_short(node, c, 0x60, 0, 0);
+    send_short(node, c, CO_SDO_CCS_UP_SEG, 0, 0);
     return CO_ABORT_NONE;
 }
 
@@ -195,14 +198,14 @@ static co_abort_t on_upload_init(co_node_t *node, co_sdo_client_t *c, const uint
 static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     uint8_t b = d[0];
-    if ((b & 0xE0) != 0x00) {
+    if ((b & CO_SDO_CS_MASK) != CO_SDO_SCS_UP_SEG) {
         return CO_ABORT_COMMAND;
     }
-    if (((b >> 4) & 1u) != c->toggle) {
+    if ((b & CO_SDO_SEG_TOGGLE) != c->toggle) {
         return CO_ABORT_TOGGLE;
     }
-    uint32_t n = SEG - ((b >> 1) & 7u);
-    if (n == 0 && !(b & 0x01)) {
+    uint32_t n = CO_SDO_SEG_BYTES - CO_SDO_SEG_N(b);
+    if (n == 0 && !(b & CO_SDO_SEG_LAST)) {
         return CO_ABORT_COMMAND;
     }
     uint64_t total = (uint64_t)c->done + n;
@@ -214,15 +217,15 @@ static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8
     }
     store(c, &d[1], n);
     c->done = (uint32_t)total;
-    if (b & 0x01) {
+    if (b & CO_SDO_SEG_LAST) {
         if (c->size_known && c->done < c->size) {
             return CO_ABORT_LEN_LOW;
         }
         finish(node, c, CO_ABORT_NONE, c->done);
         return CO_ABORT_NONE;
     }
-    c->toggle ^= 1u;
-    send_short(node, c, (uint8_t)(0x60 | ((unsigned)c->toggle << 4)), 0, 0);
+    c->toggle ^= CO_SDO_SEG_TOGGLE;
+    send_short(node, c, (uint8_t)(CO_SDO_CCS_UP_SEG | c->toggle), 0, 0);
     return CO_ABORT_NONE;
 }
 
@@ -231,20 +234,20 @@ static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8
  * the server repeats what was lost. The final segment's padding is dropped at the end. */
 static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    uint8_t seqno = d[0] & 0x7F;
-    bool last = (d[0] & 0x80) != 0;
+    uint8_t seqno = d[0] & CO_SDO_BLK_SEQ_MASK;
+    bool last = (d[0] & CO_SDO_BLK_LAST) != 0;
     if (seqno == 0 || seqno > c->blksize) {
         return CO_ABORT_NONE; /* not a segment of this sub-block: ignore */
     }
     if (seqno == c->seq + 1) {
-        uint64_t total = (uint64_t)c->done + SEG;
+        uint64_t total = (uint64_t)c->done + CO_SDO_SEG_BYTES;
         if (!last && c->size_known && total > c->size) {
             return CO_ABORT_LEN_HIGH;
         }
         if (!last && total > c->cap) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
-        store(c, &d[1], SEG);
+        store(c, &d[1], CO_SDO_SEG_BYTES);
         c->done = (uint32_t)co_min_u64(total, UINT32_MAX);
         c->seq = seqno;
         if (last) {
@@ -255,7 +258,7 @@ static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const
         uint8_t ackseq = c->seq;
         c->seq = 0; /* the next sub-block (or its repetition) counts from 1 again */
         c->blksize = c->want_blksize;
-        send_short(node, c, 0xA2, ackseq, c->blksize);
+        send_short(node, c, CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK, ackseq, c->blksize);
     }
     return CO_ABORT_NONE;
 }
@@ -263,10 +266,10 @@ static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const
 /* Server's end `110n nn01` + CRC: n bytes of the last segment held no data. */
 static co_abort_t on_block_upload_end(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    if ((d[0] & 0xE3) != 0xC1) {
+    if ((d[0] & (CO_SDO_CS_MASK | CO_SDO_BLK_SUB_MASK)) != (CO_SDO_SCS_BLK_UP | CO_SDO_BLK_END)) {
         return CO_ABORT_COMMAND;
     }
-    uint32_t n = (d[0] >> 2) & 7u;
+    uint32_t n = CO_SDO_BLK_END_N(d[0]);
     if (n > c->done) {
         return CO_ABORT_COMMAND;
     }
@@ -280,7 +283,7 @@ static co_abort_t on_block_upload_end(co_node_t *node, co_sdo_client_t *c, const
     if (c->crc_on && co_crc16(0, c->up_buf, len) != co_get_u16(&d[1])) {
         return CO_ABORT_CRC;
     }
-    send_short(node, c, 0xA1, 0, 0);
+    send_short(node, c, CO_SDO_CCS_BLK_UP | CO_SDO_BLK_END, 0, 0);
     finish(node, c, CO_ABORT_NONE, len);
     return CO_ABORT_NONE;
 }
@@ -291,9 +294,11 @@ static co_abort_t on_block_upload_end(co_node_t *node, co_sdo_client_t *c, const
 static void send_segment(co_node_t *node, co_sdo_client_t *c)
 {
     uint32_t left = c->cap - c->done;
-    uint32_t n = left < SEG ? left : SEG;
-    uint8_t d[8] = {0};
-    d[0] = (uint8_t)(((unsigned)c->toggle << 4) | ((SEG - n) << 1) | (n == left ? 1u : 0u));
+    uint32_t n = left < CO_SDO_SEG_BYTES ? left : CO_SDO_SEG_BYTES;
+    uint8_t d[CO_SDO_FRAME_LEN] = {0};
+    d[0] =
+        (uint8_t)(CO_SDO_CCS_DN_SEG | c->toggle | ((CO_SDO_SEG_BYTES - n) << CO_SDO_SEG_N_SHIFT) |
+                  (n == left ? CO_SDO_SEG_LAST : 0u));
     if (n) {
         memcpy(&d[1], c->dn_data + c->done, n);
     }
@@ -306,15 +311,15 @@ static void send_segment(co_node_t *node, co_sdo_client_t *c)
 static void pump(co_node_t *node, co_sdo_client_t *c)
 {
     while (c->state == BDN_DATA && co_txq_idle(node) && c->seq < c->blksize) {
-        uint64_t off = (uint64_t)c->done + (uint64_t)c->seq * SEG;
+        uint64_t off = (uint64_t)c->done + (uint64_t)c->seq * CO_SDO_SEG_BYTES;
         if (c->seq > 0 && off >= c->cap) {
             return; /* the last segment is out: wait for the acknowledgement */
         }
         uint32_t left = c->cap - (uint32_t)off;
-        uint32_t n = left < SEG ? left : SEG;
-        uint8_t d[8] = {0};
+        uint32_t n = left < CO_SDO_SEG_BYTES ? left : CO_SDO_SEG_BYTES;
+        uint8_t d[CO_SDO_FRAME_LEN] = {0};
         c->seq++;
-        d[0] = (uint8_t)((n == left ? 0x80u : 0u) | c->seq);
+        d[0] = (uint8_t)((n == left ? CO_SDO_BLK_LAST : 0u) | c->seq);
         if (n) {
             memcpy(&d[1], c->dn_data + off, n);
         }
@@ -324,7 +329,7 @@ static void pump(co_node_t *node, co_sdo_client_t *c)
 
 static co_abort_t on_download_init(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    if (d[0] != 0x60) {
+    if (d[0] != CO_SDO_SCS_DN_INI) {
         return CO_ABORT_COMMAND;
     }
     if (c->mode == CO_SDO_EXPEDITED) {
@@ -341,30 +346,30 @@ static co_abort_t on_download_init(co_node_t *node, co_sdo_client_t *c, const ui
 /* Download segment confirmation `001t 0000`. */
 static co_abort_t on_download_seg(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    if ((d[0] & 0xE0) != 0x20) {
+    if ((d[0] & CO_SDO_CS_MASK) != CO_SDO_SCS_DN_SEG) {
         return CO_ABORT_COMMAND;
     }
-    if (((d[0] >> 4) & 1u) != c->toggle) {
+    if ((d[0] & CO_SDO_SEG_TOGGLE) != c->toggle) {
         return CO_ABORT_TOGGLE;
     }
     if (c->done >= c->cap) {
         finish(node, c, CO_ABORT_NONE, c->cap);
         return CO_ABORT_NONE;
     }
-    c->toggle ^= 1u;
+    c->toggle ^= CO_SDO_SEG_TOGGLE;
     send_segment(node, c);
     return CO_ABORT_NONE;
 }
 
 static co_abort_t on_block_download_init(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    if ((d[0] & 0xFB) != 0xA0) {
+    if ((d[0] & ~CO_SDO_BLK_CRC) != (CO_SDO_SCS_BLK_DN | CO_SDO_BLK_INI)) {
         return CO_ABORT_COMMAND;
     }
-    if (d[4] == 0 || d[4] > BLKSIZE_MAX) {
+    if (d[4] == 0 || d[4] > CO_SDO_BLKSIZE_MAX) {
         return CO_ABORT_BLOCK_SIZE;
     }
-    c->crc_on = c->use_crc && (d[0] & 0x04);
+    c->crc_on = c->use_crc && (d[0] & CO_SDO_BLK_CRC);
     c->blksize = d[4];
     c->done = 0;
     c->seq = 0;
@@ -376,26 +381,28 @@ static co_abort_t on_block_download_init(co_node_t *node, co_sdo_client_t *c, co
 /* End of a block download: n = bytes of the last segment without data (7 when empty). */
 static void send_block_end(co_node_t *node, co_sdo_client_t *c)
 {
-    uint32_t n = c->cap == 0 ? SEG : (SEG - c->cap % SEG) % SEG;
+    uint32_t n = c->cap == 0 ? CO_SDO_SEG_BYTES
+                             : (CO_SDO_SEG_BYTES - c->cap % CO_SDO_SEG_BYTES) % CO_SDO_SEG_BYTES;
     uint16_t crc = c->crc_on ? co_crc16(0, c->dn_data, c->cap) : 0;
     c->state = BDN_END;
-    send_short(node, c, (uint8_t)(0xC1 | (n << 2)), (uint8_t)crc, (uint8_t)(crc >> 8));
+    uint8_t cmd = (uint8_t)(CO_SDO_CCS_BLK_DN | CO_SDO_BLK_END | (n << CO_SDO_BLK_END_N_SHIFT));
+    send_short(node, c, cmd, (uint8_t)crc, (uint8_t)(crc >> 8));
 }
 
-/* Sub-block acknowledgement 0xA2 ackseq blksize: repeat from ackseq + 1, or end. */
+/* Sub-block acknowledgement (ackseq, blksize): repeat from ackseq + 1, or end. */
 static co_abort_t on_block_download_ack(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    if (d[0] != 0xA2) {
+    if (d[0] != (CO_SDO_SCS_BLK_DN | CO_SDO_BLK_ACK)) {
         return CO_ABORT_COMMAND;
     }
     uint8_t ackseq = d[1];
     if (ackseq > c->seq) {
         return CO_ABORT_SEQUENCE;
     }
-    if (d[2] == 0 || d[2] > BLKSIZE_MAX) {
+    if (d[2] == 0 || d[2] > CO_SDO_BLKSIZE_MAX) {
         return CO_ABORT_BLOCK_SIZE;
     }
-    uint64_t acked = (uint64_t)c->done + (uint64_t)ackseq * SEG;
+    uint64_t acked = (uint64_t)c->done + (uint64_t)ackseq * CO_SDO_SEG_BYTES;
     bool all = ackseq > 0 && acked >= c->cap;
     c->done = (uint32_t)co_min_u64(acked, c->cap);
     c->seq = 0;
@@ -410,7 +417,7 @@ static co_abort_t on_block_download_ack(co_node_t *node, co_sdo_client_t *c, con
 
 static co_abort_t on_block_download_end(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
-    if (d[0] != 0xA1) {
+    if (d[0] != (CO_SDO_SCS_BLK_DN | CO_SDO_BLK_END)) {
         return CO_ABORT_COMMAND;
     }
     finish(node, c, CO_ABORT_NONE, c->cap);
@@ -418,6 +425,13 @@ static co_abort_t on_block_download_end(co_node_t *node, co_sdo_client_t *c, con
 }
 
 /* ---- the node's side */
+
+/* The channel listens to its server's responses (a channel to the node itself, or one
+ * without valid COB-IDs, to nothing). */
+static void route(co_node_t *node, uint8_t ch)
+{
+    co_route_set(node, CO_ROUTE_SDO_CLIENT, ch, co_cob_route(node->sdo_clients[ch].cob_rx));
+}
 
 /* Take the channel's parameters from 0x1280 + ch when the dictionary has them: sub1
  * COB-ID client -> server, sub2 server -> client, sub3 server node-ID. Returns false when
@@ -455,6 +469,7 @@ void co_sdo_client_reset_comm(co_node_t *node)
             c->cob_tx = CO_COB_INVALID;
             c->cob_rx = CO_COB_INVALID;
         }
+        route(node, i);
     }
 }
 
@@ -477,7 +492,7 @@ void co_sdo_client_written(co_node_t *node, const co_od_entry_t *entry)
             fail(node, c, CO_ABORT_GENERAL); /* its server changed under it */
         }
         (void)load_from_od(node, (uint8_t)ch);
-        co_routes_rebuild(node);
+        route(node, (uint8_t)ch);
     }
 }
 
@@ -487,7 +502,7 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         return;
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_SDO_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }
@@ -498,7 +513,7 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     if (awaits_initiate_answer(c) && !same_object(c, d)) {
         return; /* a late answer to an earlier request, or to another client of the server */
     }
-    if (d[0] == 0x80) { /* server abort (never a valid block segment: seqno 0) */
+    if (d[0] == CO_SDO_CS_ABORT) { /* never a valid block segment: seqno 0 */
         co_abort_t code = co_get_u32(&d[4]);
         finish(node, c, code ? code : CO_ABORT_GENERAL, 0);
         return;
@@ -544,16 +559,6 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
 
 /* Resume paced block sending first (a stalled sender is not a silent server), then
  * time out transfers that saw no frame for the time-out. */
-void co_sdo_client_add_routes(co_node_t *node)
-{
-    for (uint8_t i = 0; i < co_sdo_clients_max(); i++) {
-        uint32_t cob = node->sdo_clients[i].cob_rx;
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add_cob(node, cob, CO_ROUTE_SDO_CLIENT, i);
-        }
-    }
-}
-
 uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
@@ -598,14 +603,15 @@ co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id
     (void)co_od_set_uint(&node->cfg.od, index, 1, 0x600u + server_id);
     (void)co_od_set_uint(&node->cfg.od, index, 2, 0x580u + server_id);
     (void)co_od_set_uint(&node->cfg.od, index, 3, server_id);
-    co_routes_rebuild(node);
+    route(node, channel);
     return CO_OK;
 }
 
 co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t blksize, bool crc,
                                      uint8_t pst)
 {
-    if (node == NULL || channel >= co_sdo_clients_max() || blksize < 1 || blksize > BLKSIZE_MAX) {
+    if (node == NULL || channel >= co_sdo_clients_max() || blksize < 1 ||
+        blksize > CO_SDO_BLKSIZE_MAX) {
         return CO_ERR_ARG;
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
@@ -661,6 +667,36 @@ static void begin(co_sdo_client_t *c, uint16_t index, uint8_t sub, co_sdo_done_f
     c->seq = 0;
 }
 
+/* ---- a channel to the node itself: the request is served on its own dictionary as its
+ * SDO server would serve it, without frames (writes with their effects: co_node_write) */
+
+/* The entry of a local request, found and accessible in that direction; else NULL and the
+ * abort code. */
+static const co_od_entry_t *local_entry(co_node_t *node, uint16_t index, uint8_t sub, bool write,
+                                        co_abort_t *abort)
+{
+    const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, abort);
+    if (e != NULL) {
+        *abort = co_od_access(e, write);
+    }
+    return *abort == CO_ABORT_NONE ? e : NULL;
+}
+
+/* A value larger than `cap` is refused whole, as a remote server's would be. */
+static co_abort_t local_upload(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
+                               uint32_t cap, uint32_t *len)
+{
+    co_abort_t abort = CO_ABORT_NONE;
+    const co_od_entry_t *e = local_entry(node, index, sub, false, &abort);
+    uint32_t total = 0;
+    if (e != NULL) {
+        abort = co_od_read(&node->cfg.od, e, 0, buf, cap, len, &total);
+    }
+    return abort == CO_ABORT_NONE && total != CO_OD_SIZE_UNKNOWN && total > *len
+               ? CO_ABORT_OUT_OF_MEMORY
+               : abort;
+}
+
 co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t sub,
                        co_sdo_mode_t mode, uint8_t *buf, uint32_t cap, co_sdo_done_fn done,
                        void *ctx)
@@ -676,10 +712,9 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
     if (c->server_id == node->node_id) {
         uint8_t none = 0;
         uint32_t len = 0;
-        co_abort_t code = co_node_read_net(node, index, sub, buf ? buf : &none, cap, &len);
+        co_abort_t code = local_upload(node, index, sub, buf ? buf : &none, cap, &len);
         if (done) {
-            done(ctx, channel, code == CO_ABORT_LEN_HIGH ? CO_ABORT_OUT_OF_MEMORY : code,
-                 code == CO_ABORT_NONE ? len : 0);
+            done(ctx, channel, code, code == CO_ABORT_NONE ? len : 0);
         }
         return CO_OK;
     }
@@ -687,8 +722,10 @@ co_err_t co_sdo_upload(co_node_t *node, uint8_t channel, uint16_t index, uint8_t
     c->up_buf = buf;
     c->cap = cap;
     c->mode = (uint8_t)mode;
-    uint8_t d[8];
-    cmd_frame(c, d, mode == CO_SDO_BLOCK ? (uint8_t)(0xA0 | (c->use_crc ? 0x04 : 0x00)) : 0x40, 0);
+    uint8_t d[CO_SDO_FRAME_LEN];
+    uint8_t crc = c->use_crc ? CO_SDO_BLK_CRC : 0u;
+    uint8_t block = (uint8_t)(CO_SDO_CCS_BLK_UP | CO_SDO_BLK_INI | crc);
+    cmd_frame(c, d, mode == CO_SDO_BLOCK ? block : CO_SDO_CCS_UP_INI, 0);
     if (mode == CO_SDO_BLOCK) {
         c->blksize = c->want_blksize;
         d[4] = c->blksize;
@@ -704,8 +741,8 @@ co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8
                          void *ctx)
 {
     co_err_t err = can_start(node, channel, mode);
-    if (err == CO_OK &&
-        ((data == NULL && len > 0) || (mode == CO_SDO_EXPEDITED && (len == 0 || len > 4)))) {
+    if (err == CO_OK && ((data == NULL && len > 0) ||
+                         (mode == CO_SDO_EXPEDITED && (len == 0 || len > CO_SDO_EXPEDITED_MAX)))) {
         err = CO_ERR_ARG;
     }
     if (err != CO_OK) {
@@ -714,7 +751,9 @@ co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8
     co_sdo_client_t *c = &node->sdo_clients[channel];
     if (c->server_id == node->node_id) {
         static const uint8_t none = 0;
-        co_abort_t code = co_node_write_net(node, index, sub, data ? data : &none, len);
+        co_abort_t code = CO_ABORT_NONE;
+        const co_od_entry_t *e = local_entry(node, index, sub, true, &code);
+        code = e != NULL ? co_node_write(node, e, data ? data : &none, len) : code;
         if (done) {
             done(ctx, channel, code, code == CO_ABORT_NONE ? len : 0);
         }
@@ -724,16 +763,20 @@ co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8
     c->dn_data = data;
     c->cap = len;
     if (mode == CO_SDO_AUTO) {
-        mode = (len >= 1 && len <= 4) ? CO_SDO_EXPEDITED : CO_SDO_SEGMENTED;
+        mode = (len >= 1 && len <= CO_SDO_EXPEDITED_MAX) ? CO_SDO_EXPEDITED : CO_SDO_SEGMENTED;
     }
     c->mode = (uint8_t)mode;
-    uint8_t d[8];
+    uint8_t d[CO_SDO_FRAME_LEN];
     if (mode == CO_SDO_EXPEDITED) {
-        cmd_frame(c, d, (uint8_t)(0x23 | ((4u - len) << 2)), 0);
+        uint32_t n = CO_SDO_EXPEDITED_MAX - len; /* bytes that hold no data */
+        uint32_t cmd = CO_SDO_CCS_DN_INI | CO_SDO_INI_EXPEDITED | CO_SDO_INI_SIZE;
+        cmd_frame(c, d, (uint8_t)(cmd | (n << CO_SDO_INI_N_SHIFT)), 0);
         memcpy(&d[4], data, len);
     } else {
-        uint8_t block = (uint8_t)(0xC2 | (c->use_crc ? 0x04 : 0x00));
-        cmd_frame(c, d, mode == CO_SDO_SEGMENTED ? 0x21 : block, len);
+        uint8_t crc = c->use_crc ? CO_SDO_BLK_CRC : 0u;
+        uint8_t block = (uint8_t)(CO_SDO_CCS_BLK_DN | CO_SDO_BLK_INI | CO_SDO_BLK_SIZE | crc);
+        cmd_frame(c, d, mode == CO_SDO_SEGMENTED ? CO_SDO_CCS_DN_INI | CO_SDO_INI_SIZE : block,
+                  len);
     }
     c->state = mode == CO_SDO_BLOCK ? BDN_INIT : DN_INIT;
     send8(node, c, d);

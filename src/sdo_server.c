@@ -17,7 +17,10 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "crc16.h"
+#include "od_plain.h"
+#include "sdo_internal.h"
+#include "sdo_protocol.h"
 
 enum server_state {
     IDLE = 0,
@@ -30,9 +33,10 @@ enum server_state {
     BLOCK_UP_END,   /* end sent, expect the client's end response */
 };
 
-#define SEG_BYTES 7u
-#define TOGGLE 0x10u /* the toggle bit of segment commands, where s->toggle keeps it */
-#define BLOCK_SIZE_MAX (CO_SDO_BUF_SIZE / SEG_BYTES < 127 ? CO_SDO_BUF_SIZE / SEG_BYTES : 127)
+/* A sub-block fits the channel buffer. */
+#define BLOCK_SIZE_MAX                                                                             \
+    (CO_SDO_BUF_SIZE / CO_SDO_SEG_BYTES < CO_SDO_BLKSIZE_MAX ? CO_SDO_BUF_SIZE / CO_SDO_SEG_BYTES  \
+                                                             : CO_SDO_BLKSIZE_MAX)
 
 /* ---- channels and their COB-IDs */
 
@@ -52,7 +56,8 @@ static void load_channel(co_node_t *node, uint8_t ch)
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
-    co_frame_address(&s->reply, s->cob_tx, 8);
+    co_frame_address(&s->reply, s->cob_tx, CO_SDO_FRAME_LEN);
+    co_route_set(node, CO_ROUTE_SDO_SERVER, ch, co_cob_route(s->cob_rx));
 }
 
 void co_sdo_server_reset_comm(co_node_t *node)
@@ -70,60 +75,14 @@ void co_sdo_server_stop(co_node_t *node)
     }
 }
 
-void co_sdo_server_add_routes(co_node_t *node)
-{
-    for (uint8_t i = 0; i < co_sdo_servers_max(); i++) {
-        uint32_t cob = node->sdo_servers[i].cob_rx;
-        if (!(cob & CO_COB_INVALID)) {
-            co_routes_add_cob(node, cob, CO_ROUTE_SDO_SERVER, i);
-        }
-    }
-}
-
-/* Take new COB-IDs into use. A channel reconfigured by a request it is serving itself
- * answers that request on the old COB-ID first: the reload waits for the answer. */
-static CO_SIZE_NOINLINE void apply_reloads(co_node_t *node)
-{
-    if (!node->sdo_reload) {
-        return;
-    }
-    node->sdo_reload = false;
-    bool changed = false;
-    for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
-        co_sdo_server_t *s = &node->sdo_servers[ch];
-        if (s->reload) {
-            s->reload = false;
-            s->state = IDLE;
-            load_channel(node, ch);
-            changed = true;
-        }
-    }
-    if (changed) {
-        co_routes_rebuild(node);
-    }
-}
-
+/* New COB-IDs take effect at once: a transfer open on the channel ends (without a frame). */
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t ch = entry->index - 0x1200u;
     if (ch < co_sdo_servers_max() && (entry->sub == 1 || entry->sub == 2)) {
-        node->sdo_servers[ch].reload = true;
-        node->sdo_reload = true;
-        if (!node->sdo_serving) {
-            apply_reloads(node);
-        }
+        node->sdo_servers[ch].state = IDLE;
+        load_channel(node, (uint8_t)ch);
     }
-}
-
-/* A whole value from the network into the dictionary, with the services' effects; a
- * new COB-ID of a server channel waits until the request is answered (apply_reloads). */
-static co_abort_t write_value(co_node_t *node, const co_sdo_server_t *s, const uint8_t *data,
-                              uint32_t len)
-{
-    node->sdo_serving = true;
-    co_abort_t abort = co_node_write_entry(node, s->entry, data, len);
-    node->sdo_serving = false;
-    return abort;
 }
 
 /* ---- sending */
@@ -144,10 +103,11 @@ static CO_INLINE void send_reply(co_node_t *node, co_sdo_server_t *s)
     (void)co_node_send_hot(node, &s->reply, CO_SVC_SDO);
 }
 
-/* A frame of 8 bytes to the client. */
-static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[8])
+/* A whole frame to the client. */
+static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s,
+                           const uint8_t data[CO_SDO_FRAME_LEN])
 {
-    co_copy(s->reply.data, data, 8);
+    co_copy(s->reply.data, data, CO_SDO_FRAME_LEN);
     send_reply(node, s);
 }
 
@@ -160,16 +120,56 @@ static CO_INLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t h
     send_reply(node, s);
 }
 
-/* A response naming the transfer's object: cmd, index, sub-index, then `tail`. */
+/* The first word of a response naming the transfer's object: cmd, index, sub-index. */
+static CO_INLINE uint32_t head(const co_sdo_server_t *s, uint8_t cmd)
+{
+    return cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24);
+}
+
+/* A response naming the transfer's object, then `tail`. */
 static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
-    send_words(node, s, cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24), tail);
+    send_words(node, s, head(s, cmd), tail);
 }
 
 static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
 {
-    respond(node, s, 0x80, code);
+    respond(node, s, CO_SDO_CS_ABORT, code);
     s->state = IDLE;
+}
+
+/* store() of a server parameter (0x1200..0x127F), which may move this very channel (sub1 or
+ * sub2 written through it): the write takes effect at once, and its confirmation still leaves
+ * where the client waits for it, on the COB-ID the request was served on. */
+static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
+                                        uint32_t len, uint32_t ok)
+{
+    co_frame_t served = s->reply; /* valid: else the request had not come */
+    co_abort_t abort = co_node_write(node, s->entry, data, len);
+    if (abort != CO_ABORT_NONE) {
+        abort_transfer(node, s, abort);
+        return;
+    }
+    co_put_u32(&served.data[0], ok);
+    co_put_u32(&served.data[4], 0);
+    (void)co_node_send_hot(node, &served, CO_SVC_SDO);
+}
+
+/* A whole value from the network into the dictionary with the services' effects, then the
+ * answer: the confirmation (`ok`, its first word; the second is 0) or the abort. */
+static CO_INLINE void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
+                            uint32_t ok)
+{
+    if ((s->entry->index >> 7) == (0x1200u >> 7)) {
+        store_parameter(node, s, data, len, ok);
+        return;
+    }
+    co_abort_t abort = co_node_write(node, s->entry, data, len);
+    if (abort != CO_ABORT_NONE) {
+        abort_transfer(node, s, abort);
+    } else {
+        send_words(node, s, ok, 0);
+    }
 }
 
 /* The first bytes of a new transfer's bookkeeping (expedited requests need none). */
@@ -236,19 +236,12 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
     return CO_ABORT_NONE;
 }
 
-/* Pass the buffered bytes on: to the write hook as a piece, or (last) store them whole:
- * from the buffer, or from the entry's storage when earlier parts went there (spill). */
+/* Pass the buffered bytes on: to the write hook as a piece, or (a DOMAIN or string in RAM
+ * larger than the buffer) into the entry's own storage before the last piece (spill). */
 static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 {
     if (!streams(s)) {
-        if (!last) {
-            return spill(s) ? CO_ABORT_NONE : CO_ABORT_LEN_HIGH;
-        }
-        if (s->done == 0) {
-            return write_value(node, s, s->buf, s->buf_len);
-        }
-        uint32_t len = received(s);
-        return spill(s) ? write_value(node, s, own_storage(s), len) : CO_ABORT_LEN_HIGH;
+        return spill(s) ? CO_ABORT_NONE : CO_ABORT_LEN_HIGH;
     }
     uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
     co_abort_t abort =
@@ -285,21 +278,16 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
 static uint32_t unsized_length(const co_od_entry_t *e)
 {
     uint32_t fixed = co_type_size((co_type_t)e->type);
-    return fixed && fixed < 4 ? fixed : 4u;
+    return fixed && fixed < CO_SDO_EXPEDITED_MAX ? fixed : CO_SDO_EXPEDITED_MAX;
 }
 
 static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
-    if (cmd & 0x02u) { /* expedited */
-        uint32_t len = (cmd & 0x01u) ? 4u - ((cmd >> 2) & 3u) : unsized_length(s->entry);
-        co_abort_t abort = write_value(node, s, &d[4], len);
-        if (abort != CO_ABORT_NONE) {
-            abort_transfer(node, s, abort);
-            return;
-        }
-        respond(node, s, 0x60, 0);
-        apply_reloads(node);
+    if (cmd & CO_SDO_INI_EXPEDITED) {
+        uint32_t len = (cmd & CO_SDO_INI_SIZE) ? CO_SDO_EXPEDITED_MAX - CO_SDO_INI_N(cmd)
+                                               : unsized_length(s->entry);
+        store(node, s, &d[4], len, head(s, CO_SDO_SCS_DN_INI));
         return;
     }
     if (!CO_CONFIG_SDO_SEGMENTED) {
@@ -307,7 +295,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
         return;
     }
     begin(s);
-    s->size_known = cmd & 0x01u;
+    s->size_known = cmd & CO_SDO_INI_SIZE;
     s->size = co_get_u32(&d[4]);
     s->crc_on = false;
     co_abort_t abort = check_download_size(s);
@@ -316,19 +304,37 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
         return;
     }
     enter(node, s, DOWN_SEGMENTED);
-    respond(node, s, 0x60, 0);
+    respond(node, s, CO_SDO_SCS_DN_INI, 0);
 }
 
-/* The end of a download: sizes agree, then the value goes to the dictionary. */
-static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s)
+/* The end of a download (the transfer is over): sizes agree, then the value goes to the
+ * dictionary, and the client hears `ok` (the confirmation's first word) or the abort. The
+ * value is stored whole: from the buffer, or from the entry's own storage when earlier parts
+ * went there (spill). */
+static void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
 {
-    if (s->size_known && received(s) != s->size) {
-        return received(s) > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
+    co_abort_t abort;
+    uint32_t len = received(s);
+    if (s->size_known && len != s->size) {
+        abort = len > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
+    } else if (streams(s)) {
+        abort = flush(node, s, true);
+    } else if (s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE && own_storage(s) == NULL) {
+        abort = CO_ABORT_OUT_OF_MEMORY;
+    } else if (s->done == 0) {
+        store(node, s, s->buf, s->buf_len, ok);
+        return;
+    } else if (spill(s)) {
+        store(node, s, own_storage(s), len, ok);
+        return;
+    } else {
+        abort = CO_ABORT_LEN_HIGH;
     }
-    if (!streams(s) && own_storage(s) == NULL && s->buf_len > CO_SDO_BUF_SIZE) {
-        return CO_ABORT_OUT_OF_MEMORY;
+    if (abort != CO_ABORT_NONE) {
+        abort_transfer(node, s, abort);
+    } else {
+        send_words(node, s, ok, 0);
     }
-    return flush(node, s, true);
 }
 
 /* A download segment (command 000t nnnc) of an open segmented download: any case. */
@@ -336,35 +342,32 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
                                                  const uint8_t *d)
 {
     uint8_t cmd = d[0];
-    uint8_t toggle = cmd & TOGGLE;
+    uint8_t toggle = cmd & CO_SDO_SEG_TOGGLE;
     if (toggle != s->toggle) {
         abort_transfer(node, s, CO_ABORT_TOGGLE);
         return;
     }
-    uint32_t n = SEG_BYTES - ((cmd >> 1) & 7u);
+    uint32_t n = CO_SDO_SEG_BYTES - CO_SDO_SEG_N(cmd);
     co_abort_t abort = CO_ABORT_NONE;
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
-    } else if (s->buf_len + SEG_BYTES <= CO_SDO_BUF_SIZE) {
-        co_copy(&s->buf[s->buf_len], &d[1], SEG_BYTES); /* the usual case: room for 7 */
+    } else if (s->buf_len + CO_SDO_SEG_BYTES <= CO_SDO_BUF_SIZE) {
+        co_copy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES); /* the usual case: room for 7 */
         s->buf_len += n;
     } else {
         abort = collect(node, s, &d[1], n);
-    }
-    bool last = cmd & 0x01u;
-    if (abort == CO_ABORT_NONE && last) {
-        abort = finish_download(node, s);
     }
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
         return;
     }
-    s->toggle = (uint8_t)(toggle ^ TOGGLE);
-    send_words(node, s, 0x20u | toggle, 0);
-    if (last) {
+    s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
+    if (cmd & CO_SDO_SEG_LAST) {
         s->state = IDLE;
-        apply_reloads(node);
+        finish_download(node, s, CO_SDO_SCS_DN_SEG | toggle);
+        return;
     }
+    send_words(node, s, CO_SDO_SCS_DN_SEG | toggle, 0);
 }
 
 /* A download segment: the usual one (more to come, the right toggle, room for 7 bytes in
@@ -372,16 +375,16 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
 static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
-    if (!CO_SHORT_PATHS || (cmd & (TOGGLE | 0x01u)) != s->toggle ||
-        s->buf_len + SEG_BYTES > CO_SDO_BUF_SIZE ||
-        (s->size_known && received(s) + SEG_BYTES > s->size)) {
+    if (!CO_SHORT_PATHS || (cmd & (CO_SDO_SEG_TOGGLE | CO_SDO_SEG_LAST)) != s->toggle ||
+        s->buf_len + CO_SDO_SEG_BYTES > CO_SDO_BUF_SIZE ||
+        (s->size_known && received(s) + CO_SDO_SEG_BYTES > s->size)) {
         download_segment_general(node, s, d);
         return;
     }
-    memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES);
-    s->buf_len += SEG_BYTES - ((cmd >> 1) & 7u);
-    s->toggle ^= TOGGLE;
-    co_put_u32(&s->reply.data[0], 0x20u | (cmd & TOGGLE));
+    memcpy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES);
+    s->buf_len += CO_SDO_SEG_BYTES - CO_SDO_SEG_N(cmd);
+    s->toggle ^= CO_SDO_SEG_TOGGLE;
+    co_put_u32(&s->reply.data[0], CO_SDO_SCS_DN_SEG | (cmd & CO_SDO_SEG_TOGGLE));
     co_put_u32(&s->reply.data[4], 0);
     send_reply(node, s);
 }
@@ -414,7 +417,9 @@ static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, 
 static CO_INLINE void answer_expedited(co_node_t *node, co_sdo_server_t *s, uint32_t value,
                                        uint32_t len)
 {
-    respond(node, s, (uint8_t)(0x43u | ((4u - len) << 2)), value);
+    uint32_t n = CO_SDO_EXPEDITED_MAX - len; /* bytes that hold no data */
+    uint32_t cmd = CO_SDO_SCS_UP_INI | CO_SDO_INI_EXPEDITED | CO_SDO_INI_SIZE;
+    respond(node, s, (uint8_t)(cmd | (n << CO_SDO_INI_N_SHIFT)), value);
 }
 
 /* Up to 4 bytes of wire value as a little-endian word (no call to memcpy). */
@@ -446,7 +451,7 @@ static CO_INLINE uint32_t plain_value(const co_od_entry_t *e)
 /* Any other upload: through the dictionary's wire view or its read hook. */
 static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
 {
-    uint8_t first[4] = {0};
+    uint8_t first[CO_SDO_EXPEDITED_MAX] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
     begin(s);
@@ -460,10 +465,10 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
             return;
         }
     } else {
-        n = total < 4 ? total : 4;
+        n = total < sizeof first ? total : sizeof first;
         co_copy(first, s->wire, n);
     }
-    if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= 4) {
+    if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= CO_SDO_EXPEDITED_MAX) {
         answer_expedited(node, s, small_value(first, total), total);
         return;
     }
@@ -474,13 +479,13 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
     s->size_known = total != CO_OD_SIZE_UNKNOWN;
     s->size = s->size_known ? total : 0;
     enter(node, s, UP_SEGMENTED);
-    respond(node, s, s->size_known ? 0x41 : 0x40, s->size);
+    respond(node, s, CO_SDO_SCS_UP_INI | (s->size_known ? CO_SDO_INI_SIZE : 0u), s->size);
 }
 
 static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 {
     const co_od_entry_t *e = s->entry;
-    if (CO_SHORT_PATHS && co_od_reads_plain(e) && e->size <= 4) { /* stored as it travels */
+    if (CO_SHORT_PATHS && co_od_reads_plain(e) && e->size <= CO_SDO_EXPEDITED_MAX) { /* as stored */
         answer_expedited(node, s, plain_value(e), e->size);
         return;
     }
@@ -491,32 +496,33 @@ static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t *s,
                                                const uint8_t *d)
 {
-    uint8_t toggle = d[0] & TOGGLE;
+    uint8_t toggle = d[0] & CO_SDO_SEG_TOGGLE;
     if (toggle != s->toggle) {
         abort_transfer(node, s, CO_ABORT_TOGGLE);
         return;
     }
-    uint8_t r[8] = {0};
+    uint8_t r[CO_SDO_FRAME_LEN] = {0};
     uint32_t n = 0;
     uint32_t total = s->size;
     if (s->wire != NULL) { /* stored in wire form: copy the piece */
-        n = total - s->done < SEG_BYTES ? total - s->done : SEG_BYTES;
-        if (CO_SHORT_PATHS && n == SEG_BYTES) {
-            memcpy(&r[1], s->wire + s->done, SEG_BYTES); /* the usual case, copied inline */
+        n = total - s->done < CO_SDO_SEG_BYTES ? total - s->done : CO_SDO_SEG_BYTES;
+        if (CO_SHORT_PATHS && n == CO_SDO_SEG_BYTES) {
+            memcpy(&r[1], s->wire + s->done, CO_SDO_SEG_BYTES); /* the usual case, copied inline */
         } else {
             co_copy(&r[1], s->wire + s->done, n);
         }
     } else {
-        co_abort_t abort = read_at(node, s, s->done, &r[1], SEG_BYTES, &n, &total);
+        co_abort_t abort = read_at(node, s, s->done, &r[1], CO_SDO_SEG_BYTES, &n, &total);
         if (abort != CO_ABORT_NONE) {
             abort_transfer(node, s, abort);
             return;
         }
     }
     s->done += n;
-    bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < SEG_BYTES;
-    r[0] = (uint8_t)(toggle | ((SEG_BYTES - n) << 1) | (last ? 1u : 0u));
-    s->toggle = (uint8_t)(toggle ^ TOGGLE);
+    bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < CO_SDO_SEG_BYTES;
+    r[0] = (uint8_t)(CO_SDO_SCS_UP_SEG | toggle | ((CO_SDO_SEG_BYTES - n) << CO_SDO_SEG_N_SHIFT) |
+                     (last ? CO_SDO_SEG_LAST : 0u));
+    s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
     send(node, s, r);
     if (last) {
         s->state = IDLE;
@@ -527,16 +533,16 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
  * more than 7 bytes to go) here, the others in upload_segment_general. */
 static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    uint8_t toggle = d[0] & TOGGLE;
+    uint8_t toggle = d[0] & CO_SDO_SEG_TOGGLE;
     if (!CO_SHORT_PATHS || toggle != s->toggle || s->wire == NULL ||
-        s->size - s->done <= SEG_BYTES) {
+        s->size - s->done <= CO_SDO_SEG_BYTES) {
         upload_segment_general(node, s, d);
         return;
     }
-    s->reply.data[0] = toggle; /* 7 bytes, more to come */
-    memcpy(&s->reply.data[1], s->wire + s->done, SEG_BYTES);
-    s->done += SEG_BYTES;
-    s->toggle ^= TOGGLE;
+    s->reply.data[0] = CO_SDO_SCS_UP_SEG | toggle; /* 7 bytes, more to come */
+    memcpy(&s->reply.data[1], s->wire + s->done, CO_SDO_SEG_BYTES);
+    s->done += CO_SDO_SEG_BYTES;
+    s->toggle ^= CO_SDO_SEG_TOGGLE;
     send_reply(node, s);
 }
 
@@ -545,8 +551,8 @@ static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, cons
 static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     begin(s);
-    s->crc_on = d[0] & 0x04u;
-    s->size_known = d[0] & 0x02u;
+    s->crc_on = d[0] & CO_SDO_BLK_CRC;
+    s->size_known = d[0] & CO_SDO_BLK_SIZE;
     s->size = co_get_u32(&d[4]);
     co_abort_t abort = check_download_size(s);
     if (abort != CO_ABORT_NONE) {
@@ -556,26 +562,28 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
     s->blksize = BLOCK_SIZE_MAX;
     s->seq = 0;
     enter(node, s, BLOCK_DOWN);
-    respond(node, s, 0xA4, s->blksize); /* sc = 1: this server checks CRCs */
+    /* sc = 1: this server checks CRCs */
+    respond(node, s, CO_SDO_SCS_BLK_DN | CO_SDO_BLK_INI | CO_SDO_BLK_CRC, s->blksize);
 }
 
 /* One segment of a sub-block. Only the next in-order sequence number is taken; the
  * acknowledgement names the last one taken, so the client repeats what was lost. */
 static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    uint8_t seqno = d[0] & 0x7Fu;
-    bool last = d[0] & 0x80u;
+    uint8_t seqno = d[0] & CO_SDO_BLK_SEQ_MASK;
+    bool last = d[0] & CO_SDO_BLK_LAST;
     if (seqno == 0 || seqno > s->blksize) {
         abort_transfer(node, s, CO_ABORT_SEQUENCE);
         return;
     }
     bool in_order = seqno == s->seq + 1u;
     if (in_order) {
-        if (s->buf_len + SEG_BYTES <= sizeof s->buf) { /* the usual case: room in the buffer */
-            memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES);
-            s->buf_len += SEG_BYTES;
+        if (s->buf_len + CO_SDO_SEG_BYTES <=
+            sizeof s->buf) { /* the usual case: room in the buffer */
+            memcpy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES);
+            s->buf_len += CO_SDO_SEG_BYTES;
         } else {
-            co_abort_t abort = collect(node, s, &d[1], SEG_BYTES);
+            co_abort_t abort = collect(node, s, &d[1], CO_SDO_SEG_BYTES);
             if (abort != CO_ABORT_NONE) {
                 abort_transfer(node, s, abort);
                 return;
@@ -586,7 +594,7 @@ static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *
     if (!(last || seqno >= s->blksize)) {
         return;
     }
-    uint8_t ack[8] = {0xA2, s->seq, s->blksize};
+    uint8_t ack[CO_SDO_FRAME_LEN] = {CO_SDO_SCS_BLK_DN | CO_SDO_BLK_ACK, s->seq, s->blksize};
     send(node, s, ack);
     s->seq = 0;
     if (last && in_order) {
@@ -598,24 +606,24 @@ static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *
  * last nor the transfer's, room in the buffer) here, the others in block_segment_general. */
 static CO_INLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    uint8_t cmd = d[0]; /* below blksize (<= 127): bit 7, "last", is clear */
+    uint8_t cmd = d[0]; /* below blksize (<= 127): CO_SDO_BLK_LAST is clear */
     if (!CO_SHORT_PATHS || cmd != s->seq + 1u || cmd >= s->blksize ||
-        s->buf_len + SEG_BYTES > sizeof s->buf) {
+        s->buf_len + CO_SDO_SEG_BYTES > sizeof s->buf) {
         block_segment_general(node, s, d);
         return;
     }
-    memcpy(&s->buf[s->buf_len], &d[1], SEG_BYTES);
-    s->buf_len += SEG_BYTES;
+    memcpy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES);
+    s->buf_len += CO_SDO_SEG_BYTES;
     s->seq = cmd;
 }
 
 static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    if ((d[0] & 0xE3u) != 0xC1) {
+    if ((d[0] & (CO_SDO_CS_MASK | CO_SDO_BLK_SUB_MASK)) != (CO_SDO_CCS_BLK_DN | CO_SDO_BLK_END)) {
         abort_transfer(node, s, CO_ABORT_COMMAND);
         return;
     }
-    uint32_t unused = (d[0] >> 2) & 7u;
+    uint32_t unused = CO_SDO_BLK_END_N(d[0]);
     if (unused > s->buf_len) { /* n = 7: an empty value's only segment */
         abort_transfer(node, s, CO_ABORT_COMMAND);
         return;
@@ -625,20 +633,16 @@ static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_
         abort_transfer(node, s, CO_ABORT_CRC);
         return;
     }
-    co_abort_t abort = finish_download(node, s);
-    if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
-    }
-    uint8_t r[8] = {0xA1};
-    send(node, s, r);
     s->state = IDLE;
-    apply_reloads(node);
+    finish_download(node, s, CO_SDO_SCS_BLK_DN | CO_SDO_BLK_END);
 }
 
 /* ---- block upload */
 
-static uint32_t chunk_cap(const co_sdo_server_t *s) { return (uint32_t)s->blksize * SEG_BYTES; }
+static uint32_t chunk_cap(const co_sdo_server_t *s)
+{
+    return (uint32_t)s->blksize * CO_SDO_SEG_BYTES;
+}
 
 /* Load the next sub-block's data from the dictionary at the current offset. */
 static co_abort_t load_sub_block(co_node_t *node, co_sdo_server_t *s, uint32_t *total_out)
@@ -659,8 +663,8 @@ static co_abort_t load_sub_block(co_node_t *node, co_sdo_server_t *s, uint32_t *
  * the remainder (an empty value still sends one segment). */
 static uint8_t sub_block_segments(const co_sdo_server_t *s)
 {
-    uint32_t n = s->buf_len / SEG_BYTES;
-    if (s->last_sent && (s->buf_len % SEG_BYTES != 0 || s->buf_len == 0)) {
+    uint32_t n = s->buf_len / CO_SDO_SEG_BYTES;
+    if (s->last_sent && (s->buf_len % CO_SDO_SEG_BYTES != 0 || s->buf_len == 0)) {
         n++;
     }
     return (uint8_t)n;
@@ -676,17 +680,17 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
     if (seq >= segments || (s->cob_tx & CO_COB_INVALID)) {
         return; /* (a channel without a valid COB-ID is never in a transfer) */
     }
-    const uint8_t *next = &s->buf[(size_t)seq * SEG_BYTES];
+    const uint8_t *next = &s->buf[(size_t)seq * CO_SDO_SEG_BYTES];
     while (seq < plain && co_txq_idle(node)) {
         s->reply.data[0] = ++seq;
-        memcpy(&s->reply.data[1], next, SEG_BYTES);
-        next += SEG_BYTES;
+        memcpy(&s->reply.data[1], next, CO_SDO_SEG_BYTES);
+        next += CO_SDO_SEG_BYTES;
         (void)co_node_send_idle(node, &s->reply, CO_SVC_SDO);
     }
     if (seq == plain && seq < segments && co_txq_idle(node)) { /* the final segment */
-        uint32_t offset = (uint32_t)seq * SEG_BYTES;
+        uint32_t offset = (uint32_t)seq * CO_SDO_SEG_BYTES;
         uint32_t n = s->buf_len - offset;
-        uint8_t d[8] = {(uint8_t)(0x80u | ++seq)};
+        uint8_t d[CO_SDO_FRAME_LEN] = {(uint8_t)(CO_SDO_BLK_LAST | ++seq)};
         co_copy(&d[1], &s->buf[offset], n);
         s->last_len = (uint8_t)n;
         send(node, s, d);
@@ -699,12 +703,12 @@ static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uin
 {
     uint8_t blksize = d[4];
     uint8_t pst = d[5];
-    if (blksize < 1 || blksize > 127) {
+    if (blksize < 1 || blksize > CO_SDO_BLKSIZE_MAX) {
         abort_transfer(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
     begin(s);
-    s->crc_on = d[0] & 0x04u;
+    s->crc_on = d[0] & CO_SDO_BLK_CRC;
     s->blksize = blksize <= BLOCK_SIZE_MAX ? blksize : (uint8_t)BLOCK_SIZE_MAX;
     uint32_t total = 0;
     co_abort_t abort = load_sub_block(node, s, &total);
@@ -719,7 +723,8 @@ static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uin
     s->size_known = total != CO_OD_SIZE_UNKNOWN;
     s->size = s->size_known ? total : 0;
     enter(node, s, BLOCK_UP_START);
-    respond(node, s, s->size_known ? 0xC6 : 0xC4, s->size);
+    uint8_t size = s->size_known ? CO_SDO_BLK_SIZE : 0u; /* sc = 1: a CRC is offered */
+    respond(node, s, CO_SDO_SCS_BLK_UP | CO_SDO_BLK_INI | CO_SDO_BLK_CRC | size, s->size);
 }
 
 static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
@@ -730,11 +735,11 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         abort_transfer(node, s, CO_ABORT_SEQUENCE);
         return;
     }
-    if (blksize < 1 || blksize > 127) {
+    if (blksize < 1 || blksize > CO_SDO_BLKSIZE_MAX) {
         abort_transfer(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
-    uint32_t acked = (uint32_t)ackseq * SEG_BYTES;
+    uint32_t acked = (uint32_t)ackseq * CO_SDO_SEG_BYTES;
     if (acked > s->buf_len) {
         acked = s->buf_len;
     }
@@ -744,9 +749,10 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
     }
     s->done += acked;
     if (all_acked && s->last_sent) {
-        uint8_t unused = (uint8_t)(SEG_BYTES - s->last_len);
-        uint8_t end[8] = {(uint8_t)(0xC1u | ((unsigned)unused << 2)), (uint8_t)s->crc,
-                          (uint8_t)(s->crc >> 8)};
+        uint8_t unused = (uint8_t)(CO_SDO_SEG_BYTES - s->last_len);
+        uint8_t cmd = CO_SDO_SCS_BLK_UP | CO_SDO_BLK_END;
+        uint8_t end[CO_SDO_FRAME_LEN] = {(uint8_t)(cmd | (unused << CO_SDO_BLK_END_N_SHIFT)),
+                                         (uint8_t)s->crc, (uint8_t)(s->crc >> 8)};
         send(node, s, end);
         s->state = BLOCK_UP_END;
         return;
@@ -771,8 +777,8 @@ static CO_INLINE bool may_access(const co_od_entry_t *e, bool write)
 
 /* A new transfer's object: found and accessible in that direction, or the request is
  * answered with the abort code (NULL). */
-static const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s, const uint8_t *d,
-                                       bool write)
+static CO_INLINE const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s,
+                                                 const uint8_t *d, bool write)
 {
     s->state = IDLE; /* a transfer still open ends here */
     s->index = co_get_u16(&d[1]);
@@ -808,8 +814,9 @@ static CO_NOINLINE void initiate(co_node_t *node, co_sdo_server_t *s, const uint
 /* Block initiate requests: 110x x0x0 download, 101x x000 upload. */
 static bool is_block_initiate(uint8_t cmd)
 {
-    uint8_t cs = cmd >> 5;
-    return (cs == 6 && (cmd & 0x01u) == 0) || (cs == 5 && (cmd & 0x03u) == 0);
+    uint8_t cs = cmd & CO_SDO_CS_MASK;
+    return (cs == CO_SDO_CCS_BLK_DN && (cmd & CO_SDO_BLK_END) == 0) ||
+           (cs == CO_SDO_CCS_BLK_UP && (cmd & CO_SDO_BLK_SUB_MASK) == CO_SDO_BLK_INI);
 }
 
 /* A frame inside an open block transfer, or one that does not fit the state. */
@@ -824,7 +831,7 @@ static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t
         block_download_end(node, s, d);
         break;
     case BLOCK_UP_START:
-        if (d[0] != 0xA3) {
+        if (d[0] != (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_START)) {
             abort_transfer(node, s, CO_ABORT_COMMAND);
             break;
         }
@@ -832,14 +839,14 @@ static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t
         pump_sub_block(node, s);
         break;
     case BLOCK_UP:
-        if (d[0] != 0xA2) {
+        if (d[0] != (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK)) {
             abort_transfer(node, s, CO_ABORT_COMMAND);
             break;
         }
         block_upload_ack(node, s, d);
         break;
     case BLOCK_UP_END:
-        if (d[0] != 0xA1) {
+        if (d[0] != (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_END)) {
             abort_transfer(node, s, CO_ABORT_COMMAND);
             break;
         }
@@ -855,12 +862,12 @@ static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t
 static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
-    if (cmd == 0x80) { /* abort from the client: end silently */
+    if (cmd == CO_SDO_CS_ABORT) { /* from the client: end silently */
         s->state = IDLE;
         return;
     }
     if (is_block_initiate(cmd)) {
-        bool write = (cmd >> 5) == 6;
+        bool write = (cmd & CO_SDO_CS_MASK) == CO_SDO_CCS_BLK_DN;
         if (open_entry(node, s, d, write) == NULL) {
             return;
         }
@@ -885,7 +892,7 @@ static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const u
 
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
 {
-    if (frame->len != 8 || (frame->flags & CO_FRAME_RTR)) {
+    if (frame->len != CO_SDO_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
         node->stats.rx_malformed++;
         return;
     }
@@ -899,19 +906,19 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     case IDLE:
         break;
     case DOWN_SEGMENTED:
-        if (CO_CONFIG_SDO_SEGMENTED && (cmd & 0xE0u) == 0x00) {
+        if (CO_CONFIG_SDO_SEGMENTED && (cmd & CO_SDO_CS_MASK) == CO_SDO_CCS_DN_SEG) {
             download_segment(node, s, d);
             return;
         }
         break;
     case UP_SEGMENTED:
-        if (CO_CONFIG_SDO_SEGMENTED && (cmd & 0xEFu) == 0x60) {
+        if (CO_CONFIG_SDO_SEGMENTED && (cmd & ~CO_SDO_SEG_TOGGLE) == CO_SDO_CCS_UP_SEG) {
             upload_segment(node, s, d);
             return;
         }
         break;
     case BLOCK_DOWN:
-        if (CO_CONFIG_SDO_BLOCK && cmd != 0x80) { /* in a sub-block every frame is a segment */
+        if (CO_CONFIG_SDO_BLOCK && cmd != CO_SDO_CS_ABORT) { /* in a sub-block: a segment */
             block_segment(node, s, d);
             return;
         }
@@ -919,9 +926,9 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     default:
         break;
     }
-    uint8_t cs = cmd >> 5;
-    if (cs == 1 || cs == 2) {
-        initiate(node, s, d, cs == 1);
+    uint8_t cs = cmd & CO_SDO_CS_MASK;
+    if (cs == CO_SDO_CCS_DN_INI || cs == CO_SDO_CCS_UP_INI) {
+        initiate(node, s, d, cs == CO_SDO_CCS_DN_INI);
         return;
     }
     serve_other(node, s, d);

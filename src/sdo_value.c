@@ -3,7 +3,7 @@
  * masters: the value travels in the channel's own 8-byte buffer, so the caller keeps
  * no buffer alive.
  */
-#include "internal.h"
+#include "sdo_internal.h"
 
 #if CO_SDO_CLIENTS_MAX > 0
 

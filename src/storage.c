@@ -1,7 +1,9 @@
 /*
  * storage.c -- stored parameters (0x1010, 0x1011); see canola/storage.h.
  */
-#include "internal.h"
+#include "storage_internal.h"
+
+#include "crc16.h"
 
 /* The storage given, or none when the feature is left out (CO_CONFIG_STORAGE 0): every
  * path below then is the "no storage" one, and the compiler drops the rest. */

@@ -6,7 +6,8 @@
  * found once per reset communication; their values are read when needed, so a new value
  * counts from the next use on, without a look-up per SYNC.
  */
-#include "internal.h"
+#include "pdo_internal.h" /* co_pdo_sync */
+#include "sync_internal.h"
 
 #define SYNC_EMCY_LENGTH 0x8240u /* unexpected SYNC data length */
 
@@ -56,14 +57,9 @@ void co_sync_reset_comm(co_node_t *node)
     s->last_us = CO_TIME_NEVER;
     s->last_counter = 0;
     co_sync_producer_reset(node);
-}
-
-void co_sync_add_routes(co_node_t *node)
-{
     /* Every node with 0x1005 consumes SYNC; bit 31 means nothing for this object. */
-    if (co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL) {
-        co_routes_add_cob(node, node->sync.cob_id, CO_ROUTE_SYNC, 0);
-    }
+    bool consumes = co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL;
+    co_route_set(node, CO_ROUTE_SYNC, 0, consumes ? co_cob_key(s->cob_id) : CO_ROUTE_OFF);
 }
 
 co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
@@ -82,11 +78,8 @@ void co_sync_written(co_node_t *node, const co_od_entry_t *entry)
 {
     co_sync_t *s = &node->sync;
     if (entry->index == 0x1005) {
-        uint32_t old = s->cob_id;
         s->cob_id = (uint32_t)co_od_entry_uint(entry);
-        if (co_cob_key(old) != co_cob_key(s->cob_id)) {
-            co_routes_rebuild(node);
-        }
+        co_route_set(node, CO_ROUTE_SYNC, 0, co_cob_key(s->cob_id)); /* (the same: no change) */
     }
     co_sync_producer_written(node, entry->index); /* 0x1007 is read at each use */
 }

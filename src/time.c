@@ -1,7 +1,7 @@
 /*
  * time.c -- TIME producer and consumer (0x1012), TIME_OF_DAY on the wire.
  */
-#include "internal.h"
+#include "time_internal.h"
 
 #define TIME_CONSUMER 0x80000000u /* 0x1012 bit 31 */
 #define TIME_PRODUCER 0x40000000u /* 0x1012 bit 30 */
@@ -74,17 +74,17 @@ void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 
 /* ---- lifecycle and object dictionary */
 
+/* Consuming (bit 31 set): the route of the COB-ID's identifier; else none. */
+static void route(co_node_t *node)
+{
+    uint32_t cob = node->time.cob_id;
+    co_route_set(node, CO_ROUTE_TIME, 0, (cob & TIME_CONSUMER) ? co_cob_key(cob) : CO_ROUTE_OFF);
+}
+
 void co_time_reset_comm(co_node_t *node)
 {
     node->time.cob_id = co_od_u32(node, 0x1012, 0, 0); /* absent: 0, neither role */
-}
-
-void co_time_add_routes(co_node_t *node)
-{
-    uint32_t cob = node->time.cob_id;
-    if (cob & TIME_CONSUMER) {
-        co_routes_add_cob(node, cob, CO_ROUTE_TIME, 0);
-    }
+    route(node);
 }
 
 void co_time_written(co_node_t *node, const co_od_entry_t *entry)
@@ -92,14 +92,8 @@ void co_time_written(co_node_t *node, const co_od_entry_t *entry)
     if (entry->index != 0x1012) {
         return;
     }
-    uint32_t old = node->time.cob_id;
     node->time.cob_id = (uint32_t)co_od_entry_uint(entry);
-    /* Routes change when consuming starts or stops, or the identifier moves. */
-    bool was = (old & TIME_CONSUMER) != 0;
-    bool is = (node->time.cob_id & TIME_CONSUMER) != 0;
-    if (was != is || (is && co_cob_key(old) != co_cob_key(node->time.cob_id))) {
-        co_routes_rebuild(node);
-    }
+    route(node); /* consuming starts or stops, or the identifier moves */
 }
 
 #endif /* CO_CONFIG_TIME: without it neither role, whatever 0x1012 says */

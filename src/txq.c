@@ -6,7 +6,7 @@
  * the NMT state changes, frames whose service the new state does not allow (an SDO
  * answer queued just before "stop") are dropped instead of sent.
  */
-#include "internal.h"
+#include "kernel.h"
 
 /* Arbitration rank: lower wins. An 11-bit frame beats a 29-bit frame with the
  * same 11 base bits (its IDE bit is dominant). */
@@ -140,13 +140,6 @@ co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t serv
         return CO_OK;
     }
     return co_txq_refused(node, frame, service, CO_ERR_BUSY); /* queued */
-}
-
-void co_frame_address(co_frame_t *frame, uint32_t cob, uint8_t len)
-{
-    frame->id = (cob & CO_COB_EXT) ? (cob & CO_ID_EXT_MAX) : (cob & CO_ID_STD_MAX);
-    frame->flags = (cob & CO_COB_EXT) ? CO_FRAME_EXT : 0;
-    frame->len = len;
 }
 
 co_err_t co_node_send_cob(co_node_t *node, uint32_t cob, const uint8_t *data, uint8_t len,

@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "canola/storage.h"
-#include "internal.h"
+#include "crc16.h"
 
 /* Header + `len` bytes of `records` of `group` into `out`; the image's length. */
 static inline uint32_t store_image_seal(uint8_t *out, co_param_group_t group,

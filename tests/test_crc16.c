@@ -1,6 +1,6 @@
 /* test_crc16.c -- the SDO block CRC against a bitwise reference, every table entry. */
 #include "check.h"
-#include "internal.h"
+#include "crc16.h"
 
 /* Bit by bit, straight from the definition: polynomial 0x1021, initial 0. */
 static uint16_t reference(uint16_t crc, const uint8_t *p, uint32_t n)

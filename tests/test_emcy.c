@@ -589,6 +589,40 @@ static void test_reset_communication_to_an_invalid_cob_id_drops_the_queue(void)
     CHECK_STR(bus(&t), "705#00 085#0350010000000000");
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static void test_emcy_consumer_without_callback_or_with_bad_frames(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u32(&t, 0x1028, 1, 0x85), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x085, "10 81 11 00 00 00 00 00"); /* no on_emcy: dropped */
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 0);
+    ingest(&t, 1 * MS, 0x085, "10 81 11");
+    ingest(&t, 1 * MS, 0x085, "R8");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 2);
+    /* The history: only 0 may be written to sub0. */
+    CHECK_EQ(write_u8(&t, 0x1003, 0, 1), CO_ABORT_VALUE);
+    CHECK_EQ(write_u8(&t, 0x1003, 0, 0), CO_ABORT_NONE);
+}
+
+static void test_emcy_producer_off(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x80000085u), CO_ABORT_NONE);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_emcy_raise(&t.node, 0x5000, NULL), CO_OK);
+    CHECK_EQ(t.bus.count, 0);            /* EMCY off: no frame */
+    CHECK_EQ(t.od.error_count, 1);       /* but recorded */
+    CHECK_EQ(t.od.error_register, 0x01); /* and the register set */
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x85), CO_ABORT_NONE);
+    CHECK_EQ(co_emcy_raise(&t.node, 0x5001, NULL), CO_OK);
+    CHECK_EQ(fake_count_id(&t.bus, 0x085), 1); /* on again: the next one goes out */
+}
+
 int main(void)
 {
     RUN(test_register_bit_of_each_group);
@@ -614,5 +648,7 @@ int main(void)
     RUN(test_unknown_bus_event_ignored);
     RUN(test_history_entry_written_locally_keeps_history);
     RUN(test_reset_communication_to_an_invalid_cob_id_drops_the_queue);
+    RUN(test_emcy_consumer_without_callback_or_with_bad_frames);
+    RUN(test_emcy_producer_off);
     return check_summary();
 }

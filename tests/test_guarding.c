@@ -149,6 +149,105 @@ static void test_master_watch_limits(void)
     CHECK_EQ(co_node_write_net(&t.node, 0x1016, 2, b, 4), CO_ABORT_PARAM_INCOMPAT);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static void test_guard_watch_limits_and_replies(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    /* One error control per node: a node consumed by heartbeat is not guarded too. */
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(9, 500)), CO_ABORT_NONE);
+    CHECK_EQ(co_guard_watch(&t.node, 9, 100, 3), CO_ERR_STATE);
+    CHECK_EQ(co_guard_watch(&t.node, 9, 0, 0), CO_OK); /* removing what is not there */
+    for (uint8_t id = 10; id < 10 + CO_GUARD_WATCH_MAX; id++) {
+        CHECK_EQ(co_guard_watch(&t.node, id, 100, 3), CO_OK);
+    }
+    CHECK_EQ(co_guard_watch(&t.node, 100, 100, 3), CO_ERR_FULL);
+    CHECK_EQ(co_guard_watch(&t.node, 100, 0, 0), CO_OK);
+    t.event_count = 0;
+    /* Replies of node 10: a wrong length is malformed, another master's RTR is ignored. */
+    uint32_t malformed = co_node_stats(&t.node)->rx_malformed;
+    ingest(&t, 1 * MS, 0x70A, "05 00");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, malformed + 1);
+    ingest(&t, 1 * MS, 0x70A, "R1");
+    CHECK_EQ(t.event_count, 0);
+    /* First reply: started; a change of state is reported; a boot-up restarts the toggle. */
+    ingest(&t, 2 * MS, 0x70A, "7F");
+    ingest(&t, 3 * MS, 0x70A, "85");
+    ingest(&t, 4 * MS, 0x70A, "00");
+    ingest(&t, 5 * MS, 0x70A, "FF"); /* any toggle is taken after a boot-up */
+    CHECK_EQ(t.event_count, 4);
+    CHECK_EQ(t.events[0].kind, CO_EC_STARTED);
+    CHECK_EQ(t.events[1].kind, CO_EC_STATE_CHANGED);
+    CHECK_EQ(t.events[1].state, CO_NMT_OPERATIONAL);
+    CHECK_EQ(t.events[2].kind, CO_EC_BOOT);
+    CHECK_EQ(t.events[3].kind, CO_EC_STATE_CHANGED);
+    CHECK_EQ(t.events[3].previous, CO_NMT_INITIALISING);
+}
+
+static void test_life_time_change_while_guarded(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u16(&t, 0x100C, 0, 100), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x100D, 0, 2), CO_ABORT_NONE);
+    ingest(&t, 10 * MS, 0x705, "R1");                    /* monitoring starts: life time 200 ms */
+    CHECK_EQ(write_u8(&t, 0x100D, 0, 5), CO_ABORT_NONE); /* from now: 500 ms */
+    co_node_poll(&t.node, 250 * MS);
+    CHECK_EQ(t.event_count, 0); /* the old 200 ms would have run out at 210 ms */
+    co_node_poll(&t.node, 509 * MS);
+    CHECK_EQ(t.event_count, 0);
+    co_node_poll(&t.node, 510 * MS);
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(t.events[0].kind, CO_EC_LIFE_GUARD);
+    CHECK_EQ(co_node_poll(&t.node, 520 * MS), CO_TIME_NEVER); /* lost: nothing to wait for */
+    CHECK_EQ(write_u8(&t, 0x100D, 0, 3), CO_ABORT_NONE);      /* changes nothing while lost */
+    co_node_poll(&t.node, 590 * MS);
+    CHECK_EQ(t.event_count, 1);
+    ingest(&t, 600 * MS, 0x705, "R1"); /* resumed */
+    CHECK_EQ(t.event_count, 2);
+    CHECK_EQ(write_u16(&t, 0x100C, 0, 0), CO_ABORT_NONE); /* guarding off */
+    co_node_poll(&t.node, 5000 * MS);
+    CHECK_EQ(t.event_count, 2);
+}
+
+static void test_collision_report_of_an_empty_frame(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x705, "");
+    CHECK_EQ(t.event_count, 1);
+    CHECK_EQ(t.events[0].kind, CO_EC_ID_COLLISION);
+    CHECK_EQ(t.events[0].state, 0xFF); /* nothing heard: no byte was read */
+}
+
+static void test_guard_watch_repeats_and_timeouts_once(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(co_guard_watch(&t.node, 9, 100, 2), CO_OK);
+    ingest(&t, 1 * MS, 0x709, "7F");
+    ingest(&t, 2 * MS, 0x709, "FF"); /* same state: no event */
+    CHECK_EQ(t.event_count, 1);
+    co_node_poll(&t.node, 500 * MS);
+    co_node_poll(&t.node, 900 * MS);
+    CHECK_EQ(t.event_count, 2); /* one timeout, not one per poll */
+    CHECK_EQ(t.events[1].kind, CO_EC_GUARD_TIMEOUT);
+}
+
+/* A node does not guard itself (0x700 + its ID is its own error-control COB-ID). */
+static void test_own_node_id_refused_for_guarding(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(co_guard_watch(&t.node, 5, 100, 3), CO_ERR_ARG);
+}
+
 int main(void)
 {
     RUN(test_replies_toggle_and_state);
@@ -156,5 +255,10 @@ int main(void)
     RUN(test_life_guarding_event_and_error_behaviour);
     RUN(test_master_watch_sends_rtr_and_checks_replies);
     RUN(test_master_watch_limits);
+    RUN(test_guard_watch_limits_and_replies);
+    RUN(test_life_time_change_while_guarded);
+    RUN(test_collision_report_of_an_empty_frame);
+    RUN(test_guard_watch_repeats_and_timeouts_once);
+    RUN(test_own_node_id_refused_for_guarding);
     return check_summary();
 }

@@ -235,6 +235,57 @@ static void test_consumers_survive_restart_of_consumer(void)
     CHECK_EQ(test_find_event(&t, CO_EC_HB_TIMEOUT, 3), -1);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static void test_unconfigured_node_sends_no_heartbeat(void)
+{
+    test_node_t t;
+    CHECK_EQ(test_node_init(&t, CO_NODE_ID_UNCONFIGURED, 100), CO_OK);
+    co_node_start(&t.node, 0);
+    co_node_poll(&t.node, 1000 * MS);
+    CHECK_EQ(t.bus.count, 0);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_INITIALISING);
+    CHECK_EQ(co_hb_remote_state(&t.node, 9), 0xFF); /* not consumed */
+}
+
+static void test_consumer_entry_of_the_wrong_length(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u16(&t, 0x1016, 1, 500), CO_ABORT_LEN_LOW);
+    CHECK_EQ(co_hb_remote_state(&t.node, 0), 0xFF);
+}
+
+static void test_heartbeat_consumer_edges(void)
+{
+    test_node_t t;
+    test_node_init(&t, 1, 0);
+    co_node_start(&t.node, 0);
+    /* Node-ID 200 is no node: the entry is unused, nothing is routed for it. */
+    uint32_t routes = co_node_route_count(&t.node);
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(200, 100)), CO_ABORT_NONE);
+    CHECK_EQ(co_node_route_count(&t.node), routes);
+    CHECK_EQ(co_node_route_id(&t.node, routes), 0); /* past the end */
+    /* Two boot-ups in a row: two boots, not a remote reset (it never ran in between). */
+    CHECK_EQ(write_u32(&t, 0x1016, 2, hb_consumer_value(9, 100)), CO_ABORT_NONE);
+    ingest(&t, 1 * MS, 0x709, "00");
+    ingest(&t, 2 * MS, 0x709, "00");
+    CHECK_EQ(t.event_count, 2);
+    CHECK_EQ(t.events[0].kind, CO_EC_BOOT);
+    CHECK_EQ(t.events[1].kind, CO_EC_BOOT);
+}
+
+/* A node does not consume its own heartbeat (0x700 + its ID is its own error-control
+ * COB-ID). */
+static void test_own_node_id_refused_for_consuming(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(5, 100)), CO_ABORT_PARAM_INCOMPAT);
+}
+
 int main(void)
 {
     RUN(test_producer_period_and_state_byte);
@@ -249,5 +300,9 @@ int main(void)
     RUN(test_consumer_malformed_heartbeats_ignored);
     RUN(test_not_booted_within_boot_time);
     RUN(test_consumers_survive_restart_of_consumer);
+    RUN(test_unconfigured_node_sends_no_heartbeat);
+    RUN(test_consumer_entry_of_the_wrong_length);
+    RUN(test_heartbeat_consumer_edges);
+    RUN(test_own_node_id_refused_for_consuming);
     return check_summary();
 }

@@ -2,6 +2,8 @@
 #include "check.h"
 #include "harness.h"
 
+#define MS 1000ull
+
 static char dump[4096];
 
 static void test_boot_sends_one_bootup_then_pre_operational(void)
@@ -206,6 +208,81 @@ static void test_stopped_node_still_obeys_nmt(void)
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static void test_nmt_before_start(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    CHECK_EQ(co_nmt_apply(&t.node, CO_NMT_CMD_START), CO_ERR_STATE);
+    CHECK_EQ(t.bus.count, 0);
+}
+
+/* ---- NMT states and the frames that wait in the transmit queue */
+
+/* An SDO response that waits in the queue (driver busy) while the NMT command `cmd` arrives
+ * and takes the node to `state`; then the driver is free again. */
+static void queued_response_then(test_node_t *t, const char *cmd, co_nmt_state_t state)
+{
+    test_node_init(t, 5, 0);
+    co_node_start(&t->node, 0);
+    fake_clear(&t->bus);
+    t->bus.busy = true;
+    ingest(t, 1 * MS, 0x605, "40 00 10 00 00 00 00 00");
+    ingest(t, 2 * MS, 0x000, cmd);
+    CHECK_EQ(co_nmt_state(&t->node), state);
+    t->bus.busy = false;
+    (void)co_node_poll(&t->node, 3 * MS);
+}
+
+/* nmt.h: SDO runs in pre-operational and operational only, and "every producer" consults
+ * the service table. An SDO response that waited in the queue when an NMT stop arrived must
+ * not leave once the node is stopped. */
+static void test_sdo_response_queued_before_stop_is_not_sent_when_stopped(void)
+{
+    test_node_t t;
+    queued_response_then(&t, "02 05", CO_NMT_STOPPED);
+    CHECK_EQ(fake_count_id(&t.bus, 0x585), 0);
+}
+
+/* The other way round: an SDO response that waited when an NMT start arrived may still
+ * leave, as operational allows SDO. */
+static void test_sdo_response_queued_before_start_is_sent_when_operational(void)
+{
+    test_node_t t;
+    queued_response_then(&t, "01 05", CO_NMT_OPERATIONAL);
+    CHECK_EQ(fake_count_id(&t.bus, 0x585), 1);
+    CHECK_EQ(co_node_stats(&t.node)->tx_gated, 0);
+}
+
+/* A heartbeat left waiting by a busy driver must not leave after the boot-up that a reset
+ * sends: the reset makes it stale (same COB-ID, so it would otherwise go first). */
+static void test_reset_drops_a_heartbeat_left_waiting(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 100);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    t.bus.busy = true;
+    co_node_poll(&t.node, 100 * MS); /* the heartbeat 705#7F waits */
+    co_frame_t reset = frm(0x000, "81 05");
+    co_node_ingest(&t.node, 110 * MS, &reset);
+    t.bus.busy = false;
+    co_node_poll(&t.node, 111 * MS);
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "705#00");
+    CHECK_EQ(co_node_stats(&t.node)->tx_gated, 1);
+}
+
+/* An unconfigured node (0xFF) keeps $NODEID defaults at their base: 0x1014 is 0x80, not
+ * 0x80 + 0xFF. */
+static void test_unconfigured_node_keeps_node_id_defaults_at_base(void)
+{
+    test_node_t t;
+    test_node_init(&t, CO_NODE_ID_UNCONFIGURED, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(t.od.emcy_cob_id, 0x80);
+}
+
 int main(void)
 {
     RUN(test_boot_sends_one_bootup_then_pre_operational);
@@ -219,5 +296,10 @@ int main(void)
     RUN(test_service_table);
     RUN(test_master_sends_commands_byte_exact);
     RUN(test_stopped_node_still_obeys_nmt);
+    RUN(test_nmt_before_start);
+    RUN(test_sdo_response_queued_before_stop_is_not_sent_when_stopped);
+    RUN(test_sdo_response_queued_before_start_is_sent_when_operational);
+    RUN(test_reset_drops_a_heartbeat_left_waiting);
+    RUN(test_unconfigured_node_keeps_node_id_defaults_at_base);
     return check_summary();
 }

@@ -1,6 +1,7 @@
 /* test_node.c -- node lifecycle, transmit queue, receive routes, OD access through the node. */
 #include "check.h"
 #include "harness.h"
+#include "kernel.h" /* the routes */
 
 #define MS 1000ull
 
@@ -150,6 +151,95 @@ static void test_routes_and_acceptance(void)
     CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
 }
 
+/* A COB-ID with two owners (a configuration may make one): both routes are kept and listed,
+ * the one of the lower kind (src/kernel.h orders them: TIME before the PDOs) takes the
+ * frames, whichever was set first, and the other takes over while it is gone. */
+static void test_two_owners_of_one_cob_id(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_nmt_apply(&t.node, CO_NMT_CMD_START);
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE); /* RPDO1 off, then moved */
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x100u), CO_ABORT_NONE);      /* onto TIME's 0x100 */
+    CHECK_EQ(co_node_route_count(&t.node), 7);
+    uint32_t listed = 0;
+    for (uint32_t i = 0; i < 7; i++) {
+        listed += co_node_route_id(&t.node, i) == 0x100;
+    }
+    CHECK_EQ(listed, 2);
+    ingest(&t, 1, 0x100, "11 22 33 44"); /* to TIME, for which 4 bytes are malformed */
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    CHECK_EQ(t.od.outputs[0], 0);
+
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x100u), CO_ABORT_NONE); /* TIME stops consuming */
+    CHECK_EQ(co_node_route_count(&t.node), 6);
+    ingest(&t, 2, 0x100, "11 22 33 44");
+    CHECK_EQ(t.od.outputs[0], 0x11);
+    CHECK_EQ(t.od.outputs[3], 0x44);
+
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x80000100u), CO_ABORT_NONE); /* and starts again */
+    ingest(&t, 3, 0x100, "55 66 77 88");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 2);
+    CHECK_EQ(t.od.outputs[0], 0x11);
+
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000100u), CO_ABORT_NONE); /* the waiting one goes */
+    CHECK_EQ(co_node_route_count(&t.node), 6);
+    ingest(&t, 4, 0x100, "55 66 77 88");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 3);
+    CHECK_EQ(t.od.outputs[0], 0x11);
+}
+
+/* The routes' own order: the owners of one key, set in any order, are ranked by kind, then
+ * slot; the first takes the frames, the next takes over when it goes or moves, and the
+ * table stays sorted by key for the search. */
+static bool routes_sorted(const co_node_t *node)
+{
+    for (uint32_t i = 1; i < node->route_count; i++) {
+        if (node->routes[i - 1].key > node->routes[i].key) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static bool owner_is(const co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
+{
+    const co_route_t *r = co_routes_find(node, key);
+    return r != NULL && r->kind == kind && r->slot == slot;
+}
+
+static void test_route_owners_ranked_by_kind_then_slot(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint32_t count = co_node_route_count(&t.node);
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 7, 0x123);
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 3, 0x123); /* a lower slot, set later */
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_MGR_BOOTUP, 3));
+    co_route_set(&t.node, CO_ROUTE_SYNC, 1, 0x123); /* a lower kind */
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_SYNC, 1));
+    CHECK_EQ(co_node_route_count(&t.node), count + 3);
+    uint32_t listed = 0;
+    for (uint32_t i = 0; i < count + 3; i++) {
+        listed += co_node_route_id(&t.node, i) == 0x123;
+    }
+    CHECK_EQ(listed, 3);
+    CHECK(routes_sorted(&t.node));
+
+    co_route_set(&t.node, CO_ROUTE_SYNC, 1, CO_ROUTE_OFF);
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_MGR_BOOTUP, 3));
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 3, 0x124); /* moves: alone on its new key */
+    CHECK(owner_is(&t.node, 0x123, CO_ROUTE_MGR_BOOTUP, 7));
+    CHECK(owner_is(&t.node, 0x124, CO_ROUTE_MGR_BOOTUP, 3));
+    CHECK(routes_sorted(&t.node));
+    co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 7, CO_ROUTE_OFF);
+    CHECK(co_routes_find(&t.node, 0x123) == NULL);
+    CHECK_EQ(co_node_route_count(&t.node), count + 1);
+    CHECK(routes_sorted(&t.node));
+}
+
 static void test_od_access_through_node(void)
 {
     test_node_t t;
@@ -198,6 +288,119 @@ static void test_od_access_through_node(void)
     CHECK_EQ(co_node_set_uint(&t.node, 0x1000, 7, 1), CO_ABORT_NO_SUB);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static co_err_t no_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_OK;
+}
+
+static co_err_t busy_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return CO_ERR_BUSY;
+}
+
+static int g_sent;
+static co_err_t counting_tx(void *ctx, const co_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    g_sent++;
+    return CO_OK;
+}
+
+static void test_node_init_arguments(void)
+{
+    static example_od_t od;
+    static co_node_t node;
+    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&od, 0)};
+    CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_ARG); /* no tx */
+    cfg.driver.tx = no_tx;
+    CHECK_EQ(co_node_init(NULL, &cfg), CO_ERR_ARG);
+    CHECK_EQ(co_node_init(&node, NULL), CO_ERR_ARG);
+    co_node_config_t no_od = cfg;
+    no_od.od.entries = NULL;
+    CHECK_EQ(co_node_init(&node, &no_od), CO_ERR_ARG);
+    cfg.node_id = 0;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_ERR_ARG);
+    cfg.node_id = 5;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    /* Nothing runs before start. */
+    CHECK_EQ(co_node_poll(&node, 10 * MS), CO_TIME_NEVER);
+}
+
+static void test_local_reads_of_the_wrong_kind(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint64_t v = 7;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2FFF, 0, &v), CO_ERR_NOT_FOUND);
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2006, 0, &v), CO_ERR_ARG); /* REAL32 */
+    CHECK_EQ(co_node_get_uint(&t.node, 0x2002, 0, &v), CO_ERR_ARG); /* a string */
+    CHECK_EQ(v, 7);
+    /* A network read into a buffer too small for the value. */
+    uint8_t buf[2];
+    uint32_t len = 0;
+    CHECK_EQ(co_node_read_net(&t.node, 0x2000, 0, buf, sizeof buf, &len), CO_ABORT_LEN_HIGH);
+}
+
+static void test_queue_overflow_and_driver_errors_without_callback(void)
+{
+    static example_od_t od;
+    static co_node_t node;
+    co_node_config_t cfg = {.node_id = 5, .od = example_od_init(&od, 0)};
+    cfg.driver.tx = busy_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0); /* the boot-up waits */
+    co_frame_t f = {.id = 0x300, .len = 1};
+    for (int i = 0; i < CO_TX_QUEUE_LEN; i++) {
+        co_node_send(&node, &f);
+    }
+    CHECK_EQ(co_node_stats(&node)->tx_overflow, 1);
+    cfg.driver.tx = failing_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0);
+    CHECK_EQ(co_node_stats(&node)->tx_dropped, 1);
+    /* An SDO answer the driver refuses for good is dropped as well, not queued. */
+    co_frame_t read = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    co_node_ingest(&node, 0, &read);
+    CHECK_EQ(co_node_stats(&node)->tx_dropped, 2);
+    CHECK_EQ(co_node_stats(&node)->tx_queued, 0);
+    /* The application's own frames carry no service: a state change does not purge them,
+     * while a service's frame the new state forbids is dropped. */
+    cfg.driver.tx = busy_tx;
+    CHECK_EQ(co_node_init(&node, &cfg), CO_OK);
+    co_node_start(&node, 0);
+    co_node_send(&node, &f);
+    co_frame_t req = {.id = 0x605, .len = 8, .data = {0x40, 0x00, 0x10, 0x00}};
+    co_node_ingest(&node, 0, &req); /* its SDO response waits in the queue */
+    co_nmt_apply(&node, CO_NMT_CMD_STOP);
+    CHECK_EQ(co_node_stats(&node)->tx_gated, 1);
+    node.cfg.driver.tx = counting_tx;
+    g_sent = 0;
+    co_node_poll(&node, 1 * MS);
+    CHECK_EQ(g_sent, 2); /* the boot-up and the application's frame, not the SDO answer */
+}
+
+/* An 11-bit frame whose identifier does not fit 11 bits is malformed, not a match for a
+ * 29-bit route or anything else. */
+static void test_standard_frame_with_an_oversized_id_is_malformed(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_frame_t bad = frm(0x000, "01 05");
+    bad.id = 0x80000000u; /* no CO_FRAME_EXT */
+    co_node_ingest(&t.node, 1, &bad);
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 1);
+    CHECK_EQ(co_nmt_state(&t.node), CO_NMT_PRE_OPERATIONAL);
+}
+
 int main(void)
 {
     RUN(test_init_rejects_bad_config);
@@ -206,6 +409,12 @@ int main(void)
     RUN(test_queue_overflow_is_counted_and_reported);
     RUN(test_driver_error_drops_frame);
     RUN(test_routes_and_acceptance);
+    RUN(test_two_owners_of_one_cob_id);
+    RUN(test_route_owners_ranked_by_kind_then_slot);
     RUN(test_od_access_through_node);
+    RUN(test_node_init_arguments);
+    RUN(test_local_reads_of_the_wrong_kind);
+    RUN(test_queue_overflow_and_driver_errors_without_callback);
+    RUN(test_standard_frame_with_an_oversized_id_is_malformed);
     return check_summary();
 }

@@ -728,6 +728,129 @@ static void test_rpdo_without_listeners(void)
     CHECK_STR(bus(&t), "");
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+/* Two RPDOs: an error they share (deadline, length) ends only when both are fine again. */
+static void two_rpdos(test_node_t *t)
+{
+    test_node_init(t, 5, 0);
+    co_node_start(&t->node, 0);
+    CHECK_EQ(write_u8(t, 0x1029, 1, 1), CO_ABORT_NONE); /* stay operational */
+    CHECK_EQ(write_u32(t, 0x1401, 1, 0x80000305u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1601, 1, 0x62000208), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(t, 0x1601, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(t, 0x1401, 1, 0x305), CO_ABORT_NONE);
+    ingest(t, 0, 0x000, "01 05");
+}
+
+static void test_pdo_event_and_rtr_of_what_the_node_lacks(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x000, "01 05");
+    fake_clear(&t.bus);
+    CHECK_EQ(co_pdo_event(&t.node, 0x2FFF, 0), 0); /* no such entry: no TPDO */
+    CHECK_EQ(co_tpdo_request(&t.node, EXAMPLE_PDOS), CO_ERR_ARG);
+    CHECK_EQ(co_tpdo_request(&t.node, 1), CO_ERR_STATE); /* maps nothing: not valid */
+    /* TPDO2 maps nothing: not valid, so an RTR for it is not answered. */
+    ingest(&t, 0, 0x285, "R0");
+    CHECK_EQ(t.bus.count, 0);
+}
+
+static void test_pdo_parameter_writes_that_change_nothing(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint32_t changes = t.bus.routes_changed;
+    CHECK_EQ(write_u16(&t, 0x1800, 3, 10), CO_ABORT_NONE); /* inhibit: filters unchanged */
+    CHECK_EQ(t.bus.routes_changed, changes);
+    CHECK_EQ(write_u8(&t, 0x1400, 2, 254), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1400, 2, 253), CO_ABORT_VALUE); /* RTR types are TPDO-only */
+    /* Mapping entries that can never be valid. */
+    CHECK_EQ(write_u32(&t, 0x1400, 1, 0x80000205u), CO_ABORT_NONE);
+    CHECK_EQ(write_u8(&t, 0x1600, 0, 0), CO_ABORT_NONE);
+    const uint32_t bad[] = {0x62000100, 0x00050010, 0x00080020};
+    for (int i = 0; i < 3; i++) {
+        CHECK_EQ(write_u32(&t, 0x1600, 1, bad[i]), CO_ABORT_NONE);
+        CHECK_EQ(write_u8(&t, 0x1600, 0, 1), CO_ABORT_NO_MAP); /* 0 bits, too wide, no object */
+    }
+    /* TPDO request in pre-operational: not running. */
+    CHECK_EQ(co_tpdo_request(&t.node, 0), CO_ERR_STATE);
+}
+
+static void test_tpdo_252_rtr_before_any_sync(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 252), CO_ABORT_NONE);
+    ingest(&t, 0, 0x000, "01 05");
+    fake_clear(&t.bus);
+    ingest(&t, 1 * MS, 0x185, "R4"); /* nothing sampled yet: no answer */
+    CHECK_EQ(t.bus.count, 0);
+    ingest(&t, 2 * MS, 0x080, "");
+    ingest(&t, 3 * MS, 0x185, "R4");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 1);
+}
+
+static void test_shared_rpdo_errors_end_with_the_last(void)
+{
+    test_node_t t;
+    two_rpdos(&t);
+    CHECK_EQ(write_u16(&t, 0x1400, 5, 50), CO_ABORT_NONE);
+    CHECK_EQ(write_u16(&t, 0x1401, 5, 50), CO_ABORT_NONE);
+    ingest(&t, 10 * MS, 0x205, "01 02 03 04");
+    ingest(&t, 10 * MS, 0x305, "05");
+    co_node_poll(&t.node, 100 * MS);
+    CHECK(co_emcy_active(&t.node, 0x8250));
+    ingest(&t, 110 * MS, 0x205, "01 02 03 04");
+    CHECK(co_emcy_active(&t.node, 0x8250)); /* RPDO2 is still missing */
+    ingest(&t, 120 * MS, 0x305, "05");
+    CHECK(!co_emcy_active(&t.node, 0x8250));
+
+    two_rpdos(&t);
+    ingest(&t, 10 * MS, 0x205, "01 02");
+    ingest(&t, 10 * MS, 0x305, "");
+    CHECK(co_emcy_active(&t.node, 0x8210));
+    ingest(&t, 20 * MS, 0x205, "01 02 03 04");
+    CHECK(co_emcy_active(&t.node, 0x8210));
+    ingest(&t, 20 * MS, 0x305, "05");
+    CHECK(!co_emcy_active(&t.node, 0x8210));
+    CHECK_EQ(t.od.outputs[1], 5);
+}
+
+/* A change of a mapped value sends an event-driven TPDO only: not in pre-operational, not
+ * for a synchronous one. */
+static void test_value_changes_and_tpdo_types(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 1), CO_ABORT_NONE);
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 0); /* pre-operational */
+    ingest(&t, 0, 0x000, "01 05");
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 1), CO_ABORT_NONE); /* every SYNC */
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 2), CO_ABORT_NONE);
+    CHECK_EQ(co_pdo_event(&t.node, 0x2000, 0), 0);
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 0);
+    ingest(&t, 1 * MS, 0x080, "");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 1);
+    /* A SYNC start value with SYNCs that carry no counter: sent from the first SYNC. */
+    CHECK_EQ(write_u8(&t, 0x1800, 6, 3), CO_ABORT_NONE);
+    ingest(&t, 2 * MS, 0x080, "");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 2);
+    /* A TPDO made not valid sends nothing, whatever changes. */
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 255), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(co_pdo_event(&t.node, 0x2000, 0), 0);
+    CHECK_EQ(co_node_set_uint(&t.node, 0x2000, 0, 3), CO_ABORT_NONE);
+    ingest(&t, 3 * MS, 0x185, "R4");
+    CHECK_EQ(fake_count_id(&t.bus, 0x185), 2);
+}
+
 int main(void)
 {
     RUN(test_tpdo_sent_on_change);
@@ -759,5 +882,10 @@ int main(void)
     RUN(test_node_stopped_by_on_rpdo_at_a_sync);
     RUN(test_rpdo_into_a_tpdo_mapped_object);
     RUN(test_rpdo_without_listeners);
+    RUN(test_pdo_event_and_rtr_of_what_the_node_lacks);
+    RUN(test_pdo_parameter_writes_that_change_nothing);
+    RUN(test_tpdo_252_rtr_before_any_sync);
+    RUN(test_shared_rpdo_errors_end_with_the_last);
+    RUN(test_value_changes_and_tpdo_types);
     return check_summary();
 }

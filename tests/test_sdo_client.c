@@ -1000,12 +1000,14 @@ static void test_done_starts_next(void)
     CHECK_EQ(g_r.len, 2);
 }
 
-/* 0x1280 in the dictionary follows co_sdo_client_setup. */
+/* ---- the client parameters 0x1280 in the dictionary */
+
 static uint8_t g_cp_count = 3;
 static uint32_t g_cp_cob[2];
 static uint8_t g_cp_node;
 
-static void test_od_client_parameters(void)
+/* Node 1, started, on the example dictionary with 0x1280 sub0..3 merged in. */
+static void start_with_client_parameters(void)
 {
     CHECK_EQ(test_node_init(&g_t, 1, 0), CO_OK);
     co_od_entry_t *e = g_t.od.entries;
@@ -1042,10 +1044,28 @@ static void test_od_client_parameters(void)
     g_t.cfg.od.count = count + 4;
     CHECK_EQ(co_node_init(&g_t.node, &g_t.cfg), CO_OK);
     CHECK_EQ(co_node_start(&g_t.node, 0), CO_OK);
+}
+
+/* 0x1280 in the dictionary follows co_sdo_client_setup. */
+static void test_od_client_parameters(void)
+{
+    start_with_client_parameters();
     CHECK_EQ(co_sdo_client_setup(&g_t.node, 0, 0x22), CO_OK);
     CHECK_EQ(g_cp_cob[0], 0x622);
     CHECK_EQ(g_cp_cob[1], 0x5A2);
     CHECK_EQ(g_cp_node, 0x22);
+}
+
+/* CiA 301, COB-ID of an SDO parameter: bit 29 = 0 (11-bit CAN-ID) requires bits 28..11 to
+ * be 0. 0x00000800 is not a CAN-ID the channel can use; stored, it would make the client send
+ * its requests on COB-ID 0x000 (its frames take the low 11 bits), the NMT command ID. The
+ * write is refused with 0x06090030 (invalid value). */
+static void test_client_cob_id_with_bits_above_11_bit_id_is_refused(void)
+{
+    start_with_client_parameters();
+    CHECK_EQ(write_u32(&g_t, 0x1280, 1, 0x00000800u), CO_ABORT_VALUE);
+    CHECK_EQ(write_u32(&g_t, 0x1280, 2, 0x00000800u), CO_ABORT_VALUE);
+    CHECK_EQ(write_u32(&g_t, 0x1280, 1, 0x20000800u), CO_ABORT_NONE); /* a 29-bit ID may */
 }
 
 /* ---- client and server over the simulated bus */
@@ -1289,6 +1309,7 @@ int main(void)
     RUN(test_reset_communication_ends_transfer);
     RUN(test_done_starts_next);
     RUN(test_od_client_parameters);
+    RUN(test_client_cob_id_with_bits_above_11_bit_id_is_refused);
     RUN(test_sim_domain_sizes);
     RUN(test_sim_string_and_switch);
     RUN(test_sim_block_timed_and_lossy);

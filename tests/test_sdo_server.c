@@ -1842,6 +1842,211 @@ static void test_operational_serves_like_pre_operational(void)
     CHECK_STR(t.od.app_string, "ABCDEFGHIJ");
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static const char *last_frame(const test_node_t *t)
+{
+    static char buf[40];
+    return t->bus.count ? frame_str(&t->bus.frames[t->bus.count - 1], buf, sizeof buf) : "";
+}
+
+/* A download without size indication is refused once the server's buffer is full: with
+ * "too long" for an object of variable size, "out of memory" for a fixed one. */
+static void segmented_until_refused(uint16_t index, co_abort_t expected)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    char req[32];
+    snprintf(req, sizeof req, "20 %02X %02X 00 00 00 00 00", index & 0xFF, index >> 8);
+    ingest(&t, 0, 0x605, req); /* segmented, size not indicated */
+    uint32_t segments = 0;
+    for (uint8_t toggle = 0; segments < 200; segments++, toggle ^= 1u) {
+        ingest(&t, 0, 0x605, toggle ? "10 41 41 41 41 41 41 41" : "00 41 41 41 41 41 41 41");
+        if (t.bus.frames[t.bus.count - 1].data[0] == 0x80) {
+            break;
+        }
+    }
+    CHECK_EQ(segments, CO_SDO_BUF_SIZE / 7); /* the segment that no longer fits */
+    CHECK_EQ(co_get_u32(&t.bus.frames[t.bus.count - 1].data[4]), expected);
+}
+
+static void test_block_download_bad_sequence_number(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x605, "C6 00 20 00 04 00 00 00");
+    CHECK_EQ(t.bus.frames[t.bus.count - 1].data[0], 0xA4);
+    ingest(&t, 0, 0x605, "00 01 02 03 04 05 06 07"); /* seqno 0 */
+    CHECK_STR(last_frame(&t), "585#8000200003000405");
+}
+
+static void test_block_download_of_an_empty_value(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    /* 0x2003 is a DOMAIN: 0 bytes, one segment with nothing in it, n = 7. */
+    ingest(&t, 0, 0x605, "C2 03 20 00 00 00 00 00");
+    ingest(&t, 0, 0x605, "81 00 00 00 00 00 00 00");
+    CHECK_STR(last_frame(&t), "585#A2017F0000000000");
+    ingest(&t, 0, 0x605, "DD 00 00 00 00 00 00 00");
+    CHECK_STR(last_frame(&t), "585#A100000000000000");
+    /* An end claiming more padding than data is refused. */
+    ingest(&t, 0, 0x605, "C2 03 20 00 00 00 00 00");
+    ingest(&t, 0, 0x605, "81 00 00 00 00 00 00 00");
+    ingest(&t, 0, 0x605, "C1 00 00 00 00 00 00 00"); /* n = 0: 7 bytes, but 0 indicated */
+    CHECK_EQ(t.bus.frames[t.bus.count - 1].data[0], 0x80);
+}
+
+static void test_block_upload_bad_acknowledgements(void)
+{
+    const char *acks[] = {"A2 05 10 00 00 00 00 00", "A2 01 00 00 00 00 00 00",
+                          "A2 01 80 00 00 00 00 00"};
+    const co_abort_t codes[] = {CO_ABORT_SEQUENCE, CO_ABORT_BLOCK_SIZE, CO_ABORT_BLOCK_SIZE};
+    for (int i = 0; i < 3; i++) {
+        test_node_t t;
+        test_node_init(&t, 5, 0);
+        co_node_start(&t.node, 0);
+        ingest(&t, 0, 0x605, "A0 08 10 00 02 00 00 00"); /* 0x1008, 2 per sub-block */
+        ingest(&t, 0, 0x605, "A3 00 00 00 00 00 00 00");
+        ingest(&t, 0, 0x605, acks[i]);
+        const co_frame_t *f = &t.bus.frames[t.bus.count - 1];
+        CHECK_EQ(f->data[0], 0x80);
+        CHECK_EQ(co_get_u32(&f->data[4]), codes[i]);
+    }
+}
+
+static void test_expedited_download_without_size(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    /* 0x22: expedited, size not indicated: the object's own size (2 bytes) is taken. */
+    ingest(&t, 0, 0x605, "22 01 20 00 F6 FF 55 55");
+    CHECK_STR(last_frame(&t), "585#6001200000000000");
+    CHECK_EQ(t.od.app_i16, -10);
+}
+
+static void test_unsized_download_beyond_the_buffer(void)
+{
+    segmented_until_refused(0x2002, CO_ABORT_LEN_HIGH);
+    segmented_until_refused(0x2000, CO_ABORT_OUT_OF_MEMORY);
+}
+
+static void test_unsized_block_download_beyond_the_buffer(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x605, "C0 02 20 00 00 00 00 00"); /* block, no size, no CRC */
+    uint8_t blksize = t.bus.frames[t.bus.count - 1].data[4];
+    CHECK_EQ(blksize, CO_SDO_BUF_SIZE / 7 < 127 ? CO_SDO_BUF_SIZE / 7 : 127);
+    char seg[32];
+    for (unsigned i = 1; i <= blksize; i++) {
+        snprintf(seg, sizeof seg, "%02X 41 41 41 41 41 41 41", i);
+        ingest(&t, 0, 0x605, seg);
+    }
+    CHECK_EQ(t.bus.frames[t.bus.count - 1].data[0], 0xA2);
+    ingest(&t, 0, 0x605, "01 41 41 41 41 41 41 41");
+    const co_frame_t *f = &t.bus.frames[t.bus.count - 1];
+    CHECK_EQ(f->data[0], 0x80);
+    CHECK_EQ(co_get_u32(&f->data[4]), CO_ABORT_LEN_HIGH);
+}
+
+static void test_expedited_without_size_to_wide_objects(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    ingest(&t, 0, 0x605, "22 00 20 00 01 02 03 04"); /* u32: 4 bytes taken */
+    CHECK_EQ(t.od.app_u32, 0x04030201u);
+    ingest(&t, 0, 0x605, "22 02 20 00 61 62 63 64"); /* a string: 4 bytes taken */
+    CHECK_STR(t.od.app_string, "abcd");
+}
+
+/* ---- a read hook that hands out short pieces: od.h lets it copy "up to `cap` bytes" a call,
+ * and sdo.h has uploads read the dictionary piece by piece, so read hooks stream too */
+
+#define TRICKLE 0x2200 /* DOMAIN ro: byte i is 0x10 + i; the hook copies `piece` bytes a call */
+
+typedef struct trickle {
+    fake_bus_t bus;
+    co_node_t node;
+    co_od_entry_t entry;
+    uint32_t len;
+    uint32_t piece;
+} trickle_t;
+
+static co_abort_t trickle_read(void *ctx, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                               uint32_t cap, uint32_t *n, uint32_t *total)
+{
+    (void)entry;
+    trickle_t *m = ctx;
+    uint32_t left = offset < m->len ? m->len - offset : 0;
+    uint32_t k = left < cap ? left : cap;
+    k = k < m->piece ? k : m->piece;
+    for (uint32_t i = 0; i < k; i++) {
+        buf[i] = (uint8_t)(0x10u + offset + i);
+    }
+    *n = k;
+    *total = m->len;
+    return CO_ABORT_NONE;
+}
+
+static const co_od_hooks_t k_trickle_hooks = {.read = trickle_read};
+
+/* Node 5 with the one entry TRICKLE, pre-operational, bus cleared. */
+static void trickle_start(trickle_t *m, uint32_t len, uint32_t piece)
+{
+    memset(m, 0, sizeof *m);
+    m->len = len;
+    m->piece = piece;
+    m->entry = (co_od_entry_t){.index = TRICKLE,
+                               .type = CO_TYPE_DOMAIN,
+                               .attr = CO_OD_RO,
+                               .size = 0x10000u,
+                               .hooks = &k_trickle_hooks};
+    co_node_config_t cfg = {.node_id = 5, .driver = fake_driver(&m->bus)};
+    cfg.od = (co_od_t){.entries = &m->entry, .count = 1, .hook_ctx = m};
+    CHECK_EQ(co_node_init(&m->node, &cfg), CO_OK);
+    CHECK_EQ(co_node_start(&m->node, 0), CO_OK);
+    fake_clear(&m->bus);
+}
+
+static void trickle_request(trickle_t *m, uint64_t now, const char *hex)
+{
+    co_frame_t f = frm(0x605, hex);
+    co_node_ingest(&m->node, now, &f);
+    (void)co_node_poll(&m->node, now);
+}
+
+/* A 3-byte value whose hook gives one byte per call is still uploaded whole: 0x47 + 10 11 12,
+ * not 10 00 00. */
+static void test_expedited_upload_collects_every_piece_of_a_short_read_hook(void)
+{
+    trickle_t m;
+    trickle_start(&m, 3, 1);
+    trickle_request(&m, 0, "40 00 22 00 00 00 00 00");
+    CHECK_STR(fake_dump(&m.bus, dump, sizeof dump), "585#4700220010111200");
+}
+
+/* A 20-byte value read 4 bytes per call, by block upload: after the client's start (0xA3)
+ * the server sends the sub-block (CiA 301: segments 1..n, the last one flagged), and does
+ * not fall silent until the transfer times out. */
+static void test_block_upload_sends_segments_when_read_hook_gives_short_pieces(void)
+{
+    trickle_t m;
+    trickle_start(&m, 20, 4);
+    trickle_request(&m, 0, "A4 00 22 00 7F 00 00 00");
+    CHECK_STR(fake_dump(&m.bus, dump, sizeof dump), "585#C600220014000000");
+    fake_clear(&m.bus);
+    trickle_request(&m, 1 * MS, "A3 00 00 00 00 00 00 00");
+    CHECK_STR(fake_dump(&m.bus, dump, sizeof dump),
+              "585#0110111213141516 585#021718191A1B1C1D 585#831E1F2021222300");
+}
+
 int main(void)
 {
     /* helpers */
@@ -1935,7 +2140,16 @@ int main(void)
     RUN(test_stop_ends_open_transfer_at_once);
     RUN(test_reset_communication_ends_open_transfer);
     RUN(test_operational_serves_like_pre_operational);
+    RUN(test_block_download_bad_sequence_number);
+    RUN(test_block_download_of_an_empty_value);
+    RUN(test_block_upload_bad_acknowledgements);
+    RUN(test_expedited_download_without_size);
+    RUN(test_unsized_download_beyond_the_buffer);
+    RUN(test_unsized_block_download_beyond_the_buffer);
+    RUN(test_expedited_without_size_to_wide_objects);
     /* Several server channels: CO_SDO_SERVERS_MAX is 1 in the default configuration, so
      * there is no second channel to test here. */
+    RUN(test_expedited_upload_collects_every_piece_of_a_short_read_hook);
+    RUN(test_block_upload_sends_segments_when_read_hook_gives_short_pieces);
     return check_summary();
 }

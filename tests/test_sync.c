@@ -361,6 +361,30 @@ static void test_cob_id_change_moves_the_route(void)
     CHECK_EQ(syncs.count, 2);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static void test_sync_producer_follows_values_changed_directly(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    CHECK_EQ(write_u8(&t, 0x1019, 0, 5), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1006, 0, 10000), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1005, 0, 0x40000080u), CO_ABORT_NONE);
+    fake_clear(&t.bus);
+    for (uint64_t ms = 10; ms <= 40; ms += 10) {
+        co_node_poll(&t.node, ms * MS);
+    }
+    CHECK_EQ(t.bus.count, 4);
+    CHECK_EQ(t.bus.frames[3].data[0], 4);
+    t.od.sync_overflow = 2; /* the counter (now 5) is past it: starts over at 1 */
+    co_node_poll(&t.node, 50 * MS);
+    CHECK_EQ(t.bus.frames[4].data[0], 1);
+    t.od.sync_period_us = 0; /* period gone: no more SYNC */
+    CHECK_EQ(co_node_poll(&t.node, 60 * MS), CO_TIME_NEVER);
+    CHECK_EQ(t.bus.count, 5);
+}
+
 int main(void)
 {
     RUN(test_producer_exact_timing);
@@ -379,5 +403,6 @@ int main(void)
     RUN(test_window_edges);
     RUN(test_sync_ignored_in_stopped);
     RUN(test_cob_id_change_moves_the_route);
+    RUN(test_sync_producer_follows_values_changed_directly);
     return check_summary();
 }

@@ -237,6 +237,43 @@ static void test_consumer_bit_and_state(void)
     CHECK_EQ(t.bus.routes_changed, changes);
 }
 
+/* ---- edges: the documented answers to inputs seldom seen */
+
+static void test_time_producer_arguments_and_consumer_without_callback(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_time_of_day_t tod = {.ms = 1000, .days = 1};
+    CHECK_EQ(co_time_send(NULL, &tod), CO_ERR_ARG);
+    CHECK_EQ(co_time_send(&t.node, NULL), CO_ERR_ARG);
+    CHECK_EQ(co_time_send(&t.node, &tod), CO_ERR_STATE); /* not a producer */
+    /* Consumer without on_time: the frame is taken (not malformed) and dropped. */
+    ingest(&t, 0, 0x100, "00 00 00 00 00 00");
+    CHECK_EQ(co_node_stats(&t.node)->rx_malformed, 0);
+    CHECK_EQ(co_node_stats(&t.node)->rx_unrouted, 0);
+    /* Producer on: now it sends; a producer keeps consuming nothing of its own. */
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x40000100u), CO_ABORT_NONE);
+    fake_clear(&t.bus);
+    CHECK_EQ(co_time_send(&t.node, &tod), CO_OK);
+    CHECK_EQ(fake_count_id(&t.bus, 0x100), 1);
+    tod.ms = 86400000u;
+    CHECK_EQ(co_time_send(&t.node, &tod), CO_ERR_ARG);
+}
+
+static void test_time_cob_id_moves_the_route(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    co_frame_t old_id = frm(0x100, "00 00 00 00 00 00");
+    co_frame_t new_id = frm(0x101, "00 00 00 00 00 00");
+    CHECK(co_node_accepts(&t.node, &old_id));
+    CHECK_EQ(write_u32(&t, 0x1012, 0, 0x80000101u), CO_ABORT_NONE);
+    CHECK(!co_node_accepts(&t.node, &old_id));
+    CHECK(co_node_accepts(&t.node, &new_id));
+}
+
 int main(void)
 {
     RUN(test_encode_decode_edges);
@@ -248,5 +285,7 @@ int main(void)
     RUN(test_consumer_reports_time);
     RUN(test_consumer_malformed_frames);
     RUN(test_consumer_bit_and_state);
+    RUN(test_time_producer_arguments_and_consumer_without_callback);
+    RUN(test_time_cob_id_moves_the_route);
     return check_summary();
 }

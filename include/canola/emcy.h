@@ -47,6 +47,9 @@ extern "C" {
 
 typedef struct co_node co_node_t;
 
+/** Data bytes of an EMCY frame: error code (2), error register (1), manufacturer (5). */
+#define CO_EMCY_FRAME_LEN 8u
+
 /** One emergency message as received (or sent). */
 typedef struct co_emcy_msg {
     uint32_t cob_id; /**< COB-ID it arrived on (consumer) */
@@ -61,7 +64,7 @@ typedef struct co_emcy_msg {
 typedef struct co_emcy {
 #if CO_EMCY_QUEUE_LEN > 0
     uint64_t last_us; /**< inhibit: time of the latest frame sent, CO_TIME_NEVER: none */
-    uint8_t queue[CO_EMCY_QUEUE_LEN][8]; /**< frames waiting for the inhibit time */
+    uint8_t queue[CO_EMCY_QUEUE_LEN][CO_EMCY_FRAME_LEN]; /**< frames waiting for the inhibit time */
     uint8_t queue_count;
     uint32_t dropped; /**< frames lost to a full queue */
 #endif

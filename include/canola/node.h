@@ -4,9 +4,9 @@
  *
  * Data flows one way. The driver hands each received frame to
  * co_node_ingest(); the node finds the frame's COB-ID in its receive routes (a
- * sorted table rebuilt whenever a COB-ID object changes; O(log routes), no scan
- * over services), checks that the NMT state allows the service, and the
- * service updates its state and the object dictionary. Frames to send go out
+ * sorted table in which each service keeps the COB-IDs it listens to; O(log
+ * routes), no scan over services), checks that the NMT state allows the
+ * service, and the service updates its state and the object dictionary. Frames to send go out
  * through the driver's tx callback; when it reports CO_ERR_BUSY they wait in a
  * bounded queue (CO_TX_QUEUE_LEN) ordered by priority (lowest COB-ID first,
  * first-in first-out among equal IDs) and leave on the next co_node_poll().
@@ -117,6 +117,8 @@ typedef struct co_route {
     uint8_t slot;
 } co_route_t;
 
+struct co_node_wiring; /* internal (src/kernel.h) */
+
 /** The node. Fields are internal; read them through the functions below. The small fields
  *  the services use most come first, then the configuration, then the tables: Cortex-M
  *  loads and stores reach the first 32 (bytes), 64 (halfwords) or 128 (words) bytes of a
@@ -127,8 +129,6 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint8_t nmt_state;
     bool started;
     uint8_t txq_count;
-    bool sdo_serving;     /**< inside an SDO server request (see sdo_server.c) */
-    bool sdo_reload;      /**< a server channel waits to take new COB-IDs */
     uint16_t services;    /**< co_service_t bits the current NMT state allows */
     uint16_t route_count; /**< receive routes, sorted by key (routes[] below) */
     uint16_t route_hint;  /**< the route found last (short paths only) */
@@ -137,14 +137,15 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint16_t rpdo_count;
     uint16_t tpdo_count;
     /* The three below are kept by the short paths only (a size build looks at every PDO). */
-    uint16_t tpdo_listeners;        /**< active TPDOs a changed value can trigger */
-    uint16_t tpdo_sync_end;         /**< 1 + the last active TPDO a SYNC drives (0: none) */
-    uint16_t rpdo_sync_end;         /**< 1 + the last active synchronous RPDO (0: none) */
-    uint32_t route_groups;          /**< bit (key >> 6) % 32 set for every route: a quick "no" */
-    const co_od_entry_t *hb_period; /**< heartbeat producer: 0x1017 or NULL */
-    uint64_t now_us;                /**< time of the latest ingest/poll */
-    uint64_t next_due_us;           /**< earliest deadline of any service */
-    uint64_t hb_next_us;            /**< heartbeat producer: the next heartbeat */
+    uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
+    uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
+    uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */
+    uint32_t route_groups;   /**< bit (key >> 6) % 32 of every route (and gone): a quick "no" */
+    const co_od_entry_t *hb_period;       /**< heartbeat producer: 0x1017 or NULL */
+    const struct co_node_wiring *wiring;  /**< the services' calls up (src/kernel.h) */
+    uint64_t now_us;                      /**< time of the latest ingest/poll */
+    uint64_t next_due_us;                 /**< earliest deadline of any service */
+    uint64_t hb_next_us;                  /**< heartbeat producer: the next heartbeat */
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
     co_node_stats_t stats;
@@ -223,7 +224,7 @@ uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame);
 
 /** Number of receive routes and the i-th routed COB-ID (bit 31 set for 29-bit), for
- *  drivers that program hardware filters. */
+ *  drivers that program hardware filters (a COB-ID two services listen to comes twice). */
 uint32_t co_node_route_count(const co_node_t *node);
 uint32_t co_node_route_id(const co_node_t *node, uint32_t i);
 
@@ -240,7 +241,7 @@ const co_node_stats_t *co_node_stats(const co_node_t *node);
 co_err_t co_node_send(co_node_t *node, const co_frame_t *frame);
 
 /* ---- Object dictionary access through the node, so that writes take effect on the
- * services (a new 0x1017 period at once, 0x1016 entries rebuilt, ...). */
+ * services (a new 0x1017 period at once, 0x1016 entries reloaded, ...). */
 
 /** Write a wire value as the network would (access rights, length, limits, hooks,
  *  service checks). Returns CO_ABORT_NONE or the CiA abort code. */

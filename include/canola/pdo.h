@@ -90,7 +90,7 @@ typedef struct co_pdo {
                             no SYNC start value */
     uint8_t frame_flags; /**< TPDO with `fast`: the flags of its frames */
     uint8_t map_direct[(CO_PDO_MAP_MAX + 7) / 8]; /**< bit i: slot i copied as stored */
-    uint8_t data[8];                  /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+    uint8_t data[CO_FRAME_DATA_MAX];  /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
     uint8_t map_bits[CO_PDO_MAP_MAX]; /**< bits mapped per slot */
     uint32_t cob_id;
     uint32_t frame_id; /**< TPDO with `fast`: the identifier of its frames, from cob_id */

@@ -92,7 +92,6 @@ typedef struct co_sdo_server {
     bool size_known;
     bool crc_on;
     bool last_sent;
-    bool reload; /**< new COB-IDs to take once the current request is answered */
     uint16_t index;
     uint16_t crc;
     const co_od_entry_t *entry;

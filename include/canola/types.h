@@ -42,12 +42,17 @@ typedef enum co_err {
 #define CO_ID_STD_MAX 0x7FFu
 #define CO_ID_EXT_MAX 0x1FFFFFFFu
 
+/** Data bytes a frame carries at most: 8 in classic CAN (CC). The one place that decides it:
+ *  the frame below, the node's input check, the transmit path and the PDOs' sizes follow it;
+ *  every other length is a protocol's own (an SDO frame has 8, a heartbeat 1, ...). */
+#define CO_FRAME_DATA_MAX 8u
+
 /** One classic CAN frame. `len` is 0..8; for RTR frames it is the requested length. */
 typedef struct co_frame {
-    uint32_t id;     /**< 11-bit or (with CO_FRAME_EXT) 29-bit identifier */
-    uint8_t flags;   /**< CO_FRAME_EXT | CO_FRAME_RTR */
-    uint8_t len;     /**< data length code, 0..8 */
-    uint8_t data[8]; /**< payload; bytes past len are unspecified */
+    uint32_t id;                     /**< 11-bit or (with CO_FRAME_EXT) 29-bit identifier */
+    uint8_t flags;                   /**< CO_FRAME_EXT | CO_FRAME_RTR */
+    uint8_t len;                     /**< data length code, 0..CO_FRAME_DATA_MAX */
+    uint8_t data[CO_FRAME_DATA_MAX]; /**< payload; bytes past len are unspecified */
 } co_frame_t;
 
 /* ---- SDO abort codes (CiA 301), the language of object dictionary failures. */

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+import threading
+from collections.abc import Callable, Iterator
+
 import pytest
 
 from canola.cli import main
@@ -18,3 +22,23 @@ def one_line_error(err: str) -> None:
     """The CLI's error convention: one line on stderr, never a traceback."""
     assert len(err.strip().splitlines()) == 1, err
     assert "Traceback" not in err
+
+
+@contextlib.contextmanager
+def repeating(action: Callable[[], None], pause: float = 0.3) -> Iterator[None]:
+    """Do ``action`` again and again (``pause`` seconds apart) while the block runs: the
+    command under test opens its bus at a moment the test does not know (slow under
+    emulation), so it sees some round from its start."""
+    stop = threading.Event()
+
+    def run() -> None:
+        while not stop.wait(pause):
+            action()
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join(5)

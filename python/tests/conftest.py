@@ -35,6 +35,17 @@ SDO_TIMEOUT_MS = 5000 if VCAN else 1000
 os.environ[SESSION_VAR] = str(os.getpid())
 
 
+#: The environment that names a default bus (canola.buses.default_bus): the tests name
+#: their buses themselves, whatever the developer's shell says.
+BUS_ENVIRONMENT = ("CANOLA_BUS", "CAN_INTERFACE", "CAN_CHANNEL", "CAN_CONFIG", "CAN_BITRATE")
+
+
+@pytest.fixture(autouse=True)
+def _no_default_bus(monkeypatch: pytest.MonkeyPatch) -> None:
+    for name in BUS_ENVIRONMENT:
+        monkeypatch.delenv(name, raising=False)
+
+
 @pytest.fixture(autouse=True)
 def _nothing_left_running(request: pytest.FixtureRequest) -> Iterator[None]:
     """Mark the processes this test starts; after it, none may still run."""

@@ -20,9 +20,10 @@ from pathlib import Path
 import can
 import canopen
 import pytest
-from cli_helpers import cli, one_line_error
+from cli_helpers import cli, one_line_error, repeating
 
 from canola.cli import build_parser
+from canola.decode import Decoder
 from canola.hub import HubThread
 
 DATA = Path(__file__).parent / "data"
@@ -55,26 +56,14 @@ def vbus(request: pytest.FixtureRequest) -> Iterator[tuple[list[str], can.BusABC
     bus.shutdown()
 
 
-@contextlib.contextmanager
 def _repeating(bus: can.BusABC, frames: list[tuple[int, bytes]],
-               pause: float = 0.3) -> Iterator[None]:
-    """Send ``frames`` again and again (a pause after each round) while the block runs: the
-    command under test opens its bus at a moment the test does not know (slow under
-    emulation), so it sees some round from its start."""
-    stop = threading.Event()
-
+               pause: float = 0.3) -> contextlib.AbstractContextManager[None]:
+    """Send ``frames`` again and again while the block runs (see cli_helpers.repeating)."""
     def send() -> None:
-        while not stop.wait(pause):
-            for can_id, data in frames:
-                bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
+        for can_id, data in frames:
+            bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
 
-    thread = threading.Thread(target=send, daemon=True)
-    thread.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        thread.join(5)
+    return repeating(send, pause)
 
 
 @pytest.fixture
@@ -131,6 +120,15 @@ def test_help_on_every_level(capsys: pytest.CaptureFixture[str]) -> None:
     ["dump"], ["dump", "f.log", "--bus", "virtual://x"],
     ["monitor", "--bus", "virtual://x", "--duration", "-1"],
     ["bus", "serve", "--port", "70000"], ["bus"],
+    ["sync", "--bus", "virtual://x"], ["sync", "0", "--bus", "virtual://x"],
+    ["sync", "10", "--counter", "1", "--bus", "virtual://x"],
+    ["sync", "10", "--count", "0", "--bus", "virtual://x"],
+    ["sync", "10", "--duration", "0", "--bus", "virtual://x"],
+    ["time", "--period", "0", "--bus", "virtual://x"],
+    ["time", "--count", "3", "--bus", "virtual://x"], ["time", "now", "--bus", "virtual://x"],
+    ["pdo", "show", "--bus", "virtual://x"], ["pdo", "map", "5", "--bus", "virtual://x"],
+    ["pdo", "map", "5", "TPDO0", "--bus", "virtual://x"],
+    ["pdo", "show", "5", "--eds", "200=x.eds", "--bus", "virtual://x"],
 ])
 def test_usage_errors_are_one_line_exit_2(capsys: pytest.CaptureFixture[str],
                                           args: list[str]) -> None:
@@ -180,13 +178,59 @@ def test_dump_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     lines = out.splitlines()
     assert lines[0] == "(1.000000) 705#05               node 5 heartbeat OPERATIONAL"
     assert lines[2].endswith("SDO upload 0x1018:01 = 0x00000004 (node 5)")
-    assert lines[3].endswith("EMCY node 3 0x4210 temperature register 0x08")
+    assert lines[3].endswith("EMCY node 3 0x4210 device temperature, error register 0x08 "
+                             "(temperature)")
     assert lines[4].endswith(" SYNC")
     code, out, _ = cli(capsys, "dump", str(log), "--json", "--count", "1")
     assert json.loads(out) == {"t": 1.0, "id": 0x705, "data": "05", "rtr": False,
                                "kind": "heartbeat", "node": 5,
                                "text": "node 5 heartbeat OPERATIONAL", "state": 5,
                                "state_name": "OPERATIONAL"}
+
+
+_MIXED = ("(1.0) can0 000#0105\n(1.1) can0 080#\n(1.2) can0 100#000000000000\n"
+          "(1.3) can0 085#1081100000000000\n(1.4) can0 185#3702\n(1.5) can0 1A0#01\n"
+          "(1.6) can0 205#0F00\n(1.7) can0 605#4000100000000000\n"
+          "(1.8) can0 585#4300100092010200\n(1.9) can0 705#05\n(2.0) can0 706#00\n"
+          "(2.1) can0 7E5#5E00000000000000\n(2.2) can0 7E4#4400000000000000\n")
+
+
+@pytest.mark.parametrize(("filters", "ids"), [
+    ([], [0x000, 0x080, 0x100, 0x085, 0x185, 0x1A0, 0x205, 0x605, 0x585, 0x705, 0x706,
+          0x7E5, 0x7E4]),
+    (["--node", "5"], [0x000, 0x085, 0x185, 0x205, 0x605, 0x585, 0x705]),
+    (["--node", "5", "--node", "6"], [0x000, 0x085, 0x185, 0x205, 0x605, 0x585, 0x705,
+                                      0x706]),
+    (["--service", "nmt"], [0x000]),
+    (["--service", "hb"], [0x705, 0x706]),
+    (["--service", "sdo"], [0x605, 0x585]),
+    (["--service", "pdo"], [0x185, 0x1A0, 0x205]),
+    (["--service", "emcy"], [0x085]),
+    (["--service", "sync,time"], [0x080, 0x100]),
+    (["--service", "lss"], [0x7E5, 0x7E4]),
+    (["--service", "sync", "--service", "lss"], [0x080, 0x7E5, 0x7E4]),
+    (["--id", "0x181-0x1FF"], [0x185, 0x1A0]),
+    (["--id", "0x080", "--id", "0x700-0x7FF"], [0x080, 0x705, 0x706, 0x7E5, 0x7E4]),
+    (["--node", "5", "--service", "pdo", "--id", "0x180-0x1FF"], [0x185]),
+    (["--service", "pdo", "--count", "2"], [0x185, 0x1A0]),
+])
+def test_dump_filters(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                      filters: list[str], ids: list[int]) -> None:
+    log = tmp_path / "mixed.log"
+    log.write_text(_MIXED)
+    code, out, err = cli(capsys, "dump", str(log), "--json", *filters)
+    assert (code, err) == (0, "")
+    assert [json.loads(line)["id"] for line in out.splitlines()] == ids
+
+
+@pytest.mark.parametrize("args", [["--node", "0"], ["--node", "x"], ["--service", "pdox"],
+                                  ["--service", "nmt,"], ["--id", "0x1FF-0x181"],
+                                  ["--id", "zz"], ["--id", "0x20000000"]])
+def test_dump_filter_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                            args: list[str]) -> None:
+    code, out, err = cli(capsys, "dump", str(tmp_path / "never-read.log"), *args)
+    assert (code, out) == (2, "")
+    one_line_error(err)
 
 
 def test_dump_file_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
@@ -237,7 +281,8 @@ def test_monitor_live(capsys: pytest.CaptureFixture[str],
     assert (five["node"], five["state"], ten["node"], ten["state"]) == (5, "OPERATIONAL", 10,
                                                                         "STOPPED")
     assert five["pdo_total"]["TPDO1"] >= 2 and five["pdo_rate"]["TPDO1"] > 0
-    assert five["last_emcy"] == "0x8130 life guard / heartbeat error register 0x11"
+    assert five["last_emcy"] == ("0x8130 life guard / heartbeat error, error register 0x11 "
+                                 "(generic, communication)")
     assert 0.1 < five["heartbeat_gap"] < 3
 
 
@@ -332,3 +377,44 @@ def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
         peer.shutdown()
     assert b"\x1b[H\x1b[2J" in screen  # redrawn in place
     assert re.search(rb"\n\s+3\s+OPERATIONAL", screen)
+
+
+@pytest.mark.realtime
+@pytest.mark.slow
+def test_device_reports_a_duplicate_node_id_in_words(hub: HubThread) -> None:
+    """Another node's boot-up on the device's own COB-ID: the device raises EMCY 0x8150 and
+    ``canola device`` says so in words, as ``canola dump`` does for the frame."""
+    channel = f"dup{time.monotonic_ns() % 10**9}"
+    url = f"socketcand://127.0.0.1:{hub.port}/{channel}"
+    drive = str(Path(__file__).resolve().parents[2] / "examples" / "eds" / "drive.eds")
+    device = subprocess.Popen([sys.executable, "-m", "canola.cli", "device", "--eds", drive,
+                               "--node-id", "5", "--bus", url], stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+    peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel=channel)
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(device.stdout or ()), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 60
+        while not any("PRE-OPERATIONAL" in line for line in list(lines)):
+            assert time.monotonic() < deadline and device.poll() is None, lines
+            time.sleep(0.05)
+        emcy = None
+        with _repeating(peer, [(0x705, b"\x00")], pause=0.5):
+            deadline = time.monotonic() + 60
+            while emcy is None and time.monotonic() < deadline:
+                msg = peer.recv(1)
+                if msg is not None and msg.arbitration_id == 0x085:
+                    emcy = bytes(msg.data)
+        assert emcy is not None and emcy[:2] == b"\x50\x81"
+    finally:
+        device.send_signal(signal.SIGTERM)
+        device.wait(60)
+        reader.join(10)
+        peer.shutdown()
+    out = "".join(lines)
+    assert ("node 5: EMCY 0x8150 CAN-ID collision (another node uses this node-ID), "
+            f"error register 0x{emcy[2]:02X} (") in out, out
+    event = Decoder().decode(0x085, emcy)
+    assert event.text.startswith("EMCY node 5 0x8150 CAN-ID collision (another node uses "
+                                 "this node-ID), error register")

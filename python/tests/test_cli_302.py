@@ -203,7 +203,7 @@ def test_flash_failures(capsys: pytest.CaptureFixture[str], net: Net, tmp_path: 
     ["flash", "5", "--bus", "virtual://x"],
     ["flash", "5", "f.bin", "--bus", "virtual://x", "--ident", "xyz"],
     ["flash", "5", "f.bin", "--bus", "virtual://x", "--program", "0"],
-    ["flash", "5", "f.bin"],
+    ["flash", "5", __file__],  # no bus (and no default bus)
 ])
 def test_flash_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str]) -> None:
     code, out, err = cli(capsys, *args)

@@ -12,6 +12,7 @@ from canola import eds
 from canola.candump import CandumpError, LogFrame, parse_line, read_log
 from canola.core import Node, Od, SimBus
 from canola.decode import Decoder, emcy_text, format_value
+from canola.emcycodes import emcy_class, emcy_line, register_text
 from canola.odgen import GenerateOptions
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
@@ -37,8 +38,8 @@ def test_simple_services() -> None:
         "NMT start node 5", "NMT reset-node all", "SYNC", "SYNC counter 3",
         "node 5 heartbeat OPERATIONAL", "node 5 heartbeat PRE-OPERATIONAL", "node 5 boot-up",
         "node 5 guarding request", "node 5 guarding OPERATIONAL toggle 1",
-        "EMCY node 3 0x4210 temperature register 0x08",
-        "EMCY node 3 0x0000 error reset / no error register 0x00",
+        "EMCY node 3 0x4210 device temperature, error register 0x08 (temperature)",
+        "EMCY node 3 0x0000 error reset / no error, error register 0x00 (none)",
         "TPDO1 node 5 01 02", "RPDO1 node 5 (empty)", "TPDO4 node 5 remote request",
         "TIME 1984-01-02 00:00:01.000",
     ]
@@ -46,8 +47,17 @@ def test_simple_services() -> None:
 
 def test_emcy_names_and_values() -> None:
     assert emcy_text(0x8130) == "life guard / heartbeat error"
-    assert emcy_text(0x3210) == "voltage"
+    assert emcy_text(0x3210) == "voltage inside the device"  # its group, 0x32xx
+    assert emcy_text(0x3410) == "voltage"  # its class, 0x3xxx
     assert emcy_text(0xFF42) == "device specific"
+    assert emcy_text(0x8150) == "CAN-ID collision (another node uses this node-ID)"
+    assert emcy_text(0xFF11) == "stored communication parameters refused (defaults in use)"
+    assert emcy_class(0x8150) == "monitoring" and emcy_class(0x4210) == "temperature"
+    assert register_text(0) == "none"
+    assert register_text(0x91) == "generic, communication, manufacturer"
+    assert emcy_line(0x8150, 0x11, b"\x00\x05\x00\x00\x00") == (
+        "0x8150 CAN-ID collision (another node uses this node-ID), error register 0x11 "
+        "(generic, communication), data 00 05 00 00 00")
     assert format_value(b"\x04\x00\x00\x00") == "0x00000004"
     assert format_value(b"canola sample") == "'canola sample' (13 bytes)"
     assert format_value(bytes(40)).endswith("... ] (40 bytes)".replace(" ]", "]"))

@@ -18,9 +18,9 @@ VendorNumber=0x1234
 ProductNumber=1
 
 [MandatoryObjects]
-SupportedObjects=1
+SupportedObjects=2
 1=0x1000
-
+2=0x1001
 """
 
 VAR_1000 = """[1000]
@@ -33,15 +33,28 @@ PDOMapping=0
 """
 
 
+VAR_1001 = """[1001]
+ParameterName=Error register
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+PDOMapping=1
+"""
+
+
 def make(body: str = "", mandatory: str = VAR_1000, optional: str = "") -> str:
-    """An EDS with [1000] plus ``optional`` objects (listed in [OptionalObjects]), and the
-    identity object [1018] (RECORD_1018, below) unless the test brings its own."""
+    """An EDS with [1000] plus ``optional`` objects (listed in [OptionalObjects]), the
+    identity object [1018] (RECORD_1018, below) unless the test brings its own, and [1001]
+    last (lines before it keep their numbers)."""
     if "[1018]" in body + optional + mandatory:
-        return HEADER + optional + mandatory + "\n" + body
-    # the listing takes the blank line's place: line numbers stay those of HEADER
-    header = HEADER.replace("SupportedObjects=1\n1=0x1000\n\n",
-                            "SupportedObjects=2\n1=0x1000\n2=0x1018\n")
-    return header + optional + mandatory + "\n" + RECORD_1018 + "\n" + body
+        return HEADER + optional + mandatory + "\n" + body + "\n" + VAR_1001
+    # the listing's extra line takes a blank line's place: lines after the listing
+    # keep the numbers they have in HEADER
+    header = HEADER.replace("EDSVersion=4.0\n\n", "EDSVersion=4.0\n").replace(
+        "SupportedObjects=2\n1=0x1000\n2=0x1001\n",
+        "SupportedObjects=3\n1=0x1000\n2=0x1001\n3=0x1018\n")
+    return (header + optional + mandatory + "\n" + RECORD_1018 + "\n" + body + "\n"
+            + VAR_1001)
 
 
 def optional_list(*indices: int) -> str:
@@ -111,6 +124,14 @@ def test_crlf_and_cr_line_endings() -> None:
 def test_whole_line_comments_are_skipped() -> None:
     text = "; leading comment\n" + make(mandatory=VAR_1000 + "  ;DefaultValue=5\n")
     assert eds.parse(text, strict=True)[0x1000].subs[0].default == 0x20192
+
+
+def test_hash_comment_lines_are_skipped() -> None:
+    # seen in real files (kacanopen's 301.eds): "# Category: Mandatory" inside a section
+    text = "# leading\n" + make(mandatory=VAR_1000 + "  # DefaultValue=5\n#\n")
+    od = eds.parse(text, strict=True)
+    assert od[0x1000].subs[0].default == 0x20192
+    assert "#" not in od[0x1000].subs[0].extra
 
 
 def test_semicolon_after_a_number_is_dropped_with_a_warning() -> None:
@@ -263,9 +284,9 @@ def test_missing_mandatory_key_of_a_var_is_reported(key: str) -> None:
 
 
 def test_supported_objects_count_mismatch_is_reported() -> None:
-    text = make().replace("SupportedObjects=2", "SupportedObjects=3")
+    text = make().replace("SupportedObjects=3", "SupportedObjects=4")
     assert strict_problems(text) == [
-        "t.eds:10: [MandatoryObjects] SupportedObjects: SupportedObjects=3 but 2 entries"]
+        "t.eds:9: [MandatoryObjects] SupportedObjects: SupportedObjects=4 but 3 entries"]
 
 
 def test_listed_object_without_section_is_reported() -> None:
@@ -312,6 +333,20 @@ def test_limit_outside_the_type_range_is_reported() -> None:
         "t.eds:20: [1000] HighLimit: 256 is outside the range of UNSIGNED8 [0, 255]"]
 
 
+@pytest.mark.parametrize(("default", "problem"), [
+    ("$NODEID+0xFF", "256 with node-ID 1 is outside the range of UNSIGNED8 [0, 255]"),
+    ("$NODEID+0x81", "256 with node-ID 127 is outside the range of UNSIGNED8 [0, 255]"),
+    ("$NODEID-2", "-1 with node-ID 1 is outside the range of UNSIGNED8 [0, 255]"),
+])
+def test_a_nodeid_default_must_fit_for_every_node_id(default: str, problem: str) -> None:
+    text = make(mandatory=VAR_1000.replace("DataType=0x0007", "DataType=0x0005")
+                .replace("0x00020192", default))
+    assert strict_problems(text) == [f"t.eds:18: [1000] DefaultValue: {problem}"]
+    fits = text.replace(default, "$NODEID+0x80")
+    assert eds.parse(fits, strict=True)[0x1000].subs[0].default is None  # no node-ID known
+    assert eds.parse(fits, node_id=127)[0x1000].subs[0].default == 255
+
+
 def test_hex_bit_pattern_of_a_signed_limit_is_its_twos_complement() -> None:
     text = make(mandatory=VAR_1000.replace("DataType=0x0007", "DataType=0x0003")
                 .replace("0x00020192", "0") + "LowLimit=0x8000\n")
@@ -354,7 +389,7 @@ def test_error_tree() -> None:
 def test_line_that_is_neither_section_key_nor_comment_is_an_error() -> None:
     err = broken(make(mandatory=VAR_1000 + "garbage here\n"))
     assert str(err) == ("bad.eds:20: [1000] line is neither [section], key=value nor "
-                        "';' comment: 'garbage here'")
+                        "comment: 'garbage here'")
     assert (err.file, err.line, err.section, err.key) == ("bad.eds", 20, "1000", None)
 
 

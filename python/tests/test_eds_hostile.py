@@ -8,7 +8,7 @@ import random
 from pathlib import Path
 
 import pytest
-from test_eds import HEADER, RECORD_1018, VAR_1000, make, optional_list
+from test_eds import HEADER, RECORD_1018, VAR_1000, VAR_1001, make, optional_list
 
 from canola import EdsError, eds
 from canola.errors import Diagnostic
@@ -57,6 +57,7 @@ def test_an_empty_file_is_a_warning_and_no_device(source: str | bytes) -> None:
     assert [(w.line, w.message) for w in warnings] == [
         (1, "empty file: no sections, no objects"),
         (None, "no object 0x1000 (Device type), which every CANopen device has"),
+        (None, "no object 0x1001 (Error register), which every CANopen device has"),
         (None, "no object 0x1018 (Identity object), which every CANopen device has")]
     with pytest.raises(EdsError, match="empty file"):
         eds.parse(source, strict=True)
@@ -86,7 +87,7 @@ def test_sections_named_like_impossible_objects_are_warnings(section: str, why: 
     assert [(w.line, w.section, w.message) for w in od.warnings] == [
         (_line_of(text, f"[{section}]"), section,
          f"{why}: not an object, kept as an other section")]
-    assert sorted(od.objects) == [0x1000, 0x1018, 0x2000]
+    assert sorted(od.objects) == [0x1000, 0x1001, 0x1018, 0x2000]
     assert section in od.other_sections
     with pytest.raises(EdsError):
         eds.parse(text, strict=True)
@@ -113,11 +114,11 @@ def test_sub_number_out_of_range_is_a_warning(value: str, message: str) -> None:
     assert sorted(eds.parse(text)[0x1018].subs) == [0, 1]  # the sections make the structure
 
 
-@pytest.mark.parametrize("missing", [0x1000, 0x1018])
-def test_a_device_without_device_type_or_identity_is_refused_when_strict(
-        missing: int) -> None:
-    text = (make(mandatory="") if missing == 0x1000 else
-            HEADER + VAR_1000)  # HEADER lists 0x1000 only, and there is no [1018]
+@pytest.mark.parametrize("missing", [0x1000, 0x1001, 0x1018])
+def test_a_device_without_a_mandatory_object_is_refused_when_strict(missing: int) -> None:
+    text = {0x1000: make(mandatory=""),
+            0x1001: make().replace(VAR_1001, ""),
+            0x1018: HEADER + VAR_1000 + VAR_1001}[missing]  # HEADER lists no 0x1018
     with pytest.raises(EdsError, match=f"no object 0x{missing:04X}"):
         eds.parse(text, strict=True)
     warnings = [w for w in _warnings(text) if f"0x{missing:04X} (" in w.message]

@@ -222,7 +222,7 @@ PREAMBLE = r"""
 #include "canola/canola.h"
 #include "canola/sim.h"
 #include "canola/file_storage.h"
-#include "internal.h"
+#include "node_internal.h" /* co_node_write_entry */
 
 typedef struct canola_py_node {
     co_node_t node;

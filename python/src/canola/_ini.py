@@ -4,7 +4,8 @@ Rules (the ones real files need):
 
 - bytes are decoded as UTF-8 when they are valid UTF-8 (a BOM is dropped), else Latin-1;
 - lines end in CRLF, LF or CR, mixed;
-- blank lines and lines whose first non-blank character is ``;`` are comments;
+- blank lines and lines whose first non-blank character is ``;`` (CiA 306) or ``#`` (seen
+  in real files) are comments;
 - ``[name]`` opens a section; spaces inside the brackets are trimmed;
 - ``key = value``: the first ``=`` splits, both sides are trimmed. ``;`` inside a value is
   kept (it may be part of a string); the EDS layer strips ``;`` comments from numbers;
@@ -59,7 +60,7 @@ def read_sections(text: str, file: str) -> list[Section]:
     current: Section | None = None
     for number, raw in enumerate(_LINE_END.split(text), start=1):
         line = raw.strip()
-        if not line or line.startswith(";"):
+        if not line or line.startswith((";", "#")):
             continue
         if line.startswith("["):
             if not line.endswith("]"):
@@ -84,7 +85,7 @@ def read_sections(text: str, file: str) -> list[Section]:
         key = key.strip()
         if not sep or not key:
             raise EdsError(
-                f"line is neither [section], key=value nor ';' comment: {line[:40]!r}",
+                f"line is neither [section], key=value nor comment: {line[:40]!r}",
                 file=file,
                 line=number,
                 section=None if current is None else current.name,

@@ -18,7 +18,7 @@ from canola import eds, values
 from canola.datatypes import DATA_TYPES, INTEGER_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
-__all__ = ["Record", "build", "from_dcf", "parse", "pdo_order"]
+__all__ = ["Record", "build", "from_dcf", "parse", "pdo_order", "wire"]
 
 #: One entry of a concise DCF: (index, sub-index, wire bytes).
 Record = tuple[int, int, bytes]
@@ -58,10 +58,10 @@ def parse(data: bytes) -> list[Record]:
     return records
 
 
-def _wire(var: eds.Variable, node_id: int | None) -> bytes:
-    """The wire bytes of the variable's ParameterValue; ValueError when it has none."""
-    code = var.data_type
-    text = var.parameter_value or ""
+def wire(code: int | None, text: str, node_id: int | None) -> bytes:
+    """The wire bytes of a value written in a DCF (``text``, a ParameterValue or
+    DefaultValue) for data type ``code``; ValueError (or UnicodeEncodeError) when it has
+    none: empty, not of the type, out of its range, or ``$NODEID`` with ``node_id`` None."""
     if code in _STRINGS:
         return text.encode(_STRINGS[code])
     if code in _OCTETS:
@@ -149,7 +149,7 @@ def from_dcf(model: eds.ObjectDictionary) -> list[Record]:
             section = (f"{index:04X}" if obj.object_type == eds.ObjectType.VAR
                        else f"{index:04X}sub{sub:X}")
             try:
-                data = _wire(var, model.node_id)
+                data = wire(var.data_type, var.parameter_value, model.node_id)
             except (ValueError, UnicodeEncodeError) as exc:
                 raise EdsError(f"{var.parameter_value!r} cannot be downloaded: {exc}",
                                file=model.file, line=var.line, section=section,

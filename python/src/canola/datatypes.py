@@ -13,6 +13,7 @@ __all__ = [
     "NumberError",
     "parse_integer",
     "parse_value",
+    "type_bits",
 ]
 
 Value = int | float | str
@@ -64,6 +65,16 @@ DATA_TYPES: dict[int, DataTypeInfo] = {
 }
 INTEGER_TYPES = frozenset(code for code, info in DATA_TYPES.items() if info.bits)
 REAL_TYPES = frozenset({0x0008, 0x0011})
+#: Sizes in bits of the types whose DATA_TYPES entry has none (0: no fixed size).
+_FIXED_BITS = {0x01: 1, 0x08: 32, 0x11: 64, 0x0C: 48, 0x0D: 48}
+
+
+def type_bits(code: int | None) -> int | None:
+    """The size in bits a value of data type ``code`` takes (in a PDO), None when the type
+    has no fixed size (strings, DOMAIN) or is unknown."""
+    if code is None or code not in DATA_TYPES:
+        return None
+    return _FIXED_BITS.get(code, DATA_TYPES[code].bits) or None
 
 _NODEID = re.compile(r"\$nodeid", re.IGNORECASE)
 _TERM = re.compile(r"\s*([+-]?)\s*(\$nodeid|0x[0-9a-f]+|[0-9]+)\s*", re.IGNORECASE)

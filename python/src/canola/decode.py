@@ -14,7 +14,14 @@ import datetime
 from dataclasses import dataclass, field
 from typing import Any
 
+from canola import pdomap
+from canola.emcycodes import emcy_class, emcy_line, emcy_text, register_text
 from canola.errors import ABORT_TEXT
+from canola.nodedicts import NodeDictionaries
+from canola.odnames import entry_name, value_text
+from canola.pdomap import Pdo, pdos_from_od
+from canola.values import TIME_EPOCH, TimeOfDay, Value
+from canola.values import untyped_text as format_value
 
 __all__ = ["STATE_NAMES", "Decoder", "Event", "emcy_text", "format_value"]
 
@@ -25,53 +32,26 @@ STATE_NAMES: dict[int, str] = {0x00: "BOOT-UP", 0x04: "STOPPED", 0x05: "OPERATIO
 _NMT_COMMANDS = {0x01: "start", 0x02: "stop", 0x80: "preop", 0x81: "reset-node",
                  0x82: "reset-comm"}
 
-_EMCY_CODES = {
-    0x0000: "error reset / no error", 0x1000: "generic error", 0x8100: "communication",
-    0x8110: "CAN overrun", 0x8120: "CAN error passive", 0x8130: "life guard / heartbeat error",
-    0x8140: "recovered from bus-off", 0x8150: "CAN-ID collision", 0x8200: "protocol error",
-    0x8210: "PDO not processed (length)", 0x8220: "PDO length exceeded",
-    0x8230: "DAM MPDO not processed", 0x8240: "unexpected SYNC data length",
-    0x8250: "RPDO time-out", 0x9000: "external error", 0xF000: "additional functions",
-    0xFF00: "device specific",
-}
-_EMCY_GROUPS = {0x1: "generic", 0x2: "current", 0x3: "voltage", 0x4: "temperature",
-                0x5: "device hardware", 0x6: "device software", 0x7: "additional modules",
-                0x8: "monitoring", 0x9: "external error", 0xF: "additional functions"}
 
-_TIME_EPOCH = datetime.datetime(1984, 1, 1, tzinfo=datetime.UTC)
+def _shown(value: Value) -> str:
+    """A decoded PDO value in a line: integers also in hex, bytes in hex."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, int):
+        return str(value) if value <= 9 else f"{value} (0x{value:X})"
+    if isinstance(value, bytes):
+        return value.hex(" ").upper()
+    if isinstance(value, TimeOfDay):
+        return f"{value.ms} ms day {value.days}"
+    return repr(value) if isinstance(value, str) else str(value)
 
 
-def emcy_text(code: int) -> str:
-    """The CiA 301 name of an emergency error code (exact code, else its group)."""
-    if code in _EMCY_CODES:
-        return _EMCY_CODES[code]
-    if code & 0xFF00 == 0xFF00:
-        return "device specific"
-    return _EMCY_GROUPS.get(code >> 12, "unknown error code")
-
-
-def format_value(data: bytes) -> str:
-    """A value of unknown type as dump and an untyped read print it: up to 4 bytes (what
-    an expedited transfer carries, numbers in practice) a little-endian hex number, 5..8
-    bytes too unless they read as text, printable (UTF-8) text quoted, other data as hex
-    bytes (long data shortened)."""
-    text = _as_text(data) if len(data) > 4 else None
-    if 1 <= len(data) <= 8 and text is None:
-        return f"0x{int.from_bytes(data, 'little'):0{2 * len(data)}X}"
-    if text is not None:
-        return repr(text if len(text) <= 80 else text[:80] + "...") + f" ({len(data)} bytes)"
-    shown = data[:32].hex(" ").upper()
-    return f"[{shown}{' ...' if len(data) > 32 else ''}] ({len(data)} bytes)"
-
-
-def _as_text(data: bytes) -> str | None:
-    """``data`` as text when it is printable UTF-8 of 3 characters or more (trailing NULs
-    aside), else None."""
-    try:
-        text = data.rstrip(b"\0").decode("utf-8")
-    except UnicodeDecodeError:
-        return None
-    return text if len(text) >= 3 and text.isprintable() else None
+def _json_value(value: Value) -> Any:
+    if isinstance(value, bytes):
+        return value.hex()
+    if isinstance(value, TimeOfDay):
+        return [value.ms, value.days]
+    return value
 
 
 @dataclass(frozen=True)
@@ -98,19 +78,61 @@ class _Sdo:
     subblock: list[bytes] = field(default_factory=list)
 
     @property
-    def where(self) -> str:
-        return f"0x{self.index:04X}:{self.sub:02X}"
-
-    @property
     def verb(self) -> str:
         return "upload" if self.upload else "download"
 
 
 class Decoder:
-    """Stateful CANopen decoder (one per bus)."""
+    """Stateful CANopen decoder (one per bus). With ``dictionaries`` (the EDS/DCF of the
+    nodes) SDO lines name their entries and show typed values, and PDOs are decoded by
+    their mapping; ``pdos`` (node -> PDOs, e.g. read from the devices) come before the
+    files' mappings."""
 
-    def __init__(self) -> None:
+    def __init__(self, dictionaries: NodeDictionaries | None = None,
+                 pdos: dict[int, list[Pdo]] | None = None) -> None:
         self._sdo: dict[int, _Sdo] = {}
+        self._dicts = dictionaries or NodeDictionaries()
+        self._given = pdos or {}
+        self._by_cob: dict[int, tuple[int, Pdo] | None] = {}
+        self._file_pdos: dict[int, list[Pdo]] = {}
+
+    # ---- what the dictionaries say
+
+    def _at(self, node: int, index: int, sub: int) -> str:
+        """An entry in a line: its address, and its name when a dictionary has one."""
+        od = self._dicts.get(node)
+        name = None if od is None else entry_name(od, index, sub)
+        return f"0x{index:04X}:{sub:02X}" + (f" {name}" if name else "")
+
+    def _of(self, node: int, t: _Sdo) -> str:
+        return self._at(node, t.index, t.sub)
+
+    def _value(self, node: int, index: int, sub: int, data: bytes) -> str:
+        od = self._dicts.get(node)
+        obj = None if od is None else od.objects.get(index)
+        return value_text(None if obj is None else obj.subs.get(sub), data)
+
+    def _mapped_pdo(self, can_id: int) -> tuple[int, Pdo] | None:
+        """The (node, PDO) whose valid COB-ID is ``can_id``: the PDOs given first, then
+        the dictionary of node ``can_id & 0x7F`` (pre-defined connection set), then every
+        node's own file."""
+        if can_id not in self._by_cob:
+            found = None
+            candidates = [*self._given.items(),
+                          *((n, self._pdos_of(n)) for n in
+                            (can_id & 0x7F, *sorted(self._dicts.per_node)) if n)]
+            for node, pdos in candidates:
+                for pdo in pdos:
+                    if pdo.valid and pdo.cob_id == can_id and found is None:
+                        found = (node, pdo)
+            self._by_cob[can_id] = found
+        return self._by_cob[can_id]
+
+    def _pdos_of(self, node: int) -> list[Pdo]:
+        if node not in self._file_pdos:
+            od = self._dicts.get(node)
+            self._file_pdos[node] = [] if od is None else pdos_from_od(od)
+        return self._file_pdos[node]
 
     def decode(self, can_id: int, data: bytes, *, rtr: bool = False,
                extended: bool = False) -> Event:
@@ -120,6 +142,9 @@ class Decoder:
         fn, node = can_id & 0x780, can_id & 0x7F
         if can_id == 0x000:
             return self._nmt(data)
+        mapped = self._mapped_pdo(can_id) if (self._dicts or self._given) else None
+        if mapped is not None:
+            return self._decoded_pdo(*mapped, data, rtr)
         if can_id == 0x080:
             if not data:
                 return Event("sync", None, "SYNC")
@@ -159,17 +184,17 @@ class Decoder:
         code = int.from_bytes(data[0:2], "little")
         reg = data[2]
         extra = data[3:8].hex(" ").upper()
-        text = f"EMCY node {node} 0x{code:04X} {emcy_text(code)} register 0x{reg:02X}"
-        if any(data[3:8]):
-            text += f" data {extra}"
-        return Event("emcy", node, text, {"code": code, "register": reg, "data": extra})
+        return Event("emcy", node, f"EMCY node {node} {emcy_line(code, reg, data[3:8])}",
+                     {"code": code, "register": reg, "data": extra,
+                      "class": emcy_class(code), "meaning": emcy_text(code),
+                      "register_bits": register_text(reg)})
 
     def _time(self, data: bytes) -> Event:
         if len(data) != 6:
             return Event("time", None, f"TIME bad length {len(data)}")
         ms = int.from_bytes(data[0:4], "little") & 0x0FFFFFFF
         days = int.from_bytes(data[4:6], "little")
-        when = _TIME_EPOCH + datetime.timedelta(days=days, milliseconds=ms)
+        when = TIME_EPOCH + datetime.timedelta(days=days, milliseconds=ms)
         stamp = when.strftime("%Y-%m-%d %H:%M:%S.") + f"{when.microsecond // 1000:03d}"
         return Event("time", None, f"TIME {stamp}", {"days": days, "ms": ms})
 
@@ -183,6 +208,19 @@ class Decoder:
         shown = data.hex(" ").upper() or "(empty)"
         return Event("pdo", node, f"{name} node {node} {shown}",
                      {"pdo": name, "data": data.hex()})
+
+    def _decoded_pdo(self, node: int, pdo: Pdo, data: bytes, rtr: bool) -> Event:
+        if rtr:
+            return Event("pdo", node, f"{pdo.name} node {node} remote request",
+                         {"pdo": pdo.name})
+        decoded = pdomap.decode(pdo, data)
+        shown = ", ".join(f"{m.name} = {_shown(v)}" for m, v in decoded)
+        bits = sum(m.bits for m in pdo.entries)
+        if bits != 8 * len(data):  # the mapping known is not the one the sender uses
+            shown += f" ({len(data)} bytes, the mapping has {bits} bits)"
+        return Event("pdo", node, f"{pdo.name} node {node} {shown or data.hex(' ').upper()}",
+                     {"pdo": pdo.name, "data": data.hex(),
+                      "values": {m.name: _json_value(v) for m, v in decoded}})
 
     def _error_control(self, node: int, data: bytes, rtr: bool) -> Event:
         if rtr:
@@ -229,7 +267,7 @@ class Decoder:
         code = int.from_bytes(data[4:8], "little")
         self._sdo.pop(node, None)
         by = "server" if from_server else "client"
-        return self._ev(node, f"SDO abort 0x{index:04X}:{sub:02X} 0x{code:08X} "
+        return self._ev(node, f"SDO abort {self._at(node, index, sub)} 0x{code:08X} "
                         f"{ABORT_TEXT.get(code, 'unknown abort code')} by {by}",
                         index=index, sub=sub, abort=code)
 
@@ -241,8 +279,9 @@ class Decoder:
         n = 4 - ((cmd >> 2) & 3) if cmd & 0x01 else 4
         value = data[4:4 + n]
         self._sdo.pop(node, None)
-        return self._ev(node, f"SDO {direction} 0x{index:04X}:{sub:02X} = "
-                        f"{format_value(value)}", index=index, sub=sub, value=value.hex())
+        return self._ev(node, f"SDO {direction} {self._at(node, index, sub)} = "
+                        f"{self._value(node, index, sub, value)}", index=index, sub=sub,
+                        value=value.hex())
 
     def _client(self, node: int, data: bytes, ccs: int) -> Event:
         cmd = data[0]
@@ -253,7 +292,7 @@ class Decoder:
                 return self._expedited(node, data, "download", index, sub)
             size = int.from_bytes(data[4:8], "little") if cmd & 0x01 else None
             self._sdo[node] = _Sdo(False, index, sub, size)
-            return self._ev(node, f"SDO download 0x{index:04X}:{sub:02X} start"
+            return self._ev(node, f"SDO download {self._at(node, index, sub)} start"
                             + (f", {size} bytes" if size is not None else ""),
                             index=index, sub=sub, size=size)
         if ccs == 0:  # download segment
@@ -263,37 +302,38 @@ class Decoder:
             t.data += data[1:1 + n]
             if cmd & 0x01:
                 return self._done(node, t)
-            return self._ev(node, f"SDO download {t.where} segment, {len(t.data)} bytes so far")
+            return self._ev(node, f"SDO download {self._of(node, t)} segment, "
+                            f"{len(t.data)} bytes so far")
         if ccs == 2:  # initiate upload
             index, sub = self._where(data)
             self._sdo[node] = _Sdo(True, index, sub)
-            return self._ev(node, f"SDO upload 0x{index:04X}:{sub:02X} request",
+            return self._ev(node, f"SDO upload {self._at(node, index, sub)} request",
                             index=index, sub=sub)
         if ccs == 3:  # upload segment request
-            where = t.where if t is not None else "?"
+            where = self._of(node, t) if t is not None else "?"
             return self._ev(node, f"SDO upload {where} segment request")
         if ccs == 5:  # block upload: initiate, start, ack, end response
             sub_cmd = cmd & 0x03
             if sub_cmd == 0:
                 index, sub = self._where(data)
                 self._sdo[node] = _Sdo(True, index, sub, block=True)
-                return self._ev(node, f"SDO block upload 0x{index:04X}:{sub:02X} request, "
+                return self._ev(node, f"SDO block upload {self._at(node, index, sub)} request, "
                                 f"block size {data[4]}", index=index, sub=sub)
             if t is None or not t.block:
                 return self._ev(node, "SDO block upload frame outside a transfer", bad=True)
             if sub_cmd == 3:
                 t.phase = "data"
-                return self._ev(node, f"SDO block upload {t.where} start")
+                return self._ev(node, f"SDO block upload {self._of(node, t)} start")
             if sub_cmd == 2:
                 return self._ack(node, t, data)
             self._sdo.pop(node, None)
-            return self._ev(node, f"SDO block upload {t.where} end confirmed")
+            return self._ev(node, f"SDO block upload {self._of(node, t)} end confirmed")
         if ccs == 6:  # block download: initiate, end
             if cmd & 0x01 == 0:
                 index, sub = self._where(data)
                 size = int.from_bytes(data[4:8], "little") if cmd & 0x02 else None
                 self._sdo[node] = _Sdo(False, index, sub, size, block=True)
-                return self._ev(node, f"SDO block download 0x{index:04X}:{sub:02X} start"
+                return self._ev(node, f"SDO block download {self._at(node, index, sub)} start"
                                 + (f", {size} bytes" if size is not None else ""),
                                 index=index, sub=sub, size=size)
             if t is None or not t.block:
@@ -313,7 +353,7 @@ class Decoder:
             if t is None or t.block:  # also: a block upload switched to segmented
                 t = self._sdo[node] = _Sdo(True, index, sub)
             t.size = size
-            return self._ev(node, f"SDO upload 0x{index:04X}:{sub:02X} segmented"
+            return self._ev(node, f"SDO upload {self._at(node, index, sub)} segmented"
                             + (f", {size} bytes" if size is not None else ""),
                             index=index, sub=sub, size=size)
         if scs == 0:  # upload segment
@@ -323,15 +363,16 @@ class Decoder:
             t.data += data[1:1 + n]
             if cmd & 0x01:
                 return self._done(node, t)
-            return self._ev(node, f"SDO upload {t.where} segment, {len(t.data)} bytes so far")
+            return self._ev(node, f"SDO upload {self._of(node, t)} segment, "
+                            f"{len(t.data)} bytes so far")
         if scs == 3:  # initiate download response
             index, sub = self._where(data)
             if t is None or t.index != index or t.sub != sub:
-                return self._ev(node, f"SDO download 0x{index:04X}:{sub:02X} ok",
+                return self._ev(node, f"SDO download {self._at(node, index, sub)} ok",
                                 index=index, sub=sub)
-            return self._ev(node, f"SDO download {t.where} accepted")
+            return self._ev(node, f"SDO download {self._of(node, t)} accepted")
         if scs == 1:  # download segment response
-            where = t.where if t is not None else "?"
+            where = self._of(node, t) if t is not None else "?"
             return self._ev(node, f"SDO download {where} segment ok")
         if scs == 5:  # block download: initiate response, ack, end response
             sub_cmd = cmd & 0x03
@@ -340,18 +381,18 @@ class Decoder:
                                 bad=True)
             if sub_cmd == 0:
                 t.phase = "data"
-                return self._ev(node, f"SDO block download {t.where} accepted, "
+                return self._ev(node, f"SDO block download {self._of(node, t)} accepted, "
                                 f"block size {data[4]}")
             if sub_cmd == 2:
                 return self._ack(node, t, data)
             self._sdo.pop(node, None)
-            return self._ev(node, f"SDO block download {t.where} done")
+            return self._ev(node, f"SDO block download {self._of(node, t)} done")
         if scs == 6:  # block upload: initiate response, end
             if t is None or not t.block:
                 return self._ev(node, "SDO block upload response outside a transfer", bad=True)
             if cmd & 0x01 == 0:
                 t.size = int.from_bytes(data[4:8], "little") if cmd & 0x02 else None
-                return self._ev(node, f"SDO block upload {t.where}"
+                return self._ev(node, f"SDO block upload {self._of(node, t)}"
                                 + (f", {t.size} bytes" if t.size is not None else ""))
             del t.data[len(t.data) - ((cmd >> 2) & 7):]
             return self._done(node, t, keep=True)
@@ -364,7 +405,7 @@ class Decoder:
         last = bool(data[0] & 0x80)
         if last:
             t.phase = "end"
-        return self._ev(node, f"SDO block {t.verb} {t.where} segment {seq}"
+        return self._ev(node, f"SDO block {t.verb} {self._of(node, t)} segment {seq}"
                         + (" (last)" if last else ""))
 
     def _ack(self, node: int, t: _Sdo, data: bytes) -> Event:
@@ -374,7 +415,7 @@ class Decoder:
         t.subblock.clear()
         if t.phase != "end":
             t.phase = "data"
-        return self._ev(node, f"SDO block {t.verb} {t.where} ack {ackseq}, "
+        return self._ev(node, f"SDO block {t.verb} {self._of(node, t)} ack {ackseq}, "
                         f"{len(t.data)} bytes so far")
 
     def _done(self, node: int, t: _Sdo, keep: bool = False) -> Event:
@@ -382,5 +423,6 @@ class Decoder:
             self._sdo.pop(node, None)
         value = bytes(t.data)
         kind = "block " if t.block else ""
-        return self._ev(node, f"SDO {kind}{t.verb} {t.where} = {format_value(value)}",
+        return self._ev(node, f"SDO {kind}{t.verb} {self._of(node, t)} = "
+                        f"{self._value(node, t.index, t.sub, value)}",
                         index=t.index, sub=t.sub, value=value.hex(), size=len(value))

@@ -3,17 +3,18 @@
 ``parse(source, strict=False, node_id=None)`` builds an :class:`ObjectDictionary`;
 ``write(od, dcf=False)`` gives the file text back. Problems come in two kinds:
 
-- a broken file (a line that is not ``[section]``, ``key=value`` or a ``;`` comment, a
+- a broken file (a line that is not ``[section]``, ``key=value`` or a ``;``/``#`` comment, a
   duplicate section, a sub-object section without its object, a number that the structure
   needs, such as ObjectType, DataType, CompactSubObj or an object-list entry, that cannot be
   read) raises :class:`~canola.errors.EdsError` naming file and line, in both modes;
 - a deviation from CiA 306 that still leaves a usable model (missing mandatory keys, counts
   that do not match, unknown AccessType or DataType, values that are not numbers of their
-  type, limits out of range, a synthesised sub0, an empty file, a section named like an
+  type or out of its range (a ``$NODEID`` value with the node-ID unknown: for node-ID 1 or
+  127), limits out of range, a synthesised sub0, an empty file, a section named like an
   object whose index is beyond 0xFFFF or sub-index beyond 0xFF (kept as an other section),
-  a SubNumber that is no UNSIGNED8, no 0x1000 or 0x1018, ...) is collected: ``strict=True``
-  raises one EdsError listing all of them, one per line; otherwise they are in
-  ``od.warnings``.
+  a SubNumber that is no UNSIGNED8, no 0x1000, 0x1001 or 0x1018, a PDO mapping that breaks
+  CiA 301 (see :mod:`canola._eds_pdo`), ...) is collected: ``strict=True`` raises one
+  EdsError listing all of them, one per line; otherwise they are in ``od.warnings``.
 
 Every problem is a :class:`~canola.errors.Diagnostic` (message, file, line, section, key),
 so that a tool can print or sort them. Whatever the input and its size, :func:`parse`
@@ -24,9 +25,9 @@ file drives a loop beyond the file's own size.
 Accepted forms: section and key names in any case (``[1a00]``, ``[1018SUB1]``,
 ``parametername``), spaces around ``=`` and at line ends, CRLF/LF/CR, UTF-8 or Latin-1 text,
 numbers in decimal, ``0x`` hex or leading-``0`` octal with an optional sign, ``$NODEID``
-(any case) added to or subtracted from constants on either side. A ``;`` starts a comment only
-at the start of a line; a ``;`` after a *numeric* value (``DefaultValue=0x180 ; note``) is
-dropped with a warning, while in strings it is kept as text.
+(any case) added to or subtracted from constants on either side. A ``;`` or ``#`` starts a
+comment only at the start of a line; a ``;`` after a *numeric* value
+(``DefaultValue=0x180 ; note``) is dropped with a warning, while in strings it is kept as text.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from pathlib import Path
 
+from canola._eds_pdo import mapping_problems
 from canola._ini import Entry, Section, decode, read_sections
 from canola.datatypes import (
     DATA_TYPES,
@@ -160,7 +162,7 @@ _COMPACT = re.compile(r"([0-9a-f]{4})(name|value|denotation)", re.IGNORECASE)
 _OBJECT_LIKE = re.compile(r"([0-9a-f]+)(?:sub([0-9a-f]*)|name|value|denotation)?",
                           re.IGNORECASE)
 #: CiA 301 objects every device has: a device without them is refused when strict.
-_REQUIRED = {0x1000: "Device type", 0x1018: "Identity object"}
+_REQUIRED = {0x1000: "Device type", 0x1001: "Error register", 0x1018: "Identity object"}
 _LISTS = {"mandatoryobjects": "mandatory", "optionalobjects": "optional",
           "manufacturerobjects": "manufacturer"}
 _VAR_KEYS = ("parametername", "objecttype", "datatype", "accesstype", "defaultvalue",
@@ -213,13 +215,29 @@ class _Builder:
         except NumberError as exc:
             self.warn(f"not a number of type {DATA_TYPES[data_type or 0].name}: {exc}", sec, ent)
             return None
+        if value is None and node_id is None and data_type in INTEGER_TYPES:
+            # $NODEID with the node-ID unknown: the value must fit for every node-ID
+            for some_id in (1, 127):
+                if not self._in_range(parse_value(text, data_type, some_id), text, data_type,
+                                      sec, ent, note=f" with node-ID {some_id}"):
+                    break
         if isinstance(value, int) and data_type in INTEGER_TYPES:
             value = fit_signed(value, text, data_type)
-            info = DATA_TYPES[data_type]
-            if not info.min <= value <= info.max:
-                self.warn(f"{value} is outside the range of {info.name} "
-                          f"[{info.min}, {info.max}]", sec, ent)
+            self._in_range(value, text, data_type, sec, ent)
         return value
+
+    def _in_range(self, value: Value | None, text: str, data_type: int, sec: Section,
+                  ent: Entry, *, note: str = "") -> bool:
+        """Whether an integer ``value`` fits ``data_type``; a warning when it does not."""
+        if not isinstance(value, int):
+            return True
+        value = fit_signed(value, text, data_type)
+        info = DATA_TYPES[data_type]
+        if info.min <= value <= info.max:
+            return True
+        self.warn(f"{value}{note} is outside the range of {info.name} "
+                  f"[{info.min}, {info.max}]", sec, ent)
+        return False
 
     def variable(self, sec: Section, index: int, sub: int, base: Section | None = None,
                  name: str | None = None) -> Variable:
@@ -380,6 +398,7 @@ def _build(sections: list[Section], file: str, strict: bool,
         if obj is None or obj.compact_sub_obj is None:
             b.warn(f"[{index:04X}{kind.capitalize()}] belongs to no CompactSubObj object", sec)
     _check_lists(b, od, lists)
+    b.diags += mapping_problems(od)
     for index, what in _REQUIRED.items():
         if index not in od.objects:
             where = lists.get("mandatory")

@@ -2,7 +2,8 @@
 
 :class:`NetworkView` is fed frames with their time and keeps, per node: NMT state, time of
 the last heartbeat (and the gap between the last two), the last EMCY, and per PDO the count
-of frames and their rate over the last ``window`` seconds. :meth:`NetworkView.rows` gives a
+of frames, their rate over the last ``window`` seconds and, when the decoder knows its
+mapping (an EDS/DCF), the last values. :meth:`NetworkView.rows` gives a
 snapshot as plain data; :func:`render` makes the text table of ``canola monitor``.
 """
 
@@ -27,12 +28,14 @@ class NodeView:
     emcy_count: int = 0
     pdos: dict[str, deque[float]] = field(default_factory=dict)
     pdo_total: dict[str, int] = field(default_factory=dict)
+    pdo_values: dict[str, Any] = field(default_factory=dict)  # entry name -> last value
+    pdo_text: dict[str, str] = field(default_factory=dict)  # PDO -> its last decoded line
 
 
 class NetworkView:
-    def __init__(self, window: float = 5.0) -> None:
+    def __init__(self, window: float = 5.0, decoder: Decoder | None = None) -> None:
         self.window = window
-        self.decoder = Decoder()
+        self.decoder = decoder or Decoder()
         self.nodes: dict[int, NodeView] = {}
         self.frames = 0
 
@@ -57,6 +60,9 @@ class NetworkView:
             times = view.pdos.setdefault(name, deque())
             times.append(t)
             view.pdo_total[name] = view.pdo_total.get(name, 0) + 1
+            if "values" in event.fields:  # decoded by its mapping
+                view.pdo_values.update(event.fields["values"])
+                view.pdo_text[name] = event.text.removeprefix(f"{name} node {node} ")
         return event
 
     def rows(self, now: float) -> list[dict[str, Any]]:
@@ -76,6 +82,8 @@ class NetworkView:
                 else round(v.heartbeat_gap, 3),
                 "last_emcy": v.last_emcy, "emcy_count": v.emcy_count,
                 "pdo_rate": rates, "pdo_total": dict(sorted(v.pdo_total.items())),
+                "pdo_values": dict(v.pdo_values),
+                "pdo_text": dict(sorted(v.pdo_text.items())),
             })
         return out
 
@@ -86,10 +94,13 @@ def render(rows: list[dict[str, Any]], frames: int) -> str:
     for r in rows:
         age = "-" if r["heartbeat_age"] is None else f"{r['heartbeat_age']:.1f}s"
         pdo = " ".join(f"{k}:{v:g}" for k, v in r["pdo_rate"].items()) or "-"
-        emcy = r["last_emcy"] or "-"
+        emcy = r["last_emcy"].split(",")[0] or "-"  # code and meaning; in full below
         if r["emcy_count"] > 1:
             emcy += f" (x{r['emcy_count']})"
         lines.append(f"{r['node']:>4}  {r['state']:<15}  {age:>7}  {emcy[:36]:<36}  {pdo}")
+        if r["last_emcy"]:
+            lines.append(f"{'':6}EMCY: {r['last_emcy']}")
+        lines.extend(f"{'':6}{name}: {text}" for name, text in r.get("pdo_text", {}).items())
     if not rows:
         lines.append("  (no node seen)")
     lines.append(f"{frames} frame(s)")

@@ -21,6 +21,7 @@ Every bad value or name raises :class:`ValueFormatError` (a :class:`canola.Error
 
 from __future__ import annotations
 
+import datetime
 import math
 import struct
 from typing import NamedTuple
@@ -30,6 +31,7 @@ from canola.errors import Error
 
 __all__ = [
     "CIA309_NAMES",
+    "TIME_EPOCH",
     "TimeOfDay",
     "Value",
     "ValueFormatError",
@@ -39,6 +41,7 @@ __all__ = [
     "parse_type",
     "to_text",
     "type_name",
+    "untyped_text",
     "visible_text",
 ]
 
@@ -56,6 +59,9 @@ class TimeOfDay(NamedTuple):
 
 
 Value = bool | int | float | str | bytes | TimeOfDay
+
+#: Day 0 of TIME_OF_DAY (CiA 301).
+TIME_EPOCH = datetime.datetime(1984, 1, 1, tzinfo=datetime.UTC)
 
 #: CiA 309-3 data type names -> CiA 301 type code.
 CIA309_NAMES: dict[str, int] = {
@@ -236,3 +242,27 @@ def to_text(data_type: str | int, value: Value) -> str:
     if code in (0x08, 0x11) and isinstance(value, float):
         return repr(value)
     return str(value)
+
+
+def untyped_text(data: bytes) -> str:
+    """A value of unknown type as dump and an untyped read print it: up to 4 bytes (what
+    an expedited transfer carries, numbers in practice) a little-endian hex number, 5..8
+    bytes too unless they read as text, printable (UTF-8) text quoted, other data as hex
+    bytes (long data shortened)."""
+    text = _as_text(data) if len(data) > 4 else None
+    if 1 <= len(data) <= 8 and text is None:
+        return f"0x{int.from_bytes(data, 'little'):0{2 * len(data)}X}"
+    if text is not None:
+        return repr(text if len(text) <= 80 else text[:80] + "...") + f" ({len(data)} bytes)"
+    shown = data[:32].hex(" ").upper()
+    return f"[{shown}{' ...' if len(data) > 32 else ''}] ({len(data)} bytes)"
+
+
+def _as_text(data: bytes) -> str | None:
+    """``data`` as text when it is printable UTF-8 of 3 characters or more (trailing NULs
+    aside), else None."""
+    try:
+        text = data.rstrip(b"\0").decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    return text if len(text) >= 3 and text.isprintable() else None

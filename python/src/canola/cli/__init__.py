@@ -1,9 +1,13 @@
 """The ``canola`` command: one sub-command group per module of this package.
 
     canola odgen DEVICE.eds -o DIR            C object dictionary from an EDS/DCF
+    canola eds check|show|dcf|diff            check, show, configure, compare EDS/DCF files
     canola bus serve [--host H] [--port P]    software CAN bus (socketcand hub)
     canola nmt CMD NODE|all                   NMT commands
     canola sdo read|write|upload|download     SDO client
+    canola pdo show|map NODE ...              a node's PDOs, read and configured by SDO
+    canola sync PERIOD_MS                     produce SYNC
+    canola time                               produce TIME
     canola scan                               which node-IDs answer
     canola dump [FILE]                        traffic decoded into CANopen meaning
     canola monitor                            live view of every node
@@ -15,7 +19,9 @@
     canola lss scan|set-id|inquire            layer setting services (CiA 305)
     canola conformance --node-id N --eds FILE CiA 301 checks of a node against its EDS
 
-Every bus command takes ``--iface IFACE`` or ``--bus URL``. A bad argument is one line on
+Every bus command takes ``--iface IFACE`` or ``--bus URL``; without them it uses the
+default bus: the URL in ``CANOLA_BUS``, else python-can's configuration (``CAN_INTERFACE``,
+``CAN_CHANNEL``, ``CAN_CONFIG``, ``~/.canrc``, ...). A bad argument is one line on
 stderr and exit code 2; a failure (no answer, SDO abort, bus missing) one line and exit
 code 1. Nothing waits without a time limit.
 """
@@ -35,13 +41,16 @@ from canola.cli import (
     demo_cmd,
     device_cmd,
     dump_cmd,
+    eds_cmd,
     flash_cmd,
     gateway_cmd,
     lss_cmd,
     monitor_cmd,
     nmt_cmd,
+    pdo_cmd,
     scan_cmd,
     sdo_cmd,
+    sync_cmd,
 )
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
@@ -52,7 +61,7 @@ _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
     dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
     demo_cmd.register, boot_cmd.register, flash_cmd.register, lss_cmd.register,
-    conformance_cmd.register,
+    pdo_cmd.register, sync_cmd.register, eds_cmd.register, conformance_cmd.register,
 )
 
 

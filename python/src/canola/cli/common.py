@@ -13,9 +13,13 @@ from typing import Any, Literal, NoReturn, overload
 
 import can
 
-from canola.buses import BusError, connection_lost, open_bus
+from canola.buses import BUS_ENV, BusError, NoBusError, connection_lost, open_bus
 from canola.candump import LogFrame
-from canola.master import Master
+from canola.decode import Decoder
+from canola.errors import EdsError, Error, SdoAbort
+from canola.master import Master, SdoTimeout
+from canola.nodedicts import NodeDictionaries
+from canola.pdomap import Pdo, read_pdos
 
 __all__ = [
     "CliError",
@@ -23,14 +27,18 @@ __all__ = [
     "UsageError",
     "add_announce_option",
     "add_bus_options",
+    "add_dictionary_options",
+    "add_group",
     "add_master_options",
+    "add_pdo_reading_options",
     "bus_from_args",
+    "decoder_from_args",
+    "dictionaries_from_args",
     "emit_json",
     "live_frames",
     "master_from_args",
     "node_id",
     "node_or_all",
-    "object_address",
     "positive_ms",
 ]
 
@@ -55,6 +63,15 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{self.prog}: error: {message} (see {self.prog} --help)")
+
+
+def add_group(subs: argparse._SubParsersAction[Parser], name: str, help_text: str,
+              description: str) -> argparse._SubParsersAction[Parser]:
+    """A command with sub-commands (``canola sdo read``, ``canola pdo show``, ...)."""
+    p = subs.add_parser(name, help=help_text, description=description)
+    group = p.add_subparsers(dest=f"{name}_command", metavar="SUBCOMMAND", parser_class=Parser)
+    group.required = True
+    return group
 
 
 def int_in_range(text: str, low: int, high: int, what: str, unit: str = "") -> int:
@@ -85,39 +102,80 @@ def node_or_all(text: str) -> int:
         raise argparse.ArgumentTypeError(f"bad node-ID {text!r}: 1..127 or all") from None
 
 
-def object_address(text: str) -> tuple[int, int]:
-    """``INDEX[:SUB]``: the index in hex (``0x1018`` or ``1018``), the sub-index decimal or
-    0x-hex (default 0)."""
-    index_text, _, sub_text = text.partition(":")
-    try:
-        index = int(index_text[2:] if index_text.lower().startswith("0x") else index_text, 16)
-        sub = int(sub_text, 0) if sub_text else 0
-    except ValueError:
-        index = sub = -1
-    if not (0 <= index <= 0xFFFF and 0 <= sub <= 0xFF) or not index_text:
-        raise argparse.ArgumentTypeError(
-            f"bad object {text!r}: INDEX:SUB, e.g. 0x1018:1")
-    return index, sub
-
-
 def positive_ms(text: str) -> int:
     return int_in_range(text, 1, 3_600_000, "time", "ms")
 
 
-def add_bus_options(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
-    """``--iface IFACE`` | ``--bus URL`` (one of them ``required``, else at most one)."""
-    group = parser.add_mutually_exclusive_group(required=required)
+def add_bus_options(parser: argparse.ArgumentParser) -> None:
+    """``--iface IFACE`` | ``--bus URL``; without either the default bus
+    (:func:`canola.buses.default_bus`: ``CANOLA_BUS``, else python-can's configuration)."""
+    group = parser.add_mutually_exclusive_group()
     group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
     group.add_argument("--bus", metavar="URL",
                        help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
-                            "virtual://CHANNEL")
+                            f"virtual://CHANNEL (default: ${BUS_ENV}, else python-can's "
+                            "configuration: CAN_INTERFACE, CAN_CHANNEL, ~/.canrc, ...)")
 
 
 def bus_from_args(args: argparse.Namespace) -> can.BusABC:
+    """The bus of ``--iface``/``--bus``, else the default bus. No bus at all is a usage
+    error (exit 2), one that does not open a failure (exit 1)."""
     try:
         return open_bus(iface=args.iface, url=args.bus)
+    except NoBusError as exc:
+        raise CliError(f"canola: {exc}", 2) from None
     except BusError as exc:
         raise CliError(str(exc)) from None
+
+
+def add_dictionary_options(parser: argparse.ArgumentParser) -> None:
+    """``--eds FILE`` / ``--dcf FILE`` (every node) and ``--eds N=FILE`` (node N),
+    repeatable: entries by name, types and PDO mappings from the files."""
+    for flag in ("--eds", "--dcf"):
+        parser.add_argument(flag, dest="dictionaries", action="append", default=[],
+                            metavar="[N=]FILE",
+                            help=f"{flag[2:].upper()} of every node, or of node N (N=FILE; "
+                                 "repeatable): entries by name, types, PDO mappings")
+
+
+def dictionaries_from_args(args: argparse.Namespace) -> NodeDictionaries:
+    """The files of ``--eds``/``--dcf``, each read once now (a bad one fails here)."""
+    try:
+        dicts = NodeDictionaries(args.dictionaries)
+        dicts.check()
+    except EdsError as exc:
+        raise CliError(str(exc)) from None
+    except Error as exc:
+        raise CliError(f"canola: error: {exc}", 2) from None
+    return dicts
+
+
+def add_pdo_reading_options(parser: argparse.ArgumentParser) -> None:
+    """``--read-pdos NODE``: PDO mappings read from the device (and the options of the
+    master that reads them)."""
+    parser.add_argument("--read-pdos", type=node_id, action="append", default=[],
+                        metavar="NODE",
+                        help="read node NODE's PDO mappings by SDO first and decode its "
+                             "PDOs by them (repeatable)")
+    add_master_options(parser, announce=False)
+
+
+def decoder_from_args(args: argparse.Namespace) -> Decoder:
+    """A decoder with the dictionaries of ``--eds``/``--dcf`` and the PDOs of
+    ``--read-pdos`` (read now, before the command listens)."""
+    dicts = dictionaries_from_args(args)
+    pdos: dict[int, list[Pdo]] = {}
+    if args.read_pdos:
+        with master_from_args(args) as master:
+            for node in args.read_pdos:
+                try:
+                    pdos[node] = read_pdos(master.sdo(node), dicts.get(node))
+                except SdoTimeout:
+                    raise CliError(f"no response from node {node} (SDO time-out "
+                                   f"{args.sdo_timeout} ms)") from None
+                except SdoAbort as exc:
+                    raise CliError(f"node {node}: reading its PDOs: {exc}") from None
+    return Decoder(dicts, pdos)
 
 
 def add_master_options(p: argparse.ArgumentParser, *, announce: bool = True) -> None:

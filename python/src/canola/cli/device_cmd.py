@@ -1,4 +1,5 @@
-"""``canola device``: run a canola device (canola.Device) from an EDS/DCF on a bus."""
+"""``canola device``: run a canola device (canola.Device) from an EDS/DCF on a bus; it
+prints its NMT states and every EMCY it sends or receives, in words."""
 
 from __future__ import annotations
 
@@ -10,6 +11,9 @@ import sys
 import threading
 from types import FrameType
 
+import can
+
+from canola._nodebase import EmcyEvent
 from canola.buses import connection_lost
 from canola.cli.common import (
     CliError,
@@ -21,6 +25,7 @@ from canola.cli.common import (
     positive_ms,
 )
 from canola.device import Device, StoreRejectedEvent
+from canola.emcycodes import emcy_line
 from canola.errors import Error
 
 log = logging.getLogger("canola.device")
@@ -33,7 +38,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p = subs.add_parser(
         "device", help="run a device from an EDS/DCF",
         description="Run a canola device with the dictionary of an EDS/DCF on a bus until "
-                    "SIGINT/SIGTERM; prints its NMT state changes. With --store, 0x1010 "
+                    "SIGINT/SIGTERM; prints its NMT state changes and EMCYs in words (e.g. "
+                    "0x8150 when another node uses its node-ID). With --store, 0x1010 "
                     "'save' writes the parameters to DIR and resets load them. DOMAIN and "
                     "string entries live in RAM of --domain-size/--string-size bytes: an SDO "
                     "download of any protocol writes values up to that size (larger ones "
@@ -55,6 +61,23 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                    help="RAM of each VISIBLE/OCTET/UNICODE_STRING entry, at least its "
                         "default's length (default 256; 1..65535)")
     p.set_defaults(func=run)
+
+
+def _report_own_emcys(bus: can.BusABC, device: Device) -> None:
+    """Print every EMCY the device sends, in words (a duplicate node-ID, 0x8150, among
+    them): python-can does not hand a bus its own frames back, so its send is watched."""
+    send = bus.send
+
+    def watched(msg: can.Message, timeout: float | None = None) -> None:
+        send(msg, timeout)
+        if (not msg.is_extended_id and msg.arbitration_id == 0x80 + device.node_id
+                and len(msg.data) == 8):
+            data = bytes(msg.data)
+            print(f"node {device.node_id}: EMCY "
+                  f"{emcy_line(int.from_bytes(data[:2], 'little'), data[2], data[3:])}",
+                  flush=True)
+
+    setattr(bus, "send", watched)  # noqa: B010 -- an instance's method, replaced on purpose
 
 
 def run(args: argparse.Namespace) -> int:
@@ -90,8 +113,14 @@ def run(args: argparse.Namespace) -> int:
                   f"{event.group} parameters start with their defaults "
                   f"(EMCY 0x{event.code:04X})", file=sys.stderr, flush=True)
 
+        def on_emcy(event: EmcyEvent) -> None:  # another node's, when 0x1028 watches it
+            print(f"node {args.node_id}: EMCY from node {event.node} "
+                  f"{emcy_line(event.code, event.register, event.manufacturer)}", flush=True)
+
         device.on_state(on_state)
         device.on_store_rejected(on_store_rejected)
+        device.on_emcy(on_emcy)
+        _report_own_emcys(bus, device)
         device.start()
         print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
         try:

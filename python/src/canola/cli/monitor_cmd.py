@@ -13,7 +13,10 @@ from canola.cli.common import (
     CliError,
     Parser,
     add_bus_options,
+    add_dictionary_options,
+    add_pdo_reading_options,
     bus_from_args,
+    decoder_from_args,
     emit_json,
     live_frames,
 )
@@ -28,6 +31,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "or when the output is not a terminal it listens for --duration seconds "
                     "and prints the view once.")
     add_bus_options(p)
+    add_dictionary_options(p)
+    add_pdo_reading_options(p)
     p.add_argument("--once", action="store_true", help="print one view and exit")
     p.add_argument("--duration", type=float, default=3.0, metavar="S",
                    help="listening time of --once (default 3 s)")
@@ -41,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     if args.duration <= 0 or args.window <= 0:
         raise CliError("canola monitor: error: --duration and --window must be > 0", 2)
     once = args.once or args.json or not sys.stdout.isatty()
-    view = NetworkView(window=args.window)
+    view = NetworkView(window=args.window, decoder=decoder_from_args(args))
     bus = bus_from_args(args)
     try:
         if once:

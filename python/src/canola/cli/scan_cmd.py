@@ -1,8 +1,10 @@
-"""``canola scan``: which node-IDs answer an SDO read of 0x1000 (device type)."""
+"""``canola scan``: which node-IDs answer an SDO read of 0x1000 (device type); with
+``--eds`` each answer is compared with the node's EDS (product name, device type)."""
 
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import can
@@ -11,10 +13,13 @@ from canola.cli.common import (
     CliError,
     Parser,
     add_bus_options,
+    add_dictionary_options,
     bus_from_args,
+    dictionaries_from_args,
     emit_json,
     positive_ms,
 )
+from canola.nodedicts import NodeDictionaries
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
@@ -23,6 +28,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         description="Ask every node-ID (1..127, or --nodes) for its device type (SDO read of "
                     "0x1000:00) at once and list those that answer within the time-out.")
     add_bus_options(p)
+    add_dictionary_options(p)
     p.add_argument("--timeout", type=positive_ms, default=500, metavar="MS",
                    help="how long to wait for answers (default 500 ms)")
     p.add_argument("--nodes", metavar="A-B", default="1-127",
@@ -42,8 +48,35 @@ def _range(text: str) -> range:
     return range(first, last + 1)
 
 
+def _compared(dicts: NodeDictionaries, entry: dict[str, object]) -> dict[str, object]:
+    """What the node's EDS says of the answer: its product name, whether its 0x1000
+    default is the device type read."""
+    node = entry["node"]
+    assert isinstance(node, int)
+    od, file = dicts.get(node), dicts.file(node)
+    if od is None or file is None or "device_type" not in entry:
+        return {}
+    var = od.objects[0x1000].subs.get(0) if 0x1000 in od else None
+    expected = None if var is None else var.value if var.value is not None else var.default
+    return {"eds": os.path.basename(file),
+            "product": od.device_info.get("ProductName", "?"),
+            "eds_device_type": expected, "matches": expected == entry["device_type"]}
+
+
+def _eds_note(entry: dict[str, object]) -> str:
+    if "product" not in entry:
+        return ""
+    said = entry["eds_device_type"]
+    if entry["matches"]:
+        return f", {entry['product']} ({entry['eds']})"
+    if isinstance(said, int):
+        return f", not {entry['product']}: {entry['eds']} says device type 0x{said:08X}"
+    return f", {entry['eds']} gives no device type"
+
+
 def run(args: argparse.Namespace) -> int:
     nodes = _range(args.nodes)
+    dicts = dictionaries_from_args(args)
     bus = bus_from_args(args)
     found: dict[int, dict[str, object]] = {}
     try:
@@ -68,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
             found[node] = entry
     finally:
         bus.shutdown()
-    result = [found[n] for n in sorted(found)]
+    result = [{**found[n], **_compared(dicts, found[n])} for n in sorted(found)]
     if args.json:
         emit_json(result)
     else:
@@ -76,6 +109,6 @@ def run(args: argparse.Namespace) -> int:
             extra = (f"device type 0x{entry['device_type']:08X}" if "device_type" in entry
                      else f"answered with abort 0x{entry.get('abort', 0):08X}"
                      if "abort" in entry else "answered")
-            print(f"node {entry['node']}: {extra}")
+            print(f"node {entry['node']}: {extra}{_eds_note(entry)}")
         print(f"{len(result)} node(s) found")
     return 0

@@ -4,6 +4,10 @@
     canola sdo write NODE 0x1017:0 u16 1000     r32, r64, b, vs, os, us, d, t, td
     canola sdo upload NODE 0x2000:0 FILE        block transfer, progress bar
     canola sdo download NODE 0x2000:0 FILE
+
+With ``--eds FILE`` (or ``--dcf``, or ``--eds N=FILE``) an entry may be named as
+python-canopen names it (``"Producer heartbeat time"``, ``"Identity object.Vendor-ID"``)
+and its type comes from the file: ``canola sdo write 5 "Producer heartbeat time" 1000``.
 """
 
 from __future__ import annotations
@@ -18,18 +22,22 @@ from canola import values
 from canola.cli.common import (
     CliError,
     Parser,
+    UsageError,
     add_announce_option,
     add_bus_options,
+    add_dictionary_options,
+    add_group,
+    dictionaries_from_args,
     emit_json,
     master_from_args,
     node_id,
-    object_address,
     positive_ms,
 )
 from canola.cli.progress import SdoProgress
-from canola.decode import format_value
+from canola.eds import Variable
 from canola.errors import SdoAbort
 from canola.master import SdoTimeout
+from canola.odnames import EntryError, entry_name, find_entry, parse_address, value_text
 
 
 def _type(text: str) -> int:
@@ -42,16 +50,16 @@ def _type(text: str) -> int:
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
-    p = subs.add_parser("sdo", help="SDO client: read, write, upload, download",
-                        description="Access a node's object dictionary over SDO.")
-    sdo_subs = p.add_subparsers(dest="sdo_command", metavar="SUBCOMMAND", parser_class=Parser)
-    sdo_subs.required = True
+    sdo_subs = add_group(subs, "sdo", "SDO client: read, write, upload, download",
+                         "Access a node's object dictionary over SDO.")
 
     def common(sp: argparse.ArgumentParser) -> None:
         sp.add_argument("node", type=node_id, metavar="NODE", help="node-ID 1..127")
-        sp.add_argument("address", type=object_address, metavar="INDEX:SUB",
-                        help="object, e.g. 0x1018:1")
+        sp.add_argument("entry", metavar="ENTRY",
+                        help="INDEX:SUB, e.g. 0x1018:1, or with --eds a name, e.g. "
+                             "'Identity object.Vendor-ID'")
         add_bus_options(sp)
+        add_dictionary_options(sp)
         sp.add_argument("--timeout", type=positive_ms, default=1000, metavar="MS",
                         help="SDO time-out (default 1000 ms)")
         sp.add_argument("--master-id", type=node_id, default=127, metavar="N",
@@ -59,19 +67,20 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         add_announce_option(sp)
 
     r = sdo_subs.add_parser("read", help="read a value",
-                            description="Read an object. Without TYPE the bytes are shown "
-                                        "as a little-endian number or text.")
+                            description="Read an object. Its type is TYPE, else the one the "
+                                        "EDS gives; without either the bytes are shown as a "
+                                        "little-endian number or text.")
     common(r)
     r.add_argument("type", type=_type, nargs="?", metavar="TYPE", help="CiA 309-3 type name")
     r.add_argument("--json", action="store_true", help="print a JSON object")
     r.set_defaults(func=run_read)
 
     w = sdo_subs.add_parser("write", help="write a value",
-                            description="Write an object: TYPE (CiA 309-3 name) and VALUE "
-                                        "(integers decimal or 0x-hex, os/d as hex digits).")
+                            description="Write an object: TYPE (CiA 309-3 name; with --eds "
+                                        "the EDS gives it) and VALUE (integers decimal or "
+                                        "0x-hex, os/d as hex digits).")
     common(w)
-    w.add_argument("type", type=_type, metavar="TYPE")
-    w.add_argument("value", metavar="VALUE")
+    w.add_argument("type_value", nargs="+", metavar="[TYPE] VALUE")
     w.add_argument("--json", action="store_true", help="print a JSON object")
     w.set_defaults(func=run_write)
 
@@ -91,38 +100,83 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         f.set_defaults(func=func)
 
 
-def _where(args: argparse.Namespace) -> str:
-    index, sub = args.address
-    return f"node {args.node} 0x{index:04X}:{sub:02X}"
+class _Target:
+    """The entry a command names: its address, and its EDS entry when a file gives one."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.node: int = args.node
+        od = dictionaries_from_args(args).get(self.node)
+        address = parse_address(args.entry)
+        self.var: Variable | None = None
+        if od is not None:
+            try:
+                self.var = find_entry(od, args.entry)
+            except EntryError as exc:
+                if address is None:
+                    raise UsageError(f"canola sdo: error: {exc}") from None
+        elif address is None:
+            raise UsageError(f"canola sdo: error: bad object {args.entry!r}: INDEX:SUB, e.g. "
+                             "0x1018:1 (entry names need --eds FILE)")
+        if self.var is not None:
+            self.index, self.sub = self.var.index, self.var.subindex
+            self.name = entry_name(od, self.index, self.sub) if od is not None else None
+        else:
+            assert address is not None
+            (self.index, self.sub), self.name = address, None
+
+    @property
+    def where(self) -> str:
+        named = f" ({self.name})" if self.name else ""
+        return f"node {self.node} 0x{self.index:04X}:{self.sub:02X}{named}"
+
+    def data_type(self, given: int | None) -> int | None:
+        """``given``, else the EDS's type of the entry."""
+        return given if given is not None else None if self.var is None else self.var.data_type
+
+    def json(self) -> dict[str, object]:
+        out: dict[str, object] = {"node": self.node, "index": self.index, "sub": self.sub}
+        if self.name:
+            out["name"] = self.name
+        return out
 
 
 @contextlib.contextmanager
-def _sdo_errors(args: argparse.Namespace) -> Iterator[None]:
+def sdo_errors(node: int, timeout_ms: int, where: str | None = None) -> Iterator[None]:
+    """An SDO time-out or abort of a transfer with ``node`` as a one-line CliError; an
+    abort says ``where`` (default: the node)."""
     try:
         yield
     except SdoTimeout:
-        raise CliError(f"no response from node {args.node} (SDO time-out {args.timeout} ms)"
+        raise CliError(f"no response from node {node} (SDO time-out {timeout_ms} ms)"
                        ) from None
     except SdoAbort as exc:
-        raise CliError(f"{_where(args)}: SDO abort 0x{exc.code:08X}: {exc.text}") from None
+        at = where or f"node {node}"
+        raise CliError(f"{at}: SDO abort 0x{exc.code:08X}: {exc.text}") from None
+
+
+def _sdo_errors(args: argparse.Namespace,
+                target: _Target) -> contextlib.AbstractContextManager[None]:
+    return sdo_errors(args.node, args.timeout, target.where)
 
 
 def run_read(args: argparse.Namespace) -> int:
-    index, sub = args.address
-    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
-        data = master.sdo(args.node).upload(index, sub, timeout=args.timeout / 1000)
-    result: dict[str, object] = {"node": args.node, "index": index, "sub": sub,
-                                 "raw": data.hex()}
-    if args.type is not None:
+    target = _Target(args)
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, \
+            _sdo_errors(args, target):
+        data = master.sdo(args.node).upload(target.index, target.sub,
+                                            timeout=args.timeout / 1000)
+    result = {**target.json(), "raw": data.hex()}
+    code = target.data_type(args.type)
+    if code is not None and code in values.CIA309_NAMES.values():
         try:
-            value = values.decode(args.type, data)
+            value = values.decode(code, data)
         except values.ValueFormatError as exc:
-            raise CliError(f"{_where(args)}: {exc}") from None
-        text = values.to_text(args.type, value)
-        result["type"] = values.type_name(args.type, short=True)
+            raise CliError(f"{target.where}: {exc}") from None
+        text = values.to_text(code, value)
+        result["type"] = values.type_name(code, short=True)
         result["value"] = value if isinstance(value, bool | int | float | str) else text
     else:
-        text = format_value(data) if data else "(empty)"
+        text = value_text(None, data)
     if args.json:
         emit_json(result)
     else:
@@ -130,26 +184,48 @@ def run_read(args: argparse.Namespace) -> int:
     return 0
 
 
+def _write_type_and_value(args: argparse.Namespace, target: _Target) -> tuple[int, str]:
+    given = args.type_value
+    if len(given) > 2:
+        raise UsageError(f"canola sdo write: error: too many arguments {given[2:]!r}: "
+                         "[TYPE] VALUE")
+    code = _type(given[0]) if len(given) == 2 else target.data_type(None)
+    if code is None or code not in values.CIA309_NAMES.values():
+        raise UsageError("canola sdo write: error: give TYPE VALUE (with --eds FILE the EDS "
+                         "gives the type)" if code is None else
+                         f"canola sdo write: error: {target.where} has data type 0x{code:04X}: "
+                         "give TYPE VALUE")
+    return code, given[-1]
+
+
 def run_write(args: argparse.Namespace) -> int:
-    index, sub = args.address
+    target = _Target(args)
     try:
-        data = values.encode(args.type, values.from_text(args.type, args.value))
+        code, text = _write_type_and_value(args, target)
+    except argparse.ArgumentTypeError as exc:
+        raise UsageError(f"canola sdo write: error: {exc}") from None
+    try:
+        data = values.encode(code, values.from_text(code, text))
     except values.ValueFormatError as exc:
         raise CliError(f"canola sdo write: error: {exc}", 2) from None
-    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
-        master.sdo(args.node).download(index, sub, data, timeout=args.timeout / 1000)
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, \
+            _sdo_errors(args, target):
+        master.sdo(args.node).download(target.index, target.sub, data,
+                                       timeout=args.timeout / 1000)
     if args.json:
-        emit_json({"node": args.node, "index": index, "sub": sub, "raw": data.hex()})
+        emit_json({**target.json(), "raw": data.hex()})
     return 0
 
 
 def run_upload(args: argparse.Namespace) -> int:
-    index, sub = args.address
+    target = _Target(args)
+    index, sub = target.index, target.sub
     if args.max_size < 1:
         raise CliError(f"canola sdo upload: error: bad --max-size {args.max_size}", 2)
     progress = SdoProgress(upload=True, total=None,
                            enabled=args.progress or sys.stderr.isatty())
-    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, \
+            _sdo_errors(args, target):
         master.on_frame(progress.frame, cob_id=0x580 + args.node)
         data = master.sdo(args.node).upload(index, sub, block=not args.no_block,
                                             max_size=args.max_size)
@@ -164,12 +240,13 @@ def run_upload(args: argparse.Namespace) -> int:
             os.unlink(tmp)
         raise CliError(f"cannot write {args.file}: {exc.strerror or exc}") from None
     if args.json:
-        emit_json({"node": args.node, "index": index, "sub": sub, "bytes": len(data)})
+        emit_json({**target.json(), "bytes": len(data)})
     return 0
 
 
 def run_download(args: argparse.Namespace) -> int:
-    index, sub = args.address
+    target = _Target(args)
+    index, sub = target.index, target.sub
     try:
         with open(args.file, "rb") as src:
             data = src.read()
@@ -177,10 +254,11 @@ def run_download(args: argparse.Namespace) -> int:
         raise CliError(f"cannot read {args.file}: {exc.strerror or exc}") from None
     progress = SdoProgress(upload=False, total=len(data),
                            enabled=args.progress or sys.stderr.isatty())
-    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, _sdo_errors(args):
+    with master_from_args(args, sdo_timeout_ms=args.timeout) as master, \
+            _sdo_errors(args, target):
         master.on_frame(progress.frame, cob_id=0x580 + args.node)
         master.sdo(args.node).download(index, sub, data, block=not args.no_block)
     progress.finish()
     if args.json:
-        emit_json({"node": args.node, "index": index, "sub": sub, "bytes": len(data)})
+        emit_json({**target.json(), "bytes": len(data)})
     return 0

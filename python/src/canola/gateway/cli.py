@@ -1,12 +1,13 @@
 """``canola gateway``: the CiA 309-3 ASCII gateway as a command.
 
-    canola gateway (--iface IFACE | --bus URL | --simulate EDS) [--listen WHERE]
+    canola gateway [--iface IFACE | --bus URL | --simulate EDS] [--listen WHERE]
                    [--node-id N] [--sdo-timeout MS] [--eds FILE] [--max-clients N]
                    [--max-line BYTES] [--idle-timeout S]
 
 ``--listen`` is ``tcp:HOST:PORT`` (default tcp:127.0.0.1:6000, loopback only),
 ``unix:PATH`` or ``stdio``. ``--simulate EDS`` runs the gateway's master and the devices
 named by ``--sim-node`` on a simulated bus (no hardware; for trying the protocol out).
+Without a bus option the gateway runs on the default bus (:func:`canola.buses.default_bus`).
 The same options work as ``python -m canola.gateway``. SIGINT and SIGTERM stop it at once,
 whatever its clients are doing (their transfers are aborted).
 """
@@ -78,7 +79,7 @@ def _seconds(text: str) -> float:
 
 def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) -> None:
     """The gateway's options (``bus_options``: also ``--iface`` / ``--bus``)."""
-    group = parser.add_mutually_exclusive_group(required=True)
+    group = parser.add_mutually_exclusive_group(required=not bus_options)  # default bus
     if bus_options:
         group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
         group.add_argument("--bus", metavar="URL", help="socketcand://HOST:PORT/CHANNEL, "
