@@ -45,7 +45,8 @@ def test_list(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["--node-id", "5"], "missing --eds, --iface or --bus"),
+    (["--node-id", "5"], "missing --eds (see canola conformance --help)"),
+    (["--eds", "x.eds"], "missing --node-id (see canola conformance --help)"),
     (["--node-id", "5", "--eds", "x.eds", "--bus", "virtual://x", "--only", "nope"],
      "unknown group or check 'nope'"),
     (["--node-id", "200", "--eds", "x.eds", "--bus", "virtual://x"], "bad node-ID '200'"),

@@ -46,7 +46,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         epilog=f"Groups: {', '.join(GROUPS)}. --list shows every check and its clause.")
     p.add_argument("--node-id", type=node_id, metavar="N", help="the node to check (1..127)")
     p.add_argument("--eds", metavar="FILE", help="the node's EDS (or DCF)")
-    add_bus_options(p, required=False)
+    add_bus_options(p)
     p.add_argument("--only", nargs="+", action="extend", metavar="GROUP",
                    help="run only these groups or checks (e.g. --only sdo pdo.remap)")
     p.add_argument("--list", action="store_true", help="list the checks and exit")
@@ -84,8 +84,6 @@ def run_command(args: argparse.Namespace) -> int:
         return 0
     missing = [flag for flag, value in (("--node-id", args.node_id), ("--eds", args.eds))
                if value is None]
-    if args.iface is None and args.bus is None:
-        missing.append("--iface or --bus")
     if missing:
         raise UsageError(f"canola conformance: error: missing {', '.join(missing)} "
                          "(see canola conformance --help)")
