@@ -15,6 +15,8 @@
 void co_emcy_reset_comm(co_node_t *node);
 void co_emcy_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1003, 0x1014.., 0x1028 */
 bool co_emcy_producer_off(const co_node_t *node);                  /* 0x1014 bit 31 */
+co_abort_t co_emcy_cob_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                                   uint32_t len); /* 0x1014: valid to valid refused */
 void co_emcy_frame_send(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN]);
 
 /* emcy_queue.c: without it frames leave at once. */

@@ -44,7 +44,8 @@ static const service_object_t k_service_objects[] = {
     {0x1010, 0x1011, COB_NONE, co_storage_check_write, NULL}, /* every command refused */
 #endif
     {0x1012, 0x1012, COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
-    {0x1014, 0x1014, COB_SUB0, NULL, CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
+    {0x1014, 0x1014, COB_SUB0, co_emcy_cob_check_write,
+     CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
 #if CO_EMCY_QUEUE_LEN > 0
     {0x1015, 0x1015, COB_NONE, NULL, co_emcy_written},
 #endif

@@ -274,12 +274,14 @@ static void test_cob_id_off_29_bit_and_changed(void)
     CHECK_EQ(co_node_poll(&t.node, 1 * MS), CO_TIME_NEVER);
     CHECK_EQ(t.bus.count, 0);
     co_emcy_raise(&t.node, 0x3211, NULL);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x8000009Au), CO_ABORT_NONE); /* valid -> valid: via off */
     CHECK_EQ(write_u32(&t, 0x1014, 0, 0x20012345u), CO_ABORT_NONE);
     co_emcy_clear(&t.node, 0x3210);
     co_emcy_clear(&t.node, 0x3211);
     CHECK_STR(bus(&t), "09A#1132050000000000 00012345#0000000000000000");
     CHECK(t.bus.frames[1].flags & CO_FRAME_EXT);
     /* Turning it off drops what waits for the inhibit time. */
+    write_u32(&t, 0x1014, 0, 0x80000085u);
     write_u32(&t, 0x1014, 0, 0x85);
     write_u16(&t, 0x1015, 0, 10);
     co_node_poll(&t.node, 10 * MS);
@@ -291,6 +293,23 @@ static void test_cob_id_off_29_bit_and_changed(void)
     CHECK_EQ(t.node.emcy.queue_count, 0);
     CHECK_EQ(co_node_poll(&t.node, 15 * MS), CO_TIME_NEVER);
     CHECK_STR(bus(&t), "085#0150010000000000");
+}
+
+/* CiA 301 7.5.2.17: the identifier of a valid EMCY COB-ID does not change; a new one goes
+ * through "not valid" (bit 31). Writing the value it has is no change. */
+static void test_valid_cob_id_changes_only_through_not_valid(void)
+{
+    test_node_t t;
+    start(&t, 5);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x86), CO_ABORT_VALUE);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x20000085u), CO_ABORT_VALUE);
+    CHECK_EQ(t.od.emcy_cob_id, 0x85u);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x85), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x80000085u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x80000086u), CO_ABORT_NONE); /* not valid: free */
+    CHECK_EQ(write_u32(&t, 0x1014, 0, 0x86), CO_ABORT_NONE);
+    co_emcy_raise(&t.node, 0x1000, NULL);
+    CHECK_STR(bus(&t), "086#0010010000000000");
 }
 
 static void test_heartbeat_loss_raises_0x8130_and_resume_clears_it(void)
@@ -616,6 +635,7 @@ int main(void)
     RUN(test_full_queue_drops_the_newest);
     RUN(test_not_sent_while_stopped_sent_on_pre_operational);
     RUN(test_cob_id_off_29_bit_and_changed);
+    RUN(test_valid_cob_id_changes_only_through_not_valid);
     RUN(test_heartbeat_loss_raises_0x8130_and_resume_clears_it);
     RUN(test_heartbeat_loss_of_two_nodes_clears_when_both_are_back);
     RUN(test_bus_events);

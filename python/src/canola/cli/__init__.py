@@ -17,6 +17,7 @@
     canola boot NETWORK.yaml|DCF...           boot a network (CiA 302-2 manager)
     canola flash NODE FILE                    program download (CiA 302-3)
     canola lss scan|set-id|inquire            layer setting services (CiA 305)
+    canola conformance --node-id N --eds FILE CiA 301 checks of a node against its EDS
 
 Every bus command takes ``--iface IFACE`` or ``--bus URL``; without them it uses the
 default bus: the URL in ``CANOLA_BUS``, else python-can's configuration (``CAN_INTERFACE``,
@@ -36,6 +37,7 @@ from canola import __version__, odgen
 from canola.cli import (
     boot_cmd,
     bus_cmd,
+    conformance_cmd,
     demo_cmd,
     device_cmd,
     dump_cmd,
@@ -59,7 +61,7 @@ _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     bus_cmd.register, nmt_cmd.register, sdo_cmd.register, scan_cmd.register,
     dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
     demo_cmd.register, boot_cmd.register, flash_cmd.register, lss_cmd.register,
-    pdo_cmd.register, sync_cmd.register, eds_cmd.register,
+    pdo_cmd.register, sync_cmd.register, eds_cmd.register, conformance_cmd.register,
 )
 
 

@@ -1,0 +1,314 @@
+"""An SDO client made of raw frames, for the checks: every request and answer is a frame
+the tester sends or sees (so a failure can quote them), and every answer is checked
+against CiA 301 §7.2.4.3 as it arrives.
+
+- :meth:`RawSdo.upload` / :meth:`RawSdo.download`: expedited up to 4 bytes, else
+  segmented (``segmented=True`` forces it);
+- :meth:`RawSdo.block_download` / :meth:`RawSdo.block_upload`: block transfer with CRC;
+- :meth:`RawSdo.request`: one request frame, its answer frame (protocol-level checks).
+
+A server abort raises :class:`canola.SdoAbort`; no answer :class:`NoAnswerError`; an answer
+that breaks the protocol :class:`SdoProtocolError`. After a failure in the middle of a
+transfer the client aborts it (0x05040000 or 0x08000000), so the server is idle again.
+"""
+
+from __future__ import annotations
+
+from canola import SdoAbort
+from canola.conformance.link import Link
+from canola.errors import Error
+
+__all__ = ["NoAnswerError", "RawSdo", "SdoProtocolError", "abort_frame", "crc16"]
+
+ABORT_TIMEOUT = 0x05040000
+ABORT_GENERAL = 0x08000000
+
+
+class NoAnswerError(Error):
+    """The server did not answer ``what`` within the time-out."""
+
+    def __init__(self, what: str, timeout: float) -> None:
+        super().__init__(f"no answer to {what} within {timeout:g} s")
+        self.what = what
+
+
+class SdoProtocolError(Error):
+    """An answer that breaks the SDO protocol (the message says how)."""
+
+
+def crc16(data: bytes, crc: int = 0) -> int:
+    """CRC-16-CCITT of the block transfer (CiA 301 §7.2.4.3.16): polynomial 0x1021,
+    initial value 0, no reflection ("123456789" -> 0x31C3)."""
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
+            crc &= 0xFFFF
+    return crc
+
+
+def _mux(index: int, sub: int) -> bytes:
+    return index.to_bytes(2, "little") + bytes([sub])
+
+
+def abort_frame(index: int, sub: int, code: int) -> bytes:
+    """The 8 bytes of an SDO abort transfer."""
+    return bytes([0x80]) + _mux(index, sub) + code.to_bytes(4, "little")
+
+
+class RawSdo:
+    """SDO client of node ``node_id`` over ``link``; ``timeout``: seconds per answer."""
+
+    def __init__(self, link: Link, node_id: int, timeout: float) -> None:
+        self.link = link
+        self.node_id = node_id
+        self.timeout = timeout
+        self.rx = 0x600 + node_id  # the server's receive COB-ID
+        self.tx = 0x580 + node_id  # the server's transmit COB-ID
+
+    # ---- single frames
+
+    def send(self, data: bytes) -> int:
+        """Send one request frame (padded to 8 bytes); the mark before it."""
+        mark = self.link.mark()
+        self.link.send(self.rx, bytes(data).ljust(8, b"\0"))
+        return mark
+
+    def answer(self, since: int, what: str, timeout: float | None = None) -> bytes:
+        """The next answer of the server after ``since``. Raises NoAnswerError."""
+        return self.answer_at(since, what, timeout)[0]
+
+    def answer_at(self, since: int, what: str,
+                  timeout: float | None = None) -> tuple[bytes, int]:
+        """The next answer after ``since`` and the mark just after it. Raises NoAnswerError."""
+        limit = self.timeout if timeout is None else timeout
+        seen = self.link.wait_frame(lambda f: f.can_id == self.tx and not f.rtr, limit, since)
+        if seen is None:
+            raise NoAnswerError(what, limit)
+        return seen.frame.data, seen.pos + 1
+
+    def request(self, data: bytes, what: str, timeout: float | None = None) -> bytes:
+        """Send ``data`` and return the answer (any answer, an abort too)."""
+        return self.answer(self.send(data), what, timeout)
+
+    def abort(self, index: int, sub: int, code: int = ABORT_GENERAL) -> None:
+        """Abort the transfer in progress (no answer expected)."""
+        self.send(abort_frame(index, sub, code))
+
+    def initiate(self, data: bytes, index: int, sub: int, what: str, scs: int) -> bytes:
+        """Send an initiate request and return its answer, checked (:meth:`_expect`). An
+        answer that names another multiplexer is a late one of an earlier exchange (over a
+        slow link) and is passed over; if no other comes, it is the answer, and wrong."""
+        since = self.send(data)
+        mux = _mux(index, sub)
+        end = self.link.now() + self.timeout
+        stray: bytes | None = None
+        while True:
+            try:
+                answer, since = self.answer_at(since, what, max(0.0, end - self.link.now()))
+            except NoAnswerError:
+                if stray is None:
+                    raise NoAnswerError(what, self.timeout) from None
+                answer = stray
+                break
+            if len(answer) != 8 or answer[1:4] == mux:
+                break
+            stray = answer
+        return self._expect(answer, index, sub, what, scs)
+
+    def _expect(self, data: bytes, index: int | None, sub: int, what: str,
+                scs: int) -> bytes:
+        """Check an answer: 8 bytes, not an abort, command specifier ``scs`` (bits 7..5),
+        and, for initiate answers (``index`` given), the multiplexer echoed."""
+        if len(data) != 8:
+            raise SdoProtocolError(f"{what}: answer of {len(data)} bytes (SDO frames have 8)")
+        if data[0] == 0x80:
+            code = int.from_bytes(data[4:8], "little")
+            raise SdoAbort(code)
+        if data[0] >> 5 != scs:
+            raise SdoProtocolError(f"{what}: command byte 0x{data[0]:02X} (server command "
+                                    f"specifier {data[0] >> 5}, expected {scs})")
+        if index is not None and data[1:4] != _mux(index, sub):
+            got = int.from_bytes(data[1:3], "little")
+            raise SdoProtocolError(f"{what}: answer names 0x{got:04X}:{data[3]} instead of "
+                                    f"0x{index:04X}:{sub}")
+        return data
+
+    # ---- expedited and segmented
+
+    def upload(self, index: int, sub: int) -> bytes:
+        """Read (index, sub): expedited or segmented, as the server chooses."""
+        where = f"upload 0x{index:04X}:{sub}"
+        first = self.initiate(bytes([0x40]) + _mux(index, sub), index, sub, where, 2)
+        cmd = first[0]
+        expedited, sized = bool(cmd & 0x02), bool(cmd & 0x01)
+        if expedited:
+            return first[4:8 - ((cmd >> 2) & 3)] if sized else first[4:8]
+        size = int.from_bytes(first[4:8], "little") if sized else None
+        try:
+            return self._upload_segments(index, sub, size, where)
+        except (NoAnswerError, SdoProtocolError):
+            self.abort(index, sub, ABORT_GENERAL)
+            raise
+
+    def _upload_segments(self, index: int, sub: int, size: int | None, where: str) -> bytes:
+        data = bytearray()
+        toggle = 0
+        while True:
+            what = f"{where}, segment {len(data) // 7 + 1}"
+            seg = self._expect(self.request(bytes([0x60 | toggle << 4]), what), None, sub,
+                               what, 0)
+            if (seg[0] >> 4) & 1 != toggle:
+                raise SdoProtocolError(f"{what}: toggle bit {(seg[0] >> 4) & 1}, expected "
+                                        f"{toggle}")
+            data += seg[1:8 - ((seg[0] >> 1) & 7)]
+            if seg[0] & 1:
+                break
+            if size is not None and len(data) >= size:
+                raise SdoProtocolError(f"{what}: {len(data)} of {size} bytes sent and "
+                                        "still no last segment")
+            toggle ^= 1
+        if size is not None and len(data) != size:
+            raise SdoProtocolError(f"{where}: {len(data)} bytes in the segments, "
+                                    f"{size} announced")
+        return bytes(data)
+
+    def download(self, index: int, sub: int, data: bytes, *, segmented: bool = False) -> None:
+        """Write ``data`` to (index, sub): expedited up to 4 bytes unless ``segmented``."""
+        where = f"download 0x{index:04X}:{sub} ({len(data)} bytes)"
+        if len(data) <= 4 and not segmented and data:
+            cmd = 0x23 | (4 - len(data)) << 2
+            self.initiate(bytes([cmd]) + _mux(index, sub) + data, index, sub, where, 3)
+            return
+        self.initiate(bytes([0x21]) + _mux(index, sub) + len(data).to_bytes(4, "little"),
+                      index, sub, where, 3)
+        try:
+            self._download_segments(data, where)
+        except (NoAnswerError, SdoProtocolError):
+            self.abort(index, sub, ABORT_GENERAL)
+            raise
+
+    def _download_segments(self, data: bytes, where: str) -> None:
+        toggle = 0
+        for start in range(0, max(len(data), 1), 7):
+            piece = data[start:start + 7]
+            last = start + 7 >= len(data)
+            cmd = toggle << 4 | (7 - len(piece)) << 1 | int(last)
+            what = f"{where}, segment {start // 7 + 1}"
+            ack = self._expect(self.request(bytes([cmd]) + piece, what), None, 0, what, 1)
+            if (ack[0] >> 4) & 1 != toggle:
+                raise SdoProtocolError(f"{what}: answer toggle bit {(ack[0] >> 4) & 1}, "
+                                        f"expected {toggle}")
+            toggle ^= 1
+
+    # ---- block transfer
+
+    def block_download(self, index: int, sub: int, data: bytes, *,
+                       bad_crc: bool = False) -> int:
+        """Write ``data`` by block transfer with CRC (a wrong CRC with ``bad_crc``); the
+        block size the server asked for first."""
+        where = f"block download 0x{index:04X}:{sub} ({len(data)} bytes)"
+        init = self.initiate(bytes([0xC6]) + _mux(index, sub) + len(data).to_bytes(4, "little"),
+                             index, sub, where, 5)
+        if init[0] & 0x03:
+            raise SdoProtocolError(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
+        crc_on = bool(init[0] & 0x04)
+        blksize = first_blksize = init[4]
+        try:
+            seq_data = [data[i:i + 7] for i in range(0, len(data), 7)] or [b""]
+            sent = 0
+            while sent < len(seq_data):
+                if not 1 <= blksize <= 127:
+                    raise SdoProtocolError(f"{where}: block size {blksize} (1..127)")
+                chunk = seq_data[sent:sent + blksize]
+                mark = self.link.mark()
+                for n, piece in enumerate(chunk, start=1):
+                    last = sent + n == len(seq_data)
+                    self.link.send(self.rx, bytes([int(last) << 7 | n]) + piece.ljust(7, b"\0"))
+                upto = min(len(data), (sent + len(chunk)) * 7)
+                what = f"{where}, sub-block ending at byte {upto}"
+                ack = self._expect(self.answer(mark, what), None, 0, what, 5)
+                if ack[0] & 0x03 != 2:
+                    raise SdoProtocolError(f"{what}: answer 0x{ack[0]:02X} (expected 0xA2)")
+                if ack[1] > len(chunk):
+                    raise SdoProtocolError(f"{what}: ackseq {ack[1]} of {len(chunk)} sent")
+                sent += ack[1]  # the server asks again for what it did not take
+                blksize = ack[2]
+            n = (7 - len(data) % 7) % 7 if data else 7
+            crc = crc16(data) ^ (0xFFFF if bad_crc else 0) if crc_on else 0
+            what = f"{where}, end"
+            end = self._expect(self.request(bytes([0xC1 | n << 2]) + crc.to_bytes(2, "little"),
+                                            what), None, 0, what, 5)
+            if end[0] & 0x03 != 1:
+                raise SdoProtocolError(f"{what}: answer 0x{end[0]:02X} (expected 0xA1)")
+        except (NoAnswerError, SdoProtocolError):
+            self.abort(index, sub, ABORT_GENERAL)
+            raise
+        return first_blksize
+
+    def block_upload(self, index: int, sub: int, *, blksize: int = 127,
+                     next_blksize: int | None = None) -> tuple[bytes, list[int]]:
+        """Read (index, sub) by block transfer with CRC (protocol switch threshold 0: the
+        server must not fall back to a segmented upload); the client asks for ``blksize``
+        segments per sub-block, then ``next_blksize``. The data and the number of segments
+        in each sub-block."""
+        where = f"block upload 0x{index:04X}:{sub}"
+        init = self.initiate(bytes([0xA4]) + _mux(index, sub) + bytes([blksize, 0, 0, 0]),
+                             index, sub, where, 6)
+        if init[0] & 0x01:
+            raise SdoProtocolError(f"{where}: initiate answer 0x{init[0]:02X} (ss must be 0)")
+        crc_on = bool(init[0] & 0x04)
+        size = int.from_bytes(init[4:8], "little") if init[0] & 0x02 else None
+        data = bytearray()
+        blocks: list[int] = []
+        try:
+            mark = self.send(bytes([0xA3]))
+            asked = blksize
+            while True:
+                frames, last = self._sub_block(mark, asked, where)
+                blocks.append(len(frames))
+                for piece in frames:
+                    data += piece
+                asked = next_blksize or blksize
+                mark = self.send(bytes([0xA2, len(frames), asked]))
+                if last:
+                    break
+            what = f"{where}, end"
+            end = self._expect(self.answer(mark, what), None, 0, what, 6)
+            if end[0] & 0x03 != 1:
+                raise SdoProtocolError(f"{what}: frame 0x{end[0]:02X} (expected an end, "
+                                        "0xC1 | n << 2)")
+            unused = (end[0] >> 2) & 7
+            if unused:
+                del data[len(data) - unused:]
+            if size is not None and len(data) != size:
+                raise SdoProtocolError(f"{where}: {len(data)} bytes, {size} announced")
+            if crc_on and int.from_bytes(end[1:3], "little") != crc16(bytes(data)):
+                raise SdoProtocolError(f"{where}: CRC 0x{int.from_bytes(end[1:3], 'little'):04X}"
+                                        f", computed 0x{crc16(bytes(data)):04X}")
+            self.send(bytes([0xA1]))
+        except (NoAnswerError, SdoProtocolError):
+            self.abort(index, sub, ABORT_GENERAL)
+            raise
+        return bytes(data), blocks
+
+    def _sub_block(self, mark: int, blksize: int, where: str) -> tuple[list[bytes], bool]:
+        """The segments of one sub-block sent after ``mark``: their data, and whether the
+        last one carried the end flag."""
+        frames: list[bytes] = []
+        while True:
+            what = f"{where}, segment {len(frames) + 1} of a sub-block of {blksize}"
+            seg, mark = self.answer_at(mark, what)
+            if len(seg) != 8:
+                raise SdoProtocolError(f"{what}: {len(seg)} bytes (SDO frames have 8)")
+            if seg[0] == 0x80 and not frames:
+                raise SdoAbort(int.from_bytes(seg[4:8], "little"))
+            seqno = seg[0] & 0x7F
+            if seqno != len(frames) + 1:
+                raise SdoProtocolError(f"{what}: sequence number {seqno}, expected "
+                                        f"{len(frames) + 1}")
+            frames.append(seg[1:8])
+            if seg[0] & 0x80:
+                return frames, True
+            if len(frames) == blksize:
+                return frames, False
