@@ -21,7 +21,11 @@ class SdistWithCore(sdist):  # type: ignore[misc]
     """The sdist, plus the C files the extension is built from, in csrc/."""
 
     def make_release_tree(self, base_dir: str, files: list[str]) -> None:
-        super().make_release_tree(base_dir, files)
+        # setuptools lists the extension's sources (../src/*.c) among the files; placed
+        # under base_dir they would land beside python/ (python/src/*.c), outside the sdist:
+        # they go into csrc/ below instead.
+        inside = [f for f in files if not os.path.normpath(f).startswith(os.pardir)]
+        super().make_release_tree(base_dir, inside)
         spec = importlib.util.spec_from_file_location("_canola_build_core", _BUILDER)
         assert spec is not None and spec.loader is not None
         builder = importlib.util.module_from_spec(spec)

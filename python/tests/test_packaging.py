@@ -103,8 +103,11 @@ def test_runtime_dependencies_are_ranges_and_tools_are_pinned() -> None:
 @pytest.mark.realtime
 def test_wheel_installs_and_runs_the_demo(tmp_path: Path) -> None:
     dist = tmp_path / "dist"
+    before = set(PYTHON_DIR.rglob("*.c"))
     run([sys.executable, "-m", "build", "-v", "--outdir", str(dist), str(PYTHON_DIR)],
         cwd=tmp_path, what="python -m build")
+    # the build writes nothing into the source tree (once: copies of ../src/*.c in python/src)
+    assert set(PYTHON_DIR.rglob("*.c")) == before
     (sdist,) = dist.glob("canola-*.tar.gz")
     (wheel,) = dist.glob("canola-*.whl")
     with tarfile.open(sdist) as tar:
