@@ -17,7 +17,6 @@ from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.events import EventHub
 from canola.gateway.masterbackend import MasterBackend
 from canola.gateway.requests import NmtCommand
-from canola.gateway.simbackend import SimBackend
 
 T = TypeVar("T")
 TIMEOUT = 20.0
@@ -162,7 +161,7 @@ async def eventually(check: Callable[[], bool], timeout: float = TIMEOUT) -> Non
 
 
 @contextlib.asynccontextmanager
-async def serving(backend: MasterBackend | SimBackend) -> AsyncIterator[str]:
+async def serving(backend: MasterBackend) -> AsyncIterator[str]:
     """The gateway on ``backend``, listening on a free TCP port of 127.0.0.1, with the
     backend's event pump running: its address; pump, server and event hub closed after."""
     hub = EventHub(backend)

@@ -9,8 +9,7 @@
   time-out; :mod:`~canola.gateway.connection`: one client's reader, worker and writer;
   :mod:`~canola.gateway.listen`: where to listen
 - :mod:`~canola.gateway.backend`: what the gateway needs from a master;
-  :mod:`~canola.gateway.masterbackend`: canola.Master (python-can or simulated bus);
-  :mod:`~canola.gateway.simbackend`: a canola.core node on a simulated bus
+  :mod:`~canola.gateway.masterbackend`: canola.Master (python-can or simulated bus)
 """
 
 from canola.gateway.codes import GatewayError

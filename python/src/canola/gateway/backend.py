@@ -1,8 +1,8 @@
 """What the gateway needs from a CANopen master: a small interface, and the events.
 
 :class:`Backend` is the whole contract between the executor and the master it drives;
-:mod:`canola.gateway.masterbackend` and :mod:`canola.gateway.simbackend` implement it
-(canola.Master; a canola.core node on a simulated bus). Tests use a fake.
+:mod:`canola.gateway.masterbackend` implements it (canola.Master, on python-can or a
+simulated bus). Tests use a fake too.
 
 SDO failures are :class:`canola.errors.SdoAbort` (an SDO time-out is abort 0x05040000);
 cancelling an SDO coroutine must abort the transfer on the bus before it returns.

@@ -40,10 +40,18 @@ from canola.gateway.backend import (
 from canola.gateway.codes import GatewayError, GatewayFailure
 from canola.gateway.pdo import mapped_values
 from canola.gateway.requests import NmtCommand
-from canola.gateway.simbackend import NMT_NAMES
 from canola.master import Frame, Master
 
 __all__ = ["MasterBackend", "open_master"]
+
+#: Gateway NMT command -> canola.Master NMT command name.
+_NMT_NAMES: dict[str, str] = {
+    "start": "start",
+    "stop": "stop",
+    "preop": "pre-operational",
+    "reset_node": "reset-node",
+    "reset_comm": "reset-communication",
+}
 
 
 def _answer_s(timeout_ms: int) -> float | None:
@@ -126,10 +134,10 @@ class MasterBackend:
     # ---- NMT
 
     async def nmt(self, node: int, command: NmtCommand) -> None:
-        self.master.nmt(node, NMT_NAMES[command])
+        self.master.nmt(node, _NMT_NAMES[command])
 
     async def local_nmt(self, command: NmtCommand) -> None:
-        spec = nmt_command(NMT_NAMES[command])
+        spec = nmt_command(_NMT_NAMES[command])
         with self.master._engine.locked() as node:
             lib.co_nmt_apply(node, spec)
 
