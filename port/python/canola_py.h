@@ -2,8 +2,9 @@
  * python/src/canola/_build_core.py with cffi): what Python allocates, and the C ends of
  * the callbacks that go to Python.
  *
- * The core never allocates; these helpers do (one calloc per bus, node, program or
- * stream), which is what a binding layer is allowed to do. Every function here is
+ * The core never allocates; these helpers do (one block per bus, link, node, program or
+ * stream, through canola_py_alloc, which counts them), which is what a binding layer is
+ * allowed to do. Every function here is
  * declared again, for cffi, in _build_core.py's CDEF.
  *
  * One kind of node, canola_py_dev_t (canola.Device, canola.Master, canola.simnode.Node):
@@ -18,6 +19,7 @@
 #include "canola/sim.h"
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 /* ---- callbacks into Python (cffi defines them: extern "Python+C" in the CDEF) */
@@ -40,6 +42,14 @@ co_abort_t canola_py_stream_read(void *handle, uint32_t offset, uint8_t *buf, ui
                                  uint32_t *n, uint32_t *total);
 co_abort_t canola_py_stream_write(void *handle, uint32_t offset, const uint8_t *data, uint32_t n,
                                   uint32_t total, bool last);
+
+/* ---- memory (py_alloc.c): every allocation of this layer, counted */
+
+/* calloc(1, size) / free(p), counting the blocks alive: a leak of the binding shows as a
+ * count that does not come back (canola_py_live_allocs, read by the tests). */
+void *canola_py_alloc(size_t size);
+void canola_py_release(void *p);
+long canola_py_live_allocs(void);
 
 /* ---- the simulated bus (py_sim.c) */
 
@@ -73,9 +83,11 @@ typedef struct canola_py_dev {
 } canola_py_dev_t;
 
 /* A node with every callback routed to Python (`user` is the Python object's handle), on
- * the simulated bus `bus` (with a raw port that sees every frame when `raw_port`), or on
- * `link` (bus NULL). NULL with *err set when out of memory or the storage folder fails;
- * otherwise *err is co_node_init's result (the dev must then be kept, not used). */
+ * the simulated bus `bus` (with a raw port that sees every frame when `raw_port`), or
+ * attached to `link` (bus NULL; under the link's lock). NULL with *err set, nothing kept,
+ * when out of memory, the storage folder fails or the link is full (CO_ERR_FULL, with
+ * CANOLA_PY_LINK_DEVS devs on it); otherwise *err is co_node_init's result (the dev must
+ * then be kept, not used, and freed with canola_py_dev_free). */
 canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    co_od_entry_t *entries, uint32_t count, uint8_t node_id,
                                    uint16_t sdo_timeout_ms, const char *store_dir, bool raw_port,
@@ -114,6 +126,7 @@ struct canola_py_link {
 
 canola_py_link_t *canola_py_link_new(void);
 void canola_py_link_free(canola_py_link_t *link);
+/* canola_py_dev_new's: `dev` joins the link (CO_ERR_FULL when it has CANOLA_PY_LINK_DEVS). */
 co_err_t canola_py_link_attach(canola_py_link_t *link, canola_py_dev_t *dev);
 void canola_py_link_detach(canola_py_link_t *link, canola_py_dev_t *dev);
 /* A dev's tx on its link: queue the frame (CO_ERR_BUSY when the queue is full). */

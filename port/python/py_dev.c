@@ -3,7 +3,6 @@
 #include "canola_py.h"
 #include "node_internal.h" /* co_node_write_entry, the node's parts */
 
-#include <stdlib.h>
 #include <string.h>
 
 static co_err_t sim_tx(canola_py_dev_t *d, const co_frame_t *frame)
@@ -62,7 +61,7 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    uint16_t sdo_timeout_ms, const char *store_dir, bool raw_port,
                                    void *user, co_err_t *err)
 {
-    canola_py_dev_t *d = calloc(1, sizeof *d);
+    canola_py_dev_t *d = canola_py_alloc(sizeof *d);
     if (!d) {
         *err = CO_ERR_FULL;
         return NULL;
@@ -83,7 +82,6 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
     cfg.on_rpdo = canola_py_on_rpdo;
     d->hooks.written = canola_py_written;
     d->user = user;
-    d->link = link;
     for (uint32_t i = 0; i < count; i++) {
         if (entries[i].hooks == NULL) {
             entries[i].hooks = &d->hooks;
@@ -92,10 +90,17 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
     if (store_dir) {
         *err = co_file_storage_init(&d->fs, store_dir);
         if (*err != CO_OK) {
-            free(d);
+            canola_py_release(d);
             return NULL;
         }
         cfg.storage = &d->fs.api;
+    }
+    if (link) {
+        *err = canola_py_link_attach(link, d);
+        if (*err != CO_OK) { /* the link is full: nothing of d is kept anywhere */
+            canola_py_release(d);
+            return NULL;
+        }
     }
     if (bus) {
         *err = co_sim_port_attach(bus, &d->port);
@@ -126,7 +131,7 @@ void canola_py_dev_free(canola_py_dev_t *dev)
     if (dev->link) {
         canola_py_link_detach(dev->link, dev);
     }
-    free(dev);
+    canola_py_release(dev);
 }
 
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev) { return &dev->node; }

@@ -3,22 +3,20 @@
  * frames to python-can for everybody else. */
 #include "canola_py.h"
 
-#include <stdlib.h>
-
 /* Rounds of delivery and polling in one run: a bound against two devs that would keep
  * answering each other for ever. */
 #define CANOLA_PY_LINK_ROUNDS 1024
 
 canola_py_link_t *canola_py_link_new(void)
 {
-    canola_py_link_t *link = calloc(1, sizeof *link);
+    canola_py_link_t *link = canola_py_alloc(sizeof *link);
     if (link) {
         link->due_us = CO_TIME_NEVER;
     }
     return link;
 }
 
-void canola_py_link_free(canola_py_link_t *link) { free(link); }
+void canola_py_link_free(canola_py_link_t *link) { canola_py_release(link); }
 
 co_err_t canola_py_link_attach(canola_py_link_t *link, canola_py_dev_t *dev)
 {

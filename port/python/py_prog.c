@@ -6,7 +6,6 @@
 #include "node_internal.h" /* the SDO clients of the node */
 
 #include <stddef.h>
-#include <stdlib.h>
 
 typedef struct canola_py_prog {
     co_od_hooks_t data, control, ident, status;
@@ -67,7 +66,7 @@ canola_py_prog_t *canola_py_prog_new(co_od_entry_t *entries, uint32_t count, uin
             control = control || entries[i].index == 0x1F51;
         }
     }
-    canola_py_prog_t *p = data && control ? calloc(1, sizeof *p) : NULL;
+    canola_py_prog_t *p = data && control ? canola_py_alloc(sizeof *p) : NULL;
     if (!p) {
         return NULL;
     }
@@ -109,7 +108,7 @@ canola_py_prog_t *canola_py_prog_new(co_od_entry_t *entries, uint32_t count, uin
     return p;
 }
 
-void canola_py_prog_free(canola_py_prog_t *p) { free(p); }
+void canola_py_prog_free(canola_py_prog_t *p) { canola_py_release(p); }
 void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident)
 {
     co_program_set_ident(&p->prog, ident);

@@ -4,8 +4,6 @@
  * "written" hook stays (on_write callbacks). */
 #include "canola_py.h"
 
-#include <stdlib.h>
-
 typedef struct canola_py_stream {
     co_od_hooks_t hooks; /* first: the entry's hooks pointer is the stream */
     void *handle;
@@ -38,7 +36,7 @@ canola_py_stream_t *canola_py_stream_new(co_od_entry_t *entries, uint32_t count,
         if (e->type != CO_TYPE_DOMAIN) {
             return NULL;
         }
-        canola_py_stream_t *s = calloc(1, sizeof *s);
+        canola_py_stream_t *s = canola_py_alloc(sizeof *s);
         if (!s) {
             return NULL;
         }
@@ -55,4 +53,4 @@ canola_py_stream_t *canola_py_stream_new(co_od_entry_t *entries, uint32_t count,
     return NULL;
 }
 
-void canola_py_stream_free(canola_py_stream_t *s) { free(s); }
+void canola_py_stream_free(canola_py_stream_t *s) { canola_py_release(s); }

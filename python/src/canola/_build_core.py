@@ -193,10 +193,10 @@ void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
 void canola_py_dev_set_active(canola_py_dev_t *dev, bool active);
 void canola_py_dev_set_raw(canola_py_dev_t *dev, bool raw);
 #define CANOLA_PY_LINK_FRAMES ...
-struct canola_py_link { co_frame_t frames[...]; uint32_t count; ...; };
+#define CANOLA_PY_LINK_DEVS ...
+struct canola_py_link { co_frame_t frames[...]; uint32_t count; uint32_t dev_count; ...; };
 canola_py_link_t *canola_py_link_new(void);
 void canola_py_link_free(canola_py_link_t *link);
-co_err_t canola_py_link_attach(canola_py_link_t *link, canola_py_dev_t *dev);
 void canola_py_link_detach(canola_py_link_t *link, canola_py_dev_t *dev);
 void canola_py_link_ingest(canola_py_link_t *link, uint64_t now_us, const co_frame_t *frame);
 uint64_t canola_py_link_poll(canola_py_link_t *link, uint64_t now_us);
@@ -210,6 +210,7 @@ int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel);
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
 void canola_py_bus_free(co_sim_bus_t *bus);
 uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
+long canola_py_live_allocs(void);
 
 /* callbacks into Python */
 extern "Python+C" void canola_py_trace(void *ctx, const char *line);

@@ -137,10 +137,17 @@ class Link:
 
     # ---- nodes
 
-    def attach(self, engine: Engine, dev: Any) -> None:
+    def new_dev(self, engine: Engine, make: Callable[[Any], Any]) -> Any:
+        """``make(c_link)``: a dev attached to this link (NULL when refused), under the
+        lock; a dev made is freed by the link once ``engine`` is gone."""
         with self.lock:
-            _check(int(lib.canola_py_link_attach(self.c, dev)), "attach the node to the bus")
-        weakref.finalize(engine, self._retired.append, dev)
+            dev = make(self.c)
+        if dev != ffi.NULL:
+            weakref.finalize(engine, self._retired.append, dev)
+        elif int(self.c.dev_count) >= lib.CANOLA_PY_LINK_DEVS:
+            raise Error(f"a python-can bus object holds at most {lib.CANOLA_PY_LINK_DEVS} "
+                        "canola nodes")
+        return dev
 
     def activate(self, engine: Engine) -> None:
         """``engine`` receives and is polled; the bus thread runs while one is."""
@@ -324,20 +331,23 @@ class Engine:
         self.app_writing = False
         err = ffi.new("co_err_t *")
         store = ffi.new("char[]", store_dir.encode()) if store_dir is not None else ffi.NULL
-        raw = lib.canola_py_dev_new(bus._bus if isinstance(bus, SimBus) else ffi.NULL,
-                                    ffi.NULL, od.entries, od.count, node_id, sdo_timeout_ms,
-                                    store, raw_frames, self._handle, err)
+
+        def make(link: Any) -> Any:
+            return lib.canola_py_dev_new(bus._bus if isinstance(bus, SimBus) else ffi.NULL,
+                                         link, od.entries, od.count, node_id, sdo_timeout_ms,
+                                         store, raw_frames, self._handle, err)
+
+        raw = self.link.new_dev(self, make) if self.link is not None else make(ffi.NULL)
         if raw == ffi.NULL:
             if store_dir is not None:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
             _check(int(err[0]), "create the node")
         self.dev = raw
         if isinstance(bus, SimBus):
-            bus._nodes.append((raw, od))  # ports stay attached: freed with the bus
+            # its ports stay attached to the bus: the dev is freed with the bus
+            bus._nodes.append((ffi.gc(raw, lib.canola_py_dev_free), od))
             bus._nodes.append((self._handle, self))
             bus._engines.append(self)
-        elif self.link is not None:
-            self.link.attach(self, raw)  # freed by the link once this engine is gone
         if int(err[0]) != lib.CO_OK:
             if store_dir is not None and int(err[0]) == lib.CO_ERR_ARG:
                 raise Error(f"parameter storage folder {store_dir!r} cannot be used")
