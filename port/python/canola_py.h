@@ -35,6 +35,7 @@ void canola_py_on_time(void *user, const co_time_of_day_t *time);
 void canola_py_on_rpdo(void *user, uint16_t rpdo);
 void canola_py_written(void *ctx, const co_od_entry_t *entry);
 void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
+void canola_py_sent(void *ctx, const co_frame_t *frame);
 co_abort_t canola_py_prog_write(void *ctx, uint32_t offset, const uint8_t *data, uint32_t n,
                                 uint32_t total, bool last);
 co_abort_t canola_py_prog_control(void *ctx, uint8_t command);
@@ -71,10 +72,11 @@ typedef struct canola_py_dev {
     co_file_storage_t fs;
     co_od_hooks_t hooks;
     void *user;
-    bool sim;        /* on the simulated bus, else on a link (python-can) */
-    bool quiet;      /* a tool, not a network member: no boot-up, heartbeat or guarding answer */
-    bool raw_frames; /* on a link: the frames of the others go to canola_py_raw_rx too */
-    bool active;     /* on a link: receives and is polled (canola.Device.start .. stop) */
+    bool sim;         /* on the simulated bus, else on a link (python-can) */
+    bool quiet;       /* a tool, not a network member: no boot-up, heartbeat or guarding answer */
+    bool raw_frames;  /* on a link: the frames of the others go to canola_py_raw_rx too */
+    bool active;      /* on a link: receives and is polled (canola.Device.start .. stop) */
+    bool sent_frames; /* every frame the node puts on the bus goes to canola_py_sent too */
     canola_py_link_t *link;
     /* the raw port skips the node's own frames (python-can does not hand a bus its own
      * frames either) */
@@ -98,6 +100,10 @@ co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
  * next instant the bus runs (its deadline may have moved). */
 void canola_py_dev_touch(canola_py_dev_t *dev);
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
+/* Every frame the node puts on the bus (the simulated bus or its link) goes to
+ * canola_py_sent too (true), in the order sent; frames a quiet node keeps off the bus and
+ * frames refused (the core sends them again later) do not. */
+void canola_py_dev_set_sent(canola_py_dev_t *dev, bool sent);
 
 /* Application access: no access rights; writes take the node's path (limits, service
  * checks, event-driven TPDOs mapping the entry). */

@@ -26,7 +26,11 @@ static co_err_t dev_tx(void *ctx, const co_frame_t *frame)
     if (d->quiet && !(frame->flags & CO_FRAME_EXT) && frame->id == 0x700u + co_node_id(&d->node)) {
         return CO_OK;
     }
-    return d->sim ? sim_tx(d, frame) : canola_py_link_tx(d, frame);
+    co_err_t err = d->sim ? sim_tx(d, frame) : canola_py_link_tx(d, frame);
+    if (err == CO_OK && d->sent_frames) {
+        canola_py_sent(d->user, frame);
+    }
+    return err;
 }
 
 /* The node's routes changed: the bus's delivery index follows (see canola/sim.h). */
@@ -139,6 +143,8 @@ co_node_t *canola_py_dev_node(canola_py_dev_t *dev) { return &dev->node; }
 void canola_py_dev_touch(canola_py_dev_t *dev) { dev->port.node_due_us = 0; }
 
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet) { dev->quiet = quiet; }
+
+void canola_py_dev_set_sent(canola_py_dev_t *dev, bool sent) { dev->sent_frames = sent; }
 
 co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                               uint32_t cap, uint32_t *len, uint8_t *type)

@@ -383,12 +383,20 @@ def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
 
 @pytest.mark.realtime
 @pytest.mark.slow
-def test_device_reports_a_duplicate_node_id_in_words(hub: HubThread) -> None:
+@pytest.mark.parametrize("emcy_cob_id", [0x085, 0x0A5], ids=["default", "changed-0x1014"])
+def test_device_reports_a_duplicate_node_id_in_words(hub: HubThread, tmp_path: Path,
+                                                     emcy_cob_id: int) -> None:
     """Another node's boot-up on the device's own COB-ID: the device raises EMCY 0x8150 and
-    ``canola device`` says so in words, as ``canola dump`` does for the frame."""
+    ``canola device`` says so in words, as ``canola dump`` does for the frame; also when its
+    EMCY goes out on another COB-ID than 0x80 + node-ID (0x1014 changed)."""
     channel = f"dup{time.monotonic_ns() % 10**9}"
     url = f"socketcand://127.0.0.1:{hub.port}/{channel}"
     drive = str(Path(__file__).resolve().parents[2] / "examples" / "eds" / "drive.eds")
+    if emcy_cob_id != 0x085:
+        changed = tmp_path / "drive.eds"
+        changed.write_text(Path(drive).read_text().replace(
+            "DefaultValue=$NODEID+0x80\n", f"DefaultValue=0x{emcy_cob_id:03X}\n"))
+        drive = str(changed)
     device = subprocess.Popen([sys.executable, "-m", "canola.cli", "device", "--eds", drive,
                                "--node-id", "5", "--bus", url], stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True)
@@ -406,7 +414,7 @@ def test_device_reports_a_duplicate_node_id_in_words(hub: HubThread) -> None:
             deadline = time.monotonic() + 60
             while emcy is None and time.monotonic() < deadline:
                 msg = peer.recv(1)
-                if msg is not None and msg.arbitration_id == 0x085:
+                if msg is not None and msg.arbitration_id == emcy_cob_id:
                     emcy = bytes(msg.data)
         assert emcy is not None and emcy[:2] == b"\x50\x81"
     finally:

@@ -183,3 +183,19 @@ def test_asyncio_on_a_shared_bus(can_bus: Callable[[], can.BusABC]) -> None:
 
         assert asyncio.run(main()) == [b"\x78\x56\x34\x12"] * 20
         assert device.od[0x2006][0] == 0x539
+
+
+def test_a_node_observes_the_frames_it_sends(can_bus: Callable[[], can.BusABC]) -> None:
+    """on_frame_sent on python-can, which does not hand a bus object its own frames: the
+    device's frames only (not the master's on the same bus object), in order."""
+    shared = can_bus()
+    device = Device(INTEROP, 5, shared)
+    master = Master(shared, node_id=1)
+    sent: list[tuple[int, bytes]] = []
+    device.on_frame_sent(lambda frame: sent.append((frame.can_id, frame.data)))
+    with device, master:
+        assert master.sdo(5).upload(0x1018, 4) == b"\x78\x56\x34\x12"
+        device.emcy_raise(0x5000)
+        assert wait_until(lambda: len(sent) == 3)
+        assert sent == [(0x705, b"\x00"), (0x585, b"\x43\x18\x10\x04\x78\x56\x34\x12"),
+                        (0x085, b"\x00\x50\x01\0\0\0\0\0")]

@@ -367,3 +367,31 @@ def test_master_announces_itself_unless_told_not_to() -> None:
     member.nmt(0x7F, "reset-communication")
     bus.run_for(10_000)
     assert not any(f.startswith("77F#") and f != "77F#R" for f in _frames(bus))
+
+
+def test_a_node_observes_the_frames_it_sends() -> None:
+    """on_frame_sent: every frame of this node, in order, none of the others'; an EMCY on
+    the COB-ID its 0x1014 holds, changed or not."""
+    bus = SimBus()
+    master = Master(bus, node_id=1)
+    device = Device(INTEROP, 5, bus)
+    sent: list[Frame] = []
+    mine: list[Frame] = []
+    device.on_frame_sent(sent.append)
+    master.on_frame_sent(mine.append)
+    master.start()
+    device.start()
+    bus.run_for(1000)
+    assert master.sdo(5).upload(0x1018, 4) == b"\x78\x56\x34\x12"
+    device.emcy_raise(0x5000, b"\x01")
+    device.od.set(0x1014, 0, 0x80000085)  # invalid first, then a new COB-ID
+    device.od.set(0x1014, 0, 0x0A5)
+    device.emcy_raise(0x6000)
+    bus.run_for(1000)
+    assert [(f.can_id, f.data.hex()) for f in sent] == [
+        (0x705, "00"), (0x585, "4318100478563412"), (0x085, "0050010100000000"),
+        (0x0A5, "0060010000000000")]
+    assert [f.timestamp for f in sent] == sorted(f.timestamp for f in sent)
+    assert [f.can_id for f in mine] == [0x701, 0x605]
+    assert [f.split()[-1][:3] for f in bus.trace if "#" in f] == \
+        ["701", "705", "605", "585", "085", "0A5"]

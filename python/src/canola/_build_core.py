@@ -192,6 +192,7 @@ void canola_py_dev_touch(canola_py_dev_t *dev);
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
 void canola_py_dev_set_active(canola_py_dev_t *dev, bool active);
 void canola_py_dev_set_raw(canola_py_dev_t *dev, bool raw);
+void canola_py_dev_set_sent(canola_py_dev_t *dev, bool sent);
 #define CANOLA_PY_LINK_FRAMES ...
 #define CANOLA_PY_LINK_DEVS ...
 struct canola_py_link { co_frame_t frames[...]; uint32_t count; uint32_t dev_count; ...; };
@@ -225,6 +226,7 @@ extern "Python+C" void canola_py_on_time(void *user, const co_time_of_day_t *tim
 extern "Python+C" void canola_py_on_rpdo(void *user, uint16_t rpdo);
 extern "Python+C" void canola_py_written(void *ctx, const co_od_entry_t *entry);
 extern "Python+C" void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
+extern "Python+C" void canola_py_sent(void *ctx, const co_frame_t *frame);
 """
 
 

@@ -328,6 +328,7 @@ class Engine:
         self._events = self.link.events if self.link is not None else deque()
         self._handle = ffi.new_handle(self)
         self.frame_listeners: list[Callable[[Frame], None]] = []
+        self.sent_listeners: list[Callable[[Frame], None]] = []
         self.app_writing = False
         err = ffi.new("co_err_t *")
         store = ffi.new("char[]", store_dir.encode()) if store_dir is not None else ffi.NULL
@@ -469,6 +470,17 @@ class Engine:
         for fn in self.frame_listeners:
             self.later(lambda fn=fn: fn(frame))  # type: ignore[misc]
 
+    def add_sent_listener(self, fn: Callable[[Frame], None]) -> None:
+        """``fn(Frame)`` for every frame this node puts on the bus (outside the lock, in
+        the order sent)."""
+        with self.lock:
+            self.sent_listeners.append(fn)
+            lib.canola_py_dev_set_sent(self.dev, True)
+
+    def frame_sent(self, frame: Frame) -> None:
+        for fn in self.sent_listeners:
+            self.later(lambda fn=fn: fn(frame))  # type: ignore[misc]
+
     # ---- life cycle
 
     def start(self) -> None:
@@ -574,6 +586,16 @@ def canola_py_written(ctx: Any, entry: Any) -> None:
             _call(ctx, "_on_written", int(entry.index), int(entry.sub))
     except Exception:
         log.exception("canola: write callback")
+
+
+@ffi.def_extern()
+def canola_py_sent(ctx: Any, frame: Any) -> None:
+    try:
+        engine = _engine(ctx)
+        engine.frame_sent(_frame_in(frame, engine.bus.now_us / 1e6
+                                    if isinstance(engine.bus, SimBus) else time.time()))
+    except Exception:
+        log.exception("canola: sent-frame callback")
 
 
 @ffi.def_extern()

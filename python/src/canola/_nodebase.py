@@ -224,6 +224,14 @@ class NodeBase:
         self._emcy_cbs.append(fn)
         return fn
 
+    def on_frame_sent(self, fn: F) -> F:
+        """``fn(Frame)`` for every frame this node puts on the bus, in the order sent: its
+        own frames, which python-can does not hand back to the bus object that sent them
+        (e.g. to report this node's EMCYs, on the COB-ID its 0x1014 holds). Like every
+        callback it runs outside the lock, after the call that made the node send."""
+        self._engine.add_sent_listener(fn)
+        return fn
+
     def on_store_rejected(self, fn: F) -> F:
         """``fn(StoreRejectedEvent)`` when, at a reset (:meth:`start` included), a stored
         parameter file of ``store_dir`` failed its checks and was ignored: the node runs on

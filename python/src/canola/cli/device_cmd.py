@@ -11,8 +11,7 @@ import sys
 import threading
 from types import FrameType
 
-import can
-
+from canola._engine import Frame
 from canola._nodebase import EmcyEvent
 from canola.buses import connection_lost
 from canola.cli.common import (
@@ -63,21 +62,22 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p.set_defaults(func=run)
 
 
-def _report_own_emcys(bus: can.BusABC, device: Device) -> None:
+def _report_own_emcys(device: Device) -> None:
     """Print every EMCY the device sends, in words (a duplicate node-ID, 0x8150, among
-    them): python-can does not hand a bus its own frames back, so its send is watched."""
-    send = bus.send
+    them): its frames on the COB-ID its 0x1014 holds when they are sent."""
 
-    def watched(msg: can.Message, timeout: float | None = None) -> None:
-        send(msg, timeout)
-        if (not msg.is_extended_id and msg.arbitration_id == 0x80 + device.node_id
-                and len(msg.data) == 8):
-            data = bytes(msg.data)
-            print(f"node {device.node_id}: EMCY "
-                  f"{emcy_line(int.from_bytes(data[:2], 'little'), data[2], data[3:])}",
-                  flush=True)
+    def sent(frame: Frame) -> None:
+        if frame.extended or frame.rtr or len(frame.data) != 8:
+            return
+        cob_id = device.od.get(0x1014, 0)
+        if not isinstance(cob_id, int) or cob_id >> 31 or frame.can_id != cob_id & 0x7FF:
+            return
+        data = frame.data
+        print(f"node {device.node_id}: EMCY "
+              f"{emcy_line(int.from_bytes(data[:2], 'little'), data[2], data[3:])}",
+              flush=True)
 
-    setattr(bus, "send", watched)  # noqa: B010 -- an instance's method, replaced on purpose
+    device.on_frame_sent(sent)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         device.on_state(on_state)
         device.on_store_rejected(on_store_rejected)
         device.on_emcy(on_emcy)
-        _report_own_emcys(bus, device)
+        _report_own_emcys(device)
         device.start()
         print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
         try:
