@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import datetime as dt
+import threading
 from pathlib import Path
 
 import pytest
@@ -395,3 +396,64 @@ def test_a_node_observes_the_frames_it_sends() -> None:
     assert [f.can_id for f in mine] == [0x701, 0x605]
     assert [f.split()[-1][:3] for f in bus.trace if "#" in f] == \
         ["701", "705", "605", "585", "085", "0A5"]
+
+
+def _time_frames(master: Master) -> list[float]:
+    """The virtual instants of the TIME frames ``master`` sends (filled as it sends)."""
+    instants: list[float] = []
+    master.on_frame_sent(lambda f: instants.append(f.timestamp) if f.can_id == 0x100 else None)
+    return instants
+
+
+def test_stop_time_skips_a_run_already_queued() -> None:
+    """Two masters' TIME timers fall due at the same instant; the first one's run stops
+    the second's, whose run is queued by then: it must not send after stop_time."""
+    bus = SimBus()
+    first = Master(bus, node_id=2)  # its callbacks run first at an instant
+    second = Master(bus, node_id=1)
+    first.start()
+    second.start()
+    sent = _time_frames(second)
+    at_stop: list[int] = []
+
+    def stop_the_other() -> dt.datetime:
+        second.stop_time()
+        at_stop.append(len(sent))
+        return dt.datetime(2024, 1, 1, tzinfo=dt.UTC)
+
+    second.start_time(50)
+    first.start_time(50, clock=stop_the_other)
+    bus.run_for(1_000_000)
+    assert at_stop and at_stop[0] == 0
+    assert sent == []
+
+
+def test_stop_time_waits_for_a_run_in_progress() -> None:
+    """A TIME run in progress in the bus's thread when another thread stops TIME: stop_time
+    returns after that run's frame, and nothing follows it."""
+    bus = SimBus()
+    master = Master(bus, node_id=1)
+    master.start()
+    sent = _time_frames(master)
+    entered, release = threading.Event(), threading.Event()
+
+    def slow_clock() -> dt.datetime:
+        entered.set()
+        release.wait(30)
+        return dt.datetime(2024, 1, 1, tzinfo=dt.UTC)
+
+    master.start_time(50, clock=slow_clock)
+    runner = threading.Thread(target=bus.run_for, args=(1_000_000,))
+    runner.start()
+    assert entered.wait(30)
+    at_return: list[int] = []
+    stopper = threading.Thread(target=lambda: (master.stop_time(), at_return.append(len(sent))))
+    stopper.start()
+    stopper.join(0.5)  # a bound, not an expectation: stop_time waits for the run (fixed)
+    release.set()
+    stopper.join(30)
+    runner.join(30)
+    assert not stopper.is_alive() and not runner.is_alive()
+    assert at_return == [1]  # the run's frame went out before stop_time returned
+    bus.run_for(1_000_000)
+    assert len(sent) == 1

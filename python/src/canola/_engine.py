@@ -68,12 +68,17 @@ class Frame:
 
 
 class _Timer:
-    __slots__ = ("due_us", "fn", "period_us")
+    """A periodic Python job of an engine: ``live`` until removed; ``running_in``: the
+    threads running ``fn`` now (one each; a run may nest in another on a SimBus)."""
+
+    __slots__ = ("due_us", "fn", "live", "period_us", "running_in")
 
     def __init__(self, due_us: int, period_us: int, fn: Callable[[], None]) -> None:
         self.due_us = due_us
         self.period_us = period_us
         self.fn = fn
+        self.live = True
+        self.running_in: list[int] = []
 
 
 def _frame_in(frame: Any, timestamp: float) -> Frame:
@@ -356,6 +361,7 @@ class Engine:
         self.node = lib.canola_py_dev_node(raw)
         lib.canola_py_dev_set_quiet(raw, quiet)  # before the start: its boot-up stays off
         self._timers: list[_Timer] = []
+        self._timer_runs = threading.Condition()  # guards live / running_in of the timers
         self._started = False
         self._active = False
 
@@ -425,7 +431,9 @@ class Engine:
     # ---- periodic work of the Python side (e.g. TIME production), in the node's time
 
     def add_timer(self, period_us: int, fn: Callable[[], None]) -> _Timer:
-        """Run ``fn`` every ``period_us`` (first one period from now), like a callback."""
+        """Run ``fn`` every ``period_us`` (first one period from now), like a callback
+        (queued when due, run after the lock; a run queued but not begun when the timer
+        is removed is skipped)."""
         timer = _Timer(self.now_us() + period_us, period_us, fn)
         self._timers.append(timer)
         if self.link is not None and self not in self.link.timers:
@@ -433,8 +441,29 @@ class Engine:
         return timer
 
     def remove_timer(self, timer: _Timer) -> None:
-        if timer in self._timers:
-            self._timers.remove(timer)
+        """Stop ``timer``: when this returns, ``fn`` runs no more and a run begun in
+        another thread has ended (so have the frames it sent). From ``fn`` itself it
+        returns at once. Not under the lock: a run in another thread may need it."""
+        with self._timer_runs:
+            timer.live = False
+            if timer in self._timers:
+                self._timers.remove(timer)
+            me = threading.get_ident()
+            self._timer_runs.wait_for(lambda: all(t == me for t in timer.running_in))
+
+    def _run_timer(self, timer: _Timer) -> None:
+        runs = self._timer_runs
+        with runs:
+            if not timer.live:
+                return
+            me = threading.get_ident()
+            timer.running_in.append(me)
+        try:
+            timer.fn()
+        finally:
+            with runs:
+                timer.running_in.remove(me)
+                runs.notify_all()
 
     def next_timer_us(self) -> int | None:
         if not self._active and not self.sim:
@@ -449,7 +478,7 @@ class Engine:
                 timer.due_us += timer.period_us
                 if timer.due_us <= now_us:  # fell behind (a slow machine): skip, no burst
                     timer.due_us = now_us + timer.period_us
-                self.later(timer.fn)
+                self.later(lambda timer=timer: self._run_timer(timer))  # type: ignore[misc]
 
     def in_bus_thread(self) -> bool:
         return self.link is not None and self.link.in_thread()
