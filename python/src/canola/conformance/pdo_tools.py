@@ -28,6 +28,7 @@ __all__ = [
     "Pdo",
     "PdoConfig",
     "SyncSource",
+    "all_pdos",
     "check_values",
     "configurable",
     "configure",
@@ -102,6 +103,11 @@ def pdos(ctx: Context, *, tpdo: bool) -> list[Pdo]:
         if ctx.var(pdo.comm, 1) is not None and ctx.var(pdo.mapping, 0) is not None:
             found.append(pdo)
     return found
+
+
+def all_pdos(ctx: Context) -> list[Pdo]:
+    """Every PDO the EDS has (:func:`pdos`): the TPDOs, then the RPDOs."""
+    return pdos(ctx, tpdo=True) + pdos(ctx, tpdo=False)
 
 
 def configurable(ctx: Context, pdo: Pdo) -> bool:

@@ -42,7 +42,7 @@ def _usable(ctx: Context, *, tpdo: bool, need_writable: bool = False
        title="a valid PDO's mapping and its COB-ID (to another valid one) cannot be changed")
 def valid_locked(ctx: Context) -> None:
     tested = 0
-    for pdo in pt.pdos(ctx, tpdo=True) + pt.pdos(ctx, tpdo=False):
+    for pdo in pt.all_pdos(ctx):
         cfg = pt.read_config(ctx, pdo)
         if not cfg.valid:
             continue
@@ -65,7 +65,7 @@ def valid_locked(ctx: Context) -> None:
        title="every PDO's mapping as the node has it is one its EDS allows: count within "
              "the sub-indices and limits, entries PDO-mappable in the PDO's direction")
 def own_mappings(ctx: Context) -> None:
-    every = pt.pdos(ctx, tpdo=True) + pt.pdos(ctx, tpdo=False)
+    every = pt.all_pdos(ctx)
     if not every:
         ctx.skip("the EDS has no PDO")
     for pdo in every:
@@ -82,7 +82,7 @@ def own_mappings(ctx: Context) -> None:
              "writable mapping, and the mapping reads back")
 def remap(ctx: Context) -> None:
     tested = []
-    for pdo in pt.pdos(ctx, tpdo=True) + pt.pdos(ctx, tpdo=False):
+    for pdo in pt.all_pdos(ctx):
         if not pt.dynamic(ctx, pdo):
             continue
         cfg = pt.read_config(ctx, pdo)
@@ -135,7 +135,7 @@ def map_every_mappable(ctx: Context) -> None:
        title="mapping a non-mappable entry is refused (0x06040041), more than 64 bits too "
              "(0x06040042)")
 def map_refused(ctx: Context) -> None:
-    pdo = next((p for p in pt.pdos(ctx, tpdo=True) + pt.pdos(ctx, tpdo=False)
+    pdo = next((p for p in pt.all_pdos(ctx)
                 if pt.remappable(ctx, p)), None)
     if pdo is None:
         ctx.skip("no PDO has a writable mapping (and its own mapping of PDO-mappable "
