@@ -22,9 +22,11 @@ except ImportError:  # replay only
 
 if atheris is not None:
     with atheris.instrument_imports():
-        from canola import EdsError, eds
+        from canola import EdsError
+        from canola.formats import eds
 else:
-    from canola import EdsError, eds
+    from canola import EdsError
+    from canola.formats import eds
 
 
 def one_input(data: bytes) -> None:

@@ -2,7 +2,7 @@
 
     build-py/venv/bin/python fuzz/fuzz_socketcand.py -max_total_time=30 fuzz/corpus/socketcand
 
-The same functions the hub runs on what clients send (canola.socketcand). Contract: any
+The same functions the hub runs on what clients send (canola.bus.socketcand). Contract: any
 bytes give elements or ProtocolError (a one-line message), never another exception; the
 rest :func:`split_elements` leaves is at most MAX_ELEMENT bytes; cutting the input in two
 (the stream arriving in pieces) gives the same elements; a command that parses formats
@@ -21,7 +21,7 @@ import atheris
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python" / "src"))
 
 with atheris.instrument_imports(include=["canola"]):
-    from canola.socketcand import (
+    from canola.bus.socketcand import (
         MAX_ELEMENT,
         ProtocolError,
         format_error,

@@ -35,7 +35,7 @@ SDO_TIMEOUT_MS = 5000 if VCAN else 1000
 os.environ[SESSION_VAR] = str(os.getpid())
 
 
-#: The environment that names a default bus (canola.buses.default_bus): the tests name
+#: The environment that names a default bus (canola.bus.open.default_bus): the tests name
 #: their buses themselves, whatever the developer's shell says.
 BUS_ENVIRONMENT = ("CANOLA_BUS", "CAN_INTERFACE", "CAN_CHANNEL", "CAN_CONFIG", "CAN_BITRATE")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from canola import eds
+from canola.formats import eds
 
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "managed_device.eds"

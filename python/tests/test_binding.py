@@ -10,10 +10,11 @@ import can
 import pytest
 
 import canola
-from canola import Device, _build_core, eds
+from canola import Device, _build_core
 from canola._c import lib
 from canola.core import SimBus
 from canola.errors import Error
+from canola.formats import eds
 
 PACKAGE = Path(canola.__file__).parent
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"

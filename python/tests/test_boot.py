@@ -9,10 +9,10 @@ import pytest
 from managed import DEVICE_TYPE, PRODUCT, VENDOR, model, write_dcf
 
 from canola import Device, Error, Master, SdoAbort
+from canola.boot_plan import Identity, Network, NetworkError, SlaveSpec
 from canola.core import SimBus
 from canola.manager import BootEvent, NetworkManager
 from canola.master import Frame
-from canola.network import Identity, Network, NetworkError, SlaveSpec
 
 PLANT = """
 nodes:

@@ -22,9 +22,9 @@ import canopen
 import pytest
 from cli_helpers import cli, one_line_error, repeating
 
+from canola.bus.hub import HubThread
 from canola.cli import build_parser
 from canola.decode import Decoder
-from canola.hub import HubThread
 
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "cli_device.eds"

@@ -20,7 +20,7 @@ import canopen
 import pytest
 from cli_helpers import cli, one_line_error
 
-from canola.buses import open_bus
+from canola.bus.open import open_bus
 
 pytestmark = [pytest.mark.slow, pytest.mark.realtime]  # processes: a hub, devices
 
@@ -128,7 +128,7 @@ def python_canopen(url: str) -> Iterator[canopen.RemoteNode]:
     the CLI's transfers cannot receive their last frames late (which python-canopen's SDO
     client would take for answers)."""
     # on canola's socketcand client (python-can's fails to join a busy hub on a busy
-    # machine: canola.socketcand_bus)
+    # machine: canola.bus.socketcand_bus)
     network = canopen.Network(open_bus(url=url))
     network.connect()
     try:
@@ -316,7 +316,7 @@ def test_device_errors(tmp_path: Path, net: tuple[str, list[Proc]]) -> None:
 
 CANOPEN_PEER = """
 import sys, canopen
-from canola.buses import open_bus
+from canola.bus.open import open_bus
 url, eds = sys.argv[1:3]
 net = canopen.Network(open_bus(url=url))  # canola's socketcand client: see python_canopen
 net.connect()

@@ -14,10 +14,11 @@ import pytest
 from conformance_fakes import FAKE_EDS, FakeNode
 
 import canola.conformance as cc
-from canola import Device, Error, eds
+from canola import Device, Error
 from canola.conformance import Options, Status
 from canola.conformance.entries import VARIABLE_TYPES
 from canola.core import SimBus
+from canola.formats import eds
 
 ROOT = Path(__file__).resolve().parents[2]
 INTEROP = Path(__file__).parent / "data" / "interop.eds"

@@ -25,9 +25,9 @@ from conftest import SDO_TIMEOUT_MS, VCAN
 
 import canola.conformance as cc
 from canola import Device
-from canola.buses import open_bus
+from canola.bus.hub import HubThread
+from canola.bus.open import open_bus
 from canola.conformance import Options, Status
-from canola.hub import HubThread
 
 ROOT = Path(__file__).resolve().parents[2]
 INTEROP = Path(__file__).parent / "data" / "interop.eds"

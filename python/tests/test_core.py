@@ -6,9 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from canola import Error, SdoAbort, eds
+from canola import Error, SdoAbort
 from canola.core import Od, SimBus
-from canola.odgen import GenerateOptions
+from canola.formats import eds
+from canola.formats.odgen import GenerateOptions
 from canola.simnode import Node
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"

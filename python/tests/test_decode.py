@@ -8,12 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from canola import eds
-from canola.candump import CandumpError, LogFrame, parse_line, read_log
+from canola.bus.candump import CandumpError, LogFrame, parse_line, read_log
 from canola.core import Od, SimBus
 from canola.decode import Decoder, emcy_text, format_value
 from canola.emcycodes import emcy_class, emcy_line, register_text
-from canola.odgen import GenerateOptions
+from canola.formats import eds
+from canola.formats.odgen import GenerateOptions
 from canola.simnode import Node
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"

@@ -14,7 +14,7 @@ import can
 import pytest
 from cli_helpers import cli, one_line_error
 
-from canola.hub import HubThread
+from canola.bus.hub import HubThread
 
 _channels = itertools.count()
 

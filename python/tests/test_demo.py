@@ -19,8 +19,7 @@ from collections.abc import Iterator
 import can
 import pytest
 
-from canola import concise, eds
-from canola.buses import open_bus
+from canola.bus.open import open_bus
 from canola.cli import main
 from canola.decode import Event
 from canola.demo.devices import DEVICES, configuration, eds_path
@@ -28,6 +27,7 @@ from canola.demo.network import SimNetwork, TraceFrame
 from canola.demo.report import STEPS
 from canola.demo.scenario import FAULTS, Scenario
 from canola.demo.trace import Trace
+from canola.formats import concise, eds
 
 PY = sys.executable
 

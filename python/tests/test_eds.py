@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from canola import EdsError, Error, eds
-from canola.eds import ObjectType
+from canola import EdsError, Error
+from canola.formats import eds
+from canola.formats.eds import ObjectType
 
 HEADER = """[FileInfo]
 FileName=t.eds

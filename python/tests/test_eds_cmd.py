@@ -18,7 +18,8 @@ from cli_helpers import cli, one_line_error
 from test_eds import VAR_1001, make
 from test_eds_pdo import mapping_file
 
-from canola import Device, eds
+from canola import Device
+from canola.formats import eds
 
 DATA = Path(__file__).parent / "data"
 EDS = DATA / "cli_device.eds"

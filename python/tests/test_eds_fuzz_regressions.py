@@ -3,7 +3,7 @@ and what parses survives write() and parse() again."""
 
 from __future__ import annotations
 
-from canola import eds
+from canola.formats import eds
 
 NEGATIVE_DATA_TYPE = """[FileInfo]
 FileName=x.eds

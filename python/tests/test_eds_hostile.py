@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 from test_eds import HEADER, RECORD_1018, VAR_1000, VAR_1001, make, optional_list
 
-from canola import EdsError, eds
+from canola import EdsError
 from canola.errors import Diagnostic
+from canola.formats import eds
 
 
 def _warnings(text: str | bytes, **kw: object) -> list[Diagnostic]:

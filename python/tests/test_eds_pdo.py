@@ -1,4 +1,4 @@
-"""PDO mapping objects in an EDS/DCF are checked against CiA 301 (canola._eds_pdo): every
+"""PDO mapping objects in an EDS/DCF are checked against CiA 301 (canola.formats._eds_pdo): every
 rule has a file that breaks it, and a file that keeps them all has no warning."""
 
 from __future__ import annotations
@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 from test_eds import make, optional_list
 
-from canola import EdsError, eds
+from canola import EdsError
+from canola.formats import eds
 
 APP = """[2000]
 ParameterName=Speed

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from canola import values
+from canola.formats import values
 from canola.gateway import GatewayError, ParseError, parse_line
 from canola.gateway.formats import TYPES, format_value, parse_value
 from canola.gateway.parser import LSS_COMMANDS

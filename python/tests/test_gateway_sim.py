@@ -15,8 +15,9 @@ from pathlib import Path
 import pytest
 from gateway_helpers import Client, run, serving
 
-from canola import Device, Master, eds
+from canola import Device, Master
 from canola.core import SimBus
+from canola.formats import eds
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import BootUp, Emcy, Event, Heartbeat
 from canola.gateway.masterbackend import MasterBackend

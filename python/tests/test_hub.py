@@ -12,9 +12,9 @@ import can
 import pytest
 from cli_helpers import cli
 
-from canola import hub as hub_module
-from canola.hub import Hub, HubThread, exposed_addresses
-from canola.socketcand import Frame, parse_server_element, split_elements
+from canola.bus import hub as hub_module
+from canola.bus.hub import Hub, HubThread, exposed_addresses
+from canola.bus.socketcand import Frame, parse_server_element, split_elements
 
 pytestmark = pytest.mark.realtime
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from cli_helpers import cli
 
-from canola.hub import HubThread
+from canola.bus.hub import HubThread
 
 ROOT = Path(__file__).resolve().parents[2]
 NODE_BIN = Path(os.environ.get("CANOLA_NODE_BIN", ROOT / "build" / "canola-node"))

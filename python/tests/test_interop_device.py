@@ -20,7 +20,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 from conftest import SDO_TIMEOUT_MS, wait_until
 
 from canola import Device
-from canola.values import TimeOfDay
+from canola.formats.values import TimeOfDay
 
 pytestmark = [pytest.mark.realtime, pytest.mark.vcan]
 

@@ -17,11 +17,12 @@ import pytest
 from durand.scheduler import SyncScheduler, get_scheduler, set_scheduler
 from durand_peer import SimBusNetwork, device, virtual_time
 
-from canola import Master, SdoAbort, concise
+from canola import Master, SdoAbort
+from canola.boot_plan import Network, SlaveSpec
 from canola.core import SimBus
+from canola.formats import concise
 from canola.lss import LssAddress
 from canola.master import EmcyEvent, Frame, HeartbeatEvent
-from canola.network import Network, SlaveSpec
 
 PEER = 0x22
 

@@ -12,9 +12,9 @@ from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model
 
 from canola import Device, Error, Master
+from canola.boot_plan import Identity, Network, SlaveSpec
 from canola.core import SimBus
 from canola.lss import UNCONFIGURED, FastscanTimeLimitError, LssAddress, LssError
-from canola.network import Identity, Network, SlaveSpec
 
 SERIALS = (0x300, 0x100, 0x200)
 

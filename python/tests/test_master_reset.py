@@ -16,8 +16,8 @@ from managed import VENDOR, model
 from test_gateway_master import serve
 
 from canola import Device, Master
+from canola.boot_plan import Identity, Network, SlaveSpec
 from canola.core import SimBus
-from canola.network import Identity, Network, SlaveSpec
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 MASTER = 1

@@ -8,9 +8,10 @@ from pathlib import Path
 import pytest
 from managed import DEVICE_TYPE, EDS, PRODUCT, REVISION, VENDOR, write_dcf
 
-from canola import concise, eds, network
+from canola import boot_plan as network
+from canola.boot_plan import Identity, NetworkError
 from canola.errors import Error
-from canola.network import Identity, NetworkError
+from canola.formats import concise, eds
 
 
 def test_yaml_network(tmp_path: Path) -> None:

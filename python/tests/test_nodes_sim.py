@@ -12,8 +12,8 @@ import pytest
 import canola
 from canola import Device, Error, Master, SdoAbort, SdoTimeout
 from canola.core import SimBus
+from canola.formats.values import TimeOfDay
 from canola.master import EmcyEvent, Frame, HeartbeatEvent
-from canola.values import TimeOfDay
 
 DATA = Path(__file__).parent / "data"
 INTEROP = DATA / "interop.eds"

@@ -18,7 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from canola import EdsError, eds, odgen
+from canola import EdsError
+from canola.formats import eds, odgen
 
 HERE = Path(__file__).resolve().parent
 GOLDEN = HERE / "golden"

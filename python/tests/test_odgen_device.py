@@ -20,9 +20,10 @@ from pathlib import Path
 
 import pytest
 
-from canola import EdsError, SdoAbort, eds, odgen
+from canola import EdsError, SdoAbort
 from canola._build_core import _CONFIG
 from canola.core import Od, SimBus
+from canola.formats import eds, odgen
 from canola.simnode import Node
 
 HERE = Path(__file__).resolve().parent

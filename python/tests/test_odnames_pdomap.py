@@ -9,8 +9,8 @@ from pathlib import Path
 import canopen
 import pytest
 
-from canola import eds
 from canola.errors import SdoAbort
+from canola.formats import eds
 from canola.odnames import EntryError, entry_name, find_entry, parse_address, value_text
 from canola.pdomap import (
     Mapped,

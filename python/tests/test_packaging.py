@@ -132,7 +132,24 @@ def test_wheel_installs_and_runs_the_demo(tmp_path: Path) -> None:
         {r.name: Version(p.split("==")[1]) for r, p in zip(reqs, pins, strict=True)}
     demo(oldest)
     demo(oldest, "--bus", f"virtual://packaging-{os.getpid()}", "--time-scale", "3")
-    yaml_check = ("from canola.network import load_yaml\n"
+    yaml_check = ("from canola.boot_plan import load_yaml\n"
                   "net = load_yaml('nodes:\\n  - {id: 5, heartbeat_ms: 100}\\n')\n"
                   "assert [(s.node_id, s.heartbeat_ms) for s in net.slaves] == [(5, 100)]\n")
     run([str(oldest / "python"), "-c", yaml_check], cwd=tmp_path, what="load_yaml (pyyaml)")
+
+
+def test_the_layout_is_the_one_the_architecture_page_draws() -> None:
+    """docs/architecture.md's map of the package: the modules and folders it names exist,
+    and every module of bus/ and formats/ is on it (a new one goes on the map too)."""
+    page = (PYTHON_DIR.parent / "docs" / "architecture.md").read_text()
+    drawing = page.split("## The Python package", 1)[1].split("```")[1]
+    package = PYTHON_DIR / "src" / "canola"
+    for folder in re.findall(r"(?<![\w/.])(\w+)/(?=[\s,])", drawing):
+        assert next(package.rglob(f"{folder}/__init__.py"), None) is not None, folder
+    for module in re.findall(r"(?<![\w/.*])(\w+\.py)\b", drawing):
+        assert next(package.rglob(module), None) is not None, module
+    for folder in ("bus", "formats"):
+        listed = re.search(folder + r"/\s+(.*?)\n \S", drawing, re.S)
+        assert listed is not None, folder
+        modules = {p.name for p in (package / folder).glob("*.py") if p.name != "__init__.py"}
+        assert modules <= set(re.findall(r"\w+\.py", listed.group(1))), folder

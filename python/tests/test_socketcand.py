@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from canola.socketcand import (
+from canola.bus.socketcand import (
     MAX_ELEMENT,
     Frame,
     ProtocolError,

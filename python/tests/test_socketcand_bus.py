@@ -1,4 +1,4 @@
-"""canola's socketcand client (canola.buses.open_bus of a socketcand:// URL) against a
+"""canola's socketcand client (canola.bus.open.open_bus of a socketcand:// URL) against a
 scripted server: the stream read as a stream, whatever the TCP segments."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from collections.abc import Callable, Iterator
 import can
 import pytest
 
-from canola.buses import BusError, connection_lost, open_bus
+from canola.bus.open import BusError, connection_lost, open_bus
 
 Script = Callable[[socket.socket], None]
 

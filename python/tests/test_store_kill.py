@@ -34,10 +34,10 @@ from pathlib import Path
 import can
 import pytest
 
-from canola import eds
+from canola.bus.hub import HubThread
 from canola.core import SimBus
 from canola.device import Device
-from canola.hub import HubThread
+from canola.formats import eds
 from canola.master import Master
 
 pytestmark = [pytest.mark.slow, pytest.mark.realtime]
@@ -47,8 +47,8 @@ LOOPS = int(os.environ.get("CANOLA_STORE_LOOPS", "200"))
 
 DRIVER = textwrap.dedent("""
     import os, sys, time
-    from canola import eds
-    from canola.buses import open_bus
+    from canola.formats import eds
+    from canola.bus.open import open_bus
     from canola.device import Device
     model = eds.parse(sys.argv[1])
     for line in sys.stdin:

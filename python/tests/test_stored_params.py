@@ -18,9 +18,9 @@ from pathlib import Path
 
 import pytest
 
+from canola.bus.hub import HubThread
 from canola.core import SimBus
 from canola.device import Device, StoreRejectedEvent
-from canola.hub import HubThread
 
 EDS = Path(__file__).parent / "data" / "cli_device.eds"
 SAVE = 0x65766173  # "save"

@@ -7,7 +7,7 @@ import math
 import pytest
 
 from canola import Error
-from canola.values import (
+from canola.formats.values import (
     CIA309_NAMES,
     TimeOfDay,
     ValueFormatError,

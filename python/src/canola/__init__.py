@@ -21,4 +21,6 @@ def __getattr__(name: str) -> Any:
               "SdoTimeout": "canola.master"}.get(name)
     if module is not None:
         return getattr(importlib.import_module(module), name)
+    if name in ("eds", "values", "odgen"):  # canola.eds etc. as the docs use them
+        return importlib.import_module(f"canola.formats.{name}")
     raise AttributeError(f"module 'canola' has no attribute {name!r}")

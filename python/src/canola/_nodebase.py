@@ -9,12 +9,12 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from canola import eds, values
 from canola._c import ffi, lib
 from canola._engine import Bus, Engine, Frame
 from canola.core import NMT_CMDS, Od
 from canola.errors import Error, SdoAbort
-from canola.odgen import GenerateOptions
+from canola.formats import eds, values
+from canola.formats.odgen import GenerateOptions
 
 __all__ = ["STATE_NAMES", "EmcyEvent", "Frame", "HeartbeatEvent", "LocalOd", "NodeBase",
            "StoreRejectedEvent"]
@@ -292,7 +292,7 @@ class NodeBase:
 
 class LocalOd:
     """The node's own dictionary from the application side: ``od[index][sub]`` and
-    ``od[index, sub]`` read and write typed values (see :mod:`canola.values`), without
+    ``od[index, sub]`` read and write typed values (see :mod:`canola.formats.values`), without
     access rights (the application may set read-only entries) but with limits and the
     node's service rules; a write to a mapped object triggers event-driven TPDOs.
     Failures raise :class:`~canola.errors.SdoAbort` with the CiA code."""

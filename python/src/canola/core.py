@@ -3,9 +3,9 @@
 Built on the cffi extension ``canola._core`` (through ``canola._c``). Everything runs on
 a :class:`SimBus` with a virtual clock; nothing depends on wall time.
 
-- :meth:`Od.from_eds` turns a parsed EDS/DCF (:func:`canola.eds.parse`) into an entry
+- :meth:`Od.from_eds` turns a parsed EDS/DCF (:func:`canola.formats.eds.parse`) into an entry
   table in C memory, with the type / access / power-on value mapping of
-  :mod:`canola.odgen`.
+  :mod:`canola.formats.odgen`.
 - :class:`SimBus` is the simulated bus; ``trace`` collects every delivered frame as a
   candump line (``(0.001000) sim0 701#00``).
 - the nodes on it: :class:`canola.Device`, :class:`canola.Master` and the bare
@@ -19,12 +19,12 @@ import sys
 from dataclasses import dataclass
 from typing import Any
 
-from canola import eds
 from canola._c import check as _check
 from canola._c import ffi, lib
-from canola.datatypes import DATA_TYPES
 from canola.errors import Error
-from canola.odgen import (
+from canola.formats import eds
+from canola.formats.datatypes import DATA_TYPES
+from canola.formats.odgen import (
     _BOOL,
     _DOMAIN,
     _OSTRING,
@@ -91,7 +91,7 @@ class Od:
     @classmethod
     def from_eds(cls, model: eds.ObjectDictionary, node_id: int | None = None,
                  options: GenerateOptions | None = None) -> Od:
-        """Build the table of ``model`` as :func:`canola.odgen.generate` would in C.
+        """Build the table of ``model`` as :func:`canola.formats.odgen.generate` would in C.
 
         ``node_id`` is the node-ID the dictionary is meant for (default: the DCF's); the
         ``$NODEID`` part of power-on values is added by the core at reset, from the node's

@@ -17,11 +17,11 @@ from typing import Any
 from canola import pdomap
 from canola.emcycodes import emcy_class, emcy_line, emcy_text, register_text
 from canola.errors import ABORT_TEXT
+from canola.formats.values import TIME_EPOCH, TimeOfDay, Value
+from canola.formats.values import untyped_text as format_value
 from canola.nodedicts import NodeDictionaries
 from canola.odnames import entry_name, value_text
 from canola.pdomap import Pdo, pdos_from_od
-from canola.values import TIME_EPOCH, TimeOfDay, Value
-from canola.values import untyped_text as format_value
 
 __all__ = ["STATE_NAMES", "Decoder", "Event", "emcy_text", "format_value"]
 

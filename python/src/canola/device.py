@@ -16,19 +16,19 @@ from __future__ import annotations
 
 import os
 
-from canola import eds
 from canola._c import check, lib
 from canola._engine import Bus
 from canola._nodebase import NodeBase, StoreRejectedEvent, load_od, nmt_command
 from canola.errors import Error
-from canola.odgen import GenerateOptions
+from canola.formats import eds
+from canola.formats.odgen import GenerateOptions
 
 __all__ = ["Device", "StoreRejectedEvent"]
 
 
 class Device(NodeBase):
     """A device with the dictionary of ``eds_or_dcf`` (a path or a parsed
-    :class:`canola.eds.ObjectDictionary`) as node ``node_id`` on ``bus``.
+    :class:`canola.formats.eds.ObjectDictionary`) as node ``node_id`` on ``bus``.
 
     ``store_dir``: a folder where 0x1010 "save" stores parameters (files comm.params and
     app.params, written atomically); they are loaded at every reset. ``string_size`` is the

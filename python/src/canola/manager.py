@@ -1,6 +1,6 @@
 """The CANopen manager (CiA 302-2) from Python: boot a network from its description.
 
-    net = canola.network.load("plant.yaml")          # or network.from_dcfs([...])
+    net = canola.boot_plan.load("plant.yaml")          # or network.from_dcfs([...])
     mgr = master.boot(net, on_event=print)           # blocks until the boot settled
     if mgr.started: ...
     for status in mgr.slaves(): print(status)        # node, state, CiA 302 reason
@@ -28,8 +28,8 @@ from canola._c import check as _check
 from canola._c import ffi, lib
 from canola._channels import SdoChannels, unset
 from canola._waiting import Waiter
+from canola.boot_plan import Network
 from canola.errors import ABORT_TEXT, Error
-from canola.network import Network
 
 __all__ = ["BootEvent", "NetworkManager", "SlaveStatus", "boot"]
 
@@ -157,7 +157,7 @@ class NetworkManager:
 
     def __init__(self, channels: SdoChannels, network: Network) -> None:
         if not isinstance(network, Network):
-            raise Error(f"a canola.network.Network is needed, not {type(network).__name__}")
+            raise Error(f"a canola.boot_plan.Network is needed, not {type(network).__name__}")
         own = network.slave(channels.node_id)
         if own is not None:
             raise Error(f"{network.source}: node {own.node_id} is the master itself")

@@ -43,7 +43,6 @@ from collections.abc import Callable, Sequence
 from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from canola import eds, values
 from canola._c import check, ffi, lib
 from canola._channels import SdoChannels, Transfer
 from canola._engine import Bus, Engine, Frame, _Timer
@@ -57,13 +56,14 @@ from canola._nodebase import (
 )
 from canola.core import SimBus
 from canola.errors import Error, SdoAbort
-from canola.odgen import GenerateOptions
+from canola.formats import eds, values
+from canola.formats.odgen import GenerateOptions
 
 if TYPE_CHECKING:  # loaded on first use (the command line starts faster without them)
+    from canola.boot_plan import Network
     from canola.flash import FlashResult
     from canola.lss import Lss
     from canola.manager import BootEvent, NetworkManager
-    from canola.network import Network
 
 __all__ = ["MASTER_EDS", "EmcyEvent", "Frame", "HeartbeatEvent", "Master", "SdoClient",
            "SdoTimeout"]
@@ -158,12 +158,12 @@ class SdoClient:
                   self._answer_ms(answer_timeout))
 
     def read(self, index: int, sub: int, data_type: str | int, **kw: Any) -> values.Value:
-        """upload + :func:`canola.values.decode` as ``data_type`` (e.g. "u16", "vs")."""
+        """upload + :func:`canola.formats.values.decode` as ``data_type`` (e.g. "u16", "vs")."""
         return values.decode(data_type, self.upload(index, sub, **kw))
 
     def write(self, index: int, sub: int, data_type: str | int, value: values.Value,
               **kw: Any) -> None:
-        """:func:`canola.values.encode` as ``data_type`` + download."""
+        """:func:`canola.formats.values.encode` as ``data_type`` + download."""
         self.download(index, sub, values.encode(data_type, value), **kw)
 
     # ---- asyncio
@@ -536,11 +536,11 @@ class Master(NodeBase):
              *, on_event: Callable[[BootEvent], None] | None = None, wait: bool = True,
              timeout: float | None = None) -> NetworkManager:
         """Boot the network (CiA 302-2) described by ``network``: a
-        :class:`canola.network.Network`, a YAML file, or DCF files. Blocks until the boot
+        :class:`canola.boot_plan.Network`, a YAML file, or DCF files. Blocks until the boot
         settled (unless ``wait=False``) and returns the manager: ``started``, ``slaves()``,
         ``events``. ``on_event(BootEvent)`` for every report. See :mod:`canola.manager`."""
+        from canola import boot_plan as net  # noqa: PLC0415
         from canola import manager  # noqa: PLC0415 -- on first use
-        from canola import network as net  # noqa: PLC0415
 
         if not isinstance(network, net.Network):
             paths = [network] if isinstance(network, str | os.PathLike) else list(network)

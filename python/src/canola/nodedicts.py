@@ -14,8 +14,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from canola import eds
 from canola.errors import Error
+from canola.formats import eds
 
 __all__ = ["NodeDictionaries", "parse_spec"]
 

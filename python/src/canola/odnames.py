@@ -18,9 +18,9 @@ from __future__ import annotations
 import difflib
 from collections.abc import Callable
 
-from canola import values
-from canola.eds import Object, ObjectDictionary, ObjectType, Variable
 from canola.errors import Error
+from canola.formats import values
+from canola.formats.eds import Object, ObjectDictionary, ObjectType, Variable
 
 __all__ = ["EntryError", "entry_name", "find_entry", "parse_address", "value_text"]
 

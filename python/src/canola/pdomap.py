@@ -18,10 +18,10 @@ import re
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from canola import values
-from canola.datatypes import DATA_TYPES, type_bits
-from canola.eds import ObjectDictionary, Variable
 from canola.errors import Error, SdoAbort
+from canola.formats import values
+from canola.formats.datatypes import DATA_TYPES, type_bits
+from canola.formats.eds import ObjectDictionary, Variable
 from canola.odnames import entry_name, find_entry, parse_address
 
 __all__ = ["Mapped", "Pdo", "PdoError", "configure_pdo", "decode", "describe",

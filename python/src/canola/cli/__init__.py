@@ -33,7 +33,7 @@ import logging
 import sys
 from collections.abc import Callable, Sequence
 
-from canola import __version__, odgen
+from canola import __version__
 from canola.cli import (
     boot_cmd,
     bus_cmd,
@@ -54,6 +54,7 @@ from canola.cli import (
 )
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
+from canola.formats import odgen
 
 __all__ = ["build_parser", "main"]
 

@@ -18,7 +18,7 @@ from canola.cli.common import (
 )
 
 if TYPE_CHECKING:
-    from canola.network import Network
+    from canola.boot_plan import Network
 
 #: Longest one slave's boot may take, per SDO time-out (reads, DCF records, retries).
 _STEPS_PER_SLAVE = 16
@@ -55,7 +55,7 @@ def _limit(args: argparse.Namespace, network: Network) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
-    from canola.network import NetworkError, from_files  # noqa: PLC0415 -- on first use
+    from canola.boot_plan import NetworkError, from_files  # noqa: PLC0415 -- on first use
 
     try:
         network = from_files(args.files, node_id_of_master=args.master_id)

@@ -1,11 +1,11 @@
-"""``canola bus serve``: the software CAN bus (a socketcand hub, :mod:`canola.hub`)."""
+"""``canola bus serve``: the software CAN bus (a socketcand hub, :mod:`canola.bus.hub`)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
-from canola import hub
+from canola.bus import hub
 from canola.cli.common import CliError, Parser
 
 

@@ -13,8 +13,8 @@ from typing import Any, Literal, NoReturn, overload
 
 import can
 
-from canola.buses import BUS_ENV, BusError, NoBusError, connection_lost, open_bus
-from canola.candump import LogFrame
+from canola.bus.candump import LogFrame
+from canola.bus.open import BUS_ENV, BusError, NoBusError, connection_lost, open_bus
 from canola.decode import Decoder
 from canola.errors import EdsError, Error, SdoAbort
 from canola.master import Master, SdoTimeout
@@ -108,7 +108,7 @@ def positive_ms(text: str) -> int:
 
 def add_bus_options(parser: argparse.ArgumentParser) -> None:
     """``--iface IFACE`` | ``--bus URL``; without either the default bus
-    (:func:`canola.buses.default_bus`: ``CANOLA_BUS``, else python-can's configuration)."""
+    (:func:`canola.bus.open.default_bus`: ``CANOLA_BUS``, else python-can's configuration)."""
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
     group.add_argument("--bus", metavar="URL",

@@ -6,7 +6,6 @@ import argparse
 import os
 import sys
 
-from canola import eds
 from canola.cli.common import (
     CliError,
     Parser,
@@ -19,6 +18,7 @@ from canola.cli.common import (
 from canola.conformance.options import Options
 from canola.conformance.registry import GROUPS
 from canola.errors import Error
+from canola.formats import eds
 
 
 def _seconds(text: str) -> float:

@@ -13,7 +13,7 @@ from types import FrameType
 
 from canola._engine import Frame
 from canola._nodebase import EmcyEvent
-from canola.buses import connection_lost
+from canola.bus.open import connection_lost
 from canola.cli.common import (
     CliError,
     Parser,

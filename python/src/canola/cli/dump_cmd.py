@@ -9,7 +9,7 @@ import sys
 import time
 from collections.abc import Iterator
 
-from canola.candump import CandumpError, LogFrame, read_log
+from canola.bus.candump import CandumpError, LogFrame, read_log
 from canola.cli.common import (
     CliError,
     Parser,

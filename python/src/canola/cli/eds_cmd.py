@@ -1,5 +1,5 @@
 """``canola eds``: check, show, make a DCF from, and compare EDS/DCF files (the library
-behind it: :mod:`canola.edstools`).
+behind it: :mod:`canola.formats.edstools`).
 
     canola eds check FILE... [--strict]          CiA 306 problems, file:line: [section] key:
     canola eds show FILE [INDEX[-LAST]] [--name TEXT]              the dictionary as a table
@@ -15,7 +15,6 @@ import os
 import sys
 from pathlib import Path
 
-from canola import eds
 from canola.cli.common import (
     CliError,
     Parser,
@@ -27,11 +26,12 @@ from canola.cli.common import (
     master_from_args,
     node_id,
 )
-from canola.edstools.check import check_file
-from canola.edstools.dcf import DcfValueError, make_dcf, parse_setting
-from canola.edstools.diff import Difference, diff, diff_live
-from canola.edstools.table import format_rows, rows
 from canola.errors import SdoAbort
+from canola.formats import eds
+from canola.formats.edstools.check import check_file
+from canola.formats.edstools.dcf import DcfValueError, make_dcf, parse_setting
+from canola.formats.edstools.diff import Difference, diff, diff_live
+from canola.formats.edstools.table import format_rows, rows
 
 
 def _index_range(text: str) -> tuple[int, int]:

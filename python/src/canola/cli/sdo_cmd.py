@@ -18,7 +18,6 @@ import os
 import sys
 from collections.abc import Iterator
 
-from canola import values
 from canola.cli.common import (
     CliError,
     Parser,
@@ -34,8 +33,9 @@ from canola.cli.common import (
     positive_ms,
 )
 from canola.cli.progress import SdoProgress
-from canola.eds import Variable
 from canola.errors import SdoAbort
+from canola.formats import values
+from canola.formats.eds import Variable
 from canola.master import SdoTimeout
 from canola.odnames import EntryError, entry_name, find_entry, parse_address, value_text
 

@@ -17,7 +17,6 @@ from collections.abc import Callable
 
 import can
 
-from canola import values
 from canola.cli.common import (
     CliError,
     Parser,
@@ -27,6 +26,7 @@ from canola.cli.common import (
     int_in_range,
     positive_ms,
 )
+from canola.formats import values
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:

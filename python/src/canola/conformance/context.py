@@ -14,13 +14,14 @@ from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from typing import NoReturn
 
-from canola import SdoAbort, eds
+from canola import SdoAbort
 from canola.conformance.entries import describe
 from canola.conformance.link import Link
 from canola.conformance.options import Options
 from canola.conformance.rawsdo import NoAnswerError, RawSdo, SdoProtocolError
 from canola.conformance.results import Finding
 from canola.errors import ABORT_TEXT, Error
+from canola.formats import eds
 
 __all__ = ["NMT_CS", "STATES", "CheckEnded", "Context", "Options", "Skipped", "abort_text",
            "outcome"]

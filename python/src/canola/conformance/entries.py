@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from canola import eds, values
-from canola.datatypes import DATA_TYPES, INTEGER_TYPES
+from canola.formats import eds, values
+from canola.formats.datatypes import DATA_TYPES, INTEGER_TYPES
 
 __all__ = ["ACTING", "VARIABLE_TYPES", "another_number", "another_value", "describe",
            "fixed_size", "integer_range", "mappable", "plain_rw", "readable", "value_text",

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import partial
 
-from canola import SdoAbort, eds
+from canola import SdoAbort
 from canola.conformance.context import Context
 from canola.conformance.entries import (
     another_value,
@@ -20,6 +20,7 @@ from canola.conformance.entries import (
     writable,
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
+from canola.formats import eds
 
 __all__ = [
     "INVALID",

@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from canola import Master, SdoAbort, eds
+from canola import Master, SdoAbort
 from canola.conformance.context import STATES, CheckEnded, Context, Skipped, outcome
 from canola.conformance.link import Link
 from canola.conformance.options import Options
@@ -19,6 +19,7 @@ from canola.conformance.registry import Check, select
 from canola.conformance.results import Report, Result, Status
 from canola.core import SimBus
 from canola.errors import Error
+from canola.formats import eds
 
 __all__ = ["Progress", "run"]
 

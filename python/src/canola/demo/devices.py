@@ -20,10 +20,10 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from canola import eds
-from canola.concise import Record, pdo_order
+from canola.boot_plan import Identity, identity_of
 from canola.device import Device
-from canola.network import Identity, identity_of
+from canola.formats import eds
+from canola.formats.concise import Record, pdo_order
 
 __all__ = ["DEVICES", "DeviceSpec", "Mapped", "attach_application", "configuration",
            "eds_path", "identity"]

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import can
 
-from canola.candump import parse_line
+from canola.bus.candump import parse_line
 from canola.core import SimBus
 from canola.errors import Error
 

@@ -34,7 +34,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from canola import concise
+from canola.boot_plan import Network as NetworkDescription
+from canola.boot_plan import SlaveSpec
 from canola.decode import emcy_text
 from canola.demo.devices import (
     DEVICES,
@@ -55,10 +56,9 @@ from canola.demo.report import STEPS, Step
 from canola.demo.trace import Trace
 from canola.device import Device
 from canola.errors import Error
+from canola.formats import concise
 from canola.manager import NetworkManager
 from canola.master import EmcyEvent, HeartbeatEvent, Master
-from canola.network import Network as NetworkDescription
-from canola.network import SlaveSpec
 
 __all__ = ["FAULTS", "Faults", "Scenario"]
 

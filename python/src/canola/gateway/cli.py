@@ -7,7 +7,7 @@
 ``--listen`` is ``tcp:HOST:PORT`` (default tcp:127.0.0.1:6000, loopback only),
 ``unix:PATH`` or ``stdio``. ``--simulate EDS`` runs the gateway's master and the devices
 named by ``--sim-node`` on a simulated bus (no hardware; for trying the protocol out).
-Without a bus option the gateway runs on the default bus (:func:`canola.buses.default_bus`).
+Without a bus option the gateway runs on the default bus (:func:`canola.bus.open.default_bus`).
 The same options work as ``python -m canola.gateway``. SIGINT and SIGTERM stop it at once,
 whatever its clients are doing (their transfers are aborted).
 """
@@ -106,9 +106,9 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
 
 
 def _simulated(args: argparse.Namespace) -> tuple[Backend, asyncio.Task[None] | None]:
-    from canola import eds  # noqa: PLC0415
     from canola.core import SimBus  # noqa: PLC0415 -- the simulator only when asked for
     from canola.device import Device  # noqa: PLC0415
+    from canola.formats import eds  # noqa: PLC0415
     from canola.gateway.masterbackend import MasterBackend  # noqa: PLC0415
     from canola.master import Master  # noqa: PLC0415
 

@@ -238,7 +238,7 @@ class MasterBackend:
 
 def open_master(args: argparse.Namespace) -> MasterBackend:
     """The gateway's master on ``--iface`` / ``--bus`` (``--node-id``, ``--eds``)."""
-    from canola.buses import open_bus  # noqa: PLC0415 -- python-can only when used
+    from canola.bus.open import open_bus  # noqa: PLC0415 -- python-can only when used
 
     bus = open_bus(iface=args.iface, url=args.bus)
     try:

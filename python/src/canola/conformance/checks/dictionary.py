@@ -7,7 +7,7 @@ from __future__ import annotations
 from functools import partial
 from itertools import chain
 
-from canola import SdoAbort, eds, values
+from canola import SdoAbort
 from canola.conformance.context import Context, outcome
 from canola.conformance.entries import (
     describe,
@@ -19,6 +19,7 @@ from canola.conformance.entries import (
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
+from canola.formats import eds, values
 
 _MANDATORY = ((0x1000, 0), (0x1001, 0), (0x1018, 0), (0x1018, 1))
 _NOT_THERE = (0x06020000, 0x06090011)

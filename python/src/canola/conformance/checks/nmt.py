@@ -9,7 +9,6 @@ from collections.abc import Callable
 from functools import partial
 from itertools import pairwise
 
-from canola import eds, values
 from canola.conformance import pdo_tools as pt
 from canola.conformance.context import STATES, Context, abort_text
 from canola.conformance.entries import (
@@ -21,6 +20,7 @@ from canola.conformance.entries import (
     writable,
 )
 from canola.conformance.registry import check
+from canola.formats import eds, values
 
 __all__ = ["heartbeat", "reset"]
 

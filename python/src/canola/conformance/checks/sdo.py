@@ -8,7 +8,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import TypeVar
 
-from canola import SdoAbort, eds
+from canola import SdoAbort
 from canola.conformance.context import Context, abort_text, outcome
 from canola.conformance.entries import (
     VARIABLE_TYPES,
@@ -20,6 +20,7 @@ from canola.conformance.entries import (
 )
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
+from canola.formats import eds
 
 #: Value lengths around the frame boundaries: expedited (4), one segment (7), two (14).
 SIZES = (1, 4, 5, 7, 8, 14, 15, 21, 22)

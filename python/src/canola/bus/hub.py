@@ -22,7 +22,7 @@ Robustness rules:
   buffer are fixed (``write_buffer`` bytes each), so a client costs at most about
   ``(queue_limit + reply_limit) * MAX_ELEMENT + 2 * write_buffer`` bytes of memory.
 - Input is read in bounded chunks and an element is at most
-  :data:`canola.socketcand.MAX_ELEMENT` characters; after each chunk the hub lets the
+  :data:`canola.bus.socketcand.MAX_ELEMENT` characters; after each chunk the hub lets the
   other clients run, and after each command whose reply finds the queue beyond
   ``queue_limit`` it lets the replies go out first: a client that reads its replies is
   never disconnected, however many commands it sends at once.
@@ -47,7 +47,7 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 
-from canola.socketcand import (
+from canola.bus.socketcand import (
     Frame,
     ProtocolError,
     format_error,
@@ -66,7 +66,7 @@ DEFAULT_PORT = 29536
 #: Delay between the ``< ok >`` of ``< rawmode >`` and the first frame: python-can's client
 #: reads the ok with a single recv() and compares it whole, so a frame must not share its
 #: segment. Only a mitigation: a client run later than this still fails (canola's own
-#: client, :mod:`canola.socketcand_bus`, reads a stream and needs no delay).
+#: client, :mod:`canola.bus.socketcand_bus`, reads a stream and needs no delay).
 RAW_SETTLE_S = 0.05
 
 

@@ -28,8 +28,8 @@ from typing import Any
 
 import can
 
+from canola.bus.socketcand_bus import SocketcandBus
 from canola.errors import Error
-from canola.socketcand_bus import SocketcandBus
 
 __all__ = ["BUS_ENV", "BusError", "NoBusError", "connection_lost", "default_bus", "open_bus",
            "parse_bus_url"]

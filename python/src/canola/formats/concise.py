@@ -14,9 +14,9 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterable
 
-from canola import eds, values
-from canola.datatypes import DATA_TYPES, INTEGER_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
+from canola.formats import eds, values
+from canola.formats.datatypes import DATA_TYPES, INTEGER_TYPES, NumberError, fit_signed, parse_value
 
 __all__ = ["Record", "build", "from_dcf", "parse", "pdo_order", "wire"]
 

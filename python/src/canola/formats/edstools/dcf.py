@@ -12,9 +12,10 @@ from __future__ import annotations
 import copy
 from collections.abc import Mapping
 
-from canola import eds
-from canola.concise import wire
-from canola.datatypes import (
+from canola.errors import Error
+from canola.formats import eds
+from canola.formats.concise import wire
+from canola.formats.datatypes import (
     DATA_TYPES,
     INTEGER_TYPES,
     REAL_TYPES,
@@ -22,7 +23,6 @@ from canola.datatypes import (
     fit_signed,
     parse_value,
 )
-from canola.errors import Error
 
 __all__ = ["DcfValueError", "make_dcf", "parse_setting"]
 

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from canola.datatypes import DATA_TYPES, type_bits
 from canola.errors import Diagnostic
+from canola.formats.datatypes import DATA_TYPES, type_bits
 
 if TYPE_CHECKING:
-    from canola.eds import Object, ObjectDictionary, Variable
+    from canola.formats.eds import Object, ObjectDictionary, Variable
 
 __all__ = ["mapping_problems"]
 

@@ -12,11 +12,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
-from canola import eds, values
-from canola.concise import wire
-from canola.datatypes import DATA_TYPES
-from canola.edstools.table import type_name
 from canola.errors import SdoAbort
+from canola.formats import eds, values
+from canola.formats.concise import wire
+from canola.formats.datatypes import DATA_TYPES
+from canola.formats.edstools.table import type_name
 
 __all__ = ["Difference", "diff", "diff_live"]
 

@@ -1,5 +1,5 @@
 """canola's socketcand client: a python-can bus on a socketcand server (``canola bus serve``
-or the daemon) in raw mode, for the buses :func:`canola.buses.open_bus` opens.
+or the daemon) in raw mode, for the buses :func:`canola.bus.open.open_bus` opens.
 
 It reads the server's stream as a stream: the handshake's ``< ok >`` and the frames that
 follow it may arrive in one TCP segment (a server sends frames as soon as the channel is
@@ -20,7 +20,7 @@ from typing import Any
 
 import can
 
-from canola.socketcand import (
+from canola.bus.socketcand import (
     Frame,
     ProtocolError,
     format_send,

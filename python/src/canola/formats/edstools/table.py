@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from canola import eds
-from canola.datatypes import DATA_TYPES
+from canola.formats import eds
+from canola.formats.datatypes import DATA_TYPES
 
 __all__ = ["Row", "format_rows", "rows", "type_name"]
 

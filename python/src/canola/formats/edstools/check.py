@@ -1,4 +1,4 @@
-"""An EDS/DCF linter: the problems :func:`canola.eds.parse` finds, each a warning (the file
+"""An EDS/DCF linter: the problems :func:`canola.formats.eds.parse` finds, each a warning (the file
 gives a usable dictionary but deviates from CiA 306/301) or an error (the file cannot be
 used: the parser refuses it, or it cannot be read). ``strict`` makes every warning an
 error, as ``eds.parse(strict=True)`` refuses every deviation.
@@ -13,8 +13,8 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from canola import eds
 from canola.errors import Diagnostic, EdsError
+from canola.formats import eds
 
 __all__ = ["Finding", "check_file"]
 

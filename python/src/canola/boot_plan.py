@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from canola import concise, eds
 from canola.errors import EdsError, Error
+from canola.formats import concise, eds
 
 __all__ = ["Identity", "Network", "NetworkError", "SlaveSpec", "from_dcfs", "load",
            "load_yaml"]

@@ -1,6 +1,6 @@
 """The socketcand text protocol: splitting a byte stream into elements, parsing and formatting.
 
-Pure functions, no I/O: the hub (:mod:`canola.hub`) and the fuzz target use them. The subset
+Pure functions, no I/O: the hub (:mod:`canola.bus.hub`) and the fuzz target use them. The subset
 spoken here is what python-can's ``socketcand`` interface and canola's C client need:
 
 - server greeting ``< hi >``; client ``< open CHANNEL >`` (1..16 characters of

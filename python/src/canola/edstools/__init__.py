@@ -1,8 +1,0 @@
-"""Tools over parsed EDS/DCF files (:mod:`canola.eds`), the library behind ``canola eds``:
-
-- :mod:`~canola.edstools.check`: the parser's diagnostics as a linter's findings;
-- :mod:`~canola.edstools.table`: the dictionary as rows of a table, filtered;
-- :mod:`~canola.edstools.dcf`: a DCF from an EDS, a node-ID and checked values;
-- :mod:`~canola.edstools.diff`: what differs between two dictionaries, or between a
-  dictionary and a device's values.
-"""
