@@ -81,7 +81,9 @@ def test_entries_sorted_with_attributes() -> None:
         assert len(keys) == len(set(keys))
     compact_rows = dict(zip(keys, [r for r in compact.splitlines()
                                    if r.startswith("    {.index = ")], strict=True))
-    assert ".limits = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
+    assert ".side = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
+    assert ".side = " not in compact_rows[(0x1000, 0)]  # no limits, a fixed size
+    assert ", .side = 1}" in compact_rows[(0x1008, 0)]  # the first string's capacity
     assert "/* 0x1014 sub 0 */ 0x03, 0x00, 0x01, 0x80," in compact  # $NODEID+0x80: 0x80
     by_key = dict(zip(keys, rows, strict=True))
     assert ".attr = CO_OD_RW | CO_OD_NODEID," in by_key[(0x1014, 0)]
@@ -180,9 +182,21 @@ int main(void)
     }
 #endif
 #if CO_CONFIG_OD_COMPACT
-    /* The compact form: entries of a pointer and 8 bytes, the power-on values' image. */
-    if (sizeof(co_od_entry_t) != sizeof(void *) + 8u || sample_od.defaults == NULL) {
+    /* The compact form: entries of 8 bytes, values at offsets into sample_values, sizes
+     * from the type or the side table, the power-on values' image. */
+    if (sizeof(co_od_entry_t) != 8u || sample_od.tables == NULL ||
+        sample_od.tables->defaults == NULL) {
         return 20;
+    }
+    e = co_od_find(&sample_od, 0x1008, 0, NULL);
+    if (e == NULL || co_od_value(&sample_od, e) != (void *)sample_values.manufacturer_device_name ||
+        co_od_size(&sample_od, e) != sizeof sample_values.manufacturer_device_name) {
+        return 21;
+    }
+    e = co_od_find(&sample_od, 0x1017, 0, NULL);
+    if (e == NULL || co_od_value(&sample_od, e) != (void *)&sample_values.producer_heartbeat_time ||
+        co_od_size(&sample_od, e) != 2u) {
+        return 22;
     }
 #endif
     return 0;

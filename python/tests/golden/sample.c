@@ -6,6 +6,8 @@
  */
 #include "sample.h"
 
+#include <stddef.h>
+
 #include <float.h>
 
 sample_values_t sample_values;
@@ -66,50 +68,62 @@ static const co_od_limits_t k_limits[] = {
     {.low = {.i = -1000}, .high = {.i = 1000}},
 };
 
+static const uint32_t k_sizes[] = {
+    14u,
+    6u,
+    4u,
+    1u,
+};
+
+static const co_od_tables_t k_tables = {.defaults = k_defaults, .limits = k_limits, .limits_count = 8u,
+                                         .sizes = k_sizes, .sizes_count = 4u};
+
+_Static_assert(sizeof(sample_values_t) <= 0x10000u, "the compact form addresses values by 16-bit offsets (use the general form, CO_CONFIG_OD_COMPACT 0)");
+
 static const co_od_entry_t k_entries[] = {
-    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.device_type},
-    {.index = 0x1001, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO | CO_OD_TPDO, .size = 1, .value = &sample_values.error_register},
-    {.index = 0x1008, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_CO, .size = 14, .value = sample_values.manufacturer_device_name},
-    {.index = 0x1014, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .size = 4, .value = &sample_values.cob_id_emcy},
-    {.index = 0x1017, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .size = 2, .value = &sample_values.producer_heartbeat_time},
-    {.index = 0x1018, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1, .value = &sample_values.identity_object.highest_sub_index_supported},
-    {.index = 0x1018, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.vendor_id},
-    {.index = 0x1018, .sub = 2, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.product_code},
-    {.index = 0x1018, .sub = 3, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.revision_number},
-    {.index = 0x1018, .sub = 4, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4, .value = &sample_values.identity_object.serial_number},
-    {.index = 0x1800, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO, .size = 1, .value = &sample_values.tpdo_communication_parameter.highest_sub_index_supported},
-    {.index = 0x1800, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .size = 4, .value = &sample_values.tpdo_communication_parameter.cob_id_used_by_tpdo},
-    {.index = 0x1800, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.tpdo_communication_parameter.transmission_type},
-    {.index = 0x2000, .sub = 0, .type = CO_TYPE_BOOLEAN, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .size = 1, .value = &sample_values.flag},
-    {.index = 0x2001, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .size = 1, .value = &sample_values.int8_value, .limits = 1},
-    {.index = 0x2002, .sub = 0, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RWW | CO_OD_RPDO, .size = 2, .value = &sample_values.int16_value},
-    {.index = 0x2003, .sub = 0, .type = CO_TYPE_INTEGER24, .attr = CO_OD_RW, .size = 3, .value = &sample_values.int24_value},
-    {.index = 0x2004, .sub = 0, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWR | CO_OD_TPDO, .size = 4, .value = &sample_values.int32_value, .limits = 2},
-    {.index = 0x2005, .sub = 0, .type = CO_TYPE_INTEGER40, .attr = CO_OD_RW, .size = 5, .value = &sample_values.int40_value},
-    {.index = 0x2006, .sub = 0, .type = CO_TYPE_INTEGER48, .attr = CO_OD_RW, .size = 6, .value = &sample_values.int48_value},
-    {.index = 0x2007, .sub = 0, .type = CO_TYPE_INTEGER56, .attr = CO_OD_RW, .size = 7, .value = &sample_values.int56_value},
-    {.index = 0x2008, .sub = 0, .type = CO_TYPE_INTEGER64, .attr = CO_OD_RW, .size = 8, .value = &sample_values.int64_value, .limits = 3},
-    {.index = 0x2009, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_WO | CO_OD_RPDO, .size = 1, .value = &sample_values.unsigned8_value, .limits = 4},
-    {.index = 0x200A, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .size = 2, .value = &sample_values.unsigned16_value, .limits = 5},
-    {.index = 0x200B, .sub = 0, .type = CO_TYPE_UNSIGNED24, .attr = CO_OD_RW, .size = 3, .value = &sample_values.unsigned24_value},
-    {.index = 0x200C, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO | CO_OD_NODEID, .size = 4, .value = &sample_values.unsigned32_value},
-    {.index = 0x200D, .sub = 0, .type = CO_TYPE_UNSIGNED40, .attr = CO_OD_RW, .size = 5, .value = &sample_values.unsigned40_value},
-    {.index = 0x200E, .sub = 0, .type = CO_TYPE_UNSIGNED48, .attr = CO_OD_RW, .size = 6, .value = &sample_values.unsigned48_value},
-    {.index = 0x200F, .sub = 0, .type = CO_TYPE_UNSIGNED56, .attr = CO_OD_RW, .size = 7, .value = &sample_values.unsigned56_value},
-    {.index = 0x2010, .sub = 0, .type = CO_TYPE_UNSIGNED64, .attr = CO_OD_RW, .size = 8, .value = &sample_values.unsigned64_value},
-    {.index = 0x2011, .sub = 0, .type = CO_TYPE_REAL32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .size = 4, .value = &sample_values.temperature_degc, .limits = 6},
-    {.index = 0x2012, .sub = 0, .type = CO_TYPE_REAL64, .attr = CO_OD_RW, .size = 8, .value = &sample_values.gain, .limits = 7},
-    {.index = 0x2013, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .size = 6, .value = sample_values.user_label},
-    {.index = 0x2014, .sub = 0, .type = CO_TYPE_OCTET_STRING, .attr = CO_OD_RO, .size = 4, .value = sample_values.key_bytes},
-    {.index = 0x2015, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .size = 1, .value = sample_values.empty_text},
-    {.index = 0x2100, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1, .value = &sample_values.analog_inputs.number_of_inputs},
-    {.index = 0x2100, .sub = 1, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .size = 2, .value = &sample_values.analog_inputs.input},
-    {.index = 0x2100, .sub = 2, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .size = 2, .value = &sample_values.analog_inputs.input_2},
-    {.index = 0x2100, .sub = 3, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .size = 2, .value = &sample_values.analog_inputs.input_3},
-    {.index = 0x2300, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .size = 1, .value = &sample_values.setpoints.highest_sub_index_supported},
-    {.index = 0x2300, .sub = 1, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID, .size = 4, .value = &sample_values.setpoints.speed, .limits = 8},
-    {.index = 0x2300, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.setpoints.default_},
-    {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.mode},
+    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, device_type)},
+    {.index = 0x1001, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, error_register)},
+    {.index = 0x1008, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_CO, .offset = offsetof(sample_values_t, manufacturer_device_name), .side = 1},
+    {.index = 0x1014, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .offset = offsetof(sample_values_t, cob_id_emcy)},
+    {.index = 0x1017, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, producer_heartbeat_time)},
+    {.index = 0x1018, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.highest_sub_index_supported)},
+    {.index = 0x1018, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.vendor_id)},
+    {.index = 0x1018, .sub = 2, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.product_code)},
+    {.index = 0x1018, .sub = 3, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.revision_number)},
+    {.index = 0x1018, .sub = 4, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.serial_number)},
+    {.index = 0x1800, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO, .offset = offsetof(sample_values_t, tpdo_communication_parameter.highest_sub_index_supported)},
+    {.index = 0x1800, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .offset = offsetof(sample_values_t, tpdo_communication_parameter.cob_id_used_by_tpdo)},
+    {.index = 0x1800, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, tpdo_communication_parameter.transmission_type)},
+    {.index = 0x2000, .sub = 0, .type = CO_TYPE_BOOLEAN, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .offset = offsetof(sample_values_t, flag)},
+    {.index = 0x2001, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .offset = offsetof(sample_values_t, int8_value), .side = 1},
+    {.index = 0x2002, .sub = 0, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RWW | CO_OD_RPDO, .offset = offsetof(sample_values_t, int16_value)},
+    {.index = 0x2003, .sub = 0, .type = CO_TYPE_INTEGER24, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int24_value)},
+    {.index = 0x2004, .sub = 0, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWR | CO_OD_TPDO, .offset = offsetof(sample_values_t, int32_value), .side = 2},
+    {.index = 0x2005, .sub = 0, .type = CO_TYPE_INTEGER40, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int40_value)},
+    {.index = 0x2006, .sub = 0, .type = CO_TYPE_INTEGER48, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int48_value)},
+    {.index = 0x2007, .sub = 0, .type = CO_TYPE_INTEGER56, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int56_value)},
+    {.index = 0x2008, .sub = 0, .type = CO_TYPE_INTEGER64, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int64_value), .side = 3},
+    {.index = 0x2009, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_WO | CO_OD_RPDO, .offset = offsetof(sample_values_t, unsigned8_value), .side = 4},
+    {.index = 0x200A, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned16_value), .side = 5},
+    {.index = 0x200B, .sub = 0, .type = CO_TYPE_UNSIGNED24, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned24_value)},
+    {.index = 0x200C, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO | CO_OD_NODEID, .offset = offsetof(sample_values_t, unsigned32_value)},
+    {.index = 0x200D, .sub = 0, .type = CO_TYPE_UNSIGNED40, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned40_value)},
+    {.index = 0x200E, .sub = 0, .type = CO_TYPE_UNSIGNED48, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned48_value)},
+    {.index = 0x200F, .sub = 0, .type = CO_TYPE_UNSIGNED56, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned56_value)},
+    {.index = 0x2010, .sub = 0, .type = CO_TYPE_UNSIGNED64, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned64_value)},
+    {.index = 0x2011, .sub = 0, .type = CO_TYPE_REAL32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .offset = offsetof(sample_values_t, temperature_degc), .side = 6},
+    {.index = 0x2012, .sub = 0, .type = CO_TYPE_REAL64, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, gain), .side = 7},
+    {.index = 0x2013, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, user_label), .side = 2},
+    {.index = 0x2014, .sub = 0, .type = CO_TYPE_OCTET_STRING, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, key_bytes), .side = 3},
+    {.index = 0x2015, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, empty_text), .side = 4},
+    {.index = 0x2100, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, analog_inputs.number_of_inputs)},
+    {.index = 0x2100, .sub = 1, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, analog_inputs.input)},
+    {.index = 0x2100, .sub = 2, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, analog_inputs.input_2)},
+    {.index = 0x2100, .sub = 3, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, analog_inputs.input_3)},
+    {.index = 0x2300, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, setpoints.highest_sub_index_supported)},
+    {.index = 0x2300, .sub = 1, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID, .offset = offsetof(sample_values_t, setpoints.speed), .side = 8},
+    {.index = 0x2300, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, setpoints.default_)},
+    {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, mode)},
 };
 #else /* the general form */
 /* Power-on values (without the node-ID where CO_OD_NODEID is set). */
@@ -241,7 +255,7 @@ static const uint16_t k_hash[128] = {
 
 const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL,
 #if CO_CONFIG_OD_COMPACT
-    .defaults = k_defaults, .limits = k_limits, .limits_count = 8u,
+    .values = &sample_values, .tables = &k_tables,
 #endif
 #if CO_SHORT_PATHS
 #if !CO_CONFIG_OD_COMPACT
