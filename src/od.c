@@ -131,15 +131,17 @@ static bool has_write_hook(const co_od_entry_t *e)
 }
 
 /* The limits of an entry, or NULL (none, or left out of the build). */
-static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e)
+static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e,
+                                       const type_info_t *t)
 {
     if (!CO_CONFIG_OD_LIMITS) {
         return NULL;
     }
-#if CO_CONFIG_OD_COMPACT
-    return co_od_has_limits(e) ? &od->tables->limits[e->side - 1u] : NULL;
+#if CO_CONFIG_OD_COMPACT /* a side of a number: its limits (of a string: its capacity) */
+    return e->side != 0 && t->wire != 0 ? &od->tables->limits[e->side - 1u] : NULL;
 #else
     (void)od;
+    (void)t;
     return e->limits;
 #endif
 }
@@ -304,18 +306,22 @@ static bool storage_ok(const co_od_t *od, const co_od_entry_t *e, const type_inf
 }
 
 #if CO_CONFIG_OD_COMPACT
-/* How many positions co_od_entry_t.side may name in the side table of its entry's type:
- * capacities for strings and domains, limits for numbers, none for the others. */
-static uint32_t side_count(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+/* co_od_entry_t.side names a position its type's side table has: a capacity for each
+ * string and domain (the types of no fixed size), limits or none for a number, none for
+ * the others. */
+static bool side_ok(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
     const co_od_tables_t *tab = od->tables;
+    if (e->side == 0) {
+        return t->wire != 0;
+    }
     if (tab == NULL) {
-        return 0;
+        return false;
     }
-    if (co_type_is_variable(e->type)) {
-        return tab->sizes != NULL ? tab->sizes_count : 0u;
+    if (t->wire == 0) {
+        return tab->sizes != NULL && e->side <= tab->sizes_count && tab->sizes[e->side - 1u] != 0;
     }
-    return is_number(t) && tab->limits != NULL ? tab->limits_count : 0u;
+    return is_number(t) && tab->limits != NULL && e->side <= tab->limits_count;
 }
 #endif
 
@@ -325,16 +331,16 @@ static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
     if (t->kind == K_NONE) {
         return false;
     }
-#if CO_CONFIG_OD_COMPACT
-    if (e->side > side_count(od, e, t) || (co_type_is_variable(e->type) && e->side == 0)) {
+#if CO_CONFIG_OD_COMPACT /* the size follows from the type or the side table */
+    if (!side_ok(od, e, t)) {
         return false; /* refers to a limit or capacity the tables do not have */
     }
-#endif
-    uint32_t size = co_od_size(od, e);
-    if (t->wire != 0 ? size != t->wire : size == 0) {
+#else
+    if (t->wire != 0 ? e->size != t->wire : e->size == 0) {
         return false;
     }
-    if (is_ustring(t) && (size & 1u) != 0) {
+#endif
+    if (is_ustring(t) && (co_od_size(od, e) & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
     if (!CO_CONFIG_OD_LIMITS && co_od_has_limits(e)) {
@@ -576,10 +582,8 @@ static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
 #if CO_CONFIG_OD_COMPACT
 uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
 {
-    if (co_type_is_variable(entry->type) && entry->side != 0) {
-        return od->tables->sizes[entry->side - 1u];
-    }
-    return type_info(entry->type)->wire;
+    uint32_t wire = type_info(entry->type)->wire;
+    return wire == 0 && entry->side != 0 ? od->tables->sizes[entry->side - 1u] : wire;
 }
 #endif
 
@@ -751,7 +755,7 @@ co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint
     const type_info_t *t = type_info(entry->type);
     co_abort_t abort = check_len(od, entry, t, len);
     /* a number with limits, or a BOOLEAN (0 or 1), is decoded; others need not be */
-    const co_od_limits_t *limits = limits_of(od, entry);
+    const co_od_limits_t *limits = limits_of(od, entry, t);
     if (abort == CO_ABORT_NONE && is_number(t) && (limits || t->kind == K_BOOL)) {
         bits_t bits = wire_number(t, data);
         if (t->kind == K_BOOL && bits > 1u) {
@@ -796,7 +800,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
         if (value != data) {
             co_copy(value, data, len);
         }
-        co_zero(value + len, (t->wire != 0 ? t->wire : co_od_size(od, entry)) - len);
+        co_zero(value + len, co_od_size(od, entry) - len); /* (a fixed type's: its wire size) */
     }
     return CO_ABORT_NONE;
 }
@@ -878,28 +882,36 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
  * of the others. */
 static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e) { return co_od_size(od, e); }
 
-/* One record of the image (co_od_tables_t.defaults) at `p`: its entry's position and value; the
- * next record after it. */
+/* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE
+ * past the last record) and value. */
 typedef struct record {
     uint32_t pos;
     uint32_t len;
     const uint8_t *data;
 } record_t;
 
-static const uint8_t *read_record(const uint8_t *p, record_t *r)
+#define END_OF_IMAGE UINT32_MAX
+#define SKIP_FAR 31u /* a record's head: its position follows */
+#define LEN_FAR 7u   /* a record's head: its length follows */
+
+/* The record at `p`, the first one since the entry before `next`; the next record after
+ * it. */
+static const uint8_t *read_record(const uint8_t *p, uint32_t next, record_t *r)
 {
-    r->pos = (uint32_t)p[0] | (uint32_t)p[1] << 8;
-    r->len = p[2];
-    p += 3;
-    if (r->len == 255u) {
-        r->len = (uint32_t)p[0] | (uint32_t)p[1] << 8;
+    uint32_t head = *p++;
+    r->pos = head == 0 ? END_OF_IMAGE : next + (head & SKIP_FAR);
+    r->len = head >> 5;
+    if ((head & SKIP_FAR) == SKIP_FAR) {
+        r->pos = co_get_u16(p);
+        p += 2;
+    }
+    if (r->len == LEN_FAR) {
+        r->len = co_get_u16(p);
         p += 2;
     }
     r->data = p;
     return p + r->len;
 }
-
-#define END_OF_IMAGE 0xFFFFu
 
 /* A storage of zeros, except a DOMAIN's (kept, as the general form keeps one without a
  * default). */
@@ -943,10 +955,11 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
         zero_entry(od, &od->entries[end]);
     }
     record_t r;
-    for (const uint8_t *p = image_of(od); p != NULL;) {
-        p = read_record(p, &r);
-        if (r.pos == END_OF_IMAGE || r.pos >= end) {
-            break;
+    uint32_t next = 0;
+    for (const uint8_t *p = image_of(od); p != NULL; next = r.pos + 1u) {
+        p = read_record(p, next, &r);
+        if (r.pos >= end) {
+            break; /* past the range, or the end of the image */
         }
         if (r.pos >= from) {
             set_default(od, &od->entries[r.pos], r.data, r.len);
@@ -964,7 +977,7 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
     uint32_t next = 0;
     record_t r;
     for (const uint8_t *p = image_of(od); p != NULL;) {
-        p = read_record(p, &r);
+        p = read_record(p, next, &r);
         if (r.pos == END_OF_IMAGE) {
             return true;
         }

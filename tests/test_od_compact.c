@@ -32,16 +32,17 @@ static const co_od_limits_t k_limits[] = {
     {.low = {.u = 1}, .high = {.u = 9}},
 };
 
-/* Records: position (2 bytes), length (1), wire bytes; trailing zeros left out. */
+/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), wire bytes; trailing
+ * zeros left out. */
 static const uint8_t k_image[] = {
-    0,    0,    2, 0x91, 0x01,             /* 0x1000: 0x191 */
-    1,    0,    2, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
-    2,    0,    3, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
-    3,    0,    4, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
-    4,    0,    2, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
-    5,    0,    2, 'h',  'i',              /* 0x2004: "hi" */
-    6,    0,    2, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
-    0xFF, 0xFF, 0,                         /* end */
+    0x40, 0x91, 0x01,             /* 0x1000: 0x191 */
+    0x40, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
+    0x60, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    0x80, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
+    0x40, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
+    0x40, 'h',  'i',              /* 0x2004: "hi" */
+    0x40, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
+    0,                            /* end */
 };
 
 /* Capacities of the string (1) and the DOMAIN (2). */
@@ -157,7 +158,7 @@ static void test_reset_range(void)
 
 static void test_domain_without_record_kept(void)
 {
-    static const uint8_t empty[] = {0xFF, 0xFF, 0};
+    static const uint8_t empty[] = {0};
     co_od_t od = make_od();
     tables.defaults = empty;
     v.log.len = 3;
@@ -169,6 +170,22 @@ static void test_domain_without_record_kept(void)
     v.device_type = 7;
     co_od_reset(&od, 0x0000, 0xFFFF, 0);
     CHECK_EQ(v.device_type, 0u);
+}
+
+static void test_image_skips_and_positions(void)
+{
+    /* entry 1 (one skipped), then entry 7 by its position, 1 byte each */
+    static const uint8_t image[] = {0x21, 0x07, 0x3F, 7, 0, 0x09, 0};
+    co_od_t od = make_od();
+    tables.defaults = image;
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    co_od_reset(&od, 0x0000, 0xFFFF, 0);
+    CHECK_EQ(v.device_type, 0u);
+    CHECK_EQ(v.offset, 7);
+    CHECK_EQ(v.i24, 0);
+    CHECK_EQ(v.level, 9u);
+    co_od_reset(&od, 0x2006, 0x2006, 0); /* a range that starts past the first record */
+    CHECK_EQ(v.level, 9u);
 }
 
 static void test_limits_by_position(void)
@@ -237,12 +254,13 @@ static void test_validate_limits_and_image(void)
     tables.defaults = NULL;
     CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
 
-    static const uint8_t too_long[] = {1, 0, 3, 1, 2, 3, 0xFF, 0xFF, 0}; /* 3 bytes, INTEGER16 */
-    static const uint8_t out_of_order[] = {3, 0, 1, 1, 1, 0, 1, 1, 0xFF, 0xFF, 0};
-    static const uint8_t past_table[] = {8, 0, 1, 1, 0xFF, 0xFF, 0};
-    static const uint8_t string_cap[] = {5, 0, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0xFF, 0xFF, 0};
-    static const uint8_t long_form[] = {5,   0,   255, 8,   0,   'a',  'b',  'c',
-                                        'd', 'e', 'f', 'g', 'h', 0xFF, 0xFF, 0};
+    static const uint8_t too_long[] = {0x61, 1, 2, 3, 0}; /* 3 bytes for the INTEGER16 */
+    /* entry 3, then entry 1 by its position (head 31: the position follows) */
+    static const uint8_t out_of_order[] = {0x23, 1, 0x3F, 1, 0, 1, 0};
+    static const uint8_t past_table[] = {0x28, 1, 0}; /* entry 8 of 8 */
+    /* head 7: the length follows (9: more than the string's capacity) */
+    static const uint8_t string_cap[] = {0xE5, 9, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0};
+    static const uint8_t long_form[] = {0xE5, 8, 0, 'a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 0};
     od = make_od();
     tables.defaults = too_long;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
@@ -289,6 +307,7 @@ int main(void)
     RUN(test_reset_from_image);
     RUN(test_reset_range);
     RUN(test_domain_without_record_kept);
+    RUN(test_image_skips_and_positions);
     RUN(test_limits_by_position);
     RUN(test_validate_limits_and_image);
     RUN(test_hash_compares_entries);

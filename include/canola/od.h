@@ -256,12 +256,14 @@ typedef struct co_od {
 /** The const tables of a compact dictionary (co_od_t.tables), apart from the entries. */
 typedef struct co_od_tables {
     /** The power-on values, one record per entry whose power-on value is not all zeros, in
-     *  entry order, ended by position 0xFFFF: the entry's position (2 bytes, little-endian),
-     *  the length n of its value (1 byte; 255: the length in the 2 bytes that follow,
-     *  little-endian), then n bytes of its wire value (trailing zero bytes may be left out).
-     *  co_od_reset zeroes every entry that is not a DOMAIN, then writes the records' values
-     *  (numbers through their wire form, so the image does not depend on the target's byte
-     *  order). NULL: every value resets to zero. */
+     *  entry order, ended by a 0 byte. A record: a head byte, then the entry's position if
+     *  the head says so, the length if the head says so, then the value's wire bytes
+     *  (trailing zero bytes may be left out). The head's bits 0-4: the entries skipped
+     *  since the previous record's (since position 0 for the first), 0..30, or 31: the
+     *  position follows (2 bytes, little-endian); bits 5-7: the value's length, 1..6, or
+     *  7: the length follows (2 bytes, little-endian). co_od_reset zeroes every entry that is not a
+     * DOMAIN, then writes the records' values (numbers through their wire form, so the image does
+     * not depend on the target's byte order). NULL: every value resets to zero. */
     const uint8_t *defaults;
     /** The limits that numbers refer to (co_od_entry_t.side: 1 + position), or NULL. */
     const co_od_limits_t *limits;

@@ -10,7 +10,9 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
 - ``<name>_values_t``: one member per entry, named after its ParameterName (lower case,
   ``[a-z0-9_]``, made unique; the index/sub-index is in a comment). ARRAY and RECORD objects
   become a nested struct whose members are their sub-indices, sub-index 0 included (a plain
-  UNSIGNED8 entry as the EDS describes it).
+  UNSIGNED8 entry as the EDS describes it). Members come the most aligned first (in index
+  order among equals), in the struct and in each nested one, so that no padding lies
+  between them (a nested struct keeps its tail padding up to its own alignment).
 - ``<name>_values``: the one static instance that holds the RAM values, zero-initialised;
   ``<name>_od``: a const ``co_od_t`` whose const entry table points into it. Call
   ``co_od_reset(&<name>_od, 0x0000, 0xFFFF, node_id)`` once before use. One node per
@@ -21,8 +23,9 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   configuration value). The compact form (1), the smaller: 8-byte entries (index, the
   value's offset in ``<name>_values``, sub-index, type, attributes, a side table position:
   the limits of a number, the capacity of a string or domain), the power-on values as one
-  byte image ``k_defaults`` (a record per entry whose value is not all zeros: position,
-  length, wire bytes; see ``co_od_tables_t.defaults``), the distinct limits once each in
+  byte image ``k_defaults`` (a record per entry whose value is not all zeros: a head byte of
+  the entries skipped since the previous record and the length, the wire bytes; see
+  ``co_od_tables_t.defaults``), the distinct limits once each in
   ``k_limits``, the distinct capacities once each in ``k_sizes``, all four in ``k_tables``
   (``co_od_tables_t``). The general form (0): 28-byte entries with pointers to
   the value, its power-on value in a const ``<name>_values_t``, its limits and hooks
@@ -390,7 +393,7 @@ def generate(od: eds.ObjectDictionary, name: str,
     source = Path(od.file).name
     entries: list[_Entry] = []
     skipped: list[eds.Variable] = []
-    struct: list[str] = []
+    members: list[tuple[int, list[str]]] = []  # (alignment, lines) of each top-level member
     used: set[str] = set()
     for index in sorted(od.objects):
         obj = od.objects[index]
@@ -406,9 +409,10 @@ def generate(od: eds.ObjectDictionary, name: str,
                 used.discard(obj_name)
                 continue
             entries.append(e)
-            struct.append(_member(e, obj_name, "    ", f"0x{index:04X}", obj.name))
+            members.append((_ALIGN[e.ctype],
+                            [_member(e, obj_name, "    ", f"0x{index:04X}", obj.name)]))
             continue
-        inner: list[str] = []
+        inner: list[tuple[int, list[str]]] = []
         sub_used: set[str] = set()
         for sub in sorted(obj.subs):
             var = obj.subs[sub]
@@ -418,16 +422,32 @@ def generate(od: eds.ObjectDictionary, name: str,
                 skipped.append(var)
                 continue
             entries.append(e)
-            inner.append(_member(e, member, "        ", f"0x{index:04X} sub {sub}", var.name))
+            inner.append((_ALIGN[e.ctype], [_member(e, member, "        ",
+                                                    f"0x{index:04X} sub {sub}", var.name)]))
         if not inner:
             used.discard(obj_name)
             continue
-        struct.append("    struct {")
-        struct.extend(inner)
-        struct.append(f"    }} {obj_name}; /* 0x{index:04X} {_comment(obj.name)} */")
+        members.append((max(align for align, _ in inner),
+                        ["    struct {", *_by_alignment(inner),
+                         f"    }} {obj_name}; /* 0x{index:04X} {_comment(obj.name)} */"]))
+    struct = _by_alignment(members)
     node_id = opts.node_id if opts.node_id is not None else od.node_id
     return (_header(name, source, struct, skipped, node_id),
             _source_text(name, source, entries, skipped))
+
+
+# Alignment of each storage type (at most: a co_od_domain_t holds a pointer), which orders
+# the values struct's members so that the compiler pads none of them.
+_ALIGN = {"uint8_t": 1, "int8_t": 1, "char": 1, "uint16_t": 2, "int16_t": 2, "uint32_t": 4,
+          "int32_t": 4, "float": 4, "int64_t": 8, "uint64_t": 8, "double": 8,
+          "co_od_domain_t": 8}
+
+
+def _by_alignment(members: list[tuple[int, list[str]]]) -> list[str]:
+    """The members' lines, the most aligned first (in EDS order among equals): no padding
+    between them (a struct keeps only the tail padding up to its own alignment)."""
+    ordered = sorted(members, key=lambda m: -m[0])
+    return [line for _, lines in ordered for line in lines]
 
 
 def _member(e: _Entry, member: str, indent: str, where: str, title: str) -> str:
@@ -580,6 +600,21 @@ def _distinct_sizes(entries: list[_Entry]) -> list[int]:
     return list(dict.fromkeys(e.size for e in entries if _TYPES[e.var.data_type or 0][1] == 0))
 
 
+def _record(skip: int, pos: int, value: bytes) -> list[int]:
+    """One record of the power-on values' image (canola/od.h, co_od_tables_t.defaults): the
+    head (bits 0-4 the entries skipped since the previous record, 31: the position follows;
+    bits 5-7 the length, 7: the length follows), the position and length if they follow,
+    the value."""
+    n = len(value)
+    head = (skip if skip < 31 else 31) | (n if n < 7 else 7) << 5
+    out = [head]
+    if skip >= 31:
+        out += [pos & 0xFF, pos >> 8]
+    if n >= 7:
+        out += [n & 0xFF, n >> 8]
+    return out + list(value)
+
+
 def _side_table(what: str, declaration: str, items: list[str]) -> list[str]:
     """One side table of the compact form (co_od_tables_t), whose positions the entries' one
     byte can name: 255 of them at most."""
@@ -600,16 +635,18 @@ def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
     limits and capacities (co_od_tables_t), 8-byte entries that give their value's offset
     in the values struct."""
     out = ["/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per",
-           " * entry whose value is not all zeros: position (2 bytes), length (1), wire bytes. */",
+           " * entry whose value is not all zeros: a head (entries skipped, length), wire bytes",
+           " * (co_od_tables_t.defaults). */",
            "static const uint8_t k_defaults[] = {"]
+    next_pos = 0
     for pos, e in enumerate(entries):
         if e.default and e.kind != _DOMAIN:
-            n = len(e.default)
-            head = [pos & 0xFF, pos >> 8] + ([n] if n < 255 else [255, n & 0xFF, n >> 8])
             v = e.var
             out.append(f"    /* 0x{v.index:04X} sub {v.subindex} */ "
-                       + ", ".join(f"0x{b:02X}" for b in head + list(e.default)) + ",")
-    out.append("    0xFF, 0xFF, 0x00, /* end */")
+                       + ", ".join(f"0x{b:02X}" for b in _record(pos - next_pos, pos, e.default))
+                       + ",")
+            next_pos = pos + 1
+    out.append("    0x00, /* end */")
     out.append("};")
     out.append("")
     limits = _distinct_limits(entries)
