@@ -130,18 +130,28 @@ static bool has_write_hook(const co_od_entry_t *e)
     return h && h->write;
 }
 
+/* Whether an entry of type `t` has limits (co_od_has_limits, its type at hand). */
+static bool has_limits(const co_od_entry_t *e, const type_info_t *t)
+{
+#if CO_CONFIG_OD_COMPACT /* a side of a number: its limits (of a string: its capacity) */
+    return e->side != 0 && t->wire != 0;
+#else
+    (void)t;
+    return e->limits != NULL;
+#endif
+}
+
 /* The limits of an entry, or NULL (none, or left out of the build). */
 static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e,
                                        const type_info_t *t)
 {
-    if (!CO_CONFIG_OD_LIMITS) {
+    if (!CO_CONFIG_OD_LIMITS || !has_limits(e, t)) {
         return NULL;
     }
-#if CO_CONFIG_OD_COMPACT /* a side of a number: its limits (of a string: its capacity) */
-    return e->side != 0 && t->wire != 0 ? &od->tables->limits[e->side - 1u] : NULL;
+#if CO_CONFIG_OD_COMPACT
+    return &od->tables->limits[e->side - 1u];
 #else
     (void)od;
-    (void)t;
     return e->limits;
 #endif
 }
@@ -343,10 +353,10 @@ static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
     if (is_ustring(t) && (co_od_size(od, e) & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
-    if (!CO_CONFIG_OD_LIMITS && co_od_has_limits(e)) {
+    if (!CO_CONFIG_OD_LIMITS && has_limits(e, t)) {
         return false; /* limits are left out of this build */
     }
-    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && co_od_has_limits(e)) {
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && has_limits(e, t)) {
         return false; /* REAL limits are left out of this build */
     }
     return storage_ok(od, e, t);
