@@ -959,24 +959,24 @@ static const uint8_t *image_of(const co_od_t *od)
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
 {
-    uint32_t from = lower_bound(od, key_of(first, 0));
-    uint32_t end = from;
-    for (; end < od->count && od->entries[end].index <= last; end++) {
-        zero_entry(od, &od->entries[end]);
+    record_t r = {.pos = END_OF_IMAGE, .len = 0, .data = NULL};
+    const uint8_t *p = image_of(od);
+    if (p != NULL) {
+        p = read_record(p, 0, &r);
     }
-    record_t r;
-    uint32_t next = 0;
-    for (const uint8_t *p = image_of(od); p != NULL; next = r.pos + 1u) {
-        p = read_record(p, next, &r);
-        if (r.pos >= end) {
-            break; /* past the range, or the end of the image */
+    /* one pass: each entry in the range zeroed, given its record if it has one (the records
+     * before the range passed over), its node-ID added */
+    for (uint32_t i = lower_bound(od, key_of(first, 0));
+         i < od->count && od->entries[i].index <= last; i++) {
+        const co_od_entry_t *e = &od->entries[i];
+        zero_entry(od, e);
+        while (r.pos < i) {
+            p = read_record(p, r.pos + 1u, &r);
         }
-        if (r.pos >= from) {
-            set_default(od, &od->entries[r.pos], r.data, r.len);
+        if (r.pos == i) {
+            set_default(od, e, r.data, r.len);
         }
-    }
-    for (uint32_t i = from; i < end; i++) {
-        add_node_id(od, &od->entries[i], node_id);
+        add_node_id(od, e, node_id);
     }
 }
 
