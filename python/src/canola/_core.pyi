@@ -124,6 +124,8 @@ class Lib:
     CO_OK: int
     CO_PARAMS_APPLICATION: int
     CO_PARAMS_COMMUNICATION: int
+    CO_RESET_APPLICATION: int
+    CO_RESET_COMMUNICATION: int
     CO_SDO_AUTO: int
     CO_SDO_BLOCK: int
     CO_SDO_EXPEDITED: int
@@ -143,6 +145,7 @@ class Lib:
     canola_py_on_emcy: CData
     canola_py_on_errctl: CData
     canola_py_on_error: CData
+    canola_py_on_reset: CData
     canola_py_on_rpdo: CData
     canola_py_on_state: CData
     canola_py_on_sync: CData
