@@ -240,7 +240,8 @@ typedef struct co_lss_address { uint32_t vendor; uint32_t product; uint32_t revi
 typedef struct co_lss_result { uint8_t cs; uint8_t status; uint8_t error; uint8_t spec_error;
                                uint32_t value; uint16_t answers; bool keeps_answering;
                                co_lss_address_t address; ...; } co_lss_result_t;
-typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; ...; }
+typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; bool above;
+                                  ...; }
     co_lss_fastscan_t;
 typedef void (*co_lss_done_fn)(void *ctx, const co_lss_result_t *result);
 typedef enum co_lss_mode { CO_LSS_WAITING, CO_LSS_CONFIGURATION, ... } co_lss_mode_t;
