@@ -140,7 +140,8 @@ static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_a
 
 /* store() of a server parameter (0x1200..0x127F), which may move this very channel (sub1 or
  * sub2 written through it): the write takes effect at once, and its confirmation still leaves
- * where the client waits for it, on the COB-ID the request was served on. */
+ * where the client waits for it, on the COB-ID the request was served on. (A build for size
+ * stores every value so.) */
 static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
                                         uint32_t len, uint32_t ok)
 {
@@ -160,7 +161,8 @@ static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, con
 static CO_INLINE void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
                             uint32_t ok)
 {
-    if ((s->entry->index >> 7) == (0x1200u >> 7)) {
+    /* (a build for size sends every confirmation so: one copy of the path, not two) */
+    if (!CO_SHORT_PATHS || (s->entry->index >> 7) == (0x1200u >> 7)) {
         store_parameter(node, s, data, len, ok);
         return;
     }
@@ -373,7 +375,7 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
 
 /* A download segment: the usual one (more to come, the right toggle, room for 7 bytes in
  * the buffer and in the indicated size) here, the others in download_segment_general. */
-static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_FAST_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
     if (!CO_SHORT_PATHS || (cmd & (CO_SDO_SEG_TOGGLE | CO_SDO_SEG_LAST)) != s->toggle ||
@@ -532,7 +534,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
 
 /* An upload segment request: the usual one (the right toggle, a value in storage with
  * more than 7 bytes to go) here, the others in upload_segment_general. */
-static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_FAST_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t toggle = d[0] & CO_SDO_SEG_TOGGLE;
     if (!CO_SHORT_PATHS || toggle != s->toggle || s->wire == NULL ||
