@@ -202,13 +202,10 @@ static co_store_fault_t check_records(const co_storage_t *st, co_param_group_t g
         }
         at += want;
     }
-    /* Nothing may follow the records. */
-    uint32_t n = 0;
-    if (st->read(st->ctx, group, CO_STORE_HEADER_SIZE + len, chunk, 1, &n) != CO_OK) {
-        return CO_STORE_READ_ERROR;
-    }
-    if (n != 0) {
-        return CO_STORE_BAD_LENGTH;
+    /* Nothing may follow the records: a byte read there is one too many. */
+    co_store_fault_t after = read_exact(st, group, CO_STORE_HEADER_SIZE + len, chunk, 1);
+    if (after != CO_STORE_BAD_LENGTH) {
+        return after == CO_STORE_INTACT ? CO_STORE_BAD_LENGTH : after;
     }
     return next == len ? CO_STORE_INTACT : CO_STORE_BAD_RECORDS;
 }
