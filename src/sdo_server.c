@@ -458,7 +458,9 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
     uint32_t n = 0;
     uint32_t total = 0;
     begin(s);
-    if (CO_CONFIG_SDO_SEGMENTED) { /* the segments of a long value copy from the wire view */
+    /* The segments of a long value copy from the wire view (a short path: without it,
+     * every piece is read through co_od_read) */
+    if (CO_SHORT_PATHS && CO_CONFIG_SDO_SEGMENTED) {
         s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
     }
     if (s->wire == NULL) {
@@ -507,7 +509,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
     uint8_t r[CO_SDO_FRAME_LEN] = {0};
     uint32_t n = 0;
     uint32_t total = s->size;
-    if (s->wire != NULL) { /* stored in wire form: copy the piece */
+    if (CO_SHORT_PATHS && s->wire != NULL) { /* stored in wire form: copy the piece */
         n = total - s->done < CO_SDO_SEG_BYTES ? total - s->done : CO_SDO_SEG_BYTES;
         if (CO_SHORT_PATHS && n == CO_SDO_SEG_BYTES) {
             memcpy(&r[1], s->wire + s->done, CO_SDO_SEG_BYTES); /* the usual case, copied inline */
