@@ -354,7 +354,7 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
     co_abort_t abort = CO_ABORT_NONE;
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
-    } else if (s->buf_len + CO_SDO_SEG_BYTES <= CO_SDO_BUF_SIZE) {
+    } else if (CO_SHORT_PATHS && s->buf_len + CO_SDO_SEG_BYTES <= CO_SDO_BUF_SIZE) {
         co_copy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES); /* the usual case: room for 7 */
         s->buf_len += n;
     } else {
