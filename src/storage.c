@@ -332,21 +332,16 @@ static uint64_t capability(const co_node_t *node)
     return st != NULL && (st->can_save == NULL || st->can_save(st->ctx)) ? 1u : 0u;
 }
 
-static void show_capability(co_node_t *node, const co_od_entry_t *entry, uint64_t value)
-{
-    if (entry != NULL && entry->value != NULL) {
-        (void)co_od_set_uint(&node->cfg.od, entry->index, entry->sub, value);
-    }
-}
-
 /* Every sub-index of 0x1010 and 0x1011 reads the capability: at reset communication, and
- * after each command (which may have shown the storage can, or cannot, save now). */
+ * after each command (which may have shown the storage can, or cannot, save now). Those
+ * the dictionary lacks, or serves through hooks, are left alone (co_od_set_uint refuses). */
 void co_storage_reset_comm(co_node_t *node)
 {
     uint64_t value = capability(node);
-    for (uint8_t sub = 1; sub <= 3; sub++) {
-        show_capability(node, co_od_find(&node->cfg.od, 0x1010, sub, NULL), value);
-        show_capability(node, co_od_find(&node->cfg.od, 0x1011, sub, NULL), value);
+    for (uint16_t index = 0x1010; index <= 0x1011; index++) {
+        for (uint8_t sub = 1; sub <= 3; sub++) {
+            (void)co_od_set_uint(&node->cfg.od, index, sub, value);
+        }
     }
 }
 
