@@ -124,9 +124,25 @@ static co_err_t save_group(co_node_t *node, co_param_group_t group)
         }
         return err;
     }
-    err = st->commit(st->ctx);
-    if (err == CO_OK) {
-        group_error_clear(node, group);
+    return st->commit(st->ctx);
+}
+
+/* The groups that sub-index `which` of 0x1010/0x1011 names (1: both, 2: communication,
+ * 3: application), in that order: each saved, or erased when `restore` (its defaults at
+ * the next reset); each group done ends the EMCY of its rejected image. */
+static co_err_t each_group(co_node_t *node, uint8_t which, bool restore)
+{
+    const co_storage_t *st = storage_of(node);
+    co_err_t err = CO_OK;
+    for (uint8_t g = CO_PARAMS_COMMUNICATION; g <= CO_PARAMS_APPLICATION && err == CO_OK; g++) {
+        co_param_group_t group = (co_param_group_t)g;
+        if (which == 4u - g) {
+            continue; /* the other group alone */
+        }
+        err = restore ? st->erase(st->ctx, group) : save_group(node, group);
+        if (err == CO_OK) {
+            group_error_clear(node, group);
+        }
     }
     return err;
 }
@@ -139,36 +155,7 @@ co_err_t co_storage_save(co_node_t *node, uint8_t which)
     if (which < 1 || which > 3) {
         return CO_ERR_ARG;
     }
-    co_err_t err = CO_OK;
-    if (which != 3) {
-        err = save_group(node, CO_PARAMS_COMMUNICATION);
-    }
-    if (err == CO_OK && which != 2) {
-        err = save_group(node, CO_PARAMS_APPLICATION);
-    }
-    return err;
-}
-
-static co_err_t restore_group(co_node_t *node, co_param_group_t group)
-{
-    const co_storage_t *st = storage_of(node);
-    co_err_t err = st->erase(st->ctx, group);
-    if (err == CO_OK) {
-        group_error_clear(node, group);
-    }
-    return err;
-}
-
-static co_err_t restore_defaults(co_node_t *node, uint8_t which)
-{
-    co_err_t err = CO_OK;
-    if (which != 3) {
-        err = restore_group(node, CO_PARAMS_COMMUNICATION);
-    }
-    if (err == CO_OK && which != 2) {
-        err = restore_group(node, CO_PARAMS_APPLICATION);
-    }
-    return err;
+    return each_group(node, which, false);
 }
 
 /* ---- checking and loading */
@@ -316,7 +303,7 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
     if (storage_of(node) == NULL || entry->sub > 3 || co_get_u32(data) != want) {
         return CO_ABORT_DATA_STORE;
     }
-    co_err_t err = store ? co_storage_save(node, entry->sub) : restore_defaults(node, entry->sub);
+    co_err_t err = each_group(node, entry->sub, !store);
     if (err != CO_OK) {
         co_storage_reset_comm(node); /* the capability may have gone with the failure */
         return CO_ABORT_HARDWARE;
