@@ -17,12 +17,13 @@ static inline const co_storage_t *storage_of(const co_node_t *node)
 static const uint16_t k_first[3] = {0, 0x1000, 0x2000};
 static const uint16_t k_last[3] = {0, 0x1FFF, 0x9FFF};
 
-/* Entries a save records: writable from the network, with storage, not a DOMAIN, short
- * enough, and not one of the objects that are commands or logs rather than parameters. */
-static bool is_parameter(const co_od_entry_t *e)
+/* Entries a save of `group` records: in the group's range, writable from the network, with
+ * storage, not a DOMAIN, and not one of the objects that are commands or logs rather than
+ * parameters. */
+static bool is_parameter(const co_od_entry_t *e, co_param_group_t group)
 {
-    if (!(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || e->value == NULL ||
-        e->type == CO_TYPE_DOMAIN) {
+    if (e->index < k_first[group] || e->index > k_last[group] || !(e->attr & CO_OD_WRITE) ||
+        (e->attr & CO_OD_CONST) || e->value == NULL || e->type == CO_TYPE_DOMAIN) {
         return false;
     }
     return e->index != 0x1003 && e->index != 0x1010 && e->index != 0x1011;
@@ -71,7 +72,7 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
     co_err_t err = CO_OK;
     for (uint32_t i = 0; i < od->count && err == CO_OK; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        if (e->index < k_first[group] || e->index > k_last[group] || !is_parameter(e)) {
+        if (!is_parameter(e, group)) {
             continue;
         }
         uint8_t rec[RECORD_HEAD + CO_STORE_VALUE_MAX];
@@ -253,9 +254,8 @@ static bool apply_records(co_node_t *node, co_param_group_t group)
             return false;
         }
         offset += RECORD_HEAD + len;
-        uint16_t index = co_get_u16(rec);
-        const co_od_entry_t *e = co_od_find(od, index, rec[2], NULL);
-        if (e != NULL && index >= k_first[group] && index <= k_last[group] && is_parameter(e) &&
+        const co_od_entry_t *e = co_od_find(od, co_get_u16(rec), rec[2], NULL);
+        if (e != NULL && is_parameter(e, group) &&
             co_od_check(od, e, &rec[RECORD_HEAD], len) == CO_ABORT_NONE) {
             (void)co_od_store(od, e, &rec[RECORD_HEAD], len);
         }
