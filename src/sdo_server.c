@@ -409,7 +409,9 @@ static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, 
             return abort;
         }
         *n += got;
-        if (got == 0 || (*total != CO_OD_SIZE_UNKNOWN && offset + *n >= *total)) {
+        /* (without hooks, as in the compact form, the first read is the whole piece) */
+        if (CO_CONFIG_OD_COMPACT || got == 0 ||
+            (*total != CO_OD_SIZE_UNKNOWN && offset + *n >= *total)) {
             break;
         }
     }
