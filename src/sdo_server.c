@@ -394,6 +394,12 @@ static CO_FAST_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *
 
 /* ---- upload */
 
+/* Whether a read told the value's size: always without hooks (the compact form has none). */
+static bool size_told(uint32_t total)
+{
+    return CO_CONFIG_OD_COMPACT || total != CO_OD_SIZE_UNKNOWN;
+}
+
 /* Read the value from `offset` until `cap` bytes or its end: a read hook may hand out
  * fewer bytes per call than asked (an empty piece ends a value of unknown size). */
 static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, uint8_t *buf,
@@ -410,8 +416,7 @@ static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, 
         }
         *n += got;
         /* (without hooks, as in the compact form, the first read is the whole piece) */
-        if (CO_CONFIG_OD_COMPACT || got == 0 ||
-            (*total != CO_OD_SIZE_UNKNOWN && offset + *n >= *total)) {
+        if (CO_CONFIG_OD_COMPACT || got == 0 || (size_told(*total) && offset + *n >= *total)) {
             break;
         }
     }
@@ -483,7 +488,7 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
         abort_transfer(node, s, CO_ABORT_UNSUPPORTED); /* too long without segments */
         return;
     }
-    s->size_known = total != CO_OD_SIZE_UNKNOWN;
+    s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, UP_SEGMENTED);
     respond(node, s, CO_SDO_SCS_UP_INI | (s->size_known ? CO_SDO_INI_SIZE : 0u), s->size);
@@ -526,7 +531,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
         }
     }
     s->done += n;
-    bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < CO_SDO_SEG_BYTES;
+    bool last = size_told(total) ? s->done >= total : n < CO_SDO_SEG_BYTES;
     r[0] = (uint8_t)(CO_SDO_SCS_UP_SEG | toggle | ((CO_SDO_SEG_BYTES - n) << CO_SDO_SEG_N_SHIFT) |
                      (last ? CO_SDO_SEG_LAST : 0u));
     s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
@@ -661,7 +666,7 @@ static co_abort_t load_sub_block(co_node_t *node, co_sdo_server_t *s, uint32_t *
         return abort;
     }
     s->last_sent =
-        total != CO_OD_SIZE_UNKNOWN ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
+        size_told(total) ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
     s->seq = 0;
     return CO_ABORT_NONE;
 }
@@ -723,11 +728,11 @@ static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uin
         abort_transfer(node, s, abort);
         return;
     }
-    if (pst != 0 && total != CO_OD_SIZE_UNKNOWN && total <= pst) {
+    if (pst != 0 && size_told(total) && total <= pst) {
         initiate_upload(node, s); /* protocol switch: a normal upload serves it better */
         return;
     }
-    s->size_known = total != CO_OD_SIZE_UNKNOWN;
+    s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, BLOCK_UP_START);
     uint8_t size = s->size_known ? CO_SDO_BLK_SIZE : 0u; /* sc = 1: a CRC is offered */
