@@ -665,8 +665,7 @@ static co_abort_t load_sub_block(co_node_t *node, co_sdo_server_t *s, uint32_t *
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    s->last_sent =
-        size_told(total) ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
+    s->last_sent = size_told(total) ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
     s->seq = 0;
     return CO_ABORT_NONE;
 }
