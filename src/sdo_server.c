@@ -432,14 +432,11 @@ static CO_INLINE void answer_expedited(co_node_t *node, co_sdo_server_t *s, uint
     respond(node, s, (uint8_t)(cmd | (n << CO_SDO_INI_N_SHIFT)), value);
 }
 
-/* Up to 4 bytes of wire value as a little-endian word (no call to memcpy). */
-static uint32_t small_value(const uint8_t *wire, uint32_t len)
+/* The first `len` (1..4) bytes of `wire` as a little-endian word: any bytes after them
+ * (a read hook may have left some) are not part of the value. */
+static uint32_t small_value(const uint8_t wire[CO_SDO_EXPEDITED_MAX], uint32_t len)
 {
-    uint32_t v = 0;
-    for (uint32_t i = 0; i < len; i++) {
-        v |= (uint32_t)wire[i] << (8u * i);
-    }
-    return v;
+    return co_get_u32(wire) & (0xFFFFFFFFu >> (8u * (CO_SDO_EXPEDITED_MAX - len)));
 }
 
 /* A plain number of 1, 2 or 4 bytes, read in place. */
