@@ -14,16 +14,14 @@ static inline const co_storage_t *storage_of(const co_node_t *node)
 
 #define RECORD_HEAD 4u /* index (2), sub-index (1), length (1) */
 
-static const uint16_t k_first[3] = {0, 0x1000, 0x2000};
-static const uint16_t k_last[3] = {0, 0x1FFF, 0x9FFF};
-
 /* Entries a save of `group` records: in the group's range, writable from the network, with
  * storage, not a DOMAIN, and not one of the objects that are commands or logs rather than
  * parameters. */
 static bool is_parameter(const co_od_entry_t *e, co_param_group_t group)
 {
-    if (e->index < k_first[group] || e->index > k_last[group] || !(e->attr & CO_OD_WRITE) ||
-        (e->attr & CO_OD_CONST) || e->value == NULL || e->type == CO_TYPE_DOMAIN) {
+    if (e->index < co_group_first(group) || e->index > co_group_last(group) ||
+        !(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || e->value == NULL ||
+        e->type == CO_TYPE_DOMAIN) {
         return false;
     }
     return e->index != 0x1003 && e->index != 0x1010 && e->index != 0x1011;
@@ -274,14 +272,17 @@ static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fau
                                                : CO_NODE_ERR_STORED_APP);
     }
 }
+#endif
 
-/* Called right after the group's defaults were copied (reset application/communication). */
-void co_storage_load(co_node_t *node, co_param_group_t group)
+#if CO_CONFIG_STORAGE
+/* The group's power-on values, then the values stored for it; an image that cannot be
+ * applied whole leaves the power-on values. */
+void co_storage_reset_group(co_node_t *node, co_param_group_t group)
 {
+    co_group_defaults(node, group);
     co_store_fault_t fault = co_storage_verify(node, group);
     if (fault == CO_STORE_INTACT && !apply_records(node, group)) {
-        uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id; /* as nmt.c */
-        co_od_reset(&node->cfg.od, k_first[group], k_last[group], id); /* no half image */
+        co_group_defaults(node, group); /* no half image */
         fault = CO_STORE_READ_ERROR;
     }
     if (fault != CO_STORE_INTACT && fault != CO_STORE_NONE) {
