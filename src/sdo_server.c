@@ -461,13 +461,13 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
     uint8_t first[CO_SDO_EXPEDITED_MAX] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
-    begin(s);
     /* The segments of a long value copy from the wire view (a short path: without it,
      * every piece is read through co_od_read) */
+    const uint8_t *wire = NULL;
     if (CO_SHORT_PATHS && CO_CONFIG_SDO_SEGMENTED) {
-        s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+        wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
     }
-    if (s->wire == NULL) {
+    if (wire == NULL) {
         co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
         if (abort != CO_ABORT_NONE) {
             abort_transfer(node, s, abort);
@@ -475,7 +475,7 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
         }
     } else {
         n = total < sizeof first ? total : sizeof first;
-        co_copy(first, s->wire, n);
+        co_copy(first, wire, n);
     }
     if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= CO_SDO_EXPEDITED_MAX) {
         answer_expedited(node, s, small_value(first, total), total);
@@ -485,6 +485,8 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
         abort_transfer(node, s, CO_ABORT_UNSUPPORTED); /* too long without segments */
         return;
     }
+    begin(s); /* segments follow */
+    s->wire = wire;
     s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, UP_SEGMENTED);
