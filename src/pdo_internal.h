@@ -85,7 +85,7 @@ static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uin
 {
     for (uint8_t i = 0; i < p->count; i++) {
         uint32_t bytes = p->map_bits[i] / 8u;
-        pdo_copy_value(p->map_entry[i]->value, data, bytes);
+        pdo_copy_value(co_od_value(&node->cfg.od, p->map_entry[i]), data, bytes);
         data += bytes;
     }
     if (node->tpdo_listeners != 0) {

@@ -15,7 +15,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *
     uint32_t n;
     uint8_t bits = p->map_bits[i];
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
-        pdo_copy_value(out + pos / 8u, p->map_entry[i]->value, bits / 8u);
+        pdo_copy_value(out + pos / 8u, co_od_value(od, p->map_entry[i]), bits / 8u);
         return;
     }
     if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
@@ -36,7 +36,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
         uint8_t *at = out;
         for (uint8_t i = 0; i < p->count; i++) {
             uint32_t bytes = p->map_bits[i] / 8u;
-            pdo_copy_value(at, p->map_entry[i]->value, bytes);
+            pdo_copy_value(at, co_od_value(&node->cfg.od, p->map_entry[i]), bytes);
             at += bytes;
         }
         return;
@@ -67,7 +67,7 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
     uint8_t *at = f.data;
     for (uint8_t i = 0; i < p->count; i++) {
         uint32_t bytes = p->map_bits[i] / 8u;
-        co_copy_number(at, p->map_entry[i]->value, bytes);
+        co_copy_number(at, co_od_value(&node->cfg.od, p->map_entry[i]), bytes);
         at += bytes;
     }
     (void)co_node_send_hot(node, &f, CO_SVC_PDO);

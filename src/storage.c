@@ -17,10 +17,10 @@ static inline const co_storage_t *storage_of(const co_node_t *node)
 /* Entries a save of `group` records: in the group's range, writable from the network, with
  * storage, not a DOMAIN, and not one of the objects that are commands or logs rather than
  * parameters. */
-static bool is_parameter(const co_od_entry_t *e, co_param_group_t group)
+static bool is_parameter(const co_od_t *od, const co_od_entry_t *e, co_param_group_t group)
 {
     if (e->index < co_group_first(group) || e->index > co_group_last(group) ||
-        !(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || e->value == NULL ||
+        !(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || co_od_value(od, e) == NULL ||
         e->type == CO_TYPE_DOMAIN) {
         return false;
     }
@@ -70,7 +70,7 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
     co_err_t err = CO_OK;
     for (uint32_t i = 0; i < od->count && err == CO_OK; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        if (!is_parameter(e, group)) {
+        if (!is_parameter(od, e, group)) {
             continue;
         }
         uint8_t rec[RECORD_HEAD + CO_STORE_VALUE_MAX];
@@ -253,7 +253,7 @@ static bool apply_records(co_node_t *node, co_param_group_t group)
         }
         offset += RECORD_HEAD + len;
         const co_od_entry_t *e = co_od_find(od, co_get_u16(rec), rec[2], NULL);
-        if (e != NULL && is_parameter(e, group) &&
+        if (e != NULL && is_parameter(od, e, group) &&
             co_od_check(od, e, &rec[RECORD_HEAD], len) == CO_ABORT_NONE) {
             (void)co_od_store(od, e, &rec[RECORD_HEAD], len);
         }
