@@ -99,10 +99,10 @@ co_err_t co_pdo_bind(co_node_t *node)
 #if CO_SHORT_PATHS
 /* After parameters or mapping loaded (NMT states do not change it): may a frame of this
  * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
-static bool fast_widths(const co_pdo_t *p)
+static bool fast_widths(const co_od_t *od, const co_pdo_t *p)
 {
     for (uint8_t i = 0; i < p->count; i++) {
-        uint8_t b = p->map_bits[i];
+        uint8_t b = pdo_item_bits(od, p, i);
         if (b != 8 && b != 16 && b != 32 && b != 64) {
             return false; /* co_copy_number copies 1, 2, 4 or 8 bytes */
         }
@@ -111,10 +111,10 @@ static bool fast_widths(const co_pdo_t *p)
 }
 #endif
 
-static void decide_fast(co_pdo_t *p, bool tpdo)
+static void decide_fast(const co_od_t *od, co_pdo_t *p, bool tpdo)
 {
 #if CO_SHORT_PATHS
-    bool plain = p->plain && fast_widths(p);
+    bool plain = p->plain && fast_widths(od, p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
         co_frame_t f; /* the header, built once */
@@ -127,6 +127,7 @@ static void decide_fast(co_pdo_t *p, bool tpdo)
     bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
     p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
 #else
+    (void)od;
     (void)tpdo;
     p->fast = 0; /* -Os: no short paths */
 #endif
@@ -146,7 +147,7 @@ static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, u
 {
     load_comm(node, p, tpdo, num);
     pdo_load_mapping(node, p, tpdo, num);
-    decide_fast(p, tpdo);
+    decide_fast(&node->cfg.od, p, tpdo);
     restart(node, p, tpdo);
     route(node, p, tpdo, num);
 }
@@ -237,10 +238,10 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
 
 /* ---- events */
 
-static bool maps_entry(const co_pdo_t *p, const co_od_entry_t *entry)
+static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t *entry)
 {
     for (uint8_t i = 0; i < p->count; i++) {
-        if (p->map_entry[i] == entry) {
+        if (pdo_entry(od, p, i) == entry) {
             return true;
         }
     }
@@ -252,7 +253,7 @@ static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
     uint32_t marked = 0;
     for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
-        if (maps_entry(p, entry) && tpdo_event(node, p)) {
+        if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
             marked++;
         }
     }
@@ -329,7 +330,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         load_comm(node, p, r.tpdo, r.num);
         p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
-    decide_fast(p, r.tpdo);
+    decide_fast(&node->cfg.od, p, r.tpdo);
     restart(node, p, r.tpdo);
     count_listeners(node);
     route(node, p, r.tpdo, r.num);

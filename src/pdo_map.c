@@ -48,8 +48,10 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t bits = (uint8_t)value;
-    out->map_entry[k] = NULL;
+    out->map_entry[k] = CO_PDO_NO_ENTRY;
+#if CO_CONFIG_PDO_BIT_MAPPING
     out->map_bits[k] = bits;
+#endif
     if (bits == 0) {
         return CO_ABORT_NO_MAP;
     }
@@ -63,7 +65,15 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     if (e == NULL || !mappable(e, size, tpdo) || !bits_fit(bits, size)) {
         return CO_ABORT_NO_MAP;
     }
+#if CO_CONFIG_OD_COMPACT
+    ptrdiff_t pos = e - od->entries;
+    if (pos >= CO_PDO_NO_ENTRY) {
+        return CO_ABORT_NO_MAP; /* past the positions a PDO slot holds: 65535 entries */
+    }
+    out->map_entry[k] = (uint16_t)pos;
+#else
     out->map_entry[k] = e;
+#endif
     /* A whole number stored as it travels (and no hook to run): the short paths copy it
      * straight to and from the frame. */
     if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL && e->value != NULL &&
@@ -109,11 +119,12 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
         if (e == NULL) {
             return CO_ABORT_VALUE_HIGH;
         }
-        co_abort_t abort = resolve_item(od, (uint32_t)co_od_entry_uint(e), tpdo, out, k);
+        uint32_t item = (uint32_t)co_od_entry_uint(e);
+        co_abort_t abort = resolve_item(od, item, tpdo, out, k);
         if (abort != CO_ABORT_NONE) {
             return abort;
         }
-        total += out->map_bits[k];
+        total += (uint8_t)item; /* the entry's bits */
         if (total > PDO_MAP_BITS_MAX) {
             return CO_ABORT_MAP_LEN;
         }
