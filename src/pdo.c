@@ -117,11 +117,8 @@ static void decide_fast(const co_od_t *od, co_pdo_t *p, bool tpdo)
     bool plain = p->plain && fast_widths(od, p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
-        co_frame_t f; /* the header, built once */
-        co_frame_address(&f, p->cob_id, pdo_bytes(p));
-        p->fast = pdo_active(p) && plain && cyclic ? f.len : 0;
-        p->frame_id = f.id;
-        p->frame_flags = f.flags;
+        bool std_id = !(p->cob_id & CO_COB_EXT); /* its frame: the COB-ID's low 11 bits */
+        p->fast = pdo_active(p) && plain && cyclic && std_id ? pdo_bytes(p) : 0;
         return;
     }
     bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);

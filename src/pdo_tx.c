@@ -62,10 +62,10 @@ static void send_fresh(co_node_t *node, const co_pdo_t *p)
     send_data(node, p, data);
 }
 
-/* A TPDO with `fast` set: its frame header is precomputed. */
+/* A TPDO with `fast` set: `fast` bytes of whole values on an 11-bit identifier. */
 void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
 {
-    co_frame_t f = {.id = p->frame_id, .flags = p->frame_flags, .len = p->fast}; /* data zeroed */
+    co_frame_t f = {.id = p->cob_id & CO_ID_STD_MAX, .len = p->fast}; /* data zeroed */
     const co_od_t *od = &node->cfg.od;
     uint8_t *at = f.data;
     for (uint8_t i = 0; i < p->count; i++) {

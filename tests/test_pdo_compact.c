@@ -30,58 +30,58 @@ static values_t v;
 #define U32 CO_TYPE_UNSIGNED32
 #define ENTRY(idx, s, t, a, field)                                                                 \
     {                                                                                              \
-        .index = (idx), .sub = (s), .type = (t), .attr = (a), .size = sizeof v.field,             \
+        .index = (idx), .sub = (s), .type = (t), .attr = (a), .size = sizeof v.field,              \
         .value = &v.field                                                                          \
     }
 
 static const co_od_entry_t entries[] = {
-    ENTRY(0x1005, 0, U32, CO_OD_RW, sync_cob),                    /* 0 */
-    ENTRY(0x1400, 0, U8, CO_OD_CO, rpdo_n),                       /* 1 */
-    ENTRY(0x1400, 1, U32, CO_OD_RW | CO_OD_NODEID, rpdo_cob),     /* 2 */
-    ENTRY(0x1400, 2, U8, CO_OD_RW, rpdo_type),                    /* 3 */
-    ENTRY(0x1600, 0, U8, CO_OD_RW, rmap_n),                       /* 4 */
-    ENTRY(0x1600, 1, U32, CO_OD_RW, rmap[0]),                     /* 5 */
-    ENTRY(0x1600, 2, U32, CO_OD_RW, rmap[1]),                     /* 6 */
-    ENTRY(0x1600, 3, U32, CO_OD_RW, rmap[2]),                     /* 7 */
-    ENTRY(0x1800, 0, U8, CO_OD_CO, tpdo_n[0]),                    /* 8 */
-    ENTRY(0x1800, 1, U32, CO_OD_RW | CO_OD_NODEID, tpdo_cob[0]),  /* 9 */
-    ENTRY(0x1800, 2, U8, CO_OD_RW, tpdo_type[0]),                 /* 10 */
-    ENTRY(0x1801, 0, U8, CO_OD_CO, tpdo_n[1]),                    /* 11 */
-    ENTRY(0x1801, 1, U32, CO_OD_RW | CO_OD_NODEID, tpdo_cob[1]),  /* 12 */
-    ENTRY(0x1801, 2, U8, CO_OD_RW, tpdo_type[1]),                 /* 13 */
-    ENTRY(0x1A00, 0, U8, CO_OD_RW, tmap_n[0]),                    /* 14 */
-    ENTRY(0x1A00, 1, U32, CO_OD_RW, tmap[0]),                     /* 15 */
-    ENTRY(0x1A01, 0, U8, CO_OD_RW, tmap_n[1]),                    /* 16 */
-    ENTRY(0x1A01, 1, U32, CO_OD_RW, tmap[1]),                     /* 17 */
-    ENTRY(0x2000, 0, U32, CO_OD_RW | CO_OD_RPDO, in32),           /* 18 */
+    ENTRY(0x1005, 0, U32, CO_OD_RW, sync_cob),                       /* 0 */
+    ENTRY(0x1400, 0, U8, CO_OD_CO, rpdo_n),                          /* 1 */
+    ENTRY(0x1400, 1, U32, CO_OD_RW | CO_OD_NODEID, rpdo_cob),        /* 2 */
+    ENTRY(0x1400, 2, U8, CO_OD_RW, rpdo_type),                       /* 3 */
+    ENTRY(0x1600, 0, U8, CO_OD_RW, rmap_n),                          /* 4 */
+    ENTRY(0x1600, 1, U32, CO_OD_RW, rmap[0]),                        /* 5 */
+    ENTRY(0x1600, 2, U32, CO_OD_RW, rmap[1]),                        /* 6 */
+    ENTRY(0x1600, 3, U32, CO_OD_RW, rmap[2]),                        /* 7 */
+    ENTRY(0x1800, 0, U8, CO_OD_CO, tpdo_n[0]),                       /* 8 */
+    ENTRY(0x1800, 1, U32, CO_OD_RW | CO_OD_NODEID, tpdo_cob[0]),     /* 9 */
+    ENTRY(0x1800, 2, U8, CO_OD_RW, tpdo_type[0]),                    /* 10 */
+    ENTRY(0x1801, 0, U8, CO_OD_CO, tpdo_n[1]),                       /* 11 */
+    ENTRY(0x1801, 1, U32, CO_OD_RW | CO_OD_NODEID, tpdo_cob[1]),     /* 12 */
+    ENTRY(0x1801, 2, U8, CO_OD_RW, tpdo_type[1]),                    /* 13 */
+    ENTRY(0x1A00, 0, U8, CO_OD_RW, tmap_n[0]),                       /* 14 */
+    ENTRY(0x1A00, 1, U32, CO_OD_RW, tmap[0]),                        /* 15 */
+    ENTRY(0x1A01, 0, U8, CO_OD_RW, tmap_n[1]),                       /* 16 */
+    ENTRY(0x1A01, 1, U32, CO_OD_RW, tmap[1]),                        /* 17 */
+    ENTRY(0x2000, 0, U32, CO_OD_RW | CO_OD_RPDO, in32),              /* 18 */
     ENTRY(0x2001, 0, U16, CO_OD_RW | CO_OD_RPDO | CO_OD_TPDO, in16), /* 19 */
-    ENTRY(0x2100, 0, U32, CO_OD_RW | CO_OD_TPDO, out32),          /* 20 */
+    ENTRY(0x2100, 0, U32, CO_OD_RW | CO_OD_TPDO, out32),             /* 20 */
 };
 
 /* Power-on values: position (2 bytes), length (1), wire bytes. RPDO1 maps 0x2000 (32 bits),
  * a dummy UNSIGNED8 (0x0005, 8 bits) and 0x2001 (16 bits); TPDO1 (type 1: every SYNC) maps
  * 0x2100, TPDO2 (type 254: on events) 0x2001. */
 static const uint8_t k_image[] = {
-    0,  0, 1, 0x80,                   /* 0x1005: SYNC on 0x80 */
-    1,  0, 1, 2,                      /* 0x1400 sub0 */
-    2,  0, 2, 0x00, 0x02,             /* 0x200 + node-ID */
-    3,  0, 1, 255,                    /* asynchronous */
-    4,  0, 1, 3,                      /* three entries */
-    5,  0, 4, 0x20, 0x00, 0x00, 0x20, /* 0x2000 sub0, 32 bits */
-    6,  0, 4, 0x08, 0x00, 0x05, 0x00, /* dummy UNSIGNED8 */
-    7,  0, 4, 0x10, 0x00, 0x01, 0x20, /* 0x2001 sub0, 16 bits */
-    8,  0, 1, 2,                      /* 0x1800 sub0 */
-    9,  0, 2, 0x80, 0x01,             /* 0x180 + node-ID */
-    10, 0, 1, 1,                      /* every SYNC */
-    11, 0, 1, 2,                      /* 0x1801 sub0 */
-    12, 0, 2, 0x80, 0x02,             /* 0x280 + node-ID */
-    13, 0, 1, 254,                    /* on events */
-    14, 0, 1, 1,                      /* one entry */
-    15, 0, 4, 0x20, 0x00, 0x00, 0x21, /* 0x2100 sub0, 32 bits */
-    16, 0, 1, 1,                      /* one entry */
-    17, 0, 4, 0x10, 0x00, 0x01, 0x20, /* 0x2001 sub0, 16 bits */
-    20, 0, 4, 0x44, 0x33, 0x22, 0x11, /* 0x2100: 0x11223344 */
-    0xFF, 0xFF, 0,                    /* end */
+    0,    0,    1, 0x80,                   /* 0x1005: SYNC on 0x80 */
+    1,    0,    1, 2,                      /* 0x1400 sub0 */
+    2,    0,    2, 0x00, 0x02,             /* 0x200 + node-ID */
+    3,    0,    1, 255,                    /* asynchronous */
+    4,    0,    1, 3,                      /* three entries */
+    5,    0,    4, 0x20, 0x00, 0x00, 0x20, /* 0x2000 sub0, 32 bits */
+    6,    0,    4, 0x08, 0x00, 0x05, 0x00, /* dummy UNSIGNED8 */
+    7,    0,    4, 0x10, 0x00, 0x01, 0x20, /* 0x2001 sub0, 16 bits */
+    8,    0,    1, 2,                      /* 0x1800 sub0 */
+    9,    0,    2, 0x80, 0x01,             /* 0x180 + node-ID */
+    10,   0,    1, 1,                      /* every SYNC */
+    11,   0,    1, 2,                      /* 0x1801 sub0 */
+    12,   0,    2, 0x80, 0x02,             /* 0x280 + node-ID */
+    13,   0,    1, 254,                    /* on events */
+    14,   0,    1, 1,                      /* one entry */
+    15,   0,    4, 0x20, 0x00, 0x00, 0x21, /* 0x2100 sub0, 32 bits */
+    16,   0,    1, 1,                      /* one entry */
+    17,   0,    4, 0x10, 0x00, 0x01, 0x20, /* 0x2001 sub0, 16 bits */
+    20,   0,    4, 0x44, 0x33, 0x22, 0x11, /* 0x2100: 0x11223344 */
+    0xFF, 0xFF, 0,                         /* end */
 };
 
 typedef struct sent {
