@@ -117,6 +117,16 @@ typedef struct co_route {
     uint8_t slot;
 } co_route_t;
 
+/** A frame waiting in the transmit queue and the service that sent it (0: none), kept in
+ *  the frame's padding where it has some (2 bytes on the usual targets). Internal. */
+typedef union co_txq_slot {
+    co_frame_t frame;
+    struct {
+        uint8_t frame_bytes[offsetof(co_frame_t, data) + CO_FRAME_DATA_MAX];
+        uint16_t service;
+    } tag;
+} co_txq_slot_t;
+
 struct co_node_wiring; /* internal (src/kernel.h) */
 
 /** The node. Fields are internal; read them through the functions below. The small fields
@@ -172,10 +182,8 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
 #endif
 
-    /* Transmit queue, sorted by COB-ID (ties in arrival order): the frames and, beside them
-     * (not padded into each), the service that sent each (0: none). */
-    co_frame_t txq[CO_TX_QUEUE_LEN];
-    uint16_t txq_service[CO_TX_QUEUE_LEN];
+    /* Transmit queue, sorted by COB-ID (ties in arrival order). */
+    co_txq_slot_t txq[CO_TX_QUEUE_LEN];
     /* Receive routes, sorted by key. */
     co_route_t routes[CO_RX_ROUTES_MAX];
 
