@@ -109,14 +109,6 @@ typedef struct co_node_stats {
     uint32_t tx_gated;     /**< service frames the NMT state no longer allowed to send */
 } co_node_stats_t;
 
-/** One receive route: COB-ID key -> service and slot. Internal. */
-typedef struct co_route {
-    uint32_t key;     /**< id, with bit 31 set for 29-bit ids */
-    uint16_t service; /**< co_service_t bit the NMT state must allow */
-    uint8_t kind;
-    uint8_t slot;
-} co_route_t;
-
 /** A frame waiting in the transmit queue and the service that sent it (0: none), kept in
  *  the frame's padding where it has some (2 bytes on the usual targets). Internal. */
 typedef union co_txq_slot {
@@ -184,8 +176,11 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
     co_txq_slot_t txq[CO_TX_QUEUE_LEN];
-    /* Receive routes, sorted by key. */
-    co_route_t routes[CO_RX_ROUTES_MAX];
+    /* Receive routes, sorted by key (then owner): the keys (id, bit 31 set for 29-bit ids)
+     * and, beside them (not padded into each), their owners: route kind and slot. */
+    uint32_t route_keys[CO_RX_ROUTES_MAX];
+    uint8_t route_kind[CO_RX_ROUTES_MAX];
+    uint8_t route_slot[CO_RX_ROUTES_MAX];
 
     co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
     co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];
