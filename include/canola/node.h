@@ -76,14 +76,14 @@ typedef enum co_node_error {
 } co_node_error_t;
 
 typedef struct co_node_config {
-    uint8_t node_id; /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
-    co_od_t od;      /**< the object dictionary; its entries must outlive the node */
+    uint8_t node_id;         /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
+    bool self_start;         /**< enter OPERATIONAL by itself after boot-up */
+    uint16_t boot_time_ms;   /**< report consumed nodes not heard this long after reset
+                                  communication (CO_EC_NOT_BOOTED); 0 = off */
+    uint16_t sdo_timeout_ms; /**< SDO server and client time-out; 0 = 1000 ms */
+    co_od_t od;              /**< the object dictionary; its entries must outlive the node */
     co_driver_t driver;
     const co_storage_t *storage; /**< parameter storage (0x1010/0x1011), or NULL */
-    bool self_start;             /**< enter OPERATIONAL by itself after boot-up */
-    uint16_t boot_time_ms;       /**< report consumed nodes not heard this long after reset
-                                      communication (CO_EC_NOT_BOOTED); 0 = off */
-    uint16_t sdo_timeout_ms;     /**< SDO server and client time-out; 0 = 1000 ms */
     void *user;                  /**< first argument of every callback below */
     /** Optional callbacks. */
     void (*on_state)(void *user, co_nmt_state_t state);
@@ -155,6 +155,10 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_node_config_t cfg;
     co_time_t time;
     co_emcy_t emcy;
+    /* The owners of the receive routes (route_keys below): route kind and slot. Here, after
+     * the 2-byte fields, where they fill what would be padding. */
+    uint8_t route_kind[CO_RX_ROUTES_MAX];
+    uint8_t route_slot[CO_RX_ROUTES_MAX];
 
 #if CO_HB_CONSUMERS_MAX > 0
     /* Heartbeat consumer (0x1016). */
@@ -176,11 +180,9 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
 
     /* Transmit queue, sorted by COB-ID (ties in arrival order). */
     co_txq_slot_t txq[CO_TX_QUEUE_LEN];
-    /* Receive routes, sorted by key (then owner): the keys (id, bit 31 set for 29-bit ids)
-     * and, beside them (not padded into each), their owners: route kind and slot. */
+    /* Receive routes, sorted by key (then owner): the keys (id, bit 31 set for 29-bit ids);
+     * their owners are route_kind and route_slot above (not padded into each). */
     uint32_t route_keys[CO_RX_ROUTES_MAX];
-    uint8_t route_kind[CO_RX_ROUTES_MAX];
-    uint8_t route_slot[CO_RX_ROUTES_MAX];
 
     co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
     co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];
