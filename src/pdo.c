@@ -65,7 +65,6 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
     pdo_clear(p, PDO_F_PENDING | PDO_F_SAMPLED | PDO_F_STARTED | PDO_F_WAITING);
     pdo_timers_restart(p);
     p->sync_count = 0;
-    p->len = 0;
     if (tpdo) {
         tpdo_start(node, p);
     }
@@ -114,7 +113,7 @@ static bool fast_widths(const co_od_t *od, const co_pdo_t *p)
 static void decide_fast(const co_od_t *od, co_pdo_t *p, bool tpdo)
 {
 #if CO_SHORT_PATHS
-    bool plain = p->plain && fast_widths(od, p);
+    bool plain = pdo_has(p, PDO_F_PLAIN) && fast_widths(od, p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
         bool std_id = !(p->cob_id & CO_COB_EXT); /* its frame: the COB-ID's low 11 bits */
@@ -325,7 +324,8 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     } else {
         uint8_t flags = p->flags;
         load_comm(node, p, r.tpdo, r.num);
-        p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
+        p->flags =
+            (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR | PDO_F_PLAIN)));
     }
     decide_fast(&node->cfg.od, p, r.tpdo);
     restart(node, p, r.tpdo);

@@ -38,6 +38,7 @@ uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
 #define PDO_F_WAITING 0x10u   /* RPDO 0..240: data[] waits for the next SYNC */
 #define PDO_F_TIMED_OUT 0x20u /* RPDO: deadline missed and reported, until the next RPDO */
 #define PDO_F_LEN_ERROR 0x40u /* RPDO: raised 0x8210/0x8220, until a frame of the right length */
+#define PDO_F_PLAIN 0x80u     /* every item a whole value copied as stored (short paths only) */
 #define PDO_RTR_NOT_ALLOWED 0x40000000u /* TPDO COB-ID bit 30 */
 #define PDO_VALUE_MAX 8u                /* bytes of the widest mappable value (64 bits) */
 
@@ -160,7 +161,7 @@ static inline uint16_t pdo_map_index(bool tpdo, uint16_t num)
 /* pdo_tx.c */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
-void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* p->plain: pack, send */
+void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* `fast` set: pack, send */
 void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
 
 /* pdo_rx.c */

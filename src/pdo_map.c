@@ -102,7 +102,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
 {
     out->count = 0;
     out->bits = 0;
-    out->plain = false;
+    pdo_clear(out, PDO_F_PLAIN);
     memset(out->map_direct, 0, sizeof out->map_direct);
     if (n == 0) {
         return CO_ABORT_NONE;
@@ -131,7 +131,9 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
-    out->plain = CO_SHORT_PATHS && all_direct(out);
+    if (CO_SHORT_PATHS && all_direct(out)) {
+        pdo_set(out, PDO_F_PLAIN);
+    }
     return CO_ABORT_NONE;
 }
 
@@ -161,6 +163,7 @@ co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uin
         return CO_ABORT_NONE; /* the length check has refused it already */
     }
     co_pdo_t trial;
+    trial.flags = 0; /* (resolve_mapping keeps the state bits: there are none) */
     return resolve_mapping(&node->cfg.od, idx, data[0], tpdo, &trial);
 }
 #endif

@@ -51,7 +51,7 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const co_o
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    if (CO_SHORT_PATHS && p->plain) {
+    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) {
         pdo_apply_plain(node, p, data);
     } else {
         const co_od_t *od = &node->cfg.od;
@@ -122,8 +122,7 @@ static CO_SIZE_NOINLINE void hold_for_sync(co_node_t *node, co_pdo_t *p, const c
     if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
-    co_copy(p->data, frame->data, frame->len);
-    p->len = frame->len;
+    co_copy(p->data, frame->data, frame->len); /* at least the mapped bits (rx_general) */
     pdo_set(p, PDO_F_WAITING);
 }
 

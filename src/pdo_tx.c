@@ -34,7 +34,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
 {
     const co_od_t *od = &node->cfg.od;
     co_zero(out, CO_FRAME_DATA_MAX);
-    if (CO_SHORT_PATHS && p->plain) { /* whole values as stored: one copy each */
+    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) { /* whole values as stored: one copy each */
         uint8_t *at = out;
         for (uint8_t i = 0; i < p->count; i++) {
             uint32_t bytes = pdo_item_bits(od, p, i) / 8u;

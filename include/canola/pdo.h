@@ -92,10 +92,7 @@ typedef struct co_pdo {
     uint8_t bits;       /**< mapped bits in all */
     uint8_t type;       /**< transmission type */
     uint8_t sync_count; /**< SYNCs counted towards the next transmission */
-    uint8_t flags;      /**< internal state bits */
-    uint8_t len;        /**< RPDO: bytes of the frame waiting for the next SYNC */
-    bool plain;         /**< every item a whole byte-aligned value copied as stored (set
-                           and used by the short paths only, as map_direct) */
+    uint8_t flags;      /**< internal state bits (src/pdo_internal.h) */
     uint8_t fast;       /**< the short path's frame length, else 0. RPDO: active, plain,
                            asynchronous, no deadline; TPDO: active, plain, type 1..240,
                            no SYNC start value, an 11-bit COB-ID */
