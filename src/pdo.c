@@ -76,7 +76,7 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
 {
     uint16_t count = 0;
-    for (uint16_t n = 0; n < max; n++) {
+    for (unsigned n = 0; n < max; n++) {
         if (co_od_find(od, (uint16_t)(base + n), 1, NULL) != NULL) {
             count = (uint16_t)(n + 1u);
         }
@@ -100,7 +100,7 @@ co_err_t co_pdo_bind(co_node_t *node)
  * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
 static bool fast_widths(const co_od_t *od, const co_pdo_t *p)
 {
-    for (uint8_t i = 0; i < p->count; i++) {
+    for (unsigned i = 0; i < p->count; i++) {
         uint8_t b = pdo_item_bits(od, p, i);
         if (b != 8 && b != 16 && b != 32 && b != 64) {
             return false; /* co_copy_number copies 1, 2, 4 or 8 bytes */
@@ -158,7 +158,7 @@ static void count_listeners(co_node_t *node)
     }
     uint16_t listeners = 0;
     uint16_t sync_end = 0;
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
+    for (unsigned n = 0; n < node->tpdo_count; n++) {
         const co_pdo_t *p = &node->tpdo[n];
         if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
             listeners++;
@@ -170,7 +170,7 @@ static void count_listeners(co_node_t *node)
     node->tpdo_listeners = listeners;
     node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
     uint16_t rx_end = 0;
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < node->rpdo_count; n++) {
         if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
             rx_end = (uint16_t)(n + 1u);
         }
@@ -183,8 +183,8 @@ void co_pdo_reset_comm(co_node_t *node)
     for (int tpdo = 0; tpdo <= 1; tpdo++) {
         uint16_t count;
         co_pdo_t *table = pdo_table(node, tpdo, &count);
-        for (uint16_t n = 0; n < count; n++) {
-            load_pdo(node, &table[n], tpdo, n);
+        for (unsigned n = 0; n < count; n++) {
+            load_pdo(node, &table[n], tpdo, (uint16_t)n);
         }
     }
     count_listeners(node);
@@ -192,10 +192,10 @@ void co_pdo_reset_comm(co_node_t *node)
 
 void co_pdo_state_entered(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < node->rpdo_count; n++) {
         restart(node, &node->rpdo[n], false);
     }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
+    for (unsigned n = 0; n < node->tpdo_count; n++) {
         restart(node, &node->tpdo[n], true);
     }
 }
@@ -216,12 +216,12 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
      * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
      * Both loops test the NMT state first (an application callback may change it). */
-    for (uint16_t n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
+    for (unsigned n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n);
         }
     }
-    for (uint16_t n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
+    for (unsigned n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (!CO_SHORT_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);
@@ -236,7 +236,7 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
 
 static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t *entry)
 {
-    for (uint8_t i = 0; i < p->count; i++) {
+    for (unsigned i = 0; i < p->count; i++) {
         if (pdo_entry(od, p, i) == entry) {
             return true;
         }
@@ -247,7 +247,7 @@ static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t
 static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t marked = 0;
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < node->tpdo_count && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
             marked++;

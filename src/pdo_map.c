@@ -44,7 +44,7 @@ static bool bits_fit(uint8_t bits, uint32_t size)
 
 /* One mapping entry value (index << 16 | sub << 8 | bits) into slot k of `out`. */
 static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_pdo_t *out,
-                               uint8_t k)
+                               unsigned k)
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t bits = (uint8_t)value;
@@ -87,7 +87,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
  * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
 static bool all_direct(const co_pdo_t *p)
 {
-    for (uint8_t i = 0; i < p->count; i++) {
+    for (unsigned i = 0; i < p->count; i++) {
         if (!pdo_direct(p, i)) {
             return false; /* a direct item is whole bytes: the next one stays aligned */
         }
@@ -114,7 +114,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
         return CO_ABORT_MAP_LEN;
     }
     uint32_t total = 0;
-    for (uint8_t k = 0; k < n; k++) {
+    for (unsigned k = 0; k < n; k++) {
         const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(k + 1u), NULL);
         if (e == NULL) {
             return CO_ABORT_VALUE_HIGH;

@@ -17,7 +17,7 @@
 /* Slot i's value (entry e, `bits` of it) from the frame at bit `pos`; false when the
  * object's write hook refused it (then nothing changed). A whole value is stored as it
  * comes; a value mapped with fewer bits keeps the bits the frame does not carry. */
-static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const co_od_entry_t *e,
+static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_od_entry_t *e,
                        uint8_t bits, const uint8_t *data, uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
@@ -58,7 +58,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
         const co_od_entry_t *stored[CO_PDO_MAP_MAX];
         uint8_t count = 0;
         uint32_t pos = 0;
-        for (uint8_t i = 0; i < p->count; i++) {
+        for (unsigned i = 0; i < p->count; i++) {
             const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
             uint8_t bits = pdo_item_bits(od, p, i);
             if (e != NULL && store_item(node, p, i, e, bits, data, pos)) {
@@ -66,7 +66,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
             }
             pos += bits;
         }
-        for (uint8_t i = 0; i < count; i++) {
+        for (unsigned i = 0; i < count; i++) {
             co_pdo_changed(node, stored[i]);
         }
     }
@@ -78,7 +78,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 /* Another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < node->rpdo_count; n++) {
         const co_pdo_t *p = &node->rpdo[n];
         if (p != self && pdo_has(p, flag)) {
             return true;
@@ -154,7 +154,7 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 {
     const co_pdo_t *p = &node->rpdo[rpdo];
     if (node->tpdo_listeners != 0) {
-        for (uint8_t i = 0; i < p->count; i++) {
+        for (unsigned i = 0; i < p->count; i++) {
             co_pdo_changed(node, pdo_mapped(&node->cfg.od, p, i));
         }
     }
@@ -188,7 +188,7 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
         !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
         const co_od_t *od = &node->cfg.od;
         const uint8_t *data = frame->data;
-        for (uint8_t i = 0; i < p->count; i++) {
+        for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
             uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
             co_copy_number(pdo_mapped(od, p, i)->value, data, bytes);
             data += bytes;

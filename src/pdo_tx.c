@@ -10,7 +10,7 @@ static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
 /* Slot i's value into the frame at bit `pos`: whole bytes straight from co_od_read,
  * anything else through a bit copy of the value's low bits. */
-static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *out, uint32_t pos)
+static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
     const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
@@ -36,7 +36,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
     co_zero(out, CO_FRAME_DATA_MAX);
     if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) { /* whole values as stored: one copy each */
         uint8_t *at = out;
-        for (uint8_t i = 0; i < p->count; i++) {
+        for (unsigned i = 0; i < p->count; i++) {
             uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
             pdo_copy_value(at, pdo_mapped(od, p, i)->value, bytes);
             at += bytes;
@@ -44,7 +44,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
         return;
     }
     uint32_t pos = 0;
-    for (uint8_t i = 0; i < p->count; i++) {
+    for (unsigned i = 0; i < p->count; i++) {
         pack_item(od, p, i, out, pos);
         pos += pdo_item_bits(od, p, i);
     }
@@ -68,7 +68,7 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
     co_frame_t f = {.id = p->cob_id & CO_ID_STD_MAX, .len = p->fast}; /* data zeroed */
     const co_od_t *od = &node->cfg.od;
     uint8_t *at = f.data;
-    for (uint8_t i = 0; i < p->count; i++) {
+    for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
         uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
         co_copy_number(at, pdo_mapped(od, p, i)->value, bytes);
         at += bytes;

@@ -14,7 +14,7 @@
 
 /* The owner of route i as one number, by which the owners of one key rank: the lower kind,
  * then the lower slot, comes first. */
-static uint16_t owner_at(const co_node_t *node, uint16_t i)
+static uint16_t owner_at(const co_node_t *node, unsigned i)
 {
     return (uint16_t)((unsigned)node->route_kind[i] << 8 | node->route_slot[i]);
 }
@@ -33,9 +33,9 @@ static uint16_t owned(const co_node_t *node, uint16_t owner)
  * takes the frames, the others wait behind it, their key marked SHADOW. */
 static void settle(co_node_t *node, uint32_t key)
 {
-    uint16_t first = node->route_count;
+    unsigned first = node->route_count;
     uint16_t first_owner = UINT16_MAX; /* above every owner: kinds are below 0xFF */
-    for (uint16_t i = 0; i < node->route_count; i++) {
+    for (unsigned i = 0; i < node->route_count; i++) {
         if ((node->route_keys[i] & ~SHADOW) == key) {
             node->route_keys[i] = key | SHADOW;
             uint16_t owner = owner_at(node, i);
@@ -51,7 +51,7 @@ static void settle(co_node_t *node, uint32_t key)
 }
 
 /* Route i becomes (key, owner). */
-static CO_SIZE_NOINLINE void put(co_node_t *node, uint16_t i, uint32_t key, uint16_t owner)
+static CO_SIZE_NOINLINE void put(co_node_t *node, unsigned i, uint32_t key, uint16_t owner)
 {
     node->route_keys[i] = key;
     node->route_kind[i] = (uint8_t)(owner >> 8);
@@ -62,12 +62,12 @@ static CO_SIZE_NOINLINE void put(co_node_t *node, uint16_t i, uint32_t key, uint
  * out of place and this runs only on changes. */
 static void sort(co_node_t *node)
 {
-    for (uint16_t i = 1; i < node->route_count; i++) {
+    for (unsigned i = 1; i < node->route_count; i++) {
         uint32_t key = node->route_keys[i];
         uint16_t owner = owner_at(node, i);
-        uint16_t at = i;
+        unsigned at = i;
         for (; at > 0; at--) {
-            uint16_t before = (uint16_t)(at - 1u);
+            unsigned before = at - 1u;
             uint32_t k = node->route_keys[before];
             if (k < key || (k == key && owner_at(node, before) < owner)) {
                 break; /* (no two routes have one owner) */

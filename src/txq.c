@@ -43,7 +43,7 @@ static bool driver_take(co_node_t *node, const co_frame_t *frame)
 }
 
 /* Waiting frame i's service is one the NMT state no longer allows. */
-static bool void_now(const co_node_t *node, uint8_t i)
+static bool void_now(const co_node_t *node, unsigned i)
 {
     uint16_t service = node->txq[i].tag.service;
     return service != 0 && !(node->services & service);
@@ -52,7 +52,7 @@ static bool void_now(const co_node_t *node, uint8_t i)
 /* Move waiting frame `from` (and its service) to place `to`. (co_copy: GCC makes this
  * assignment a call of the C library's memcpy on Cortex-M0, which a build for size does not
  * otherwise link.) */
-static void move(co_node_t *node, uint8_t to, uint8_t from)
+static void move(co_node_t *node, unsigned to, unsigned from)
 {
     co_copy(&node->txq[to], &node->txq[from], sizeof node->txq[to]);
 }
@@ -63,7 +63,7 @@ static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
 {
     uint8_t count = node->txq_count;
     uint8_t kept = 0;
-    for (uint8_t i = 0; i < count; i++) {
+    for (unsigned i = 0; i < count; i++) {
         if (send ? kept == 0 && driver_take(node, &node->txq[i].frame) : void_now(node, i)) {
             node->stats.tx_gated += send ? 0u : 1u;
             continue;
