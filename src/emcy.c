@@ -162,11 +162,10 @@ void co_emcy_reset_comm(co_node_t *node)
 co_abort_t co_emcy_cob_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                    uint32_t len)
 {
-    (void)node;
     if (len != 4) {
         return CO_ABORT_NONE; /* the length check of the entry answers */
     }
-    uint32_t now = (uint32_t)co_od_entry_uint(entry);
+    uint32_t now = (uint32_t)co_od_entry_uint(&node->cfg.od, entry);
     uint32_t next = co_get_u32(data);
     bool both_valid = !(now & CO_COB_INVALID) && !(next & CO_COB_INVALID);
     return (both_valid && next != now) ? CO_ABORT_VALUE : CO_ABORT_NONE;

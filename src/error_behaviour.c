@@ -18,7 +18,7 @@ void co_node_ec_event(co_node_t *node, co_ec_event_kind_t kind, uint8_t node_id,
 
 void co_node_error_behaviour(co_node_t *node)
 {
-    switch (co_entry_uint(node->error_behaviour)) {
+    switch (co_entry_uint(&node->cfg.od, node->error_behaviour)) {
     case 0:
         if (node->nmt_state == CO_NMT_OPERATIONAL) {
             (void)co_nmt_apply(node, CO_NMT_CMD_ENTER_PRE_OPERATIONAL);

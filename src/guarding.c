@@ -12,8 +12,8 @@
 
 static uint64_t life_time_us(const co_node_t *node)
 {
-    uint64_t guard_ms = co_entry_uint(node->guard_time);
-    uint64_t factor = co_entry_uint(node->life_factor);
+    uint64_t guard_ms = co_entry_uint(&node->cfg.od, node->guard_time);
+    uint64_t factor = co_entry_uint(&node->cfg.od, node->life_factor);
     return co_long_ms_to_us((uint32_t)(guard_ms * factor));
 }
 
@@ -50,7 +50,7 @@ void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         }
         return;
     }
-    if (co_entry_uint(node->hb_period) != 0) {
+    if (co_entry_uint(&node->cfg.od, node->hb_period) != 0) {
         return; /* heartbeat and guarding are exclusive: the heartbeat is in use */
     }
     co_frame_t reply = {.id = GUARD_COB_BASE + node->node_id,

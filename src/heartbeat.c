@@ -8,7 +8,7 @@
 
 static uint16_t producer_period_ms(const co_node_t *node)
 {
-    return (uint16_t)co_entry_uint(node->hb_period);
+    return (uint16_t)co_entry_uint(&node->cfg.od, node->hb_period);
 }
 
 /* The producer runs from boot-up on, in every state but initialisation. */

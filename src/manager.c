@@ -223,7 +223,7 @@ static bool watch_heartbeat(co_manager_t *m, uint8_t n, uint16_t ms)
     const co_od_entry_t *e = free_sub != 0 ? co_od_find(od, 0x1016, free_sub, NULL) : NULL;
     uint8_t value[4];
     co_put_u32(value, ((uint32_t)n << 16) | ms);
-    return e != NULL && e->size == sizeof value &&
+    return e != NULL && co_od_size(od, e) == sizeof value &&
            co_node_write(m->node, e, value, sizeof value) == CO_ABORT_NONE;
 }
 

@@ -122,10 +122,11 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
 co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                uint32_t len)
 {
-    if (CO_SHORT_PATHS && entry->index >= 0x2000u && co_od_writes_plain(entry) &&
-        len == entry->size) {
-        co_copy_number(entry->value, data, len); /* what check + store would come to */
-        co_pdo_changed(node, entry);             /* change of state, as below */
+    const co_od_t *od = &node->cfg.od;
+    if (CO_SHORT_PATHS && entry->index >= 0x2000u && co_od_writes_plain(od, entry) &&
+        len == co_od_size(od, entry)) {
+        co_copy_number(co_od_value(od, entry), data, len); /* what check + store would come to */
+        co_pdo_changed(node, entry);                       /* change of state, as below */
         return CO_ABORT_NONE;
     }
     return write_entry_general(node, entry, data, len);

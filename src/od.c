@@ -130,14 +130,26 @@ static bool has_write_hook(const co_od_entry_t *e)
     return h && h->write;
 }
 
-/* The limits of an entry, or NULL (none, or left out of the build). */
-static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e)
+/* Whether an entry of type `t` has limits (co_od_has_limits, its type at hand). */
+static bool has_limits(const co_od_entry_t *e, const type_info_t *t)
 {
-    if (!CO_CONFIG_OD_LIMITS) {
+#if CO_CONFIG_OD_COMPACT /* a side of a number: its limits (of a string: its capacity) */
+    return e->side != 0 && t->wire != 0;
+#else
+    (void)t;
+    return e->limits != NULL;
+#endif
+}
+
+/* The limits of an entry, or NULL (none, or left out of the build). */
+static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e,
+                                       const type_info_t *t)
+{
+    if (!CO_CONFIG_OD_LIMITS || !has_limits(e, t)) {
         return NULL;
     }
 #if CO_CONFIG_OD_COMPACT
-    return e->limits != 0 ? &od->limits[e->limits - 1u] : NULL;
+    return &od->tables->limits[e->side - 1u];
 #else
     (void)od;
     return e->limits;
@@ -285,12 +297,13 @@ static uint64_t widen(const type_info_t *t, bits_t bits)
 
 /* ---- Table checks and look-up. */
 
-static bool storage_ok(const co_od_entry_t *e, const type_info_t *t)
+static bool storage_ok(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
-    if (e->value != NULL) {
+    const void *value = co_od_value(od, e);
+    if (value != NULL) {
         /* a DOMAIN kept in RAM (CO_CONFIG_OD_DOMAIN) needs its buffer */
         if (t->kind == K_DOMAIN) {
-            return CO_CONFIG_OD_DOMAIN && ((const co_od_domain_t *)e->value)->data != NULL;
+            return CO_CONFIG_OD_DOMAIN && ((const co_od_domain_t *)value)->data != NULL;
         }
         return true;
     }
@@ -302,32 +315,51 @@ static bool storage_ok(const co_od_entry_t *e, const type_info_t *t)
     return rd || wr; /* an entry with neither storage nor hooks holds nothing */
 }
 
+#if CO_CONFIG_OD_COMPACT
+/* co_od_entry_t.side names a position its type's side table has: a capacity for each
+ * string and domain (the types of no fixed size), limits or none for a number, none for
+ * the others. */
+static bool side_ok(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+{
+    const co_od_tables_t *tab = od->tables;
+    if (e->side == 0) {
+        return t->wire != 0;
+    }
+    if (tab == NULL) {
+        return false;
+    }
+    if (t->wire == 0) {
+        return tab->sizes != NULL && e->side <= tab->sizes_count && tab->sizes[e->side - 1u] != 0;
+    }
+    return is_number(t) && tab->limits != NULL && e->side <= tab->limits_count;
+}
+#endif
+
 static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
 {
     const type_info_t *t = type_info(e->type);
     if (t->kind == K_NONE) {
         return false;
     }
+#if CO_CONFIG_OD_COMPACT /* the size follows from the type or the side table */
+    if (!side_ok(od, e, t)) {
+        return false; /* refers to a limit or capacity the tables do not have */
+    }
+#else
     if (t->wire != 0 ? e->size != t->wire : e->size == 0) {
         return false;
     }
-    if (is_ustring(t) && (e->size & 1u) != 0) {
+#endif
+    if (is_ustring(t) && (co_od_size(od, e) & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
-    if (!CO_CONFIG_OD_LIMITS && co_od_has_limits(e)) {
+    if (!CO_CONFIG_OD_LIMITS && has_limits(e, t)) {
         return false; /* limits are left out of this build */
     }
-    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && co_od_has_limits(e)) {
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && has_limits(e, t)) {
         return false; /* REAL limits are left out of this build */
     }
-#if CO_CONFIG_OD_COMPACT
-    if (e->limits > od->limits_count || (e->limits != 0 && od->limits == NULL)) {
-        return false; /* refers to limits the table does not have */
-    }
-#else
-    (void)od;
-#endif
-    return storage_ok(e, t);
+    return storage_ok(od, e, t);
 }
 
 /* Entry i is well formed and comes strictly after entry i - 1. */
@@ -557,20 +589,29 @@ static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
     return n;
 }
 
+#if CO_CONFIG_OD_COMPACT
+uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
+{
+    uint32_t wire = type_info(entry->type)->wire;
+    return wire == 0 && entry->side != 0 ? od->tables->sizes[entry->side - 1u] : wire;
+}
+#endif
+
 uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
 {
-    (void)od;
-    if (entry->value == NULL) {
-        return entry->size;
+    const uint8_t *value = co_od_value(od, entry);
+    uint32_t size = co_od_size(od, entry);
+    if (value == NULL) {
+        return size;
     }
     const type_info_t *t = type_info(entry->type);
     if (t->kind == K_VSTRING || is_ustring(t)) {
-        return string_len(entry->value, entry->size, is_ustring(t) ? 2u : 1u);
+        return string_len(value, size, is_ustring(t) ? 2u : 1u);
     }
     if (is_domain(t)) {
-        return min_u32(((const co_od_domain_t *)entry->value)->len, entry->size);
+        return min_u32(((const co_od_domain_t *)(const void *)value)->len, size);
     }
-    return entry->size;
+    return size;
 }
 
 co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
@@ -586,14 +627,16 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
  * they are: on a little-endian host the wire bytes of every number are the first bytes of
  * its storage (an INTEGER24 is the low three bytes of its int32_t). A big-endian host
  * encodes numbers into tmp (when given; NULL without). */
-static const uint8_t *stored_wire(const co_od_entry_t *e, uint8_t *tmp, uint32_t *len)
+static const uint8_t *stored_wire(const co_od_t *od, const co_od_entry_t *e, uint8_t *tmp,
+                                  uint32_t *len)
 {
     const type_info_t *t = type_info(e->type);
-    *len = co_od_value_len(NULL, e);
+    const void *value = co_od_value(od, e);
+    *len = co_od_value_len(od, e);
 #if !LITTLE_ENDIAN_HOST
     if (is_number(t)) {
         if (tmp != NULL) {
-            bits_t bits = native_get(e->value, t);
+            bits_t bits = native_get(value, t);
             for (unsigned i = 0; i < t->wire; i++) {
                 tmp[i] = (uint8_t)(bits >> (8u * i));
             }
@@ -603,16 +646,15 @@ static const uint8_t *stored_wire(const co_od_entry_t *e, uint8_t *tmp, uint32_t
 #else
     (void)tmp;
 #endif
-    return is_domain(t) ? ((const co_od_domain_t *)e->value)->data : e->value;
+    return is_domain(t) ? ((const co_od_domain_t *)value)->data : value;
 }
 
 const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, uint32_t *len)
 {
-    (void)od;
-    if (has_read_hook(entry) || entry->value == NULL) {
+    if (has_read_hook(entry) || co_od_value(od, entry) == NULL) {
         return NULL;
     }
-    return stored_wire(entry, NULL, len);
+    return stored_wire(od, entry, NULL, len);
 }
 
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
@@ -629,12 +671,13 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
         }
         return abort;
     }
-    if (entry->value == NULL) {
+    const void *value = co_od_value(od, entry);
+    if (value == NULL) {
         return CO_ABORT_WRITE_ONLY;
     }
     const type_info_t *t = type_info(entry->type);
     if (CO_SHORT_PATHS && wire_is_native(t) && offset == 0 && cap >= t->wire) {
-        memcpy(buf, entry->value, t->wire); /* a whole number, as stored */
+        memcpy(buf, value, t->wire); /* a whole number, as stored */
         *n = t->wire;
         if (total != NULL) {
             *total = t->wire;
@@ -642,7 +685,7 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
         return CO_ABORT_NONE;
     }
     uint8_t tmp[8];
-    const uint8_t *wire = stored_wire(entry, tmp, &whole);
+    const uint8_t *wire = stored_wire(od, entry, tmp, &whole);
     if (total != NULL) {
         *total = whole;
     }
@@ -659,13 +702,14 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
 
 /* Fixed types need exactly their wire size (validate makes it the entry's size);
  * variable ones at most the capacity. */
-static co_abort_t check_len(const co_od_entry_t *e, const type_info_t *t, uint32_t len)
+static co_abort_t check_len(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t,
+                            uint32_t len)
 {
     uint32_t want = t->wire;
     if (want != 0) {
         return len > want ? CO_ABORT_LEN_HIGH : len < want ? CO_ABORT_LEN_LOW : CO_ABORT_NONE;
     }
-    if (len > e->size) {
+    if (len > co_od_size(od, e)) {
         return CO_ABORT_LEN_HIGH;
     }
     return (is_ustring(t) && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
@@ -719,9 +763,9 @@ co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint
                        uint32_t len)
 {
     const type_info_t *t = type_info(entry->type);
-    co_abort_t abort = check_len(entry, t, len);
+    co_abort_t abort = check_len(od, entry, t, len);
     /* a number with limits, or a BOOLEAN (0 or 1), is decoded; others need not be */
-    const co_od_limits_t *limits = limits_of(od, entry);
+    const co_od_limits_t *limits = limits_of(od, entry, t);
     if (abort == CO_ABORT_NONE && is_number(t) && (limits || t->kind == K_BOOL)) {
         bits_t bits = wire_number(t, data);
         if (t->kind == K_BOOL && bits > 1u) {
@@ -740,22 +784,22 @@ co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint
 co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
                        uint32_t len)
 {
-    if (entry->value == NULL) {
+    uint8_t *value = co_od_value(od, entry);
+    if (value == NULL) {
         if (has_write_hook(entry)) {
             return co_od_hooks_of(entry)->write(od->hook_ctx, entry, 0, data, len, len, true);
         }
         return CO_ABORT_UNSUPPORTED;
     }
     const type_info_t *t = type_info(entry->type);
-    co_abort_t abort = check_len(entry, t, len); /* never overrun the storage */
+    co_abort_t abort = check_len(od, entry, t, len); /* never overrun the storage */
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    uint8_t *value = entry->value;
     if (is_number(t) && !wire_is_native(t)) {
         native_set(value, t, wire_number(t, data));
     } else if (is_domain(t)) {
-        co_od_domain_t *d = entry->value;
+        co_od_domain_t *d = (void *)value;
         if (d->data != data) { /* an SDO download larger than its buffer came in place */
             co_copy(d->data, data, len);
         }
@@ -766,7 +810,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
         if (value != data) {
             co_copy(value, data, len);
         }
-        co_zero(value + len, (t->wire != 0 ? t->wire : entry->size) - len);
+        co_zero(value + len, co_od_size(od, entry) - len); /* (a fixed type's: its wire size) */
     }
     return CO_ABORT_NONE;
 }
@@ -808,16 +852,17 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* ---- Power-on values. */
 
-static void add_node_id(const co_od_entry_t *e, uint8_t node_id)
+static void add_node_id(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
 {
     const type_info_t *t = type_info(e->type);
-    if ((e->attr & CO_OD_NODEID) && is_integer(t) && e->value != NULL) {
-        native_set(e->value, t, native_get(e->value, t) + node_id);
+    void *value = co_od_value(od, e);
+    if ((e->attr & CO_OD_NODEID) && is_integer(t) && value != NULL) {
+        native_set(value, t, native_get(value, t) + node_id);
     }
 }
 
 #if !CO_CONFIG_OD_COMPACT
-static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
+static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
 {
     if (e->dflt == NULL || e->value == NULL) {
         return;
@@ -832,93 +877,106 @@ static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
         return;
     }
     co_copy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
-    add_node_id(e, node_id);
+    add_node_id(od, e, node_id);
 }
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
 {
     uint32_t i = lower_bound(od, key_of(first, 0));
     for (; i < od->count && od->entries[i].index <= last; i++) {
-        reset_entry(&od->entries[i], node_id);
+        reset_entry(od, &od->entries[i], node_id);
     }
 }
 #else
 /* Bytes of storage an entry's power-on value may fill: a number's wire size, the capacity
  * of the others. */
-static uint32_t default_cap(const co_od_entry_t *e)
-{
-    const type_info_t *t = type_info(e->type);
-    return t->wire != 0 ? t->wire : e->size;
-}
+static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e) { return co_od_size(od, e); }
 
-/* One record of the image (co_od_t.defaults) at `p`: its entry's position and value; the
- * next record after it. */
+/* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE
+ * past the last record) and value. */
 typedef struct record {
     uint32_t pos;
     uint32_t len;
     const uint8_t *data;
 } record_t;
 
-static const uint8_t *read_record(const uint8_t *p, record_t *r)
+#define END_OF_IMAGE UINT32_MAX
+#define SKIP_FAR 31u /* a record's head: its position follows */
+#define LEN_FAR 7u   /* a record's head: its length follows */
+
+/* The record at `p`, the first one since the entry before `next`; the next record after
+ * it. */
+static const uint8_t *read_record(const uint8_t *p, uint32_t next, record_t *r)
 {
-    r->pos = (uint32_t)p[0] | (uint32_t)p[1] << 8;
-    r->len = p[2];
-    p += 3;
-    if (r->len == 255u) {
-        r->len = (uint32_t)p[0] | (uint32_t)p[1] << 8;
+    uint32_t head = *p++;
+    r->pos = head == 0 ? END_OF_IMAGE : next + (head & SKIP_FAR);
+    r->len = head >> 5;
+    if ((head & SKIP_FAR) == SKIP_FAR) {
+        r->pos = co_get_u16(p);
+        p += 2;
+    }
+    if (r->len == LEN_FAR) {
+        r->len = co_get_u16(p);
         p += 2;
     }
     r->data = p;
     return p + r->len;
 }
 
-#define END_OF_IMAGE 0xFFFFu
-
 /* A storage of zeros, except a DOMAIN's (kept, as the general form keeps one without a
  * default). */
-static void zero_entry(const co_od_entry_t *e)
+static void zero_entry(const co_od_t *od, const co_od_entry_t *e)
 {
     const type_info_t *t = type_info(e->type);
-    if (e->value != NULL && t->kind != K_DOMAIN) {
-        co_zero(e->value, t->width != 0 ? t->width : e->size);
+    if (t->kind != K_DOMAIN) {
+        co_zero(co_od_value(od, e), t->width != 0 ? t->width : co_od_size(od, e));
     }
 }
 
-static void set_default(const co_od_entry_t *e, const uint8_t *data, uint32_t len)
+static void set_default(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data,
+                        uint32_t len)
 {
     const type_info_t *t = type_info(e->type);
+    void *value = co_od_value(od, e);
     if (is_number(t)) {
         uint8_t wire[8] = {0};
         co_copy(wire, data, len);
-        native_set(e->value, t, wire_number(t, wire));
+        native_set(value, t, wire_number(t, wire));
     } else if (is_domain(t)) {
-        co_od_domain_t *d = e->value;
+        co_od_domain_t *d = value;
         co_copy(d->data, data, len);
         d->len = len;
     } else if (t->kind != K_DOMAIN) {
-        co_copy(e->value, data, len);
+        co_copy(value, data, len);
     }
+}
+
+/* The power-on values' image, or NULL. */
+static const uint8_t *image_of(const co_od_t *od)
+{
+    return od->tables != NULL ? od->tables->defaults : NULL;
 }
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
 {
-    uint32_t from = lower_bound(od, key_of(first, 0));
-    uint32_t end = from;
-    for (; end < od->count && od->entries[end].index <= last; end++) {
-        zero_entry(&od->entries[end]);
+    record_t r = {.pos = END_OF_IMAGE, .len = 0, .data = NULL};
+    const uint8_t *p = image_of(od);
+    if (p != NULL) {
+        p = read_record(p, 0, &r);
     }
-    record_t r;
-    for (const uint8_t *p = od->defaults; p != NULL;) {
-        p = read_record(p, &r);
-        if (r.pos == END_OF_IMAGE || r.pos >= end) {
-            break;
+    /* one pass: each entry in the range zeroed, given its record if it has one (the records
+     * before the range passed over), its node-ID added */
+    for (uint32_t i = lower_bound(od, key_of(first, 0));
+         i < od->count && od->entries[i].index <= last; i++) {
+        const co_od_entry_t *e = &od->entries[i];
+        zero_entry(od, e);
+        while (r.pos < i) {
+            p = read_record(p, r.pos + 1u, &r);
         }
-        if (r.pos >= from) {
-            set_default(&od->entries[r.pos], r.data, r.len);
+        if (r.pos == i) {
+            set_default(od, e, r.data, r.len);
         }
-    }
-    for (uint32_t i = from; i < end; i++) {
-        add_node_id(&od->entries[i], node_id);
+        add_node_id(od, e, node_id);
     }
 }
 
@@ -928,12 +986,12 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
 {
     uint32_t next = 0;
     record_t r;
-    for (const uint8_t *p = od->defaults; p != NULL;) {
-        p = read_record(p, &r);
+    for (const uint8_t *p = image_of(od); p != NULL;) {
+        p = read_record(p, next, &r);
         if (r.pos == END_OF_IMAGE) {
             return true;
         }
-        if (r.pos < next || r.pos >= od->count || r.len > default_cap(&od->entries[r.pos])) {
+        if (r.pos < next || r.pos >= od->count || r.len > default_cap(od, &od->entries[r.pos])) {
             *bad = r.pos < od->count ? r.pos : od->count;
             return false;
         }
@@ -945,10 +1003,10 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
 
 /* ---- Native integer access. */
 
-static bool has_uint(const co_od_entry_t *e)
+static bool has_uint(const co_od_t *od, const co_od_entry_t *e)
 {
     const type_info_t *t = type_info(e->type);
-    return e->value != NULL && (is_integer(t) || t->kind == K_BOOL);
+    return co_od_value(od, e) != NULL && (is_integer(t) || t->kind == K_BOOL);
 }
 
 static co_err_t find_uint(const co_od_t *od, uint16_t index, uint8_t sub,
@@ -958,7 +1016,7 @@ static co_err_t find_uint(const co_od_t *od, uint16_t index, uint8_t sub,
     if (*entry == NULL) {
         return CO_ERR_NOT_FOUND;
     }
-    return has_uint(*entry) ? CO_OK : CO_ERR_ARG;
+    return has_uint(od, *entry) ? CO_OK : CO_ERR_ARG;
 }
 
 co_err_t co_od_get_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t *value)
@@ -966,7 +1024,7 @@ co_err_t co_od_get_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
     const co_od_entry_t *e;
     co_err_t err = find_uint(od, index, sub, &e);
     if (err == CO_OK) {
-        *value = co_od_entry_uint(e);
+        *value = co_od_entry_uint(od, e);
     }
     return err;
 }
@@ -976,16 +1034,16 @@ co_err_t co_od_set_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
     const co_od_entry_t *e;
     co_err_t err = find_uint(od, index, sub, &e);
     if (err == CO_OK) {
-        native_set(e->value, type_info(e->type), (bits_t)value);
+        native_set(co_od_value(od, e), type_info(e->type), (bits_t)value);
     }
     return err;
 }
 
-uint64_t co_od_entry_uint(const co_od_entry_t *entry)
+uint64_t co_od_entry_uint(const co_od_t *od, const co_od_entry_t *entry)
 {
-    if (!has_uint(entry)) {
+    if (!has_uint(od, entry)) {
         return 0;
     }
     const type_info_t *t = type_info(entry->type);
-    return widen(t, native_get(entry->value, t));
+    return widen(t, native_get(co_od_value(od, entry), t));
 }

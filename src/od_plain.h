@@ -11,24 +11,25 @@
 #include "canola/od.h"
 
 /* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place (a short path). */
-static inline uint64_t co_entry_uint(const co_od_entry_t *entry)
+static inline uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry)
 {
     if (entry == NULL) {
         return 0;
     }
-    if (CO_SHORT_PATHS && entry->value != NULL) {
+    const void *value = co_od_value(od, entry);
+    if (CO_SHORT_PATHS && value != NULL) {
         switch (entry->type) {
         case CO_TYPE_UNSIGNED8:
-            return *(const uint8_t *)entry->value;
+            return *(const uint8_t *)value;
         case CO_TYPE_UNSIGNED16:
-            return *(const uint16_t *)entry->value;
+            return *(const uint16_t *)value;
         case CO_TYPE_UNSIGNED32:
-            return *(const uint32_t *)entry->value;
+            return *(const uint32_t *)value;
         default:
             break;
         }
     }
-    return co_od_entry_uint(entry);
+    return co_od_entry_uint(od, entry);
 }
 
 /* The types whose native storage is their wire form (as in od.c: numbers as wide as their
@@ -56,10 +57,10 @@ static inline bool co_od_reads_plain(const co_od_entry_t *e)
 /* A writable entry whose new value is just its `size` wire bytes copied into storage: no
  * hook, no limits (co_od_check would accept any value of the right length, co_od_store
  * would copy it). */
-static inline bool co_od_writes_plain(const co_od_entry_t *e)
+static inline bool co_od_writes_plain(const co_od_t *od, const co_od_entry_t *e)
 {
     return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && co_od_hooks_of(e) == NULL &&
-           !co_od_has_limits(e) && e->value != NULL;
+           !co_od_has_limits(e) && co_od_value(od, e) != NULL;
 }
 
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no

@@ -51,7 +51,7 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     uint16_t idx = pdo_comm_index(tpdo, num);
     const co_od_entry_t *cob = co_od_find(&node->cfg.od, idx, 1, NULL);
     p->flags = cob ? PDO_F_PRESENT : 0;
-    p->cob_id = cob ? (uint32_t)co_od_entry_uint(cob) : CO_COB_INVALID;
+    p->cob_id = cob ? (uint32_t)co_od_entry_uint(&node->cfg.od, cob) : CO_COB_INVALID;
     p->type = (uint8_t)co_od_u32(node, idx, 2, 255);
     pdo_timers_load(node, p, tpdo, idx);
     p->sync_start = tpdo ? (uint8_t)co_od_u32(node, idx, 6, 0) : 0;

@@ -89,6 +89,12 @@ static inline const co_od_entry_t *pdo_entry(const co_od_t *od, const co_pdo_t *
     return p->map_entry[i] != CO_PDO_NO_ENTRY ? pdo_mapped(od, p, i) : NULL;
 }
 
+/* Slot i's storage, for a slot that is no dummy entry. */
+static inline void *pdo_value(const co_od_t *od, const co_pdo_t *p, unsigned i)
+{
+    return co_od_value(od, pdo_mapped(od, p, i));
+}
+
 /* Bits slot i maps: without bit-granular mapping always the whole value (no dummies). */
 static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsigned i)
 {
@@ -96,7 +102,7 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     (void)od;
     return p->map_bits[i];
 #else
-    return (uint8_t)(8u * pdo_mapped(od, p, i)->size);
+    return (uint8_t)(8u * co_od_size(od, pdo_mapped(od, p, i)));
 #endif
 }
 
@@ -116,7 +122,7 @@ static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uin
     const co_od_t *od = &node->cfg.od;
     for (uint8_t i = 0; i < p->count; i++) {
         uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-        pdo_copy_value(pdo_mapped(od, p, i)->value, data, bytes);
+        pdo_copy_value(pdo_value(od, p, i), data, bytes);
         data += bytes;
     }
     if (node->tpdo_listeners != 0) {

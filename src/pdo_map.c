@@ -25,14 +25,14 @@ void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spo
 
 /* An object can carry PDO data in this direction: a fixed size of 1..8 bytes, the PDO
  * attribute, and storage or a hook to read (TPDO) / take (RPDO) the value. */
-static bool mappable(const co_od_entry_t *e, uint32_t size, bool tpdo)
+static bool mappable(const co_od_t *od, const co_od_entry_t *e, uint32_t size, bool tpdo)
 {
     if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > PDO_VALUE_MAX) {
         return false;
     }
     const co_od_hooks_t *hooks = co_od_hooks_of(e);
     bool hook = hooks && (tpdo ? hooks->read != NULL : hooks->write != NULL);
-    return e->value != NULL || hook;
+    return co_od_value(od, e) != NULL || hook;
 }
 
 /* Bits an entry of `size` bytes may map: any 1..8 x size with bit-granular mapping, else
@@ -62,7 +62,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     }
     const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(value >> 8), NULL);
     uint32_t size = e != NULL ? co_type_size((co_type_t)e->type) : 0;
-    if (e == NULL || !mappable(e, size, tpdo) || !bits_fit(bits, size)) {
+    if (e == NULL || !mappable(od, e, size, tpdo) || !bits_fit(bits, size)) {
         return CO_ABORT_NO_MAP;
     }
 #if CO_CONFIG_OD_COMPACT
@@ -76,8 +76,8 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
 #endif
     /* A whole number stored as it travels (and no hook to run): the short paths copy it
      * straight to and from the frame. */
-    if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL && e->value != NULL &&
-        ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u)) {
+    if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL &&
+        co_od_value(od, e) != NULL && ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u)) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }
     return CO_ABORT_NONE;
@@ -119,7 +119,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
         if (e == NULL) {
             return CO_ABORT_VALUE_HIGH;
         }
-        uint32_t item = (uint32_t)co_od_entry_uint(e);
+        uint32_t item = (uint32_t)co_od_entry_uint(od, e);
         co_abort_t abort = resolve_item(od, item, tpdo, out, k);
         if (abort != CO_ABORT_NONE) {
             return abort;

@@ -22,7 +22,7 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
 {
     const co_od_t *od = &node->cfg.od;
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* what co_od_store does */
-        pdo_copy_value(e->value, data + pos / 8u, bits / 8u);
+        pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
         return true;
     }
     uint32_t size = co_type_size((co_type_t)e->type);
@@ -190,7 +190,7 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
         const uint8_t *data = frame->data;
         for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
             uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-            co_copy_number(pdo_mapped(od, p, i)->value, data, bytes);
+            co_copy_number(pdo_value(od, p, i), data, bytes);
             data += bytes;
         }
         if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {

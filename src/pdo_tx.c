@@ -16,7 +16,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t 
     const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
     uint8_t bits = pdo_item_bits(od, p, i);
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
-        pdo_copy_value(out + pos / 8u, e->value, bits / 8u);
+        pdo_copy_value(out + pos / 8u, co_od_value(od, e), bits / 8u);
         return;
     }
     if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
@@ -38,7 +38,7 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
         uint8_t *at = out;
         for (unsigned i = 0; i < p->count; i++) {
             uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-            pdo_copy_value(at, pdo_mapped(od, p, i)->value, bytes);
+            pdo_copy_value(at, pdo_value(od, p, i), bytes);
             at += bytes;
         }
         return;
@@ -70,7 +70,7 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
     uint8_t *at = f.data;
     for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
         uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-        co_copy_number(at, pdo_mapped(od, p, i)->value, bytes);
+        co_copy_number(at, pdo_value(od, p, i), bytes);
         at += bytes;
     }
     (void)co_node_send_hot(node, &f, CO_SVC_PDO);

@@ -186,30 +186,31 @@ static void begin(co_sdo_server_t *s)
 
 static uint32_t received(const co_sdo_server_t *s) { return s->done + s->buf_len; }
 
-static bool streams(const co_sdo_server_t *s)
+static bool streams(const co_od_t *od, const co_sdo_server_t *s)
 {
     const co_od_hooks_t *hooks = co_od_hooks_of(s->entry);
-    return s->entry->value == NULL && hooks && hooks->write;
+    return co_od_value(od, s->entry) == NULL && hooks && hooks->write;
 }
 
 /* The RAM bytes of a DOMAIN or string (a value of no fixed size, kept in storage): a
  * download larger than the buffer is received straight into them, up to the entry's
  * size (the buffer frames the transfer, it does not bound the value). NULL otherwise. */
-static uint8_t *own_storage(const co_sdo_server_t *s)
+static uint8_t *own_storage(const co_od_t *od, const co_sdo_server_t *s)
 {
     const co_od_entry_t *e = s->entry;
-    if (e->value == NULL || co_type_size((co_type_t)e->type) != 0) {
+    void *value = co_od_value(od, e);
+    if (value == NULL || co_type_size((co_type_t)e->type) != 0) {
         return NULL;
     }
-    return e->type == CO_TYPE_DOMAIN ? ((co_od_domain_t *)e->value)->data : (uint8_t *)e->value;
+    return e->type == CO_TYPE_DOMAIN ? ((co_od_domain_t *)value)->data : (uint8_t *)value;
 }
 
 /* Move the buffered bytes into the entry's own storage (own_storage), after those moved
  * before: false when they would not fit. */
-static bool spill(co_sdo_server_t *s)
+static bool spill(const co_od_t *od, co_sdo_server_t *s)
 {
-    uint8_t *storage = own_storage(s);
-    if (storage == NULL || s->done + s->buf_len > s->entry->size) {
+    uint8_t *storage = own_storage(od, s);
+    if (storage == NULL || s->done + s->buf_len > co_od_size(od, s->entry)) {
         return false;
     }
     co_copy(storage + s->done, s->buf, s->buf_len);
@@ -219,7 +220,7 @@ static bool spill(co_sdo_server_t *s)
 }
 
 /* Size checks at initiate: what the entry and the buffer can take. */
-static co_abort_t check_download_size(const co_sdo_server_t *s)
+static co_abort_t check_download_size(const co_od_t *od, const co_sdo_server_t *s)
 {
     uint32_t fixed = co_type_size((co_type_t)s->entry->type);
     if (!s->size_known) {
@@ -228,10 +229,10 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
     if (fixed != 0 && s->size != fixed) {
         return s->size > fixed ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
     }
-    if (fixed == 0 && s->entry->value != NULL && s->size > s->entry->size) {
+    if (fixed == 0 && co_od_value(od, s->entry) != NULL && s->size > co_od_size(od, s->entry)) {
         return CO_ABORT_LEN_HIGH;
     }
-    if (!streams(s) && s->size > CO_SDO_BUF_SIZE && own_storage(s) == NULL) {
+    if (!streams(od, s) && s->size > CO_SDO_BUF_SIZE && own_storage(od, s) == NULL) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
     return CO_ABORT_NONE;
@@ -241,8 +242,8 @@ static co_abort_t check_download_size(const co_sdo_server_t *s)
  * larger than the buffer) into the entry's own storage before the last piece (spill). */
 static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
 {
-    if (!streams(s)) {
-        return spill(s) ? CO_ABORT_NONE : CO_ABORT_LEN_HIGH;
+    if (!streams(&node->cfg.od, s)) {
+        return spill(&node->cfg.od, s) ? CO_ABORT_NONE : CO_ABORT_LEN_HIGH;
     }
     uint32_t total = s->size_known ? s->size : CO_OD_SIZE_UNKNOWN;
     co_abort_t abort =
@@ -259,7 +260,7 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
     /* a block's last segment may carry up to 6 bytes of padding past the value */
     uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
     if (s->buf_len + n > room) {
-        if (!streams(s) && own_storage(s) == NULL) {
+        if (!streams(&node->cfg.od, s) && own_storage(&node->cfg.od, s) == NULL) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
         if (CO_CONFIG_SDO_BLOCK && s->crc_on) { /* the CRC covers data as it leaves the buffer */
@@ -299,7 +300,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
     s->size_known = cmd & CO_SDO_INI_SIZE;
     s->size = co_get_u32(&d[4]);
     s->crc_on = false;
-    co_abort_t abort = check_download_size(s);
+    co_abort_t abort = check_download_size(&node->cfg.od, s);
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
         return;
@@ -318,15 +319,16 @@ static void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
     uint32_t len = received(s);
     if (s->size_known && len != s->size) {
         abort = len > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
-    } else if (streams(s)) {
+    } else if (streams(&node->cfg.od, s)) {
         abort = flush(node, s, true);
-    } else if (s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE && own_storage(s) == NULL) {
+    } else if (s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE &&
+               own_storage(&node->cfg.od, s) == NULL) {
         abort = CO_ABORT_OUT_OF_MEMORY;
     } else if (s->done == 0) {
         store(node, s, s->buf, s->buf_len, ok);
         return;
-    } else if (spill(s)) {
-        store(node, s, own_storage(s), len, ok);
+    } else if (spill(&node->cfg.od, s)) {
+        store(node, s, own_storage(&node->cfg.od, s), len, ok);
         return;
     } else {
         abort = CO_ABORT_LEN_HIGH;
@@ -434,19 +436,20 @@ static uint32_t small_value(const uint8_t *wire, uint32_t len)
 }
 
 /* A plain number of 1, 2 or 4 bytes, read in place. */
-static CO_INLINE uint32_t plain_value(const co_od_entry_t *e)
+static CO_INLINE uint32_t plain_value(const co_od_t *od, const co_od_entry_t *e)
 {
-    if (e->size == 4) {
+    const void *value = co_od_value(od, e);
+    if (co_od_size(od, e) == 4) {
         uint32_t v;
-        memcpy(&v, e->value, 4);
+        memcpy(&v, value, 4);
         return v;
     }
-    if (e->size == 2) {
+    if (co_od_size(od, e) == 2) {
         uint16_t v;
-        memcpy(&v, e->value, 2);
+        memcpy(&v, value, 2);
         return v;
     }
-    return *(const uint8_t *)e->value;
+    return *(const uint8_t *)value;
 }
 
 /* Any other upload: through the dictionary's wire view or its read hook. */
@@ -486,8 +489,9 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
 static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 {
     const co_od_entry_t *e = s->entry;
-    if (CO_SHORT_PATHS && co_od_reads_plain(e) && e->size <= CO_SDO_EXPEDITED_MAX) { /* as stored */
-        answer_expedited(node, s, plain_value(e), e->size);
+    const co_od_t *od = &node->cfg.od;
+    if (CO_SHORT_PATHS && co_od_reads_plain(e) && co_od_size(od, e) <= CO_SDO_EXPEDITED_MAX) {
+        answer_expedited(node, s, plain_value(od, e), co_od_size(od, e)); /* as stored */
         return;
     }
     initiate_upload_general(node, s);
@@ -555,7 +559,7 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
     s->crc_on = d[0] & CO_SDO_BLK_CRC;
     s->size_known = d[0] & CO_SDO_BLK_SIZE;
     s->size = co_get_u32(&d[4]);
-    co_abort_t abort = check_download_size(s);
+    co_abort_t abort = check_download_size(&node->cfg.od, s);
     if (abort != CO_ABORT_NONE) {
         abort_transfer(node, s, abort);
         return;

@@ -19,9 +19,9 @@ static const uint16_t k_last[3] = {0, 0x1FFF, 0x9FFF};
 
 /* Entries a save records: writable from the network, with storage, not a DOMAIN, short
  * enough, and not one of the objects that are commands or logs rather than parameters. */
-static bool is_parameter(const co_od_entry_t *e)
+static bool is_parameter(const co_od_t *od, const co_od_entry_t *e)
 {
-    if (!(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || e->value == NULL ||
+    if (!(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || co_od_value(od, e) == NULL ||
         e->type == CO_TYPE_DOMAIN) {
         return false;
     }
@@ -71,7 +71,7 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
     co_err_t err = CO_OK;
     for (uint32_t i = 0; i < od->count && err == CO_OK; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        if (e->index < k_first[group] || e->index > k_last[group] || !is_parameter(e)) {
+        if (e->index < k_first[group] || e->index > k_last[group] || !is_parameter(od, e)) {
             continue;
         }
         uint8_t rec[RECORD_HEAD + CO_STORE_VALUE_MAX];
@@ -271,7 +271,7 @@ static bool apply_records(co_node_t *node, co_param_group_t group)
         offset += RECORD_HEAD + len;
         uint16_t index = co_get_u16(rec);
         const co_od_entry_t *e = co_od_find(od, index, rec[2], NULL);
-        if (e != NULL && index >= k_first[group] && index <= k_last[group] && is_parameter(e) &&
+        if (e != NULL && index >= k_first[group] && index <= k_last[group] && is_parameter(od, e) &&
             co_od_check(od, e, &rec[RECORD_HEAD], len) == CO_ABORT_NONE) {
             (void)co_od_store(od, e, &rec[RECORD_HEAD], len);
         }
@@ -337,7 +337,7 @@ static uint64_t capability(const co_node_t *node)
 
 static void show_capability(co_node_t *node, const co_od_entry_t *entry, uint64_t value)
 {
-    if (entry != NULL && entry->value != NULL) {
+    if (entry != NULL && co_od_value(&node->cfg.od, entry) != NULL) {
         (void)co_od_set_uint(&node->cfg.od, entry->index, entry->sub, value);
     }
 }

@@ -78,7 +78,7 @@ void co_sync_written(co_node_t *node, const co_od_entry_t *entry)
 {
     co_sync_t *s = &node->sync;
     if (entry->index == 0x1005) {
-        s->cob_id = (uint32_t)co_od_entry_uint(entry);
+        s->cob_id = (uint32_t)co_od_entry_uint(&node->cfg.od, entry);
         co_route_set(node, CO_ROUTE_SYNC, 0, co_cob_key(s->cob_id)); /* (the same: no change) */
     }
     co_sync_producer_written(node, entry->index); /* 0x1007 is read at each use */

@@ -26,7 +26,7 @@ static inline bool co_sync_window_open(const co_node_t *node, uint64_t now_us)
     if (last == CO_TIME_NEVER || now_us < last) {
         return false;
     }
-    uint32_t window = (uint32_t)co_entry_uint(node->sync.window);
+    uint32_t window = (uint32_t)co_entry_uint(&node->cfg.od, node->sync.window);
     return window == 0 || now_us - last < window;
 }
 
@@ -34,7 +34,7 @@ static inline bool co_sync_window_open(const co_node_t *node, uint64_t now_us)
  * the refused value 1 set natively). */
 static inline uint8_t co_sync_overflow(const co_node_t *node)
 {
-    uint8_t n = (uint8_t)co_entry_uint(node->sync.overflow);
+    uint8_t n = (uint8_t)co_entry_uint(&node->cfg.od, node->sync.overflow);
     return n >= 2 ? n : 0;
 }
 

@@ -10,7 +10,7 @@
 
 uint32_t co_sync_producer_period(const co_node_t *node)
 {
-    return (uint32_t)co_entry_uint(node->sync.period);
+    return (uint32_t)co_entry_uint(&node->cfg.od, node->sync.period);
 }
 
 static bool producer_enabled(const co_node_t *node)

@@ -92,7 +92,7 @@ void co_time_written(co_node_t *node, const co_od_entry_t *entry)
     if (entry->index != 0x1012) {
         return;
     }
-    node->time.cob_id = (uint32_t)co_od_entry_uint(entry);
+    node->time.cob_id = (uint32_t)co_od_entry_uint(&node->cfg.od, entry);
     route(node); /* consuming starts or stops, or the identifier moves */
 }
 

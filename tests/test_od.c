@@ -1184,7 +1184,7 @@ static void test_get_set_uint(void)
     CHECK_EQ(i8, -100);
     CHECK_EQ(co_od_set_uint(&od, 0x2002, 0, (uint64_t)-7), CO_OK);
     CHECK_EQ(i24, -7);
-    CHECK_EQ(co_od_entry_uint(&t[2]), (uint64_t)-7);
+    CHECK_EQ(co_od_entry_uint(&od, &t[2]), (uint64_t)-7);
     CHECK_EQ(co_od_set_uint(&od, 0x2003, 0, 0x1FF), CO_OK);
     CHECK_EQ(u8, 0xFF);
     CHECK_EQ(co_od_set_uint(&od, 0x2004, 0, 1), CO_OK);
@@ -1192,7 +1192,7 @@ static void test_get_set_uint(void)
     CHECK_EQ(co_od_get_uint(&od, 0x2004, 0, &v), CO_OK);
     CHECK_EQ(v, 1);
     i40 = -((int64_t)1 << 39);
-    CHECK_EQ(co_od_entry_uint(&t[7]), (uint64_t)i40);
+    CHECK_EQ(co_od_entry_uint(&od, &t[7]), (uint64_t)i40);
 
     v = 77;
     CHECK_EQ(co_od_get_uint(&od, 0x2005, 0, &v), CO_ERR_ARG);
@@ -1202,8 +1202,8 @@ static void test_get_set_uint(void)
     CHECK_EQ(v, 77);
     CHECK_EQ(co_od_get_uint(&od, 0x2008, 0, &v), CO_ERR_NOT_FOUND);
     CHECK_EQ(co_od_set_uint(&od, 0x2000, 1, 0), CO_ERR_NOT_FOUND);
-    CHECK_EQ(co_od_entry_uint(&t[5]), 0);
-    CHECK_EQ(co_od_entry_uint(&t[6]), 0);
+    CHECK_EQ(co_od_entry_uint(&od, &t[5]), 0);
+    CHECK_EQ(co_od_entry_uint(&od, &t[6]), 0);
 
     static example_od_t x;
     co_od_t ex = example_od_init(&x, 250);

@@ -1,10 +1,13 @@
 /* test_od_compact.c -- the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1, the core
- * built so: tests/CMakeLists.txt): power-on values from the image without zeros (numbers
+ * built so: tests/CMakeLists.txt): 8-byte entries (values by offset into one struct, sizes
+ * from the type or the side table), power-on values from the image without zeros (numbers
  * through their wire form, strings, the node-ID, index ranges, DOMAINs kept), limits
- * referred to by position, the checks co_od_validate makes of both, and look-ups through
- * a hash that compares the entries (no key array). */
+ * referred to by position, the checks co_od_validate makes of all of them, and look-ups
+ * through a hash that compares the entries (no key array). */
 #include "canola/od.h"
 #include "check.h"
+
+#include <stddef.h>
 
 #if !CO_CONFIG_OD_COMPACT
 #error "test_od_compact.c needs the core built with CO_CONFIG_OD_COMPACT 1"
@@ -29,53 +32,52 @@ static const co_od_limits_t k_limits[] = {
     {.low = {.u = 1}, .high = {.u = 9}},
 };
 
-/* Records: position (2 bytes), length (1), wire bytes; trailing zeros left out. */
+/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), wire bytes; trailing
+ * zeros left out. */
 static const uint8_t k_image[] = {
-    0,    0,    2, 0x91, 0x01,             /* 0x1000: 0x191 */
-    1,    0,    2, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
-    2,    0,    3, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
-    3,    0,    4, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
-    4,    0,    2, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
-    5,    0,    2, 'h',  'i',              /* 0x2004: "hi" */
-    6,    0,    2, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
-    0xFF, 0xFF, 0,                         /* end */
+    0x40, 0x91, 0x01,             /* 0x1000: 0x191 */
+    0x40, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
+    0x60, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    0x80, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
+    0x40, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
+    0x40, 'h',  'i',              /* 0x2004: "hi" */
+    0x40, 0xAB, 0xCD,             /* 0x2005: a DOMAIN's default */
+    0,                            /* end */
 };
 
-#define ENTRY(idx, t, a, sz, val)                                                                  \
+/* Capacities of the string (1) and the DOMAIN (2). */
+static const uint32_t k_sizes[] = {8, 4};
+
+static const co_od_tables_t k_tables = {
+    .defaults = k_image, .limits = k_limits, .sizes = k_sizes, .limits_count = 2, .sizes_count = 2};
+
+/* An entry whose value is member `m` of values_t, with side table position `s`. */
+#define ENTRY(idx, t, a, m, s)                                                                     \
     {                                                                                              \
-        .index = (idx), .sub = 0, .type = (t), .attr = (a), .size = (sz), .value = (val)           \
+        .index = (idx), .sub = 0, .type = (t), .attr = (a),                                        \
+        .offset = (uint16_t)offsetof(values_t, m), .side = (s)                                     \
     }
 
 static co_od_entry_t entries[] = {
-    ENTRY(0x1000, CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &v.device_type),
-    {.index = 0x2000,
-     .type = CO_TYPE_INTEGER16,
-     .attr = CO_OD_RW,
-     .size = 2,
-     .value = &v.offset,
-     .limits = 1},
-    ENTRY(0x2001, CO_TYPE_INTEGER24, CO_OD_RW, 3, &v.i24),
-    ENTRY(0x2002, CO_TYPE_REAL32, CO_OD_RW, 4, &v.gain),
-    ENTRY(0x2003, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, 4, &v.cob),
-    ENTRY(0x2004, CO_TYPE_VISIBLE_STRING, CO_OD_RW, 8, v.name),
-    ENTRY(0x2005, CO_TYPE_DOMAIN, CO_OD_RW, 4, &v.log),
-    {.index = 0x2006,
-     .type = CO_TYPE_UNSIGNED8,
-     .attr = CO_OD_RW,
-     .size = 1,
-     .value = &v.level,
-     .limits = 2},
+    ENTRY(0x1000, CO_TYPE_UNSIGNED32, CO_OD_RO, device_type, 0),
+    ENTRY(0x2000, CO_TYPE_INTEGER16, CO_OD_RW, offset, 1), /* limits 1 */
+    ENTRY(0x2001, CO_TYPE_INTEGER24, CO_OD_RW, i24, 0),
+    ENTRY(0x2002, CO_TYPE_REAL32, CO_OD_RW, gain, 0),
+    ENTRY(0x2003, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, cob, 0),
+    ENTRY(0x2004, CO_TYPE_VISIBLE_STRING, CO_OD_RW, name, 1), /* capacity 1: 8 */
+    ENTRY(0x2005, CO_TYPE_DOMAIN, CO_OD_RW, log, 2),          /* capacity 2: 4 */
+    ENTRY(0x2006, CO_TYPE_UNSIGNED8, CO_OD_RW, level, 2),     /* limits 2 */
 };
 
 #define COUNT ((uint32_t)(sizeof entries / sizeof entries[0]))
 
+/* The side tables a test changes (a copy of k_tables). */
+static co_od_tables_t tables;
+
 static co_od_t make_od(void)
 {
-    co_od_t od = {.entries = entries,
-                  .count = COUNT,
-                  .defaults = k_image,
-                  .limits = k_limits,
-                  .limits_count = 2};
+    tables = k_tables;
+    co_od_t od = {.entries = entries, .count = COUNT, .values = &v, .tables = &tables};
     memset(&v, 0x5A, sizeof v);
     v.log.data = v.log_data;
     v.log.len = 0;
@@ -84,12 +86,45 @@ static co_od_t make_od(void)
 
 static void test_entry_is_compact(void)
 {
-    /* a pointer, index, size, sub-index, type, attributes, limits: no per-entry pointers to
-     * defaults, limits or hooks */
-    CHECK_EQ(sizeof(co_od_entry_t), sizeof(void *) + 8u);
+    /* index, offset, sub-index, type, attributes, side table position: no pointer at all */
+    CHECK_EQ(sizeof(co_od_entry_t), 8u);
     CHECK(co_od_hooks_of(&entries[0]) == NULL);
     CHECK(!co_od_has_limits(&entries[0]));
     CHECK(co_od_has_limits(&entries[1]));
+    CHECK(!co_od_has_limits(&entries[5])); /* a string's side is its capacity */
+}
+
+static void test_values_and_sizes(void)
+{
+    co_od_t od = make_od();
+    CHECK(co_od_value(&od, &entries[0]) == (void *)&v.device_type);
+    CHECK(co_od_value(&od, &entries[5]) == (void *)v.name);
+    CHECK(co_od_value(&od, &entries[7]) == (void *)&v.level);
+    /* sizes from the type, strings and domains from the side table */
+    CHECK_EQ(co_od_size(&od, &entries[0]), 4u);
+    CHECK_EQ(co_od_size(&od, &entries[1]), 2u);
+    CHECK_EQ(co_od_size(&od, &entries[2]), 3u); /* INTEGER24: 3 on the wire */
+    CHECK_EQ(co_od_size(&od, &entries[5]), 8u);
+    CHECK_EQ(co_od_size(&od, &entries[6]), 4u);
+    CHECK_EQ(co_od_size(&od, &entries[7]), 1u);
+    co_od_reset(&od, 0x0000, 0xFFFF, 0);
+    CHECK_EQ(co_od_entry_uint(&od, &entries[1]), (uint64_t)-5);
+    CHECK_EQ(co_od_set_uint(&od, 0x2006, 0, 7), CO_OK);
+    CHECK_EQ(v.level, 7u);
+    /* reads and writes reach the value at its offset, strings up to their capacity */
+    uint8_t buf[9];
+    uint32_t n = 0;
+    uint32_t total = 0;
+    CHECK_EQ(co_od_read(&od, &entries[5], 0, buf, sizeof buf, &n, &total), CO_ABORT_NONE);
+    CHECK_EQ(total, 2u);
+    CHECK(memcmp(buf, "hi", 2) == 0);
+    CHECK_EQ(co_od_write(&od, &entries[5], (const uint8_t *)"abcdefgh", 8), CO_ABORT_NONE);
+    CHECK(memcmp(v.name, "abcdefgh", 8) == 0);
+    CHECK_EQ(co_od_write(&od, &entries[5], (const uint8_t *)"abcdefghi", 9), CO_ABORT_LEN_HIGH);
+    CHECK_EQ(co_od_write(&od, &entries[6], (const uint8_t *)"wxyz!", 5), CO_ABORT_LEN_HIGH);
+    CHECK_EQ(co_od_write(&od, &entries[6], (const uint8_t *)"wxy", 3), CO_ABORT_NONE);
+    CHECK_EQ(v.log.len, 3u);
+    CHECK_EQ(co_od_value_len(&od, &entries[6]), 3u);
 }
 
 static void test_reset_from_image(void)
@@ -123,18 +158,34 @@ static void test_reset_range(void)
 
 static void test_domain_without_record_kept(void)
 {
-    static const uint8_t empty[] = {0xFF, 0xFF, 0};
+    static const uint8_t empty[] = {0};
     co_od_t od = make_od();
-    od.defaults = empty;
+    tables.defaults = empty;
     v.log.len = 3;
     co_od_reset(&od, 0x0000, 0xFFFF, 0);
     CHECK_EQ(v.log.len, 3u); /* a DOMAIN without a power-on value keeps its own */
     CHECK_EQ(v.offset, 0);   /* every other value: zero */
     CHECK_EQ(v.name[0], 0);
-    od.defaults = NULL; /* no image at all: zeros */
+    tables.defaults = NULL; /* no image at all: zeros */
     v.device_type = 7;
     co_od_reset(&od, 0x0000, 0xFFFF, 0);
     CHECK_EQ(v.device_type, 0u);
+}
+
+static void test_image_skips_and_positions(void)
+{
+    /* entry 1 (one skipped), then entry 7 by its position, 1 byte each */
+    static const uint8_t image[] = {0x21, 0x07, 0x3F, 7, 0, 0x09, 0};
+    co_od_t od = make_od();
+    tables.defaults = image;
+    CHECK_EQ(co_od_validate(&od, NULL), CO_OK);
+    co_od_reset(&od, 0x0000, 0xFFFF, 0);
+    CHECK_EQ(v.device_type, 0u);
+    CHECK_EQ(v.offset, 7);
+    CHECK_EQ(v.i24, 0);
+    CHECK_EQ(v.level, 9u);
+    co_od_reset(&od, 0x2006, 0x2006, 0); /* a range that starts past the first record */
+    CHECK_EQ(v.level, 9u);
 }
 
 static void test_limits_by_position(void)
@@ -161,34 +212,69 @@ static void test_validate_limits_and_image(void)
 {
     co_od_t od = make_od();
     uint32_t bad = 0;
-    od.limits_count = 1; /* 0x2006 refers to limits 2 */
+    tables.limits_count = 1; /* 0x2006 refers to limits 2 */
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 7u);
     od = make_od();
-    od.limits = NULL;
+    tables.limits = NULL;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 1u);
+    od = make_od();
+    tables.sizes_count = 1; /* the DOMAIN refers to capacity 2 */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 6u);
+    od = make_od();
+    tables.sizes = NULL;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 5u);
+    static const uint32_t zero_size[] = {0, 4};
+    od = make_od();
+    tables.sizes = zero_size; /* a string of no capacity */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 5u);
+    od = make_od();
+    od.tables = NULL; /* the entries refer to tables there are none of */
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 1u);
 
-    static const uint8_t too_long[] = {1, 0, 3, 1, 2, 3, 0xFF, 0xFF, 0}; /* 3 bytes, INTEGER16 */
-    static const uint8_t out_of_order[] = {3, 0, 1, 1, 1, 0, 1, 1, 0xFF, 0xFF, 0};
-    static const uint8_t past_table[] = {8, 0, 1, 1, 0xFF, 0xFF, 0};
-    static const uint8_t string_cap[] = {5, 0, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0xFF, 0xFF, 0};
-    static const uint8_t long_form[] = {5,   0,   255, 8,   0,   'a',  'b',  'c',
-                                        'd', 'e', 'f', 'g', 'h', 0xFF, 0xFF, 0};
+    /* a string without a capacity, a number past the limits, a TIME_OF_DAY with a side */
+    static co_od_entry_t odd[] = {ENTRY(0x2004, CO_TYPE_VISIBLE_STRING, CO_OD_RW, name, 0)};
     od = make_od();
-    od.defaults = too_long;
+    od.entries = odd;
+    od.count = 1;
+    od.tables = NULL;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 0u);
+    odd[0] = (co_od_entry_t)ENTRY(0x2006, CO_TYPE_UNSIGNED8, CO_OD_RW, level, 3);
+    od.tables = &tables;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    odd[0] = (co_od_entry_t)ENTRY(0x2006, CO_TYPE_TIME_OF_DAY, CO_OD_RW, name, 1);
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    odd[0].side = 0; /* the same without a side: fine (and without the others' image) */
+    tables.defaults = NULL;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
+
+    static const uint8_t too_long[] = {0x61, 1, 2, 3, 0}; /* 3 bytes for the INTEGER16 */
+    /* entry 3, then entry 1 by its position (head 31: the position follows) */
+    static const uint8_t out_of_order[] = {0x23, 1, 0x3F, 1, 0, 1, 0};
+    static const uint8_t past_table[] = {0x28, 1, 0}; /* entry 8 of 8 */
+    /* head 7: the length follows (9: more than the string's capacity) */
+    static const uint8_t string_cap[] = {0xE5, 9, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0};
+    static const uint8_t long_form[] = {0xE5, 8, 0, 'a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 0};
+    od = make_od();
+    tables.defaults = too_long;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 1u);
-    od.defaults = out_of_order;
+    tables.defaults = out_of_order;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 1u);
-    od.defaults = past_table;
+    tables.defaults = past_table;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, COUNT);
-    od.defaults = string_cap;
+    tables.defaults = string_cap;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 5u);
-    od.defaults = long_form; /* a length of 255 or more: in the 2 bytes after 255 */
+    tables.defaults = long_form; /* a length of 255 or more: in the 2 bytes after 255 */
     CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
     co_od_reset(&od, 0x2004, 0x2004, 0);
     CHECK(memcmp(v.name, "abcdefgh", 8) == 0);
@@ -217,9 +303,11 @@ static void test_hash_compares_entries(void)
 int main(void)
 {
     RUN(test_entry_is_compact);
+    RUN(test_values_and_sizes);
     RUN(test_reset_from_image);
     RUN(test_reset_range);
     RUN(test_domain_without_record_kept);
+    RUN(test_image_skips_and_positions);
     RUN(test_limits_by_position);
     RUN(test_validate_limits_and_image);
     RUN(test_hash_compares_entries);

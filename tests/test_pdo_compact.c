@@ -30,8 +30,8 @@ static values_t v;
 #define U32 CO_TYPE_UNSIGNED32
 #define ENTRY(idx, s, t, a, field)                                                                 \
     {                                                                                              \
-        .index = (idx), .sub = (s), .type = (t), .attr = (a), .size = sizeof v.field,              \
-        .value = &v.field                                                                          \
+        .index = (idx), .sub = (s), .type = (t), .attr = (a),                                      \
+        .offset = (uint16_t)offsetof(values_t, field)                                              \
     }
 
 static const co_od_entry_t entries[] = {
@@ -58,31 +58,35 @@ static const co_od_entry_t entries[] = {
     ENTRY(0x2100, 0, U32, CO_OD_RW | CO_OD_TPDO, out32),             /* 20 */
 };
 
-/* Power-on values: position (2 bytes), length (1), wire bytes. RPDO1 maps 0x2000 (32 bits),
- * a dummy UNSIGNED8 (0x0005, 8 bits) and 0x2001 (16 bits); TPDO1 (type 1: every SYNC) maps
- * 0x2100, TPDO2 (type 254: on events) 0x2001. */
+/* Power-on values (canola/od.h, co_od_tables_t.defaults): a head (bits 0-4 the entries
+ * skipped since the previous record's, bits 5-7 the length), wire bytes. RPDO1 maps 0x2000
+ * (32 bits), a dummy UNSIGNED8 (0x0005, 8 bits) and 0x2001 (16 bits); TPDO1 (type 1: every
+ * SYNC) maps 0x2100, TPDO2 (type 254: on events) 0x2001. */
+#define LEN(n) ((n) << 5)
 static const uint8_t k_image[] = {
-    0,    0,    1, 0x80,                   /* 0x1005: SYNC on 0x80 */
-    1,    0,    1, 2,                      /* 0x1400 sub0 */
-    2,    0,    2, 0x00, 0x02,             /* 0x200 + node-ID */
-    3,    0,    1, 255,                    /* asynchronous */
-    4,    0,    1, 3,                      /* three entries */
-    5,    0,    4, 0x20, 0x00, 0x00, 0x20, /* 0x2000 sub0, 32 bits */
-    6,    0,    4, 0x08, 0x00, 0x05, 0x00, /* dummy UNSIGNED8 */
-    7,    0,    4, 0x10, 0x00, 0x01, 0x20, /* 0x2001 sub0, 16 bits */
-    8,    0,    1, 2,                      /* 0x1800 sub0 */
-    9,    0,    2, 0x80, 0x01,             /* 0x180 + node-ID */
-    10,   0,    1, 1,                      /* every SYNC */
-    11,   0,    1, 2,                      /* 0x1801 sub0 */
-    12,   0,    2, 0x80, 0x02,             /* 0x280 + node-ID */
-    13,   0,    1, 254,                    /* on events */
-    14,   0,    1, 1,                      /* one entry */
-    15,   0,    4, 0x20, 0x00, 0x00, 0x21, /* 0x2100 sub0, 32 bits */
-    16,   0,    1, 1,                      /* one entry */
-    17,   0,    4, 0x10, 0x00, 0x01, 0x20, /* 0x2001 sub0, 16 bits */
-    20,   0,    4, 0x44, 0x33, 0x22, 0x11, /* 0x2100: 0x11223344 */
-    0xFF, 0xFF, 0,                         /* end */
+    LEN(1),     0x80,                   /* 0: 0x1005, SYNC on 0x80 */
+    LEN(1),     2,                      /* 1: 0x1400 sub0 */
+    LEN(2),     0x00, 0x02,             /* 2: 0x200 + node-ID */
+    LEN(1),     255,                    /* 3: asynchronous */
+    LEN(1),     3,                      /* 4: three entries */
+    LEN(4),     0x20, 0x00, 0x00, 0x20, /* 5: 0x2000 sub0, 32 bits */
+    LEN(4),     0x08, 0x00, 0x05, 0x00, /* 6: dummy UNSIGNED8 */
+    LEN(4),     0x10, 0x00, 0x01, 0x20, /* 7: 0x2001 sub0, 16 bits */
+    LEN(1),     2,                      /* 8: 0x1800 sub0 */
+    LEN(2),     0x80, 0x01,             /* 9: 0x180 + node-ID */
+    LEN(1),     1,                      /* 10: every SYNC */
+    LEN(1),     2,                      /* 11: 0x1801 sub0 */
+    LEN(2),     0x80, 0x02,             /* 12: 0x280 + node-ID */
+    LEN(1),     254,                    /* 13: on events */
+    LEN(1),     1,                      /* 14: one entry */
+    LEN(4),     0x20, 0x00, 0x00, 0x21, /* 15: 0x2100 sub0, 32 bits */
+    LEN(1),     1,                      /* 16: one entry */
+    LEN(4),     0x10, 0x00, 0x01, 0x20, /* 17: 0x2001 sub0, 16 bits */
+    LEN(4) | 2, 0x44, 0x33, 0x22, 0x11, /* 20 (18 and 19 skipped): 0x2100 = 0x11223344 */
+    0,                                  /* end */
 };
+
+static const co_od_tables_t k_tables = {.defaults = k_image};
 
 typedef struct sent {
     co_frame_t frames[8];
@@ -113,7 +117,8 @@ static void start(co_node_t *node, sent_t *sent)
     co_node_config_t cfg = {.node_id = NODE_ID,
                             .od = {.entries = entries,
                                    .count = sizeof entries / sizeof entries[0],
-                                   .defaults = k_image},
+                                   .values = &v,
+                                   .tables = &k_tables},
                             .driver = {.tx = tx, .ctx = sent}};
     CHECK_EQ(co_node_init(node, &cfg), CO_OK);
     CHECK_EQ(co_node_start(node, 0), CO_OK);

@@ -216,9 +216,10 @@
 #define CO_CONFIG_OD_UNICODE 1
 #endif
 
-/** The compact form of the dictionary (canola/od.h): 12-byte entries (32-bit targets) that
- *  keep only their value pointer, power-on values as one image without zeros
- *  (co_od_t.defaults), limits in a table of their own, no hooks, and a look-up hash that
+/** The compact form of the dictionary (canola/od.h): 8-byte entries without pointers (the
+ *  value at an offset into one values struct, the size from the type or a side table),
+ *  power-on values as one image without zeros (co_od_tables_t.defaults), limits in a
+ *  table of their own, no hooks, and a look-up hash that
  *  compares the entries themselves (no key array). The form canola.odgen's dictionaries
  *  are smallest in (they compile in both); hand-written tables with hooks need the
  *  general form (0). */

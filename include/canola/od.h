@@ -4,8 +4,9 @@
  * Purpose: every value a CANopen device exposes lives in one table of entries
  * addressed by (index, sub-index). The table itself is const (it can live in
  * flash); each entry points at the RAM that holds its value and at a const
- * default (its power-on value). Look-up is a binary search, O(log n), or with the
- * optional hash table (co_od_t.hash) O(1) expected.
+ * default (its power-on value), or in the compact form gives its value's offset in one
+ * values struct (co_od_t.values) and finds its default in one image. Look-up is a binary search,
+ * O(log n), or with the optional hash table (co_od_t.hash) O(1) expected.
  *
  * Values are stored in native form (uint16_t, float, ...); reads and writes
  * through this API speak wire form: little-endian bytes, as SDO and PDO carry
@@ -27,8 +28,12 @@
  *
  * Threading: none inside. One OD belongs to one node; guard it with the node.
  * Memory: 28 bytes of const data per entry on 32-bit targets (48 on 64-bit hosts), plus
- * the values themselves; in the compact form (CO_CONFIG_OD_COMPACT, see co_od_entry) 12
- * (16), plus the power-on values' image and the limits that entries have.
+ * the values themselves; in the compact form (CO_CONFIG_OD_COMPACT, see co_od_entry) 8 on
+ * every target, plus the power-on values' image, the limits that entries have and the
+ * capacities of strings and domains (co_od_tables_t).
+ *
+ * Reading an entry: co_od_value(od, entry) is its storage, co_od_size(od, entry) its size
+ * (both forms; the compact entry holds neither itself).
  */
 #ifndef CANOLA_OD_H
 #define CANOLA_OD_H
@@ -42,9 +47,10 @@ extern "C" {
 
 /** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
  *  refuse to compile against a library whose layout differs. 2: co_od_t.keys;
- *  3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT). */
+ *  3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT); 5: its 8-byte entries
+ *  (value offsets, co_od_tables_t). */
 #ifndef CO_OD_FORMAT
-#define CO_OD_FORMAT 4
+#define CO_OD_FORMAT 5
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
@@ -152,20 +158,36 @@ struct co_od_entry {
 };
 #else
 /** One (index, sub-index) of the dictionary. Tables are sorted by index, then sub-index.
- *  The compact form (CO_CONFIG_OD_COMPACT 1, what a generated dictionary is made for): 12
- *  bytes on 32-bit targets. Power-on values are one image for the whole table
- *  (co_od_t.defaults), limits a table of their own that only entries with limits refer
- *  to, and there are no hooks. */
+ *  The compact form (CO_CONFIG_OD_COMPACT 1, what a generated dictionary is made for): 8
+ *  bytes, no pointer. The value lives `offset` bytes into co_od_t.values (one struct of
+ *  every value; co_od_value); the size follows from the type (co_type_size), except for
+ *  strings and domains (CO_OD_VARIABLE_TYPES), whose capacity is in the side table
+ *  co_od_tables_t.sizes. Power-on values are one image for the whole table
+ *  (co_od_tables_t.defaults), limits a table of their own that only entries with limits
+ *  refer to, and there are no hooks. */
 struct co_od_entry {
-    void *value; /**< native storage (never NULL in this form: no hooks to replace it) */
     uint16_t index;
-    uint16_t size; /**< bytes on the wire; capacity for strings and domains */
+    uint16_t offset; /**< of the value in co_od_t.values (never absent: no hooks replace it) */
     uint8_t sub;
-    uint8_t type;   /**< co_type_t */
-    uint8_t attr;   /**< CO_OD_* attributes */
-    uint8_t limits; /**< 0, or 1 + the position of its limits in co_od_t.limits */
+    uint8_t type; /**< co_type_t */
+    uint8_t attr; /**< CO_OD_* attributes */
+    /** 0, or 1 + a position in a side table (co_od_tables_t): a number's limits in
+     *  `limits`; a string's or domain's capacity in `sizes` (never 0 for them). */
+    uint8_t side;
 };
 #endif
+
+/** The types of variable length (strings, DOMAIN) as bits of a mask indexed by type code:
+ *  the compact form keeps their capacity in co_od_tables_t.sizes. */
+#define CO_OD_VARIABLE_TYPES                                                                       \
+    ((1u << CO_TYPE_VISIBLE_STRING) | (1u << CO_TYPE_OCTET_STRING) |                               \
+     (1u << CO_TYPE_UNICODE_STRING) | (1u << CO_TYPE_DOMAIN))
+
+/** Whether a type code is one of CO_OD_VARIABLE_TYPES. */
+static inline bool co_type_is_variable(unsigned type)
+{
+    return type < 32u && ((CO_OD_VARIABLE_TYPES >> type) & 1u) != 0;
+}
 
 /** The hooks of an entry, or NULL (a compact dictionary has none). */
 static inline const co_od_hooks_t *co_od_hooks_of(const co_od_entry_t *entry)
@@ -182,7 +204,7 @@ static inline const co_od_hooks_t *co_od_hooks_of(const co_od_entry_t *entry)
 static inline bool co_od_has_limits(const co_od_entry_t *entry)
 {
 #if CO_CONFIG_OD_COMPACT
-    return entry->limits != 0;
+    return entry->side != 0 && !co_type_is_variable(entry->type);
 #else
     return entry->limits != NULL;
 #endif
@@ -205,17 +227,12 @@ typedef struct co_od {
     uint32_t count;
     void *hook_ctx;
 #if CO_CONFIG_OD_COMPACT
-    /** The power-on values of the compact form, one record per entry whose power-on value
-     *  is not all zeros, in entry order, ended by position 0xFFFF: the entry's position
-     *  (2 bytes, little-endian), the length n of its value (1 byte; 255: the length in the
-     *  2 bytes that follow, little-endian), then n bytes of its wire value (trailing zero
-     *  bytes may be left out). co_od_reset zeroes every entry that is not a DOMAIN, then
-     *  writes the records' values (numbers through their wire form, so the image does not
-     *  depend on the target's byte order). NULL: every value resets to zero. */
-    const uint8_t *defaults;
-    /** The limits that entries refer to (co_od_entry_t.limits: 1 + position), or NULL;
-     *  limits_count of them (below). */
-    const co_od_limits_t *limits;
+    /** The values of the compact form (co_od_entry_t.offset counts from here): one struct
+     *  in RAM, the one a generator writes (canola.odgen's <name>_values). */
+    void *values;
+    /** Its const side tables (co_od_tables_t), or NULL: no power-on values but zeros, no
+     *  limits, no strings or domains. */
+    const struct co_od_tables *tables;
 #else
     /** Optional (NULL: look-up searches the entries): keys[i] = CO_OD_KEY of entries[i].
      *  A dense array of 4 bytes per entry that the binary search walks instead of the
@@ -233,16 +250,60 @@ typedef struct co_od {
      * emits it; co_od_hash_build builds one at run time; co_od_validate checks it. */
     const uint16_t *hash;
     uint16_t hash_mask; /**< slots - 1: 2^bits - 1 with 1 <= bits <= 16 */
-#if CO_CONFIG_OD_COMPACT
-    uint8_t limits_count; /**< limits in `limits` (here: no padding after hash_mask) */
-#endif
 } co_od_t;
+
+#if CO_CONFIG_OD_COMPACT
+/** The const tables of a compact dictionary (co_od_t.tables), apart from the entries. */
+typedef struct co_od_tables {
+    /** The power-on values, one record per entry whose power-on value is not all zeros, in
+     *  entry order, ended by a 0 byte. A record: a head byte, then the entry's position if
+     *  the head says so, the length if the head says so, then the value's wire bytes
+     *  (trailing zero bytes may be left out). The head's bits 0-4: the entries skipped
+     *  since the previous record's (since position 0 for the first), 0..30, or 31: the
+     *  position follows (2 bytes, little-endian); bits 5-7: the value's length, 1..6, or
+     *  7: the length follows (2 bytes, little-endian). co_od_reset zeroes every entry that is not a
+     * DOMAIN, then writes the records' values (numbers through their wire form, so the image does
+     * not depend on the target's byte order). NULL: every value resets to zero. */
+    const uint8_t *defaults;
+    /** The limits that numbers refer to (co_od_entry_t.side: 1 + position), or NULL. */
+    const co_od_limits_t *limits;
+    /** The capacities that strings and domains refer to (co_od_entry_t.side: 1 +
+     *  position), or NULL. */
+    const uint32_t *sizes;
+    uint8_t limits_count; /**< limits in `limits` */
+    uint8_t sizes_count;  /**< capacities in `sizes` */
+} co_od_tables_t;
+#endif
+
+/** The native storage of an entry (NULL in the general form when hooks produce and take
+ *  the value). O(1). */
+static inline void *co_od_value(const co_od_t *od, const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    return (uint8_t *)od->values + entry->offset;
+#else
+    (void)od;
+    return entry->value;
+#endif
+}
+
+#if CO_CONFIG_OD_COMPACT
+/** Bytes of an entry's value on the wire; capacity for strings and domains. O(1). */
+uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry);
+#else
+static inline uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
+{
+    (void)od;
+    return entry->size;
+}
+#endif
 
 /** Check the table: sorted and unique, sizes fitting their types, storage where no hook
  *  replaces it, keys (when given) equal to the entries', the hash (when given) finding
  *  every entry with an empty slot left (keys and hash not in a core built for size, which
- *  does not use them: see co_od_t); in the compact form also every limits number within
- *  co_od_t.limits and the power-on values' records in entry order, each fitting its entry.
+ *  does not use them: see co_od_t); in the compact form also every side table position
+ *  within co_od_tables_t (a capacity for each string and domain, limits only for numbers)
+ *  and the power-on values' records in entry order, each fitting its entry.
  *  Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's position, or
  *  to `count` for a bad hash or a record past the table, when `bad` is not NULL). O(n)
  *  plus O(slots). */
@@ -313,7 +374,7 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 /** Copy power-on values into every entry with index in [first, last] that has a default
  *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
  *  O(entries in range). The compact form: every entry in the range but a DOMAIN is zeroed,
- *  then given its record of co_od_t.defaults, if any (O(entries in range + records before
+ *  then given its record of co_od_tables_t.defaults, if any (O(entries in range + records before
  *  the range's end)); the records are trusted as they are (co_od_validate checks them, as
  *  the general form's power-on values are trusted to match their entries). */
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
@@ -326,7 +387,7 @@ co_err_t co_od_set_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
 
 /** Native unsigned value of a numeric entry's storage (signed types sign-extended to 64
  *  bits and returned as their two's-complement bit pattern). */
-uint64_t co_od_entry_uint(const co_od_entry_t *entry);
+uint64_t co_od_entry_uint(const co_od_t *od, const co_od_entry_t *entry);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@ and review the diff. The C tests use $CC (default ``cc``) and are skipped withou
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -81,8 +82,10 @@ def test_entries_sorted_with_attributes() -> None:
         assert len(keys) == len(set(keys))
     compact_rows = dict(zip(keys, [r for r in compact.splitlines()
                                    if r.startswith("    {.index = ")], strict=True))
-    assert ".limits = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
-    assert "/* 0x1014 sub 0 */ 0x03, 0x00, 0x01, 0x80," in compact  # $NODEID+0x80: 0x80
+    assert ".side = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
+    assert ".side = " not in compact_rows[(0x1000, 0)]  # no limits, a fixed size
+    assert ", .side = 1}" in compact_rows[(0x1008, 0)]  # the first string's capacity
+    assert "/* 0x1014 sub 0 */ 0x20, 0x80," in compact  # $NODEID+0x80: 0x80, 1 byte, next
     by_key = dict(zip(keys, rows, strict=True))
     assert ".attr = CO_OD_RW | CO_OD_NODEID," in by_key[(0x1014, 0)]
     assert ".attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID," in by_key[(0x2300, 1)]
@@ -92,6 +95,21 @@ def test_entries_sorted_with_attributes() -> None:
     assert ".limits = &k_limits_2001_00," in by_key[(0x2001, 0)]
     assert ".cob_id_emcy = 0x80u," in code  # $NODEID+0x80 stored without the node-ID
     assert (0x2200, 0) not in by_key  # DOMAIN left out by default
+
+
+def test_image_records_skip_entries_and_name_far_ones() -> None:
+    """The power-on values' records (co_od_tables_t.defaults): a head byte of the entries
+    skipped (31: the position follows) and the length (7: the length follows)."""
+    objects = "".join(f"[{0x2000 + i:04X}]\nParameterName=V{i}\nObjectType=0x7\n"
+                      f"DataType=0x0007\nAccessType=rw\nDefaultValue={value}\n\n"
+                      for i, value in enumerate([0] * 40 + [0x1234, 7]))
+    text = objects + ("[3000]\nParameterName=S\nObjectType=0x7\nDataType=0x0009\n"
+                      "AccessType=rw\nDefaultValue=abcdefgh\n")
+    _, code = odgen.generate(eds.parse(HEADER + text, filename="far.eds"), "far")
+    assert "/* 0x2028 sub 0 */ 0x5F, 0x28, 0x00, 0x34, 0x12," in code  # position 40 follows
+    assert "/* 0x2029 sub 0 */ 0x20, 0x07," in code  # the next entry: none skipped
+    assert ("/* 0x3000 sub 0 */ 0xE0, 0x08, 0x00, 0x61, 0x62, 0x63, 0x64, 0x65, 0x66, 0x67, "
+            "0x68,") in code  # 8 bytes: the length follows
 
 
 # --- C: compile, link, run ---------------------------------------------------------------
@@ -107,6 +125,23 @@ def test_sample_compiles_with_strict_warnings(tmp_path: Path, form: tuple[str, .
     _, code = generate_sample(tmp_path, domain_size=32)
     result = compile_c(cc, code, tmp_path, form)
     assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_values_struct_has_no_padding_between_members(tmp_path: Path,
+                                                      form: tuple[str, ...]) -> None:
+    """Members ordered by alignment: the compiler pads none (-Wpadded), at most a nested
+    struct's tail up to its own alignment."""
+    cc = compiler()
+    _, code = generate_sample(tmp_path, domain_size=32)
+    result = compile_c(cc, code, tmp_path, ("-Wpadded", "-Wno-error", *form))
+    assert result.returncode == 0, result.stderr
+    ours = [line for line in result.stderr.splitlines()
+            if "sample.h" in line and "-Wpadded" in line]
+    assert ours, "the sample's records end in tail padding: -Wpadded should say so"
+    # GCC and clang: "... to align 'member'" before a member, "... alignment boundary" after
+    # the last
+    assert not [line for line in ours if re.search(r"to align\b", line)], ours
 
 
 TEST_MAIN = r"""
@@ -180,9 +215,21 @@ int main(void)
     }
 #endif
 #if CO_CONFIG_OD_COMPACT
-    /* The compact form: entries of a pointer and 8 bytes, the power-on values' image. */
-    if (sizeof(co_od_entry_t) != sizeof(void *) + 8u || sample_od.defaults == NULL) {
+    /* The compact form: entries of 8 bytes, values at offsets into sample_values, sizes
+     * from the type or the side table, the power-on values' image. */
+    if (sizeof(co_od_entry_t) != 8u || sample_od.tables == NULL ||
+        sample_od.tables->defaults == NULL) {
         return 20;
+    }
+    e = co_od_find(&sample_od, 0x1008, 0, NULL);
+    if (e == NULL || co_od_value(&sample_od, e) != (void *)sample_values.manufacturer_device_name ||
+        co_od_size(&sample_od, e) != sizeof sample_values.manufacturer_device_name) {
+        return 21;
+    }
+    e = co_od_find(&sample_od, 0x1017, 0, NULL);
+    if (e == NULL || co_od_value(&sample_od, e) != (void *)&sample_values.producer_heartbeat_time ||
+        co_od_size(&sample_od, e) != 2u) {
+        return 22;
     }
 #endif
     return 0;

@@ -86,16 +86,23 @@ static int upload(co_sim_bus_t *bus, co_node_t *client, const co_od_entry_t *e,
     return 0;
 }
 
+static uint32_t client_device_type;
+#if CO_CONFIG_OD_COMPACT /* the value at offset 0 of co_od_t.values, its size from its type */
+static co_od_entry_t client_entries[1] = {
+    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = 0}};
+#else
 static co_od_entry_t client_entries[1] = {
     {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4u}};
-static uint32_t client_device_type;
+#endif
 
 int main(int argc, char **argv)
 {
     static co_sim_bus_t bus;
     static co_sim_port_t dev_port, cli_port;
     static co_node_t dev, client;
+#if !CO_CONFIG_OD_COMPACT
     client_entries[0].value = &client_device_type;
+#endif
     if (co_sim_bus_init(&bus, 0) != CO_OK || co_sim_port_attach(&bus, &dev_port) != CO_OK ||
         co_sim_port_attach(&bus, &cli_port) != CO_OK) {
         return 2;
@@ -109,6 +116,9 @@ int main(int argc, char **argv)
     cc.node_id = node_id == 127 ? 126 : 127;
     cc.od.entries = client_entries;
     cc.od.count = 1;
+#if CO_CONFIG_OD_COMPACT
+    cc.od.values = &client_device_type;
+#endif
     cc.driver = co_sim_port_driver(&cli_port);
     if (co_node_init(&dev, &dc) != CO_OK) {
         printf("device init failed\n");

@@ -10,7 +10,9 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
 - ``<name>_values_t``: one member per entry, named after its ParameterName (lower case,
   ``[a-z0-9_]``, made unique; the index/sub-index is in a comment). ARRAY and RECORD objects
   become a nested struct whose members are their sub-indices, sub-index 0 included (a plain
-  UNSIGNED8 entry as the EDS describes it).
+  UNSIGNED8 entry as the EDS describes it). Members come the most aligned first (in index
+  order among equals), in the struct and in each nested one, so that no padding lies
+  between them (a nested struct keeps its tail padding up to its own alignment).
 - ``<name>_values``: the one static instance that holds the RAM values, zero-initialised;
   ``<name>_od``: a const ``co_od_t`` whose const entry table points into it. Call
   ``co_od_reset(&<name>_od, 0x0000, 0xFFFF, node_id)`` once before use. One node per
@@ -18,11 +20,14 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   program.
 - The ``.c`` file holds the tables in both forms of ``canola/od.h``, chosen by the core's
   ``CO_CONFIG_OD_COMPACT`` (the dictionary and the library must agree, as for every
-  configuration value). The compact form (1), the smaller: 12-byte entries (32-bit
-  targets: value pointer, index, 16-bit size, sub-index, type, attributes, limits number),
-  the power-on values as one byte image ``k_defaults`` (a record per entry whose value is
-  not all zeros: position, length, wire bytes; see ``co_od_t.defaults``), the distinct
-  limits once each in ``k_limits``. The general form (0): 28-byte entries with pointers to
+  configuration value). The compact form (1), the smaller: 8-byte entries (index, the
+  value's offset in ``<name>_values``, sub-index, type, attributes, a side table position:
+  the limits of a number, the capacity of a string or domain), the power-on values as one
+  byte image ``k_defaults`` (a record per entry whose value is not all zeros: a head byte of
+  the entries skipped since the previous record and the length, the wire bytes; see
+  ``co_od_tables_t.defaults``), the distinct limits once each in
+  ``k_limits``, the distinct capacities once each in ``k_sizes``, all four in ``k_tables``
+  (``co_od_tables_t``). The general form (0): 28-byte entries with pointers to
   the value, its power-on value in a const ``<name>_values_t``, its limits and hooks
   (NULL), and the dense key array ``k_keys``. Both share the look-up hash ``k_hash``, left
   out where the core does not read it (``CO_SHORT_PATHS`` 0, a build for size).
@@ -70,7 +75,8 @@ from canola.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 from canola.errors import EdsError
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 4  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT)
+OD_FORMAT = 5  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
+# 5: its 8-byte entries (value offsets, co_od_tables_t)
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -387,7 +393,7 @@ def generate(od: eds.ObjectDictionary, name: str,
     source = Path(od.file).name
     entries: list[_Entry] = []
     skipped: list[eds.Variable] = []
-    struct: list[str] = []
+    members: list[tuple[int, list[str]]] = []  # (alignment, lines) of each top-level member
     used: set[str] = set()
     for index in sorted(od.objects):
         obj = od.objects[index]
@@ -403,9 +409,10 @@ def generate(od: eds.ObjectDictionary, name: str,
                 used.discard(obj_name)
                 continue
             entries.append(e)
-            struct.append(_member(e, obj_name, "    ", f"0x{index:04X}", obj.name))
+            members.append((_ALIGN[e.ctype],
+                            [_member(e, obj_name, "    ", f"0x{index:04X}", obj.name)]))
             continue
-        inner: list[str] = []
+        inner: list[tuple[int, list[str]]] = []
         sub_used: set[str] = set()
         for sub in sorted(obj.subs):
             var = obj.subs[sub]
@@ -415,16 +422,32 @@ def generate(od: eds.ObjectDictionary, name: str,
                 skipped.append(var)
                 continue
             entries.append(e)
-            inner.append(_member(e, member, "        ", f"0x{index:04X} sub {sub}", var.name))
+            inner.append((_ALIGN[e.ctype], [_member(e, member, "        ",
+                                                    f"0x{index:04X} sub {sub}", var.name)]))
         if not inner:
             used.discard(obj_name)
             continue
-        struct.append("    struct {")
-        struct.extend(inner)
-        struct.append(f"    }} {obj_name}; /* 0x{index:04X} {_comment(obj.name)} */")
+        members.append((max(align for align, _ in inner),
+                        ["    struct {", *_by_alignment(inner),
+                         f"    }} {obj_name}; /* 0x{index:04X} {_comment(obj.name)} */"]))
+    struct = _by_alignment(members)
     node_id = opts.node_id if opts.node_id is not None else od.node_id
     return (_header(name, source, struct, skipped, node_id),
             _source_text(name, source, entries, skipped))
+
+
+# Alignment of each storage type (at most: a co_od_domain_t holds a pointer), which orders
+# the values struct's members so that the compiler pads none of them.
+_ALIGN = {"uint8_t": 1, "int8_t": 1, "char": 1, "uint16_t": 2, "int16_t": 2, "uint32_t": 4,
+          "int32_t": 4, "float": 4, "int64_t": 8, "uint64_t": 8, "double": 8,
+          "co_od_domain_t": 8}
+
+
+def _by_alignment(members: list[tuple[int, list[str]]]) -> list[str]:
+    """The members' lines, the most aligned first (in EDS order among equals): no padding
+    between them (a struct keeps only the tail padding up to its own alignment)."""
+    ordered = sorted(members, key=lambda m: -m[0])
+    return [line for _, lines in ordered for line in lines]
 
 
 def _member(e: _Entry, member: str, indent: str, where: str, title: str) -> str:
@@ -506,6 +529,8 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         *_skipped_note(skipped),
         " */",
         f'#include "{name}.h"',
+        "",
+        "#include <stddef.h>",
     ]
     if any(e.limits and "_MAX}" in e.limits for e in entries):
         out.append("")
@@ -547,12 +572,10 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         out.append("};")
         out.append("#endif")
         out.append("")
-    limits = _distinct_limits(entries)
     out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
                ".hook_ctx = NULL,")
     out.append("#if CO_CONFIG_OD_COMPACT")
-    lim = f"k_limits, .limits_count = {len(limits)}u" if limits else "NULL, .limits_count = 0"
-    out.append(f"    .defaults = k_defaults, .limits = {lim},")
+    out.append(f"    .values = &{name}_values, .tables = &k_tables,")
     out.append("#endif")
     out.append("#if CO_SHORT_PATHS")
     out.append("#if !CO_CONFIG_OD_COMPACT")
@@ -571,45 +594,86 @@ def _distinct_limits(entries: list[_Entry]) -> list[str]:
     return list(dict.fromkeys(e.limits for e in entries if e.limits))
 
 
+def _distinct_sizes(entries: list[_Entry]) -> list[int]:
+    """The different capacities of the strings and domains, in the order of their first
+    entry."""
+    return list(dict.fromkeys(e.size for e in entries if _TYPES[e.var.data_type or 0][1] == 0))
+
+
+def _record(skip: int, pos: int, value: bytes) -> list[int]:
+    """One record of the power-on values' image (canola/od.h, co_od_tables_t.defaults): the
+    head (bits 0-4 the entries skipped since the previous record, 31: the position follows;
+    bits 5-7 the length, 7: the length follows), the position and length if they follow,
+    the value."""
+    n = len(value)
+    head = (skip if skip < 31 else 31) | (n if n < 7 else 7) << 5
+    out = [head]
+    if skip >= 31:
+        out += [pos & 0xFF, pos >> 8]
+    if n >= 7:
+        out += [n & 0xFF, n >> 8]
+    return out + list(value)
+
+
+def _side_table(what: str, declaration: str, items: list[str]) -> list[str]:
+    """One side table of the compact form (co_od_tables_t), whose positions the entries' one
+    byte can name: 255 of them at most."""
+    out = []
+    if len(items) > 255:
+        out.append(f'#error "more than 255 different {what}: the compact form refers to at '
+                   'most 255 (use the general form, CO_CONFIG_OD_COMPACT 0)"')
+    if items:
+        out.append(f"static const {declaration}[] = {{")
+        out += [f"    {text}," for text in items]
+        out.append("};")
+        out.append("")
+    return out
+
+
 def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
-    """The compact form's tables: power-on values as one image without zeros (co_od_t's
-    defaults), the distinct limits, 12-byte entries (32-bit targets) that point at their
-    value only."""
+    """The compact form's tables: power-on values as one image without zeros, the distinct
+    limits and capacities (co_od_tables_t), 8-byte entries that give their value's offset
+    in the values struct."""
     out = ["/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per",
-           " * entry whose value is not all zeros: position (2 bytes), length (1), wire bytes. */",
+           " * entry whose value is not all zeros: a head (entries skipped, length), wire bytes",
+           " * (co_od_tables_t.defaults). */",
            "static const uint8_t k_defaults[] = {"]
+    next_pos = 0
     for pos, e in enumerate(entries):
         if e.default and e.kind != _DOMAIN:
-            n = len(e.default)
-            head = [pos & 0xFF, pos >> 8] + ([n] if n < 255 else [255, n & 0xFF, n >> 8])
             v = e.var
             out.append(f"    /* 0x{v.index:04X} sub {v.subindex} */ "
-                       + ", ".join(f"0x{b:02X}" for b in head + list(e.default)) + ",")
-    out.append("    0xFF, 0xFF, 0x00, /* end */")
+                       + ", ".join(f"0x{b:02X}" for b in _record(pos - next_pos, pos, e.default))
+                       + ",")
+            next_pos = pos + 1
+    out.append("    0x00, /* end */")
     out.append("};")
     out.append("")
     limits = _distinct_limits(entries)
-    if len(limits) > 255:
-        out.append('#error "more than 255 different limits: the compact form refers to at most '
-                   '255 (use the general form, CO_CONFIG_OD_COMPACT 0)"')
-    if limits:
-        out.append("static const co_od_limits_t k_limits[] = {")
-        out += [f"    {text}," for text in limits]
-        out.append("};")
-        out.append("")
-    number = {text: i + 1 for i, text in enumerate(limits)}
-    if any(e.size > 0xFFFF for e in entries):
-        out.append('#error "an entry larger than 65535 bytes: the compact form holds sizes of 16 '
-                   'bits (use the general form, CO_CONFIG_OD_COMPACT 0)"')
+    sizes = _distinct_sizes(entries)
+    out += _side_table("limits", "co_od_limits_t k_limits", limits)
+    out += _side_table("string and domain sizes", "uint32_t k_sizes", [f"{n}u" for n in sizes])
+    lim = f"k_limits, .limits_count = {len(limits)}u" if limits else "NULL, .limits_count = 0"
+    siz = f"k_sizes, .sizes_count = {len(sizes)}u" if sizes else "NULL, .sizes_count = 0"
+    out.append(f"static const co_od_tables_t k_tables = {{.defaults = k_defaults, .limits = {lim},")
+    out.append(f"                                         .sizes = {siz}}};")
+    out.append("")
+    out.append(f"_Static_assert(sizeof({name}_values_t) <= 0x10000u, \"the compact form addresses "
+               "values by 16-bit offsets (use the general form, CO_CONFIG_OD_COMPACT 0)\");")
+    out.append("")
+    limit_pos = {text: i + 1 for i, text in enumerate(limits)}
+    size_pos = {n: i + 1 for i, n in enumerate(sizes)}
     out.append("static const co_od_entry_t k_entries[] = {")
     for e in entries:
         v = e.var
-        amp = "" if e.array else "&"
-        lim = f", .limits = {number[e.limits]}" if e.limits else ""
+        if _TYPES[v.data_type or 0][1] == 0:
+            more = f", .side = {size_pos[e.size]}"
+        else:
+            more = f", .side = {limit_pos[e.limits]}" if e.limits else ""
         out.append(
             f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, "
             f".type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, "
-            f".size = {e.size}, .value = {amp}{name}_values.{e.member}{lim}}},")
+            f".offset = offsetof({name}_values_t, {e.member}){more}}},")
     out.append("};")
     return out
 

@@ -16,8 +16,8 @@
 
 #include "canola/od.h"
 
-#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 4
-#error "sample.h was generated for object dictionary format 4: regenerate it with the odgen of this canola"
+#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 5
+#error "sample.h was generated for object dictionary format 5: regenerate it with the odgen of this canola"
 #endif
 
 #ifdef __cplusplus
@@ -28,56 +28,56 @@ extern "C" {
 
 /** Every value of the dictionary, in native form (see canola/od.h). */
 typedef struct sample_values {
-    uint32_t device_type; /* 0x1000 UNSIGNED32: Device type */
-    uint8_t error_register; /* 0x1001 UNSIGNED8: Error register */
-    char manufacturer_device_name[14]; /* 0x1008 VISIBLE_STRING: Manufacturer device name */
-    uint32_t cob_id_emcy; /* 0x1014 UNSIGNED32: COB-ID EMCY */
-    uint16_t producer_heartbeat_time; /* 0x1017 UNSIGNED16: Producer heartbeat time */
-    struct {
-        uint8_t highest_sub_index_supported; /* 0x1018 sub 0 UNSIGNED8: Highest sub-index supported */
-        uint32_t vendor_id; /* 0x1018 sub 1 UNSIGNED32: Vendor-ID */
-        uint32_t product_code; /* 0x1018 sub 2 UNSIGNED32: Product code */
-        uint32_t revision_number; /* 0x1018 sub 3 UNSIGNED32: Revision number */
-        uint32_t serial_number; /* 0x1018 sub 4 UNSIGNED32: Serial number */
-    } identity_object; /* 0x1018 Identity object */
-    struct {
-        uint8_t highest_sub_index_supported; /* 0x1800 sub 0 UNSIGNED8: Highest sub-index supported */
-        uint32_t cob_id_used_by_tpdo; /* 0x1800 sub 1 UNSIGNED32: COB-ID used by TPDO */
-        uint8_t transmission_type; /* 0x1800 sub 2 UNSIGNED8: Transmission type */
-    } tpdo_communication_parameter; /* 0x1800 TPDO communication parameter */
-    uint8_t flag; /* 0x2000 BOOLEAN: Flag */
-    int8_t int8_value; /* 0x2001 INTEGER8: Int8 value */
-    int16_t int16_value; /* 0x2002 INTEGER16: Int16 value */
-    int32_t int24_value; /* 0x2003 INTEGER24: Int24 value */
-    int32_t int32_value; /* 0x2004 INTEGER32: Int32 value */
     int64_t int40_value; /* 0x2005 INTEGER40: Int40 value */
     int64_t int48_value; /* 0x2006 INTEGER48: Int48 value */
     int64_t int56_value; /* 0x2007 INTEGER56: Int56 value */
     int64_t int64_value; /* 0x2008 INTEGER64: Int64 value */
-    uint8_t unsigned8_value; /* 0x2009 UNSIGNED8: Unsigned8 value */
-    uint16_t unsigned16_value; /* 0x200A UNSIGNED16: Unsigned16 value */
-    uint32_t unsigned24_value; /* 0x200B UNSIGNED24: Unsigned24 value */
-    uint32_t unsigned32_value; /* 0x200C UNSIGNED32: Unsigned32 value */
     uint64_t unsigned40_value; /* 0x200D UNSIGNED40: Unsigned40 value */
     uint64_t unsigned48_value; /* 0x200E UNSIGNED48: Unsigned48 value */
     uint64_t unsigned56_value; /* 0x200F UNSIGNED56: Unsigned56 value */
     uint64_t unsigned64_value; /* 0x2010 UNSIGNED64: Unsigned64 value */
-    float temperature_degc; /* 0x2011 REAL32: Temperature (degC) */
     double gain; /* 0x2012 REAL64: Gain */
-    char user_label[6]; /* 0x2013 VISIBLE_STRING: User "label" *_/ ?_?/ */
-    uint8_t key_bytes[4]; /* 0x2014 OCTET_STRING: Key bytes */
-    char empty_text[1]; /* 0x2015 VISIBLE_STRING: Empty text */
+    uint32_t device_type; /* 0x1000 UNSIGNED32: Device type */
+    uint32_t cob_id_emcy; /* 0x1014 UNSIGNED32: COB-ID EMCY */
     struct {
-        uint8_t number_of_inputs; /* 0x2100 sub 0 UNSIGNED8: Number of inputs */
+        uint32_t vendor_id; /* 0x1018 sub 1 UNSIGNED32: Vendor-ID */
+        uint32_t product_code; /* 0x1018 sub 2 UNSIGNED32: Product code */
+        uint32_t revision_number; /* 0x1018 sub 3 UNSIGNED32: Revision number */
+        uint32_t serial_number; /* 0x1018 sub 4 UNSIGNED32: Serial number */
+        uint8_t highest_sub_index_supported; /* 0x1018 sub 0 UNSIGNED8: Highest sub-index supported */
+    } identity_object; /* 0x1018 Identity object */
+    struct {
+        uint32_t cob_id_used_by_tpdo; /* 0x1800 sub 1 UNSIGNED32: COB-ID used by TPDO */
+        uint8_t highest_sub_index_supported; /* 0x1800 sub 0 UNSIGNED8: Highest sub-index supported */
+        uint8_t transmission_type; /* 0x1800 sub 2 UNSIGNED8: Transmission type */
+    } tpdo_communication_parameter; /* 0x1800 TPDO communication parameter */
+    int32_t int24_value; /* 0x2003 INTEGER24: Int24 value */
+    int32_t int32_value; /* 0x2004 INTEGER32: Int32 value */
+    uint32_t unsigned24_value; /* 0x200B UNSIGNED24: Unsigned24 value */
+    uint32_t unsigned32_value; /* 0x200C UNSIGNED32: Unsigned32 value */
+    float temperature_degc; /* 0x2011 REAL32: Temperature (degC) */
+    struct {
+        int32_t speed; /* 0x2300 sub 1 INTEGER32: Speed */
+        uint8_t highest_sub_index_supported; /* 0x2300 sub 0 UNSIGNED8: Highest sub-index supported */
+        uint8_t default_; /* 0x2300 sub 2 UNSIGNED8: default */
+    } setpoints; /* 0x2300 Setpoints */
+    uint16_t producer_heartbeat_time; /* 0x1017 UNSIGNED16: Producer heartbeat time */
+    int16_t int16_value; /* 0x2002 INTEGER16: Int16 value */
+    uint16_t unsigned16_value; /* 0x200A UNSIGNED16: Unsigned16 value */
+    struct {
         int16_t input; /* 0x2100 sub 1 INTEGER16: Input */
         int16_t input_2; /* 0x2100 sub 2 INTEGER16: Input */
         int16_t input_3; /* 0x2100 sub 3 INTEGER16: Input */
+        uint8_t number_of_inputs; /* 0x2100 sub 0 UNSIGNED8: Number of inputs */
     } analog_inputs; /* 0x2100 Analog inputs */
-    struct {
-        uint8_t highest_sub_index_supported; /* 0x2300 sub 0 UNSIGNED8: Highest sub-index supported */
-        int32_t speed; /* 0x2300 sub 1 INTEGER32: Speed */
-        uint8_t default_; /* 0x2300 sub 2 UNSIGNED8: default */
-    } setpoints; /* 0x2300 Setpoints */
+    uint8_t error_register; /* 0x1001 UNSIGNED8: Error register */
+    char manufacturer_device_name[14]; /* 0x1008 VISIBLE_STRING: Manufacturer device name */
+    uint8_t flag; /* 0x2000 BOOLEAN: Flag */
+    int8_t int8_value; /* 0x2001 INTEGER8: Int8 value */
+    uint8_t unsigned8_value; /* 0x2009 UNSIGNED8: Unsigned8 value */
+    char user_label[6]; /* 0x2013 VISIBLE_STRING: User "label" *_/ ?_?/ */
+    uint8_t key_bytes[4]; /* 0x2014 OCTET_STRING: Key bytes */
+    char empty_text[1]; /* 0x2015 VISIBLE_STRING: Empty text */
     int8_t mode; /* 0x6000 INTEGER8: Mode */
 } sample_values_t;
 
