@@ -105,7 +105,9 @@ static co_err_t tx(void *ctx, const co_frame_t *frame)
 static void feed(co_node_t *node, uint32_t id, const uint8_t *data, uint8_t len)
 {
     co_frame_t f = {.id = id, .len = len};
-    memcpy(f.data, data, len);
+    if (len > 0) { /* (a SYNC has no data: no pointer either) */
+        memcpy(f.data, data, len);
+    }
     co_node_ingest(node, 0, &f);
 }
 
