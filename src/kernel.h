@@ -31,7 +31,7 @@ static inline uint32_t co_cob_key(uint32_t cob)
 
 /* ---- receive routes (routes.c): which service takes the frames of a COB-ID */
 
-/* Route kinds (co_route_t.kind), each with its slot (a channel, an entry, a PDO): one route
+/* Route kinds, each with its slot (a channel, an entry, a PDO): one route
  * per kind and slot. When two owners share a key, the lower kind takes the frames. */
 enum co_route_kind {
     CO_ROUTE_NMT = 1,     /* 0x000: NMT command */
@@ -60,8 +60,9 @@ static inline uint32_t co_cob_route(uint32_t cob)
 {
     return (cob & CO_COB_INVALID) ? CO_ROUTE_OFF : co_cob_key(cob);
 }
-/* The route that takes the frames of `key` (the lowest kind of its owners), or NULL. */
-const co_route_t *co_routes_find(const co_node_t *node, uint32_t key);
+/* The position of the route that takes the frames of `key` (the lowest kind of its owners),
+ * or route_count when none does. */
+uint16_t co_routes_find(const co_node_t *node, uint32_t key);
 /* The route key of a received frame. */
 static inline uint32_t co_route_key(const co_frame_t *frame)
 {
@@ -134,11 +135,7 @@ void co_node_schedule(co_node_t *node, uint64_t due_us);
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 /* Milliseconds of a 16-bit object (a period, a time-out) in microseconds: they fit 32 bits,
  * so the multiply is a 32-bit one (no 64-bit helper call on Cortex-M0). */
-static inline uint64_t co_ms_to_us(uint16_t ms)
-{
-    uint32_t us = (uint32_t)ms * 1000u;
-    return us;
-}
+static inline uint64_t co_ms_to_us(uint16_t ms) { return (uint32_t)ms * 1000u; }
 /* Any 32-bit count of milliseconds (guard time x life time factor) in microseconds. */
 static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
 

@@ -86,18 +86,35 @@ static const ingest_fn k_ingest[] = {
     [CO_ROUTE_MGR_BOOTUP] = co_manager_bootup,
 };
 
+/* The co_service_t bit the NMT state must allow for the frames of each route kind. */
+static const uint16_t k_service[] = {
+    [CO_ROUTE_NMT] = CO_SVC_NMT,
+    [CO_ROUTE_GUARD_RTR] = CO_SVC_ERROR_CONTROL,
+    [CO_ROUTE_GUARD_REPLY] = CO_SVC_ERROR_CONTROL,
+    [CO_ROUTE_HB_CONSUMER] = CO_SVC_ERROR_CONTROL,
+    [CO_ROUTE_SDO_SERVER] = CO_SVC_SDO,
+    [CO_ROUTE_SDO_CLIENT] = CO_SVC_SDO,
+    [CO_ROUTE_SYNC] = CO_SVC_SYNC,
+    [CO_ROUTE_TIME] = CO_SVC_TIME,
+    [CO_ROUTE_EMCY] = CO_SVC_EMCY,
+    [CO_ROUTE_RPDO] = CO_SVC_PDO,
+    [CO_ROUTE_TPDO_RTR] = CO_SVC_PDO,
+    [CO_ROUTE_LSS_SLAVE] = CO_SVC_LSS,
+    [CO_ROUTE_LSS_MASTER] = CO_SVC_LSS,
+    [CO_ROUTE_MGR_BOOTUP] = CO_SVC_ERROR_CONTROL,
+};
+
 /* Hand a frame to the service its route names (routes hold the kinds above only). */
-static CO_INLINE void dispatch(co_node_t *node, const co_route_t *route, const co_frame_t *frame)
+static CO_INLINE void dispatch(co_node_t *node, uint16_t route, const co_frame_t *frame)
 {
-    k_ingest[route->kind](node, route->slot, frame);
+    k_ingest[node->route_kind[route]](node, node->route_slot[route], frame);
 }
 
 /* A frame whose service the NMT state does not allow now: dropped and counted, unless
  * it is the one that ends an LSS quiet time. */
-static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *route,
-                                          const co_frame_t *frame)
+static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, uint16_t route, const co_frame_t *frame)
 {
-    if (co_lss_slave_resume(node, route->service)) {
+    if (co_lss_slave_resume(node, k_service[node->route_kind[route]])) {
         dispatch(node, route, frame);
     } else {
         node->stats.rx_gated++;
@@ -105,9 +122,9 @@ static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, const co_route_t *rou
 }
 
 /* A routed frame: to its service, or to the gate when the NMT state does not allow it. */
-static CO_INLINE void deliver(co_node_t *node, const co_route_t *route, const co_frame_t *frame)
+static CO_INLINE void deliver(co_node_t *node, uint16_t route, const co_frame_t *frame)
 {
-    if (!(node->services & route->service)) {
+    if (!(node->services & k_service[node->route_kind[route]])) {
         ingest_gated(node, route, frame);
         return;
     }
@@ -117,8 +134,8 @@ static CO_INLINE void deliver(co_node_t *node, const co_route_t *route, const co
 /* A frame on another COB-ID than the last one routed: the search, then delivered. */
 static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
 {
-    const co_route_t *route = co_routes_find(node, key);
-    if (route == NULL) {
+    uint16_t found = co_routes_find(node, key);
+    if (found == node->route_count) {
         if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
             node->stats.rx_malformed++;
         } else {
@@ -126,8 +143,8 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
         }
         return;
     }
-    node->route_hint = (uint16_t)(route - node->routes);
-    deliver(node, route, frame);
+    node->route_hint = found;
+    deliver(node, found, frame);
 }
 
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
@@ -145,12 +162,12 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
      * the one the last frame took; this path makes no call but the service's (a short
      * path: without it every frame takes the search). */
     uint32_t key = co_route_key(frame);
-    const co_route_t *route = &node->routes[node->route_hint];
-    if (!CO_SHORT_PATHS || node->route_hint >= node->route_count || route->key != key) {
+    uint16_t hint = node->route_hint;
+    if (!CO_SHORT_PATHS || hint >= node->route_count || node->route_keys[hint] != key) {
         ingest_searched(node, frame, key);
         return;
     }
-    deliver(node, route, frame);
+    deliver(node, hint, frame);
 }
 
 /* ---- time */

@@ -65,7 +65,6 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
     pdo_clear(p, PDO_F_PENDING | PDO_F_SAMPLED | PDO_F_STARTED | PDO_F_WAITING);
     pdo_timers_restart(p);
     p->sync_count = 0;
-    p->len = 0;
     if (tpdo) {
         tpdo_start(node, p);
     }
@@ -77,7 +76,7 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
 {
     uint16_t count = 0;
-    for (uint16_t n = 0; n < max; n++) {
+    for (unsigned n = 0; n < max; n++) {
         if (co_od_find(od, (uint16_t)(base + n), 1, NULL) != NULL) {
             count = (uint16_t)(n + 1u);
         }
@@ -99,10 +98,10 @@ co_err_t co_pdo_bind(co_node_t *node)
 #if CO_SHORT_PATHS
 /* After parameters or mapping loaded (NMT states do not change it): may a frame of this
  * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
-static bool fast_widths(const co_pdo_t *p)
+static bool fast_widths(const co_od_t *od, const co_pdo_t *p)
 {
-    for (uint8_t i = 0; i < p->count; i++) {
-        uint8_t b = p->map_bits[i];
+    for (unsigned i = 0; i < p->count; i++) {
+        uint8_t b = pdo_item_bits(od, p, i);
         if (b != 8 && b != 16 && b != 32 && b != 64) {
             return false; /* co_copy_number copies 1, 2, 4 or 8 bytes */
         }
@@ -111,22 +110,20 @@ static bool fast_widths(const co_pdo_t *p)
 }
 #endif
 
-static void decide_fast(co_pdo_t *p, bool tpdo)
+static void decide_fast(const co_od_t *od, co_pdo_t *p, bool tpdo)
 {
 #if CO_SHORT_PATHS
-    bool plain = p->plain && fast_widths(p);
+    bool plain = pdo_has(p, PDO_F_PLAIN) && fast_widths(od, p);
     if (tpdo) {
         bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
-        co_frame_t f; /* the header, built once */
-        co_frame_address(&f, p->cob_id, pdo_bytes(p));
-        p->fast = pdo_active(p) && plain && cyclic ? f.len : 0;
-        p->frame_id = f.id;
-        p->frame_flags = f.flags;
+        bool std_id = !(p->cob_id & CO_COB_EXT); /* its frame: the COB-ID's low 11 bits */
+        p->fast = pdo_active(p) && plain && cyclic && std_id ? pdo_bytes(p) : 0;
         return;
     }
     bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
     p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
 #else
+    (void)od;
     (void)tpdo;
     p->fast = 0; /* -Os: no short paths */
 #endif
@@ -146,7 +143,7 @@ static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, u
 {
     load_comm(node, p, tpdo, num);
     pdo_load_mapping(node, p, tpdo, num);
-    decide_fast(p, tpdo);
+    decide_fast(&node->cfg.od, p, tpdo);
     restart(node, p, tpdo);
     route(node, p, tpdo, num);
 }
@@ -161,7 +158,7 @@ static void count_listeners(co_node_t *node)
     }
     uint16_t listeners = 0;
     uint16_t sync_end = 0;
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
+    for (unsigned n = 0; n < node->tpdo_count; n++) {
         const co_pdo_t *p = &node->tpdo[n];
         if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
             listeners++;
@@ -173,7 +170,7 @@ static void count_listeners(co_node_t *node)
     node->tpdo_listeners = listeners;
     node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
     uint16_t rx_end = 0;
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < node->rpdo_count; n++) {
         if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
             rx_end = (uint16_t)(n + 1u);
         }
@@ -186,8 +183,8 @@ void co_pdo_reset_comm(co_node_t *node)
     for (int tpdo = 0; tpdo <= 1; tpdo++) {
         uint16_t count;
         co_pdo_t *table = pdo_table(node, tpdo, &count);
-        for (uint16_t n = 0; n < count; n++) {
-            load_pdo(node, &table[n], tpdo, n);
+        for (unsigned n = 0; n < count; n++) {
+            load_pdo(node, &table[n], tpdo, (uint16_t)n);
         }
     }
     count_listeners(node);
@@ -195,10 +192,10 @@ void co_pdo_reset_comm(co_node_t *node)
 
 void co_pdo_state_entered(co_node_t *node)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < node->rpdo_count; n++) {
         restart(node, &node->rpdo[n], false);
     }
-    for (uint16_t n = 0; n < node->tpdo_count; n++) {
+    for (unsigned n = 0; n < node->tpdo_count; n++) {
         restart(node, &node->tpdo[n], true);
     }
 }
@@ -219,12 +216,12 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
      * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
      * Both loops test the NMT state first (an application callback may change it). */
-    for (uint16_t n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
+    for (unsigned n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n);
         }
     }
-    for (uint16_t n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
+    for (unsigned n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (!CO_SHORT_PATHS || !p->fast) {
             tpdo_sync(node, p, counter);
@@ -237,10 +234,10 @@ void co_pdo_sync(co_node_t *node, uint8_t counter)
 
 /* ---- events */
 
-static bool maps_entry(const co_pdo_t *p, const co_od_entry_t *entry)
+static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t *entry)
 {
-    for (uint8_t i = 0; i < p->count; i++) {
-        if (p->map_entry[i] == entry) {
+    for (unsigned i = 0; i < p->count; i++) {
+        if (pdo_entry(od, p, i) == entry) {
             return true;
         }
     }
@@ -250,9 +247,9 @@ static bool maps_entry(const co_pdo_t *p, const co_od_entry_t *entry)
 static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t marked = 0;
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < node->tpdo_count && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
-        if (maps_entry(p, entry) && tpdo_event(node, p)) {
+        if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
             marked++;
         }
     }
@@ -327,9 +324,10 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     } else {
         uint8_t flags = p->flags;
         load_comm(node, p, r.tpdo, r.num);
-        p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
+        p->flags =
+            (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR | PDO_F_PLAIN)));
     }
-    decide_fast(p, r.tpdo);
+    decide_fast(&node->cfg.od, p, r.tpdo);
     restart(node, p, r.tpdo);
     count_listeners(node);
     route(node, p, r.tpdo, r.num);

@@ -38,6 +38,7 @@ uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
 #define PDO_F_WAITING 0x10u   /* RPDO 0..240: data[] waits for the next SYNC */
 #define PDO_F_TIMED_OUT 0x20u /* RPDO: deadline missed and reported, until the next RPDO */
 #define PDO_F_LEN_ERROR 0x40u /* RPDO: raised 0x8210/0x8220, until a frame of the right length */
+#define PDO_F_PLAIN 0x80u     /* every item a whole value copied as stored (short paths only) */
 #define PDO_RTR_NOT_ALLOWED 0x40000000u /* TPDO COB-ID bit 30 */
 #define PDO_VALUE_MAX 8u                /* bytes of the widest mappable value (64 bits) */
 
@@ -70,6 +71,41 @@ static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
     }
 }
 
+/* Slot i's entry, for a slot that is no dummy entry (a plain or direct one, or any slot
+ * without bit-granular mapping). */
+static inline const co_od_entry_t *pdo_mapped(const co_od_t *od, const co_pdo_t *p, unsigned i)
+{
+#if CO_CONFIG_OD_COMPACT
+    return &od->entries[p->map_entry[i]];
+#else
+    (void)od;
+    return p->map_entry[i];
+#endif
+}
+
+/* Slot i's entry, NULL for a dummy entry (only bit-granular mapping has them). */
+static inline const co_od_entry_t *pdo_entry(const co_od_t *od, const co_pdo_t *p, unsigned i)
+{
+    return p->map_entry[i] != CO_PDO_NO_ENTRY ? pdo_mapped(od, p, i) : NULL;
+}
+
+/* Slot i's storage, for a slot that is no dummy entry. */
+static inline void *pdo_value(const co_od_t *od, const co_pdo_t *p, unsigned i)
+{
+    return co_od_value(od, pdo_mapped(od, p, i));
+}
+
+/* Bits slot i maps: without bit-granular mapping always the whole value (no dummies). */
+static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsigned i)
+{
+#if CO_CONFIG_PDO_BIT_MAPPING
+    (void)od;
+    return p->map_bits[i];
+#else
+    return (uint8_t)(8u * co_od_size(od, pdo_mapped(od, p, i)));
+#endif
+}
+
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
 
@@ -83,14 +119,15 @@ static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
  * told when some TPDO listens to changes. */
 static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
+    const co_od_t *od = &node->cfg.od;
     for (uint8_t i = 0; i < p->count; i++) {
-        uint32_t bytes = p->map_bits[i] / 8u;
-        pdo_copy_value(co_od_value(&node->cfg.od, p->map_entry[i]), data, bytes);
+        uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
+        pdo_copy_value(pdo_value(od, p, i), data, bytes);
         data += bytes;
     }
     if (node->tpdo_listeners != 0) {
         for (uint8_t i = 0; i < p->count; i++) {
-            co_pdo_changed(node, p->map_entry[i]);
+            co_pdo_changed(node, pdo_mapped(od, p, i));
         }
     }
 }
@@ -130,7 +167,7 @@ static inline uint16_t pdo_map_index(bool tpdo, uint16_t num)
 /* pdo_tx.c */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
-void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* p->plain: pack, send */
+void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* `fast` set: pack, send */
 void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
 
 /* pdo_rx.c */
@@ -138,63 +175,7 @@ void rpdo_sync(co_node_t *node, uint8_t n);
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
 void pdo_clear_emcy(co_node_t *node, uint16_t code); /* co_emcy_clear if active */
 
-/* pdo_timers.c: inhibit time, event timer, RPDO deadline (CO_CONFIG_PDO_TIMERS). */
-#if CO_CONFIG_PDO_TIMERS
-void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
-static inline void pdo_timers_restart(co_pdo_t *p)
-{
-    p->next_us = CO_TIME_NEVER;
-    p->inhibit_until_us = 0;
-}
-/* Entering operational / new parameters: an event-driven TPDO's event timer starts. */
-static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
-{
-    p->next_us = CO_TIME_NEVER;
-    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
-}
-/* Inside the inhibit time: true, and a poll is scheduled for its end. */
-bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
-void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
-void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
-static inline bool rpdo_monitored(const co_pdo_t *p) { return p->event_ms != 0; }
-#else
-static inline void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
-{
-    (void)node;
-    (void)p;
-    (void)tpdo;
-    (void)comm_index;
-}
-static inline void pdo_timers_restart(co_pdo_t *p) { (void)p; }
-static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
-{
-    (void)node;
-    (void)p;
-}
-static inline bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
-{
-    (void)node;
-    (void)p;
-    return false;
-}
-static inline void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
-{
-    (void)node;
-    (void)p;
-}
-static inline void rpdo_received(co_node_t *node, co_pdo_t *p)
-{
-    (void)node;
-    (void)p;
-}
-static inline bool rpdo_monitored(const co_pdo_t *p)
-{
-    (void)p;
-    return false;
-}
-#endif
+/* pdo_timers.c (its header uses the helpers above) */
+#include "pdo_timers.h"
 
 #endif /* CANOLA_PDO_INTERNAL_H */

@@ -44,12 +44,14 @@ static bool bits_fit(uint8_t bits, uint32_t size)
 
 /* One mapping entry value (index << 16 | sub << 8 | bits) into slot k of `out`. */
 static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_pdo_t *out,
-                               uint8_t k)
+                               unsigned k)
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t bits = (uint8_t)value;
-    out->map_entry[k] = NULL;
+    out->map_entry[k] = CO_PDO_NO_ENTRY;
+#if CO_CONFIG_PDO_BIT_MAPPING
     out->map_bits[k] = bits;
+#endif
     if (bits == 0) {
         return CO_ABORT_NO_MAP;
     }
@@ -63,7 +65,15 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     if (e == NULL || !mappable(od, e, size, tpdo) || !bits_fit(bits, size)) {
         return CO_ABORT_NO_MAP;
     }
+#if CO_CONFIG_OD_COMPACT
+    ptrdiff_t pos = e - od->entries;
+    if (pos >= CO_PDO_NO_ENTRY) {
+        return CO_ABORT_NO_MAP; /* past the positions a PDO slot holds: 65535 entries */
+    }
+    out->map_entry[k] = (uint16_t)pos;
+#else
     out->map_entry[k] = e;
+#endif
     /* A whole number stored as it travels (and no hook to run): the short paths copy it
      * straight to and from the frame. */
     if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL &&
@@ -77,7 +87,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
  * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
 static bool all_direct(const co_pdo_t *p)
 {
-    for (uint8_t i = 0; i < p->count; i++) {
+    for (unsigned i = 0; i < p->count; i++) {
         if (!pdo_direct(p, i)) {
             return false; /* a direct item is whole bytes: the next one stays aligned */
         }
@@ -92,7 +102,7 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
 {
     out->count = 0;
     out->bits = 0;
-    out->plain = false;
+    pdo_clear(out, PDO_F_PLAIN);
     memset(out->map_direct, 0, sizeof out->map_direct);
     if (n == 0) {
         return CO_ABORT_NONE;
@@ -104,23 +114,26 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
         return CO_ABORT_MAP_LEN;
     }
     uint32_t total = 0;
-    for (uint8_t k = 0; k < n; k++) {
+    for (unsigned k = 0; k < n; k++) {
         const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(k + 1u), NULL);
         if (e == NULL) {
             return CO_ABORT_VALUE_HIGH;
         }
-        co_abort_t abort = resolve_item(od, (uint32_t)co_od_entry_uint(od, e), tpdo, out, k);
+        uint32_t item = (uint32_t)co_od_entry_uint(od, e);
+        co_abort_t abort = resolve_item(od, item, tpdo, out, k);
         if (abort != CO_ABORT_NONE) {
             return abort;
         }
-        total += out->map_bits[k];
+        total += (uint8_t)item; /* the entry's bits */
         if (total > PDO_MAP_BITS_MAX) {
             return CO_ABORT_MAP_LEN;
         }
     }
     out->count = n;
     out->bits = (uint8_t)total;
-    out->plain = CO_SHORT_PATHS && all_direct(out);
+    if (CO_SHORT_PATHS && all_direct(out)) {
+        pdo_set(out, PDO_F_PLAIN);
+    }
     return CO_ABORT_NONE;
 }
 
@@ -150,6 +163,7 @@ co_abort_t pdo_check_mapping(const co_node_t *node, bool tpdo, uint16_t num, uin
         return CO_ABORT_NONE; /* the length check has refused it already */
     }
     co_pdo_t trial;
+    trial.flags = 0; /* (resolve_mapping keeps the state bits: there are none) */
     return resolve_mapping(&node->cfg.od, idx, data[0], tpdo, &trial);
 }
 #endif

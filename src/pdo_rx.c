@@ -14,15 +14,13 @@
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
 
-/* Slot i's value from the frame at bit `pos`; false when the object's write hook refused it
- * (then nothing changed). A whole value is stored as it comes; a value mapped with fewer
- * bits keeps the bits the frame does not carry. */
-static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint8_t *data,
-                       uint32_t pos)
+/* Slot i's value (entry e, `bits` of it) from the frame at bit `pos`; false when the
+ * object's write hook refused it (then nothing changed). A whole value is stored as it
+ * comes; a value mapped with fewer bits keeps the bits the frame does not carry. */
+static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_od_entry_t *e,
+                       uint8_t bits, const uint8_t *data, uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    const co_od_entry_t *e = p->map_entry[i];
-    uint8_t bits = p->map_bits[i];
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* what co_od_store does */
         pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
         return true;
@@ -53,20 +51,22 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, uint8_t i, const uint
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    if (CO_SHORT_PATHS && p->plain) {
+    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) {
         pdo_apply_plain(node, p, data);
     } else {
+        const co_od_t *od = &node->cfg.od;
         const co_od_entry_t *stored[CO_PDO_MAP_MAX];
         uint8_t count = 0;
         uint32_t pos = 0;
-        for (uint8_t i = 0; i < p->count; i++) {
-            /* a NULL entry is a dummy entry: skipped */
-            if (p->map_entry[i] != NULL && store_item(node, p, i, data, pos)) {
-                stored[count++] = p->map_entry[i];
+        for (unsigned i = 0; i < p->count; i++) {
+            const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
+            uint8_t bits = pdo_item_bits(od, p, i);
+            if (e != NULL && store_item(node, p, i, e, bits, data, pos)) {
+                stored[count++] = e;
             }
-            pos += p->map_bits[i];
+            pos += bits;
         }
-        for (uint8_t i = 0; i < count; i++) {
+        for (unsigned i = 0; i < count; i++) {
             co_pdo_changed(node, stored[i]);
         }
     }
@@ -78,7 +78,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 /* Another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
 {
-    for (uint16_t n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < node->rpdo_count; n++) {
         const co_pdo_t *p = &node->rpdo[n];
         if (p != self && pdo_has(p, flag)) {
             return true;
@@ -122,8 +122,7 @@ static CO_SIZE_NOINLINE void hold_for_sync(co_node_t *node, co_pdo_t *p, const c
     if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
-    co_copy(p->data, frame->data, frame->len);
-    p->len = frame->len;
+    co_copy(p->data, frame->data, frame->len); /* at least the mapped bits (rx_general) */
     pdo_set(p, PDO_F_WAITING);
 }
 
@@ -155,8 +154,8 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 {
     const co_pdo_t *p = &node->rpdo[rpdo];
     if (node->tpdo_listeners != 0) {
-        for (uint8_t i = 0; i < p->count; i++) {
-            co_pdo_changed(node, p->map_entry[i]);
+        for (unsigned i = 0; i < p->count; i++) {
+            co_pdo_changed(node, pdo_mapped(&node->cfg.od, p, i));
         }
     }
     if (node->cfg.on_rpdo) {
@@ -187,10 +186,11 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
     const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
     if (CO_SHORT_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
         !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
+        const co_od_t *od = &node->cfg.od;
         const uint8_t *data = frame->data;
-        for (uint8_t i = 0; i < p->count; i++) {
-            uint32_t bytes = p->map_bits[i] / 8u;
-            co_copy_number(co_od_value(&node->cfg.od, p->map_entry[i]), data, bytes);
+        for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
+            uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
+            co_copy_number(pdo_value(od, p, i), data, bytes);
             data += bytes;
         }
         if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {

@@ -84,10 +84,10 @@ static CO_SIZE_NOINLINE uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_
 uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
 {
     uint64_t next = CO_TIME_NEVER;
-    for (uint16_t n = 0; n < node->rpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < node->rpdo_count && pdo_running(node); n++) {
         next = co_min_u64(next, rpdo_poll(node, &node->rpdo[n], now_us));
     }
-    for (uint16_t n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < node->tpdo_count && pdo_running(node); n++) {
         next = co_min_u64(next, tpdo_poll(node, &node->tpdo[n], now_us));
     }
     return pdo_running(node) ? next : CO_TIME_NEVER;

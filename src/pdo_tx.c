@@ -10,41 +10,43 @@ static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
 /* Slot i's value into the frame at bit `pos`: whole bytes straight from co_od_read,
  * anything else through a bit copy of the value's low bits. */
-static void pack_item(const co_od_t *od, const co_pdo_t *p, uint8_t i, uint8_t *out, uint32_t pos)
+static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t *out, uint32_t pos)
 {
     uint32_t n;
-    uint8_t bits = p->map_bits[i];
+    const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
+    uint8_t bits = pdo_item_bits(od, p, i);
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
-        pdo_copy_value(out + pos / 8u, co_od_value(od, p->map_entry[i]), bits / 8u);
+        pdo_copy_value(out + pos / 8u, co_od_value(od, e), bits / 8u);
         return;
     }
     if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
-        (void)co_od_read(od, p->map_entry[i], 0, out + pos / 8u, bits / 8u, &n, NULL);
+        (void)co_od_read(od, e, 0, out + pos / 8u, bits / 8u, &n, NULL);
         return;
     }
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};
-    (void)co_od_read(od, p->map_entry[i], 0, wire, sizeof wire, &n, NULL);
+    (void)co_od_read(od, e, 0, wire, sizeof wire, &n, NULL);
     pdo_copy_bits(out, pos, wire, 0, bits);
 #endif
 }
 
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_DATA_MAX])
 {
+    const co_od_t *od = &node->cfg.od;
     co_zero(out, CO_FRAME_DATA_MAX);
-    if (CO_SHORT_PATHS && p->plain) { /* whole values as stored: one copy each */
+    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) { /* whole values as stored: one copy each */
         uint8_t *at = out;
-        for (uint8_t i = 0; i < p->count; i++) {
-            uint32_t bytes = p->map_bits[i] / 8u;
-            pdo_copy_value(at, co_od_value(&node->cfg.od, p->map_entry[i]), bytes);
+        for (unsigned i = 0; i < p->count; i++) {
+            uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
+            pdo_copy_value(at, pdo_value(od, p, i), bytes);
             at += bytes;
         }
         return;
     }
     uint32_t pos = 0;
-    for (uint8_t i = 0; i < p->count; i++) {
-        pack_item(&node->cfg.od, p, i, out, pos);
-        pos += p->map_bits[i];
+    for (unsigned i = 0; i < p->count; i++) {
+        pack_item(od, p, i, out, pos);
+        pos += pdo_item_bits(od, p, i);
     }
 }
 
@@ -60,14 +62,15 @@ static void send_fresh(co_node_t *node, const co_pdo_t *p)
     send_data(node, p, data);
 }
 
-/* A TPDO with `fast` set: its frame header is precomputed. */
+/* A TPDO with `fast` set: `fast` bytes of whole values on an 11-bit identifier. */
 void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
 {
-    co_frame_t f = {.id = p->frame_id, .flags = p->frame_flags, .len = p->fast}; /* data zeroed */
+    co_frame_t f = {.id = p->cob_id & CO_ID_STD_MAX, .len = p->fast}; /* data zeroed */
+    const co_od_t *od = &node->cfg.od;
     uint8_t *at = f.data;
-    for (uint8_t i = 0; i < p->count; i++) {
-        uint32_t bytes = p->map_bits[i] / 8u;
-        co_copy_number(at, co_od_value(&node->cfg.od, p->map_entry[i]), bytes);
+    for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
+        uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
+        co_copy_number(at, pdo_value(od, p, i), bytes);
         at += bytes;
     }
     (void)co_node_send_hot(node, &f, CO_SVC_PDO);

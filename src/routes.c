@@ -12,95 +12,79 @@
 
 #define SHADOW 0x40000000u /* a route waiting behind another owner of its key */
 
-static uint16_t kind_service(uint8_t kind)
+/* The owner of route i as one number, by which the owners of one key rank: the lower kind,
+ * then the lower slot, comes first. */
+static uint16_t owner_at(const co_node_t *node, unsigned i)
 {
-    switch (kind) {
-    case CO_ROUTE_NMT:
-        return CO_SVC_NMT;
-    case CO_ROUTE_SDO_SERVER:
-    case CO_ROUTE_SDO_CLIENT:
-        return CO_SVC_SDO;
-    case CO_ROUTE_SYNC:
-        return CO_SVC_SYNC;
-    case CO_ROUTE_TIME:
-        return CO_SVC_TIME;
-    case CO_ROUTE_EMCY:
-        return CO_SVC_EMCY;
-    case CO_ROUTE_RPDO:
-    case CO_ROUTE_TPDO_RTR:
-        return CO_SVC_PDO;
-    case CO_ROUTE_LSS_SLAVE:
-    case CO_ROUTE_LSS_MASTER:
-        return CO_SVC_LSS;
-    default:
-        return CO_SVC_ERROR_CONTROL;
+    return (uint16_t)((unsigned)node->route_kind[i] << 8 | node->route_slot[i]);
+}
+
+/* The position of the route of `owner`, or route_count when it has none. */
+static uint16_t owned(const co_node_t *node, uint16_t owner)
+{
+    uint16_t i = 0;
+    while (i < node->route_count && owner_at(node, i) != owner) {
+        i++;
     }
+    return i;
 }
 
-/* The route of `kind` and `slot`, or NULL when it has none. */
-static co_route_t *owned(co_node_t *node, uint8_t kind, uint8_t slot)
-{
-    for (co_route_t *r = node->routes; r < node->routes + node->route_count; r++) {
-        if (r->kind == kind && r->slot == slot) {
-            return r;
-        }
-    }
-    return NULL;
-}
-
-/* Route `a` comes before route `b` among the owners of one key: the lower kind, then slot. */
-static bool lower(const co_route_t *a, const co_route_t *b)
-{
-    return a->kind != b->kind ? a->kind < b->kind : a->slot < b->slot;
-}
-
-/* The routes of `key` (none: CO_ROUTE_OFF, which no masked key equals): the lowest takes
- * the frames, the others wait behind it, their key marked SHADOW. */
+/* The routes of `key` (none: CO_ROUTE_OFF, which no masked key equals): the lowest owner
+ * takes the frames, the others wait behind it, their key marked SHADOW. */
 static void settle(co_node_t *node, uint32_t key)
 {
-    co_route_t *owner = NULL;
-    for (co_route_t *r = node->routes; r < node->routes + node->route_count; r++) {
-        if ((r->key & ~SHADOW) == key) {
-            r->key = key | SHADOW;
-            owner = owner == NULL || lower(r, owner) ? r : owner;
+    unsigned first = node->route_count;
+    uint16_t first_owner = UINT16_MAX; /* above every owner: kinds are below 0xFF */
+    for (unsigned i = 0; i < node->route_count; i++) {
+        if ((node->route_keys[i] & ~SHADOW) == key) {
+            node->route_keys[i] = key | SHADOW;
+            uint16_t owner = owner_at(node, i);
+            if (owner < first_owner) {
+                first = i;
+                first_owner = owner;
+            }
         }
     }
-    if (owner != NULL) {
-        owner->key = key;
+    if (first != node->route_count) {
+        node->route_keys[first] = key;
     }
 }
 
-/* Route `a` may come before route `b` in the table: key, then kind and slot. */
-static CO_SIZE_NOINLINE bool in_order(const co_route_t *a, const co_route_t *b)
+/* Route i becomes (key, owner). */
+static CO_SIZE_NOINLINE void put(co_node_t *node, unsigned i, uint32_t key, uint16_t owner)
 {
-    return a->key != b->key ? a->key < b->key : lower(a, b);
+    node->route_keys[i] = key;
+    node->route_kind[i] = (uint8_t)(owner >> 8);
+    node->route_slot[i] = (uint8_t)owner;
 }
 
-/* The routes in their order again: an insertion sort, as few routes are out of place and
- * this runs only on changes. (co_copy, not struct copies: those would call memcpy on
- * Cortex-M0.) */
+/* The routes in their order again (key, then owner): an insertion sort, as few routes are
+ * out of place and this runs only on changes. */
 static void sort(co_node_t *node)
 {
-    for (uint16_t i = 1; i < node->route_count; i++) {
-        if (in_order(&node->routes[i - 1u], &node->routes[i])) {
-            continue; /* in place: most are */
+    for (unsigned i = 1; i < node->route_count; i++) {
+        uint32_t key = node->route_keys[i];
+        uint16_t owner = owner_at(node, i);
+        unsigned at = i;
+        for (; at > 0; at--) {
+            unsigned before = at - 1u;
+            uint32_t k = node->route_keys[before];
+            if (k < key || (k == key && owner_at(node, before) < owner)) {
+                break; /* (no two routes have one owner) */
+            }
+            put(node, at, k, owner_at(node, before));
         }
-        co_route_t r;
-        co_copy(&r, &node->routes[i], sizeof r);
-        uint16_t at = i;
-        for (; at > 0 && !in_order(&node->routes[at - 1u], &r); at--) {
-            co_copy(&node->routes[at], &node->routes[at - 1u], sizeof r);
-        }
-        co_copy(&node->routes[at], &r, sizeof r);
+        put(node, at, key, owner);
     }
 }
 
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 {
-    co_route_t *r = owned(node, kind, slot);
+    uint16_t owner = (uint16_t)((unsigned)kind << 8 | slot);
+    uint16_t i = owned(node, owner);
     uint32_t old = CO_ROUTE_OFF;
-    if (r != NULL) {
-        old = r->key & ~SHADOW;
+    if (i < node->route_count) {
+        old = node->route_keys[i] & ~SHADOW;
         if (old == key) {
             return; /* nothing changes */
         }
@@ -108,12 +92,9 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
         if (key == CO_ROUTE_OFF || node->route_count >= CO_RX_ROUTES_MAX) {
             return; /* nothing changes, or a full table drops the new route */
         }
-        r = &node->routes[node->route_count++];
-        r->service = kind_service(kind);
-        r->kind = kind;
-        r->slot = slot;
+        node->route_count++;
     }
-    r->key = key;
+    put(node, i, key, owner);
     settle(node, old); /* its next owner takes the frames */
     settle(node, key);
     sort(node); /* a route going (CO_ROUTE_OFF, above every key) ends up last: it goes */
@@ -131,15 +112,15 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
     }
 }
 
-const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)
+uint16_t co_routes_find(const co_node_t *node, uint32_t key)
 {
     uint32_t lo = 0;
     uint32_t hi = node->route_count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2;
-        uint32_t k = node->routes[mid].key;
+        uint32_t k = node->route_keys[mid];
         if (k == key) {
-            return &node->routes[mid];
+            return (uint16_t)mid;
         }
         if (k < key) {
             lo = mid + 1;
@@ -147,7 +128,7 @@ const co_route_t *co_routes_find(const co_node_t *node, uint32_t key)
             hi = mid;
         }
     }
-    return NULL;
+    return node->route_count;
 }
 
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)
@@ -155,12 +136,13 @@ bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)
     /* A software acceptance filter sees mostly other nodes' frames: most fall in a block
      * of 64 identifiers the node has no route in, and leave after one test. */
     uint32_t key = co_route_key(frame);
-    return (node->route_groups & co_route_group(key)) && co_routes_find(node, key) != NULL;
+    return (node->route_groups & co_route_group(key)) &&
+           co_routes_find(node, key) < node->route_count;
 }
 
 uint32_t co_node_route_count(const co_node_t *node) { return node->route_count; }
 
 uint32_t co_node_route_id(const co_node_t *node, uint32_t i)
 {
-    return i < node->route_count ? node->routes[i].key & ~SHADOW : 0;
+    return i < node->route_count ? node->route_keys[i] & ~SHADOW : 0;
 }

@@ -43,18 +43,18 @@ static bool driver_take(co_node_t *node, const co_frame_t *frame)
 }
 
 /* Waiting frame i's service is one the NMT state no longer allows. */
-static bool void_now(const co_node_t *node, uint8_t i)
+static bool void_now(const co_node_t *node, unsigned i)
 {
-    uint16_t service = node->txq_service[i];
+    uint16_t service = node->txq[i].tag.service;
     return service != 0 && !(node->services & service);
 }
 
-/* Move waiting frame `from` to place `to`. (co_copy: GCC makes this assignment a call of
- * the C library's memcpy on Cortex-M0, which a build for size does not otherwise link.) */
-static void move(co_node_t *node, uint8_t to, uint8_t from)
+/* Move waiting frame `from` (and its service) to place `to`. (co_copy: GCC makes this
+ * assignment a call of the C library's memcpy on Cortex-M0, which a build for size does not
+ * otherwise link.) */
+static void move(co_node_t *node, unsigned to, unsigned from)
 {
     co_copy(&node->txq[to], &node->txq[from], sizeof node->txq[to]);
-    node->txq_service[to] = node->txq_service[from];
 }
 
 /* One pass over the queue (not empty): the frames that go (`send`: to the driver, up to the first
@@ -63,8 +63,8 @@ static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
 {
     uint8_t count = node->txq_count;
     uint8_t kept = 0;
-    for (uint8_t i = 0; i < count; i++) {
-        if (send ? kept == 0 && driver_take(node, &node->txq[i]) : void_now(node, i)) {
+    for (unsigned i = 0; i < count; i++) {
+        if (send ? kept == 0 && driver_take(node, &node->txq[i].frame) : void_now(node, i)) {
             node->stats.tx_gated += send ? 0u : 1u;
             continue;
         }
@@ -108,12 +108,12 @@ static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t servi
     }
     uint32_t rank = priority(frame);
     uint8_t at = node->txq_count;
-    while (at > 0 && priority(&node->txq[at - 1]) > rank) {
+    while (at > 0 && priority(&node->txq[at - 1].frame) > rank) {
         move(node, at, (uint8_t)(at - 1)); /* insertion: the later frames move down */
         at--;
     }
-    node->txq[at] = *frame;
-    node->txq_service[at] = service;
+    node->txq[at].frame = *frame; /* (its padding is unspecified after this: service next) */
+    node->txq[at].tag.service = service;
     node->txq_count++;
     node->stats.tx_queued++;
     return CO_OK;

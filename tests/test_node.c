@@ -196,7 +196,7 @@ static void test_two_owners_of_one_cob_id(void)
 static bool routes_sorted(const co_node_t *node)
 {
     for (uint32_t i = 1; i < node->route_count; i++) {
-        if (node->routes[i - 1].key > node->routes[i].key) {
+        if (node->route_keys[i - 1] > node->route_keys[i]) {
             return false;
         }
     }
@@ -205,8 +205,8 @@ static bool routes_sorted(const co_node_t *node)
 
 static bool owner_is(const co_node_t *node, uint32_t key, uint8_t kind, uint8_t slot)
 {
-    const co_route_t *r = co_routes_find(node, key);
-    return r != NULL && r->kind == kind && r->slot == slot;
+    uint16_t i = co_routes_find(node, key);
+    return i < node->route_count && node->route_kind[i] == kind && node->route_slot[i] == slot;
 }
 
 static void test_route_owners_ranked_by_kind_then_slot(void)
@@ -235,7 +235,7 @@ static void test_route_owners_ranked_by_kind_then_slot(void)
     CHECK(owner_is(&t.node, 0x124, CO_ROUTE_MGR_BOOTUP, 3));
     CHECK(routes_sorted(&t.node));
     co_route_set(&t.node, CO_ROUTE_MGR_BOOTUP, 7, CO_ROUTE_OFF);
-    CHECK(co_routes_find(&t.node, 0x123) == NULL);
+    CHECK_EQ(co_routes_find(&t.node, 0x123), t.node.route_count);
     CHECK_EQ(co_node_route_count(&t.node), count + 1);
     CHECK(routes_sorted(&t.node));
 }

@@ -162,6 +162,19 @@ static void test_tpdo_every_second_sync(void)
     CHECK_STR(bus(&t), "185#0B000000 185#0D000000");
 }
 
+/* A cyclic TPDO on a 29-bit COB-ID goes out with it (the short path sends 11-bit ones). */
+static void test_tpdo_29bit_cob_on_sync(void)
+{
+    test_node_t t;
+    setup(&t, true);
+    CHECK_EQ(write_u8(&t, 0x1800, 2, 1), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x80000185u), CO_ABORT_NONE);
+    CHECK_EQ(write_u32(&t, 0x1800, 1, 0x20012345u), CO_ABORT_NONE);
+    co_node_set_uint(&t.node, 0x2000, 0, 7);
+    ingest(&t, 10 * MS, 0x080, "");
+    CHECK_STR(bus(&t), "00012345#07000000");
+}
+
 static void test_tpdo_sync_start_value(void)
 {
     test_node_t t;
@@ -859,6 +872,7 @@ int main(void)
     RUN(test_tpdo_event_timer);
     RUN(test_event_timer_waits_for_inhibit);
     RUN(test_tpdo_every_second_sync);
+    RUN(test_tpdo_29bit_cob_on_sync);
     RUN(test_tpdo_sync_start_value);
     RUN(test_tpdo_acyclic_goes_at_next_sync);
     RUN(test_tpdo_own_sync_producer);

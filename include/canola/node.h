@@ -76,14 +76,14 @@ typedef enum co_node_error {
 } co_node_error_t;
 
 typedef struct co_node_config {
-    uint8_t node_id; /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
-    co_od_t od;      /**< the object dictionary; its entries must outlive the node */
+    uint8_t node_id;         /**< 1..127, or CO_NODE_ID_UNCONFIGURED */
+    bool self_start;         /**< enter OPERATIONAL by itself after boot-up */
+    uint16_t boot_time_ms;   /**< report consumed nodes not heard this long after reset
+                                  communication (CO_EC_NOT_BOOTED); 0 = off */
+    uint16_t sdo_timeout_ms; /**< SDO server and client time-out; 0 = 1000 ms */
+    co_od_t od;              /**< the object dictionary; its entries must outlive the node */
     co_driver_t driver;
     const co_storage_t *storage; /**< parameter storage (0x1010/0x1011), or NULL */
-    bool self_start;             /**< enter OPERATIONAL by itself after boot-up */
-    uint16_t boot_time_ms;       /**< report consumed nodes not heard this long after reset
-                                      communication (CO_EC_NOT_BOOTED); 0 = off */
-    uint16_t sdo_timeout_ms;     /**< SDO server and client time-out; 0 = 1000 ms */
     void *user;                  /**< first argument of every callback below */
     /** Optional callbacks. */
     void (*on_state)(void *user, co_nmt_state_t state);
@@ -109,13 +109,15 @@ typedef struct co_node_stats {
     uint32_t tx_gated;     /**< service frames the NMT state no longer allowed to send */
 } co_node_stats_t;
 
-/** One receive route: COB-ID key -> service and slot. Internal. */
-typedef struct co_route {
-    uint32_t key;     /**< id, with bit 31 set for 29-bit ids */
-    uint16_t service; /**< co_service_t bit the NMT state must allow */
-    uint8_t kind;
-    uint8_t slot;
-} co_route_t;
+/** A frame waiting in the transmit queue and the service that sent it (0: none), kept in
+ *  the frame's padding where it has some (2 bytes on the usual targets). Internal. */
+typedef union co_txq_slot {
+    co_frame_t frame;
+    struct {
+        uint8_t frame_bytes[offsetof(co_frame_t, data) + CO_FRAME_DATA_MAX];
+        uint16_t service;
+    } tag;
+} co_txq_slot_t;
 
 struct co_node_wiring; /* internal (src/kernel.h) */
 
@@ -153,6 +155,10 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_node_config_t cfg;
     co_time_t time;
     co_emcy_t emcy;
+    /* The owners of the receive routes (route_keys below): route kind and slot. Here, after
+     * the 2-byte fields, where they fill what would be padding. */
+    uint8_t route_kind[CO_RX_ROUTES_MAX];
+    uint8_t route_slot[CO_RX_ROUTES_MAX];
 
 #if CO_HB_CONSUMERS_MAX > 0
     /* Heartbeat consumer (0x1016). */
@@ -172,12 +178,11 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     co_guard_watch_t guard_watch[CO_GUARD_WATCH_MAX > 0 ? CO_GUARD_WATCH_MAX : 1];
 #endif
 
-    /* Transmit queue, sorted by COB-ID (ties in arrival order): the frames and, beside them
-     * (not padded into each), the service that sent each (0: none). */
-    co_frame_t txq[CO_TX_QUEUE_LEN];
-    uint16_t txq_service[CO_TX_QUEUE_LEN];
-    /* Receive routes, sorted by key. */
-    co_route_t routes[CO_RX_ROUTES_MAX];
+    /* Transmit queue, sorted by COB-ID (ties in arrival order). */
+    co_txq_slot_t txq[CO_TX_QUEUE_LEN];
+    /* Receive routes, sorted by key (then owner): the keys (id, bit 31 set for 29-bit ids);
+     * their owners are route_kind and route_slot above (not padded into each). */
+    uint32_t route_keys[CO_RX_ROUTES_MAX];
 
     co_pdo_t rpdo[CO_RPDO_MAX > 0 ? CO_RPDO_MAX : 1];
     co_pdo_t tpdo[CO_TPDO_MAX > 0 ? CO_TPDO_MAX : 1];

@@ -70,37 +70,45 @@ extern "C" {
 
 typedef struct co_node co_node_t;
 
+/** A mapped entry of a PDO (internal): the entry itself, NULL for a dummy entry; in the
+ *  compact form of the dictionary (CO_CONFIG_OD_COMPACT) its position in co_od_t.entries,
+ *  CO_PDO_NO_ENTRY for a dummy entry (2 bytes of RAM per slot instead of a pointer's 4). */
+#if CO_CONFIG_OD_COMPACT
+typedef uint16_t co_pdo_item_t;
+#define CO_PDO_NO_ENTRY UINT16_MAX
+#else
+typedef const co_od_entry_t *co_pdo_item_t;
+#define CO_PDO_NO_ENTRY NULL
+#endif
+
 /** One PDO's resolved mapping and state (embedded in the node; fields are internal). The
- *  mapping is kept in parallel arrays: an entry pointer and a bit count per slot, and a bit
- *  per slot for "the value travels as it is stored" (copied to/from entry->value). The
- *  byte fields come first: Cortex-M reaches the first 32 bytes of a struct with the short
- *  byte loads and stores. */
+ *  mapping is kept in parallel arrays: an entry and (with bit-granular mapping; else the
+ *  entry's size says it) a bit count per slot, and a bit per slot for "the value travels as
+ *  it is stored" (copied to/from entry->value). The byte fields come first: Cortex-M
+ *  reaches the first 32 bytes of a struct with the short byte loads and stores. */
 typedef struct co_pdo {
-    uint8_t sync_start;  /**< TPDO sub6: SYNC start value */
-    uint8_t count;       /**< mapped entries */
-    uint8_t bits;        /**< mapped bits in all */
-    uint8_t type;        /**< transmission type */
-    uint8_t sync_count;  /**< SYNCs counted towards the next transmission */
-    uint8_t flags;       /**< internal state bits */
-    uint8_t len;         /**< RPDO: bytes of the frame waiting for the next SYNC */
-    bool plain;          /**< every item a whole byte-aligned value copied as stored (set
-                            and used by the short paths only, as map_direct) */
-    uint8_t fast;        /**< the short path's frame length, else 0. RPDO: active, plain,
-                            asynchronous, no deadline; TPDO: active, plain, type 1..240,
-                            no SYNC start value */
-    uint8_t frame_flags; /**< TPDO with `fast`: the flags of its frames */
+    uint8_t sync_start; /**< TPDO sub6: SYNC start value */
+    uint8_t count;      /**< mapped entries */
+    uint8_t bits;       /**< mapped bits in all */
+    uint8_t type;       /**< transmission type */
+    uint8_t sync_count; /**< SYNCs counted towards the next transmission */
+    uint8_t flags;      /**< internal state bits (src/pdo_internal.h) */
+    uint8_t fast;       /**< the short path's frame length, else 0. RPDO: active, plain,
+                           asynchronous, no deadline; TPDO: active, plain, type 1..240,
+                           no SYNC start value, an 11-bit COB-ID */
     uint8_t map_direct[(CO_PDO_MAP_MAX + 7) / 8]; /**< bit i: slot i copied as stored */
-    uint8_t data[CO_FRAME_DATA_MAX];  /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+    uint8_t data[CO_FRAME_DATA_MAX]; /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
+#if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t map_bits[CO_PDO_MAP_MAX]; /**< bits mapped per slot */
+#endif
+    co_pdo_item_t map_entry[CO_PDO_MAP_MAX];
     uint32_t cob_id;
-    uint32_t frame_id; /**< TPDO with `fast`: the identifier of its frames, from cob_id */
 #if CO_CONFIG_PDO_TIMERS
     uint16_t event_ms; /**< sub5: TPDO event timer / RPDO deadline, ms (0 = off) */
     uint16_t inhibit;  /**< TPDO sub3: inhibit time, 100 us */
     uint64_t next_us;  /**< TPDO: event timer; RPDO: deadline */
     uint64_t inhibit_until_us;
 #endif
-    const co_od_entry_t *map_entry[CO_PDO_MAP_MAX]; /**< NULL for a dummy entry */
 } co_pdo_t;
 
 /** Mark the TPDOs mapping (index, sub) as having an event (as a change of a mapped value

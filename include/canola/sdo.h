@@ -81,29 +81,32 @@ typedef void (*co_sdo_value_fn)(void *ctx, uint8_t channel, co_abort_t abort, ui
  *  uploaded into the caller's buffer or downloaded from it. */
 typedef void (*co_sdo_done_fn)(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
 
-/** One SDO server channel (embedded in the node; fields are internal). */
+/** One SDO server channel (embedded in the node; fields are internal). The byte fields come
+ *  first (Cortex-M reaches the first 32 bytes of a struct with the short byte loads), the
+ *  words in an order without holes, and the one byte field left over after the buffer,
+ *  where the struct's padding would be. */
 typedef struct co_sdo_server {
     uint8_t sub;
     uint8_t state;
     uint8_t toggle;
     uint8_t blksize;
-    uint8_t seq;      /**< block: last in-order sequence number (download) / sent (upload) */
-    uint8_t last_len; /**< block upload: bytes in the final segment sent */
+    uint8_t seq; /**< block: last in-order sequence number (download) / sent (upload) */
     bool size_known;
     bool crc_on;
     bool last_sent;
     uint16_t index;
     uint16_t crc;
+    co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
     const co_od_entry_t *entry;
-    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
     uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
+    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
     uint32_t cob_rx;     /**< client -> server; bit 31 = off */
     uint32_t cob_tx;     /**< server -> client */
     uint32_t size;       /**< indicated or known total size */
     uint32_t done;       /**< bytes transferred so far */
     uint32_t buf_len;
-    co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
     uint8_t buf[CO_SDO_BUF_SIZE + 6]; /**< + room for a block's last segment padding */
+    uint8_t last_len;                 /**< block upload: bytes in the final segment sent */
 } co_sdo_server_t;
 
 /** One SDO client channel (embedded in the node; fields are internal). */

@@ -1,0 +1,67 @@
+/*
+ * src/pdo_timers.h -- the PDO timers of pdo_timers.c (inhibit time, event timer, RPDO
+ * deadline) as the rest of the PDO family calls them; with CO_CONFIG_PDO_TIMERS 0, stand-ins
+ * that do nothing. Included by pdo_internal.h only. Not installed.
+ */
+#ifndef CANOLA_PDO_TIMERS_H
+#define CANOLA_PDO_TIMERS_H
+
+#if CO_CONFIG_PDO_TIMERS
+void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
+static inline void pdo_timers_restart(co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    p->inhibit_until_us = 0;
+}
+/* Entering operational / new parameters: an event-driven TPDO's event timer starts. */
+static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
+/* Inside the inhibit time: true, and a poll is scheduled for its end. */
+bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
+void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
+void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
+static inline bool rpdo_monitored(const co_pdo_t *p) { return p->event_ms != 0; }
+#else
+static inline void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
+{
+    (void)node;
+    (void)p;
+    (void)tpdo;
+    (void)comm_index;
+}
+static inline void pdo_timers_restart(co_pdo_t *p) { (void)p; }
+static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+    return false;
+}
+static inline void tpdo_event_sent(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline void rpdo_received(co_node_t *node, co_pdo_t *p)
+{
+    (void)node;
+    (void)p;
+}
+static inline bool rpdo_monitored(const co_pdo_t *p)
+{
+    (void)p;
+    return false;
+}
+#endif
+
+#endif /* CANOLA_PDO_TIMERS_H */
