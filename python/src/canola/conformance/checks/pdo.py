@@ -168,16 +168,10 @@ def _refused(ctx: Context, pdo: pt.Pdo, entries: list[int], code: int, what: str
         ctx.finding(what, abort_text(code), outcome(exc))
 
 
-def _sync_cyclic_pattern(ctx: Context, cob: int, sync: pt.SyncSource,
-                         gap: float) -> list[int]:
-    """Send :data:`_SYNCS` SYNCs ``gap`` apart: the number of TPDOs after each."""
-    counts = []
-    for _ in range(_SYNCS):
-        mark = ctx.link.mark()
-        sync.send()
-        ctx.link.wait(gap)
-        counts.append(len(pt.tpdo_frames(ctx, cob, mark)))
-    return counts
+def _every_second(i: int, counts: list[int]) -> bool:
+    """Type 2: a TPDO after every second SYNC. Whether after the first is the node's choice
+    (the tester waits for it); then the others follow from it."""
+    return i == 0 or (i % 2 == 0) == (counts[0] > 0)
 
 
 @check("pdo.tpdo_sync_cyclic", clause="CiA 301 §7.2.2, §7.5.2.37 (transmission type 1..240)",
@@ -190,8 +184,7 @@ def tpdo_sync_cyclic(ctx: Context) -> None:
     sync = pt.sync_source(ctx)
     ctx.nmt("start")
     mark = ctx.link.mark()
-    ctx.link.wait(ctx.options.quiet)
-    counts = _sync_cyclic_pattern(ctx, cob, sync, ctx.options.quiet)
+    counts = pt.tpdos_per_sync(ctx, cob, sync, [None] * _SYNCS, _every_second)
     if counts not in ([0, 1] * 3, [1, 0] * 3):
         ctx.finding(f"{pdo.name} (type 2) after each of {_SYNCS} SYNCs",
                     "1 every second SYNC: 0 1 0 1 0 1", " ".join(map(str, counts)))

@@ -130,12 +130,7 @@ def start_value(ctx: Context) -> None:
     cob = pt.configure(ctx, pdo, entries=entries, type=1, sync_start=3).cob & 0x7FF
     sync = pt.sync_source(ctx)
     ctx.nmt("start")
-    counts = []
-    for counter in (1, 2, 3, 4, 5, 1):
-        mark = ctx.link.mark()
-        sync.send(counter)
-        ctx.link.wait(ctx.options.quiet)
-        counts.append(len(pt.tpdo_frames(ctx, cob, mark)))
+    counts = pt.tpdos_per_sync(ctx, cob, sync, (1, 2, 3, 4, 5, 1), lambda i, _: i >= 2)
     if counts != [0, 0, 1, 1, 1, 1]:
         ctx.finding(f"{pdo.name} after SYNCs with counters 1 2 3 4 5 1",
                     "0 0 1 1 1 1", " ".join(map(str, counts)))
