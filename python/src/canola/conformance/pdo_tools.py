@@ -386,9 +386,9 @@ def tpdos_per_sync(ctx: Context, cob: int, sync: SyncSource, counters: Sequence[
     number of TPDOs on ``cob`` after each, counted by the order of the frames on the bus
     (a TPDO belongs to the last SYNC before it), not by the time they took.
     ``due(i, counts)`` says, from the counts after the SYNCs before, whether a TPDO is due
-    after SYNC ``i``: then the tester waits until it comes (up to the answer time-out) before
-    the next SYNC, so that a slow node's TPDO is not taken for the next SYNC's; where none is
-    due it watches for ``quiet`` seconds. After the last SYNC it watches ``quiet`` again."""
+    after SYNC ``i``: then the tester waits until it comes (up to the answer time-out), so
+    that a slow node's TPDO is not taken for the next SYNC's. After each SYNC it then
+    watches ``quiet`` seconds more for a TPDO too many."""
     marks: list[int] = []
     counts: list[int] = []
     for i, counter in enumerate(counters):
@@ -399,9 +399,6 @@ def tpdos_per_sync(ctx: Context, cob: int, sync: SyncSource, counters: Sequence[
         if due(i, counts):
             ctx.link.wait_frame(lambda f: f.can_id == cob and not f.rtr, ctx.options.timeout,
                                 marks[-1])
-        else:
-            ctx.link.wait(ctx.options.quiet)
-    if marks:
         ctx.link.wait(ctx.options.quiet)
     ends = [*marks[1:], ctx.link.mark()]
     return [len(tpdo_frames(ctx, cob, a)) - len(tpdo_frames(ctx, cob, b))

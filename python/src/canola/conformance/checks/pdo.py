@@ -209,9 +209,10 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     ctx.nmt("start")
     sync.send()
     ctx.link.wait(ctx.options.quiet)
-    mark = ctx.link.mark()
     changed = another_value(var, original)
     ctx.write(var.index, var.subindex, changed)
+    # from the write's answer on: a TPDO of the SYNC before, however late, came before it
+    mark = ctx.link.mark()
     ctx.link.wait(ctx.options.quiet)
     early = pt.tpdo_frames(ctx, cob, mark)
     if early:
