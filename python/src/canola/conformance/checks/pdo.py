@@ -243,7 +243,7 @@ def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) 
 
 
 @check("pdo.tpdo_event_timer", clause="CiA 301 §7.2.2, §7.5.2.37 (type 255, event timer)",
-       title="an event-driven TPDO with a 100 ms event timer comes every 100 ms (mean within "
+       title="an event-driven TPDO with a 100 ms event timer comes every 100 ms (median within "
              "the tolerance) in OPERATIONAL")
 def tpdo_event_timer(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True)
@@ -254,12 +254,12 @@ def tpdo_event_timer(ctx: Context) -> None:
     if len(gaps) < _FRAMES:
         ctx.fail(f"{pdo.name} with event timer {_EVENT_MS} ms", f"{_FRAMES + 1} frames",
                  f"{len(gaps) + 1 if gaps else 'at most 1'}")
-    mean = statistics.fmean(gaps)
+    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
     tol = ctx.options.tolerance
-    if abs(mean - p) > tol * p:
-        ctx.finding(f"mean interval of {pdo.name} (event timer {_EVENT_MS} ms)",
-                    f"{_EVENT_MS} ms ± {tol * 100:g} %", f"{mean * 1000:.1f} ms")
-    ctx.note(f"{pdo.name}: mean {mean * 1000:.1f} ms over {len(gaps)} intervals")
+    if abs(middle - p) > tol * p:
+        ctx.finding(f"median interval of {pdo.name} (event timer {_EVENT_MS} ms)",
+                    f"{_EVENT_MS} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms")
+    ctx.note(f"{pdo.name}: median {middle * 1000:.1f} ms over {len(gaps)} intervals")
 
 
 def _no_inhibit(ctx: Context, pdo: pt.Pdo) -> dict[str, int]:
@@ -277,9 +277,12 @@ def tpdo_inhibit(ctx: Context) -> None:
         ctx.fail(f"{pdo.name} with event timer {_EVENT_MS // 2} ms, inhibit {_INHIBIT_MS} ms",
                  "5 frames", f"{len(gaps) + 1 if gaps else 'at most 1'}")
     floor = _INHIBIT_MS / 1000 * (1 - ctx.options.tolerance)
-    if min(gaps) < floor:
-        ctx.finding(f"shortest interval of {pdo.name} (inhibit {_INHIBIT_MS} ms)",
-                    f"at least {floor * 1000:.0f} ms", f"{min(gaps) * 1000:.1f} ms")
+    # the median: two frames a stalled tester read at once look close, a node that
+    # ignores its inhibit time sends every 50 ms
+    if statistics.median(gaps) < floor:
+        ctx.finding(f"median interval of {pdo.name} (inhibit {_INHIBIT_MS} ms)",
+                    f"at least {floor * 1000:.0f} ms",
+                    f"{statistics.median(gaps) * 1000:.1f} ms")
     ctx.note(f"{pdo.name}: {min(gaps) * 1000:.1f}..{max(gaps) * 1000:.1f} ms")
 
 
