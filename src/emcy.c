@@ -81,15 +81,19 @@ bool co_emcy_producer_off(const co_node_t *node)
 
 void co_emcy_frame_send(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 {
+    uint32_t cob = producer_cob(node);
+    if (cob & CO_COB_INVALID) {
+        return; /* EMCY off: errors and history are kept, nothing is sent */
+    }
     /* a full tx queue counts the loss itself */
-    (void)co_node_send_cob(node, producer_cob(node), data, CO_EMCY_FRAME_LEN, CO_SVC_EMCY);
+    (void)co_node_send_cob(node, cob, data, CO_EMCY_FRAME_LEN, CO_SVC_EMCY);
 }
 
 /* One EMCY frame: out now, or after the inhibit time (emcy_queue.c). */
 static void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[5])
 {
-    if (co_emcy_producer_off(node)) {
-        return; /* EMCY off: errors and history are kept, nothing is sent */
+    if (CO_EMCY_QUEUE_LEN > 0 && co_emcy_producer_off(node)) {
+        return; /* nothing queued either (without a queue, co_emcy_frame_send tells) */
     }
     uint8_t data[CO_EMCY_FRAME_LEN];
     co_put_u16(data, code);

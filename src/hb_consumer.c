@@ -73,26 +73,31 @@ void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
     bool was_running = c->ever_heard && previous != CO_STATE_NONE && previous != 0;
     c->state = state;
     c->ever_heard = true;
+    uint8_t watch = c->watch;
+    bool back = watch == CO_HB_WATCH_LOST; /* heard again after a timeout */
+    co_ec_event_kind_t event = CO_EC_STATE_CHANGED;
     if (state == CO_NMT_INITIALISING) {
         /* Boot-up: monitoring starts again with the node's first heartbeat. */
         c->watch = CO_HB_WATCH_WAITING;
         c->deadline_us = CO_TIME_NEVER;
-        co_node_ec_event(node, was_running ? CO_EC_REMOTE_RESET : CO_EC_BOOT, c->node_id, state,
-                         previous);
-        co_node_comm_resumed(node); /* a lost node that boots is back */
-        return;
+        event = was_running ? CO_EC_REMOTE_RESET : CO_EC_BOOT;
+        back = true; /* a lost node that boots is back */
+    } else {
+        c->watch = CO_HB_WATCH_ACTIVE;
+        c->deadline_us = node->now_us + co_ms_to_us(c->time_ms);
+        co_node_schedule(node, c->deadline_us);
+        if (watch == CO_HB_WATCH_WAITING) {
+            event = CO_EC_STARTED;
+        } else if (back) {
+            event = CO_EC_HB_RESUMED;
+        } else if (state == previous) {
+            return; /* nothing new */
+        }
     }
-    uint8_t watch = c->watch;
-    c->watch = CO_HB_WATCH_ACTIVE;
-    c->deadline_us = node->now_us + co_ms_to_us(c->time_ms);
-    co_node_schedule(node, c->deadline_us);
-    if (watch == CO_HB_WATCH_WAITING) {
-        co_node_ec_event(node, CO_EC_STARTED, c->node_id, state, previous);
-    } else if (watch == CO_HB_WATCH_LOST) {
-        co_node_ec_event(node, CO_EC_HB_RESUMED, c->node_id, state, previous);
+    /* one call for every event: the events differ in kind only */
+    co_node_ec_event(node, event, c->node_id, state, previous);
+    if (back) {
         co_node_comm_resumed(node);
-    } else if (state != previous) {
-        co_node_ec_event(node, CO_EC_STATE_CHANGED, c->node_id, state, previous);
     }
 }
 

@@ -131,18 +131,72 @@ void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame
 }
 
 /* ---- fastscan: reset, then per part bits 31..0 (a guess of 0 that nobody confirms
- * means 1), then a verify that moves the matching slave on to the next part. */
+ * means 1), then a verify that moves the matching slave on to the next part.
+ *
+ * Above an address A (the slaves that answer fastscan in configuration are all back in
+ * waiting, A's among them), an attempt per part k = 3..0 looks for the lowest address
+ * that shares A's parts 0..k-1 and is greater in part k: reset, verify A's parts 0..k-1
+ * (PREFIX), then in part k, from bit 0 up, ask for A's bits above a 0 bit of A with that
+ * bit set (ASCEND): the first confirmed is the branch, and the walk goes on below it as in
+ * a plain scan. A verify nobody confirms in PREFIX means no slave shares that many parts
+ * (attempt that part next); no branch in part k means attempt k-1; none in part 0, no
+ * slave above A. Queries within a part keep every slave where it is (next = the part),
+ * so they may come in any order. */
 
-static void scan_send(co_node_t *node, uint8_t bit, uint8_t next)
+enum { SCAN_WALK = 0, SCAN_PREFIX, SCAN_ASCEND };
+
+static void scan_send(co_node_t *node, uint32_t id, uint8_t bit, uint8_t next)
 {
     co_lss_master_t *m = &node->lss_master;
     uint8_t p[7];
-    co_put_u32(p, m->sub < 4 ? m->scan[m->sub] : 0);
+    co_put_u32(p, id);
     p[4] = bit;
     p[5] = m->sub < 4 ? m->sub : 0;
     p[6] = next;
     send(node, CO_LSS_CS_FASTSCAN, p, 7);
     arm(node);
+}
+
+static void scan_reset(co_node_t *node)
+{
+    node->lss_master.sub = SCAN_RESET_PART;
+    scan_send(node, 0, 0x80, 0);
+}
+
+/* The current part's verify: its whole value, the slaves matching it move on. */
+static void scan_verify(co_node_t *node)
+{
+    co_lss_master_t *m = &node->lss_master;
+    m->bit = -1;
+    scan_send(node, m->scan[m->sub], 0, (uint8_t)((m->sub + 1) & 3));
+}
+
+/* `v`'s bits above `bit`, with `bit` set. */
+static uint32_t branch(uint32_t v, int8_t bit)
+{
+    uint32_t above = bit >= 31 ? 0 : v & (0xFFFFFFFFu << (bit + 1));
+    return above | (1u << bit);
+}
+
+/* The next 0 bit of A's part, upwards, asked for as the branch; none left: attempt the
+ * part before (or no slave is above A). */
+static void scan_ascend(co_node_t *node)
+{
+    co_lss_master_t *m = &node->lss_master;
+    do {
+        m->bit++;
+    } while (m->bit <= 31 && ((m->scan[m->sub] >> m->bit) & 1u));
+    if (m->bit > 31) {
+        if (m->target == 0) {
+            finish(node, CO_LSS_TIMEOUT);
+            return;
+        }
+        m->target--;
+        m->phase = SCAN_PREFIX;
+        scan_reset(node);
+        return;
+    }
+    scan_send(node, branch(m->scan[m->sub], m->bit), (uint8_t)m->bit, m->sub);
 }
 
 /* The whole address matched and its slave is in configuration: the final verify once
@@ -164,14 +218,35 @@ static void scan_part(co_node_t *node)
         scan_probe(node);
         return;
     }
+    if (m->phase == SCAN_PREFIX) {
+        if (m->sub < m->target) {
+            scan_verify(node); /* A's part: the slaves sharing it move on */
+            return;
+        }
+        m->phase = SCAN_ASCEND;
+        m->bit = -1;
+        scan_ascend(node);
+        return;
+    }
     if (m->known & (1u << m->sub)) {
-        m->bit = -1; /* known: straight to the verify */
-        scan_send(node, 0, (uint8_t)((m->sub + 1) & 3));
+        scan_verify(node); /* known: straight to the verify */
         return;
     }
     m->scan[m->sub] = 0;
     m->bit = 31;
-    scan_send(node, 31, m->sub);
+    scan_send(node, 0, 31, m->sub);
+}
+
+/* The walk within a part, one bit lower (its verify after bit 0). */
+static void scan_walk(co_node_t *node)
+{
+    co_lss_master_t *m = &node->lss_master;
+    if (m->bit > 0) {
+        m->bit--;
+        scan_send(node, m->scan[m->sub], (uint8_t)m->bit, m->sub);
+    } else {
+        scan_verify(node);
+    }
 }
 
 static void scan_step(co_node_t *node)
@@ -192,8 +267,23 @@ static void scan_step(co_node_t *node)
         scan_part(node);
         return;
     }
+    if (m->phase == SCAN_ASCEND) {
+        if (!m->heard) {
+            scan_ascend(node);
+            return;
+        }
+        m->scan[m->sub] = branch(m->scan[m->sub], m->bit); /* the walk goes on below it */
+        m->phase = SCAN_WALK;
+        scan_walk(node);
+        return;
+    }
     if (m->bit < 0) {
         if (!m->heard) {
+            if (m->phase == SCAN_PREFIX) { /* nobody shares A's parts 0..sub */
+                m->target = m->sub;
+                scan_reset(node);
+                return;
+            }
             finish(node, CO_LSS_SCAN_FAILED);
             return;
         }
@@ -204,13 +294,7 @@ static void scan_step(co_node_t *node)
     if (!m->heard) {
         m->scan[m->sub] |= 1u << m->bit;
     }
-    if (m->bit > 0) {
-        m->bit--;
-        scan_send(node, (uint8_t)m->bit, m->sub);
-    } else {
-        m->bit = -1;
-        scan_send(node, 0, (uint8_t)((m->sub + 1) & 3));
-    }
+    scan_walk(node);
 }
 
 uint64_t co_lss_master_poll(co_node_t *node, uint64_t now_us)
@@ -367,15 +451,17 @@ co_err_t co_lss_fastscan(co_node_t *node, const co_lss_fastscan_t *scan, co_lss_
         return err;
     }
     co_lss_master_t *m = &node->lss_master;
-    m->known = scan ? (uint8_t)(scan->known & 0x0F) : 0;
+    bool above = scan && scan->above;
+    m->known = scan && !above ? (uint8_t)(scan->known & 0x0F) : 0;
+    m->phase = above ? SCAN_PREFIX : SCAN_WALK;
+    m->target = 3;
     if (scan) {
         m->scan[0] = scan->address.vendor;
         m->scan[1] = scan->address.product;
         m->scan[2] = scan->address.revision;
         m->scan[3] = scan->address.serial;
     }
-    m->sub = SCAN_RESET_PART;
-    scan_send(node, 0x80, 0);
+    scan_reset(node);
     return CO_OK;
 }
 

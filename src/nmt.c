@@ -59,17 +59,13 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_manager_reset_comm(node); /* first: leaving SDO's states ends the boot's transfers */
     enter(node, CO_NMT_INITIALISING);
     co_lss_slave_reset(node, application);
-    /* $NODEID defaults of an unconfigured node (0xFF) stay at their base values. */
-    uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id;
     if (application) {
-        co_od_reset(&node->cfg.od, 0x2000, 0x9FFF, id);
-        co_storage_load(node, CO_PARAMS_APPLICATION);
+        co_storage_reset_group(node, CO_PARAMS_APPLICATION); /* 0x2000..0x9FFF */
         if (node->cfg.on_reset) {
             node->cfg.on_reset(node->cfg.user, CO_RESET_APPLICATION);
         }
     }
-    co_od_reset(&node->cfg.od, 0x1000, 0x1FFF, id);
-    co_storage_load(node, CO_PARAMS_COMMUNICATION);
+    co_storage_reset_group(node, CO_PARAMS_COMMUNICATION); /* 0x1000..0x1FFF */
     /* Every service takes its parameters again, and with them its receive routes. */
     co_route_set(node, CO_ROUTE_NMT, 0, 0x000);
     co_storage_reset_comm(node);

@@ -140,7 +140,8 @@ static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_a
 
 /* store() of a server parameter (0x1200..0x127F), which may move this very channel (sub1 or
  * sub2 written through it): the write takes effect at once, and its confirmation still leaves
- * where the client waits for it, on the COB-ID the request was served on. */
+ * where the client waits for it, on the COB-ID the request was served on. (A build for size
+ * stores every value so.) */
 static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
                                         uint32_t len, uint32_t ok)
 {
@@ -160,7 +161,8 @@ static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, con
 static CO_INLINE void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
                             uint32_t ok)
 {
-    if ((s->entry->index >> 7) == (0x1200u >> 7)) {
+    /* (a build for size sends every confirmation so: one copy of the path, not two) */
+    if (!CO_SHORT_PATHS || (s->entry->index >> 7) == (0x1200u >> 7)) {
         store_parameter(node, s, data, len, ok);
         return;
     }
@@ -354,7 +356,7 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
     co_abort_t abort = CO_ABORT_NONE;
     if (s->size_known && received(s) + n > s->size) {
         abort = CO_ABORT_LEN_HIGH;
-    } else if (s->buf_len + CO_SDO_SEG_BYTES <= CO_SDO_BUF_SIZE) {
+    } else if (CO_SHORT_PATHS && s->buf_len + CO_SDO_SEG_BYTES <= CO_SDO_BUF_SIZE) {
         co_copy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES); /* the usual case: room for 7 */
         s->buf_len += n;
     } else {
@@ -375,7 +377,7 @@ static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_
 
 /* A download segment: the usual one (more to come, the right toggle, room for 7 bytes in
  * the buffer and in the indicated size) here, the others in download_segment_general. */
-static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_FAST_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
     if (!CO_SHORT_PATHS || (cmd & (CO_SDO_SEG_TOGGLE | CO_SDO_SEG_LAST)) != s->toggle ||
@@ -394,6 +396,12 @@ static CO_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, co
 
 /* ---- upload */
 
+/* Whether a read told the value's size: always without hooks (the compact form has none). */
+static bool size_told(uint32_t total)
+{
+    return CO_CONFIG_OD_COMPACT || total != CO_OD_SIZE_UNKNOWN;
+}
+
 /* Read the value from `offset` until `cap` bytes or its end: a read hook may hand out
  * fewer bytes per call than asked (an empty piece ends a value of unknown size). */
 static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, uint8_t *buf,
@@ -409,7 +417,8 @@ static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, 
             return abort;
         }
         *n += got;
-        if (got == 0 || (*total != CO_OD_SIZE_UNKNOWN && offset + *n >= *total)) {
+        /* (without hooks, as in the compact form, the first read is the whole piece) */
+        if (CO_CONFIG_OD_COMPACT || got == 0 || (size_told(*total) && offset + *n >= *total)) {
             break;
         }
     }
@@ -425,14 +434,11 @@ static CO_INLINE void answer_expedited(co_node_t *node, co_sdo_server_t *s, uint
     respond(node, s, (uint8_t)(cmd | (n << CO_SDO_INI_N_SHIFT)), value);
 }
 
-/* Up to 4 bytes of wire value as a little-endian word (no call to memcpy). */
-static uint32_t small_value(const uint8_t *wire, uint32_t len)
+/* The first `len` (1..4) bytes of `wire` as a little-endian word: any bytes after them
+ * (a read hook may have left some) are not part of the value. */
+static uint32_t small_value(const uint8_t wire[CO_SDO_EXPEDITED_MAX], uint32_t len)
 {
-    uint32_t v = 0;
-    for (uint32_t i = 0; i < len; i++) {
-        v |= (uint32_t)wire[i] << (8u * i);
-    }
-    return v;
+    return co_get_u32(wire) & (0xFFFFFFFFu >> (8u * (CO_SDO_EXPEDITED_MAX - len)));
 }
 
 /* A plain number of 1, 2 or 4 bytes, read in place. */
@@ -458,11 +464,13 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
     uint8_t first[CO_SDO_EXPEDITED_MAX] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
-    begin(s);
-    if (CO_CONFIG_SDO_SEGMENTED) { /* the segments of a long value copy from the wire view */
-        s->wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    /* The segments of a long value copy from the wire view (a short path: without it,
+     * every piece is read through co_od_read) */
+    const uint8_t *wire = NULL;
+    if (CO_SHORT_PATHS && CO_CONFIG_SDO_SEGMENTED) {
+        wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
     }
-    if (s->wire == NULL) {
+    if (wire == NULL) {
         co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
         if (abort != CO_ABORT_NONE) {
             abort_transfer(node, s, abort);
@@ -470,7 +478,7 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
         }
     } else {
         n = total < sizeof first ? total : sizeof first;
-        co_copy(first, s->wire, n);
+        co_copy(first, wire, n);
     }
     if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= CO_SDO_EXPEDITED_MAX) {
         answer_expedited(node, s, small_value(first, total), total);
@@ -480,7 +488,9 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
         abort_transfer(node, s, CO_ABORT_UNSUPPORTED); /* too long without segments */
         return;
     }
-    s->size_known = total != CO_OD_SIZE_UNKNOWN;
+    begin(s); /* segments follow */
+    s->wire = wire;
+    s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, UP_SEGMENTED);
     respond(node, s, CO_SDO_SCS_UP_INI | (s->size_known ? CO_SDO_INI_SIZE : 0u), s->size);
@@ -509,7 +519,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
     uint8_t r[CO_SDO_FRAME_LEN] = {0};
     uint32_t n = 0;
     uint32_t total = s->size;
-    if (s->wire != NULL) { /* stored in wire form: copy the piece */
+    if (CO_SHORT_PATHS && s->wire != NULL) { /* stored in wire form: copy the piece */
         n = total - s->done < CO_SDO_SEG_BYTES ? total - s->done : CO_SDO_SEG_BYTES;
         if (CO_SHORT_PATHS && n == CO_SDO_SEG_BYTES) {
             memcpy(&r[1], s->wire + s->done, CO_SDO_SEG_BYTES); /* the usual case, copied inline */
@@ -524,7 +534,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
         }
     }
     s->done += n;
-    bool last = total != CO_OD_SIZE_UNKNOWN ? s->done >= total : n < CO_SDO_SEG_BYTES;
+    bool last = size_told(total) ? s->done >= total : n < CO_SDO_SEG_BYTES;
     r[0] = (uint8_t)(CO_SDO_SCS_UP_SEG | toggle | ((CO_SDO_SEG_BYTES - n) << CO_SDO_SEG_N_SHIFT) |
                      (last ? CO_SDO_SEG_LAST : 0u));
     s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
@@ -536,7 +546,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
 
 /* An upload segment request: the usual one (the right toggle, a value in storage with
  * more than 7 bytes to go) here, the others in upload_segment_general. */
-static CO_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static CO_FAST_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t toggle = d[0] & CO_SDO_SEG_TOGGLE;
     if (!CO_SHORT_PATHS || toggle != s->toggle || s->wire == NULL ||
@@ -658,8 +668,7 @@ static co_abort_t load_sub_block(co_node_t *node, co_sdo_server_t *s, uint32_t *
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    s->last_sent =
-        total != CO_OD_SIZE_UNKNOWN ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
+    s->last_sent = size_told(total) ? s->done + s->buf_len >= total : s->buf_len < chunk_cap(s);
     s->seq = 0;
     return CO_ABORT_NONE;
 }
@@ -721,11 +730,11 @@ static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uin
         abort_transfer(node, s, abort);
         return;
     }
-    if (pst != 0 && total != CO_OD_SIZE_UNKNOWN && total <= pst) {
+    if (pst != 0 && size_told(total) && total <= pst) {
         initiate_upload(node, s); /* protocol switch: a normal upload serves it better */
         return;
     }
-    s->size_known = total != CO_OD_SIZE_UNKNOWN;
+    s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, BLOCK_UP_START);
     uint8_t size = s->size_known ? CO_SDO_BLK_SIZE : 0u; /* sc = 1: a CRC is offered */

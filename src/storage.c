@@ -14,14 +14,13 @@ static inline const co_storage_t *storage_of(const co_node_t *node)
 
 #define RECORD_HEAD 4u /* index (2), sub-index (1), length (1) */
 
-static const uint16_t k_first[3] = {0, 0x1000, 0x2000};
-static const uint16_t k_last[3] = {0, 0x1FFF, 0x9FFF};
-
-/* Entries a save records: writable from the network, with storage, not a DOMAIN, short
- * enough, and not one of the objects that are commands or logs rather than parameters. */
-static bool is_parameter(const co_od_t *od, const co_od_entry_t *e)
+/* Entries a save of `group` records: in the group's range, writable from the network, with
+ * storage, not a DOMAIN, and not one of the objects that are commands or logs rather than
+ * parameters. */
+static bool is_parameter(const co_od_t *od, const co_od_entry_t *e, co_param_group_t group)
 {
-    if (!(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || co_od_value(od, e) == NULL ||
+    if (e->index < co_group_first(group) || e->index > co_group_last(group) ||
+        !(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || co_od_value(od, e) == NULL ||
         e->type == CO_TYPE_DOMAIN) {
         return false;
     }
@@ -71,7 +70,7 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
     co_err_t err = CO_OK;
     for (uint32_t i = 0; i < od->count && err == CO_OK; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        if (e->index < k_first[group] || e->index > k_last[group] || !is_parameter(od, e)) {
+        if (!is_parameter(od, e, group)) {
             continue;
         }
         uint8_t rec[RECORD_HEAD + CO_STORE_VALUE_MAX];
@@ -124,9 +123,25 @@ static co_err_t save_group(co_node_t *node, co_param_group_t group)
         }
         return err;
     }
-    err = st->commit(st->ctx);
-    if (err == CO_OK) {
-        group_error_clear(node, group);
+    return st->commit(st->ctx);
+}
+
+/* The groups that sub-index `which` of 0x1010/0x1011 names (1: both, 2: communication,
+ * 3: application), in that order: each saved, or erased when `restore` (its defaults at
+ * the next reset); each group done ends the EMCY of its rejected image. */
+static co_err_t each_group(co_node_t *node, uint8_t which, bool restore)
+{
+    const co_storage_t *st = storage_of(node);
+    co_err_t err = CO_OK;
+    for (uint8_t g = CO_PARAMS_COMMUNICATION; g <= CO_PARAMS_APPLICATION && err == CO_OK; g++) {
+        co_param_group_t group = (co_param_group_t)g;
+        if (which == 4u - g) {
+            continue; /* the other group alone */
+        }
+        err = restore ? st->erase(st->ctx, group) : save_group(node, group);
+        if (err == CO_OK) {
+            group_error_clear(node, group);
+        }
     }
     return err;
 }
@@ -139,36 +154,7 @@ co_err_t co_storage_save(co_node_t *node, uint8_t which)
     if (which < 1 || which > 3) {
         return CO_ERR_ARG;
     }
-    co_err_t err = CO_OK;
-    if (which != 3) {
-        err = save_group(node, CO_PARAMS_COMMUNICATION);
-    }
-    if (err == CO_OK && which != 2) {
-        err = save_group(node, CO_PARAMS_APPLICATION);
-    }
-    return err;
-}
-
-static co_err_t restore_group(co_node_t *node, co_param_group_t group)
-{
-    const co_storage_t *st = storage_of(node);
-    co_err_t err = st->erase(st->ctx, group);
-    if (err == CO_OK) {
-        group_error_clear(node, group);
-    }
-    return err;
-}
-
-static co_err_t restore_defaults(co_node_t *node, uint8_t which)
-{
-    co_err_t err = CO_OK;
-    if (which != 3) {
-        err = restore_group(node, CO_PARAMS_COMMUNICATION);
-    }
-    if (err == CO_OK && which != 2) {
-        err = restore_group(node, CO_PARAMS_APPLICATION);
-    }
-    return err;
+    return each_group(node, which, false);
 }
 
 /* ---- checking and loading */
@@ -202,13 +188,10 @@ static co_store_fault_t check_records(const co_storage_t *st, co_param_group_t g
         }
         at += want;
     }
-    /* Nothing may follow the records. */
-    uint32_t n = 0;
-    if (st->read(st->ctx, group, CO_STORE_HEADER_SIZE + len, chunk, 1, &n) != CO_OK) {
-        return CO_STORE_READ_ERROR;
-    }
-    if (n != 0) {
-        return CO_STORE_BAD_LENGTH;
+    /* Nothing may follow the records: a byte read there is one too many. */
+    co_store_fault_t after = read_exact(st, group, CO_STORE_HEADER_SIZE + len, chunk, 1);
+    if (after != CO_STORE_BAD_LENGTH) {
+        return after == CO_STORE_INTACT ? CO_STORE_BAD_LENGTH : after;
     }
     return next == len ? CO_STORE_INTACT : CO_STORE_BAD_RECORDS;
 }
@@ -269,9 +252,8 @@ static bool apply_records(co_node_t *node, co_param_group_t group)
             return false;
         }
         offset += RECORD_HEAD + len;
-        uint16_t index = co_get_u16(rec);
-        const co_od_entry_t *e = co_od_find(od, index, rec[2], NULL);
-        if (e != NULL && index >= k_first[group] && index <= k_last[group] && is_parameter(od, e) &&
+        const co_od_entry_t *e = co_od_find(od, co_get_u16(rec), rec[2], NULL);
+        if (e != NULL && is_parameter(od, e, group) &&
             co_od_check(od, e, &rec[RECORD_HEAD], len) == CO_ABORT_NONE) {
             (void)co_od_store(od, e, &rec[RECORD_HEAD], len);
         }
@@ -290,14 +272,17 @@ static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fau
                                                : CO_NODE_ERR_STORED_APP);
     }
 }
+#endif
 
-/* Called right after the group's defaults were copied (reset application/communication). */
-void co_storage_load(co_node_t *node, co_param_group_t group)
+#if CO_CONFIG_STORAGE
+/* The group's power-on values, then the values stored for it; an image that cannot be
+ * applied whole leaves the power-on values. */
+void co_storage_reset_group(co_node_t *node, co_param_group_t group)
 {
+    co_group_defaults(node, group);
     co_store_fault_t fault = co_storage_verify(node, group);
     if (fault == CO_STORE_INTACT && !apply_records(node, group)) {
-        uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id; /* as nmt.c */
-        co_od_reset(&node->cfg.od, k_first[group], k_last[group], id); /* no half image */
+        co_group_defaults(node, group); /* no half image */
         fault = CO_STORE_READ_ERROR;
     }
     if (fault != CO_STORE_INTACT && fault != CO_STORE_NONE) {
@@ -319,7 +304,7 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
     if (storage_of(node) == NULL || entry->sub > 3 || co_get_u32(data) != want) {
         return CO_ABORT_DATA_STORE;
     }
-    co_err_t err = store ? co_storage_save(node, entry->sub) : restore_defaults(node, entry->sub);
+    co_err_t err = each_group(node, entry->sub, !store);
     if (err != CO_OK) {
         co_storage_reset_comm(node); /* the capability may have gone with the failure */
         return CO_ABORT_HARDWARE;
@@ -335,21 +320,16 @@ static uint64_t capability(const co_node_t *node)
     return st != NULL && (st->can_save == NULL || st->can_save(st->ctx)) ? 1u : 0u;
 }
 
-static void show_capability(co_node_t *node, const co_od_entry_t *entry, uint64_t value)
-{
-    if (entry != NULL && co_od_value(&node->cfg.od, entry) != NULL) {
-        (void)co_od_set_uint(&node->cfg.od, entry->index, entry->sub, value);
-    }
-}
-
 /* Every sub-index of 0x1010 and 0x1011 reads the capability: at reset communication, and
- * after each command (which may have shown the storage can, or cannot, save now). */
+ * after each command (which may have shown the storage can, or cannot, save now). Those
+ * the dictionary lacks, or serves through hooks, are left alone (co_od_set_uint refuses). */
 void co_storage_reset_comm(co_node_t *node)
 {
     uint64_t value = capability(node);
-    for (uint8_t sub = 1; sub <= 3; sub++) {
-        show_capability(node, co_od_find(&node->cfg.od, 0x1010, sub, NULL), value);
-        show_capability(node, co_od_find(&node->cfg.od, 0x1011, sub, NULL), value);
+    for (uint16_t index = 0x1010; index <= 0x1011; index++) {
+        for (uint8_t sub = 1; sub <= 3; sub++) {
+            (void)co_od_set_uint(&node->cfg.od, index, sub, value);
+        }
     }
 }
 

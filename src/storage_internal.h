@@ -11,16 +11,28 @@
 
 co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                                   uint32_t len);
+/* The indexes of a group: 0x1000..0x1FFF (communication), 0x2000..0x9FFF (application). */
+static inline uint16_t co_group_first(co_param_group_t group) { return (uint16_t)(group << 12); }
+static inline uint16_t co_group_last(co_param_group_t group)
+{
+    return group == CO_PARAMS_COMMUNICATION ? 0x1FFF : 0x9FFF;
+}
+
+/* The power-on values of a group's objects ($NODEID defaults of an unconfigured node, 0xFF,
+ * stay at their base values). */
+static inline void co_group_defaults(co_node_t *node, co_param_group_t group)
+{
+    uint8_t id = node->node_id == CO_NODE_ID_UNCONFIGURED ? 0 : node->node_id;
+    co_od_reset(&node->cfg.od, co_group_first(group), co_group_last(group), id);
+}
+
+/* Reset application or communication: the group's power-on values, then those stored. */
 #if CO_CONFIG_STORAGE
-void co_storage_load(co_node_t *node, co_param_group_t group);
+void co_storage_reset_group(co_node_t *node, co_param_group_t group);
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);
 void co_storage_reset_comm(co_node_t *node);
 #else
-static inline void co_storage_load(co_node_t *node, co_param_group_t group)
-{
-    (void)node;
-    (void)group; /* nothing is ever stored */
-}
+#define co_storage_reset_group co_group_defaults /* nothing is ever stored */
 #define co_storage_reset_comm co_none_node
 #endif
 

@@ -51,15 +51,15 @@ uint8_t co_sync_counter(const co_node_t *node) { return node->sync.last_counter;
 void co_sync_reset_comm(co_node_t *node)
 {
     co_sync_t *s = &node->sync;
-    s->cob_id = co_od_u32(node, 0x1005, 0, 0);              /* absent: 0 */
-    s->window = co_od_find(&node->cfg.od, 0x1007, 0, NULL); /* absent: no window */
+    const co_od_entry_t *cob = co_od_find(&node->cfg.od, 0x1005, 0, NULL);
+    s->cob_id = (uint32_t)co_entry_uint(&node->cfg.od, cob); /* absent: 0 */
+    s->window = co_od_find(&node->cfg.od, 0x1007, 0, NULL);  /* absent: no window */
     s->overflow = co_od_find(&node->cfg.od, 0x1019, 0, NULL);
     s->last_us = CO_TIME_NEVER;
     s->last_counter = 0;
     co_sync_producer_reset(node);
     /* Every node with 0x1005 consumes SYNC; bit 31 means nothing for this object. */
-    bool consumes = co_od_find(&node->cfg.od, 0x1005, 0, NULL) != NULL;
-    co_route_set(node, CO_ROUTE_SYNC, 0, consumes ? co_cob_key(s->cob_id) : CO_ROUTE_OFF);
+    co_route_set(node, CO_ROUTE_SYNC, 0, cob != NULL ? co_cob_key(s->cob_id) : CO_ROUTE_OFF);
 }
 
 co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,

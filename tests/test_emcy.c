@@ -335,6 +335,24 @@ static void test_heartbeat_loss_raises_0x8130_and_resume_clears_it(void)
     CHECK(!co_emcy_active(&t.node, 0x8130));
 }
 
+/* A boot-up ends 0x8130 when nothing is lost any more, even from a node no longer counted
+ * as lost (its consumer entry written anew while it was: monitoring waits afresh). */
+static void test_heartbeat_loss_ends_when_the_node_boots(void)
+{
+    test_node_t t;
+    start(&t, 1);
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(3, 100)), CO_ABORT_NONE);
+    ingest(&t, 10 * MS, 0x703, "05");
+    co_node_poll(&t.node, 110 * MS);
+    CHECK(co_emcy_active(&t.node, 0x8130));
+    CHECK_EQ(write_u32(&t, 0x1016, 1, hb_consumer_value(3, 200)), CO_ABORT_NONE);
+    CHECK(co_emcy_active(&t.node, 0x8130)); /* not heard yet */
+    fake_clear(&t.bus);
+    ingest(&t, 300 * MS, 0x703, "00");
+    CHECK_STR(bus(&t), "081#0000000000000000");
+    CHECK(!co_emcy_active(&t.node, 0x8130));
+}
+
 static void test_heartbeat_loss_of_two_nodes_clears_when_both_are_back(void)
 {
     test_node_t t;
@@ -637,6 +655,7 @@ int main(void)
     RUN(test_cob_id_off_29_bit_and_changed);
     RUN(test_valid_cob_id_changes_only_through_not_valid);
     RUN(test_heartbeat_loss_raises_0x8130_and_resume_clears_it);
+    RUN(test_heartbeat_loss_ends_when_the_node_boots);
     RUN(test_heartbeat_loss_of_two_nodes_clears_when_both_are_back);
     RUN(test_bus_events);
     RUN(test_consumer_decodes_frames_of_0x1028_cob_ids);

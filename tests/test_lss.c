@@ -500,6 +500,77 @@ static void test_master_fastscan_frames(void)
     free(m);
 }
 
+/* Above {1, 2, 3, 4}: the prefix verified, then the branch looked for from bit 0 up in the
+ * serial; a prefix nobody shares moves the search to that part. */
+static void test_master_fastscan_above_frames(void)
+{
+    test_node_t *m = slave(1);
+    done_log_t log = {0};
+    co_lss_fastscan_t scan = {.address = {1, 2, 3, 4}, .above = true};
+    uint64_t t = 0;
+#define STEP(heard, want)                                                                          \
+    do {                                                                                           \
+        CHECK_STR(BUS(m), want);                                                                   \
+        fake_clear(&m->bus);                                                                       \
+        if (heard) {                                                                               \
+            ingest(m, t + 1 * MS, 0x7E4, "4F 00 00 00 00 00 00 00");                               \
+        }                                                                                          \
+        t += 100 * MS;                                                                             \
+        co_node_poll(&m->node, t);                                                                 \
+    } while (0)
+    CHECK_EQ(co_lss_fastscan(&m->node, &scan, on_done, &log), CO_OK);
+    STEP(true, "7E5#5100000000800000");  /* reset */
+    STEP(true, "7E5#5101000000000001");  /* vendor 1, on to part 1 */
+    STEP(true, "7E5#5102000000000102");  /* product 2 */
+    STEP(true, "7E5#5103000000000203");  /* revision 3 */
+    STEP(false, "7E5#5105000000000303"); /* serial 4 = ..100: above it with bit 0 set? */
+    STEP(false, "7E5#5106000000010303"); /* bit 1 */
+    STEP(true, "7E5#5108000000030303");  /* bit 2 is set in 4: bit 3 -- someone */
+    STEP(false, "7E5#5108000000020303"); /* below it, bit 2 guessed 0: nobody, so 1 */
+    STEP(true, "7E5#510C000000010303");
+    STEP(true, "7E5#510C000000000303");
+    STEP(true, "7E5#510C000000000300");  /* the serial 0xC: verify, into configuration */
+    STEP(false, "7E5#510C000000000300"); /* the probe */
+    CHECK_EQ(log.n, 1);
+    CHECK_EQ(log.r[0].status, CO_LSS_OK);
+    CHECK_EQ(log.r[0].address.serial, 0xC);
+    CHECK_EQ(log.r[0].address.revision, 3);
+    CHECK(!log.r[0].keeps_answering);
+    /* Nobody with product 2: the branch is looked for in the product, above 2. */
+    CHECK_EQ(co_lss_fastscan(&m->node, &scan, on_done, &log), CO_OK);
+    STEP(true, "7E5#5100000000800000");
+    STEP(true, "7E5#5101000000000001");
+    STEP(false, "7E5#5102000000000102");
+    STEP(true, "7E5#5100000000800000"); /* again, for a product above 2 */
+    STEP(true, "7E5#5101000000000001");
+    STEP(false, "7E5#5103000000000101");       /* 2 = ..10: bit 0 */
+    STEP(true, "7E5#5104000000020101");        /* bit 1 is set: bit 2 -- someone */
+    CHECK_STR(BUS(m), "7E5#5104000000010101"); /* below it, the walk */
+    co_lss_master_cancel(&m->node);
+    /* Nobody above: every part searched, then none. */
+    fake_clear(&m->bus);
+    scan.address = (co_lss_address_t){0xFFFFFFFF, 0xFFFFFFFF, 0xFFFFFFFF, 0xFFFFFFFE};
+    CHECK_EQ(co_lss_fastscan(&m->node, &scan, on_done, &log), CO_OK);
+    STEP(true, "7E5#5100000000800000");
+    STEP(true, "7E5#51FFFFFFFF000001");
+    STEP(true, "7E5#51FFFFFFFF000102");
+    STEP(true, "7E5#51FFFFFFFF000203");
+    STEP(false, "7E5#51FFFFFFFF000303");    /* bit 0, the only 0 */
+    for (int part = 2; part >= 0; part--) { /* no 0 bit in parts 2, 1, 0: no query */
+        CHECK_EQ(log.n, 2);
+        STEP(true, "7E5#5100000000800000");
+        for (int p = 0; p < part; p++) {
+            char want[32];
+            snprintf(want, sizeof want, "7E5#51FFFFFFFF00%02X%02X", p, p + 1);
+            STEP(true, want);
+        }
+    }
+    CHECK_EQ(log.n, 3);
+    CHECK_EQ(log.r[2].status, CO_LSS_TIMEOUT);
+#undef STEP
+    free(m);
+}
+
 /* ---- master and slave on the simulated bus */
 
 typedef struct pair {
@@ -672,6 +743,15 @@ static void test_fastscan_tells_a_slave_that_keeps_answering(void)
     CHECK_EQ(log.r[1].status, CO_LSS_OK);
     CHECK_EQ(log.r[1].address.product, 0x17);
     CHECK_EQ(log.r[1].address.serial, 0x12345678);
+    /* Back in waiting, it is not above itself: a scan above it finds nobody. */
+    co_lss_switch_global(master, CO_LSS_WAITING);
+    co_sim_run_until(bus, 4010 * MS);
+    co_lss_fastscan_t above = {.address = log.r[1].address, .above = true};
+    CHECK_EQ(co_lss_fastscan(master, &above, on_done, &log), CO_OK);
+    co_sim_run_until(bus, 6000 * MS);
+    CHECK_EQ(log.n, 3);
+    CHECK_EQ(log.r[2].status, CO_LSS_TIMEOUT);
+    CHECK(!chatty.configuration);
     free(r);
 }
 
@@ -1006,6 +1086,7 @@ int main(void)
     RUN(test_master_inquire_and_selective);
     RUN(test_master_identify_counts_answers);
     RUN(test_master_fastscan_frames);
+    RUN(test_master_fastscan_above_frames);
     RUN(test_fastscan_finds_the_slave);
     RUN(test_fastscan_tells_a_slave_that_keeps_answering);
     RUN(test_eight_devices_found_by_fastscan_then_boot);

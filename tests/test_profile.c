@@ -265,6 +265,24 @@ static void test_emcy_frame_layout(void)
     CHECK_STR(seen(r), "085#0000000000000000");
 }
 
+/* 0x1014 marked not valid: errors and the register are kept, no frame leaves (with or
+ * without the EMCY queue of the inhibit time); valid again, the next error is sent. */
+static void test_emcy_off(void)
+{
+    rig_t *r = rig_start();
+    clear(r);
+    CHECK_EQ(co_node_set_uint(&r->node, 0x1014, 0, 0x80000085u), CO_ABORT_NONE);
+    CHECK_EQ(co_emcy_raise(&r->node, 0x2310, NULL), CO_OK);
+    run(r, r->bus.now_us + 1000);
+    CHECK_STR(seen(r), "");
+    CHECK_EQ(r->d.reg, 0x03);
+    CHECK(co_emcy_active(&r->node, 0x2310));
+    CHECK_EQ(co_node_set_uint(&r->node, 0x1014, 0, 0x85u), CO_ABORT_NONE);
+    CHECK_EQ(co_emcy_raise(&r->node, 0x3210, NULL), CO_OK);
+    run(r, r->bus.now_us + 1000);
+    CHECK_STR(seen(r), "085#1032070000000000");
+}
+
 /* No storage is given (minimal: none is built in): "save" is refused with 0x08000020. A
  * core with storage shows that it has none in 0x1010 (0); one without keeps what the
  * dictionary says there. */
@@ -545,6 +563,7 @@ int main(void)
     RUN(test_block_transfer_refused);
     RUN(test_pdos_sync_and_rpdo);
     RUN(test_emcy_frame_layout);
+    RUN(test_emcy_off);
     RUN(test_no_parameter_storage);
     RUN(test_64_bit_types_refused);
     RUN(test_dictionary_features);

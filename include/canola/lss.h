@@ -55,7 +55,10 @@
  * from several slaves (identify, fastscan steps) always wait the whole time-out, so an
  * answer that arrives late never counts for the next step. Fastscan costs 134 time-outs
  * per device (the reset, 32 bits and a verify per address part, the last verify once
- * more); a part given as known skips its 32 bit checks.
+ * more); a part given as known skips its 32 bit checks. A fastscan above an address (the
+ * way past slaves that answer fastscan in configuration) costs at most 7 + 2 x b
+ * time-outs when only the serial numbers differ, b the highest bit in which they do, and
+ * at most 270.
  *
  * Threading and memory as the node (canola/node.h): the slave's state is 56 bytes and
  * the master's 80 bytes inside co_node_t (x86-64); no allocation.
@@ -182,10 +185,12 @@ typedef struct co_lss_result {
 typedef void (*co_lss_done_fn)(void *ctx, const co_lss_result_t *result);
 
 /** Fastscan request: address parts known in advance (bit i of `known` set: part i of
- *  `address`, 0 vendor .. 3 serial, is checked whole instead of bit by bit). */
+ *  `address`, 0 vendor .. 3 serial, is checked whole instead of bit by bit); or, with
+ *  `above`, the lowest address greater than `address` (`known` unused). */
 typedef struct co_lss_fastscan {
     co_lss_address_t address;
     uint8_t known;
+    bool above;
 } co_lss_fastscan_t;
 
 /** Master state (embedded in the node; fields are internal). */
@@ -200,6 +205,8 @@ typedef struct co_lss_master {
     uint8_t known;  /**< fastscan: known parts */
     uint8_t sub;    /**< fastscan: part being checked, 4 = done */
     int8_t bit;     /**< fastscan: bit being checked, -1 = verify the part */
+    uint8_t phase;  /**< fastscan: walk, or (above an address) prefix or ascend */
+    uint8_t target; /**< fastscan above an address: the part it may first differ in */
     bool heard;     /**< an answer arrived during this step */
     bool listening; /**< route 0x7E4 installed */
 } co_lss_master_t;
@@ -251,7 +258,9 @@ co_err_t co_lss_identify_non_configured(co_node_t *node, co_lss_done_fn done, vo
  *  every fastscan request while in configuration (CANopenNode's) would confirm every bit
  *  of the next scan: the final verify is sent once more, and result.keeps_answering says
  *  that it answered; switch that slave back to waiting (co_lss_switch_global) before the
- *  next scan, which then finds it again unless it was given a node-ID. */
+ *  next scan, which then finds it again unless it was given a node-ID, or scan `above`
+ *  its address: slaves are found lowest address first, so a scan above the last one found
+ *  finds the next. */
 co_err_t co_lss_fastscan(co_node_t *node, const co_lss_fastscan_t *scan, co_lss_done_fn done,
                          void *ctx);
 

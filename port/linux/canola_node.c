@@ -3,12 +3,16 @@
  * program, firmware-style: one node on SocketCAN or on a socketcand server/hub, run by
  * the event loop (canola/linux_loop.h).
  *
- * usage: canola-node (--iface IFACE | --bus socketcand://HOST:PORT/CHANNEL) --node-id N
- *                    [--store DIR] [--heartbeat MS]
+ * usage: canola-node [--iface IFACE | --bus URL] --node-id N [--store DIR] [--heartbeat MS]
+ *
+ * The bus: --iface IFACE, or --bus URL (socketcand://HOST[:PORT]/CHANNEL or
+ * socketcan://IFACE), else the URL in the environment variable CANOLA_BUS, which the canola
+ * command line reads too (python-can's configuration, its fallback, is the Python side's
+ * alone; so is its in-process virtual:// bus).
  *
  * NMT state changes are logged to stderr, one line each. SIGTERM or SIGINT stop it
- * cleanly (exit 0). Bad arguments: one line on stderr, exit 2. A bus that fails or
- * cannot be opened: one line, exit 1.
+ * cleanly (exit 0). Bad arguments (no bus named among them): one line on stderr, exit 2. A
+ * bus that fails or cannot be opened, a CANOLA_BUS it cannot use included: one line, exit 1.
  */
 #include "canola/file_storage.h"
 #include "canola/linux_loop.h"
@@ -24,19 +28,22 @@
 
 #define PROG "canola-node"
 #define CONNECT_TIMEOUT_MS 5000u
+#define BUS_ENV "CANOLA_BUS"
+#define SOCKETCAN_SCHEME "socketcan://"
 
 static const char usage[] =
-    "usage: " PROG " (--iface IFACE | --bus socketcand://HOST:PORT/CHANNEL) --node-id N\n"
-    "                   [--store DIR] [--heartbeat MS]\n"
+    "usage: " PROG " [--iface IFACE | --bus URL] --node-id N [--store DIR] [--heartbeat MS]\n"
     "  --iface IFACE    SocketCAN interface (can0, vcan0)\n"
-    "  --bus URL        socketcand server or `canola bus serve` hub\n"
+    "  --bus URL        socketcand://HOST[:PORT]/CHANNEL (a socketcand server or the\n"
+    "                   `canola bus serve` hub) or socketcan://IFACE; without --iface and\n"
+    "                   --bus, the URL in $" BUS_ENV " (as for the canola commands)\n"
     "  --node-id N      1..127\n"
     "  --store DIR      keep stored parameters (0x1010/0x1011) in files in DIR\n"
     "  --heartbeat MS   producer heartbeat time 0x1017 at power-on (default 1000)\n";
 
 typedef struct args {
-    const char *iface;
-    const char *bus;
+    const char *iface; /* SocketCAN interface, or NULL */
+    const char *bus;   /* socketcand URL, or NULL */
     const char *store;
     long node_id;
     long heartbeat_ms;
@@ -72,6 +79,62 @@ static long number(const char *s, long lo, long hi)
         return -1;
     }
     return v;
+}
+
+/* Why `url` names no bus canola-node can open (NULL: it does; a socketcan:// URL then
+ * sets a->iface, any other a->bus). */
+static const char *bus_url(const char *url, args_t *a, char *why, size_t why_cap)
+{
+    if (strncmp(url, SOCKETCAN_SCHEME, sizeof SOCKETCAN_SCHEME - 1) == 0) {
+        const char *iface = url + sizeof SOCKETCAN_SCHEME - 1;
+        if (*iface == '\0' || strchr(iface, '/') != NULL) {
+            return "expected socketcan://IFACE";
+        }
+        a->iface = iface;
+        a->bus = NULL;
+        return NULL;
+    }
+    if (strncmp(url, "virtual://", 10) == 0) {
+        return "python-can's in-process virtual bus is not reachable from another program: "
+               "use socketcand://HOST:PORT/CHANNEL (canola bus serve) or socketcan://IFACE";
+    }
+    if (strncmp(url, "socketcand://", 13) != 0) {
+        return "unknown bus URL: use socketcand://HOST:PORT/CHANNEL or socketcan://IFACE";
+    }
+    co_socketcand_url_t u;
+    if (co_socketcand_parse_url(url, &u, why, why_cap) != CO_OK) {
+        return why;
+    }
+    a->bus = url;
+    return NULL;
+}
+
+/* --iface, --bus, else CANOLA_BUS: which bus, checked (see the top of the file). */
+static int choose_bus(args_t *a)
+{
+    char why[96];
+    if (a->iface != NULL) {
+        return 0;
+    }
+    if (a->bus != NULL) {
+        const char *url = a->bus;
+        const char *bad = bus_url(url, a, why, sizeof why);
+        if (bad != NULL) {
+            fprintf(stderr, PROG ": --bus %s: %s (" PROG " --help)\n", url, bad);
+            return 2;
+        }
+        return 0;
+    }
+    const char *env = getenv(BUS_ENV);
+    if (env == NULL || *env == '\0') {
+        return bad_args("no bus: give --iface IFACE or --bus URL, or set " BUS_ENV "=URL%s", "");
+    }
+    const char *bad = bus_url(env, a, why, sizeof why);
+    if (bad != NULL) {
+        fprintf(stderr, PROG ": " BUS_ENV "=%s: %s\n", env, bad);
+        return 1;
+    }
+    return 0;
 }
 
 static int parse_args(int argc, char **argv, args_t *a)
@@ -110,21 +173,13 @@ static int parse_args(int argc, char **argv, args_t *a)
             return bad_args("unknown option '%s'", opt);
         }
     }
-    if ((a->iface == NULL) == (a->bus == NULL)) {
+    if (a->iface != NULL && a->bus != NULL) {
         return bad_args("give exactly one of --iface and --bus%s", "");
     }
     if (a->node_id < 0) {
         return bad_args("--node-id is required%s", "");
     }
-    if (a->bus != NULL) {
-        co_socketcand_url_t u;
-        char why[96];
-        if (co_socketcand_parse_url(a->bus, &u, why, sizeof why) != CO_OK) {
-            fprintf(stderr, PROG ": --bus %s: %s (" PROG " --help)\n", a->bus, why);
-            return 2;
-        }
-    }
-    return 0;
+    return choose_bus(a);
 }
 
 static void on_state(void *user, co_nmt_state_t state)

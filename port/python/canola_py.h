@@ -27,6 +27,7 @@
 void canola_py_trace(void *ctx, const char *line);
 void canola_py_sdo_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
 void canola_py_on_state(void *user, co_nmt_state_t state);
+void canola_py_on_reset(void *user, co_reset_t what);
 void canola_py_on_errctl(void *user, const co_ec_event_t *event);
 void canola_py_on_error(void *user, co_node_error_t error);
 void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);

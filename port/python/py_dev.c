@@ -78,6 +78,7 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
     cfg.sdo_timeout_ms = sdo_timeout_ms;
     cfg.user = user;
     cfg.on_state = canola_py_on_state;
+    cfg.on_reset = canola_py_on_reset;
     cfg.on_errctl = canola_py_on_errctl;
     cfg.on_error = canola_py_on_error;
     cfg.on_emcy = canola_py_on_emcy;

@@ -8,7 +8,9 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
+import canola.cli.common
 from canola.cli import main
+from canola.core import SimBus
 
 
 def cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
@@ -42,3 +44,21 @@ def repeating(action: Callable[[], None], pause: float = 0.3) -> Iterator[None]:
     finally:
         stop.set()
         thread.join(5)
+
+
+class SharedSimBus(SimBus):
+    """A simulated bus that outlives the commands: each command shuts its bus down when it
+    ends; the nodes stay on this one for the next command."""
+
+    def shutdown(self) -> None:
+        """Nothing to release: the bus lives as long as the test."""
+
+
+def cli_on_sim_bus(monkeypatch: pytest.MonkeyPatch,
+                   bitrate: int = 500_000) -> tuple[list[str], SimBus]:
+    """Bus options for the CLI that open one simulated bus, and that bus: the commands run
+    in virtual time (exact and quick; :meth:`canola.Master.wait` runs the bus)."""
+    bus = SharedSimBus(bitrate)
+    monkeypatch.setattr(canola.cli.common, "open_bus",
+                        lambda *, iface=None, url=None, timeout=3.0: bus)
+    return ["--bus", "virtual://simulated"], bus

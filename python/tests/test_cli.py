@@ -383,6 +383,39 @@ def test_monitor_on_a_terminal_until_ctrl_c(hub: HubThread) -> None:
 
 @pytest.mark.realtime
 @pytest.mark.slow
+def test_sync_until_ctrl_c(hub: HubThread) -> None:
+    """``canola sync`` without an end: Ctrl-C stops the producer, exit 0, the JSON summary
+    counts what went out."""
+    channel = f"sync{time.monotonic_ns() % 10**9}"
+    peer = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel=channel)
+    proc = subprocess.Popen([sys.executable, "-c", _WITH_CTRL_C, "sync", "20", "--counter",
+                             "4", "--json", "--bus",
+                             f"socketcand://127.0.0.1:{hub.port}/{channel}"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    counters: list[int] = []
+    try:
+        deadline = time.monotonic() + 120  # a fresh interpreter on a starved machine
+        while len(counters) < 6 and time.monotonic() < deadline:
+            msg = peer.recv(0.5)
+            if msg is not None and msg.arbitration_id == 0x080:
+                counters.append(msg.data[0])
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    while (msg := peer.recv(1.0)) is not None:  # what was on its way, then silence
+        if msg.arbitration_id == 0x080:
+            counters.append(msg.data[0])
+    peer.shutdown()
+    assert (proc.returncode, err) == (0, "")
+    assert counters[:6] == [1, 2, 3, 4, 1, 2]
+    assert json.loads(out) == {"frames": len(counters), "service": "sync"}
+
+
+@pytest.mark.realtime
+@pytest.mark.slow
 @pytest.mark.parametrize("emcy_cob_id", [0x085, 0x0A5], ids=["default", "changed-0x1014"])
 def test_device_reports_a_duplicate_node_id_in_words(hub: HubThread, tmp_path: Path,
                                                      emcy_cob_id: int) -> None:

@@ -12,12 +12,11 @@ from pathlib import Path
 
 import can
 import pytest
-from cli_helpers import cli, one_line_error
+from cli_helpers import cli, cli_on_sim_bus, one_line_error
 from conftest import wait_until
 from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model, write_dcf
 
-import canola.cli.common
 from canola import Device
 from canola.core import SimBus
 from canola.lss import UNCONFIGURED
@@ -221,14 +220,6 @@ def test_flash_usage_errors(capsys: pytest.CaptureFixture[str], args: list[str])
 LSS_MS = "2000"
 
 
-class _SharedSimBus(SimBus):
-    """A simulated bus that outlives the commands: each ``canola lss`` shuts its bus down
-    when it ends; the devices stay on this one for the next command."""
-
-    def shutdown(self) -> None:
-        """Nothing to release: the bus lives as long as the test."""
-
-
 @pytest.fixture
 def sim_net(monkeypatch: pytest.MonkeyPatch) -> tuple[list[str], SimBus]:
     """Bus options for the CLI that open one simulated bus (virtual time), and that bus.
@@ -236,10 +227,7 @@ def sim_net(monkeypatch: pytest.MonkeyPatch) -> tuple[list[str], SimBus]:
     time-out: on python-can's threads a starved machine delivers an answer in the next
     step and corrupts the scan (and it takes 134 time-outs of wall clock per device). On
     the simulated bus the commands run the same code in virtual time: exact and quick."""
-    bus = _SharedSimBus(500_000)
-    monkeypatch.setattr(canola.cli.common, "open_bus",
-                        lambda *, iface=None, url=None, timeout=3.0: bus)
-    return ["--bus", "virtual://simulated"], bus
+    return cli_on_sim_bus(monkeypatch)
 
 
 def test_lss_scan_set_id_inquire(capsys: pytest.CaptureFixture[str],

@@ -5,12 +5,14 @@ network again. Simulated bus (virtual time), python-can's virtual bus, the gatew
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import can
 import pytest
+from conftest import wait_until
 from gateway_helpers import Client, run
 from managed import VENDOR, model
 from test_gateway_master import serve
@@ -18,6 +20,7 @@ from test_gateway_master import serve
 from canola import Device, Master
 from canola.boot_plan import Identity, Network, SlaveSpec
 from canola.core import SimBus
+from canola.master import HeartbeatEvent
 
 SAMPLE = Path(__file__).parent / "golden" / "sample.eds"
 MASTER = 1
@@ -142,3 +145,105 @@ def test_gateway_own_reset_leaves_it_serving(command: str) -> None:
             await c.close()
 
     run(main())
+
+
+def _stamps(trace: list[str], cob: str) -> list[tuple[int, str]]:
+    """(virtual time in us, data) of the frames on ``cob`` (e.g. "080") in ``trace``."""
+    out = []
+    for line in trace:
+        stamp, _, frame = line.split()
+        can_id, data = frame.split("#")
+        if can_id == cob:
+            out.append((round(float(stamp.strip("()")) * 1e6), data))
+    return out
+
+
+@pytest.mark.parametrize("reset", list(RESETS))
+def test_monitor_sync_and_time_survive_the_masters_reset(reset: str) -> None:
+    """What the application set up (heartbeat watches, SYNC period and counter, TIME
+    period) is in force again after the master's own reset, at the configured periods."""
+    bus = SimBus()  # frames arrive at the instant they are sent: exact stamps
+    master, other, devices = _network(bus)
+    events: list[HeartbeatEvent] = []
+    master.on_heartbeat(events.append)
+    master.monitor(2, 300)
+    master.start_sync(10_000, overflow=4)
+    master.start_time(100)
+    devices[0].od[0x1017, 0] = 100
+    bus.run_for(1_000_000)
+    assert master.heartbeat_state(2) == "PRE-OPERATIONAL"
+    reset_at = bus.now_us
+    mark = len(bus.trace)
+    other.send(0x000, RESETS[reset])
+    assert master.od[0x1012, 0] == 0x40000100  # a TIME producer again at once
+    devices[0].od[0x1017, 0] = 100  # a reset to all took the device's heartbeat too
+    bus.run_for(1_000_000)
+    after = bus.trace[mark:]
+    assert (reset_at, "00") in _stamps(after, f"{0x700 + MASTER:03X}")  # it was reset
+    syncs = _stamps(after, "080")
+    assert [t - reset_at for t, _ in syncs] == [k * 10_000 for k in range(1, 101)]
+    assert [d for _, d in syncs] == ["0" + str(k % 4 + 1) for k in range(100)]
+    times = [t for t, _ in _stamps(after, "100")]
+    assert len(times) == 10 and {b - a for a, b in itertools.pairwise(times)} == {100_000}
+    assert master.heartbeat_state(2) == "PRE-OPERATIONAL"  # watched again
+    devices[0].od[0x1017, 0] = 0  # silent: the master reports it
+    lost = len(events)
+    bus.run_for(1_000_000)
+    assert [(e.node, e.kind) for e in events[lost:]] == [(2, "lost")]
+
+
+def test_set_up_before_start_holds_after_it() -> None:
+    """monitor()/start_sync() before start(): the start's reset does not undo them."""
+    bus = SimBus()
+    master = Master(bus, node_id=MASTER)
+    device = Device(model(serial=2), 2, bus)
+    master.monitor(2, 300)
+    master.start_sync(20_000)
+    device.start()
+    device.od[0x1017, 0] = 100
+    master.start()
+    began = bus.now_us
+    bus.run_for(1_000_000)
+    assert [t - began for t, _ in _stamps(bus.trace, "080")] == [k * 20_000
+                                                                 for k in range(1, 51)]
+    assert master.heartbeat_state(2) == "PRE-OPERATIONAL"
+    master.stop_sync()
+    master.monitor(2, 0)
+    mark = len(bus.trace)
+    other = Master(bus, node_id=9)
+    other.start()
+    other.send(0x000, RESETS["reset-comm-master"])
+    bus.run_for(1_000_000)
+    assert _stamps(bus.trace[mark:], "080") == []  # stopped stays stopped
+    assert master.heartbeat_state(2) is None
+
+
+def test_python_can_restart_keeps_sync_and_monitor(
+        can_bus: Callable[[], can.BusABC]) -> None:
+    """stop() then start() of the master object: SYNC and heartbeat watches go on."""
+    master = Master(can_bus(), node_id=MASTER)
+    device = Device(model(serial=2), 2, can_bus())
+    raw = can_bus()
+    events: list[HeartbeatEvent] = []
+    master.on_heartbeat(events.append)
+    try:
+        master.start()
+        device.start()
+        device.od[0x1017, 0] = 50
+        master.monitor(2, 500)
+        master.start_sync(20_000)
+        master.stop()
+        master.start()
+        syncs = 0
+        end = time.monotonic() + 30.0
+        while syncs < 10 and time.monotonic() < end:
+            msg = raw.recv(0.1)
+            if msg is not None and msg.arbitration_id == 0x080:
+                syncs += 1
+        assert syncs == 10
+        assert wait_until(lambda: master.heartbeat_state(2) == "PRE-OPERATIONAL")
+        device.od[0x1017, 0] = 0
+        assert wait_until(lambda: (2, "lost") in [(e.node, e.kind) for e in events])
+    finally:
+        for node in (master, device):
+            node.stop()

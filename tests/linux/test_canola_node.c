@@ -7,7 +7,9 @@
  * Checks: boot-up, an NMT start seen in the heartbeat, an SDO "save" with --store DIR
  * writing the parameter files and a restart reading them back, the NMT state changes on stderr, a
  * clean exit 0 on SIGTERM and SIGINT, exit 1 when the server goes away, one-line errors and exit 2
- * for bad arguments. Bounded: every wait has a time-out; alarm(180).
+ * for bad arguments; the bus named by CANOLA_BUS (which --iface/--bus override: the other tests
+ * run with a CANOLA_BUS it cannot open), one-line errors for the forms it cannot open.
+ * Bounded: every wait has a time-out; alarm(180).
  */
 #define _GNU_SOURCE
 
@@ -20,6 +22,7 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -143,20 +146,38 @@ static int accept_within(int ls, int ms)
     return accept4(ls, NULL, NULL, SOCK_CLOEXEC);
 }
 
-/* Start canola-node on a fresh server, do the handshake; conn fd -1 on failure. */
-static void start_node(child_t *c, conn_t *k, const char *store, int *listener)
+/* What every test but the CANOLA_BUS ones has in its environment: a bus canola-node
+ * cannot open, so that they show --iface and --bus win over it. */
+#define OVERRIDDEN_BUS "virtual://overridden"
+
+/* Start canola-node on a fresh server (named by --bus, or with `by_env` by CANOLA_BUS),
+ * do the handshake; conn fd -1 on failure. */
+static void start_node_on(child_t *c, conn_t *k, const char *store, int *listener, bool by_env)
 {
     unsigned port;
     int ls = listen_loopback(&port);
     char url[64];
     snprintf(url, sizeof url, "socketcand://127.0.0.1:%u/vcan0", port);
-    char *argv[12] = {(char *)prog, "--bus", url, "--node-id", "7", "--heartbeat", "100", NULL};
-    if (store != NULL) {
-        argv[7] = "--store";
-        argv[8] = (char *)store;
-        argv[9] = NULL;
+    char *argv[12];
+    int n = 0;
+    argv[n++] = (char *)prog;
+    if (by_env) {
+        setenv("CANOLA_BUS", url, 1);
+    } else {
+        argv[n++] = "--bus";
+        argv[n++] = url;
     }
+    argv[n++] = "--node-id";
+    argv[n++] = "7";
+    argv[n++] = "--heartbeat";
+    argv[n++] = "100";
+    if (store != NULL) {
+        argv[n++] = "--store";
+        argv[n++] = (char *)store;
+    }
+    argv[n] = NULL;
     spawn(c, argv);
+    setenv("CANOLA_BUS", OVERRIDDEN_BUS, 1);
     memset(k, 0, sizeof *k);
     k->fd = accept_within(ls, WAIT_MS);
     CHECK(k->fd >= 0);
@@ -169,6 +190,11 @@ static void start_node(child_t *c, conn_t *k, const char *store, int *listener)
     send_text(k, "< ok >");
     CHECK(wait_text(k, 0, "< rawmode >", WAIT_MS) >= 0);
     send_text(k, "< ok >");
+}
+
+static void start_node(child_t *c, conn_t *k, const char *store, int *listener)
+{
+    start_node_on(c, k, store, listener, false);
 }
 
 static void test_runs_on_a_socketcand_bus(void)
@@ -265,7 +291,9 @@ static void expect_error(int want, const char *part, char *const argv[])
 static void test_bad_arguments(void)
 {
     char *p = (char *)prog;
-    expect_error(2, "exactly one of --iface and --bus", (char *[]){p, "--node-id", "5", NULL});
+    expect_error(
+        2, "exactly one of --iface and --bus",
+        (char *[]){p, "--iface", "vcan0", "--bus", "socketcan://vcan0", "--node-id", "5", NULL});
     expect_error(2, "--node-id must be 1..127",
                  (char *[]){p, "--iface", "vcan0", "--node-id", "0", NULL});
     expect_error(2, "--node-id must be 1..127",
@@ -276,7 +304,7 @@ static void test_bad_arguments(void)
     expect_error(
         2, "exactly one",
         (char *[]){p, "--iface", "vcan0", "--bus", "socketcand://h/c", "--node-id", "5", NULL});
-    expect_error(2, "not a socketcand:// URL",
+    expect_error(2, "--bus tcp://h:1/c: unknown bus URL",
                  (char *[]){p, "--bus", "tcp://h:1/c", "--node-id", "5", NULL});
     expect_error(2, "--heartbeat must be",
                  (char *[]){p, "--iface", "vcan0", "--node-id", "5", "--heartbeat", "-1", NULL});
@@ -289,6 +317,51 @@ static void test_bad_arguments(void)
                  (char *[]){p, "--bus", "socketcand://127.0.0.1:1/vcan0", "--node-id", "5", NULL});
 }
 
+static void test_bus_from_the_environment(void)
+{
+    child_t c;
+    conn_t k;
+    int ls;
+    start_node_on(&c, &k, NULL, &ls, true);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS) >= 0);
+    kill(c.pid, SIGTERM);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
+    CHECK(strstr(c.text, "node 7 on socketcand://127.0.0.1:") != NULL);
+    close(k.fd);
+    close(ls);
+
+    char *p = (char *)prog;
+    char *node[] = {p, "--node-id", "5", NULL};
+    struct {
+        const char *env; /* NULL: unset */
+        int want;
+        const char *part;
+    } cases[] = {
+        {"socketcan://nosuchcan9", 1, "no such CAN interface"},
+        {"virtual://x", 1, "CANOLA_BUS=virtual://x: python-can's in-process virtual bus"},
+        {"tcp://h:1/c", 1, "CANOLA_BUS=tcp://h:1/c: unknown bus URL"},
+        {"socketcand://h", 1, "CANOLA_BUS=socketcand://h: expected /CHANNEL"},
+        {"socketcan://", 1, "expected socketcan://IFACE"},
+        {"socketcand://127.0.0.1:1/vcan0", 1, "Connection refused"},
+        {"", 2, "no bus: give --iface IFACE or --bus URL, or set CANOLA_BUS=URL"},
+        {NULL, 2, "no bus: give --iface IFACE or --bus URL, or set CANOLA_BUS=URL"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        if (cases[i].env != NULL) {
+            setenv("CANOLA_BUS", cases[i].env, 1);
+        } else {
+            unsetenv("CANOLA_BUS");
+        }
+        expect_error(cases[i].want, cases[i].part, node);
+    }
+    setenv("CANOLA_BUS", OVERRIDDEN_BUS, 1);
+    /* --bus takes the same URLs */
+    expect_error(1, "no such CAN interface",
+                 (char *[]){p, "--bus", "socketcan://nosuchcan9", "--node-id", "5", NULL});
+    expect_error(2, "--bus virtual://x: python-can's in-process virtual bus",
+                 (char *[]){p, "--bus", "virtual://x", "--node-id", "5", NULL});
+}
+
 int main(int argc, char **argv)
 {
     alarm(180);
@@ -299,8 +372,10 @@ int main(int argc, char **argv)
         return 2;
     }
     prog = argv[1];
+    setenv("CANOLA_BUS", OVERRIDDEN_BUS, 1);
     RUN(test_runs_on_a_socketcand_bus);
     RUN(test_sigint_and_server_gone);
     RUN(test_bad_arguments);
+    RUN(test_bus_from_the_environment);
     return check_summary();
 }

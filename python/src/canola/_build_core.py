@@ -69,6 +69,7 @@ typedef enum co_err { CO_OK, CO_ERR_ARG, CO_ERR_BUSY, CO_ERR_CONFIG, CO_ERR_STAT
                       CO_ERR_NOT_FOUND, CO_ERR_FULL, CO_ERR_ABORT, ... } co_err_t;
 typedef enum co_nmt_state { CO_NMT_INITIALISING, CO_NMT_STOPPED, CO_NMT_OPERATIONAL,
                             CO_NMT_PRE_OPERATIONAL, ... } co_nmt_state_t;
+typedef enum co_reset { CO_RESET_APPLICATION, CO_RESET_COMMUNICATION, ... } co_reset_t;
 typedef enum co_nmt_cmd { CO_NMT_CMD_START, CO_NMT_CMD_STOP, CO_NMT_CMD_ENTER_PRE_OPERATIONAL,
                           CO_NMT_CMD_RESET_NODE, CO_NMT_CMD_RESET_COMMUNICATION,
                           ... } co_nmt_cmd_t;
@@ -218,6 +219,7 @@ extern "Python+C" void canola_py_trace(void *ctx, const char *line);
 extern "Python+C" void canola_py_sdo_done(void *ctx, uint8_t channel, co_abort_t abort,
                                         uint32_t len);
 extern "Python+C" void canola_py_on_state(void *user, co_nmt_state_t state);
+extern "Python+C" void canola_py_on_reset(void *user, co_reset_t what);
 extern "Python+C" void canola_py_on_errctl(void *user, const co_ec_event_t *event);
 extern "Python+C" void canola_py_on_error(void *user, co_node_error_t error);
 extern "Python+C" void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
@@ -241,7 +243,8 @@ typedef struct co_lss_address { uint32_t vendor; uint32_t product; uint32_t revi
 typedef struct co_lss_result { uint8_t cs; uint8_t status; uint8_t error; uint8_t spec_error;
                                uint32_t value; uint16_t answers; bool keeps_answering;
                                co_lss_address_t address; ...; } co_lss_result_t;
-typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; ...; }
+typedef struct co_lss_fastscan { co_lss_address_t address; uint8_t known; bool above;
+                                  ...; }
     co_lss_fastscan_t;
 typedef void (*co_lss_done_fn)(void *ctx, const co_lss_result_t *result);
 typedef enum co_lss_mode { CO_LSS_WAITING, CO_LSS_CONFIGURATION, ... } co_lss_mode_t;

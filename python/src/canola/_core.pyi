@@ -125,6 +125,8 @@ class Lib:
     CO_OK: int
     CO_PARAMS_APPLICATION: int
     CO_PARAMS_COMMUNICATION: int
+    CO_RESET_APPLICATION: int
+    CO_RESET_COMMUNICATION: int
     CO_SDO_AUTO: int
     CO_SDO_BLOCK: int
     CO_SDO_EXPEDITED: int
@@ -144,6 +146,7 @@ class Lib:
     canola_py_on_emcy: CData
     canola_py_on_errctl: CData
     canola_py_on_error: CData
+    canola_py_on_reset: CData
     canola_py_on_rpdo: CData
     canola_py_on_state: CData
     canola_py_on_sync: CData

@@ -558,6 +558,14 @@ def canola_py_on_state(user: Any, state: int) -> None:
 
 
 @ffi.def_extern()
+def canola_py_on_reset(user: Any, what: int) -> None:
+    try:
+        _call(user, "_on_reset", int(what))
+    except Exception:
+        log.exception("canola: reset callback")
+
+
+@ffi.def_extern()
 def canola_py_on_errctl(user: Any, event: Any) -> None:
     try:
         _call(user, "_on_errctl", int(event.kind), int(event.node_id), int(event.state),

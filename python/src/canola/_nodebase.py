@@ -356,6 +356,19 @@ class LocalOd:
         if code:
             raise SdoAbort(code)
 
+    def _set_locked(self, index: int, sub: int, value: values.Value) -> None:
+        """:meth:`set` from a C callback of the node (the lock is held already)."""
+        data_type, _ = self._info(index, sub)
+        data = values.encode(data_type, value)
+        engine = self._owner._engine
+        writing, engine.app_writing = engine.app_writing, True
+        try:
+            code = int(lib.canola_py_app_write(engine.node, index, sub, data, len(data)))
+        finally:
+            engine.app_writing = writing
+        if code:
+            raise SdoAbort(code)
+
     def get(self, index: int, sub: int = 0) -> values.Value:
         data_type, _ = self._info(index, sub)
         return values.decode(data_type, self.read(index, sub))

@@ -9,17 +9,17 @@ node-ID and give them one.
 A :class:`canola.Device` created with node-ID 0xFF (:data:`UNCONFIGURED`) has none: it
 answers LSS only and boots as soon as a master gives it one.
 
-Fastscan finds one device at a time and costs 134 LSS time-outs per device (``timeout_ms``,
-default 100 ms): about 13 s each in real time at the default; on a SimBus that is
-virtual time. Every request raises :class:`LssError` when it fails (no answer, refused).
+A fastscan finds one device and costs 134 LSS time-outs (``timeout_ms``, default 100 ms:
+about 13 s in real time; on a SimBus that is virtual time); one above a device found, from
+7 to about 270. Every request raises :class:`LssError` when it fails (no answer, refused).
 
-A device found stays in LSS configuration, where CiA 305 has it ignore fastscan, so the
-next scan finds the next device. Some slaves (CANopenNode's) answer every fastscan
-request in configuration, which would confirm every bit of the next scan: the scan tells
-(``keeps_answering``), :meth:`Lss.fastscan` switches them back to waiting, and since the
-next scan then finds the same device again, a device found twice ends the list. Such
-devices are found one at a time: give each a node-ID (:meth:`Lss.assign`) to reach the
-next.
+:meth:`Lss.fastscan` lists them all: devices are found lowest address first, and each scan
+after the first looks for the lowest address above the last one found (from 7 time-outs
+when only the serial numbers differ). A device found stays in LSS configuration, where
+CiA 305 has it ignore fastscan. Some slaves take part in fastscan there all the same:
+CANopenNode's answer every request, which would confirm every bit of the next scan (the
+scan tells, ``keeps_answering``, and such a slave is switched back to waiting), durand's
+match them as in waiting. Either way they are below the addresses asked for next.
 """
 
 from __future__ import annotations
@@ -269,11 +269,16 @@ class Lss:
         call = self._scan(None)
         return None if call is None else call.address
 
-    def _scan(self, limit: float | None) -> _Call | None:
-        """One fastscan (cancelled after ``limit`` seconds): the call, None when nobody
-        answered; LssError when it failed or was cancelled."""
+    def _scan(self, limit: float | None, above: LssAddress | None = None) -> _Call | None:
+        """One fastscan (cancelled after ``limit`` seconds), for the lowest address above
+        ``above`` if given: the call, None when nobody answered; LssError when it failed
+        or was cancelled."""
+        scan = ffi.NULL
+        if above is not None:
+            scan = ffi.new("co_lss_fastscan_t *", {"address": above.as_dict(), "above": True})
         call = self._run("fastscan", lambda node, h: lib.co_lss_fastscan(
-            node, ffi.NULL, lib.canola_py_lss_done, h), steps=140, limit=limit)
+            node, scan, lib.canola_py_lss_done, h), steps=140 if above is None else 280,
+            limit=limit)
         if call.status == lib.CO_LSS_TIMEOUT:
             return None
         self._expect_ok("fastscan", call)
@@ -282,9 +287,9 @@ class Lss:
     def fastscan(self, max_devices: int = 127, *,
                  time_limit: float | None = None) -> list[LssAddress]:
         """The addresses of every device without node-ID (lowest first, at most
-        ``max_devices``); they are all back in waiting afterwards. A device found twice
-        ends the list (a slave that answers fastscan in configuration is switched back to
-        waiting, see the module doc). ``time_limit`` (seconds; virtual time on a SimBus)
+        ``max_devices``); they are all back in waiting afterwards. Each scan after the
+        first is for the lowest address above the last one found (see the module doc).
+        ``time_limit`` (seconds; virtual time on a SimBus)
         bounds the whole scan: :class:`FastscanTimeLimitError` when it is reached, with the
         devices found so far."""
         if not 1 <= max_devices <= 127:
@@ -301,13 +306,13 @@ class Lss:
                     if left <= 0:
                         raise FastscanTimeLimitError(time_limit, found)
                 try:
-                    call = self._scan(left)
+                    call = self._scan(left, found[-1] if found else None)
                 except LssError as exc:
                     if exc.status == "cancelled" and time_limit is not None:
                         raise FastscanTimeLimitError(time_limit, found) from None
                     raise
                 if call is None or call.address in found:
-                    break  # nobody left, or a device put back in waiting found again
+                    break  # nobody left (a slave that matches anything: found again)
                 found.append(call.address)
                 if call.keeps_answering:  # it would confirm every bit of the next scan
                     self.switch_global("waiting")

@@ -26,9 +26,13 @@ Like any node, the master takes NMT commands from the bus: a reset communication
 reset node) to its node-ID or to all brings its communication objects back to their
 power-on values, the SDO client channels and the heartbeat watches among them. It serves
 every node again afterwards (the channel of a node is looked up in the core, never
-remembered blindly); a running CANopen manager boots the network again (CiA 302-2);
-:meth:`Master.monitor` watches and SYNC/TIME production started before are the
-application's to set again.
+remembered blindly); a running CANopen manager boots the network again (CiA 302-2); what
+:meth:`Master.monitor`, :meth:`Master.start_sync` and :meth:`Master.start_time` set up is
+set again by the reset itself, before the master's boot-up: the heartbeat watches, the
+SYNC period and counter (the first SYNC one period after the reset, counting from 1) and
+the TIME production at its period. So is what they set up before :meth:`Master.start`
+(whose power-on is such a reset). Entries written otherwise (``master.od``, SDO from
+another tool) take their power-on values, as CiA 301 says.
 """
 
 from __future__ import annotations
@@ -329,6 +333,16 @@ class SdoClient:
             self._busy.release()
 
 
+#: 0x1012 of a TIME producer on COB-ID 0x100 (bit 30).
+_TIME_PRODUCER = 0x40000100
+
+
+def _sync_writes(period_us: int, overflow: int) -> list[tuple[int, int]]:
+    """(index, value) writes at sub 0 that make a SYNC producer of ``period_us`` with
+    counter ``overflow``: the period goes to 0 first (0x1019 may change only then)."""
+    return [(0x1006, 0), (0x1019, overflow), (0x1005, 0x40000080), (0x1006, period_us)]
+
+
 def _check_address(index: int, sub: int) -> None:
     if not (isinstance(index, int) and 0 <= index <= 0xFFFF):
         raise Error(f"index {index!r} is outside 0x0000..0xFFFF")
@@ -365,6 +379,8 @@ class Master(NodeBase):
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
         self._time_timer: _Timer | None = None
+        self._watches: dict[int, int] = {}  # node -> heartbeat time (ms), by monitor()
+        self._sync: tuple[int, int] | None = None  # (period us, overflow), by start_sync()
         self._lss: Lss | None = None
         self._manager: NetworkManager | None = None
         self._managers: list[NetworkManager] = []  # the node points to them: kept alive
@@ -424,6 +440,10 @@ class Master(NodeBase):
         if not 0 <= heartbeat_ms <= 0xFFFF:
             raise Error(f"heartbeat time {heartbeat_ms} ms is outside 0..65535")
         self.od.set(0x1016, node, (node << 16 | heartbeat_ms) if heartbeat_ms else 0)
+        if heartbeat_ms:
+            self._watches[node] = heartbeat_ms
+        else:
+            self._watches.pop(node, None)
 
     def heartbeat_state(self, node: int) -> str | None:
         """The state ``node`` last reported to the heartbeat consumer, None if not heard."""
@@ -488,13 +508,13 @@ class Master(NodeBase):
             raise Error(f"SYNC period {period_us} us is outside 1..2**32-1")
         if overflow and not 2 <= overflow <= 240:
             raise Error(f"SYNC counter overflow {overflow} is outside 2..240 (or 0)")
-        self.od.set(0x1006, 0, 0)
-        self.od.set(0x1019, 0, overflow)
-        self.od.set(0x1005, 0, 0x40000080)
-        self.od.set(0x1006, 0, period_us)
+        for index, value in _sync_writes(period_us, overflow):
+            self.od.set(index, 0, value)
+        self._sync = (period_us, overflow)
 
     def stop_sync(self) -> None:
         """Stop producing SYNC."""
+        self._sync = None
         self.od.set(0x1006, 0, 0)
         self.od.set(0x1005, 0, 0x80)
 
@@ -507,8 +527,8 @@ class Master(NodeBase):
         if delta.total_seconds() < 0:
             raise Error("TIME cannot express moments before 1984-01-01")
         us = (delta.days * 86400 + delta.seconds) * 1_000_000 + delta.microseconds
-        if self.od.get(0x1012, 0) != 0x40000100:
-            self.od.set(0x1012, 0, 0x40000100)
+        if self.od.get(0x1012, 0) != _TIME_PRODUCER:
+            self.od.set(0x1012, 0, _TIME_PRODUCER)
         tod = lib.co_time_from_us(us)
         with self._engine.locked() as node:
             err = int(lib.co_time_send(node, ffi.new("co_time_of_day_t *", tod)))
@@ -529,6 +549,23 @@ class Master(NodeBase):
         if self._time_timer is not None:
             self._engine.remove_timer(self._time_timer)
             self._time_timer = None
+
+    # ---- the master's own reset
+
+    def _on_reset(self, what: int) -> None:
+        """The core reset the communication objects (0x1000..0x1FFF) to their power-on
+        values, before its boot-up: set what monitor(), start_sync() and start_time() set
+        up again (a C callback: the lock is held)."""
+        if what != lib.CO_RESET_COMMUNICATION:
+            return
+        od = self.od
+        for node, heartbeat_ms in self._watches.items():
+            od._set_locked(0x1016, node, node << 16 | heartbeat_ms)
+        if self._sync is not None:
+            for index, value in _sync_writes(*self._sync):
+                od._set_locked(index, 0, value)
+        if self._time_timer is not None:
+            od._set_locked(0x1012, 0, _TIME_PRODUCER)
 
     # ---- CiA 302 manager, LSS, program download (canola.manager, .lss, .flash do the work)
 

@@ -178,13 +178,15 @@ def decoder_from_args(args: argparse.Namespace) -> Decoder:
     return Decoder(dicts, pdos)
 
 
-def add_master_options(p: argparse.ArgumentParser, *, announce: bool = True) -> None:
-    """``--master-id`` and ``--sdo-timeout`` of the commands that run a canola.Master, and
-    ``--announce`` for the tools among them (``announce``)."""
+def add_master_options(p: argparse.ArgumentParser, *, announce: bool = True,
+                       sdo: bool = True) -> None:
+    """``--master-id`` of the commands that run a canola.Master, ``--sdo-timeout`` for
+    those that talk SDO (``sdo``), and ``--announce`` for the tools (``announce``)."""
     p.add_argument("--master-id", type=node_id, default=127, metavar="N",
                    help="node-ID the master uses (default 127)")
-    p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
-                   help="SDO time-out (default 1000 ms)")
+    if sdo:
+        p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
+                       help="SDO time-out (default 1000 ms)")
     if announce:
         add_announce_option(p)
 
@@ -207,7 +209,8 @@ def master_from_args(args: argparse.Namespace, sdo_timeout_ms: int | None = None
     asks or commands is no member of the network."""
     bus = bus_from_args(args)
     try:
-        timeout = args.sdo_timeout if sdo_timeout_ms is None else sdo_timeout_ms
+        timeout = getattr(args, "sdo_timeout", 1000) if sdo_timeout_ms is None \
+            else sdo_timeout_ms
         if announce is None:
             announce = bool(getattr(args, "announce", False))
         master = Master(bus, args.master_id, sdo_timeout_ms=timeout, announce=announce)

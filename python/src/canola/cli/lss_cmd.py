@@ -43,7 +43,8 @@ def _lss_timeout(text: str) -> int:
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p = subs.add_parser("lss", help="layer setting services: find devices, give node-IDs",
                         description="LSS master (CiA 305). Fastscan costs 134 LSS time-outs "
-                                    "per device (about 13 s each at the default 100 ms).")
+                                    "for the first device (about 13 s at the default 100 "
+                                    "ms), from 7 for each one after it.")
     lss_subs = p.add_subparsers(dest="lss_command", metavar="SUBCOMMAND", parser_class=Parser)
     lss_subs.required = True
 
@@ -58,10 +59,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                                description="Find every device without node-ID by fastscan "
                                            "and print its address "
                                            "VENDOR:PRODUCT:REVISION:SERIAL (hex), then how "
-                                           "long the scan took. Devices that answer fastscan "
-                                           "in LSS configuration (CANopenNode's) are found one "
-                                           "at a time: give the one found a node-ID (set-id) "
-                                           "to find the next.")
+                                           "long the scan took.")
     common(scan)
     scan.add_argument("--max-devices", type=lambda t: int_in_range(t, 1, 127, "count"),
                       default=127, metavar="N", help="stop after N devices (default 127)")
@@ -100,7 +98,7 @@ def run_scan(args: argparse.Namespace) -> int:
         try:
             found = master.lss.fastscan(args.max_devices, time_limit=args.time_limit)
         except FastscanTimeLimitError as exc:
-            raise CliError(f"canola lss scan: {exc}; allow more with --time-limit S (each "
+            raise CliError(f"canola lss scan: {exc}; allow more with --time-limit S (the first "
                            f"device takes 134 LSS time-outs of {args.timeout} ms, "
                            f"--timeout MS)") from None
         except LssError as exc:

@@ -65,6 +65,12 @@ __all__ = ["FAULTS", "Faults", "Scenario"]
 MASTER_ID = 0x3F  # its online status (boot-up) is 0x73F
 HEARTBEAT_MS = 100
 CONSUMER_MS = 250
+#: Step 5 averages the period over this many heartbeats of each node, waiting for them up to
+#: HEARTBEAT_WAIT_PERIODS periods; on a real bus a period up to REAL_PERIOD_MARGIN times the
+#: configured one passes (a shared, loaded machine: one measured 3.05x in an emulated VM).
+HEARTBEATS_SEEN = 4
+HEARTBEAT_WAIT_PERIODS = 12
+REAL_PERIOD_MARGIN = 4.0
 SYNC_US = 10_000
 SYNCS = 5  # SYNC cycles of the TPDO step
 TARGET_RPM = 1500
@@ -285,8 +291,14 @@ class Scenario:
                 raise Error(f"0x1017 reads back {back}")
 
         errors = self._each(configured)
-        self.wait(3.5 * self.heartbeat_ms / 1000)  # three heartbeats of each node or more
+        # four heartbeats of each node; a starved machine may take longer than 3.5 periods
+        self.wait_until(lambda: all(len(self._heartbeat_times(n, since)) >= HEARTBEATS_SEEN
+                                    for n in self.devices),
+                        HEARTBEAT_WAIT_PERIODS * HEARTBEAT_MS / 1000)
         self.obs.tick()
+        # Virtual time: the producer's period to the bit. Real time: the devices share the
+        # CPU with this process, so a starved machine sends late; never early, though.
+        low, high = (0.99, 1.01) if self.net.virtual else (0.5, REAL_PERIOD_MARGIN)
         periods = {}
         for node in self.devices:
             times = self._heartbeat_times(node, since)
@@ -296,7 +308,7 @@ class Scenario:
                 continue
             period_ms = (times[-1] - times[0]) / (len(times) - 1) * 1000
             periods[node] = period_ms
-            if not 0.5 * self.heartbeat_ms <= period_ms <= 1.5 * self.heartbeat_ms:
+            if not low * self.heartbeat_ms <= period_ms <= high * self.heartbeat_ms:
                 errors.setdefault(node, f"heartbeats every {period_ms:.0f} ms")
             elif self.master.heartbeat_state(node) is None:
                 errors.setdefault(node, "the master does not watch its heartbeat")
