@@ -35,7 +35,7 @@ EXAMPLE = ROOT / "examples" / "example_od.eds"
 NODE_BIN = Path(os.environ.get("CANOLA_NODE_BIN", ROOT / "build" / "canola-node"))
 pytestmark = [pytest.mark.slow, pytest.mark.realtime]  # whole runs on the wall clock
 
-#: A mean period within 11 times the configured one, no gap over 21 periods.
+#: A median period within 11 times the configured one, no heartbeat gap over 21 periods.
 WALL_CLOCK_TOLERANCE = 10.0
 #: Answers under an emulated VM (the SocketCAN tier) take long; the servers' own SDO
 #: time-out (SDO_TIMEOUT_MS there, for the tester is slow to acknowledge a sub-block of 127

@@ -4,7 +4,7 @@ invalidate (COB-ID bit 31), mapping count 0, entries, count, parameters, COB-ID 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -378,6 +378,31 @@ def sync_source(ctx: Context) -> SyncSource:
         ctx.write_temp(0x1007, 0, bytes(fixed_size(window) or 4))
     overflow = ctx.read_uint(0x1019, 0) if ctx.var(0x1019, 0) is not None else 0
     return SyncSource(ctx, cob & 0x7FF, overflow)
+
+
+def tpdos_per_sync(ctx: Context, cob: int, sync: SyncSource, counters: Sequence[int | None],
+                   due: Callable[[int, list[int]], bool]) -> list[int]:
+    """Send one SYNC per item of ``counters`` (its counter, or None for the next one): the
+    number of TPDOs on ``cob`` after each, counted by the order of the frames on the bus
+    (a TPDO belongs to the last SYNC before it), not by the time they took.
+    ``due(i, counts)`` says, from the counts after the SYNCs before, whether a TPDO is due
+    after SYNC ``i``: then the tester waits until it comes (up to the answer time-out), so
+    that a slow node's TPDO is not taken for the next SYNC's. After each SYNC it then
+    watches ``quiet`` seconds more for a TPDO too many."""
+    marks: list[int] = []
+    counts: list[int] = []
+    for i, counter in enumerate(counters):
+        if marks:
+            counts.append(len(tpdo_frames(ctx, cob, marks[-1])))
+        marks.append(ctx.link.mark())
+        sync.send(counter)
+        if due(i, counts):
+            ctx.link.wait_frame(lambda f: f.can_id == cob and not f.rtr, ctx.options.timeout,
+                                marks[-1])
+        ctx.link.wait(ctx.options.quiet)
+    ends = [*marks[1:], ctx.link.mark()]
+    return [len(tpdo_frames(ctx, cob, a)) - len(tpdo_frames(ctx, cob, b))
+            for a, b in zip(marks, ends, strict=True)]
 
 
 def tpdo_frames(ctx: Context, cob: int, mark: int) -> list[float]:

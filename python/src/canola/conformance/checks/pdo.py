@@ -168,16 +168,10 @@ def _refused(ctx: Context, pdo: pt.Pdo, entries: list[int], code: int, what: str
         ctx.finding(what, abort_text(code), outcome(exc))
 
 
-def _sync_cyclic_pattern(ctx: Context, cob: int, sync: pt.SyncSource,
-                         gap: float) -> list[int]:
-    """Send :data:`_SYNCS` SYNCs ``gap`` apart: the number of TPDOs after each."""
-    counts = []
-    for _ in range(_SYNCS):
-        mark = ctx.link.mark()
-        sync.send()
-        ctx.link.wait(gap)
-        counts.append(len(pt.tpdo_frames(ctx, cob, mark)))
-    return counts
+def _every_second(i: int, counts: list[int]) -> bool:
+    """Type 2: a TPDO after every second SYNC. Whether after the first is the node's choice
+    (the tester waits for it); then the others follow from it."""
+    return i == 0 or (i % 2 == 0) == (counts[0] > 0)
 
 
 @check("pdo.tpdo_sync_cyclic", clause="CiA 301 §7.2.2, §7.5.2.37 (transmission type 1..240)",
@@ -190,8 +184,7 @@ def tpdo_sync_cyclic(ctx: Context) -> None:
     sync = pt.sync_source(ctx)
     ctx.nmt("start")
     mark = ctx.link.mark()
-    ctx.link.wait(ctx.options.quiet)
-    counts = _sync_cyclic_pattern(ctx, cob, sync, ctx.options.quiet)
+    counts = pt.tpdos_per_sync(ctx, cob, sync, [None] * _SYNCS, _every_second)
     if counts not in ([0, 1] * 3, [1, 0] * 3):
         ctx.finding(f"{pdo.name} (type 2) after each of {_SYNCS} SYNCs",
                     "1 every second SYNC: 0 1 0 1 0 1", " ".join(map(str, counts)))
@@ -216,9 +209,10 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     ctx.nmt("start")
     sync.send()
     ctx.link.wait(ctx.options.quiet)
-    mark = ctx.link.mark()
     changed = another_value(var, original)
     ctx.write(var.index, var.subindex, changed)
+    # from the write's answer on: a TPDO of the SYNC before, however late, came before it
+    mark = ctx.link.mark()
     ctx.link.wait(ctx.options.quiet)
     early = pt.tpdo_frames(ctx, cob, mark)
     if early:
@@ -249,7 +243,7 @@ def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) 
 
 
 @check("pdo.tpdo_event_timer", clause="CiA 301 §7.2.2, §7.5.2.37 (type 255, event timer)",
-       title="an event-driven TPDO with a 100 ms event timer comes every 100 ms (mean within "
+       title="an event-driven TPDO with a 100 ms event timer comes every 100 ms (median within "
              "the tolerance) in OPERATIONAL")
 def tpdo_event_timer(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True)
@@ -260,12 +254,12 @@ def tpdo_event_timer(ctx: Context) -> None:
     if len(gaps) < _FRAMES:
         ctx.fail(f"{pdo.name} with event timer {_EVENT_MS} ms", f"{_FRAMES + 1} frames",
                  f"{len(gaps) + 1 if gaps else 'at most 1'}")
-    mean = statistics.fmean(gaps)
+    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
     tol = ctx.options.tolerance
-    if abs(mean - p) > tol * p:
-        ctx.finding(f"mean interval of {pdo.name} (event timer {_EVENT_MS} ms)",
-                    f"{_EVENT_MS} ms ± {tol * 100:g} %", f"{mean * 1000:.1f} ms")
-    ctx.note(f"{pdo.name}: mean {mean * 1000:.1f} ms over {len(gaps)} intervals")
+    if abs(middle - p) > tol * p:
+        ctx.finding(f"median interval of {pdo.name} (event timer {_EVENT_MS} ms)",
+                    f"{_EVENT_MS} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms")
+    ctx.note(f"{pdo.name}: median {middle * 1000:.1f} ms over {len(gaps)} intervals")
 
 
 def _no_inhibit(ctx: Context, pdo: pt.Pdo) -> dict[str, int]:
@@ -283,9 +277,12 @@ def tpdo_inhibit(ctx: Context) -> None:
         ctx.fail(f"{pdo.name} with event timer {_EVENT_MS // 2} ms, inhibit {_INHIBIT_MS} ms",
                  "5 frames", f"{len(gaps) + 1 if gaps else 'at most 1'}")
     floor = _INHIBIT_MS / 1000 * (1 - ctx.options.tolerance)
-    if min(gaps) < floor:
-        ctx.finding(f"shortest interval of {pdo.name} (inhibit {_INHIBIT_MS} ms)",
-                    f"at least {floor * 1000:.0f} ms", f"{min(gaps) * 1000:.1f} ms")
+    # the median: two frames a stalled tester read at once look close, a node that
+    # ignores its inhibit time sends every 50 ms
+    if statistics.median(gaps) < floor:
+        ctx.finding(f"median interval of {pdo.name} (inhibit {_INHIBIT_MS} ms)",
+                    f"at least {floor * 1000:.0f} ms",
+                    f"{statistics.median(gaps) * 1000:.1f} ms")
     ctx.note(f"{pdo.name}: {min(gaps) * 1000:.1f}..{max(gaps) * 1000:.1f} ms")
 
 

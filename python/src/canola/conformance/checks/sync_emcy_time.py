@@ -103,10 +103,10 @@ def producer(ctx: Context) -> None:
         ctx.fail(f"SYNC frames on 0x{sync:03X} (period {p * 1000:g} ms)",
                  f"{_SYNC_FRAMES}", f"{len(seen)}")
     gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
-    mean = statistics.fmean(gaps)
-    if abs(mean - p) > tol * p:
-        ctx.finding("mean SYNC interval", f"{p * 1000:g} ms ± {tol * 100:g} %",
-                    f"{mean * 1000:.1f} ms")
+    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
+    if abs(middle - p) > tol * p:
+        ctx.finding("median SYNC interval", f"{p * 1000:g} ms ± {tol * 100:g} %",
+                    f"{middle * 1000:.1f} ms")
     if counter:
         counters = [s.frame.data[0] if len(s.frame.data) == 1 else -1 for s in seen]
         start = counters[0]
@@ -114,7 +114,7 @@ def producer(ctx: Context) -> None:
         if counters != wanted or start not in (1, 2, 3):
             ctx.finding("SYNC counters (0x1019 = 3)", "1 2 3 1 2 3 ...",
                         " ".join(map(str, counters)))
-    ctx.note(f"mean {mean * 1000:.1f} ms over {len(gaps)} intervals")
+    ctx.note(f"median {middle * 1000:.1f} ms over {len(gaps)} intervals")
 
 
 @check("sync.start_value", clause="CiA 301 §7.2.5, §7.5.2.37 (SYNC start value)",
@@ -130,12 +130,7 @@ def start_value(ctx: Context) -> None:
     cob = pt.configure(ctx, pdo, entries=entries, type=1, sync_start=3).cob & 0x7FF
     sync = pt.sync_source(ctx)
     ctx.nmt("start")
-    counts = []
-    for counter in (1, 2, 3, 4, 5, 1):
-        mark = ctx.link.mark()
-        sync.send(counter)
-        ctx.link.wait(ctx.options.quiet)
-        counts.append(len(pt.tpdo_frames(ctx, cob, mark)))
+    counts = pt.tpdos_per_sync(ctx, cob, sync, (1, 2, 3, 4, 5, 1), lambda i, _: i >= 2)
     if counts != [0, 0, 1, 1, 1, 1]:
         ctx.finding(f"{pdo.name} after SYNCs with counters 1 2 3 4 5 1",
                     "0 0 1 1 1 1", " ".join(map(str, counts)))
