@@ -4,6 +4,7 @@
  * the event loop (canola/linux_loop.h).
  *
  * usage: canola-node [--iface IFACE | --bus URL] --node-id N [--store DIR] [--heartbeat MS]
+ *                    [--sdo-timeout MS]
  *
  * The bus: --iface IFACE, or --bus URL (socketcand://HOST[:PORT]/CHANNEL or
  * socketcan://IFACE), else the URL in the environment variable CANOLA_BUS, which the canola
@@ -33,13 +34,16 @@
 
 static const char usage[] =
     "usage: " PROG " [--iface IFACE | --bus URL] --node-id N [--store DIR] [--heartbeat MS]\n"
+    "                   [--sdo-timeout MS]\n"
     "  --iface IFACE    SocketCAN interface (can0, vcan0)\n"
     "  --bus URL        socketcand://HOST[:PORT]/CHANNEL (a socketcand server or the\n"
     "                   `canola bus serve` hub) or socketcan://IFACE; without --iface and\n"
     "                   --bus, the URL in $" BUS_ENV " (as for the canola commands)\n"
     "  --node-id N      1..127\n"
     "  --store DIR      keep stored parameters (0x1010/0x1011) in files in DIR\n"
-    "  --heartbeat MS   producer heartbeat time 0x1017 at power-on (default 1000)\n";
+    "  --heartbeat MS   producer heartbeat time 0x1017 at power-on (default 1000)\n"
+    "  --sdo-timeout MS SDO server time-out: a transfer the client leaves waiting that\n"
+    "                   long is aborted (1..65535, default 1000)\n";
 
 typedef struct args {
     const char *iface; /* SocketCAN interface, or NULL */
@@ -47,6 +51,7 @@ typedef struct args {
     const char *store;
     long node_id;
     long heartbeat_ms;
+    long sdo_timeout_ms;
 } args_t;
 
 typedef struct app {
@@ -142,6 +147,7 @@ static int parse_args(int argc, char **argv, args_t *a)
     memset(a, 0, sizeof *a);
     a->node_id = -1;
     a->heartbeat_ms = 1000;
+    a->sdo_timeout_ms = 1000;
     for (int i = 1; i < argc; i++) {
         const char *opt = argv[i];
         if (strcmp(opt, "--help") == 0 || strcmp(opt, "-h") == 0) {
@@ -168,6 +174,10 @@ static int parse_args(int argc, char **argv, args_t *a)
         } else if (strcmp(opt, "--heartbeat") == 0) {
             if ((a->heartbeat_ms = number(val, 0, 65535)) < 0) {
                 return bad_args("--heartbeat must be 0..65535 ms, not '%s'", val);
+            }
+        } else if (strcmp(opt, "--sdo-timeout") == 0) {
+            if ((a->sdo_timeout_ms = number(val, 1, 65535)) < 0) {
+                return bad_args("--sdo-timeout must be 1..65535 ms, not '%s'", val);
             }
         } else {
             return bad_args("unknown option '%s'", opt);
@@ -224,6 +234,7 @@ int main(int argc, char **argv)
     memset(&cfg, 0, sizeof cfg);
     cfg.node_id = (uint8_t)args.node_id;
     cfg.od = example_od_init(&app.od, (uint16_t)args.heartbeat_ms);
+    cfg.sdo_timeout_ms = (uint16_t)args.sdo_timeout_ms;
     cfg.user = &app;
     cfg.on_state = on_state;
     cfg.on_error = on_error;

@@ -37,15 +37,17 @@ pytestmark = [pytest.mark.slow, pytest.mark.realtime]  # whole runs on the wall 
 
 #: A median period within 11 times the configured one, no heartbeat gap over 21 periods.
 WALL_CLOCK_TOLERANCE = 10.0
-#: Answers under an emulated VM (the SocketCAN tier) take long; the servers' own SDO
-#: time-out (SDO_TIMEOUT_MS there, for the tester is slow to acknowledge a sub-block of 127
-#: frames) must come within server_timeout.
+#: The servers' own SDO time-out: a tester starved by a loaded machine (or an emulated VM,
+#: the SocketCAN tier) is slow to go on with a transfer, and 1 s aborted block transfers of
+#: canola-node at a load of 10-18. Their time-out must come within server_timeout.
+PEER_SDO_TIMEOUT_MS = max(SDO_TIMEOUT_MS, 5000)
+#: Answers under an emulated VM (the SocketCAN tier) take long.
 OPTIONS = Options(timeout=5.0 if VCAN else 2.0, tolerance=WALL_CLOCK_TOLERANCE, quiet=0.3,
-                  server_timeout=2 * SDO_TIMEOUT_MS / 1000)
+                  server_timeout=2 * PEER_SDO_TIMEOUT_MS / 1000)
 
 
 def test_canola_device(can_bus: Callable[[], can.BusABC]) -> None:
-    with Device(EXAMPLE, 21, can_bus(), sdo_timeout_ms=SDO_TIMEOUT_MS):
+    with Device(EXAMPLE, 21, can_bus(), sdo_timeout_ms=PEER_SDO_TIMEOUT_MS):
         report = cc.run(can_bus(), 21, EXAMPLE, options=OPTIONS)
     assert report.names(Status.FAILED) == set(), cc.markdown(report)
     assert report.names(Status.SKIPPED) == {"nmt.store_restore"}
@@ -61,7 +63,8 @@ def c_node_bus() -> Iterator[can.BusABC]:
     with HubThread() as hub:
         where = ["--iface", VCAN] if VCAN else [
             "--bus", f"socketcand://127.0.0.1:{hub.port}/conformance"]
-        proc = subprocess.Popen([str(NODE_BIN), *where, "--node-id", "12"],
+        proc = subprocess.Popen([str(NODE_BIN), *where, "--node-id", "12", "--sdo-timeout",
+                                 str(PEER_SDO_TIMEOUT_MS)],
                                 stderr=subprocess.PIPE, text=True)
         try:
             if not VCAN:

@@ -152,7 +152,8 @@ static int accept_within(int ls, int ms)
 
 /* Start canola-node on a fresh server (named by --bus, or with `by_env` by CANOLA_BUS),
  * do the handshake; conn fd -1 on failure. */
-static void start_node_on(child_t *c, conn_t *k, const char *store, int *listener, bool by_env)
+static void start_node_with(child_t *c, conn_t *k, const char *store, int *listener, bool by_env,
+                            const char *sdo_timeout_ms)
 {
     unsigned port;
     int ls = listen_loopback(&port);
@@ -175,6 +176,10 @@ static void start_node_on(child_t *c, conn_t *k, const char *store, int *listene
         argv[n++] = "--store";
         argv[n++] = (char *)store;
     }
+    if (sdo_timeout_ms != NULL) {
+        argv[n++] = "--sdo-timeout";
+        argv[n++] = (char *)sdo_timeout_ms;
+    }
     argv[n] = NULL;
     spawn(c, argv);
     setenv("CANOLA_BUS", OVERRIDDEN_BUS, 1);
@@ -192,9 +197,41 @@ static void start_node_on(child_t *c, conn_t *k, const char *store, int *listene
     send_text(k, "< ok >");
 }
 
+static void start_node_on(child_t *c, conn_t *k, const char *store, int *listener, bool by_env)
+{
+    start_node_with(c, k, store, listener, by_env, NULL);
+}
+
 static void start_node(child_t *c, conn_t *k, const char *store, int *listener)
 {
     start_node_on(c, k, store, listener, false);
+}
+
+/* --sdo-timeout: a segmented upload left waiting is aborted (0x05040000) after that long,
+ * not after the default 1000 ms. A loaded machine notices the answer late or the abort
+ * late: 2 s of the 4 s are slack for the first, the second only makes the wait longer. */
+static void test_sdo_timeout_option(void)
+{
+    child_t c;
+    conn_t k;
+    int ls;
+    start_node_with(&c, &k, NULL, &ls, false, "4000");
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS) >= 0);
+    size_t from = k.len;
+    send_text(&k, "< frame 607 1.000000 4008100000000000 >"); /* upload 0x1008: segmented */
+    long answer = wait_text(&k, from, "< send 587 8 41 08 10 00", WAIT_MS);
+    long answered_ms = now_ms();
+    CHECK(answer >= 0);
+    CHECK(wait_text(&k, (size_t)answer, "< send 587 8 80 08 10 00 00 00 04 05 >", WAIT_MS) >= 0);
+    long waited_ms = now_ms() - answered_ms;
+    if (waited_ms < 2000) {
+        printf("  aborted after %ld ms (--sdo-timeout 4000)\n", waited_ms);
+    }
+    CHECK(waited_ms >= 2000);
+    kill(c.pid, SIGTERM);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
+    close(k.fd);
+    close(ls);
 }
 
 static void test_runs_on_a_socketcand_bus(void)
@@ -308,6 +345,11 @@ static void test_bad_arguments(void)
                  (char *[]){p, "--bus", "tcp://h:1/c", "--node-id", "5", NULL});
     expect_error(2, "--heartbeat must be",
                  (char *[]){p, "--iface", "vcan0", "--node-id", "5", "--heartbeat", "-1", NULL});
+    expect_error(2, "--sdo-timeout must be 1..65535 ms",
+                 (char *[]){p, "--iface", "vcan0", "--node-id", "5", "--sdo-timeout", "0", NULL});
+    expect_error(
+        2, "--sdo-timeout must be 1..65535 ms",
+        (char *[]){p, "--iface", "vcan0", "--node-id", "5", "--sdo-timeout", "65536", NULL});
     expect_error(2, "not a folder",
                  (char *[]){p, "--bus", "socketcand://127.0.0.1:1/c", "--node-id", "5", "--store",
                             "/nonexistent/dir", NULL});
@@ -375,6 +417,7 @@ int main(int argc, char **argv)
     setenv("CANOLA_BUS", OVERRIDDEN_BUS, 1);
     RUN(test_runs_on_a_socketcand_bus);
     RUN(test_sigint_and_server_gone);
+    RUN(test_sdo_timeout_option);
     RUN(test_bad_arguments);
     RUN(test_bus_from_the_environment);
     return check_summary();
