@@ -135,7 +135,11 @@ void co_node_schedule(co_node_t *node, uint64_t due_us);
 static inline uint64_t co_min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 /* Milliseconds of a 16-bit object (a period, a time-out) in microseconds: they fit 32 bits,
  * so the multiply is a 32-bit one (no 64-bit helper call on Cortex-M0). */
-static inline uint64_t co_ms_to_us(uint16_t ms) { return (uint32_t)ms * 1000u; }
+static inline uint64_t co_ms_to_us(uint16_t ms)
+{
+    uint32_t us = (uint32_t)ms * 1000u; /* a 32-bit product (clang-tidy: no widening) */
+    return us;
+}
 /* Any 32-bit count of milliseconds (guard time x life time factor) in microseconds. */
 static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 1000u; }
 

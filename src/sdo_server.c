@@ -470,6 +470,8 @@ static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_ser
     if (CO_SHORT_PATHS && CO_CONFIG_SDO_SEGMENTED) {
         wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
     }
+    /* always true in a build for size (no short paths): the compiler drops the else */
+    // cppcheck-suppress knownConditionTrueFalse
     if (wire == NULL) {
         co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
         if (abort != CO_ABORT_NONE) {
