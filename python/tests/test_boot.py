@@ -214,7 +214,7 @@ def test_dcf_that_remaps_pdos_boots_a_device_that_enforces_the_procedure(
     """A DCF made from an EDS re-maps TPDO1 and RPDO1; the device refuses a mapping
     written while its PDO is valid, as CiA 301 has it: the concise DCF follows the
     re-mapping procedure, and the PDOs work afterwards."""
-    from test_network import INTEROP, _remapping_dcf  # noqa: PLC0415
+    from test_boot_plan import INTEROP, _remapping_dcf  # noqa: PLC0415
 
     bus = SimBus(500_000)
     master = Master(bus, node_id=1)
