@@ -14,9 +14,14 @@
 
 /* The owner of route i as one number, by which the owners of one key rank: the lower kind,
  * then the lower slot, comes first. */
+static uint16_t owner_of(uint8_t kind, uint8_t slot)
+{
+    return (uint16_t)((unsigned)kind << 8 | slot);
+}
+
 static uint16_t owner_at(const co_node_t *node, unsigned i)
 {
-    return (uint16_t)((unsigned)node->route_kind[i] << 8 | node->route_slot[i]);
+    return owner_of(node->route_kind[i], node->route_slot[i]);
 }
 
 /* The position of the route of `owner`, or route_count when it has none. */
@@ -80,7 +85,7 @@ static void sort(co_node_t *node)
 
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 {
-    uint16_t owner = (uint16_t)((unsigned)kind << 8 | slot);
+    uint16_t owner = owner_of(kind, slot);
     uint16_t i = owned(node, owner);
     uint32_t old = CO_ROUTE_OFF;
     if (i < node->route_count) {

@@ -135,8 +135,7 @@ def map_every_mappable(ctx: Context) -> None:
        title="mapping a non-mappable entry is refused (0x06040041), more than 64 bits too "
              "(0x06040042)")
 def map_refused(ctx: Context) -> None:
-    pdo = next((p for p in pt.all_pdos(ctx)
-                if pt.remappable(ctx, p)), None)
+    pdo = next((p for p in pt.all_pdos(ctx) if pt.remappable(ctx, p)), None)
     if pdo is None:
         ctx.skip("no PDO has a writable mapping (and its own mapping of PDO-mappable "
                  "entries)")
