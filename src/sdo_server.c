@@ -909,7 +909,7 @@ static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const u
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
 {
     if (frame->len != CO_SDO_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     co_sdo_server_t *s = &node->sdo_servers[channel];
