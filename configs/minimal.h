@@ -8,8 +8,8 @@
  * Left out as well, being in neither list: node guarding, TIME, stored parameters, LSS,
  * the manager, the node's counters (co_node_stats), and of the dictionary's features limits
  * (REAL or integer), DOMAIN values kept in RAM (of no use to an expedited-only server: a
- * hook-served DOMAIN stays possible), UNICODE_STRING and the types wider than 32 bits. Every choice below is a documented
- * switch or size of canola/config.h. */
+ * hook-served DOMAIN stays possible), UNICODE_STRING and the types wider than 32 bits.
+ * Every choice below is a documented switch or size of canola/config.h. */
 #ifndef CO_TX_QUEUE_LEN
 #define CO_TX_QUEUE_LEN 4
 #endif
