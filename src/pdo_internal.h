@@ -86,6 +86,9 @@ static inline const co_od_entry_t *pdo_mapped(const co_od_t *od, const co_pdo_t 
 /* Slot i's entry, NULL for a dummy entry (only bit-granular mapping has them). */
 static inline const co_od_entry_t *pdo_entry(const co_od_t *od, const co_pdo_t *p, unsigned i)
 {
+    if (!CO_CONFIG_PDO_BIT_MAPPING) {
+        return pdo_mapped(od, p, i); /* no dummies */
+    }
     return p->map_entry[i] != CO_PDO_NO_ENTRY ? pdo_mapped(od, p, i) : NULL;
 }
 
@@ -102,7 +105,8 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     (void)od;
     return p->map_bits[i];
 #else
-    return (uint8_t)(8u * co_od_size(od, pdo_mapped(od, p, i)));
+    /* (a mapped object's size is its type's: mappable, pdo_map.c) */
+    return (uint8_t)(8u * co_type_size((co_type_t)pdo_mapped(od, p, i)->type));
 #endif
 }
 
