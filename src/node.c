@@ -204,7 +204,7 @@ static CO_FAST_NOINLINE uint64_t poll_due(co_node_t *node, uint64_t now_us)
         next = co_min_u64(next, co_sdo_client_poll(node, now_us));
         next = co_min_u64(next, co_sync_poll(node, now_us));
         next = co_min_u64(next, co_emcy_poll(node, now_us));
-        next = co_min_u64(next, co_pdo_poll(node, now_us));
+        co_pdo_poll(node, now_us); /* (schedules its deadlines itself: less code) */
         next = co_min_u64(next, co_lss_master_poll(node, now_us));
         next = co_min_u64(next, co_manager_poll(node, now_us));
         next = co_min_u64(next, co_flash_poll(node, now_us));

@@ -22,10 +22,16 @@ co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const
                               uint32_t len);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1BFF */
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
+/* The PDO timers' due work at `now_us` (pdo_timers.c); their next deadlines go to
+ * co_node_schedule. Without timers PDOs have nothing to wait for. */
 #if CO_CONFIG_PDO_TIMERS
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
+void co_pdo_poll(co_node_t *node, uint64_t now_us);
 #else
-#define co_pdo_poll co_none_poll /* without timers PDOs have nothing to wait for */
+static inline void co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+}
 #endif
 
 /* ---- inside the family */
