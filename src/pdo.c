@@ -139,13 +139,20 @@ static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
                  listens ? co_cob_key(p->cob_id) : CO_ROUTE_OFF);
 }
 
-static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+/* New parameters or a new mapping take effect: the short path's choice, the runtime state,
+ * the route. */
+static CO_SIZE_NOINLINE void take_effect(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
-    load_comm(node, p, tpdo, num);
-    pdo_load_mapping(node, p, tpdo, num);
     decide_fast(&node->cfg.od, p, tpdo);
     restart(node, p, tpdo);
     route(node, p, tpdo, num);
+}
+
+static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+{
+    load_comm(node, p, tpdo, num);
+    pdo_load_mapping(node, p, tpdo, num);
+    take_effect(node, p, tpdo, num);
 }
 
 /* How many TPDOs an object change can trigger (active, type 0 or event-driven): when
@@ -327,8 +334,6 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         p->flags =
             (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR | PDO_F_PLAIN)));
     }
-    decide_fast(&node->cfg.od, p, r.tpdo);
-    restart(node, p, r.tpdo);
+    take_effect(node, p, r.tpdo, r.num);
     count_listeners(node);
-    route(node, p, r.tpdo, r.num);
 }
