@@ -184,7 +184,6 @@ void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven tra
 /* pdo_rx.c */
 void rpdo_sync(co_node_t *node, uint8_t n);
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
-void pdo_clear_emcy(co_node_t *node, uint16_t code); /* co_emcy_clear if active */
 
 /* pdo_timers.c (its header uses the helpers above) */
 #include "pdo_timers.h"

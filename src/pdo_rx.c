@@ -87,13 +87,6 @@ bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
     return false;
 }
 
-void pdo_clear_emcy(co_node_t *node, uint16_t code)
-{
-    if (co_emcy_active(node, code)) {
-        (void)co_emcy_clear(node, code);
-    }
-}
-
 static void length_error(co_node_t *node, co_pdo_t *p, uint16_t code)
 {
     pdo_set(p, PDO_F_LEN_ERROR);
@@ -109,8 +102,8 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
     }
     pdo_clear(p, PDO_F_LEN_ERROR);
     if (!rpdo_other_has(node, p, PDO_F_LEN_ERROR)) {
-        pdo_clear_emcy(node, EMCY_PDO_LENGTH);
-        pdo_clear_emcy(node, EMCY_PDO_EXCEEDED);
+        (void)co_emcy_clear(node, EMCY_PDO_LENGTH); /* (CO_ERR_NOT_FOUND when not active) */
+        (void)co_emcy_clear(node, EMCY_PDO_EXCEEDED);
     }
 }
 

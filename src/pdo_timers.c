@@ -46,7 +46,7 @@ void rpdo_received(co_node_t *node, co_pdo_t *p)
     if (pdo_has(p, PDO_F_TIMED_OUT)) {
         pdo_clear(p, PDO_F_TIMED_OUT);
         if (!rpdo_other_has(node, p, PDO_F_TIMED_OUT)) {
-            pdo_clear_emcy(node, EMCY_RPDO_TIMEOUT);
+            (void)co_emcy_clear(node, EMCY_RPDO_TIMEOUT);
         }
     }
 }
