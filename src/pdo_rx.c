@@ -25,8 +25,9 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
         pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
         return true;
     }
-    uint32_t size = co_type_size((co_type_t)e->type);
-    const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
+    /* without bit mapping always a whole value: `bits` are its size */
+    uint32_t size = CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)e->type) : bits / 8u;
+    const uint8_t *value = data + pos / 8u;
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};
     if (pos % 8u != 0 || bits != 8u * size) {
