@@ -14,7 +14,7 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t 
                       uint32_t pos)
 {
     uint32_t n;
-    const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
+    const co_od_entry_t *e = pdo_mapped(od, p, i);             /* TPDOs map no dummy entries */
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
         pdo_copy_value(out + pos / 8u, co_od_value(od, e), bits / 8u);
         return;
