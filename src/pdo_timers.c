@@ -20,6 +20,10 @@ void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_inde
     p->inhibit = tpdo ? od_u16(node, comm_index, 3) : 0;
 }
 
+#if !CO_SHORT_PATHS
+void tpdo_start(co_node_t *node, co_pdo_t *p) { tpdo_start_inline(node, p); }
+#endif
+
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 {
     if (node->now_us >= p->inhibit_until_us) {
