@@ -30,6 +30,9 @@ static bool mappable(const co_od_t *od, const co_od_entry_t *e, uint32_t size, b
     if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > PDO_VALUE_MAX) {
         return false;
     }
+    if (CO_CONFIG_OD_COMPACT) {
+        return true; /* every compact entry has its value (co_od_entry_t.offset), no hooks */
+    }
     const co_od_hooks_t *hooks = co_od_hooks_of(e);
     bool hook = hooks && (tpdo ? hooks->read != NULL : hooks->write != NULL);
     return co_od_value(od, e) != NULL || hook;
