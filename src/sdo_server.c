@@ -260,7 +260,7 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
                                            uint32_t n)
 {
     /* a block's last segment may carry up to 6 bytes of padding past the value */
-    uint32_t room = s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
+    uint32_t room = CO_CONFIG_SDO_BLOCK && s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
     if (s->buf_len + n > room) {
         if (!streams(&node->cfg.od, s) && own_storage(&node->cfg.od, s) == NULL) {
             return CO_ABORT_OUT_OF_MEMORY;
@@ -323,8 +323,8 @@ static void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
         abort = len > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
     } else if (streams(&node->cfg.od, s)) {
         abort = flush(node, s, true);
-    } else if (s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE &&
-               own_storage(&node->cfg.od, s) == NULL) {
+    } else if (CO_CONFIG_SDO_BLOCK && s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE &&
+               own_storage(&node->cfg.od, s) == NULL) { /* (only a block fills past the size) */
         abort = CO_ABORT_OUT_OF_MEMORY;
     } else if (s->done == 0) {
         store(node, s, s->buf, s->buf_len, ok);
@@ -912,7 +912,8 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         node->stats.rx_malformed++;
         return;
     }
-    co_sdo_server_t *s = &node->sdo_servers[channel];
+    /* (the routes give channels below co_sdo_servers_max: with one, always 0) */
+    co_sdo_server_t *s = &node->sdo_servers[co_sdo_servers_max() > 1 ? channel : 0];
     const uint8_t *d = frame->data;
     uint8_t cmd = d[0];
     if (CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK) { /* (expedited ones never time out) */
