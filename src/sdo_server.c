@@ -518,7 +518,9 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
         abort_transfer(node, s, CO_ABORT_TOGGLE);
         return;
     }
-    uint8_t r[CO_SDO_FRAME_LEN] = {0};
+    uint8_t *r = s->reply.data; /* the segment is read into the reply (an abort rewrites it) */
+    co_put_u32(&r[0], 0);
+    co_put_u32(&r[4], 0);
     uint32_t n = 0;
     uint32_t total = s->size;
     if (CO_SHORT_PATHS && s->wire != NULL) { /* stored in wire form: copy the piece */
@@ -540,7 +542,7 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
     r[0] = (uint8_t)(CO_SDO_SCS_UP_SEG | toggle | ((CO_SDO_SEG_BYTES - n) << CO_SDO_SEG_N_SHIFT) |
                      (last ? CO_SDO_SEG_LAST : 0u));
     s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
-    send(node, s, r);
+    send_reply(node, s);
     if (last) {
         s->state = IDLE;
     }
