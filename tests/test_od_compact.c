@@ -2,8 +2,9 @@
  * built so: tests/CMakeLists.txt): 8-byte entries (values by offset into one struct, sizes
  * from the type or the side table), power-on values from the image without zeros (numbers
  * through their wire form, strings, the node-ID, index ranges, DOMAINs kept), limits
- * referred to by position, the checks co_od_validate makes of all of them, and look-ups
- * through a hash that compares the entries (no key array). */
+ * referred to by position, the checks co_od_validate makes of all of them (none in a core
+ * built to trust its dictionary, CO_CONFIG_OD_VALIDATE 0), and look-ups through a hash that
+ * compares the entries (no key array). */
 #include "canola/od.h"
 #include "check.h"
 
@@ -280,6 +281,21 @@ static void test_validate_limits_and_image(void)
     CHECK(memcmp(v.name, "abcdefgh", 8) == 0);
 }
 
+/* A core that trusts its dictionary (CO_CONFIG_OD_VALIDATE 0) checks nothing of it: what
+ * test_validate_limits_and_image refuses passes (the generator's tests validate what it
+ * generates), NULL excepted. */
+static void test_validation_left_out(void)
+{
+    co_od_t od = make_od();
+    uint32_t bad = 99;
+    tables.limits_count = 1; /* 0x2006 refers to limits 2 */
+    static const uint8_t past_table[] = {0x28, 1, 0};
+    tables.defaults = past_table;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
+    CHECK_EQ(bad, 99u);
+    CHECK_EQ(co_od_validate(NULL, &bad), CO_ERR_ARG);
+}
+
 static void test_hash_compares_entries(void)
 {
     co_od_t od = make_od();
@@ -309,7 +325,11 @@ int main(void)
     RUN(test_domain_without_record_kept);
     RUN(test_image_skips_and_positions);
     RUN(test_limits_by_position);
-    RUN(test_validate_limits_and_image);
+    if (CO_CONFIG_OD_VALIDATE) {
+        RUN(test_validate_limits_and_image);
+    } else {
+        RUN(test_validation_left_out);
+    }
     RUN(test_hash_compares_entries);
     return check_summary();
 }

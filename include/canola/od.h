@@ -306,7 +306,8 @@ static inline uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
  *  and the power-on values' records in entry order, each fitting its entry.
  *  Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's position, or
  *  to `count` for a bad hash or a record past the table, when `bad` is not NULL). O(n)
- *  plus O(slots). */
+ *  plus O(slots). A core built without validation (CO_CONFIG_OD_VALIDATE 0, canola/config.h)
+ *  checks none of this: CO_OK for any dictionary given (CO_ERR_ARG for NULL). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),

@@ -12,6 +12,18 @@
 
 sample_values_t sample_values;
 
+#if !CO_CONFIG_OD_VALIDATE /* canola/config.h: co_od_validate would not refuse it */
+#if !CO_CONFIG_OD_LIMITS
+#error "this dictionary has limits: the core leaves them out (CO_CONFIG_OD_LIMITS 0)"
+#endif
+#if !CO_CONFIG_REAL_LIMITS
+#error "this dictionary has limits on REAL entries: the core leaves them out (CO_CONFIG_REAL_LIMITS 0)"
+#endif
+#if !CO_CONFIG_OD_64BIT
+#error "this dictionary has types wider than 32 bits: the core leaves them out (CO_CONFIG_OD_64BIT 0)"
+#endif
+#endif
+
 #if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */
 /* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per
  * entry whose value is not all zeros: a head (entries skipped, length), wire bytes

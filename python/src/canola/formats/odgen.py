@@ -52,6 +52,10 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   adds CO_OD_TPDO when readable (ro, const, rwr, rw) and CO_OD_RPDO when writable (wo, rww,
   rw).
 - DEFTYPE/DEFSTRUCT/NULL objects (data type definitions) are not part of the table.
+- For a core that does not validate its dictionary (``CO_CONFIG_OD_VALIDATE`` 0), the
+  ``.c`` file refuses with ``#error`` the features it uses that the core leaves out
+  (limits, REAL limits, DOMAIN values in RAM, UNICODE_STRING, types wider than 32 bits),
+  which co_od_validate would otherwise refuse at run time.
 
 Anything the core cannot hold (a DataType it lacks, a value that is not a number of its
 type or does not fit, a missing AccessType) raises :class:`~canola.errors.EdsError` naming
@@ -554,6 +558,7 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
         out.append("")
         return "\n".join(out)
+    out += _feature_guards(entries)
     out.append("#if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */")
     out += _compact_tables(name, entries)
     out.append("#else /* the general form */")
@@ -587,6 +592,29 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out.append("};")
     out.append("")
     return "\n".join(out)
+
+
+def _feature_guards(entries: list[_Entry]) -> list[str]:
+    """Compile-time refusal of the features the dictionary uses and the core may leave out,
+    for a core that does not validate its dictionary (CO_CONFIG_OD_VALIDATE 0), where
+    co_od_validate would not refuse it at run time."""
+    kinds = {_TYPES[e.var.data_type or 0][3] for e in entries}
+    wide = any(_TYPES[e.var.data_type or 0][2] in ("int64_t", "uint64_t", "double")
+               for e in entries)
+    real_limits = any(e.limits and _TYPES[e.var.data_type or 0][3] == _REAL for e in entries)
+    used = [(any(e.limits for e in entries), "CO_CONFIG_OD_LIMITS", "limits"),
+            (real_limits, "CO_CONFIG_REAL_LIMITS", "limits on REAL entries"),
+            (_DOMAIN in kinds, "CO_CONFIG_OD_DOMAIN", "DOMAIN values in RAM"),
+            (_USTRING in kinds, "CO_CONFIG_OD_UNICODE", "UNICODE_STRING entries"),
+            (wide, "CO_CONFIG_OD_64BIT", "types wider than 32 bits")]
+    out = ["#if !CO_CONFIG_OD_VALIDATE /* canola/config.h: co_od_validate would not refuse "
+           "it */"]
+    for uses, switch, what in used:
+        if uses:
+            out += [f"#if !{switch}",
+                    f'#error "this dictionary has {what}: the core leaves them out ({switch} 0)"',
+                    "#endif"]
+    return [*out, "#endif", ""] if len(out) > 1 else []
 
 
 def _distinct_limits(entries: list[_Entry]) -> list[str]:
