@@ -891,9 +891,12 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
     }
 }
 #else
-/* Bytes of storage an entry's power-on value may fill: a number's wire size, the capacity
- * of the others. */
-static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e) { return co_od_size(od, e); }
+/* Bytes of storage an entry's power-on value may fill: a fixed type's storage (the image
+ * holds its little-endian bytes), the capacity of the others. */
+static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+{
+    return t->width != 0 ? t->width : co_od_size(od, e);
+}
 
 /* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE
  * past the last record) and value. */
@@ -926,32 +929,35 @@ static const uint8_t *read_record(const uint8_t *p, uint32_t next, record_t *r)
     return p + r->len;
 }
 
-/* A storage of zeros, except a DOMAIN's (kept, as the general form keeps one without a
- * default). */
-static void zero_entry(const co_od_t *od, const co_od_entry_t *e)
-{
-    const type_info_t *t = type_info(e->type);
-    if (t->kind != K_DOMAIN) {
-        co_zero(co_od_value(od, e), t->width != 0 ? t->width : co_od_size(od, e));
-    }
-}
-
+/* An entry's power-on value: the `len` bytes of its record (none without one), the rest of
+ * its storage zeroed. A DOMAIN kept in RAM takes them as its data; one without a record
+ * keeps its own (as the general form keeps one without a default). On a little-endian
+ * host a number's storage is its record's bytes as they are. */
 static void set_default(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data,
                         uint32_t len)
 {
     const type_info_t *t = type_info(e->type);
-    void *value = co_od_value(od, e);
-    if (is_number(t)) {
-        uint8_t wire[8] = {0};
-        co_copy(wire, data, len);
-        native_set(value, t, wire_number(t, wire));
-    } else if (is_domain(t)) {
-        co_od_domain_t *d = value;
-        co_copy(d->data, data, len);
-        d->len = len;
-    } else if (t->kind != K_DOMAIN) {
-        co_copy(value, data, len);
+    uint8_t *value = co_od_value(od, e);
+    if (t->kind == K_DOMAIN) {
+        if (is_domain(t) && data != NULL) {
+            co_od_domain_t *d = (void *)value;
+            co_copy(d->data, data, len);
+            d->len = len;
+        }
+        return;
     }
+#if !LITTLE_ENDIAN_HOST
+    if (is_number(t)) {
+        bits_t bits = 0;
+        for (uint32_t n = len; n-- > 0u;) {
+            bits = (bits_t)(bits << 8) | data[n];
+        }
+        native_set(value, t, bits);
+        return;
+    }
+#endif
+    co_copy(value, data, len);
+    co_zero(value + len, default_cap(od, e, t) - len);
 }
 
 /* The power-on values' image, or NULL. */
@@ -967,18 +973,15 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
     if (p != NULL) {
         p = read_record(p, 0, &r);
     }
-    /* one pass: each entry in the range zeroed, given its record if it has one (the records
-     * before the range passed over), its node-ID added */
+    /* one pass: each entry in the range given its record if it has one (the records before
+     * the range passed over) and zeros after it, its node-ID added */
     for (uint32_t i = lower_bound(od, key_of(first, 0));
          i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        zero_entry(od, e);
         while (r.pos < i) {
             p = read_record(p, r.pos + 1u, &r);
         }
-        if (r.pos == i) {
-            set_default(od, e, r.data, r.len);
-        }
+        set_default(od, e, r.pos == i ? r.data : NULL, r.pos == i ? r.len : 0);
         add_node_id(od, e, node_id);
     }
 }
@@ -994,7 +997,8 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
         if (r.pos == END_OF_IMAGE) {
             return true;
         }
-        if (r.pos < next || r.pos >= od->count || r.len > default_cap(od, &od->entries[r.pos])) {
+        if (r.pos < next || r.pos >= od->count ||
+            r.len > default_cap(od, &od->entries[r.pos], type_info(od->entries[r.pos].type))) {
             *bad = r.pos < od->count ? r.pos : od->count;
             return false;
         }

@@ -1,10 +1,10 @@
 /* test_od_compact.c -- the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1, the core
  * built so: tests/CMakeLists.txt): 8-byte entries (values by offset into one struct, sizes
  * from the type or the side table), power-on values from the image without zeros (numbers
- * through their wire form, strings, the node-ID, index ranges, DOMAINs kept), limits
- * referred to by position, the checks co_od_validate makes of all of them (none in a core
- * built to trust its dictionary, CO_CONFIG_OD_VALIDATE 0), and look-ups through a hash that
- * compares the entries (no key array). */
+ * as their storage's little-endian bytes, strings, the node-ID, index ranges, DOMAINs
+ * kept), limits referred to by position, the checks co_od_validate makes of all of them
+ * (none in a core built to trust its dictionary, CO_CONFIG_OD_VALIDATE 0), and look-ups
+ * through a hash that compares the entries (no key array). */
 #include "canola/od.h"
 #include "check.h"
 
@@ -33,12 +33,12 @@ static const co_od_limits_t k_limits[] = {
     {.low = {.u = 1}, .high = {.u = 9}},
 };
 
-/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), wire bytes; trailing
- * zeros left out. */
+/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), the bytes (a number's
+ * storage, little-endian); trailing zeros left out. */
 static const uint8_t k_image[] = {
     0x40, 0x91, 0x01,             /* 0x1000: 0x191 */
     0x40, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
-    0x60, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    0x80, 0x00, 0x00, 0x80, 0xFF, /* 0x2001: INTEGER24 -8388608 (its int32_t's 4 bytes) */
     0x80, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
     0x40, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
     0x40, 'h',  'i',              /* 0x2004: "hi" */

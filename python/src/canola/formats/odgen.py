@@ -24,7 +24,8 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   value's offset in ``<name>_values``, sub-index, type, attributes, a side table position:
   the limits of a number, the capacity of a string or domain), the power-on values as one
   byte image ``k_defaults`` (a record per entry whose value is not all zeros: a head byte of
-  the entries skipped since the previous record and the length, the wire bytes; see
+  the entries skipped since the previous record and the length, then the bytes: a number's
+  storage little-endian, an INTEGER24 sign-extended to its int32_t, the others' wire bytes; see
   ``co_od_tables_t.defaults``), the distinct limits once each in
   ``k_limits``, the distinct capacities once each in ``k_sizes``, all four in ``k_tables``
   (``co_od_tables_t``). The general form (0): 28-byte entries with pointers to
@@ -79,8 +80,9 @@ from canola.formats import eds
 from canola.formats.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 5  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
-# 5: its 8-byte entries (value offsets, co_od_tables_t)
+OD_FORMAT = 6  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
+# 5: its 8-byte entries (value offsets, co_od_tables_t); 6: numbers in its image as their
+# storage's bytes
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -121,6 +123,9 @@ _TYPES: dict[int, tuple[str, int, str, int]] = {
     0x1A: ("UNSIGNED56", 7, "uint64_t", _UNSIGNED),
     0x1B: ("UNSIGNED64", 8, "uint64_t", _UNSIGNED),
 }
+# bytes of a number's native storage (canola/od.h)
+_STORAGE_BYTES = {"uint8_t": 1, "int8_t": 1, "int16_t": 2, "uint16_t": 2, "int32_t": 4,
+                  "uint32_t": 4, "int64_t": 8, "uint64_t": 8}
 _ATTR = {"ro": "CO_OD_RO", "wo": "CO_OD_WO", "rw": "CO_OD_RW", "rwr": "CO_OD_RWR",
          "rww": "CO_OD_RWW", "const": "CO_OD_CO"}
 _READABLE = frozenset({"ro", "const", "rwr", "rw"})
@@ -149,7 +154,9 @@ class _Entry:
     init: str | None  # C initializer of the default, None for none
     limits: str | None
     kind: int
-    default: bytes = b""  # wire bytes of the power-on value, trailing zeros left out
+    # the power-on value's bytes in the compact form's image (a number's storage, little-endian;
+    # the wire bytes of the others), trailing zeros left out
+    default: bytes = b""
 
 
 # ---------------------------------------------------------------------------------------
@@ -288,7 +295,7 @@ class _Gen:
         limits = None
         array = 0
         size = wire
-        data = b""  # the power-on value's wire bytes
+        data = b""  # the power-on value's bytes in the image (Entry.default)
         if kind in (_BOOL, _SIGNED, _UNSIGNED, _REAL):
             value, uses_node = self.number(var, text, key, kind, kind != _REAL)
             if uses_node:
@@ -299,7 +306,9 @@ class _Gen:
             else:
                 assert isinstance(value, int)
                 init = _int_literal(value, kind)
-                data = (value & ((1 << (8 * wire)) - 1)).to_bytes(wire, "little")
+                # the storage's little-endian bytes (an INTEGER24 as its int32_t: sign-extended)
+                width = _STORAGE_BYTES[ctype]
+                data = (value & ((1 << (8 * width)) - 1)).to_bytes(width, "little")
             limits = self.limits(var, kind, wire)
         elif kind == _RAW:
             value, _ = self.number_raw(var, text, key)
@@ -663,7 +672,7 @@ def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
     limits and capacities (co_od_tables_t), 8-byte entries that give their value's offset
     in the values struct."""
     out = ["/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per",
-           " * entry whose value is not all zeros: a head (entries skipped, length), wire bytes",
+           " * entry whose value is not all zeros: a head (entries skipped, length), the bytes",
            " * (co_od_tables_t.defaults). */",
            "static const uint8_t k_defaults[] = {"]
     next_pos = 0
