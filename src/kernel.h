@@ -72,6 +72,15 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
 
+/* ---- the node's counters (co_node_stats_t): one statement per event, nothing in a build
+ * without them (CO_CONFIG_STATS 0, where co_node_t has no stats). */
+#if CO_CONFIG_STATS
+#define CO_COUNT_ADD(node, counter, n) ((void)((node)->stats.counter += (n)))
+#else
+#define CO_COUNT_ADD(node, counter, n) ((void)(node), (void)(n))
+#endif
+#define CO_COUNT(node, counter) CO_COUNT_ADD(node, counter, 1u)
+
 /* ---- sending (txq.c) */
 
 /* co_node_send for a service's frame (`service`: a co_service_t bit, 0 = none): refused with
@@ -113,7 +122,7 @@ static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *fram
     if (err != CO_OK) {
         return co_txq_refused(node, frame, service, err);
     }
-    node->stats.tx_frames++;
+    CO_COUNT(node, tx_frames);
     return CO_OK;
 #endif
 }

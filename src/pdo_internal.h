@@ -22,10 +22,16 @@ co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const
                               uint32_t len);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1BFF */
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
+/* The PDO timers' due work at `now_us` (pdo_timers.c); their next deadlines go to
+ * co_node_schedule. Without timers PDOs have nothing to wait for. */
 #if CO_CONFIG_PDO_TIMERS
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
+void co_pdo_poll(co_node_t *node, uint64_t now_us);
 #else
-#define co_pdo_poll co_none_poll /* without timers PDOs have nothing to wait for */
+static inline void co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+}
 #endif
 
 /* ---- inside the family */
@@ -86,6 +92,9 @@ static inline const co_od_entry_t *pdo_mapped(const co_od_t *od, const co_pdo_t 
 /* Slot i's entry, NULL for a dummy entry (only bit-granular mapping has them). */
 static inline const co_od_entry_t *pdo_entry(const co_od_t *od, const co_pdo_t *p, unsigned i)
 {
+    if (!CO_CONFIG_PDO_BIT_MAPPING) {
+        return pdo_mapped(od, p, i); /* no dummies */
+    }
     return p->map_entry[i] != CO_PDO_NO_ENTRY ? pdo_mapped(od, p, i) : NULL;
 }
 
@@ -102,7 +111,8 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     (void)od;
     return p->map_bits[i];
 #else
-    return (uint8_t)(8u * co_od_size(od, pdo_mapped(od, p, i)));
+    /* (a mapped object's size is its type's: mappable, pdo_map.c) */
+    return (uint8_t)(8u * co_type_size((co_type_t)pdo_mapped(od, p, i)->type));
 #endif
 }
 

@@ -167,7 +167,7 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 static CO_FAST_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
     if (frame->flags & CO_FRAME_RTR) {
-        node->stats.rx_malformed++; /* RPDOs are not requested */
+        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
         return;
     }
     if (rpdo >= node->rpdo_count) {

@@ -139,7 +139,7 @@ void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter)
 void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
 {
     if (!(frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++; /* data on our own TPDO's COB-ID */
+        CO_COUNT(node, rx_malformed); /* data on our own TPDO's COB-ID */
         return;
     }
     if (tpdo >= node->tpdo_count || !pdo_active(&node->tpdo[tpdo])) {
