@@ -855,17 +855,18 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* ---- Power-on values. */
 
-static void add_node_id(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
+/* The node-ID added to the power-on value of a CO_OD_NODEID integer (`value`: its storage,
+ * `t`: its type). */
+static void add_node_id(const co_od_entry_t *e, void *value, const type_info_t *t,
+                        uint8_t node_id)
 {
-    const type_info_t *t = type_info(e->type);
-    void *value = co_od_value(od, e);
-    if ((e->attr & CO_OD_NODEID) && is_integer(t) && value != NULL) {
+    if ((e->attr & CO_OD_NODEID) && is_integer(t)) {
         native_set(value, t, native_get(value, t) + node_id);
     }
 }
 
 #if !CO_CONFIG_OD_COMPACT
-static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
+static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
 {
     if (e->dflt == NULL || e->value == NULL) {
         return;
@@ -880,14 +881,14 @@ static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_
         return;
     }
     co_copy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
-    add_node_id(od, e, node_id);
+    add_node_id(e, e->value, t, node_id);
 }
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
 {
     uint32_t i = lower_bound(od, key_of(first, 0));
     for (; i < od->count && od->entries[i].index <= last; i++) {
-        reset_entry(od, &od->entries[i], node_id);
+        reset_entry(&od->entries[i], node_id);
     }
 }
 #else
@@ -929,12 +930,22 @@ static const uint8_t *read_record(const uint8_t *p, uint32_t next, record_t *r)
     return p + r->len;
 }
 
+/* `len` little-endian bytes as a bit pattern. */
+static bits_t le_bits(const uint8_t *data, uint32_t len)
+{
+    bits_t bits = 0;
+    for (uint32_t n = len; n-- > 0u;) {
+        bits = (bits_t)(bits << 8) | data[n];
+    }
+    return bits;
+}
+
 /* An entry's power-on value: the `len` bytes of its record (none without one), the rest of
- * its storage zeroed. A DOMAIN kept in RAM takes them as its data; one without a record
- * keeps its own (as the general form keeps one without a default). On a little-endian
- * host a number's storage is its record's bytes as they are. */
+ * its storage zeroed, the node-ID added. A DOMAIN kept in RAM takes them as its data; one
+ * without a record keeps its own (as the general form keeps one without a default). On a
+ * little-endian host a number's storage is its record's bytes as they are. */
 static void set_default(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data,
-                        uint32_t len)
+                        uint32_t len, uint8_t node_id)
 {
     const type_info_t *t = type_info(e->type);
     uint8_t *value = co_od_value(od, e);
@@ -946,18 +957,13 @@ static void set_default(const co_od_t *od, const co_od_entry_t *e, const uint8_t
         }
         return;
     }
-#if !LITTLE_ENDIAN_HOST
-    if (is_number(t)) {
-        bits_t bits = 0;
-        for (uint32_t n = len; n-- > 0u;) {
-            bits = (bits_t)(bits << 8) | data[n];
-        }
-        native_set(value, t, bits);
-        return;
+    if (!LITTLE_ENDIAN_HOST && is_number(t)) {
+        native_set(value, t, le_bits(data, len));
+    } else {
+        co_copy(value, data, len);
+        co_zero(value + len, default_cap(od, e, t) - len);
     }
-#endif
-    co_copy(value, data, len);
-    co_zero(value + len, default_cap(od, e, t) - len);
+    add_node_id(e, value, t, node_id);
 }
 
 /* The power-on values' image, or NULL. */
@@ -981,8 +987,7 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
         while (r.pos < i) {
             p = read_record(p, r.pos + 1u, &r);
         }
-        set_default(od, e, r.pos == i ? r.data : NULL, r.pos == i ? r.len : 0);
-        add_node_id(od, e, node_id);
+        set_default(od, e, r.pos == i ? r.data : NULL, r.pos == i ? r.len : 0, node_id);
     }
 }
 
