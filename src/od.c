@@ -857,8 +857,7 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* The node-ID added to the power-on value of a CO_OD_NODEID integer (`value`: its storage,
  * `t`: its type). */
-static void add_node_id(const co_od_entry_t *e, void *value, const type_info_t *t,
-                        uint8_t node_id)
+static void add_node_id(const co_od_entry_t *e, void *value, const type_info_t *t, uint8_t node_id)
 {
     if ((e->attr & CO_OD_NODEID) && is_integer(t)) {
         native_set(value, t, native_get(value, t) + node_id);
