@@ -450,6 +450,9 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     if (od == NULL) {
         return CO_ERR_ARG;
     }
+    if (!CO_CONFIG_OD_VALIDATE) {
+        return CO_OK; /* the table is trusted (canola/config.h) */
+    }
     uint32_t i = 0;
     while (od->entries != NULL && i < od->count && entry_fits(od, i)) {
         i++;
@@ -852,17 +855,17 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* ---- Power-on values. */
 
-static void add_node_id(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
+/* The node-ID added to the power-on value of a CO_OD_NODEID integer (`value`: its storage,
+ * `t`: its type). */
+static void add_node_id(const co_od_entry_t *e, void *value, const type_info_t *t, uint8_t node_id)
 {
-    const type_info_t *t = type_info(e->type);
-    void *value = co_od_value(od, e);
-    if ((e->attr & CO_OD_NODEID) && is_integer(t) && value != NULL) {
+    if ((e->attr & CO_OD_NODEID) && is_integer(t)) {
         native_set(value, t, native_get(value, t) + node_id);
     }
 }
 
 #if !CO_CONFIG_OD_COMPACT
-static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
+static void reset_entry(const co_od_entry_t *e, uint8_t node_id)
 {
     if (e->dflt == NULL || e->value == NULL) {
         return;
@@ -877,20 +880,23 @@ static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_
         return;
     }
     co_copy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
-    add_node_id(od, e, node_id);
+    add_node_id(e, e->value, t, node_id);
 }
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
 {
     uint32_t i = lower_bound(od, key_of(first, 0));
     for (; i < od->count && od->entries[i].index <= last; i++) {
-        reset_entry(od, &od->entries[i], node_id);
+        reset_entry(&od->entries[i], node_id);
     }
 }
 #else
-/* Bytes of storage an entry's power-on value may fill: a number's wire size, the capacity
- * of the others. */
-static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e) { return co_od_size(od, e); }
+/* Bytes of storage an entry's power-on value may fill: a fixed type's storage (the image
+ * holds its little-endian bytes), the capacity of the others. */
+static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+{
+    return t->width != 0 ? t->width : co_od_size(od, e);
+}
 
 /* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE
  * past the last record) and value. */
@@ -923,32 +929,40 @@ static const uint8_t *read_record(const uint8_t *p, uint32_t next, record_t *r)
     return p + r->len;
 }
 
-/* A storage of zeros, except a DOMAIN's (kept, as the general form keeps one without a
- * default). */
-static void zero_entry(const co_od_t *od, const co_od_entry_t *e)
+/* `len` little-endian bytes as a bit pattern. */
+static bits_t le_bits(const uint8_t *data, uint32_t len)
 {
-    const type_info_t *t = type_info(e->type);
-    if (t->kind != K_DOMAIN) {
-        co_zero(co_od_value(od, e), t->width != 0 ? t->width : co_od_size(od, e));
+    bits_t bits = 0;
+    for (uint32_t n = len; n-- > 0u;) {
+        bits = (bits_t)(bits << 8) | data[n];
     }
+    return bits;
 }
 
+/* An entry's power-on value: the `len` bytes of its record (none without one), the rest of
+ * its storage zeroed, the node-ID added. A DOMAIN kept in RAM takes them as its data; one
+ * without a record keeps its own (as the general form keeps one without a default). On a
+ * little-endian host a number's storage is its record's bytes as they are. */
 static void set_default(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data,
-                        uint32_t len)
+                        uint32_t len, uint8_t node_id)
 {
     const type_info_t *t = type_info(e->type);
-    void *value = co_od_value(od, e);
-    if (is_number(t)) {
-        uint8_t wire[8] = {0};
-        co_copy(wire, data, len);
-        native_set(value, t, wire_number(t, wire));
-    } else if (is_domain(t)) {
-        co_od_domain_t *d = value;
-        co_copy(d->data, data, len);
-        d->len = len;
-    } else if (t->kind != K_DOMAIN) {
-        co_copy(value, data, len);
+    uint8_t *value = co_od_value(od, e);
+    if (t->kind == K_DOMAIN) {
+        if (is_domain(t) && data != NULL) {
+            co_od_domain_t *d = (void *)value;
+            co_copy(d->data, data, len);
+            d->len = len;
+        }
+        return;
     }
+    if (!LITTLE_ENDIAN_HOST && is_number(t)) {
+        native_set(value, t, le_bits(data, len));
+    } else {
+        co_copy(value, data, len);
+        co_zero(value + len, default_cap(od, e, t) - len);
+    }
+    add_node_id(e, value, t, node_id);
 }
 
 /* The power-on values' image, or NULL. */
@@ -964,19 +978,15 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
     if (p != NULL) {
         p = read_record(p, 0, &r);
     }
-    /* one pass: each entry in the range zeroed, given its record if it has one (the records
-     * before the range passed over), its node-ID added */
+    /* one pass: each entry in the range given its record if it has one (the records before
+     * the range passed over) and zeros after it, its node-ID added */
     for (uint32_t i = lower_bound(od, key_of(first, 0));
          i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        zero_entry(od, e);
         while (r.pos < i) {
             p = read_record(p, r.pos + 1u, &r);
         }
-        if (r.pos == i) {
-            set_default(od, e, r.data, r.len);
-        }
-        add_node_id(od, e, node_id);
+        set_default(od, e, r.pos == i ? r.data : NULL, r.pos == i ? r.len : 0, node_id);
     }
 }
 
@@ -991,7 +1001,8 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
         if (r.pos == END_OF_IMAGE) {
             return true;
         }
-        if (r.pos < next || r.pos >= od->count || r.len > default_cap(od, &od->entries[r.pos])) {
+        if (r.pos < next || r.pos >= od->count ||
+            r.len > default_cap(od, &od->entries[r.pos], type_info(od->entries[r.pos].type))) {
             *bad = r.pos < od->count ? r.pos : od->count;
             return false;
         }

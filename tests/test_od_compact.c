@@ -1,8 +1,9 @@
 /* test_od_compact.c -- the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1, the core
  * built so: tests/CMakeLists.txt): 8-byte entries (values by offset into one struct, sizes
  * from the type or the side table), power-on values from the image without zeros (numbers
- * through their wire form, strings, the node-ID, index ranges, DOMAINs kept), limits
- * referred to by position, the checks co_od_validate makes of all of them, and look-ups
+ * as their storage's little-endian bytes, strings, the node-ID, index ranges, DOMAINs
+ * kept), limits referred to by position, the checks co_od_validate makes of all of them
+ * (none in a core built to trust its dictionary, CO_CONFIG_OD_VALIDATE 0), and look-ups
  * through a hash that compares the entries (no key array). */
 #include "canola/od.h"
 #include "check.h"
@@ -32,12 +33,12 @@ static const co_od_limits_t k_limits[] = {
     {.low = {.u = 1}, .high = {.u = 9}},
 };
 
-/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), wire bytes; trailing
- * zeros left out. */
+/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), the bytes (a number's
+ * storage, little-endian); trailing zeros left out. */
 static const uint8_t k_image[] = {
     0x40, 0x91, 0x01,             /* 0x1000: 0x191 */
     0x40, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
-    0x60, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    0x80, 0x00, 0x00, 0x80, 0xFF, /* 0x2001: INTEGER24 -8388608 (its int32_t's 4 bytes) */
     0x80, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
     0x40, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
     0x40, 'h',  'i',              /* 0x2004: "hi" */
@@ -280,6 +281,21 @@ static void test_validate_limits_and_image(void)
     CHECK(memcmp(v.name, "abcdefgh", 8) == 0);
 }
 
+/* A core that trusts its dictionary (CO_CONFIG_OD_VALIDATE 0) checks nothing of it: what
+ * test_validate_limits_and_image refuses passes (the generator's tests validate what it
+ * generates), NULL excepted. */
+static void test_validation_left_out(void)
+{
+    co_od_t od = make_od();
+    uint32_t bad = 99;
+    tables.limits_count = 1; /* 0x2006 refers to limits 2 */
+    static const uint8_t past_table[] = {0x28, 1, 0};
+    tables.defaults = past_table;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
+    CHECK_EQ(bad, 99u);
+    CHECK_EQ(co_od_validate(NULL, &bad), CO_ERR_ARG);
+}
+
 static void test_hash_compares_entries(void)
 {
     co_od_t od = make_od();
@@ -309,7 +325,11 @@ int main(void)
     RUN(test_domain_without_record_kept);
     RUN(test_image_skips_and_positions);
     RUN(test_limits_by_position);
-    RUN(test_validate_limits_and_image);
+    if (CO_CONFIG_OD_VALIDATE) {
+        RUN(test_validate_limits_and_image);
+    } else {
+        RUN(test_validation_left_out);
+    }
     RUN(test_hash_compares_entries);
     return check_summary();
 }

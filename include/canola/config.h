@@ -236,6 +236,19 @@
 #define CO_CONFIG_OD_COMPACT 0
 #endif
 
+/** Run-time validation of the dictionary (co_od_validate, which co_node_init calls: order,
+ *  sizes, storage, side tables, power-on values, look-up tables, and the features the core
+ *  leaves out). Without it co_od_validate only checks that a dictionary is given and trusts
+ *  the table as it is, as a generated one can be: canola.odgen's tests run co_od_validate
+ *  over every dictionary it generates (its sample and the EDS corpus, in both forms), and a
+ *  generated dictionary using a feature the core leaves out (limits, DOMAIN values in RAM,
+ *  UNICODE_STRING, types wider than 32 bits) fails to compile instead. Keep it for tables
+ *  written by hand. Values written at run time (SDO, PDO, the API) are checked either way:
+ *  length, BOOLEAN 0/1, limits, access. */
+#ifndef CO_CONFIG_OD_VALIDATE
+#define CO_CONFIG_OD_VALIDATE 1
+#endif
+
 /** Dictionary types wider than 32 bits: INTEGER40..64, UNSIGNED40..64 and REAL64. Without
  *  them co_od_validate refuses a dictionary holding one, and the dictionary's arithmetic is
  *  32-bit (no 64-bit helpers on a 32-bit MCU); the API keeps its uint64_t values. */
@@ -272,7 +285,8 @@
     (CO_CONFIG_OD_LIMITS != 0 && CO_CONFIG_OD_LIMITS != 1) ||                                      \
     (CO_CONFIG_OD_DOMAIN != 0 && CO_CONFIG_OD_DOMAIN != 1) ||                                      \
     (CO_CONFIG_OD_UNICODE != 0 && CO_CONFIG_OD_UNICODE != 1) ||                                    \
-    (CO_CONFIG_OD_COMPACT != 0 && CO_CONFIG_OD_COMPACT != 1)
+    (CO_CONFIG_OD_COMPACT != 0 && CO_CONFIG_OD_COMPACT != 1) ||                                    \
+    (CO_CONFIG_OD_VALIDATE != 0 && CO_CONFIG_OD_VALIDATE != 1)
 #error "CO_CONFIG_* feature switches are 0 or 1"
 #endif
 #if CO_CONFIG_REAL_LIMITS && !CO_CONFIG_OD_LIMITS

@@ -48,9 +48,10 @@ extern "C" {
 /** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
  *  refuse to compile against a library whose layout differs. 2: co_od_t.keys;
  *  3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT); 5: its 8-byte entries
- *  (value offsets, co_od_tables_t). */
+ *  (value offsets, co_od_tables_t); 6: numbers in its power-on image as their storage's
+ *  bytes. */
 #ifndef CO_OD_FORMAT
-#define CO_OD_FORMAT 5
+#define CO_OD_FORMAT 6
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
@@ -257,13 +258,16 @@ typedef struct co_od {
 typedef struct co_od_tables {
     /** The power-on values, one record per entry whose power-on value is not all zeros, in
      *  entry order, ended by a 0 byte. A record: a head byte, then the entry's position if
-     *  the head says so, the length if the head says so, then the value's wire bytes
-     *  (trailing zero bytes may be left out). The head's bits 0-4: the entries skipped
-     *  since the previous record's (since position 0 for the first), 0..30, or 31: the
-     *  position follows (2 bytes, little-endian); bits 5-7: the value's length, 1..6, or
-     *  7: the length follows (2 bytes, little-endian). co_od_reset zeroes every entry that is not a
-     * DOMAIN, then writes the records' values (numbers through their wire form, so the image does
-     * not depend on the target's byte order). NULL: every value resets to zero. */
+     *  the head says so, the length if the head says so, then the value's bytes (trailing
+     *  zero bytes may be left out): a number's native storage as little-endian bytes (an
+     *  INTEGER24 as its int32_t, sign-extended), the wire bytes of the others. The head's
+     *  bits 0-4: the entries skipped since the previous record's (since position 0 for the
+     *  first), 0..30, or 31: the position follows (2 bytes, little-endian); bits 5-7: the
+     *  value's length, 1..6, or 7: the length follows (2 bytes, little-endian). co_od_reset
+     *  gives every entry in its range but a DOMAIN its record's bytes and zeros after them
+     *  (a little-endian host copies them as they are; a big-endian one converts numbers,
+     *  so the image does not depend on the target's byte order). NULL: every value resets
+     *  to zero. */
     const uint8_t *defaults;
     /** The limits that numbers refer to (co_od_entry_t.side: 1 + position), or NULL. */
     const co_od_limits_t *limits;
@@ -306,7 +310,8 @@ static inline uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
  *  and the power-on values' records in entry order, each fitting its entry.
  *  Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's position, or
  *  to `count` for a bad hash or a record past the table, when `bad` is not NULL). O(n)
- *  plus O(slots). */
+ *  plus O(slots). A core built without validation (CO_CONFIG_OD_VALIDATE 0, canola/config.h)
+ *  checks none of this: CO_OK for any dictionary given (CO_ERR_ARG for NULL). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),
@@ -373,10 +378,10 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /** Copy power-on values into every entry with index in [first, last] that has a default
  *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
- *  O(entries in range). The compact form: every entry in the range but a DOMAIN is zeroed,
- *  then given its record of co_od_tables_t.defaults, if any (O(entries in range + records before
- *  the range's end)); the records are trusted as they are (co_od_validate checks them, as
- *  the general form's power-on values are trusted to match their entries). */
+ *  O(entries in range). The compact form: every entry in the range but a DOMAIN gets its
+ *  record of co_od_tables_t.defaults, if any, and zeros after it (O(entries in range +
+ *  records before the range's end)); the records are trusted as they are (co_od_validate
+ *  checks them, as the general form's power-on values are trusted to match their entries). */
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
 
 /* ---- Native access for the application and the services (no access rules, no hooks,

@@ -270,6 +270,38 @@ def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str,
     assert run.returncode == 0, f"test program failed with {run.returncode}"
 
 
+# A core that does not validate its dictionary (CO_CONFIG_OD_VALIDATE 0, the size profiles)
+# refuses a generated one using a feature it leaves out when compiling it instead.
+@pytest.mark.parametrize("left_out", [
+    ("-DCO_CONFIG_OD_LIMITS=0", "-DCO_CONFIG_REAL_LIMITS=0"), ("-DCO_CONFIG_REAL_LIMITS=0",),
+    ("-DCO_CONFIG_OD_DOMAIN=0",), ("-DCO_CONFIG_OD_64BIT=0",)])
+@pytest.mark.parametrize("form", FORMS)
+def test_unvalidated_core_refuses_left_out_features_when_compiling(
+        tmp_path: Path, left_out: tuple[str, ...], form: tuple[str, ...]) -> None:
+    cc = compiler()
+    _, code = generate_sample(tmp_path, domain_size=32)
+    trusted = ("-DCO_CONFIG_OD_VALIDATE=0", *form)
+    assert compile_c(cc, code, tmp_path, trusted).returncode == 0
+    result = compile_c(cc, code, tmp_path, (*trusted, *left_out))
+    assert result.returncode != 0
+    assert f"({left_out[0][2:-2]} 0)" in result.stderr, result.stderr
+    validated = compile_c(cc, code, tmp_path, (*form, *left_out))  # co_od_validate refuses it
+    assert validated.returncode == 0, validated.stderr
+
+
+def test_unvalidated_core_refuses_unicode_strings_when_compiling(tmp_path: Path) -> None:
+    text = HEADER + ("[2000]\nParameterName=U\nObjectType=0x7\nDataType=0x000B\n"
+                     "AccessType=rw\nDefaultValue=ab\n")
+    source = tmp_path / "u.eds"
+    source.write_text(text)
+    _, code = odgen.generate_files(source, "u", tmp_path)
+    cc = compiler()
+    flags = ("-DCO_CONFIG_OD_VALIDATE=0", "-DCO_CONFIG_OD_COMPACT=1")
+    assert compile_c(cc, code, tmp_path, flags).returncode == 0
+    result = compile_c(cc, code, tmp_path, (*flags, "-DCO_CONFIG_OD_UNICODE=0"))
+    assert "(CO_CONFIG_OD_UNICODE 0)" in result.stderr, result.stderr
+
+
 # --- errors -------------------------------------------------------------------------------
 
 HEADER = """[FileInfo]
@@ -422,6 +454,63 @@ def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> No
     for line in refused:
         print("  refused", line)
     assert compiled
+
+
+def _validating_main(names: list[str]) -> str:
+    """A program that runs co_od_validate over each generated dictionary, then resets it."""
+    lines = [f'#include "{n}.h"' for n in names] + ["", "#include <stdio.h>", "",
+                                                  "int main(void)", "{", "    uint32_t bad = 0;"]
+    for n in names:
+        lines += [f"    if (co_od_validate(&{n}_od, &bad) != CO_OK) {{",
+                  f'        printf("{n}: entry %u refused\\n", (unsigned)bad);',
+                  "        return 1;", "    }",
+                  f"    co_od_reset(&{n}_od, 0x0000, 0xFFFF, 1);"]
+    return "\n".join([*lines, "    return 0;", "}", ""])
+
+
+@pytest.mark.slow
+def test_every_generated_dictionary_passes_co_od_validate(tmp_path: Path) -> None:
+    """A core built for size trusts its dictionary (CO_CONFIG_OD_VALIDATE 0): whatever the
+    generator writes must pass co_od_validate of a core that checks, in both forms, as a
+    build for size and with the look-up tables: the sample, the size rows' EDS and every
+    file of the corpus the generator takes."""
+    cc = compiler()
+    if not CORE_SOURCES:
+        pytest.skip("no core sources")
+    sources = [(SAMPLE, odgen.GenerateOptions(domain_size=32)),
+               (BENCH_EDS, odgen.GenerateOptions())]
+    sources += [(p, odgen.GenerateOptions(domain_size=16)) for p in corpus_files()]
+    names = []
+    for n, (path, options) in enumerate(sources):
+        try:
+            header, code = odgen.generate(eds.parse(path), f"d{n}", options)
+        except EdsError:
+            continue  # refused with its place (test_corpus_generates_...)
+        (tmp_path / f"d{n}.h").write_text(header)
+        (tmp_path / f"d{n}.c").write_text(code)
+        names.append(f"d{n}")
+    main_c = tmp_path / "main.c"
+    main_c.write_text(_validating_main(names))
+    for form in FORMS:
+        for optimise in ("-O0", "-Os"):
+            flags = (optimise, *form)
+            build = tmp_path / ("build" + "".join(flags))
+            build.mkdir()
+            objects = []
+            for src in [*CORE_SOURCES, *(tmp_path / f"{n}.c" for n in names), main_c]:
+                result = subprocess.run([cc, "-std=c11", *flags, f"-I{INCLUDE}", f"-I{tmp_path}",
+                                         "-c", str(src), "-o", str(build / f"{src.stem}.o")],
+                                        capture_output=True, text=True, check=False)
+                assert result.returncode == 0, f"{src.name} {flags}: {result.stderr[:500]}"
+                objects.append(str(build / f"{src.stem}.o"))
+            exe = build / "validate"
+            result = subprocess.run([cc, *objects, "-o", str(exe)], capture_output=True,
+                                    text=True, check=False)
+            assert result.returncode == 0, result.stderr
+            run = subprocess.run([str(exe)], capture_output=True, text=True, check=False,
+                                 timeout=60)
+            assert run.returncode == 0, f"{flags}: {run.stdout}"
+    assert len(names) > 2 or not corpus_files()
 
 
 # --- the size rows' dictionary (bench/run) ------------------------------------------------
