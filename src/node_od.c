@@ -16,7 +16,8 @@ typedef void (*written_fn)(co_node_t *node, const co_od_entry_t *entry);
 
 /* Which sub-indices of an object hold a COB-ID (bit 31 valid, bit 29 frame format, the
  * identifier): a new one must name an identifier of its own format. */
-enum { COB_NONE, COB_SUB0, COB_SUB1_2, COB_SUB1_UP };
+/* A bit per sub-index 0..6, bit 7 for 7 and above (a mask: one test). */
+enum { COB_NONE = 0x00, COB_SUB0 = 0x01, COB_SUB1_2 = 0x06, COB_SUB1_UP = 0xFE };
 
 /* The indices first..last as offsets into the communication profile area (12 bits each, one
  * word with `cob`: 12 bytes an object, not 16). */
@@ -88,9 +89,7 @@ static co_abort_t service_check(co_node_t *node, const service_object_t *o,
                                 const co_od_entry_t *entry, const uint8_t *data, uint32_t len)
 {
     uint8_t sub = entry->sub;
-    bool cob = (o->cob == COB_SUB0 && sub == 0) ||
-               (o->cob == COB_SUB1_2 && (sub == 1 || sub == 2)) ||
-               (o->cob == COB_SUB1_UP && sub >= 1);
+    bool cob = (o->cob >> (sub < 7u ? sub : 7u)) & 1u;
     if (len == 4 && cob && !co_cob_valid(co_get_u32(data))) {
         return CO_ABORT_VALUE;
     }
