@@ -91,7 +91,8 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 }
 
 #if !CO_SHORT_PATHS
-uint16_t co_routes_find(const co_node_t *node, uint32_t key)
+/* (out of line: co_node_accepts calls it too, and the look-up is inlined here once) */
+CO_SIZE_NOINLINE uint16_t co_routes_find(const co_node_t *node, uint32_t key)
 {
     return co_routes_find_inline(node, key);
 }
