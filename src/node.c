@@ -76,7 +76,9 @@ const co_node_stats_t *co_node_stats(const co_node_t *node)
 /* ---- dispatch */
 
 /* The service that takes the frames of each route kind, with the route's slot (a table:
- * less code than a switch). Left-out services are stand-ins that ignore the frame. */
+ * less code than a switch). Left-out services are stand-ins that ignore the frame; the last
+ * kinds (LSS, the manager) have no entry when left out: no route of theirs is ever set, and
+ * both tables end before them. */
 typedef void (*ingest_fn)(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 static const ingest_fn k_ingest[] = {
     [CO_ROUTE_NMT] = co_nmt_ingest,
@@ -90,9 +92,15 @@ static const ingest_fn k_ingest[] = {
     [CO_ROUTE_EMCY] = co_emcy_ingest,
     [CO_ROUTE_RPDO] = co_pdo_rx,
     [CO_ROUTE_TPDO_RTR] = co_pdo_rtr,
+#if CO_CONFIG_LSS_SLAVE
     [CO_ROUTE_LSS_SLAVE] = co_lss_slave_ingest,
+#endif
+#if CO_CONFIG_LSS_MASTER
     [CO_ROUTE_LSS_MASTER] = co_lss_master_ingest,
+#endif
+#if CO_CONFIG_MANAGER
     [CO_ROUTE_MGR_BOOTUP] = co_manager_bootup,
+#endif
 };
 
 /* The co_service_t bit the NMT state must allow for the frames of each route kind. */
@@ -108,9 +116,15 @@ static const uint16_t k_service[] = {
     [CO_ROUTE_EMCY] = CO_SVC_EMCY,
     [CO_ROUTE_RPDO] = CO_SVC_PDO,
     [CO_ROUTE_TPDO_RTR] = CO_SVC_PDO,
+#if CO_CONFIG_LSS_SLAVE
     [CO_ROUTE_LSS_SLAVE] = CO_SVC_LSS,
+#endif
+#if CO_CONFIG_LSS_MASTER
     [CO_ROUTE_LSS_MASTER] = CO_SVC_LSS,
+#endif
+#if CO_CONFIG_MANAGER
     [CO_ROUTE_MGR_BOOTUP] = CO_SVC_ERROR_CONTROL,
+#endif
 };
 
 /* Hand a frame to the service its route names (routes hold the kinds above only). */
