@@ -100,8 +100,9 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
 }
 
 /* Two passes: the first sums the records for the header, the second writes header and
- * records; a dictionary that changed between them fails the save (see canola/storage.h). */
-static co_err_t save_group(co_node_t *node, co_param_group_t group)
+ * records; a dictionary that changed between them fails the save (see canola/storage.h).
+ * (Out of line in a build for size: inlined, each_group's loop saves more registers.) */
+static CO_SIZE_NOINLINE co_err_t save_group(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
     image_sum_t planned = {0, 0};
