@@ -315,7 +315,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
  * dictionary, and the client hears `ok` (the confirmation's first word) or the abort. The
  * value is stored whole: from the buffer, or from the entry's own storage when earlier parts
  * went there (spill). */
-static void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
+static CO_SIZE_INLINE void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
 {
     co_abort_t abort;
     uint32_t len = received(s);
