@@ -141,9 +141,9 @@ static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_a
 /* store() of a server parameter (0x1200..0x127F), which may move this very channel (sub1 or
  * sub2 written through it): the write takes effect at once, and its confirmation still leaves
  * where the client waits for it, on the COB-ID the request was served on. (A build for size
- * stores every value so.) */
-static CO_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
-                                        uint32_t len, uint32_t ok)
+ * stores every value so, and inlines it where it has one caller, as an expedited-only server.) */
+static CO_FAST_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s,
+                                             const uint8_t *data, uint32_t len, uint32_t ok)
 {
     co_frame_t served = s->reply; /* valid: else the request had not come */
     co_abort_t abort = co_node_write(node, s->entry, data, len);
@@ -315,7 +315,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
  * dictionary, and the client hears `ok` (the confirmation's first word) or the abort. The
  * value is stored whole: from the buffer, or from the entry's own storage when earlier parts
  * went there (spill). */
-static void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
+static CO_SIZE_INLINE void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
 {
     co_abort_t abort;
     uint32_t len = received(s);
