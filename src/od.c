@@ -342,7 +342,7 @@ static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
         return false;
     }
 #if CO_CONFIG_OD_COMPACT /* the size follows from the type or the side table */
-    if (!side_ok(od, e, t)) {
+    if (od->values == NULL || !side_ok(od, e, t)) {
         return false; /* refers to a limit or capacity the tables do not have */
     }
 #else

@@ -234,6 +234,10 @@ static void test_validate_limits_and_image(void)
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 5u);
     od = make_od();
+    od.values = NULL; /* the entries' values are nowhere */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 0u);
+    od = make_od();
     od.tables = NULL; /* the entries refer to tables there are none of */
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 1u);

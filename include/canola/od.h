@@ -229,7 +229,8 @@ typedef struct co_od {
     void *hook_ctx;
 #if CO_CONFIG_OD_COMPACT
     /** The values of the compact form (co_od_entry_t.offset counts from here): one struct
-     *  in RAM, the one a generator writes (canola.odgen's <name>_values). */
+     *  in RAM, the one a generator writes (canola.odgen's <name>_values). Not NULL (unless
+     *  there are no entries): co_od_value never returns NULL in this form. */
     void *values;
     /** Its const side tables (co_od_tables_t), or NULL: no power-on values but zeros, no
      *  limits, no strings or domains. */
@@ -280,11 +281,17 @@ typedef struct co_od_tables {
 #endif
 
 /** The native storage of an entry (NULL in the general form when hooks produce and take
- *  the value). O(1). */
+ *  the value; never in the compact form, which has no hooks). O(1). */
 static inline void *co_od_value(const co_od_t *od, const co_od_entry_t *entry)
 {
 #if CO_CONFIG_OD_COMPACT
-    return (uint8_t *)od->values + entry->offset;
+    void *value = (uint8_t *)od->values + entry->offset;
+#if defined(__GNUC__) || defined(__clang__)
+    if (value == NULL) {
+        __builtin_unreachable(); /* the callers' tests for NULL fold away */
+    }
+#endif
+    return value;
 #else
     (void)od;
     return entry->value;
