@@ -10,6 +10,7 @@
 
 #include "build.h"
 #include "canola/node.h"
+#include "counters.h" /* CO_COUNT */
 
 /* ---- COB-IDs: the values of the objects 0x1005, 0x1012, 0x1014, 0x1200.., 0x1400.. */
 
@@ -71,15 +72,6 @@ static inline uint32_t co_route_key(const co_frame_t *frame)
 
 /* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
 static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
-
-/* ---- the node's counters (co_node_stats_t): one statement per event, nothing in a build
- * without them (CO_CONFIG_STATS 0, where co_node_t has no stats). */
-#if CO_CONFIG_STATS
-#define CO_COUNT_ADD(node, counter, n) ((void)((node)->stats.counter += (n)))
-#else
-#define CO_COUNT_ADD(node, counter, n) ((void)(node), (void)(n))
-#endif
-#define CO_COUNT(node, counter) CO_COUNT_ADD(node, counter, 1u)
 
 /* ---- sending (txq.c) */
 

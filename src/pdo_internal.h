@@ -22,17 +22,7 @@ co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const
                               uint32_t len);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1BFF */
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
-/* The PDO timers' due work at `now_us` (pdo_timers.c); their next deadlines go to
- * co_node_schedule. Without timers PDOs have nothing to wait for. */
-#if CO_CONFIG_PDO_TIMERS
-void co_pdo_poll(co_node_t *node, uint64_t now_us);
-#else
-static inline void co_pdo_poll(co_node_t *node, uint64_t now_us)
-{
-    (void)node;
-    (void)now_us;
-}
-#endif
+/* co_pdo_poll: pdo_timers.h */
 
 /* ---- inside the family */
 
@@ -57,6 +47,17 @@ static inline bool pdo_has(const co_pdo_t *p, unsigned f) { return (p->flags & f
 static inline bool pdo_active(const co_pdo_t *p)
 {
     return pdo_has(p, PDO_F_PRESENT) && !(p->cob_id & CO_COB_INVALID) && p->count > 0;
+}
+
+/* How many RPDOs / TPDOs the node has (co_pdo_bind): in a build for size all CO_RPDO_MAX /
+ * CO_TPDO_MAX, a constant the loops and bounds need not load. */
+static inline unsigned pdo_rx_count(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->rpdo_count : CO_RPDO_MAX;
+}
+static inline unsigned pdo_tx_count(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->tpdo_count : CO_TPDO_MAX;
 }
 
 /* PDOs run in operational only. */

@@ -85,10 +85,10 @@ static CO_SIZE_NOINLINE void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t no
 
 void co_pdo_poll(co_node_t *node, uint64_t now_us)
 {
-    for (unsigned n = 0; n < node->rpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < pdo_rx_count(node) && pdo_running(node); n++) {
         rpdo_poll(node, &node->rpdo[n], now_us);
     }
-    for (unsigned n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
         tpdo_poll(node, &node->tpdo[n], now_us);
     }
 }
