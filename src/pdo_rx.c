@@ -25,7 +25,7 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
         pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
         return true;
     }
-    uint32_t size = co_type_size((co_type_t)e->type);
+    uint32_t size = co_type_size((co_type_t)co_od_type(od, e));
     const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};
