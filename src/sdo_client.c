@@ -677,7 +677,7 @@ static const co_od_entry_t *local_entry(co_node_t *node, uint16_t index, uint8_t
 {
     const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, abort);
     if (e != NULL) {
-        *abort = co_od_access(e, write);
+        *abort = co_od_access(&node->cfg.od, e, write);
     }
     return *abort == CO_ABORT_NONE ? e : NULL;
 }
