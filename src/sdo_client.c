@@ -231,13 +231,15 @@ static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8
 
 /* Block upload segment `c seqno`: only the next in-order one is kept; the end of a
  * sub-block (its last seqno, or c = 1) is acknowledged with the last in-order seqno, so
- * the server repeats what was lost. The final segment's padding is dropped at the end. */
+ * the server repeats what was lost. The final segment's padding is dropped at the end.
+ * Only a kept segment restarts the time-out: a server that repeats what the client has,
+ * or skips what it lacks, makes no progress and must not hold the channel. */
 static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     uint8_t seqno = d[0] & CO_SDO_BLK_SEQ_MASK;
     bool last = (d[0] & CO_SDO_BLK_LAST) != 0;
     if (seqno == 0 || seqno > c->blksize) {
-        return CO_ABORT_NONE; /* not a segment of this sub-block: ignore */
+        return CO_ABORT_SEQUENCE; /* a segment of no sub-block the client asked for */
     }
     if (seqno == c->seq + 1) {
         uint64_t total = (uint64_t)c->done + CO_SDO_SEG_BYTES;
@@ -253,12 +255,14 @@ static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const
         if (last) {
             c->state = BUP_END;
         }
+        touch(node, c);
     }
     if (seqno == c->blksize || last) {
-        uint8_t ackseq = c->seq;
+        uint8_t ack[CO_SDO_FRAME_LEN] = {CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK, c->seq,
+                                         c->want_blksize};
         c->seq = 0; /* the next sub-block (or its repetition) counts from 1 again */
         c->blksize = c->want_blksize;
-        send_short(node, c, CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK, ackseq, c->blksize);
+        transmit(node, c, ack); /* no progress of its own: the time-out keeps running */
     }
     return CO_ABORT_NONE;
 }
@@ -518,7 +522,9 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         finish(node, c, code ? code : CO_ABORT_GENERAL, 0);
         return;
     }
-    touch(node, c);
+    if (c->state != BUP_DATA) {
+        touch(node, c); /* block segments restart it only when kept (on_block_upload_seg) */
+    }
     co_abort_t err = CO_ABORT_COMMAND;
     switch (c->state) {
     case UP_INIT:

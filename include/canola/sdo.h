@@ -156,7 +156,10 @@ co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t b
                                      uint8_t pst);
 
 /** The channel's time-out per answer: a transfer whose server stays silent `timeout_ms`
- *  after the last frame is aborted with 0x05040000 (also sent to the server). 0 returns to
+ *  after the last frame is aborted with 0x05040000 (also sent to the server). In a block
+ *  upload only a segment the client keeps counts: a server that repeats or skips
+ *  segments without progress is timed out all the same (a sequence number outside
+ *  1..blksize is aborted at once with 0x05040003). 0 returns to
  *  the node's co_node_config_t.sdo_timeout_ms. Takes effect with the next frame; kept
  *  across setups and resets. Returns CO_ERR_ARG for a bad channel. */
 co_err_t co_sdo_client_set_timeout(co_node_t *node, uint8_t channel, uint16_t timeout_ms);
