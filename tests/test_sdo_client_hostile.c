@@ -1,10 +1,10 @@
 /* tests/test_sdo_client_hostile.c -- the SDO client against a server that keeps talking
  * but makes no progress (silence after the start, sequence numbers that never advance, a
  * sub-block repeated without its first segment, a toggle that never alternates, more data
- * than announced). Each transfer ends with the CiA code for it within the channel's
- * time-out of its last progress, tells the server, and leaves the channel usable.
- * Virtual time: the test feeds frames and polls at chosen microseconds.
- * Client: node 1, channel time-out 100 ms; server: node 5. */
+ * than announced, a block download acknowledged with nothing again and again). Each transfer ends
+ * with the CiA code for it within the channel's time-out of its last progress, tells the server,
+ * and leaves the channel usable. Virtual time: the test feeds frames and polls at chosen
+ * microseconds. Client: node 1, channel time-out 100 ms; server: node 5. */
 #include "check.h"
 #include "harness.h"
 
@@ -119,6 +119,32 @@ static void test_block_upload_sub_block_repeated_without_progress(void)
     check_aborted_and_usable(CO_ABORT_TIMEOUT, "605#8000200000000405");
 }
 
+/* A sub-block going on past its lost first segment, slower than the time-out in all:
+ * each segment beyond the ones seen restarts it, and the repetition completes. */
+static void test_block_upload_slow_sub_block_with_a_lost_segment_completes(void)
+{
+    client();
+    start_upload(CO_SDO_BLOCK, 32);
+    reply("C2 00 20 00 1C 00 00 00"); /* 28 bytes: one sub-block of 4 */
+    static const char *const segs[] = {"02 01 02 03 04 05 06 07", "03 01 02 03 04 05 06 07",
+                                       "04 01 02 03 04 05 06 07", "01 01 02 03 04 05 06 07",
+                                       "02 01 02 03 04 05 06 07", "03 01 02 03 04 05 06 07",
+                                       "84 01 02 03 04 05 06 07"};
+    for (int i = 0; i < 7; i++) { /* 60 ms apart: 420 ms in all */
+        g_now += 60000;
+        co_node_poll(&g_t.node, g_now);
+        reply(segs[i]);
+        if (i == 2) {
+            CHECK_STR(last_sent(), "605#A200040000000000"); /* nothing kept: repeat */
+        }
+    }
+    CHECK_STR(last_sent(), "605#A204040000000000");
+    reply("C1 00 00 00 00 00 00 00");
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+    CHECK_EQ(g_r.len, 28);
+}
+
 /* Sequence numbers outside 1..blksize belong to no sub-block the client asked for. */
 static void test_block_upload_invalid_sequence_number(void)
 {
@@ -137,9 +163,9 @@ static void test_block_upload_invalid_sequence_number(void)
  * once past the caller's buffer. */
 static void test_block_upload_endless(void)
 {
-    static const char *const sub_block[] = {
-        "01 01 02 03 04 05 06 07", "02 01 02 03 04 05 06 07", "03 01 02 03 04 05 06 07",
-        "04 01 02 03 04 05 06 07", NULL};
+    static const char *const sub_block[] = {"01 01 02 03 04 05 06 07", "02 01 02 03 04 05 06 07",
+                                            "03 01 02 03 04 05 06 07", "04 01 02 03 04 05 06 07",
+                                            NULL};
     client();
     start_upload(CO_SDO_BLOCK, 32);
     reply("C2 00 20 00 0E 00 00 00"); /* 14 bytes */
@@ -171,8 +197,7 @@ static void test_segmented_upload_endless(void)
     client();
     start_upload(CO_SDO_SEGMENTED, 32);
     reply("41 00 20 00 0E 00 00 00"); /* 14 bytes */
-    static const char *const segs[] = {"00 01 02 03 04 05 06 07", "10 01 02 03 04 05 06 07",
-                                       NULL};
+    static const char *const segs[] = {"00 01 02 03 04 05 06 07", "10 01 02 03 04 05 06 07", NULL};
     keep_saying(segs);
     check_aborted_and_usable(CO_ABORT_LEN_HIGH, "605#8000200012000706");
     client();
@@ -182,14 +207,58 @@ static void test_segmented_upload_endless(void)
     check_aborted_and_usable(CO_ABORT_OUT_OF_MEMORY, "605#8000200005000405");
 }
 
+static const uint8_t g_data[40] = {1, 2, 3};
+
+/* A block download whose server acknowledges no segment of any sub-block: the first
+ * repetition is sent on a fresh time-out, the ones after it are not. */
+static void test_block_download_acknowledged_with_nothing(void)
+{
+    client();
+    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, g_data, sizeof g_data,
+                             sdo_result_done, &g_r),
+             CO_OK);
+    reply("A4 00 20 00 04 00 00 00");
+    static const char *const ack0[] = {"A2 00 04 00 00 00 00 00", NULL};
+    uint64_t end = keep_saying(ack0);
+    CHECK(end <= STEP_US + TIMEOUT_MS * 1000u + STEP_US);
+    check_aborted_and_usable(CO_ABORT_TIMEOUT, "605#8000200000000405");
+}
+
+/* One repetition, then progress again: the transfer completes, however long it takes. */
+static void test_block_download_one_repetition_at_a_time_completes(void)
+{
+    client();
+    CHECK_EQ(co_sdo_download(&g_t.node, 0, 0x2000, 0, CO_SDO_BLOCK, g_data, sizeof g_data,
+                             sdo_result_done, &g_r),
+             CO_OK);
+    reply("A4 00 20 00 04 00 00 00");
+    /* 40 bytes = 6 segments: each sub-block is first refused once, 80 ms apart */
+    static const char *const acks[] = {"A2 00 04 00 00 00 00 00", "A2 04 04 00 00 00 00 00",
+                                       "A2 00 04 00 00 00 00 00", "A2 02 04 00 00 00 00 00"};
+    for (int i = 0; i < 4; i++) {
+        g_now += 80000;
+        co_node_poll(&g_t.node, g_now);
+        CHECK_EQ(g_r.calls, 0);
+        reply(acks[i]);
+    }
+    CHECK_EQ(g_t.bus.frames[g_t.bus.count - 1].data[0] & 0xE3, 0xC1); /* the end */
+    reply("A1 00 00 00 00 00 00 00");
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+    CHECK_EQ(g_r.len, 40);
+}
+
 int main(void)
 {
     RUN(test_block_upload_silent_after_initiate);
     RUN(test_block_upload_sequence_never_advances);
     RUN(test_block_upload_sub_block_repeated_without_progress);
+    RUN(test_block_upload_slow_sub_block_with_a_lost_segment_completes);
     RUN(test_block_upload_invalid_sequence_number);
     RUN(test_block_upload_endless);
     RUN(test_segmented_upload_toggle_never_alternates);
     RUN(test_segmented_upload_endless);
+    RUN(test_block_download_acknowledged_with_nothing);
+    RUN(test_block_download_one_repetition_at_a_time_completes);
     return check_summary();
 }
