@@ -17,15 +17,9 @@
 
 uint8_t co_emcy_register_bit(uint16_t code)
 {
-    switch (code >> 12) {
-    case 0x2:
-        return 0x02; /* current */
-    case 0x3:
-        return 0x04; /* voltage */
-    case 0x4:
-        return 0x08; /* temperature */
-    default:
-        break;
+    unsigned group = code >> 12u;
+    if (group - 2u <= 2u) {
+        return (uint8_t)(1u << (group - 1u)); /* 2xxx current, 3xxx voltage, 4xxx temperature */
     }
     if (code >= 0x8100u && code <= 0x8FFFu) {
         return 0x10; /* communication */
@@ -90,7 +84,7 @@ void co_emcy_frame_send(co_node_t *node, const uint8_t data[CO_EMCY_FRAME_LEN])
 }
 
 /* One EMCY frame: out now, or after the inhibit time (emcy_queue.c). */
-static void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[5])
+static CO_SIZE_NOINLINE void emit(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t mfr[5])
 {
     if (CO_EMCY_QUEUE_LEN > 0 && co_emcy_producer_off(node)) {
         return; /* nothing queued either (without a queue, co_emcy_frame_send tells) */

@@ -46,8 +46,8 @@ static bool comm_still_lost(const co_node_t *node)
 
 void co_node_comm_resumed(co_node_t *node)
 {
-    if (!comm_still_lost(node) && co_emcy_active(node, 0x8130)) {
-        (void)co_emcy_clear(node, 0x8130);
+    if (!comm_still_lost(node)) {
+        (void)co_emcy_clear(node, 0x8130); /* (not active: nothing to clear, nothing sent) */
     }
 }
 

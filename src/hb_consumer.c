@@ -21,7 +21,6 @@ static void consumer_load(co_node_t *node, uint8_t slot)
     bool used = c->node_id >= 1 && c->node_id <= 127 && c->time_ms != 0;
     c->watch = used ? CO_HB_WATCH_WAITING : CO_HB_WATCH_UNUSED;
     c->state = CO_STATE_NONE;
-    c->ever_heard = false;
     c->deadline_us = CO_TIME_NEVER;
     co_route_set(node, CO_ROUTE_HB_CONSUMER, slot, used ? 0x700u + c->node_id : CO_ROUTE_OFF);
 }
@@ -64,15 +63,14 @@ void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         return; /* a master guarding that node, not a heartbeat */
     }
     if (frame->len != 1 || !valid_state(frame->data[0])) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     co_hb_consumer_t *c = &node->hb_consumers[slot];
     uint8_t state = frame->data[0];
     uint8_t previous = c->state;
-    bool was_running = c->ever_heard && previous != CO_STATE_NONE && previous != 0;
+    bool was_running = previous != CO_STATE_NONE && previous != CO_NMT_INITIALISING;
     c->state = state;
-    c->ever_heard = true;
     uint8_t watch = c->watch;
     bool back = watch == CO_HB_WATCH_LOST; /* heard again after a timeout */
     co_ec_event_kind_t event = CO_EC_STATE_CHANGED;
@@ -122,7 +120,7 @@ uint64_t co_hb_consumers_poll(co_node_t *node, uint64_t now_us)
         node->boot_deadline_us = CO_TIME_NEVER;
         for (uint8_t i = 0; i < node->hb_consumer_count; i++) {
             const co_hb_consumer_t *c = &node->hb_consumers[i];
-            if (c->watch != CO_HB_WATCH_UNUSED && !c->ever_heard) {
+            if (c->watch != CO_HB_WATCH_UNUSED && c->state == CO_STATE_NONE) { /* never heard */
                 co_node_ec_event(node, CO_EC_NOT_BOOTED, c->node_id, CO_STATE_NONE, CO_STATE_NONE);
             }
         }

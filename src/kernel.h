@@ -10,6 +10,7 @@
 
 #include "build.h"
 #include "canola/node.h"
+#include "counters.h" /* CO_COUNT */
 
 /* ---- COB-IDs: the values of the objects 0x1005, 0x1012, 0x1014, 0x1200.., 0x1400.. */
 
@@ -113,7 +114,7 @@ static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *fram
     if (err != CO_OK) {
         return co_txq_refused(node, frame, service, err);
     }
-    node->stats.tx_frames++;
+    CO_COUNT(node, tx_frames);
     return CO_OK;
 #endif
 }

@@ -62,7 +62,16 @@ co_err_t co_node_start(co_node_t *node, uint64_t now_us)
 
 uint8_t co_node_id(const co_node_t *node) { return node->node_id; }
 
-const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stats; }
+const co_node_stats_t *co_node_stats(const co_node_t *node)
+{
+#if CO_CONFIG_STATS
+    return &node->stats;
+#else
+    static const co_node_stats_t none; /* counters that stay zero (canola/node.h) */
+    (void)node;
+    return &none;
+#endif
+}
 
 /* ---- dispatch */
 
@@ -117,7 +126,7 @@ static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, uint16_t route, const
     if (co_lss_slave_resume(node, k_service[node->route_kind[route]])) {
         dispatch(node, route, frame);
     } else {
-        node->stats.rx_gated++;
+        CO_COUNT(node, rx_gated);
     }
 }
 
@@ -137,9 +146,9 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
     uint16_t found = co_routes_find(node, key);
     if (found == node->route_count) {
         if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
-            node->stats.rx_malformed++;
+            CO_COUNT(node, rx_malformed);
         } else {
-            node->stats.rx_unrouted++;
+            CO_COUNT(node, rx_unrouted);
         }
         return;
     }
@@ -150,12 +159,12 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
-    node->stats.rx_frames++;
+    CO_COUNT(node, rx_frames);
     /* Above 29 bits or the frame's data: malformed. An identifier of 12..29 bits without the
      * EXT flag is malformed too, but matches no route (routes hold valid keys only), so it is
      * told apart from the unrouted ones off the common path. */
     if (frame->len > CO_FRAME_DATA_MAX || frame->id > CO_ID_EXT_MAX) {
-        node->stats.rx_malformed++; /* no controller delivers this: never let it match */
+        CO_COUNT(node, rx_malformed); /* no controller delivers this: never let it match */
         return;
     }
     /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
@@ -195,7 +204,7 @@ static CO_FAST_NOINLINE uint64_t poll_due(co_node_t *node, uint64_t now_us)
         next = co_min_u64(next, co_sdo_client_poll(node, now_us));
         next = co_min_u64(next, co_sync_poll(node, now_us));
         next = co_min_u64(next, co_emcy_poll(node, now_us));
-        next = co_min_u64(next, co_pdo_poll(node, now_us));
+        co_pdo_poll(node, now_us); /* (schedules its deadlines itself: less code) */
         next = co_min_u64(next, co_lss_master_poll(node, now_us));
         next = co_min_u64(next, co_manager_poll(node, now_us));
         next = co_min_u64(next, co_flash_poll(node, now_us));

@@ -18,10 +18,15 @@ typedef void (*written_fn)(co_node_t *node, const co_od_entry_t *entry);
  * identifier): a new one must name an identifier of its own format. */
 enum { COB_NONE, COB_SUB0, COB_SUB1_2, COB_SUB1_UP };
 
+/* The indices first..last as offsets into the communication profile area (12 bits each, one
+ * word with `cob`: 12 bytes an object, not 16). */
+#define AREA 0x1000u
+#define OBJECTS(first, last) ((first)-AREA), ((last)-AREA)
+
 typedef struct service_object {
-    uint16_t first; /* indices first..last */
-    uint16_t last;
-    uint8_t cob;          /* COB_*: the sub-indices holding a COB-ID */
+    unsigned first : 12; /* indices AREA + first..last */
+    unsigned last : 12;
+    unsigned cob : 8;     /* COB_*: the sub-indices holding a COB-ID */
     write_check_fn check; /* refuse a value the service cannot take (NULL: none) */
     written_fn written;   /* the new value takes effect (NULL: nothing to do) */
 } service_object_t;
@@ -29,39 +34,40 @@ typedef struct service_object {
 /* Objects of left-out features stay (for their COB-ID check) or go (with no effect). */
 static const service_object_t k_service_objects[] = {
 #if CO_CONFIG_EMCY_HISTORY
-    {0x1003, 0x1003, COB_NONE, co_emcy_check_write, co_emcy_written},
+    {OBJECTS(0x1003, 0x1003), COB_NONE, co_emcy_check_write, co_emcy_written},
 #endif
-    {0x1005, 0x1005, COB_SUB0, NULL, co_sync_written},
+    {OBJECTS(0x1005, 0x1005), COB_SUB0, NULL, co_sync_written},
 #if CO_CONFIG_SYNC_PRODUCER
-    {0x1006, 0x1007, COB_NONE, NULL, co_sync_written},
+    {OBJECTS(0x1006, 0x1007), COB_NONE, NULL, co_sync_written},
 #endif
 #if CO_CONFIG_GUARDING
-    {0x100C, 0x100D, COB_NONE, NULL, co_guard_written},
+    {OBJECTS(0x100C, 0x100D), COB_NONE, NULL, co_guard_written},
 #endif
 #if CO_CONFIG_STORAGE
-    {0x1010, 0x1011, COB_NONE, co_storage_check_write, co_storage_show_capability},
+    {OBJECTS(0x1010, 0x1011), COB_NONE, co_storage_check_write, co_storage_show_capability},
 #else
-    {0x1010, 0x1011, COB_NONE, co_storage_check_write, NULL}, /* every command refused */
+    {OBJECTS(0x1010, 0x1011), COB_NONE, co_storage_check_write, NULL}, /* every command refused */
 #endif
-    {0x1012, 0x1012, COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
-    {0x1014, 0x1014, COB_SUB0, co_emcy_cob_check_write,
+    {OBJECTS(0x1012, 0x1012), COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
+    {OBJECTS(0x1014, 0x1014), COB_SUB0, co_emcy_cob_check_write,
      CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
 #if CO_EMCY_QUEUE_LEN > 0
-    {0x1015, 0x1015, COB_NONE, NULL, co_emcy_written},
+    {OBJECTS(0x1015, 0x1015), COB_NONE, NULL, co_emcy_written},
 #endif
 #if CO_HB_CONSUMERS_MAX > 0
-    {0x1016, 0x1016, COB_NONE, co_hb_check_write, co_hb_written},
+    {OBJECTS(0x1016, 0x1016), COB_NONE, co_hb_check_write, co_hb_written},
 #endif
-    {0x1017, 0x1017, COB_NONE, NULL, co_hb_written},
-    {0x1019, 0x1019, COB_NONE, co_sync_check_write, co_sync_written},
-    {0x1028, 0x1028, COB_SUB1_UP, NULL, CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
+    {OBJECTS(0x1017, 0x1017), COB_NONE, NULL, co_hb_written},
+    {OBJECTS(0x1019, 0x1019), COB_NONE, co_sync_check_write, co_sync_written},
+    {OBJECTS(0x1028, 0x1028), COB_SUB1_UP, NULL,
+     CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
 #if CO_SDO_CLIENTS_MAX > 0
-    {0x1200, 0x127F, COB_SUB1_2, NULL, co_sdo_server_written},
-    {0x1280, 0x12FF, COB_SUB1_2, NULL, co_sdo_client_written},
+    {OBJECTS(0x1200, 0x127F), COB_SUB1_2, NULL, co_sdo_server_written},
+    {OBJECTS(0x1280, 0x12FF), COB_SUB1_2, NULL, co_sdo_client_written},
 #else /* without clients 0x1280.. have no effect: no server channel is 0x1200 + 0x80 or more */
-    {0x1200, 0x12FF, COB_SUB1_2, NULL, co_sdo_server_written},
+    {OBJECTS(0x1200, 0x12FF), COB_SUB1_2, NULL, co_sdo_server_written},
 #endif
-    {0x1400, 0x1BFF, COB_NONE, co_pdo_check_write, co_pdo_written},
+    {OBJECTS(0x1400, 0x1BFF), COB_NONE, co_pdo_check_write, co_pdo_written},
 };
 
 /* The service object of an entry of 0x1000..0x1FFF, or NULL. */
@@ -69,7 +75,8 @@ static const service_object_t *service_object(const co_od_entry_t *entry)
 {
     for (size_t i = 0; i < sizeof k_service_objects / sizeof k_service_objects[0]; i++) {
         const service_object_t *o = &k_service_objects[i];
-        if (entry->index >= o->first && entry->index <= o->last) {
+        unsigned at = entry->index - AREA; /* (wraps below the area: above every last) */
+        if (at >= o->first && at <= o->last) {
             return o;
         }
     }

@@ -78,7 +78,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 /* Another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
 {
-    for (unsigned n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
         const co_pdo_t *p = &node->rpdo[n];
         if (p != self && pdo_has(p, flag)) {
             return true;
@@ -167,10 +167,10 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 static CO_FAST_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
     if (frame->flags & CO_FRAME_RTR) {
-        node->stats.rx_malformed++; /* RPDOs are not requested */
+        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
         return;
     }
-    if (rpdo >= node->rpdo_count) {
+    if (rpdo >= pdo_rx_count(node)) {
         return;
     }
     if (pdo_active(&node->rpdo[rpdo])) {
@@ -183,7 +183,7 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
     /* The usual frame: asynchronous, exactly the mapped length (`fast`), data, nothing
      * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
      * a route; the bound is checked all the same before the array is read. */
-    const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
+    const co_pdo_t *p = rpdo < pdo_rx_count(node) ? &node->rpdo[rpdo] : NULL;
     if (CO_SHORT_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
         !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
         const co_od_t *od = &node->cfg.od;

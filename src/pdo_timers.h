@@ -6,7 +6,10 @@
 #ifndef CANOLA_PDO_TIMERS_H
 #define CANOLA_PDO_TIMERS_H
 
+/* The timers' due work at `now_us` (the node's poll); their next deadlines go to
+ * co_node_schedule. Without timers PDOs have nothing to wait for. */
 #if CO_CONFIG_PDO_TIMERS
+void co_pdo_poll(co_node_t *node, uint64_t now_us);
 void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
 static inline void pdo_timers_restart(co_pdo_t *p)
 {
@@ -28,6 +31,11 @@ void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event ti
 void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
 static inline bool rpdo_monitored(const co_pdo_t *p) { return p->event_ms != 0; }
 #else
+static inline void co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    (void)node;
+    (void)now_us;
+}
 static inline void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
 {
     (void)node;

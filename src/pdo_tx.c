@@ -139,10 +139,10 @@ void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter)
 void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
 {
     if (!(frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++; /* data on our own TPDO's COB-ID */
+        CO_COUNT(node, rx_malformed); /* data on our own TPDO's COB-ID */
         return;
     }
-    if (tpdo >= node->tpdo_count || !pdo_active(&node->tpdo[tpdo])) {
+    if (tpdo >= pdo_tx_count(node) || !pdo_active(&node->tpdo[tpdo])) {
         return;
     }
     co_pdo_t *p = &node->tpdo[tpdo];
@@ -155,7 +155,7 @@ void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
 
 co_err_t co_tpdo_request(co_node_t *node, uint8_t n)
 {
-    if (n >= node->tpdo_count || !pdo_has(&node->tpdo[n], PDO_F_PRESENT)) {
+    if (n >= pdo_tx_count(node) || !pdo_has(&node->tpdo[n], PDO_F_PRESENT)) {
         return CO_ERR_ARG;
     }
     co_pdo_t *p = &node->tpdo[n];

@@ -56,7 +56,7 @@ static void settle(co_node_t *node, uint32_t key)
 }
 
 /* Route i becomes (key, owner). */
-static CO_SIZE_NOINLINE void put(co_node_t *node, unsigned i, uint32_t key, uint16_t owner)
+static void put(co_node_t *node, unsigned i, uint32_t key, uint16_t owner)
 {
     node->route_keys[i] = key;
     node->route_kind[i] = (uint8_t)(owner >> 8);

@@ -521,7 +521,7 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
     if (frame->len != CO_SDO_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     if (c->state == IDLE) {

@@ -31,14 +31,21 @@ static bool is_parameter(const co_od_t *od, const co_od_entry_t *e, co_param_gro
 
 #define HEADER_CRC_AT 10u         /* the CRC follows the header's other fields */
 #define IMAGE_LEN_MAX 0x7FFFFFFFu /* no offset arithmetic below can wrap */
-static const uint8_t k_magic[4] = {'C', 'N', 'P', 'S'}; /* CO_STORE_MAGIC */
+/* CO_STORE_MAGIC ("CNPS"), the header's bytes 0..3, as a little-endian word. */
+#define MAGIC_WORD                                                                                 \
+    ((uint32_t)'C' | ((uint32_t)'N' << 8) | ((uint32_t)'P' << 16) | ((uint32_t)'S' << 24))
+
+/* Header bytes 4..5 of an image of `group` (format, group) as a little-endian half-word. */
+static uint16_t format_and_group(co_param_group_t group)
+{
+    return (uint16_t)(CO_STORE_FORMAT | ((unsigned)group << 8));
+}
 
 /* Header bytes 0..9 of an image of `group` with `len` bytes of records. */
 static void header_fields(uint8_t hdr[CO_STORE_HEADER_SIZE], co_param_group_t group, uint32_t len)
 {
-    co_copy(hdr, k_magic, sizeof k_magic);
-    hdr[4] = CO_STORE_FORMAT;
-    hdr[5] = (uint8_t)group;
+    co_put_u32(hdr, MAGIC_WORD);
+    co_put_u16(&hdr[4], format_and_group(group));
     co_put_u32(&hdr[6], len);
 }
 
@@ -208,9 +215,8 @@ co_store_fault_t co_storage_verify(const co_node_t *node, co_param_group_t group
     if (err != CO_OK) {
         return err == CO_ERR_NOT_FOUND ? CO_STORE_NONE : CO_STORE_READ_ERROR;
     }
-    bool magic = n == sizeof hdr && hdr[0] == k_magic[0] && hdr[1] == k_magic[1] &&
-                 hdr[2] == k_magic[2] && hdr[3] == k_magic[3];
-    if (!magic || hdr[4] != CO_STORE_FORMAT || hdr[5] != (uint8_t)group) {
+    if (n != sizeof hdr || co_get_u32(hdr) != MAGIC_WORD ||
+        co_get_u16(&hdr[4]) != format_and_group(group)) {
         return CO_STORE_BAD_HEADER;
     }
     uint32_t len = co_get_u32(&hdr[6]);
@@ -326,10 +332,9 @@ static uint64_t capability(const co_node_t *node)
 void co_storage_reset_comm(co_node_t *node)
 {
     uint64_t value = capability(node);
-    for (uint16_t index = 0x1010; index <= 0x1011; index++) {
-        for (uint8_t sub = 1; sub <= 3; sub++) {
-            (void)co_od_set_uint(&node->cfg.od, index, sub, value);
-        }
+    for (unsigned i = 0; i < 6; i++) { /* one loop (the compiler unrolls two nested ones) */
+        (void)co_od_set_uint(&node->cfg.od, (uint16_t)(0x1010 + i / 3), (uint8_t)(1 + i % 3),
+                             value);
     }
 }
 

@@ -167,6 +167,15 @@
 #define CO_CONFIG_STORAGE 1
 #endif
 
+/** The node's counters (co_node_stats_t: frames received, unrouted, gated, malformed; sent,
+ *  queued, lost, refused, gated). Without them co_node_t keeps none (36 bytes less) and no
+ *  frame path counts: co_node_stats() still links and answers counters that are all zero
+ *  and stay zero. Bus events a device must act on come through the callbacks either way
+ *  (on_error for a lost or refused frame). */
+#ifndef CO_CONFIG_STATS
+#define CO_CONFIG_STATS 1
+#endif
+
 /** Limits on REAL32/REAL64 entries (double comparisons: soft-float code on MCUs without
  *  an FPU). Without it a dictionary giving a REAL entry limits fails co_od_validate. */
 #ifndef CO_CONFIG_REAL_LIMITS
@@ -258,6 +267,7 @@
     (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
     (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
     (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
+    (CO_CONFIG_STATS != 0 && CO_CONFIG_STATS != 1) ||                                              \
     (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1) ||                                  \
     (CO_CONFIG_OD_LIMITS != 0 && CO_CONFIG_OD_LIMITS != 1) ||                                      \
     (CO_CONFIG_OD_DOMAIN != 0 && CO_CONFIG_OD_DOMAIN != 1) ||                                      \

@@ -69,8 +69,8 @@ typedef struct co_hb_consumer {
     uint16_t time_ms;     /**< 0 = entry unused */
     uint8_t node_id;      /**< 0 = entry unused */
     uint8_t watch;        /**< internal: CO_HB_WATCH_* */
-    uint8_t state;        /**< last NMT state heard (CO_NMT_*), 0xFF = none yet */
-    bool ever_heard;      /**< heard since this node's last reset communication */
+    uint8_t state;        /**< last NMT state heard (CO_NMT_*), 0xFF = none since this node's
+                               last reset communication (or the entry's last write) */
 } co_hb_consumer_t;
 
 /** Master-side node guarding of one remote node; embedded in the node. */
