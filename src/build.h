@@ -37,6 +37,15 @@
 #define CO_SIZE_NOINLINE
 #endif
 
+/* And the reverse: a function of one or two callers that -Os keeps out of line, where
+ * the copies are smaller (constant arguments fold, a large frame merges; the functions
+ * marked so were found by measuring). Other builds let the compiler decide. */
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__OPTIMIZE_SIZE__)
+#define CO_SIZE_INLINE inline __attribute__((always_inline))
+#else
+#define CO_SIZE_INLINE
+#endif
+
 /* The opposite hint: a small hot helper that the compiler's size heuristics would keep
  * out of line. Not when compiling for size (-Os): there flash counts more than cycles. */
 #if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)

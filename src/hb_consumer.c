@@ -51,7 +51,7 @@ void co_hb_consumers_reset(co_node_t *node)
     }
 }
 
-static CO_SIZE_NOINLINE bool valid_state(uint8_t s)
+static bool valid_state(uint8_t s)
 {
     return s == CO_NMT_INITIALISING || s == CO_NMT_STOPPED || s == CO_NMT_OPERATIONAL ||
            s == CO_NMT_PRE_OPERATIONAL;

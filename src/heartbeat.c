@@ -6,7 +6,7 @@
 
 #define HB_COB_BASE 0x700u
 
-static uint16_t producer_period_ms(const co_node_t *node)
+static CO_SIZE_NOINLINE uint16_t producer_period_ms(const co_node_t *node)
 {
     return (uint16_t)co_entry_uint(&node->cfg.od, node->hb_period);
 }

@@ -148,7 +148,7 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
     if (entry == NULL) {
         return abort;
     }
-    abort = co_od_access(entry, true);
+    abort = co_od_access(&node->cfg.od, entry, true);
     return abort != CO_ABORT_NONE ? abort : co_node_write_entry(node, entry, data, len);
 }
 
@@ -160,7 +160,7 @@ co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_
     if (entry == NULL) {
         return abort;
     }
-    abort = co_od_access(entry, false);
+    abort = co_od_access(&node->cfg.od, entry, false);
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
@@ -179,9 +179,10 @@ co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64
     if (entry == NULL) {
         return abort;
     }
-    uint32_t size = co_type_size((co_type_t)entry->type);
-    if (size == 0 || size > 8 || entry->type == CO_TYPE_REAL32 || entry->type == CO_TYPE_REAL64 ||
-        entry->type == CO_TYPE_TIME_OF_DAY || entry->type == CO_TYPE_TIME_DIFFERENCE) {
+    unsigned type = co_od_type(&node->cfg.od, entry);
+    uint32_t size = co_type_size((co_type_t)type);
+    if (size == 0 || size > 8 || type == CO_TYPE_REAL32 || type == CO_TYPE_REAL64 ||
+        type == CO_TYPE_TIME_OF_DAY || type == CO_TYPE_TIME_DIFFERENCE) {
         return CO_ABORT_TYPE_MISMATCH;
     }
     uint8_t wire[8];

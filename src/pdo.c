@@ -268,7 +268,7 @@ void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
     if (CO_SHORT_PATHS && node->tpdo_listeners == 0) {
         return; /* no TPDO listens (see count_listeners) */
     }
-    if ((entry->attr & CO_OD_TPDO) && pdo_running(node)) {
+    if ((co_od_attr(&node->cfg.od, entry) & CO_OD_TPDO) && pdo_running(node)) {
         (void)mark_tpdos(node, entry);
     }
 }

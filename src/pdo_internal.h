@@ -113,7 +113,7 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     return p->map_bits[i];
 #else
     /* (a mapped object's size is its type's: mappable, pdo_map.c) */
-    return (uint8_t)(8u * co_type_size((co_type_t)pdo_mapped(od, p, i)->type));
+    return (uint8_t)(8u * co_type_size((co_type_t)co_od_type(od, pdo_mapped(od, p, i))));
 #endif
 }
 

@@ -26,7 +26,8 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
         return true;
     }
     /* without bit mapping always a whole value: `bits` are its size */
-    uint32_t size = CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)e->type) : bits / 8u;
+    uint32_t size =
+        CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)co_od_type(od, e)) : bits / 8u;
     const uint8_t *value = data + pos / 8u;
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};

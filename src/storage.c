@@ -20,8 +20,8 @@ static inline const co_storage_t *storage_of(const co_node_t *node)
 static bool is_parameter(const co_od_t *od, const co_od_entry_t *e, co_param_group_t group)
 {
     if (e->index < co_group_first(group) || e->index > co_group_last(group) ||
-        !(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || co_od_value(od, e) == NULL ||
-        e->type == CO_TYPE_DOMAIN) {
+        !(co_od_attr(od, e) & CO_OD_WRITE) || (co_od_attr(od, e) & CO_OD_CONST) ||
+        co_od_value(od, e) == NULL || co_od_type(od, e) == CO_TYPE_DOMAIN) {
         return false;
     }
     return e->index != 0x1003 && e->index != 0x1010 && e->index != 0x1011;
@@ -100,8 +100,9 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
 }
 
 /* Two passes: the first sums the records for the header, the second writes header and
- * records; a dictionary that changed between them fails the save (see canola/storage.h). */
-static co_err_t save_group(co_node_t *node, co_param_group_t group)
+ * records; a dictionary that changed between them fails the save (see canola/storage.h).
+ * (Out of line in a build for size: inlined, each_group's loop saves more registers.) */
+static CO_SIZE_NOINLINE co_err_t save_group(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
     image_sum_t planned = {0, 0};
@@ -136,7 +137,7 @@ static co_err_t save_group(co_node_t *node, co_param_group_t group)
 /* The groups that sub-index `which` of 0x1010/0x1011 names (1: both, 2: communication,
  * 3: application), in that order: each saved, or erased when `restore` (its defaults at
  * the next reset); each group done ends the EMCY of its rejected image. */
-static co_err_t each_group(co_node_t *node, uint8_t which, bool restore)
+static CO_SIZE_INLINE co_err_t each_group(co_node_t *node, uint8_t which, bool restore)
 {
     const co_storage_t *st = storage_of(node);
     co_err_t err = CO_OK;
@@ -238,7 +239,7 @@ co_store_fault_t co_storage_verify(const co_node_t *node, co_param_group_t group
 
 /* Apply the records of a verified image. False when the storage no longer reads what was
  * verified (the caller then restores the defaults). */
-static bool apply_records(co_node_t *node, co_param_group_t group)
+static CO_SIZE_INLINE bool apply_records(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
     const co_od_t *od = &node->cfg.od;

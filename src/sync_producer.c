@@ -13,7 +13,7 @@ uint32_t co_sync_producer_period(const co_node_t *node)
     return (uint32_t)co_entry_uint(&node->cfg.od, node->sync.period);
 }
 
-static bool producer_enabled(const co_node_t *node)
+static CO_SIZE_INLINE bool producer_enabled(const co_node_t *node)
 {
     return (node->sync.cob_id & SYNC_PRODUCER) && (node->services & CO_SVC_SYNC) &&
            co_sync_producer_period(node) != 0;

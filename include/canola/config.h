@@ -225,8 +225,9 @@
 #define CO_CONFIG_OD_UNICODE 1
 #endif
 
-/** The compact form of the dictionary (canola/od.h): 8-byte entries without pointers (the
- *  value at an offset into one values struct, the size from the type or a side table),
+/** The compact form of the dictionary (canola/od.h): 6-byte entries without pointers (the
+ *  value at an offset into one values struct; type, attributes and side table position a
+ *  row shared by the entries alike; the size from the type or a side table),
  *  power-on values as one image without zeros (co_od_tables_t.defaults), limits in a
  *  table of their own, no hooks, and a look-up hash that
  *  compares the entries themselves (no key array). The form canola.odgen's dictionaries

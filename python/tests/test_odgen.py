@@ -81,10 +81,16 @@ def test_entries_sorted_with_attributes() -> None:
                  .split(",")[0])) for r in rows]
         assert keys == sorted(keys)
         assert len(keys) == len(set(keys))
-    compact_rows = dict(zip(keys, [r for r in compact.splitlines()
+    # the compact form: each entry names a row (type, attributes, side), each row once
+    shared = re.findall(r"^    (\{\.type = .*\}),$", compact.split("k_rows[] = {")[1],
+                        re.MULTILINE)
+    assert len(shared) == len(set(shared)) < len(keys)
+    compact_rows = dict(zip(keys, [shared[int(r.split(".row = ")[1].split(",")[0])]
+                                   for r in compact.splitlines()
                                    if r.startswith("    {.index = ")], strict=True))
     assert ".side = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
-    assert ".side = " not in compact_rows[(0x1000, 0)]  # no limits, a fixed size
+    assert ".side = 0}" in compact_rows[(0x1000, 0)]  # no limits, a fixed size
+    assert compact_rows[(0x1000, 0)].startswith("{.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO,")
     assert ", .side = 1}" in compact_rows[(0x1008, 0)]  # the first string's capacity
     assert "/* 0x1014 sub 0 */ 0x20, 0x80," in compact  # $NODEID+0x80: 0x80, 1 byte, next
     by_key = dict(zip(keys, rows, strict=True))
@@ -216,9 +222,10 @@ int main(void)
     }
 #endif
 #if CO_CONFIG_OD_COMPACT
-    /* The compact form: entries of 8 bytes, values at offsets into sample_values, sizes
-     * from the type or the side table, the power-on values' image. */
-    if (sizeof(co_od_entry_t) != 8u || sample_od.tables == NULL ||
+    /* The compact form: entries of 6 bytes, values at offsets into sample_values, type and
+     * attributes from a shared row, sizes from the type or the side table, the power-on
+     * values' image. */
+    if (sizeof(co_od_entry_t) != 6u || sample_od.tables == NULL ||
         sample_od.tables->defaults == NULL) {
         return 20;
     }
@@ -229,7 +236,8 @@ int main(void)
     }
     e = co_od_find(&sample_od, 0x1017, 0, NULL);
     if (e == NULL || co_od_value(&sample_od, e) != (void *)&sample_values.producer_heartbeat_time ||
-        co_od_size(&sample_od, e) != 2u) {
+        co_od_size(&sample_od, e) != 2u || co_od_type(&sample_od, e) != CO_TYPE_UNSIGNED16 ||
+        co_od_attr(&sample_od, e) != CO_OD_RW) {
         return 22;
     }
 #endif

@@ -20,9 +20,10 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   program.
 - The ``.c`` file holds the tables in both forms of ``canola/od.h``, chosen by the core's
   ``CO_CONFIG_OD_COMPACT`` (the dictionary and the library must agree, as for every
-  configuration value). The compact form (1), the smaller: 8-byte entries (index, the
-  value's offset in ``<name>_values``, sub-index, type, attributes, a side table position:
-  the limits of a number, the capacity of a string or domain), the power-on values as one
+  configuration value). The compact form (1), the smaller: 6-byte entries (index, the
+  value's offset in ``<name>_values``, sub-index, a row of ``k_rows``: type, attributes, a
+  side table position, the limits of a number or the capacity of a string or domain; each
+  distinct row once), the power-on values as one
   byte image ``k_defaults`` (a record per entry whose value is not all zeros: a head byte of
   the entries skipped since the previous record and the length, then the bytes: a number's
   storage little-endian, an INTEGER24 sign-extended to its int32_t, the others' wire bytes; see
@@ -80,9 +81,9 @@ from canola.formats import eds
 from canola.formats.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 6  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
+OD_FORMAT = 7  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
 # 5: its 8-byte entries (value offsets, co_od_tables_t); 6: numbers in its image as their
-# storage's bytes
+# storage's bytes; 7: its 6-byte entries (co_od_t.rows)
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -589,7 +590,9 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
                ".hook_ctx = NULL,")
     out.append("#if CO_CONFIG_OD_COMPACT")
-    out.append(f"    .values = &{name}_values, .tables = &k_tables,")
+    rows = len(_rows(entries)[0])
+    out.append(f"    .values = &{name}_values, .rows = k_rows, .rows_count = {rows}u, "
+               ".tables = &k_tables,")
     out.append("#endif")
     out.append("#if CO_SHORT_PATHS")
     out.append("#if !CO_CONFIG_OD_COMPACT")
@@ -667,10 +670,28 @@ def _side_table(what: str, declaration: str, items: list[str]) -> list[str]:
     return out
 
 
+def _rows(entries: list[_Entry]) -> tuple[list[str], list[int]]:
+    """The compact form's rows (co_od_row_t: type, attributes, side table position), each
+    once, in the order of their first entry, and the row of each entry."""
+    limit_pos = {text: i + 1 for i, text in enumerate(_distinct_limits(entries))}
+    size_pos = {n: i + 1 for i, n in enumerate(_distinct_sizes(entries))}
+    rows: dict[str, int] = {}
+    placed = []
+    for e in entries:
+        v = e.var
+        if _TYPES[v.data_type or 0][1] == 0:
+            side = size_pos[e.size]
+        else:
+            side = limit_pos[e.limits] if e.limits else 0
+        row = f"{{.type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, .side = {side}}}"
+        placed.append(rows.setdefault(row, len(rows)))
+    return list(rows), placed
+
+
 def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
     """The compact form's tables: power-on values as one image without zeros, the distinct
-    limits and capacities (co_od_tables_t), 8-byte entries that give their value's offset
-    in the values struct."""
+    limits and capacities (co_od_tables_t), the distinct rows (co_od_row_t), 6-byte entries
+    that give their value's offset in the values struct and their row."""
     out = ["/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per",
            " * entry whose value is not all zeros: a head (entries skipped, length), the bytes",
            " * (co_od_tables_t.defaults). */",
@@ -698,19 +719,21 @@ def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
     out.append(f"_Static_assert(sizeof({name}_values_t) <= 0x10000u, \"the compact form addresses "
                "values by 16-bit offsets (use the general form, CO_CONFIG_OD_COMPACT 0)\");")
     out.append("")
-    limit_pos = {text: i + 1 for i, text in enumerate(limits)}
-    size_pos = {n: i + 1 for i, n in enumerate(sizes)}
+    rows, placed = _rows(entries)
+    if len(rows) > 256:
+        out.append('#error "more than 256 different (type, attributes, side) rows: the compact '
+                   'form names at most 256 (use the general form, CO_CONFIG_OD_COMPACT 0)"')
+    out.append("/* What entries share (co_od_row_t): type, attributes, side table position. */")
+    out.append("static const co_od_row_t k_rows[] = {")
+    out += [f"    {row}," for row in rows]
+    out.append("};")
+    out.append("")
     out.append("static const co_od_entry_t k_entries[] = {")
-    for e in entries:
+    for e, row in zip(entries, placed, strict=True):
         v = e.var
-        if _TYPES[v.data_type or 0][1] == 0:
-            more = f", .side = {size_pos[e.size]}"
-        else:
-            more = f", .side = {limit_pos[e.limits]}" if e.limits else ""
         out.append(
-            f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, "
-            f".type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, "
-            f".offset = offsetof({name}_values_t, {e.member}){more}}},")
+            f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, .row = {row}, "
+            f".offset = offsetof({name}_values_t, {e.member})}},")
     out.append("};")
     return out
 
