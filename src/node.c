@@ -166,7 +166,9 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
         }
         return;
     }
-    node->route_hint = found;
+    if (CO_SHORT_PATHS) {
+        node->route_hint = found; /* (a build for size keeps no hint) */
+    }
     deliver(node, found, frame);
 }
 

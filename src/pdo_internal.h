@@ -182,7 +182,7 @@ void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* `fast` set: pack, s
 void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
 
 /* pdo_rx.c */
-void rpdo_sync(co_node_t *node, uint8_t n);
+void rpdo_sync(co_node_t *node, uint8_t n); /* RPDO n's held data (PDO_F_WAITING) at a SYNC */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
 
 /* pdo_timers.c (its header uses the helpers above) */

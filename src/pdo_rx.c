@@ -199,9 +199,6 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 void rpdo_sync(co_node_t *node, uint8_t n)
 {
     co_pdo_t *p = &node->rpdo[n];
-    if (!pdo_has(p, PDO_F_WAITING)) {
-        return;
-    }
     pdo_clear(p, PDO_F_WAITING);
     if (pdo_active(p)) {
         apply(node, n, p->data);

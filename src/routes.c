@@ -84,7 +84,9 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
     }
     /* The hint starts over at the first route (the first of its key, as a hint must be),
      * and the driver hears of the change. */
-    node->route_hint = 0;
+    if (CO_SHORT_PATHS) {
+        node->route_hint = 0; /* (a build for size keeps no hint) */
+    }
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }

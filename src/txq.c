@@ -18,13 +18,19 @@ static uint32_t priority(const co_frame_t *frame)
     return (frame->id & CO_ID_STD_MAX) << 19;
 }
 
+/* A frame lost: the application hears of it. */
+static void lost(const co_node_t *node, co_node_error_t error)
+{
+    if (node->cfg.on_error) {
+        node->cfg.on_error(node->cfg.user, error);
+    }
+}
+
 /* The driver refused a frame for good. */
 static void dropped(co_node_t *node)
 {
     CO_COUNT(node, tx_dropped);
-    if (node->cfg.on_error) {
-        node->cfg.on_error(node->cfg.user, CO_NODE_ERR_TX_DRIVER);
-    }
+    lost(node, CO_NODE_ERR_TX_DRIVER);
 }
 
 /* Hand one frame to the driver; true when it is gone (sent or refused for good). */
@@ -101,9 +107,7 @@ static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t servi
 {
     if (node->txq_count >= CO_TX_QUEUE_LEN) {
         CO_COUNT(node, tx_overflow);
-        if (node->cfg.on_error) {
-            node->cfg.on_error(node->cfg.user, CO_NODE_ERR_TX_OVERFLOW);
-        }
+        lost(node, CO_NODE_ERR_TX_OVERFLOW);
         return CO_ERR_FULL;
     }
     uint32_t rank = priority(frame);
