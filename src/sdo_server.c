@@ -914,7 +914,8 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         node->stats.rx_malformed++;
         return;
     }
-    /* (the routes give channels below co_sdo_servers_max: with one, always 0) */
+    /* (the routes give channels below co_sdo_servers_max: with one, always 0, a constant) */
+    // cppcheck-suppress knownConditionTrueFalse
     co_sdo_server_t *s = &node->sdo_servers[co_sdo_servers_max() > 1 ? channel : 0];
     const uint8_t *d = frame->data;
     uint8_t cmd = d[0];
