@@ -6,10 +6,10 @@
  * re-mapping, whole objects only), a SYNC consumer only (no producer), an EMCY producer
  * without error history (0x1003) and without inhibit time (0x1015), no EMCY consumer.
  * Left out as well, being in neither list: node guarding, TIME, stored parameters, LSS,
- * the manager, and of the dictionary's features limits (REAL or integer), DOMAIN values kept
- * in RAM (of no use to an expedited-only server: a hook-served DOMAIN stays possible),
- * UNICODE_STRING and the types wider than 32 bits. Every choice below is a documented
- * switch or size of canola/config.h. */
+ * the manager, the node's counters (co_node_stats), and of the dictionary's features limits
+ * (REAL or integer), DOMAIN values kept in RAM (of no use to an expedited-only server: a
+ * hook-served DOMAIN stays possible), UNICODE_STRING and the types wider than 32 bits.
+ * Every choice below is a documented switch or size of canola/config.h. */
 #ifndef CO_TX_QUEUE_LEN
 #define CO_TX_QUEUE_LEN 4
 #endif
@@ -78,6 +78,9 @@
 #ifndef CO_CONFIG_OD_64BIT
 #define CO_CONFIG_OD_64BIT 0
 #endif
+#ifndef CO_CONFIG_STATS
+#define CO_CONFIG_STATS 0 /* on_error still reports lost frames */
+#endif
 /* A device with a fixed node-ID: no LSS; no CANopen manager. */
 #ifndef CO_CONFIG_LSS_SLAVE
 #define CO_CONFIG_LSS_SLAVE 0
@@ -87,4 +90,10 @@
 #endif
 #ifndef CO_CONFIG_MANAGER
 #define CO_CONFIG_MANAGER 0
+#endif
+/* A compact dictionary is generated (canola.odgen): its tests validate every dictionary it
+ * generates, and one using a feature left out above fails to compile. The core trusts it
+ * (no co_od_validate code); a hand-written general-form table is still validated. */
+#ifndef CO_CONFIG_OD_VALIDATE
+#define CO_CONFIG_OD_VALIDATE (!CO_CONFIG_OD_COMPACT)
 #endif

@@ -29,7 +29,7 @@ void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot; /* every consumer entry is handled alike */
     if (frame->len != CO_EMCY_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     if (node->cfg.on_emcy == NULL) {

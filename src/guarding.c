@@ -42,7 +42,7 @@ void co_guard_rtr(co_node_t *node, uint8_t slot, const co_frame_t *frame)
     if (!(frame->flags & CO_FRAME_RTR)) {
         /* A boot-up or heartbeat on our own error-control ID: another node has our node-ID.
          * Reported once until the application clears 0x8150 (it repeats every heartbeat). */
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         if (!co_emcy_active(node, 0x8150)) {
             (void)co_emcy_raise(node, 0x8150, NULL);
             co_node_ec_event(node, CO_EC_ID_COLLISION, node->node_id,
@@ -151,7 +151,7 @@ void co_guard_reply(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         return; /* our own request, as another master would see it */
     }
     if (frame->len != 1) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     co_guard_watch_t *w = &node->guard_watch[slot];

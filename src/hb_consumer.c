@@ -63,7 +63,7 @@ void co_hb_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         return; /* a master guarding that node, not a heartbeat */
     }
     if (frame->len != 1 || !valid_state(frame->data[0])) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     co_hb_consumer_t *c = &node->hb_consumers[slot];

@@ -1,15 +1,18 @@
 /*
- * src/kernel.h -- what every service may use: COB-IDs, the receive routes, sending, the
- * schedule and time, the dictionary's parameters; at the end, the calls up to the node that
- * CiA 301 makes necessary (the only ones). Not installed. The layers: docs/architecture.md
- * (the kernel and od.c at the bottom, the services, the node on top: node.c, nmt.c, node_od.c,
- * error_behaviour.c). A service calls down and sideways, up only as listed at the end.
+ * src/kernel.h -- what every service may use: COB-IDs, the receive routes (routes.h),
+ * sending, the schedule and time, the dictionary's parameters; at the end, the calls up to
+ * the node that CiA 301 makes necessary (the only ones). Not installed. The layers:
+ * docs/architecture.md (the kernel and od.c at the bottom, the services, the node on top:
+ * node.c, nmt.c, node_od.c, error_behaviour.c). A service calls down and sideways, up only as
+ * listed at the end.
  */
 #ifndef CANOLA_KERNEL_H
 #define CANOLA_KERNEL_H
 
 #include "build.h"
 #include "canola/node.h"
+#include "counters.h" /* CO_COUNT */
+#include "routes.h"   /* the receive routes */
 
 /* ---- COB-IDs: the values of the objects 0x1005, 0x1012, 0x1014, 0x1200.., 0x1400.. */
 
@@ -29,48 +32,11 @@ static inline uint32_t co_cob_key(uint32_t cob)
     return (cob & CO_COB_EXT) ? ((cob & CO_ID_EXT_MAX) | 0x80000000u) : (cob & CO_ID_STD_MAX);
 }
 
-/* ---- receive routes (routes.c): which service takes the frames of a COB-ID */
-
-/* Route kinds, each with its slot (a channel, an entry, a PDO): one route
- * per kind and slot. When two owners share a key, the lower kind takes the frames. */
-enum co_route_kind {
-    CO_ROUTE_NMT = 1,     /* 0x000: NMT command */
-    CO_ROUTE_GUARD_RTR,   /* own 0x700 + id: node guarding request (RTR) */
-    CO_ROUTE_GUARD_REPLY, /* 0x700 + n: guarding reply of a guarded node (slot = watch) */
-    CO_ROUTE_HB_CONSUMER, /* 0x700 + n: heartbeat of a consumed node (slot = consumer) */
-    CO_ROUTE_SDO_SERVER,  /* an SDO server's request COB-ID (slot = channel) */
-    CO_ROUTE_SDO_CLIENT,  /* an SDO client's response COB-ID (slot = channel) */
-    CO_ROUTE_SYNC,        /* 0x1005 */
-    CO_ROUTE_TIME,        /* 0x1012, when consuming */
-    CO_ROUTE_EMCY,        /* a COB-ID of 0x1028 (slot = consumer entry) */
-    CO_ROUTE_RPDO,        /* an RPDO's COB-ID (slot = RPDO) */
-    CO_ROUTE_TPDO_RTR,    /* a TPDO's COB-ID, for remote requests (slot = TPDO) */
-    CO_ROUTE_LSS_SLAVE,   /* 0x7E5: LSS request */
-    CO_ROUTE_LSS_MASTER,  /* 0x7E4: LSS answer */
-    CO_ROUTE_MGR_BOOTUP,  /* 0x700 + n of a slave the manager boots (slot = n) */
-};
-
-#define CO_ROUTE_OFF UINT32_MAX /* the key of no frame: no route */
-/* The route of `kind` and `slot` takes the frames of `key` from now on (a route key: see
- * co_cob_key), in place of the key it had; CO_ROUTE_OFF: it goes. A full table drops a new
- * route. O(routes). */
-void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key);
-/* The route key of a COB-ID value, CO_ROUTE_OFF when bit 31 says "not valid". */
+/* The route key of a COB-ID value, CO_ROUTE_OFF (routes.h) when bit 31 says "not valid". */
 static inline uint32_t co_cob_route(uint32_t cob)
 {
     return (cob & CO_COB_INVALID) ? CO_ROUTE_OFF : co_cob_key(cob);
 }
-/* The position of the route that takes the frames of `key` (the lowest kind of its owners),
- * or route_count when none does. */
-uint16_t co_routes_find(const co_node_t *node, uint32_t key);
-/* The route key of a received frame. */
-static inline uint32_t co_route_key(const co_frame_t *frame)
-{
-    return frame->id | ((frame->flags & CO_FRAME_EXT) ? 0x80000000u : 0u);
-}
-
-/* Bit of a route key in co_node_t.route_groups: its block of 64 identifiers, modulo 32. */
-static inline uint32_t co_route_group(uint32_t key) { return 1u << ((key >> 6) & 31u); }
 
 /* ---- sending (txq.c) */
 
@@ -113,7 +79,7 @@ static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *fram
     if (err != CO_OK) {
         return co_txq_refused(node, frame, service, err);
     }
-    node->stats.tx_frames++;
+    CO_COUNT(node, tx_frames);
     return CO_OK;
 #endif
 }

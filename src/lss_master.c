@@ -97,7 +97,7 @@ void co_lss_master_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame
     co_lss_master_t *m = &node->lss_master;
     const uint8_t *d = frame->data;
     if (frame->len != CO_LSS_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     if (m->op == 0 || d[0] != expected_answer(m->op)) {

@@ -182,7 +182,7 @@ void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
     (void)slot;
     const uint8_t *d = frame->data;
     if (frame->len != CO_LSS_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     co_lss_slave_t *s = &node->lss_slave;
@@ -190,7 +190,7 @@ void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
     switch (cs) {
     case CO_LSS_CS_SWITCH_GLOBAL:
         if (d[1] > CO_LSS_CONFIGURATION) {
-            node->stats.rx_malformed++;
+            CO_COUNT(node, rx_malformed);
         } else {
             switch_global(node, d[1]);
         }
@@ -233,7 +233,7 @@ void co_lss_slave_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         }
         return;
     default:
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
 }

@@ -34,7 +34,7 @@ co_err_t co_manager_load_od(const co_od_t *od, co_mgr_slave_t *slaves, uint32_t 
                               .config_time = get(od, 0x1F27, n)};
         /* The concise DCF is used in place: only a DOMAIN kept in RAM has bytes to point at. */
         const co_od_entry_t *dcf = co_od_find(od, 0x1F22, n, NULL);
-        if (dcf != NULL && dcf->type == CO_TYPE_DOMAIN && co_od_value(od, dcf) != NULL) {
+        if (dcf != NULL && co_od_type(od, dcf) == CO_TYPE_DOMAIN && co_od_value(od, dcf) != NULL) {
             const co_od_domain_t *d = co_od_value(od, dcf);
             if (d->len != 0) {
                 s->dcf = d->data;

@@ -118,7 +118,7 @@ void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot;
     if (frame->len != NMT_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     uint8_t target = frame->data[1];
@@ -126,7 +126,7 @@ void co_nmt_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
         return;
     }
     if (co_nmt_apply(node, (co_nmt_cmd_t)frame->data[0]) == CO_ERR_ARG) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
     }
 }
 

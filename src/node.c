@@ -62,12 +62,23 @@ co_err_t co_node_start(co_node_t *node, uint64_t now_us)
 
 uint8_t co_node_id(const co_node_t *node) { return node->node_id; }
 
-const co_node_stats_t *co_node_stats(const co_node_t *node) { return &node->stats; }
+const co_node_stats_t *co_node_stats(const co_node_t *node)
+{
+#if CO_CONFIG_STATS
+    return &node->stats;
+#else
+    static const co_node_stats_t none; /* counters that stay zero (canola/node.h) */
+    (void)node;
+    return &none;
+#endif
+}
 
 /* ---- dispatch */
 
 /* The service that takes the frames of each route kind, with the route's slot (a table:
- * less code than a switch). Left-out services are stand-ins that ignore the frame. */
+ * less code than a switch). Left-out services are stand-ins that ignore the frame; the last
+ * kinds (LSS, the manager) have no entry when left out: no route of theirs is ever set, and
+ * both tables end before them. */
 typedef void (*ingest_fn)(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 static const ingest_fn k_ingest[] = {
     [CO_ROUTE_NMT] = co_nmt_ingest,
@@ -81,9 +92,15 @@ static const ingest_fn k_ingest[] = {
     [CO_ROUTE_EMCY] = co_emcy_ingest,
     [CO_ROUTE_RPDO] = co_pdo_rx,
     [CO_ROUTE_TPDO_RTR] = co_pdo_rtr,
+#if CO_CONFIG_LSS_SLAVE
     [CO_ROUTE_LSS_SLAVE] = co_lss_slave_ingest,
+#endif
+#if CO_CONFIG_LSS_MASTER
     [CO_ROUTE_LSS_MASTER] = co_lss_master_ingest,
+#endif
+#if CO_CONFIG_MANAGER
     [CO_ROUTE_MGR_BOOTUP] = co_manager_bootup,
+#endif
 };
 
 /* The co_service_t bit the NMT state must allow for the frames of each route kind. */
@@ -99,9 +116,15 @@ static const uint16_t k_service[] = {
     [CO_ROUTE_EMCY] = CO_SVC_EMCY,
     [CO_ROUTE_RPDO] = CO_SVC_PDO,
     [CO_ROUTE_TPDO_RTR] = CO_SVC_PDO,
+#if CO_CONFIG_LSS_SLAVE
     [CO_ROUTE_LSS_SLAVE] = CO_SVC_LSS,
+#endif
+#if CO_CONFIG_LSS_MASTER
     [CO_ROUTE_LSS_MASTER] = CO_SVC_LSS,
+#endif
+#if CO_CONFIG_MANAGER
     [CO_ROUTE_MGR_BOOTUP] = CO_SVC_ERROR_CONTROL,
+#endif
 };
 
 /* Hand a frame to the service its route names (routes hold the kinds above only). */
@@ -117,7 +140,7 @@ static CO_FAST_NOINLINE void ingest_gated(co_node_t *node, uint16_t route, const
     if (co_lss_slave_resume(node, k_service[node->route_kind[route]])) {
         dispatch(node, route, frame);
     } else {
-        node->stats.rx_gated++;
+        CO_COUNT(node, rx_gated);
     }
 }
 
@@ -137,9 +160,9 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
     uint16_t found = co_routes_find(node, key);
     if (found == node->route_count) {
         if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
-            node->stats.rx_malformed++;
+            CO_COUNT(node, rx_malformed);
         } else {
-            node->stats.rx_unrouted++;
+            CO_COUNT(node, rx_unrouted);
         }
         return;
     }
@@ -150,12 +173,12 @@ static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
-    node->stats.rx_frames++;
+    CO_COUNT(node, rx_frames);
     /* Above 29 bits or the frame's data: malformed. An identifier of 12..29 bits without the
      * EXT flag is malformed too, but matches no route (routes hold valid keys only), so it is
      * told apart from the unrouted ones off the common path. */
     if (frame->len > CO_FRAME_DATA_MAX || frame->id > CO_ID_EXT_MAX) {
-        node->stats.rx_malformed++; /* no controller delivers this: never let it match */
+        CO_COUNT(node, rx_malformed); /* no controller delivers this: never let it match */
         return;
     }
     /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
@@ -195,7 +218,7 @@ static CO_FAST_NOINLINE uint64_t poll_due(co_node_t *node, uint64_t now_us)
         next = co_min_u64(next, co_sdo_client_poll(node, now_us));
         next = co_min_u64(next, co_sync_poll(node, now_us));
         next = co_min_u64(next, co_emcy_poll(node, now_us));
-        next = co_min_u64(next, co_pdo_poll(node, now_us));
+        co_pdo_poll(node, now_us); /* (schedules its deadlines itself: less code) */
         next = co_min_u64(next, co_lss_master_poll(node, now_us));
         next = co_min_u64(next, co_manager_poll(node, now_us));
         next = co_min_u64(next, co_flash_poll(node, now_us));

@@ -16,12 +16,18 @@ typedef void (*written_fn)(co_node_t *node, const co_od_entry_t *entry);
 
 /* Which sub-indices of an object hold a COB-ID (bit 31 valid, bit 29 frame format, the
  * identifier): a new one must name an identifier of its own format. */
-enum { COB_NONE, COB_SUB0, COB_SUB1_2, COB_SUB1_UP };
+/* A bit per sub-index 0..6, bit 7 for 7 and above (a mask: one test). */
+enum { COB_NONE = 0x00, COB_SUB0 = 0x01, COB_SUB1_2 = 0x06, COB_SUB1_UP = 0xFE };
+
+/* The indices first..last as offsets into the communication profile area (12 bits each, one
+ * word with `cob`: 12 bytes an object, not 16). */
+#define AREA 0x1000u
+#define OBJECTS(first, last) ((first)-AREA), ((last)-AREA)
 
 typedef struct service_object {
-    uint16_t first; /* indices first..last */
-    uint16_t last;
-    uint8_t cob;          /* COB_*: the sub-indices holding a COB-ID */
+    unsigned first : 12; /* indices AREA + first..last */
+    unsigned last : 12;
+    unsigned cob : 8;     /* COB_*: the sub-indices holding a COB-ID */
     write_check_fn check; /* refuse a value the service cannot take (NULL: none) */
     written_fn written;   /* the new value takes effect (NULL: nothing to do) */
 } service_object_t;
@@ -29,39 +35,40 @@ typedef struct service_object {
 /* Objects of left-out features stay (for their COB-ID check) or go (with no effect). */
 static const service_object_t k_service_objects[] = {
 #if CO_CONFIG_EMCY_HISTORY
-    {0x1003, 0x1003, COB_NONE, co_emcy_check_write, co_emcy_written},
+    {OBJECTS(0x1003, 0x1003), COB_NONE, co_emcy_check_write, co_emcy_written},
 #endif
-    {0x1005, 0x1005, COB_SUB0, NULL, co_sync_written},
+    {OBJECTS(0x1005, 0x1005), COB_SUB0, NULL, co_sync_written},
 #if CO_CONFIG_SYNC_PRODUCER
-    {0x1006, 0x1007, COB_NONE, NULL, co_sync_written},
+    {OBJECTS(0x1006, 0x1007), COB_NONE, NULL, co_sync_written},
 #endif
 #if CO_CONFIG_GUARDING
-    {0x100C, 0x100D, COB_NONE, NULL, co_guard_written},
+    {OBJECTS(0x100C, 0x100D), COB_NONE, NULL, co_guard_written},
 #endif
 #if CO_CONFIG_STORAGE
-    {0x1010, 0x1011, COB_NONE, co_storage_check_write, co_storage_show_capability},
+    {OBJECTS(0x1010, 0x1011), COB_NONE, co_storage_check_write, co_storage_show_capability},
 #else
-    {0x1010, 0x1011, COB_NONE, co_storage_check_write, NULL}, /* every command refused */
+    {OBJECTS(0x1010, 0x1011), COB_NONE, co_storage_check_write, NULL}, /* every command refused */
 #endif
-    {0x1012, 0x1012, COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
-    {0x1014, 0x1014, COB_SUB0, co_emcy_cob_check_write,
+    {OBJECTS(0x1012, 0x1012), COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
+    {OBJECTS(0x1014, 0x1014), COB_SUB0, co_emcy_cob_check_write,
      CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
 #if CO_EMCY_QUEUE_LEN > 0
-    {0x1015, 0x1015, COB_NONE, NULL, co_emcy_written},
+    {OBJECTS(0x1015, 0x1015), COB_NONE, NULL, co_emcy_written},
 #endif
 #if CO_HB_CONSUMERS_MAX > 0
-    {0x1016, 0x1016, COB_NONE, co_hb_check_write, co_hb_written},
+    {OBJECTS(0x1016, 0x1016), COB_NONE, co_hb_check_write, co_hb_written},
 #endif
-    {0x1017, 0x1017, COB_NONE, NULL, co_hb_written},
-    {0x1019, 0x1019, COB_NONE, co_sync_check_write, co_sync_written},
-    {0x1028, 0x1028, COB_SUB1_UP, NULL, CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
+    {OBJECTS(0x1017, 0x1017), COB_NONE, NULL, co_hb_written},
+    {OBJECTS(0x1019, 0x1019), COB_NONE, co_sync_check_write, co_sync_written},
+    {OBJECTS(0x1028, 0x1028), COB_SUB1_UP, NULL,
+     CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
 #if CO_SDO_CLIENTS_MAX > 0
-    {0x1200, 0x127F, COB_SUB1_2, NULL, co_sdo_server_written},
-    {0x1280, 0x12FF, COB_SUB1_2, NULL, co_sdo_client_written},
+    {OBJECTS(0x1200, 0x127F), COB_SUB1_2, NULL, co_sdo_server_written},
+    {OBJECTS(0x1280, 0x12FF), COB_SUB1_2, NULL, co_sdo_client_written},
 #else /* without clients 0x1280.. have no effect: no server channel is 0x1200 + 0x80 or more */
-    {0x1200, 0x12FF, COB_SUB1_2, NULL, co_sdo_server_written},
+    {OBJECTS(0x1200, 0x12FF), COB_SUB1_2, NULL, co_sdo_server_written},
 #endif
-    {0x1400, 0x1BFF, COB_NONE, co_pdo_check_write, co_pdo_written},
+    {OBJECTS(0x1400, 0x1BFF), COB_NONE, co_pdo_check_write, co_pdo_written},
 };
 
 /* The service object of an entry of 0x1000..0x1FFF, or NULL. */
@@ -69,7 +76,8 @@ static const service_object_t *service_object(const co_od_entry_t *entry)
 {
     for (size_t i = 0; i < sizeof k_service_objects / sizeof k_service_objects[0]; i++) {
         const service_object_t *o = &k_service_objects[i];
-        if (entry->index >= o->first && entry->index <= o->last) {
+        unsigned at = entry->index - AREA; /* (wraps below the area: above every last) */
+        if (at >= o->first && at <= o->last) {
             return o;
         }
     }
@@ -81,9 +89,7 @@ static co_abort_t service_check(co_node_t *node, const service_object_t *o,
                                 const co_od_entry_t *entry, const uint8_t *data, uint32_t len)
 {
     uint8_t sub = entry->sub;
-    bool cob = (o->cob == COB_SUB0 && sub == 0) ||
-               (o->cob == COB_SUB1_2 && (sub == 1 || sub == 2)) ||
-               (o->cob == COB_SUB1_UP && sub >= 1);
+    bool cob = (o->cob >> (sub < 7u ? sub : 7u)) & 1u;
     if (len == 4 && cob && !co_cob_valid(co_get_u32(data))) {
         return CO_ABORT_VALUE;
     }
@@ -142,7 +148,7 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
     if (entry == NULL) {
         return abort;
     }
-    abort = co_od_access(entry, true);
+    abort = co_od_access(&node->cfg.od, entry, true);
     return abort != CO_ABORT_NONE ? abort : co_node_write_entry(node, entry, data, len);
 }
 
@@ -154,7 +160,7 @@ co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_
     if (entry == NULL) {
         return abort;
     }
-    abort = co_od_access(entry, false);
+    abort = co_od_access(&node->cfg.od, entry, false);
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
@@ -173,9 +179,10 @@ co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64
     if (entry == NULL) {
         return abort;
     }
-    uint32_t size = co_type_size((co_type_t)entry->type);
-    if (size == 0 || size > 8 || entry->type == CO_TYPE_REAL32 || entry->type == CO_TYPE_REAL64 ||
-        entry->type == CO_TYPE_TIME_OF_DAY || entry->type == CO_TYPE_TIME_DIFFERENCE) {
+    unsigned type = co_od_type(&node->cfg.od, entry);
+    uint32_t size = co_type_size((co_type_t)type);
+    if (size == 0 || size > 8 || type == CO_TYPE_REAL32 || type == CO_TYPE_REAL64 ||
+        type == CO_TYPE_TIME_OF_DAY || type == CO_TYPE_TIME_DIFFERENCE) {
         return CO_ABORT_TYPE_MISMATCH;
     }
     uint8_t wire[8];

@@ -81,6 +81,12 @@ static CO_SIZE_NOINLINE const type_info_t *type_info(unsigned type)
     return type < sizeof k_types / sizeof k_types[0] ? &k_types[type] : &k_unknown;
 }
 
+/* The type information of an entry. */
+static CO_SIZE_NOINLINE const type_info_t *entry_info(const co_od_t *od, const co_od_entry_t *e)
+{
+    return type_info(co_od_type(od, e));
+}
+
 static bool is_number(const type_info_t *t) { return t->kind >= K_BOOL && t->kind <= K_REAL; }
 
 /* A DOMAIN kept in RAM (a co_od_domain_t), a UNICODE_STRING: each a switch (config.h). */
@@ -131,11 +137,12 @@ static bool has_write_hook(const co_od_entry_t *e)
 }
 
 /* Whether an entry of type `t` has limits (co_od_has_limits, its type at hand). */
-static bool has_limits(const co_od_entry_t *e, const type_info_t *t)
+static bool has_limits(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
 #if CO_CONFIG_OD_COMPACT /* a side of a number: its limits (of a string: its capacity) */
-    return e->side != 0 && t->wire != 0;
+    return co_od_side(od, e) != 0 && t->wire != 0;
 #else
+    (void)od;
     (void)t;
     return e->limits != NULL;
 #endif
@@ -145,11 +152,11 @@ static bool has_limits(const co_od_entry_t *e, const type_info_t *t)
 static const co_od_limits_t *limits_of(const co_od_t *od, const co_od_entry_t *e,
                                        const type_info_t *t)
 {
-    if (!CO_CONFIG_OD_LIMITS || !has_limits(e, t)) {
+    if (!CO_CONFIG_OD_LIMITS || !has_limits(od, e, t)) {
         return NULL;
     }
 #if CO_CONFIG_OD_COMPACT
-    return &od->tables->limits[e->side - 1u];
+    return &od->tables->limits[co_od_side(od, e) - 1u];
 #else
     (void)od;
     return e->limits;
@@ -309,7 +316,7 @@ static bool storage_ok(const co_od_t *od, const co_od_entry_t *e, const type_inf
     }
     bool rd = has_read_hook(e);
     bool wr = has_write_hook(e);
-    if (((e->attr & CO_OD_READ) && !rd) || ((e->attr & CO_OD_WRITE) && !wr)) {
+    if (((co_od_attr(od, e) & CO_OD_READ) && !rd) || ((co_od_attr(od, e) & CO_OD_WRITE) && !wr)) {
         return false;
     }
     return rd || wr; /* an entry with neither storage nor hooks holds nothing */
@@ -322,27 +329,33 @@ static bool storage_ok(const co_od_t *od, const co_od_entry_t *e, const type_inf
 static bool side_ok(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
     const co_od_tables_t *tab = od->tables;
-    if (e->side == 0) {
+    if (co_od_side(od, e) == 0) {
         return t->wire != 0;
     }
     if (tab == NULL) {
         return false;
     }
     if (t->wire == 0) {
-        return tab->sizes != NULL && e->side <= tab->sizes_count && tab->sizes[e->side - 1u] != 0;
+        return tab->sizes != NULL && co_od_side(od, e) <= tab->sizes_count &&
+               tab->sizes[co_od_side(od, e) - 1u] != 0;
     }
-    return is_number(t) && tab->limits != NULL && e->side <= tab->limits_count;
+    return is_number(t) && tab->limits != NULL && co_od_side(od, e) <= tab->limits_count;
 }
 #endif
 
 static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
 {
-    const type_info_t *t = type_info(e->type);
+#if CO_CONFIG_OD_COMPACT
+    if (od->rows == NULL || e->row >= od->rows_count) {
+        return false; /* its type and attributes are nowhere */
+    }
+#endif
+    const type_info_t *t = entry_info(od, e);
     if (t->kind == K_NONE) {
         return false;
     }
 #if CO_CONFIG_OD_COMPACT /* the size follows from the type or the side table */
-    if (!side_ok(od, e, t)) {
+    if (od->values == NULL || !side_ok(od, e, t)) {
         return false; /* refers to a limit or capacity the tables do not have */
     }
 #else
@@ -353,10 +366,10 @@ static bool entry_ok(const co_od_t *od, const co_od_entry_t *e)
     if (is_ustring(t) && (co_od_size(od, e) & 1u) != 0) {
         return false; /* whole 16-bit code units only */
     }
-    if (!CO_CONFIG_OD_LIMITS && has_limits(e, t)) {
+    if (!CO_CONFIG_OD_LIMITS && has_limits(od, e, t)) {
         return false; /* limits are left out of this build */
     }
-    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && has_limits(e, t)) {
+    if (!CO_CONFIG_REAL_LIMITS && t->kind == K_REAL && has_limits(od, e, t)) {
         return false; /* REAL limits are left out of this build */
     }
     return storage_ok(od, e, t);
@@ -449,6 +462,9 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 {
     if (od == NULL) {
         return CO_ERR_ARG;
+    }
+    if (!CO_CONFIG_OD_VALIDATE) {
+        return CO_OK; /* the table is trusted (canola/config.h) */
     }
     uint32_t i = 0;
     while (od->entries != NULL && i < od->count && entry_fits(od, i)) {
@@ -592,8 +608,9 @@ static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
 #if CO_CONFIG_OD_COMPACT
 uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
 {
-    uint32_t wire = type_info(entry->type)->wire;
-    return wire == 0 && entry->side != 0 ? od->tables->sizes[entry->side - 1u] : wire;
+    uint32_t wire = entry_info(od, entry)->wire;
+    return wire == 0 && co_od_side(od, entry) != 0 ? od->tables->sizes[co_od_side(od, entry) - 1u]
+                                                   : wire;
 }
 #endif
 
@@ -604,7 +621,7 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
     if (value == NULL) {
         return size;
     }
-    const type_info_t *t = type_info(entry->type);
+    const type_info_t *t = entry_info(od, entry);
     if (t->kind == K_VSTRING || is_ustring(t)) {
         return string_len(value, size, is_ustring(t) ? 2u : 1u);
     }
@@ -614,12 +631,12 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
     return size;
 }
 
-co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
+co_abort_t co_od_access(const co_od_t *od, const co_od_entry_t *entry, bool write)
 {
     if (!write) {
-        return (entry->attr & CO_OD_READ) ? CO_ABORT_NONE : CO_ABORT_WRITE_ONLY;
+        return (co_od_attr(od, entry) & CO_OD_READ) ? CO_ABORT_NONE : CO_ABORT_WRITE_ONLY;
     }
-    bool writable = (entry->attr & CO_OD_WRITE) && !(entry->attr & CO_OD_CONST);
+    bool writable = (co_od_attr(od, entry) & CO_OD_WRITE) && !(co_od_attr(od, entry) & CO_OD_CONST);
     return writable ? CO_ABORT_NONE : CO_ABORT_READ_ONLY;
 }
 
@@ -630,7 +647,7 @@ co_abort_t co_od_access(const co_od_entry_t *entry, bool write)
 static const uint8_t *stored_wire(const co_od_t *od, const co_od_entry_t *e, uint8_t *tmp,
                                   uint32_t *len)
 {
-    const type_info_t *t = type_info(e->type);
+    const type_info_t *t = entry_info(od, e);
     const void *value = co_od_value(od, e);
     *len = co_od_value_len(od, e);
 #if !LITTLE_ENDIAN_HOST
@@ -675,7 +692,7 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
     if (value == NULL) {
         return CO_ABORT_WRITE_ONLY;
     }
-    const type_info_t *t = type_info(entry->type);
+    const type_info_t *t = entry_info(od, entry);
     if (CO_SHORT_PATHS && wire_is_native(t) && offset == 0 && cap >= t->wire) {
         memcpy(buf, value, t->wire); /* a whole number, as stored */
         *n = t->wire;
@@ -762,7 +779,7 @@ static co_abort_t check_limits(const co_od_limits_t *lim, const type_info_t *t, 
 co_abort_t co_od_check(const co_od_t *od, const co_od_entry_t *entry, const uint8_t *data,
                        uint32_t len)
 {
-    const type_info_t *t = type_info(entry->type);
+    const type_info_t *t = entry_info(od, entry);
     co_abort_t abort = check_len(od, entry, t, len);
     /* a number with limits, or a BOOLEAN (0 or 1), is decoded; others need not be */
     const co_od_limits_t *limits = limits_of(od, entry, t);
@@ -791,7 +808,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
         }
         return CO_ABORT_UNSUPPORTED;
     }
-    const type_info_t *t = type_info(entry->type);
+    const type_info_t *t = entry_info(od, entry);
     co_abort_t abort = check_len(od, entry, t, len); /* never overrun the storage */
     if (abort != CO_ABORT_NONE) {
         return abort;
@@ -852,11 +869,12 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /* ---- Power-on values. */
 
-static void add_node_id(const co_od_t *od, const co_od_entry_t *e, uint8_t node_id)
+/* The node-ID added to the power-on value of a CO_OD_NODEID integer (`value`: its storage,
+ * `t`: its type). */
+static void add_node_id(const co_od_t *od, const co_od_entry_t *e, void *value,
+                        const type_info_t *t, uint8_t node_id)
 {
-    const type_info_t *t = type_info(e->type);
-    void *value = co_od_value(od, e);
-    if ((e->attr & CO_OD_NODEID) && is_integer(t) && value != NULL) {
+    if ((co_od_attr(od, e) & CO_OD_NODEID) && is_integer(t)) {
         native_set(value, t, native_get(value, t) + node_id);
     }
 }
@@ -867,7 +885,7 @@ static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_
     if (e->dflt == NULL || e->value == NULL) {
         return;
     }
-    const type_info_t *t = type_info(e->type);
+    const type_info_t *t = entry_info(od, e);
     if (is_domain(t)) {
         const co_od_domain_t *src = e->dflt;
         co_od_domain_t *dst = e->value;
@@ -877,7 +895,7 @@ static void reset_entry(const co_od_t *od, const co_od_entry_t *e, uint8_t node_
         return;
     }
     co_copy(e->value, e->dflt, t->width != 0 ? t->width : e->size);
-    add_node_id(od, e, node_id);
+    add_node_id(od, e, e->value, t, node_id);
 }
 
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id)
@@ -888,9 +906,12 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
     }
 }
 #else
-/* Bytes of storage an entry's power-on value may fill: a number's wire size, the capacity
- * of the others. */
-static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e) { return co_od_size(od, e); }
+/* Bytes of storage an entry's power-on value may fill: a fixed type's storage (the image
+ * holds its little-endian bytes), the capacity of the others. */
+static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+{
+    return t->width != 0 ? t->width : co_od_size(od, e);
+}
 
 /* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE
  * past the last record) and value. */
@@ -923,32 +944,40 @@ static const uint8_t *read_record(const uint8_t *p, uint32_t next, record_t *r)
     return p + r->len;
 }
 
-/* A storage of zeros, except a DOMAIN's (kept, as the general form keeps one without a
- * default). */
-static void zero_entry(const co_od_t *od, const co_od_entry_t *e)
+/* `len` little-endian bytes as a bit pattern. */
+static bits_t le_bits(const uint8_t *data, uint32_t len)
 {
-    const type_info_t *t = type_info(e->type);
-    if (t->kind != K_DOMAIN) {
-        co_zero(co_od_value(od, e), t->width != 0 ? t->width : co_od_size(od, e));
+    bits_t bits = 0;
+    for (uint32_t n = len; n-- > 0u;) {
+        bits = (bits_t)(bits << 8) | data[n];
     }
+    return bits;
 }
 
+/* An entry's power-on value: the `len` bytes of its record (none without one), the rest of
+ * its storage zeroed, the node-ID added. A DOMAIN kept in RAM takes them as its data; one
+ * without a record keeps its own (as the general form keeps one without a default). On a
+ * little-endian host a number's storage is its record's bytes as they are. */
 static void set_default(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data,
-                        uint32_t len)
+                        uint32_t len, uint8_t node_id)
 {
-    const type_info_t *t = type_info(e->type);
-    void *value = co_od_value(od, e);
-    if (is_number(t)) {
-        uint8_t wire[8] = {0};
-        co_copy(wire, data, len);
-        native_set(value, t, wire_number(t, wire));
-    } else if (is_domain(t)) {
-        co_od_domain_t *d = value;
-        co_copy(d->data, data, len);
-        d->len = len;
-    } else if (t->kind != K_DOMAIN) {
-        co_copy(value, data, len);
+    const type_info_t *t = entry_info(od, e);
+    uint8_t *value = co_od_value(od, e);
+    if (t->kind == K_DOMAIN) {
+        if (is_domain(t) && data != NULL) {
+            co_od_domain_t *d = (void *)value;
+            co_copy(d->data, data, len);
+            d->len = len;
+        }
+        return;
     }
+    if (!LITTLE_ENDIAN_HOST && is_number(t)) {
+        native_set(value, t, le_bits(data, len));
+    } else {
+        co_copy(value, data, len);
+        co_zero(value + len, default_cap(od, e, t) - len);
+    }
+    add_node_id(od, e, value, t, node_id);
 }
 
 /* The power-on values' image, or NULL. */
@@ -964,19 +993,15 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
     if (p != NULL) {
         p = read_record(p, 0, &r);
     }
-    /* one pass: each entry in the range zeroed, given its record if it has one (the records
-     * before the range passed over), its node-ID added */
+    /* one pass: each entry in the range given its record if it has one (the records before
+     * the range passed over) and zeros after it, its node-ID added */
     for (uint32_t i = lower_bound(od, key_of(first, 0));
          i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        zero_entry(od, e);
         while (r.pos < i) {
             p = read_record(p, r.pos + 1u, &r);
         }
-        if (r.pos == i) {
-            set_default(od, e, r.data, r.len);
-        }
-        add_node_id(od, e, node_id);
+        set_default(od, e, r.pos == i ? r.data : NULL, r.pos == i ? r.len : 0, node_id);
     }
 }
 
@@ -991,7 +1016,8 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
         if (r.pos == END_OF_IMAGE) {
             return true;
         }
-        if (r.pos < next || r.pos >= od->count || r.len > default_cap(od, &od->entries[r.pos])) {
+        if (r.pos < next || r.pos >= od->count ||
+            r.len > default_cap(od, &od->entries[r.pos], entry_info(od, &od->entries[r.pos]))) {
             *bad = r.pos < od->count ? r.pos : od->count;
             return false;
         }
@@ -1005,7 +1031,7 @@ static bool image_fits(const co_od_t *od, uint32_t *bad)
 
 static bool has_uint(const co_od_t *od, const co_od_entry_t *e)
 {
-    const type_info_t *t = type_info(e->type);
+    const type_info_t *t = entry_info(od, e);
     return co_od_value(od, e) != NULL && (is_integer(t) || t->kind == K_BOOL);
 }
 
@@ -1034,7 +1060,7 @@ co_err_t co_od_set_uint(const co_od_t *od, uint16_t index, uint8_t sub, uint64_t
     const co_od_entry_t *e;
     co_err_t err = find_uint(od, index, sub, &e);
     if (err == CO_OK) {
-        native_set(co_od_value(od, e), type_info(e->type), (bits_t)value);
+        native_set(co_od_value(od, e), entry_info(od, e), (bits_t)value);
     }
     return err;
 }
@@ -1044,6 +1070,6 @@ uint64_t co_od_entry_uint(const co_od_t *od, const co_od_entry_t *entry)
     if (!has_uint(od, entry)) {
         return 0;
     }
-    const type_info_t *t = type_info(entry->type);
+    const type_info_t *t = entry_info(od, entry);
     return widen(t, native_get(co_od_value(od, entry), t));
 }

@@ -18,7 +18,7 @@ static inline uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *ent
     }
     const void *value = co_od_value(od, entry);
     if (CO_SHORT_PATHS && value != NULL) {
-        switch (entry->type) {
+        switch (co_od_type(od, entry)) {
         case CO_TYPE_UNSIGNED8:
             return *(const uint8_t *)value;
         case CO_TYPE_UNSIGNED16:
@@ -47,10 +47,10 @@ static inline uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *ent
 
 /* A readable entry of a validated table whose storage is its wire value (`size` bytes at
  * `value`): the SDO server answers from it without co_od_read. */
-static inline bool co_od_reads_plain(const co_od_entry_t *e)
+static inline bool co_od_reads_plain(const co_od_t *od, const co_od_entry_t *e)
 {
     const co_od_hooks_t *hooks = co_od_hooks_of(e);
-    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) &&
+    return ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u) &&
            (hooks == NULL || hooks->read == NULL);
 }
 
@@ -59,8 +59,8 @@ static inline bool co_od_reads_plain(const co_od_entry_t *e)
  * would copy it). */
 static inline bool co_od_writes_plain(const co_od_t *od, const co_od_entry_t *e)
 {
-    return ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u) && co_od_hooks_of(e) == NULL &&
-           !co_od_has_limits(e) && co_od_value(od, e) != NULL;
+    return ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u) &&
+           co_od_hooks_of(e) == NULL && !co_od_has_limits(od, e) && co_od_value(od, e) != NULL;
 }
 
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no

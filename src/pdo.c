@@ -31,15 +31,15 @@ static pdo_ref_t pdo_ref(uint16_t index)
 
 /* The node's PDOs of one direction, `*count` of them. The loops over both directions below
  * run over the two tables in turn (one loop body instead of two: less code). */
-static co_pdo_t *pdo_table(co_node_t *node, bool tpdo, uint16_t *count)
+static co_pdo_t *pdo_table(co_node_t *node, bool tpdo, unsigned *count)
 {
-    *count = tpdo ? node->tpdo_count : node->rpdo_count;
+    *count = tpdo ? pdo_tx_count(node) : pdo_rx_count(node);
     return tpdo ? node->tpdo : node->rpdo;
 }
 
 static co_pdo_t *pdo_slot(co_node_t *node, bool tpdo, uint16_t num)
 {
-    uint16_t count;
+    unsigned count;
     co_pdo_t *table = pdo_table(node, tpdo, &count);
     return num < count ? &table[num] : NULL;
 }
@@ -139,13 +139,20 @@ static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
                  listens ? co_cob_key(p->cob_id) : CO_ROUTE_OFF);
 }
 
-static CO_SIZE_NOINLINE void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+/* New parameters or a new mapping take effect: the short path's choice, the runtime state,
+ * the route. */
+static CO_SIZE_NOINLINE void take_effect(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
-    load_comm(node, p, tpdo, num);
-    pdo_load_mapping(node, p, tpdo, num);
     decide_fast(&node->cfg.od, p, tpdo);
     restart(node, p, tpdo);
     route(node, p, tpdo, num);
+}
+
+static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
+{
+    load_comm(node, p, tpdo, num);
+    pdo_load_mapping(node, p, tpdo, num);
+    take_effect(node, p, tpdo, num);
 }
 
 /* How many TPDOs an object change can trigger (active, type 0 or event-driven): when
@@ -158,7 +165,7 @@ static void count_listeners(co_node_t *node)
     }
     uint16_t listeners = 0;
     uint16_t sync_end = 0;
-    for (unsigned n = 0; n < node->tpdo_count; n++) {
+    for (unsigned n = 0; n < pdo_tx_count(node); n++) {
         const co_pdo_t *p = &node->tpdo[n];
         if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
             listeners++;
@@ -170,7 +177,7 @@ static void count_listeners(co_node_t *node)
     node->tpdo_listeners = listeners;
     node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
     uint16_t rx_end = 0;
-    for (unsigned n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
         if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
             rx_end = (uint16_t)(n + 1u);
         }
@@ -181,7 +188,7 @@ static void count_listeners(co_node_t *node)
 void co_pdo_reset_comm(co_node_t *node)
 {
     for (int tpdo = 0; tpdo <= 1; tpdo++) {
-        uint16_t count;
+        unsigned count;
         co_pdo_t *table = pdo_table(node, tpdo, &count);
         for (unsigned n = 0; n < count; n++) {
             load_pdo(node, &table[n], tpdo, (uint16_t)n);
@@ -192,23 +199,23 @@ void co_pdo_reset_comm(co_node_t *node)
 
 void co_pdo_state_entered(co_node_t *node)
 {
-    for (unsigned n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
         restart(node, &node->rpdo[n], false);
     }
-    for (unsigned n = 0; n < node->tpdo_count; n++) {
+    for (unsigned n = 0; n < pdo_tx_count(node); n++) {
         restart(node, &node->tpdo[n], true);
     }
 }
 
 /* How far a SYNC looks among RPDOs and TPDOs (read again at each step: an application
  * callback may change the PDOs); a build for size keeps no counts and looks at all. */
-static inline uint16_t rpdo_sync_end(const co_node_t *node)
+static inline unsigned rpdo_sync_end(const co_node_t *node)
 {
-    return CO_SHORT_PATHS ? node->rpdo_sync_end : node->rpdo_count;
+    return CO_SHORT_PATHS ? node->rpdo_sync_end : pdo_rx_count(node);
 }
-static inline uint16_t tpdo_sync_end(const co_node_t *node)
+static inline unsigned tpdo_sync_end(const co_node_t *node)
 {
-    return CO_SHORT_PATHS ? node->tpdo_sync_end : node->tpdo_count;
+    return CO_SHORT_PATHS ? node->tpdo_sync_end : pdo_tx_count(node);
 }
 
 void co_pdo_sync(co_node_t *node, uint8_t counter)
@@ -247,7 +254,7 @@ static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t
 static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 {
     uint32_t marked = 0;
-    for (unsigned n = 0; n < node->tpdo_count && pdo_running(node); n++) {
+    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
         co_pdo_t *p = &node->tpdo[n];
         if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
             marked++;
@@ -261,7 +268,7 @@ void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
     if (CO_SHORT_PATHS && node->tpdo_listeners == 0) {
         return; /* no TPDO listens (see count_listeners) */
     }
-    if ((entry->attr & CO_OD_TPDO) && pdo_running(node)) {
+    if ((co_od_attr(&node->cfg.od, entry) & CO_OD_TPDO) && pdo_running(node)) {
         (void)mark_tpdos(node, entry);
     }
 }
@@ -327,8 +334,6 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         p->flags =
             (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR | PDO_F_PLAIN)));
     }
-    decide_fast(&node->cfg.od, p, r.tpdo);
-    restart(node, p, r.tpdo);
+    take_effect(node, p, r.tpdo, r.num);
     count_listeners(node);
-    route(node, p, r.tpdo, r.num);
 }

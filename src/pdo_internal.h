@@ -22,11 +22,7 @@ co_abort_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *entry, const
                               uint32_t len);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1BFF */
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
-#if CO_CONFIG_PDO_TIMERS
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us); /* pdo_timers.c */
-#else
-#define co_pdo_poll co_none_poll /* without timers PDOs have nothing to wait for */
-#endif
+/* co_pdo_poll: pdo_timers.h */
 
 /* ---- inside the family */
 
@@ -51,6 +47,17 @@ static inline bool pdo_has(const co_pdo_t *p, unsigned f) { return (p->flags & f
 static inline bool pdo_active(const co_pdo_t *p)
 {
     return pdo_has(p, PDO_F_PRESENT) && !(p->cob_id & CO_COB_INVALID) && p->count > 0;
+}
+
+/* How many RPDOs / TPDOs the node has (co_pdo_bind): in a build for size all CO_RPDO_MAX /
+ * CO_TPDO_MAX, a constant the loops and bounds need not load. */
+static inline unsigned pdo_rx_count(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->rpdo_count : CO_RPDO_MAX;
+}
+static inline unsigned pdo_tx_count(const co_node_t *node)
+{
+    return CO_SHORT_PATHS ? node->tpdo_count : CO_TPDO_MAX;
 }
 
 /* PDOs run in operational only. */
@@ -86,6 +93,9 @@ static inline const co_od_entry_t *pdo_mapped(const co_od_t *od, const co_pdo_t 
 /* Slot i's entry, NULL for a dummy entry (only bit-granular mapping has them). */
 static inline const co_od_entry_t *pdo_entry(const co_od_t *od, const co_pdo_t *p, unsigned i)
 {
+    if (!CO_CONFIG_PDO_BIT_MAPPING) {
+        return pdo_mapped(od, p, i); /* no dummies */
+    }
     return p->map_entry[i] != CO_PDO_NO_ENTRY ? pdo_mapped(od, p, i) : NULL;
 }
 
@@ -102,7 +112,8 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     (void)od;
     return p->map_bits[i];
 #else
-    return (uint8_t)(8u * co_od_size(od, pdo_mapped(od, p, i)));
+    /* (a mapped object's size is its type's: mappable, pdo_map.c) */
+    return (uint8_t)(8u * co_type_size((co_type_t)co_od_type(od, pdo_mapped(od, p, i))));
 #endif
 }
 
@@ -173,7 +184,6 @@ void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven tra
 /* pdo_rx.c */
 void rpdo_sync(co_node_t *node, uint8_t n);
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
-void pdo_clear_emcy(co_node_t *node, uint16_t code); /* co_emcy_clear if active */
 
 /* pdo_timers.c (its header uses the helpers above) */
 #include "pdo_timers.h"

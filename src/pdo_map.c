@@ -27,8 +27,12 @@ void pdo_copy_bits(uint8_t *dst, uint32_t dpos, const uint8_t *src, uint32_t spo
  * attribute, and storage or a hook to read (TPDO) / take (RPDO) the value. */
 static bool mappable(const co_od_t *od, const co_od_entry_t *e, uint32_t size, bool tpdo)
 {
-    if (!(e->attr & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 || size > PDO_VALUE_MAX) {
+    if (!(co_od_attr(od, e) & (tpdo ? CO_OD_TPDO : CO_OD_RPDO)) || size == 0 ||
+        size > PDO_VALUE_MAX) {
         return false;
+    }
+    if (CO_CONFIG_OD_COMPACT) {
+        return true; /* every compact entry has its value (co_od_entry_t.offset), no hooks */
     }
     const co_od_hooks_t *hooks = co_od_hooks_of(e);
     bool hook = hooks && (tpdo ? hooks->read != NULL : hooks->write != NULL);
@@ -61,7 +65,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
         return (!tpdo && fits) ? CO_ABORT_NONE : CO_ABORT_NO_MAP;
     }
     const co_od_entry_t *e = co_od_find(od, index, (uint8_t)(value >> 8), NULL);
-    uint32_t size = e != NULL ? co_type_size((co_type_t)e->type) : 0;
+    uint32_t size = e != NULL ? co_type_size((co_type_t)co_od_type(od, e)) : 0;
     if (e == NULL || !mappable(od, e, size, tpdo) || !bits_fit(bits, size)) {
         return CO_ABORT_NO_MAP;
     }
@@ -77,7 +81,7 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
     /* A whole number stored as it travels (and no hook to run): the short paths copy it
      * straight to and from the frame. */
     if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL &&
-        co_od_value(od, e) != NULL && ((CO_WIRE_NATIVE_TYPES >> (e->type & 31u)) & 1u)) {
+        co_od_value(od, e) != NULL && ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u)) {
         out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
     }
     return CO_ABORT_NONE;

@@ -25,8 +25,10 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
         pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
         return true;
     }
-    uint32_t size = co_type_size((co_type_t)e->type);
-    const uint8_t *value = data + pos / 8u; /* without bit mapping: always a whole value */
+    /* without bit mapping always a whole value: `bits` are its size */
+    uint32_t size =
+        CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)co_od_type(od, e)) : bits / 8u;
+    const uint8_t *value = data + pos / 8u;
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};
     if (pos % 8u != 0 || bits != 8u * size) {
@@ -78,20 +80,13 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 /* Another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
 {
-    for (unsigned n = 0; n < node->rpdo_count; n++) {
+    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
         const co_pdo_t *p = &node->rpdo[n];
         if (p != self && pdo_has(p, flag)) {
             return true;
         }
     }
     return false;
-}
-
-void pdo_clear_emcy(co_node_t *node, uint16_t code)
-{
-    if (co_emcy_active(node, code)) {
-        (void)co_emcy_clear(node, code);
-    }
 }
 
 static void length_error(co_node_t *node, co_pdo_t *p, uint16_t code)
@@ -109,8 +104,8 @@ static void length_ok(co_node_t *node, co_pdo_t *p)
     }
     pdo_clear(p, PDO_F_LEN_ERROR);
     if (!rpdo_other_has(node, p, PDO_F_LEN_ERROR)) {
-        pdo_clear_emcy(node, EMCY_PDO_LENGTH);
-        pdo_clear_emcy(node, EMCY_PDO_EXCEEDED);
+        (void)co_emcy_clear(node, EMCY_PDO_LENGTH); /* (CO_ERR_NOT_FOUND when not active) */
+        (void)co_emcy_clear(node, EMCY_PDO_EXCEEDED);
     }
 }
 
@@ -167,10 +162,10 @@ static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
 static CO_FAST_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
     if (frame->flags & CO_FRAME_RTR) {
-        node->stats.rx_malformed++; /* RPDOs are not requested */
+        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
         return;
     }
-    if (rpdo >= node->rpdo_count) {
+    if (rpdo >= pdo_rx_count(node)) {
         return;
     }
     if (pdo_active(&node->rpdo[rpdo])) {
@@ -183,7 +178,7 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
     /* The usual frame: asynchronous, exactly the mapped length (`fast`), data, nothing
      * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
      * a route; the bound is checked all the same before the array is read. */
-    const co_pdo_t *p = rpdo < node->rpdo_count ? &node->rpdo[rpdo] : NULL;
+    const co_pdo_t *p = rpdo < pdo_rx_count(node) ? &node->rpdo[rpdo] : NULL;
     if (CO_SHORT_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
         !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
         const co_od_t *od = &node->cfg.od;

@@ -20,6 +20,10 @@ void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_inde
     p->inhibit = tpdo ? od_u16(node, comm_index, 3) : 0;
 }
 
+#if !CO_SHORT_PATHS
+void tpdo_start(co_node_t *node, co_pdo_t *p) { tpdo_start_inline(node, p); }
+#endif
+
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 {
     if (node->now_us >= p->inhibit_until_us) {
@@ -46,27 +50,29 @@ void rpdo_received(co_node_t *node, co_pdo_t *p)
     if (pdo_has(p, PDO_F_TIMED_OUT)) {
         pdo_clear(p, PDO_F_TIMED_OUT);
         if (!rpdo_other_has(node, p, PDO_F_TIMED_OUT)) {
-            pdo_clear_emcy(node, EMCY_RPDO_TIMEOUT);
+            (void)co_emcy_clear(node, EMCY_RPDO_TIMEOUT);
         }
     }
 }
 
-static uint64_t rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+/* Each PDO's next deadline goes to co_node_schedule (the node's poll takes the earliest):
+ * one call each instead of a 64-bit minimum carried through the loops. */
+static void rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
 {
     if (now_us < p->next_us) {
-        return p->next_us;
+        co_node_schedule(node, p->next_us);
+        return;
     }
     p->next_us = CO_TIME_NEVER; /* reported once, until the next RPDO */
     pdo_set(p, PDO_F_TIMED_OUT);
     (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
     node->wiring->error_behaviour(node); /* the error behaviour of 0x1029 (kernel.h) */
-    return CO_TIME_NEVER;
 }
 
-static CO_SIZE_NOINLINE uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+static CO_SIZE_NOINLINE void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
 {
     if (!pdo_active(p) || p->type < 254) {
-        return CO_TIME_NEVER;
+        return;
     }
     if (now_us >= p->next_us) { /* the event timer is an event */
         p->next_us = CO_TIME_NEVER;
@@ -76,21 +82,19 @@ static CO_SIZE_NOINLINE uint64_t tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_
         tpdo_send_event(node, p);
     }
     if (pdo_has(p, PDO_F_PENDING)) {
-        return co_min_u64(p->next_us, p->inhibit_until_us);
+        co_node_schedule(node, p->inhibit_until_us);
     }
-    return p->next_us;
+    co_node_schedule(node, p->next_us);
 }
 
-uint64_t co_pdo_poll(co_node_t *node, uint64_t now_us)
+void co_pdo_poll(co_node_t *node, uint64_t now_us)
 {
-    uint64_t next = CO_TIME_NEVER;
-    for (unsigned n = 0; n < node->rpdo_count && pdo_running(node); n++) {
-        next = co_min_u64(next, rpdo_poll(node, &node->rpdo[n], now_us));
+    for (unsigned n = 0; n < pdo_rx_count(node) && pdo_running(node); n++) {
+        rpdo_poll(node, &node->rpdo[n], now_us);
     }
-    for (unsigned n = 0; n < node->tpdo_count && pdo_running(node); n++) {
-        next = co_min_u64(next, tpdo_poll(node, &node->tpdo[n], now_us));
+    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
+        tpdo_poll(node, &node->tpdo[n], now_us);
     }
-    return pdo_running(node) ? next : CO_TIME_NEVER;
 }
 
 #endif

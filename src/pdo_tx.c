@@ -8,13 +8,13 @@
 
 static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
-/* Slot i's value into the frame at bit `pos`: whole bytes straight from co_od_read,
- * anything else through a bit copy of the value's low bits. */
-static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t *out, uint32_t pos)
+/* Slot i's value (`bits` of it) into the frame at bit `pos`: whole bytes straight from
+ * co_od_read, anything else through a bit copy of the value's low bits. */
+static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t bits, uint8_t *out,
+                      uint32_t pos)
 {
     uint32_t n;
-    const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
-    uint8_t bits = pdo_item_bits(od, p, i);
+    const co_od_entry_t *e = pdo_mapped(od, p, i);             /* TPDOs map no dummy entries */
     if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
         pdo_copy_value(out + pos / 8u, co_od_value(od, e), bits / 8u);
         return;
@@ -45,8 +45,9 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
     }
     uint32_t pos = 0;
     for (unsigned i = 0; i < p->count; i++) {
-        pack_item(od, p, i, out, pos);
-        pos += pdo_item_bits(od, p, i);
+        uint8_t bits = pdo_item_bits(od, p, i);
+        pack_item(od, p, i, bits, out, pos);
+        pos += bits;
     }
 }
 
@@ -139,10 +140,10 @@ void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter)
 void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
 {
     if (!(frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++; /* data on our own TPDO's COB-ID */
+        CO_COUNT(node, rx_malformed); /* data on our own TPDO's COB-ID */
         return;
     }
-    if (tpdo >= node->tpdo_count || !pdo_active(&node->tpdo[tpdo])) {
+    if (tpdo >= pdo_tx_count(node) || !pdo_active(&node->tpdo[tpdo])) {
         return;
     }
     co_pdo_t *p = &node->tpdo[tpdo];
@@ -155,7 +156,7 @@ void co_pdo_rtr(co_node_t *node, uint8_t tpdo, const co_frame_t *frame)
 
 co_err_t co_tpdo_request(co_node_t *node, uint8_t n)
 {
-    if (n >= node->tpdo_count || !pdo_has(&node->tpdo[n], PDO_F_PRESENT)) {
+    if (n >= pdo_tx_count(node) || !pdo_has(&node->tpdo[n], PDO_F_PRESENT)) {
         return CO_ERR_ARG;
     }
     co_pdo_t *p = &node->tpdo[n];

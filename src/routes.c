@@ -1,16 +1,14 @@
 /*
  * routes.c -- the receive routes: which service takes the frames of which COB-ID.
  *
- * A small array sorted by key (then kind and slot), searched by bisection: frames are
+ * A small array sorted by key, then owner (kind and slot), searched by bisection: frames are
  * dispatched in O(log routes) whatever the number of services. Each service sets and clears
  * its own routes when its COB-ID objects change (reset communication, a write, a new watch),
- * one per kind and slot. A key with two owners keeps both: the lower kind (kernel.h orders
- * the kinds) takes the frames, the other waits behind it, its key marked SHADOW (a bit no
- * frame's key has, so the search never finds it), and takes over when the first goes.
+ * one per kind and slot. A key with two owners keeps both, side by side: the first, the
+ * lower kind (kernel.h orders the kinds), takes the frames; the other waits behind it and
+ * takes over when the first goes.
  */
 #include "kernel.h"
-
-#define SHADOW 0x40000000u /* a route waiting behind another owner of its key */
 
 /* The owner of route i as one number, by which the owners of one key rank: the lower kind,
  * then the lower slot, comes first. */
@@ -34,29 +32,8 @@ static uint16_t owned(const co_node_t *node, uint16_t owner)
     return i;
 }
 
-/* The routes of `key` (none: CO_ROUTE_OFF, which no masked key equals): the lowest owner
- * takes the frames, the others wait behind it, their key marked SHADOW. */
-static void settle(co_node_t *node, uint32_t key)
-{
-    unsigned first = node->route_count;
-    uint16_t first_owner = UINT16_MAX; /* above every owner: kinds are below 0xFF */
-    for (unsigned i = 0; i < node->route_count; i++) {
-        if ((node->route_keys[i] & ~SHADOW) == key) {
-            node->route_keys[i] = key | SHADOW;
-            uint16_t owner = owner_at(node, i);
-            if (owner < first_owner) {
-                first = i;
-                first_owner = owner;
-            }
-        }
-    }
-    if (first != node->route_count) {
-        node->route_keys[first] = key;
-    }
-}
-
 /* Route i becomes (key, owner). */
-static CO_SIZE_NOINLINE void put(co_node_t *node, unsigned i, uint32_t key, uint16_t owner)
+static void put(co_node_t *node, unsigned i, uint32_t key, uint16_t owner)
 {
     node->route_keys[i] = key;
     node->route_kind[i] = (uint8_t)(owner >> 8);
@@ -87,10 +64,8 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
 {
     uint16_t owner = owner_of(kind, slot);
     uint16_t i = owned(node, owner);
-    uint32_t old = CO_ROUTE_OFF;
     if (i < node->route_count) {
-        old = node->route_keys[i] & ~SHADOW;
-        if (old == key) {
+        if (node->route_keys[i] == key) {
             return; /* nothing changes */
         }
     } else {
@@ -100,8 +75,6 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
         node->route_count++;
     }
     put(node, i, key, owner);
-    settle(node, old); /* its next owner takes the frames */
-    settle(node, key);
     sort(node); /* a route going (CO_ROUTE_OFF, above every key) ends up last: it goes */
     if (key == CO_ROUTE_OFF) {
         node->route_count--;
@@ -117,24 +90,13 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
     }
 }
 
-uint16_t co_routes_find(const co_node_t *node, uint32_t key)
+#if !CO_SHORT_PATHS
+/* (out of line: co_node_accepts calls it too, and the look-up is inlined here once) */
+CO_SIZE_NOINLINE uint16_t co_routes_find(const co_node_t *node, uint32_t key)
 {
-    uint32_t lo = 0;
-    uint32_t hi = node->route_count;
-    while (lo < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        uint32_t k = node->route_keys[mid];
-        if (k == key) {
-            return (uint16_t)mid;
-        }
-        if (k < key) {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
-    }
-    return node->route_count;
+    return co_routes_find_inline(node, key);
 }
+#endif
 
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)
 {
@@ -149,5 +111,5 @@ uint32_t co_node_route_count(const co_node_t *node) { return node->route_count; 
 
 uint32_t co_node_route_id(const co_node_t *node, uint32_t i)
 {
-    return i < node->route_count ? node->route_keys[i] & ~SHADOW : 0;
+    return i < node->route_count ? node->route_keys[i] : 0;
 }

@@ -231,13 +231,16 @@ static co_abort_t on_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8
 
 /* Block upload segment `c seqno`: only the next in-order one is kept; the end of a
  * sub-block (its last seqno, or c = 1) is acknowledged with the last in-order seqno, so
- * the server repeats what was lost. The final segment's padding is dropped at the end. */
+ * the server repeats what was lost. The final segment's padding is dropped at the end.
+ * A segment restarts the time-out when it is kept or numbered beyond every one seen since
+ * the last acknowledged progress (`seen`): a server that repeats segments, or sub-blocks
+ * without the one the client lacks, makes no progress and cannot hold the channel. */
 static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const uint8_t *d)
 {
     uint8_t seqno = d[0] & CO_SDO_BLK_SEQ_MASK;
     bool last = (d[0] & CO_SDO_BLK_LAST) != 0;
     if (seqno == 0 || seqno > c->blksize) {
-        return CO_ABORT_NONE; /* not a segment of this sub-block: ignore */
+        return CO_ABORT_SEQUENCE; /* a segment of no sub-block the client asked for */
     }
     if (seqno == c->seq + 1) {
         uint64_t total = (uint64_t)c->done + CO_SDO_SEG_BYTES;
@@ -253,12 +256,18 @@ static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const
         if (last) {
             c->state = BUP_END;
         }
+        touch(node, c);
+    } else if (seqno > c->seen) {
+        touch(node, c); /* a sub-block going on past a lost segment */
     }
+    c->seen = seqno > c->seen ? seqno : c->seen;
     if (seqno == c->blksize || last) {
-        uint8_t ackseq = c->seq;
+        uint8_t ack[CO_SDO_FRAME_LEN] = {CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK, c->seq,
+                                         c->want_blksize};
+        c->seen = c->seq > 0 ? 0 : c->seen; /* a repetition must bring more to count */
         c->seq = 0; /* the next sub-block (or its repetition) counts from 1 again */
         c->blksize = c->want_blksize;
-        send_short(node, c, CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK, ackseq, c->blksize);
+        transmit(node, c, ack); /* no progress of its own: the time-out keeps running */
     }
     return CO_ABORT_NONE;
 }
@@ -307,7 +316,9 @@ static void send_segment(co_node_t *node, co_sdo_client_t *c)
 }
 
 /* Send the current sub-block while the tx queue is empty; `done` = bytes acknowledged,
- * `seq` = segments of this sub-block sent. Poll calls again when the queue drains. */
+ * `seq` = segments of this sub-block sent. Poll calls again when the queue drains. Each
+ * segment restarts the time-out (the server answers after the last), except in a second
+ * repetition without progress in between (`seen`). */
 static void pump(co_node_t *node, co_sdo_client_t *c)
 {
     while (c->state == BDN_DATA && co_txq_idle(node) && c->seq < c->blksize) {
@@ -323,7 +334,10 @@ static void pump(co_node_t *node, co_sdo_client_t *c)
         if (n) {
             memcpy(&d[1], c->dn_data + off, n);
         }
-        send8(node, c, d);
+        transmit(node, c, d);
+        if (c->seen <= 1) {
+            touch(node, c);
+        }
     }
 }
 
@@ -407,6 +421,10 @@ static co_abort_t on_block_download_ack(co_node_t *node, co_sdo_client_t *c, con
     c->done = (uint32_t)co_min_u64(acked, c->cap);
     c->seq = 0;
     c->blksize = d[2];
+    c->seen = ackseq > 0 ? 0 : (uint8_t)(c->seen < 2 ? c->seen + 1 : 2);
+    if (c->seen <= 1) {
+        touch(node, c);
+    }
     if (all) {
         send_block_end(node, c);
     } else {
@@ -503,7 +521,7 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
     }
     co_sdo_client_t *c = &node->sdo_clients[channel];
     if (frame->len != CO_SDO_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     if (c->state == IDLE) {
@@ -518,7 +536,9 @@ void co_sdo_client_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
         finish(node, c, code ? code : CO_ABORT_GENERAL, 0);
         return;
     }
-    touch(node, c);
+    if (c->state != BUP_DATA && c->state != BDN_DATA) {
+        touch(node, c); /* in block transfers only progress does (on_block_upload_seg, ..) */
+    }
     co_abort_t err = CO_ABORT_COMMAND;
     switch (c->state) {
     case UP_INIT:
@@ -677,7 +697,7 @@ static const co_od_entry_t *local_entry(co_node_t *node, uint16_t index, uint8_t
 {
     const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, abort);
     if (e != NULL) {
-        *abort = co_od_access(e, write);
+        *abort = co_od_access(&node->cfg.od, e, write);
     }
     return *abort == CO_ABORT_NONE ? e : NULL;
 }

@@ -201,10 +201,10 @@ static uint8_t *own_storage(const co_od_t *od, const co_sdo_server_t *s)
 {
     const co_od_entry_t *e = s->entry;
     void *value = co_od_value(od, e);
-    if (value == NULL || co_type_size((co_type_t)e->type) != 0) {
+    if (value == NULL || co_type_size((co_type_t)co_od_type(od, e)) != 0) {
         return NULL;
     }
-    return e->type == CO_TYPE_DOMAIN ? ((co_od_domain_t *)value)->data : (uint8_t *)value;
+    return co_od_type(od, e) == CO_TYPE_DOMAIN ? ((co_od_domain_t *)value)->data : (uint8_t *)value;
 }
 
 /* Move the buffered bytes into the entry's own storage (own_storage), after those moved
@@ -224,7 +224,7 @@ static bool spill(const co_od_t *od, co_sdo_server_t *s)
 /* Size checks at initiate: what the entry and the buffer can take. */
 static co_abort_t check_download_size(const co_od_t *od, const co_sdo_server_t *s)
 {
-    uint32_t fixed = co_type_size((co_type_t)s->entry->type);
+    uint32_t fixed = co_type_size((co_type_t)co_od_type(od, s->entry));
     if (!s->size_known) {
         return CO_ABORT_NONE;
     }
@@ -279,9 +279,9 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
 }
 
 /* The length of an expedited download that does not indicate it: the type's, else 4. */
-static uint32_t unsized_length(const co_od_entry_t *e)
+static uint32_t unsized_length(const co_od_t *od, const co_od_entry_t *e)
 {
-    uint32_t fixed = co_type_size((co_type_t)e->type);
+    uint32_t fixed = co_type_size((co_type_t)co_od_type(od, e));
     return fixed && fixed < CO_SDO_EXPEDITED_MAX ? fixed : CO_SDO_EXPEDITED_MAX;
 }
 
@@ -290,7 +290,7 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
     uint8_t cmd = d[0];
     if (cmd & CO_SDO_INI_EXPEDITED) {
         uint32_t len = (cmd & CO_SDO_INI_SIZE) ? CO_SDO_EXPEDITED_MAX - CO_SDO_INI_N(cmd)
-                                               : unsized_length(s->entry);
+                                               : unsized_length(&node->cfg.od, s->entry);
         store(node, s, &d[4], len, head(s, CO_SDO_SCS_DN_INI));
         return;
     }
@@ -502,7 +502,7 @@ static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
 {
     const co_od_entry_t *e = s->entry;
     const co_od_t *od = &node->cfg.od;
-    if (CO_SHORT_PATHS && co_od_reads_plain(e) && co_od_size(od, e) <= CO_SDO_EXPEDITED_MAX) {
+    if (CO_SHORT_PATHS && co_od_reads_plain(od, e) && co_od_size(od, e) <= CO_SDO_EXPEDITED_MAX) {
         answer_expedited(node, s, plain_value(od, e), co_od_size(od, e)); /* as stored */
         return;
     }
@@ -788,9 +788,10 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
 /* ---- dispatch */
 
 /* co_od_access's rule, as a test (which co_od_access then turns into the abort code). */
-static CO_INLINE bool may_access(const co_od_entry_t *e, bool write)
+static CO_INLINE bool may_access(const co_od_t *od, const co_od_entry_t *e, bool write)
 {
-    return write ? (e->attr & (CO_OD_WRITE | CO_OD_CONST)) == CO_OD_WRITE : (e->attr & CO_OD_READ);
+    return write ? (co_od_attr(od, e) & (CO_OD_WRITE | CO_OD_CONST)) == CO_OD_WRITE
+                 : (co_od_attr(od, e) & CO_OD_READ);
 }
 
 /* A new transfer's object: found and accessible in that direction, or the request is
@@ -804,8 +805,8 @@ static CO_INLINE const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_
     co_abort_t abort = CO_ABORT_NO_OBJECT;
     const co_od_entry_t *e = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
     /* The inline test is a short path; without it co_od_access tells for every entry. */
-    if (e != NULL && !(CO_SHORT_PATHS && may_access(e, write))) {
-        abort = co_od_access(e, write);
+    if (e != NULL && !(CO_SHORT_PATHS && may_access(&node->cfg.od, e, write))) {
+        abort = co_od_access(&node->cfg.od, e, write);
         e = CO_SHORT_PATHS || abort != CO_ABORT_NONE ? NULL : e; /* refused: no entry */
     }
     if (e == NULL) { /* no entry is never served */
@@ -911,10 +912,11 @@ static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const u
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
 {
     if (frame->len != CO_SDO_FRAME_LEN || (frame->flags & CO_FRAME_RTR)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
-    /* (the routes give channels below co_sdo_servers_max: with one, always 0, a constant) */
+    /* (the routes give channels below co_sdo_servers_max: with one, always 0; the
+     * condition is constant in every build, which is the point) */
     // cppcheck-suppress knownConditionTrueFalse
     co_sdo_server_t *s = &node->sdo_servers[co_sdo_servers_max() > 1 ? channel : 0];
     const uint8_t *d = frame->data;

@@ -20,8 +20,8 @@ static inline const co_storage_t *storage_of(const co_node_t *node)
 static bool is_parameter(const co_od_t *od, const co_od_entry_t *e, co_param_group_t group)
 {
     if (e->index < co_group_first(group) || e->index > co_group_last(group) ||
-        !(e->attr & CO_OD_WRITE) || (e->attr & CO_OD_CONST) || co_od_value(od, e) == NULL ||
-        e->type == CO_TYPE_DOMAIN) {
+        !(co_od_attr(od, e) & CO_OD_WRITE) || (co_od_attr(od, e) & CO_OD_CONST) ||
+        co_od_value(od, e) == NULL || co_od_type(od, e) == CO_TYPE_DOMAIN) {
         return false;
     }
     return e->index != 0x1003 && e->index != 0x1010 && e->index != 0x1011;

@@ -27,12 +27,12 @@ void co_sync_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot;
     if (frame->flags & CO_FRAME_RTR) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     bool with_counter = co_sync_overflow(node) != 0;
     if (frame->len != (with_counter ? 1u : 0u)) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         (void)co_emcy_raise(node, SYNC_EMCY_LENGTH, NULL);
         return;
     }

@@ -63,7 +63,7 @@ void co_time_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame)
 {
     (void)slot;
     if ((frame->flags & CO_FRAME_RTR) || frame->len != TIME_FRAME_LEN) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node, rx_malformed);
         return;
     }
     co_time_of_day_t t = co_time_decode(frame->data);

@@ -21,7 +21,7 @@ static uint32_t priority(const co_frame_t *frame)
 /* The driver refused a frame for good. */
 static void dropped(co_node_t *node)
 {
-    node->stats.tx_dropped++;
+    CO_COUNT(node, tx_dropped);
     if (node->cfg.on_error) {
         node->cfg.on_error(node->cfg.user, CO_NODE_ERR_TX_DRIVER);
     }
@@ -35,7 +35,7 @@ static bool driver_take(co_node_t *node, const co_frame_t *frame)
         return false;
     }
     if (err == CO_OK) {
-        node->stats.tx_frames++;
+        CO_COUNT(node, tx_frames);
     } else {
         dropped(node);
     }
@@ -65,7 +65,7 @@ static CO_SIZE_NOINLINE void pass(co_node_t *node, bool send)
     uint8_t kept = 0;
     for (unsigned i = 0; i < count; i++) {
         if (send ? kept == 0 && driver_take(node, &node->txq[i].frame) : void_now(node, i)) {
-            node->stats.tx_gated += send ? 0u : 1u;
+            CO_COUNT_ADD(node, tx_gated, send ? 0u : 1u);
             continue;
         }
         if (kept != i) {
@@ -100,7 +100,7 @@ void co_txq_flush(co_node_t *node)
 static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
     if (node->txq_count >= CO_TX_QUEUE_LEN) {
-        node->stats.tx_overflow++;
+        CO_COUNT(node, tx_overflow);
         if (node->cfg.on_error) {
             node->cfg.on_error(node->cfg.user, CO_NODE_ERR_TX_OVERFLOW);
         }
@@ -115,7 +115,7 @@ static co_err_t enqueue(co_node_t *node, const co_frame_t *frame, uint16_t servi
     node->txq[at].frame = *frame; /* (its padding is unspecified after this: service next) */
     node->txq[at].tag.service = service;
     node->txq_count++;
-    node->stats.tx_queued++;
+    CO_COUNT(node, tx_queued);
     return CO_OK;
 }
 
@@ -133,7 +133,7 @@ co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t servi
 co_err_t co_node_send_as(co_node_t *node, const co_frame_t *frame, uint16_t service)
 {
     if (service != 0 && !(node->services & service)) {
-        node->stats.tx_gated++;
+        CO_COUNT(node, tx_gated);
         return CO_ERR_STATE;
     }
     if (node->txq_count == 0 && driver_take(node, frame)) {

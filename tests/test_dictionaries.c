@@ -505,6 +505,11 @@ static void test_more_emcy_consumer_entries_than_the_node_binds(void)
     CHECK_EQ(g_emcy_count, 1);
     CHECK_EQ(g_emcy[0].cob_id, 0x0A1);
     CHECK_EQ(g_emcy[0].code, 0x8130);
+    /* A COB-ID whose identifier is not of its format (bits 11..28 of an 11-bit one) is
+     * refused at every sub-index, bound or not, below 7 and above (node_od.c). */
+    CHECK_EQ(write_u32(&g.t, 0x1028, 1, 0x8A1u), CO_ABORT_VALUE);
+    CHECK_EQ(write_u32(&g.t, 0x1028, CO_EMCY_CONSUMERS_MAX + 1, 0x8A2u), CO_ABORT_VALUE);
+    CHECK_EQ(g.extra_u32[n - 1], 0x0A2u); /* unchanged */
 }
 
 /* ---- PDO parameters: a gap, more than the node has, more mapping entries than allowed */

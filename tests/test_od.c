@@ -708,22 +708,23 @@ static void test_example_limits(void)
 static void test_access(void)
 {
     co_od_entry_t e = var(0x2000, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, NULL);
-    CHECK_EQ(co_od_access(&e, false), CO_ABORT_NONE);
-    CHECK_EQ(co_od_access(&e, true), CO_ABORT_READ_ONLY);
+    const co_od_t od = {.entries = &e, .count = 1};
+    CHECK_EQ(co_od_access(&od, &e, false), CO_ABORT_NONE);
+    CHECK_EQ(co_od_access(&od, &e, true), CO_ABORT_READ_ONLY);
     e.attr = CO_OD_WO;
-    CHECK_EQ(co_od_access(&e, false), CO_ABORT_WRITE_ONLY);
-    CHECK_EQ(co_od_access(&e, true), CO_ABORT_NONE);
+    CHECK_EQ(co_od_access(&od, &e, false), CO_ABORT_WRITE_ONLY);
+    CHECK_EQ(co_od_access(&od, &e, true), CO_ABORT_NONE);
     e.attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO;
-    CHECK_EQ(co_od_access(&e, false), CO_ABORT_NONE);
-    CHECK_EQ(co_od_access(&e, true), CO_ABORT_NONE);
+    CHECK_EQ(co_od_access(&od, &e, false), CO_ABORT_NONE);
+    CHECK_EQ(co_od_access(&od, &e, true), CO_ABORT_NONE);
     e.attr = CO_OD_CO;
-    CHECK_EQ(co_od_access(&e, false), CO_ABORT_NONE);
-    CHECK_EQ(co_od_access(&e, true), CO_ABORT_READ_ONLY);
+    CHECK_EQ(co_od_access(&od, &e, false), CO_ABORT_NONE);
+    CHECK_EQ(co_od_access(&od, &e, true), CO_ABORT_READ_ONLY);
     e.attr = CO_OD_RW | CO_OD_CONST;
-    CHECK_EQ(co_od_access(&e, true), CO_ABORT_READ_ONLY);
+    CHECK_EQ(co_od_access(&od, &e, true), CO_ABORT_READ_ONLY);
     e.attr = 0;
-    CHECK_EQ(co_od_access(&e, false), CO_ABORT_WRITE_ONLY);
-    CHECK_EQ(co_od_access(&e, true), CO_ABORT_READ_ONLY);
+    CHECK_EQ(co_od_access(&od, &e, false), CO_ABORT_WRITE_ONLY);
+    CHECK_EQ(co_od_access(&od, &e, true), CO_ABORT_READ_ONLY);
 }
 
 /* Local access ignores the rules: a write-only entry still has storage to read. */

@@ -1,8 +1,9 @@
 /* test_od_compact.c -- the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1, the core
  * built so: tests/CMakeLists.txt): 8-byte entries (values by offset into one struct, sizes
  * from the type or the side table), power-on values from the image without zeros (numbers
- * through their wire form, strings, the node-ID, index ranges, DOMAINs kept), limits
- * referred to by position, the checks co_od_validate makes of all of them, and look-ups
+ * as their storage's little-endian bytes, strings, the node-ID, index ranges, DOMAINs
+ * kept), limits referred to by position, the checks co_od_validate makes of all of them
+ * (none in a core built to trust its dictionary, CO_CONFIG_OD_VALIDATE 0), and look-ups
  * through a hash that compares the entries (no key array). */
 #include "canola/od.h"
 #include "check.h"
@@ -32,12 +33,12 @@ static const co_od_limits_t k_limits[] = {
     {.low = {.u = 1}, .high = {.u = 9}},
 };
 
-/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), wire bytes; trailing
- * zeros left out. */
+/* Records: a head (bits 0-4 entries skipped, bits 5-7 the length), the bytes (a number's
+ * storage, little-endian); trailing zeros left out. */
 static const uint8_t k_image[] = {
     0x40, 0x91, 0x01,             /* 0x1000: 0x191 */
     0x40, 0xFB, 0xFF,             /* 0x2000: -5 as INTEGER16 */
-    0x60, 0x00, 0x00, 0x80,       /* 0x2001: INTEGER24 -8388608 (sign from the wire) */
+    0x80, 0x00, 0x00, 0x80, 0xFF, /* 0x2001: INTEGER24 -8388608 (its int32_t's 4 bytes) */
     0x80, 0x00, 0x00, 0xAC, 0x41, /* 0x2002: REAL32 21.5 */
     0x40, 0x80, 0x01,             /* 0x2003: 0x180 (+ node-ID) */
     0x40, 'h',  'i',              /* 0x2004: "hi" */
@@ -51,22 +52,29 @@ static const uint32_t k_sizes[] = {8, 4};
 static const co_od_tables_t k_tables = {
     .defaults = k_image, .limits = k_limits, .sizes = k_sizes, .limits_count = 2, .sizes_count = 2};
 
-/* An entry whose value is member `m` of values_t, with side table position `s`. */
-#define ENTRY(idx, t, a, m, s)                                                                     \
+/* The rows the entries name (co_od_entry_t.row), one each here (tests change them): type,
+ * attributes, side table position. */
+static co_od_row_t rows[] = {
+    {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO},
+    {.type = CO_TYPE_INTEGER16, .attr = CO_OD_RW, .side = 1}, /* limits 1 */
+    {.type = CO_TYPE_INTEGER24, .attr = CO_OD_RW},
+    {.type = CO_TYPE_REAL32, .attr = CO_OD_RW},
+    {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID},
+    {.type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .side = 1}, /* capacity 1: 8 */
+    {.type = CO_TYPE_DOMAIN, .attr = CO_OD_RW, .side = 2},         /* capacity 2: 4 */
+    {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .side = 2},      /* limits 2 */
+};
+
+/* An entry whose value is member `m` of values_t, of row `r`. */
+#define ENTRY(idx, m, r)                                                                           \
     {                                                                                              \
-        .index = (idx), .sub = 0, .type = (t), .attr = (a),                                        \
-        .offset = (uint16_t)offsetof(values_t, m), .side = (s)                                     \
+        .index = (idx), .sub = 0, .offset = (uint16_t)offsetof(values_t, m), .row = (r)            \
     }
 
 static co_od_entry_t entries[] = {
-    ENTRY(0x1000, CO_TYPE_UNSIGNED32, CO_OD_RO, device_type, 0),
-    ENTRY(0x2000, CO_TYPE_INTEGER16, CO_OD_RW, offset, 1), /* limits 1 */
-    ENTRY(0x2001, CO_TYPE_INTEGER24, CO_OD_RW, i24, 0),
-    ENTRY(0x2002, CO_TYPE_REAL32, CO_OD_RW, gain, 0),
-    ENTRY(0x2003, CO_TYPE_UNSIGNED32, CO_OD_RW | CO_OD_NODEID, cob, 0),
-    ENTRY(0x2004, CO_TYPE_VISIBLE_STRING, CO_OD_RW, name, 1), /* capacity 1: 8 */
-    ENTRY(0x2005, CO_TYPE_DOMAIN, CO_OD_RW, log, 2),          /* capacity 2: 4 */
-    ENTRY(0x2006, CO_TYPE_UNSIGNED8, CO_OD_RW, level, 2),     /* limits 2 */
+    ENTRY(0x1000, device_type, 0), ENTRY(0x2000, offset, 1), ENTRY(0x2001, i24, 2),
+    ENTRY(0x2002, gain, 3),        ENTRY(0x2003, cob, 4),    ENTRY(0x2004, name, 5),
+    ENTRY(0x2005, log, 6),         ENTRY(0x2006, level, 7),
 };
 
 #define COUNT ((uint32_t)(sizeof entries / sizeof entries[0]))
@@ -77,7 +85,12 @@ static co_od_tables_t tables;
 static co_od_t make_od(void)
 {
     tables = k_tables;
-    co_od_t od = {.entries = entries, .count = COUNT, .values = &v, .tables = &tables};
+    co_od_t od = {.entries = entries,
+                  .count = COUNT,
+                  .values = &v,
+                  .rows = rows,
+                  .rows_count = (uint16_t)(sizeof rows / sizeof rows[0]),
+                  .tables = &tables};
     memset(&v, 0x5A, sizeof v);
     v.log.data = v.log_data;
     v.log.len = 0;
@@ -86,12 +99,16 @@ static co_od_t make_od(void)
 
 static void test_entry_is_compact(void)
 {
-    /* index, offset, sub-index, type, attributes, side table position: no pointer at all */
-    CHECK_EQ(sizeof(co_od_entry_t), 8u);
+    /* index, offset, sub-index and a row: no pointer at all */
+    CHECK_EQ(sizeof(co_od_entry_t), 6u);
+    co_od_t od = make_od();
     CHECK(co_od_hooks_of(&entries[0]) == NULL);
-    CHECK(!co_od_has_limits(&entries[0]));
-    CHECK(co_od_has_limits(&entries[1]));
-    CHECK(!co_od_has_limits(&entries[5])); /* a string's side is its capacity */
+    CHECK(!co_od_has_limits(&od, &entries[0]));
+    CHECK(co_od_has_limits(&od, &entries[1]));
+    CHECK(!co_od_has_limits(&od, &entries[5])); /* a string's side is its capacity */
+    CHECK_EQ(co_od_type(&od, &entries[2]), CO_TYPE_INTEGER24);
+    CHECK_EQ(co_od_attr(&od, &entries[4]), CO_OD_RW | CO_OD_NODEID);
+    CHECK_EQ(co_od_access(&od, &entries[0], true), CO_ABORT_READ_ONLY);
 }
 
 static void test_values_and_sizes(void)
@@ -233,24 +250,37 @@ static void test_validate_limits_and_image(void)
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 5u);
     od = make_od();
+    od.rows_count = 7; /* 0x2006 names row 7 */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 7u);
+    od = make_od();
+    od.values = NULL; /* the entries' values are nowhere */
+    CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
+    CHECK_EQ(bad, 0u);
+    od = make_od();
     od.tables = NULL; /* the entries refer to tables there are none of */
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 1u);
 
     /* a string without a capacity, a number past the limits, a TIME_OF_DAY with a side */
-    static co_od_entry_t odd[] = {ENTRY(0x2004, CO_TYPE_VISIBLE_STRING, CO_OD_RW, name, 0)};
+    static co_od_row_t odd_row[] = {{.type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW}};
+    static co_od_entry_t odd[] = {ENTRY(0x2004, name, 0)};
     od = make_od();
     od.entries = odd;
     od.count = 1;
+    od.rows = odd_row;
+    od.rows_count = 1;
     od.tables = NULL;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 0u);
-    odd[0] = (co_od_entry_t)ENTRY(0x2006, CO_TYPE_UNSIGNED8, CO_OD_RW, level, 3);
+    odd[0] = (co_od_entry_t)ENTRY(0x2006, level, 0);
+    odd_row[0] = (co_od_row_t){.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .side = 3};
     od.tables = &tables;
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
-    odd[0] = (co_od_entry_t)ENTRY(0x2006, CO_TYPE_TIME_OF_DAY, CO_OD_RW, name, 1);
+    odd[0] = (co_od_entry_t)ENTRY(0x2006, name, 0);
+    odd_row[0] = (co_od_row_t){.type = CO_TYPE_TIME_OF_DAY, .attr = CO_OD_RW, .side = 1};
     CHECK_EQ(co_od_validate(&od, &bad), CO_ERR_CONFIG);
-    odd[0].side = 0; /* the same without a side: fine (and without the others' image) */
+    odd_row[0].side = 0; /* the same without a side: fine (and without the others' image) */
     tables.defaults = NULL;
     CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
 
@@ -278,6 +308,21 @@ static void test_validate_limits_and_image(void)
     CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
     co_od_reset(&od, 0x2004, 0x2004, 0);
     CHECK(memcmp(v.name, "abcdefgh", 8) == 0);
+}
+
+/* A core that trusts its dictionary (CO_CONFIG_OD_VALIDATE 0) checks nothing of it: what
+ * test_validate_limits_and_image refuses passes (the generator's tests validate what it
+ * generates), NULL excepted. */
+static void test_validation_left_out(void)
+{
+    co_od_t od = make_od();
+    uint32_t bad = 99;
+    tables.limits_count = 1; /* 0x2006 refers to limits 2 */
+    static const uint8_t past_table[] = {0x28, 1, 0};
+    tables.defaults = past_table;
+    CHECK_EQ(co_od_validate(&od, &bad), CO_OK);
+    CHECK_EQ(bad, 99u);
+    CHECK_EQ(co_od_validate(NULL, &bad), CO_ERR_ARG);
 }
 
 static void test_hash_compares_entries(void)
@@ -309,7 +354,11 @@ int main(void)
     RUN(test_domain_without_record_kept);
     RUN(test_image_skips_and_positions);
     RUN(test_limits_by_position);
-    RUN(test_validate_limits_and_image);
+    if (CO_CONFIG_OD_VALIDATE) {
+        RUN(test_validate_limits_and_image);
+    } else {
+        RUN(test_validation_left_out);
+    }
     RUN(test_hash_compares_entries);
     return check_summary();
 }

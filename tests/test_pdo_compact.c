@@ -25,37 +25,45 @@ typedef struct values {
 
 static values_t v;
 
-#define U8 CO_TYPE_UNSIGNED8
-#define U16 CO_TYPE_UNSIGNED16
-#define U32 CO_TYPE_UNSIGNED32
-#define ENTRY(idx, s, t, a, field)                                                                 \
+/* The rows the entries name (co_od_entry_t.row): type and attributes. */
+enum { U32_RW, U8_CO, U32_RW_NODEID, U8_RW, U32_RW_RPDO, U16_RW_RPDO_TPDO, U32_RW_TPDO };
+static const co_od_row_t k_rows[] = {
+    [U32_RW] = {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW},
+    [U8_CO] = {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO},
+    [U32_RW_NODEID] = {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID},
+    [U8_RW] = {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW},
+    [U32_RW_RPDO] = {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_RPDO},
+    [U16_RW_RPDO_TPDO] = {.type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW | CO_OD_RPDO | CO_OD_TPDO},
+    [U32_RW_TPDO] = {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_TPDO},
+};
+
+#define ENTRY(idx, s, r, field)                                                                    \
     {                                                                                              \
-        .index = (idx), .sub = (s), .type = (t), .attr = (a),                                      \
-        .offset = (uint16_t)offsetof(values_t, field)                                              \
+        .index = (idx), .sub = (s), .row = (r), .offset = (uint16_t)offsetof(values_t, field)      \
     }
 
 static const co_od_entry_t entries[] = {
-    ENTRY(0x1005, 0, U32, CO_OD_RW, sync_cob),                       /* 0 */
-    ENTRY(0x1400, 0, U8, CO_OD_CO, rpdo_n),                          /* 1 */
-    ENTRY(0x1400, 1, U32, CO_OD_RW | CO_OD_NODEID, rpdo_cob),        /* 2 */
-    ENTRY(0x1400, 2, U8, CO_OD_RW, rpdo_type),                       /* 3 */
-    ENTRY(0x1600, 0, U8, CO_OD_RW, rmap_n),                          /* 4 */
-    ENTRY(0x1600, 1, U32, CO_OD_RW, rmap[0]),                        /* 5 */
-    ENTRY(0x1600, 2, U32, CO_OD_RW, rmap[1]),                        /* 6 */
-    ENTRY(0x1600, 3, U32, CO_OD_RW, rmap[2]),                        /* 7 */
-    ENTRY(0x1800, 0, U8, CO_OD_CO, tpdo_n[0]),                       /* 8 */
-    ENTRY(0x1800, 1, U32, CO_OD_RW | CO_OD_NODEID, tpdo_cob[0]),     /* 9 */
-    ENTRY(0x1800, 2, U8, CO_OD_RW, tpdo_type[0]),                    /* 10 */
-    ENTRY(0x1801, 0, U8, CO_OD_CO, tpdo_n[1]),                       /* 11 */
-    ENTRY(0x1801, 1, U32, CO_OD_RW | CO_OD_NODEID, tpdo_cob[1]),     /* 12 */
-    ENTRY(0x1801, 2, U8, CO_OD_RW, tpdo_type[1]),                    /* 13 */
-    ENTRY(0x1A00, 0, U8, CO_OD_RW, tmap_n[0]),                       /* 14 */
-    ENTRY(0x1A00, 1, U32, CO_OD_RW, tmap[0]),                        /* 15 */
-    ENTRY(0x1A01, 0, U8, CO_OD_RW, tmap_n[1]),                       /* 16 */
-    ENTRY(0x1A01, 1, U32, CO_OD_RW, tmap[1]),                        /* 17 */
-    ENTRY(0x2000, 0, U32, CO_OD_RW | CO_OD_RPDO, in32),              /* 18 */
-    ENTRY(0x2001, 0, U16, CO_OD_RW | CO_OD_RPDO | CO_OD_TPDO, in16), /* 19 */
-    ENTRY(0x2100, 0, U32, CO_OD_RW | CO_OD_TPDO, out32),             /* 20 */
+    ENTRY(0x1005, 0, U32_RW, sync_cob),           /* 0 */
+    ENTRY(0x1400, 0, U8_CO, rpdo_n),              /* 1 */
+    ENTRY(0x1400, 1, U32_RW_NODEID, rpdo_cob),    /* 2 */
+    ENTRY(0x1400, 2, U8_RW, rpdo_type),           /* 3 */
+    ENTRY(0x1600, 0, U8_RW, rmap_n),              /* 4 */
+    ENTRY(0x1600, 1, U32_RW, rmap[0]),            /* 5 */
+    ENTRY(0x1600, 2, U32_RW, rmap[1]),            /* 6 */
+    ENTRY(0x1600, 3, U32_RW, rmap[2]),            /* 7 */
+    ENTRY(0x1800, 0, U8_CO, tpdo_n[0]),           /* 8 */
+    ENTRY(0x1800, 1, U32_RW_NODEID, tpdo_cob[0]), /* 9 */
+    ENTRY(0x1800, 2, U8_RW, tpdo_type[0]),        /* 10 */
+    ENTRY(0x1801, 0, U8_CO, tpdo_n[1]),           /* 11 */
+    ENTRY(0x1801, 1, U32_RW_NODEID, tpdo_cob[1]), /* 12 */
+    ENTRY(0x1801, 2, U8_RW, tpdo_type[1]),        /* 13 */
+    ENTRY(0x1A00, 0, U8_RW, tmap_n[0]),           /* 14 */
+    ENTRY(0x1A00, 1, U32_RW, tmap[0]),            /* 15 */
+    ENTRY(0x1A01, 0, U8_RW, tmap_n[1]),           /* 16 */
+    ENTRY(0x1A01, 1, U32_RW, tmap[1]),            /* 17 */
+    ENTRY(0x2000, 0, U32_RW_RPDO, in32),          /* 18 */
+    ENTRY(0x2001, 0, U16_RW_RPDO_TPDO, in16),     /* 19 */
+    ENTRY(0x2100, 0, U32_RW_TPDO, out32),         /* 20 */
 };
 
 /* Power-on values (canola/od.h, co_od_tables_t.defaults): a head (bits 0-4 the entries
@@ -120,6 +128,8 @@ static void start(co_node_t *node, sent_t *sent)
                             .od = {.entries = entries,
                                    .count = sizeof entries / sizeof entries[0],
                                    .values = &v,
+                                   .rows = k_rows,
+                                   .rows_count = sizeof k_rows / sizeof k_rows[0],
                                    .tables = &k_tables},
                             .driver = {.tx = tx, .ctx = sent}};
     CHECK_EQ(co_node_init(node, &cfg), CO_OK);

@@ -555,6 +555,30 @@ static void test_bit_mapping(void)
 #endif
 }
 
+/* The node's counters (CO_CONFIG_STATS): counted in the default profile; the minimal one
+ * keeps none, and co_node_stats answers zeros whatever the traffic. */
+static void test_counters(void)
+{
+    rig_t *r = rig_start();
+    co_frame_t unrouted = frm(0x123, "01"); /* (the bus filters it: straight to the node) */
+    co_node_ingest(&r->node, r->bus.now_us, &unrouted);
+    send(r, 0x000, "01");                      /* NMT command of 1 byte: malformed */
+    send(r, 0x605, "40 18 10 01 00 00 00 00"); /* answered */
+    const co_node_stats_t *st = co_node_stats(&r->node);
+#if CO_CONFIG_STATS
+    CHECK_EQ(st->rx_frames, 3);
+    CHECK_EQ(st->rx_unrouted, 1);
+    CHECK_EQ(st->rx_malformed, 1);
+    CHECK_EQ(st->tx_frames, 2); /* the boot-up and the SDO answer */
+#else
+    CHECK_EQ(st->rx_frames, 0);
+    CHECK_EQ(st->rx_unrouted, 0);
+    CHECK_EQ(st->rx_malformed, 0);
+    CHECK_EQ(st->tx_frames, 0);
+#endif
+    CHECK_STR(seen(r), "705#00 585#43181001A00C0000"); /* counted or not, the same frames */
+}
+
 int main(void)
 {
     printf("profile: %s\n", CANOLA_PROFILE);
@@ -577,5 +601,6 @@ int main(void)
     RUN(test_emcy_inhibit_time);
     RUN(test_pdo_remapping);
     RUN(test_bit_mapping);
+    RUN(test_counters);
     return check_summary();
 }

@@ -167,6 +167,15 @@
 #define CO_CONFIG_STORAGE 1
 #endif
 
+/** The node's counters (co_node_stats_t: frames received, unrouted, gated, malformed; sent,
+ *  queued, lost, refused, gated). Without them co_node_t keeps none (36 bytes less) and no
+ *  frame path counts: co_node_stats() still links and answers counters that are all zero
+ *  and stay zero. Bus events a device must act on come through the callbacks either way
+ *  (on_error for a lost or refused frame). */
+#ifndef CO_CONFIG_STATS
+#define CO_CONFIG_STATS 1
+#endif
+
 /** Limits on REAL32/REAL64 entries (double comparisons: soft-float code on MCUs without
  *  an FPU). Without it a dictionary giving a REAL entry limits fails co_od_validate. */
 #ifndef CO_CONFIG_REAL_LIMITS
@@ -216,8 +225,9 @@
 #define CO_CONFIG_OD_UNICODE 1
 #endif
 
-/** The compact form of the dictionary (canola/od.h): 8-byte entries without pointers (the
- *  value at an offset into one values struct, the size from the type or a side table),
+/** The compact form of the dictionary (canola/od.h): 6-byte entries without pointers (the
+ *  value at an offset into one values struct; type, attributes and side table position a
+ *  row shared by the entries alike; the size from the type or a side table),
  *  power-on values as one image without zeros (co_od_tables_t.defaults), limits in a
  *  table of their own, no hooks, and a look-up hash that
  *  compares the entries themselves (no key array). The form canola.odgen's dictionaries
@@ -225,6 +235,19 @@
  *  general form (0). */
 #ifndef CO_CONFIG_OD_COMPACT
 #define CO_CONFIG_OD_COMPACT 0
+#endif
+
+/** Run-time validation of the dictionary (co_od_validate, which co_node_init calls: order,
+ *  sizes, storage, side tables, power-on values, look-up tables, and the features the core
+ *  leaves out). Without it co_od_validate only checks that a dictionary is given and trusts
+ *  the table as it is, as a generated one can be: canola.odgen's tests run co_od_validate
+ *  over every dictionary it generates (its sample and the EDS corpus, in both forms), and a
+ *  generated dictionary using a feature the core leaves out (limits, DOMAIN values in RAM,
+ *  UNICODE_STRING, types wider than 32 bits) fails to compile instead. Keep it for tables
+ *  written by hand. Values written at run time (SDO, PDO, the API) are checked either way:
+ *  length, BOOLEAN 0/1, limits, access. */
+#ifndef CO_CONFIG_OD_VALIDATE
+#define CO_CONFIG_OD_VALIDATE 1
 #endif
 
 /** Dictionary types wider than 32 bits: INTEGER40..64, UNSIGNED40..64 and REAL64. Without
@@ -258,11 +281,13 @@
     (CO_CONFIG_GUARDING != 0 && CO_CONFIG_GUARDING != 1) ||                                        \
     (CO_CONFIG_TIME != 0 && CO_CONFIG_TIME != 1) ||                                                \
     (CO_CONFIG_STORAGE != 0 && CO_CONFIG_STORAGE != 1) ||                                          \
+    (CO_CONFIG_STATS != 0 && CO_CONFIG_STATS != 1) ||                                              \
     (CO_CONFIG_REAL_LIMITS != 0 && CO_CONFIG_REAL_LIMITS != 1) ||                                  \
     (CO_CONFIG_OD_LIMITS != 0 && CO_CONFIG_OD_LIMITS != 1) ||                                      \
     (CO_CONFIG_OD_DOMAIN != 0 && CO_CONFIG_OD_DOMAIN != 1) ||                                      \
     (CO_CONFIG_OD_UNICODE != 0 && CO_CONFIG_OD_UNICODE != 1) ||                                    \
-    (CO_CONFIG_OD_COMPACT != 0 && CO_CONFIG_OD_COMPACT != 1)
+    (CO_CONFIG_OD_COMPACT != 0 && CO_CONFIG_OD_COMPACT != 1) ||                                    \
+    (CO_CONFIG_OD_VALIDATE != 0 && CO_CONFIG_OD_VALIDATE != 1)
 #error "CO_CONFIG_* feature switches are 0 or 1"
 #endif
 #if CO_CONFIG_REAL_LIMITS && !CO_CONFIG_OD_LIMITS

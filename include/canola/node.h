@@ -96,7 +96,7 @@ typedef struct co_node_config {
     void (*on_rpdo)(void *user, uint16_t rpdo);                /**< RPDO (0-based) applied */
 } co_node_config_t;
 
-/** Counters, never reset by the node. */
+/** Counters, never reset by the node (CO_CONFIG_STATS: without it the node keeps none). */
 typedef struct co_node_stats {
     uint32_t rx_frames;    /**< frames passed to co_node_ingest */
     uint32_t rx_unrouted;  /**< no service listens to that COB-ID */
@@ -150,7 +150,9 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint64_t hb_next_us;                  /**< heartbeat producer: the next heartbeat */
     const co_od_entry_t *error_behaviour; /**< 0x1029 sub1 or NULL */
 
+#if CO_CONFIG_STATS
     co_node_stats_t stats;
+#endif
     co_sync_t sync;
     co_node_config_t cfg;
     co_time_t time;
@@ -236,7 +238,8 @@ uint32_t co_node_route_id(const co_node_t *node, uint32_t i);
 /** This node's node-ID (CO_NODE_ID_UNCONFIGURED if none). */
 uint8_t co_node_id(const co_node_t *node);
 
-/** Counters. */
+/** The node's counters. In a build without them (CO_CONFIG_STATS 0) counters that are all
+ *  zero, always: a tool that prints them links and runs in every configuration. */
 const co_node_stats_t *co_node_stats(const co_node_t *node);
 
 /** Queue a frame for sending (or send it now when the queue is empty and the driver

@@ -28,12 +28,14 @@
  *
  * Threading: none inside. One OD belongs to one node; guard it with the node.
  * Memory: 28 bytes of const data per entry on 32-bit targets (48 on 64-bit hosts), plus
- * the values themselves; in the compact form (CO_CONFIG_OD_COMPACT, see co_od_entry) 8 on
- * every target, plus the power-on values' image, the limits that entries have and the
- * capacities of strings and domains (co_od_tables_t).
+ * the values themselves; in the compact form (CO_CONFIG_OD_COMPACT, see co_od_entry) 6 on
+ * every target, plus 4 per distinct (type, attributes, side) row, the power-on values'
+ * image, the limits that entries have and the capacities of strings and domains
+ * (co_od_tables_t).
  *
- * Reading an entry: co_od_value(od, entry) is its storage, co_od_size(od, entry) its size
- * (both forms; the compact entry holds neither itself).
+ * Reading an entry: co_od_value(od, entry) is its storage, co_od_size(od, entry) its size,
+ * co_od_type and co_od_attr its type and attributes (both forms; the compact entry holds
+ * none of them itself).
  */
 #ifndef CANOLA_OD_H
 #define CANOLA_OD_H
@@ -48,9 +50,10 @@ extern "C" {
 /** Version of the entry layout below. Generated dictionaries (canola.odgen) check it and
  *  refuse to compile against a library whose layout differs. 2: co_od_t.keys;
  *  3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT); 5: its 8-byte entries
- *  (value offsets, co_od_tables_t). */
+ *  (value offsets, co_od_tables_t); 6: numbers in its power-on image as their storage's
+ *  bytes; 7: its 6-byte entries (type, attributes and side in co_od_t.rows). */
 #ifndef CO_OD_FORMAT
-#define CO_OD_FORMAT 5
+#define CO_OD_FORMAT 7
 #endif
 
 /** CiA 301 data types; the value is the type's index (EDS `DataType=`). */
@@ -158,23 +161,30 @@ struct co_od_entry {
 };
 #else
 /** One (index, sub-index) of the dictionary. Tables are sorted by index, then sub-index.
- *  The compact form (CO_CONFIG_OD_COMPACT 1, what a generated dictionary is made for): 8
+ *  The compact form (CO_CONFIG_OD_COMPACT 1, what a generated dictionary is made for): 6
  *  bytes, no pointer. The value lives `offset` bytes into co_od_t.values (one struct of
- *  every value; co_od_value); the size follows from the type (co_type_size), except for
- *  strings and domains (CO_OD_VARIABLE_TYPES), whose capacity is in the side table
- *  co_od_tables_t.sizes. Power-on values are one image for the whole table
- *  (co_od_tables_t.defaults), limits a table of their own that only entries with limits
- *  refer to, and there are no hooks. */
+ *  every value; co_od_value); type, attributes and side table position are a row of
+ *  co_od_t.rows that every entry alike shares (co_od_type, co_od_attr). The size follows
+ *  from the type (co_type_size), except for strings and domains (CO_OD_VARIABLE_TYPES),
+ *  whose capacity is in the side table co_od_tables_t.sizes. Power-on values are one image
+ *  for the whole table (co_od_tables_t.defaults), limits a table of their own that only
+ *  entries with limits refer to, and there are no hooks. */
 struct co_od_entry {
     uint16_t index;
-    uint16_t offset; /**< of the value in co_od_t.values (never absent: no hooks replace it) */
+    uint16_t offset; /**< of the value in co_od_t.values */
     uint8_t sub;
+    uint8_t row; /**< its type, attributes and side: co_od_t.rows[row] */
+};
+
+/** What entries of the compact form share: type, attributes, side table position. */
+typedef struct co_od_row {
     uint8_t type; /**< co_type_t */
     uint8_t attr; /**< CO_OD_* attributes */
     /** 0, or 1 + a position in a side table (co_od_tables_t): a number's limits in
      *  `limits`; a string's or domain's capacity in `sizes` (never 0 for them). */
     uint8_t side;
-};
+    uint8_t unused; /**< 0 (4 bytes a row: one shift finds it) */
+} co_od_row_t;
 #endif
 
 /** The types of variable length (strings, DOMAIN) as bits of a mask indexed by type code:
@@ -200,16 +210,6 @@ static inline const co_od_hooks_t *co_od_hooks_of(const co_od_entry_t *entry)
 #endif
 }
 
-/** Whether an entry has limits. */
-static inline bool co_od_has_limits(const co_od_entry_t *entry)
-{
-#if CO_CONFIG_OD_COMPACT
-    return entry->side != 0 && !co_type_is_variable(entry->type);
-#else
-    return entry->limits != NULL;
-#endif
-}
-
 /** Key of (index, sub) in co_od_t.keys. */
 #define CO_OD_KEY(index, sub) (((uint32_t)(index) << 8) | (uint32_t)(sub))
 
@@ -228,8 +228,11 @@ typedef struct co_od {
     void *hook_ctx;
 #if CO_CONFIG_OD_COMPACT
     /** The values of the compact form (co_od_entry_t.offset counts from here): one struct
-     *  in RAM, the one a generator writes (canola.odgen's <name>_values). */
+     *  in RAM, the one a generator writes (canola.odgen's <name>_values). Not NULL (unless
+     *  there are no entries): co_od_value never returns NULL in this form. */
     void *values;
+    /** The rows the entries name (co_od_entry_t.row), rows_count of them. */
+    const co_od_row_t *rows;
     /** Its const side tables (co_od_tables_t), or NULL: no power-on values but zeros, no
      *  limits, no strings or domains. */
     const struct co_od_tables *tables;
@@ -250,6 +253,9 @@ typedef struct co_od {
      * emits it; co_od_hash_build builds one at run time; co_od_validate checks it. */
     const uint16_t *hash;
     uint16_t hash_mask; /**< slots - 1: 2^bits - 1 with 1 <= bits <= 16 */
+#if CO_CONFIG_OD_COMPACT
+    uint16_t rows_count; /**< rows in `rows` (co_od_validate checks the entries' against it) */
+#endif
 } co_od_t;
 
 #if CO_CONFIG_OD_COMPACT
@@ -257,13 +263,16 @@ typedef struct co_od {
 typedef struct co_od_tables {
     /** The power-on values, one record per entry whose power-on value is not all zeros, in
      *  entry order, ended by a 0 byte. A record: a head byte, then the entry's position if
-     *  the head says so, the length if the head says so, then the value's wire bytes
-     *  (trailing zero bytes may be left out). The head's bits 0-4: the entries skipped
-     *  since the previous record's (since position 0 for the first), 0..30, or 31: the
-     *  position follows (2 bytes, little-endian); bits 5-7: the value's length, 1..6, or
-     *  7: the length follows (2 bytes, little-endian). co_od_reset zeroes every entry that is not a
-     * DOMAIN, then writes the records' values (numbers through their wire form, so the image does
-     * not depend on the target's byte order). NULL: every value resets to zero. */
+     *  the head says so, the length if the head says so, then the value's bytes (trailing
+     *  zero bytes may be left out): a number's native storage as little-endian bytes (an
+     *  INTEGER24 as its int32_t, sign-extended), the wire bytes of the others. The head's
+     *  bits 0-4: the entries skipped since the previous record's (since position 0 for the
+     *  first), 0..30, or 31: the position follows (2 bytes, little-endian); bits 5-7: the
+     *  value's length, 1..6, or 7: the length follows (2 bytes, little-endian). co_od_reset
+     *  gives every entry in its range but a DOMAIN its record's bytes and zeros after them
+     *  (a little-endian host copies them as they are; a big-endian one converts numbers,
+     *  so the image does not depend on the target's byte order). NULL: every value resets
+     *  to zero. */
     const uint8_t *defaults;
     /** The limits that numbers refer to (co_od_entry_t.side: 1 + position), or NULL. */
     const co_od_limits_t *limits;
@@ -275,12 +284,64 @@ typedef struct co_od_tables {
 } co_od_tables_t;
 #endif
 
+/** The type (co_type_t) of an entry: its own in the general form, its row's in the
+ *  compact form. O(1). */
+static inline unsigned co_od_type(const co_od_t *od, const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    return od->rows[entry->row].type;
+#else
+    (void)od;
+    return entry->type;
+#endif
+}
+
+/** The attributes (CO_OD_*) of an entry, as co_od_type. O(1). */
+static inline unsigned co_od_attr(const co_od_t *od, const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    return od->rows[entry->row].attr;
+#else
+    (void)od;
+    return entry->attr;
+#endif
+}
+
+/** The side table position of a compact entry (co_od_row_t.side; 0 in the general form). */
+static inline unsigned co_od_side(const co_od_t *od, const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    return od->rows[entry->row].side;
+#else
+    (void)od;
+    (void)entry;
+    return 0;
+#endif
+}
+
+/** Whether an entry has limits. */
+static inline bool co_od_has_limits(const co_od_t *od, const co_od_entry_t *entry)
+{
+#if CO_CONFIG_OD_COMPACT
+    return co_od_side(od, entry) != 0 && !co_type_is_variable(co_od_type(od, entry));
+#else
+    (void)od;
+    return entry->limits != NULL;
+#endif
+}
+
 /** The native storage of an entry (NULL in the general form when hooks produce and take
- *  the value). O(1). */
+ *  the value; never in the compact form, which has no hooks). O(1). */
 static inline void *co_od_value(const co_od_t *od, const co_od_entry_t *entry)
 {
 #if CO_CONFIG_OD_COMPACT
-    return (uint8_t *)od->values + entry->offset;
+    void *value = (uint8_t *)od->values + entry->offset;
+#if defined(__GNUC__) || defined(__clang__)
+    if (value == NULL) {
+        __builtin_unreachable(); /* the callers' tests for NULL fold away */
+    }
+#endif
+    return value;
 #else
     (void)od;
     return entry->value;
@@ -306,7 +367,8 @@ static inline uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
  *  and the power-on values' records in entry order, each fitting its entry.
  *  Returns CO_OK or CO_ERR_CONFIG (with `*bad` set to the offending entry's position, or
  *  to `count` for a bad hash or a record past the table, when `bad` is not NULL). O(n)
- *  plus O(slots). */
+ *  plus O(slots). A core built without validation (CO_CONFIG_OD_VALIDATE 0, canola/config.h)
+ *  checks none of this: CO_OK for any dictionary given (CO_ERR_ARG for NULL). */
 co_err_t co_od_validate(const co_od_t *od, uint32_t *bad);
 
 /** Bits of hash for `count` entries: the smallest with 2^bits >= 2 * count (at least 1),
@@ -335,7 +397,7 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry);
 
 /** Network access rule: CO_ABORT_WRITE_ONLY / CO_ABORT_READ_ONLY when the entry may not be
  *  read / written from the network, else CO_ABORT_NONE. */
-co_abort_t co_od_access(const co_od_entry_t *entry, bool write);
+co_abort_t co_od_access(const co_od_t *od, const co_od_entry_t *entry, bool write);
 
 /** Read a piece of the wire value: up to `cap` bytes from `offset` into `buf`; `*n` gets
  *  the bytes copied, `*total` (may be NULL) the whole length. Access rights are not checked
@@ -373,10 +435,10 @@ co_abort_t co_od_write_piece(const co_od_t *od, const co_od_entry_t *entry, uint
 
 /** Copy power-on values into every entry with index in [first, last] that has a default
  *  (adding `node_id` to CO_OD_NODEID entries). Entries without a default keep their value.
- *  O(entries in range). The compact form: every entry in the range but a DOMAIN is zeroed,
- *  then given its record of co_od_tables_t.defaults, if any (O(entries in range + records before
- *  the range's end)); the records are trusted as they are (co_od_validate checks them, as
- *  the general form's power-on values are trusted to match their entries). */
+ *  O(entries in range). The compact form: every entry in the range but a DOMAIN gets its
+ *  record of co_od_tables_t.defaults, if any, and zeros after it (O(entries in range +
+ *  records before the range's end)); the records are trusted as they are (co_od_validate
+ *  checks them, as the general form's power-on values are trusted to match their entries). */
 void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_id);
 
 /* ---- Native access for the application and the services (no access rules, no hooks,

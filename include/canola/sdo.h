@@ -126,7 +126,11 @@ typedef struct co_sdo_client {
     uint8_t server_id;
     uint8_t state;
     uint8_t mode;
-    uint8_t toggle;
+    union {
+        uint8_t toggle; /**< segmented: the toggle bit of the next segment */
+        uint8_t seen;   /**< block upload: highest seqno seen, block download: sub-blocks
+                             repeated, both since the last progress (time-out rule) */
+    };
     uint8_t blksize; /**< block size asked for (uploads) / granted (downloads) */
     uint8_t seq;
     bool size_known;
@@ -156,7 +160,12 @@ co_err_t co_sdo_client_block_options(co_node_t *node, uint8_t channel, uint8_t b
                                      uint8_t pst);
 
 /** The channel's time-out per answer: a transfer whose server stays silent `timeout_ms`
- *  after the last frame is aborted with 0x05040000 (also sent to the server). 0 returns to
+ *  after the last frame is aborted with 0x05040000 (also sent to the server). A block
+ *  transfer's server that makes no progress is timed out all the same: in an upload a
+ *  segment restarts the time-out only when it is kept or numbered beyond all seen since
+ *  the last acknowledged progress (a sequence number outside 1..blksize is aborted at once
+ *  with 0x05040003); in a download an acknowledgement of no segment restarts it once, for
+ *  one repetition of the sub-block, not again until one is acknowledged. 0 returns to
  *  the node's co_node_config_t.sdo_timeout_ms. Takes effect with the next frame; kept
  *  across setups and resets. Returns CO_ERR_ARG for a bad channel. */
 co_err_t co_sdo_client_set_timeout(co_node_t *node, uint8_t channel, uint16_t timeout_ms);

@@ -106,8 +106,9 @@ def _abort(index: int, sub: int, code: int) -> bytes:
 class FakeNode:
     """Node ``node_id`` on ``bus``, answering through a Master at ``port_id``.
     ``checks_toggle=False``: download segments are taken whatever their toggle bit.
-    ``late_abort``: an abort naming another entry goes before each initiate answer (as
-    the late answer of an earlier exchange would over a slow link).
+    ``late_abort``: an abort 0x05040001 naming no entry (0x0000:0) goes before each answer,
+    initiate or segment (as the late abort of a request that reached the server after its
+    time-out would over a slow link).
     ``accepts_read_only``: a write to a read-only entry is answered with success (and the
     value kept). ``missing_object_code``: the abort code for an object it does not have."""
 
@@ -160,13 +161,13 @@ class FakeNode:
         if ccs == 4:  # abort from the client
             self._transfer = None
             return
+        if self.late_abort:
+            self._send(_abort(0, 0, 0x05040001))
         if self._transfer is not None and ccs in (0, 3):
             self._segment(data, ccs)
             return
         index, sub = int.from_bytes(data[1:3], "little"), data[3]
         key = (index, sub)
-        if self.late_abort:
-            self._send(_abort(0, 0, 0x05040001))
         if ccs not in (1, 2):
             self._send(_abort(index, sub, 0x05040001))
             return

@@ -9,6 +9,7 @@ import json
 import pytest
 from cli_helpers import cli, cli_on_sim_bus
 
+from canola import Master
 from canola.core import SimBus
 
 
@@ -71,3 +72,20 @@ def test_time_periodic_and_once(capsys: pytest.CaptureFixture[str],
                                                     "")
     bus.run_for(1_000_000)
     assert [(t, can_id) for t, can_id, _ in _frames(bus, begin)][4:] == [(0, "100")]
+
+
+def test_sync_count_counts_only_its_own(capsys: pytest.CaptureFixture[str],
+                                        sim: tuple[list[str], SimBus]) -> None:
+    # another SYNC producer on the same COB-ID (every 7 ms: never at the same instant in
+    # the first 70 ms): --count N stops after N SYNCs of the command's own
+    opts, bus = sim
+    other = Master(bus, 90)
+    other.start()
+    other.start_sync(7000)
+    begin = bus.now_us
+    assert cli(capsys, "sync", "10", "--count", "5", *opts, "--json") == (
+        0, '{"frames": 5, "service": "sync"}\n', "")
+    bus.run_for(15_000)  # up to 65 ms: a sixth SYNC of its own would come at 60 ms
+    other.stop_sync()
+    own = [t for t, can_id, _ in _frames(bus, begin) if can_id == "080" and t % 10_000 == 0]
+    assert own == [k * 10_000 for k in range(1, 6)]

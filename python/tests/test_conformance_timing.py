@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -82,3 +83,155 @@ def test_a_late_tpdo_too_many_is_found(monkeypatch: pytest.MonkeyPatch) -> None:
     assert report.names(Status.FAILED) == set(SYNC_CHECKS), cc.markdown(report)
     got = {name: report.result(name).findings[0].got for name in SYNC_CHECKS}
     assert got == {"pdo.tpdo_sync_cyclic": "0 1 0 1 1 1", "sync.start_value": "0 0 1 2 1 1"}
+
+
+class _StarvedTester:
+    """The link's wall clock and condition on python-can, faked: each wait of the link
+    takes its slice, except the first, during which the tester's process is starved for
+    :data:`STALL_S`; the frames the bus kept meanwhile (``backlog``) reach the link in the
+    wait after (the bus thread catching up)."""
+
+    STALL_S = 3.0
+
+    def __init__(self, backlog: list[Frame]) -> None:
+        self.now = 1000.0
+        self.waits = 0
+        self.backlog = backlog
+        self.link: Link | None = None
+
+    def monotonic(self) -> float:
+        return self.now
+
+    def __enter__(self) -> _StarvedTester:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def notify_all(self) -> None:
+        return None
+
+    def wait(self, timeout: float) -> None:
+        self.waits += 1
+        if self.waits == 1:
+            self.now += timeout + self.STALL_S
+        elif self.waits == 2 and self.link is not None:
+            for frame in self.backlog:
+                Link._received(self.link, frame)
+        else:
+            self.now += timeout
+
+
+def _starved_link(monkeypatch: pytest.MonkeyPatch, backlog: list[Frame]) -> _StarvedTester:
+    fake = _StarvedTester(backlog)
+    monkeypatch.setattr("canola.conformance.link.time", fake)
+    master = SimpleNamespace(bus=object(), on_frame=lambda fn: None)
+    link = Link(master)  # type: ignore[arg-type]
+    link._cond = fake  # type: ignore[assignment]
+    fake.link = link
+    return fake
+
+
+def test_a_stalled_tester_still_reads_what_came_meanwhile(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 3 s stall of the tester's own process within a 2 s wait: the heartbeat the bus
+    kept meanwhile is read, not taken for silence of the node (the wait counts only the
+    time the tester ran)."""
+    fake = _starved_link(monkeypatch, [Frame(0x705, b"\x05", timestamp=1001.0)])
+    assert fake.link is not None
+    seen = fake.link.wait_frame(lambda f: f.can_id == 0x705, 2.0, fake.link.mark())
+    assert seen is not None and seen.frame.timestamp == 1001.0
+    # nothing came: the wait ends after its 2 s of the tester's time, the stall on top
+    fake = _starved_link(monkeypatch, [])
+    assert fake.link is not None
+    began = fake.now
+    assert fake.link.wait_frame(lambda f: f.can_id == 0x705, 2.0, fake.link.mark()) is None
+    assert fake.now - began == pytest.approx(2.0 + _StarvedTester.STALL_S)
+
+
+HEARTBEAT = 0x700 + NODE
+#: A stall of the tester's process longer than the answer time-out (2 s).
+STALL_US = 2_500_000
+
+
+def _fast_beats(after: int) -> Callable[[Frame], bool]:
+    """True from the ``after``-th heartbeat at the check's period (100 ms: the node's own
+    1000 ms ones before do not count) on."""
+    last: list[float] = []
+    count = [0]
+
+    def match(frame: Frame) -> bool:
+        if frame.can_id != HEARTBEAT:
+            return False
+        if last and frame.timestamp - last[0] < 0.5:
+            count[0] += 1
+        last[:] = [frame.timestamp]
+        return count[0] >= after
+
+    return match
+
+
+def _stalled_tester(monkeypatch: pytest.MonkeyPatch, begins: Callable[[Frame], bool]) -> None:
+    """From the first frame ``begins`` matches, the tester gets no CPU for STALL_US: every
+    frame that reaches it meanwhile waits, and all come at the end, in order, each with the
+    timestamp the bus gave it (as a socket keeps them)."""
+    received = Link._received
+    held: list[Frame] = []
+    until: list[int] = []
+
+    def delivered(self: Link, frame: Frame) -> None:
+        assert self.sim is not None
+        if not until and begins(frame):
+            until.append(self.sim.now_us + STALL_US)
+            engine = self.master._engine
+            timers = []
+
+            def flush() -> None:
+                engine.remove_timer(timers[0])
+                for kept in held:
+                    received(self, kept)
+                held.clear()
+
+            timers.append(engine.add_timer(STALL_US, flush))
+        if until and (self.sim.now_us < until[0] or held):  # in order, as a socket
+            held.append(frame)
+            return
+        received(self, frame)
+
+    monkeypatch.setattr(Link, "_received", delivered)
+
+
+def test_a_stalled_tester_does_not_spoil_the_heartbeat_gap(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The tester stalls 2.5 s while it counts heartbeats: they reach it in a burst, but
+    the bus's timestamps are judged (no gap over 100 ms), and the note tells the tester's
+    stall apart."""
+    _stalled_tester(monkeypatch, _fast_beats(4))
+    report = _run(["nmt.heartbeat_period"])
+    result = report.result("nmt.heartbeat_period")
+    assert result.status is Status.PASSED, cc.markdown(report)
+    assert result.notes[0] == "100 ms: 10 intervals, median 100.0 ms, 100.0..100.0 ms"
+    assert result.notes[1] == ("the tester saw heartbeats up to 2.50 s late (its own stall, "
+                               "not the node's: the bus's timestamps are judged)")
+
+
+def test_a_late_node_spoils_the_heartbeat_gap(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two heartbeats missing on the bus (a node late by 200 ms): the longest gap is a
+    finding, and no stall of the tester is told."""
+    missing = _fast_beats(4)
+    dropped = [0]
+    received = Link._received
+
+    def delivered(self: Link, frame: Frame) -> None:
+        if missing(frame) and dropped[0] < 2:
+            dropped[0] += 1
+            return
+        received(self, frame)
+
+    monkeypatch.setattr(Link, "_received", delivered)
+    report = _run(["nmt.heartbeat_period"])
+    result = report.result("nmt.heartbeat_period")
+    assert result.status is Status.FAILED
+    finding = result.findings[0]
+    assert (finding.expected, finding.got) == ("at most 150 ms", "300.0 ms")
+    assert not any("tester" in note for note in result.notes)

@@ -81,10 +81,16 @@ def test_entries_sorted_with_attributes() -> None:
                  .split(",")[0])) for r in rows]
         assert keys == sorted(keys)
         assert len(keys) == len(set(keys))
-    compact_rows = dict(zip(keys, [r for r in compact.splitlines()
+    # the compact form: each entry names a row (type, attributes, side), each row once
+    shared = re.findall(r"^    (\{\.type = .*\}),$", compact.split("k_rows[] = {")[1],
+                        re.MULTILINE)
+    assert len(shared) == len(set(shared)) < len(keys)
+    compact_rows = dict(zip(keys, [shared[int(r.split(".row = ")[1].split(",")[0])]
+                                   for r in compact.splitlines()
                                    if r.startswith("    {.index = ")], strict=True))
     assert ".side = 1}" in compact_rows[(0x2001, 0)]  # the first of the distinct limits
-    assert ".side = " not in compact_rows[(0x1000, 0)]  # no limits, a fixed size
+    assert ".side = 0}" in compact_rows[(0x1000, 0)]  # no limits, a fixed size
+    assert compact_rows[(0x1000, 0)].startswith("{.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO,")
     assert ", .side = 1}" in compact_rows[(0x1008, 0)]  # the first string's capacity
     assert "/* 0x1014 sub 0 */ 0x20, 0x80," in compact  # $NODEID+0x80: 0x80, 1 byte, next
     by_key = dict(zip(keys, rows, strict=True))
@@ -216,9 +222,10 @@ int main(void)
     }
 #endif
 #if CO_CONFIG_OD_COMPACT
-    /* The compact form: entries of 8 bytes, values at offsets into sample_values, sizes
-     * from the type or the side table, the power-on values' image. */
-    if (sizeof(co_od_entry_t) != 8u || sample_od.tables == NULL ||
+    /* The compact form: entries of 6 bytes, values at offsets into sample_values, type and
+     * attributes from a shared row, sizes from the type or the side table, the power-on
+     * values' image. */
+    if (sizeof(co_od_entry_t) != 6u || sample_od.tables == NULL ||
         sample_od.tables->defaults == NULL) {
         return 20;
     }
@@ -229,7 +236,8 @@ int main(void)
     }
     e = co_od_find(&sample_od, 0x1017, 0, NULL);
     if (e == NULL || co_od_value(&sample_od, e) != (void *)&sample_values.producer_heartbeat_time ||
-        co_od_size(&sample_od, e) != 2u) {
+        co_od_size(&sample_od, e) != 2u || co_od_type(&sample_od, e) != CO_TYPE_UNSIGNED16 ||
+        co_od_attr(&sample_od, e) != CO_OD_RW) {
         return 22;
     }
 #endif
@@ -268,6 +276,38 @@ def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str,
     assert result.returncode == 0, result.stderr
     run = subprocess.run([str(exe)], capture_output=True, text=True, check=False, timeout=30)
     assert run.returncode == 0, f"test program failed with {run.returncode}"
+
+
+# A core that does not validate its dictionary (CO_CONFIG_OD_VALIDATE 0, the size profiles)
+# refuses a generated one using a feature it leaves out when compiling it instead.
+@pytest.mark.parametrize("left_out", [
+    ("-DCO_CONFIG_OD_LIMITS=0", "-DCO_CONFIG_REAL_LIMITS=0"), ("-DCO_CONFIG_REAL_LIMITS=0",),
+    ("-DCO_CONFIG_OD_DOMAIN=0",), ("-DCO_CONFIG_OD_64BIT=0",)])
+@pytest.mark.parametrize("form", FORMS)
+def test_unvalidated_core_refuses_left_out_features_when_compiling(
+        tmp_path: Path, left_out: tuple[str, ...], form: tuple[str, ...]) -> None:
+    cc = compiler()
+    _, code = generate_sample(tmp_path, domain_size=32)
+    trusted = ("-DCO_CONFIG_OD_VALIDATE=0", *form)
+    assert compile_c(cc, code, tmp_path, trusted).returncode == 0
+    result = compile_c(cc, code, tmp_path, (*trusted, *left_out))
+    assert result.returncode != 0
+    assert f"({left_out[0][2:-2]} 0)" in result.stderr, result.stderr
+    validated = compile_c(cc, code, tmp_path, (*form, *left_out))  # co_od_validate refuses it
+    assert validated.returncode == 0, validated.stderr
+
+
+def test_unvalidated_core_refuses_unicode_strings_when_compiling(tmp_path: Path) -> None:
+    text = HEADER + ("[2000]\nParameterName=U\nObjectType=0x7\nDataType=0x000B\n"
+                     "AccessType=rw\nDefaultValue=ab\n")
+    source = tmp_path / "u.eds"
+    source.write_text(text)
+    _, code = odgen.generate_files(source, "u", tmp_path)
+    cc = compiler()
+    flags = ("-DCO_CONFIG_OD_VALIDATE=0", "-DCO_CONFIG_OD_COMPACT=1")
+    assert compile_c(cc, code, tmp_path, flags).returncode == 0
+    result = compile_c(cc, code, tmp_path, (*flags, "-DCO_CONFIG_OD_UNICODE=0"))
+    assert "(CO_CONFIG_OD_UNICODE 0)" in result.stderr, result.stderr
 
 
 # --- errors -------------------------------------------------------------------------------
@@ -422,6 +462,63 @@ def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> No
     for line in refused:
         print("  refused", line)
     assert compiled
+
+
+def _validating_main(names: list[str]) -> str:
+    """A program that runs co_od_validate over each generated dictionary, then resets it."""
+    lines = [f'#include "{n}.h"' for n in names] + ["", "#include <stdio.h>", "",
+                                                  "int main(void)", "{", "    uint32_t bad = 0;"]
+    for n in names:
+        lines += [f"    if (co_od_validate(&{n}_od, &bad) != CO_OK) {{",
+                  f'        printf("{n}: entry %u refused\\n", (unsigned)bad);',
+                  "        return 1;", "    }",
+                  f"    co_od_reset(&{n}_od, 0x0000, 0xFFFF, 1);"]
+    return "\n".join([*lines, "    return 0;", "}", ""])
+
+
+@pytest.mark.slow
+def test_every_generated_dictionary_passes_co_od_validate(tmp_path: Path) -> None:
+    """A core built for size trusts its dictionary (CO_CONFIG_OD_VALIDATE 0): whatever the
+    generator writes must pass co_od_validate of a core that checks, in both forms, as a
+    build for size and with the look-up tables: the sample, the size rows' EDS and every
+    file of the corpus the generator takes."""
+    cc = compiler()
+    if not CORE_SOURCES:
+        pytest.skip("no core sources")
+    sources = [(SAMPLE, odgen.GenerateOptions(domain_size=32)),
+               (BENCH_EDS, odgen.GenerateOptions())]
+    sources += [(p, odgen.GenerateOptions(domain_size=16)) for p in corpus_files()]
+    names = []
+    for n, (path, options) in enumerate(sources):
+        try:
+            header, code = odgen.generate(eds.parse(path), f"d{n}", options)
+        except EdsError:
+            continue  # refused with its place (test_corpus_generates_...)
+        (tmp_path / f"d{n}.h").write_text(header)
+        (tmp_path / f"d{n}.c").write_text(code)
+        names.append(f"d{n}")
+    main_c = tmp_path / "main.c"
+    main_c.write_text(_validating_main(names))
+    for form in FORMS:
+        for optimise in ("-O0", "-Os"):
+            flags = (optimise, *form)
+            build = tmp_path / ("build" + "".join(flags))
+            build.mkdir()
+            objects = []
+            for src in [*CORE_SOURCES, *(tmp_path / f"{n}.c" for n in names), main_c]:
+                result = subprocess.run([cc, "-std=c11", *flags, f"-I{INCLUDE}", f"-I{tmp_path}",
+                                         "-c", str(src), "-o", str(build / f"{src.stem}.o")],
+                                        capture_output=True, text=True, check=False)
+                assert result.returncode == 0, f"{src.name} {flags}: {result.stderr[:500]}"
+                objects.append(str(build / f"{src.stem}.o"))
+            exe = build / "validate"
+            result = subprocess.run([cc, *objects, "-o", str(exe)], capture_output=True,
+                                    text=True, check=False)
+            assert result.returncode == 0, result.stderr
+            run = subprocess.run([str(exe)], capture_output=True, text=True, check=False,
+                                 timeout=60)
+            assert run.returncode == 0, f"{flags}: {run.stdout}"
+    assert len(names) > 2 or not corpus_files()
 
 
 # --- the size rows' dictionary (bench/run) ------------------------------------------------

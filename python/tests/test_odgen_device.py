@@ -89,8 +89,8 @@ static int upload(co_sim_bus_t *bus, co_node_t *client, const co_od_entry_t *e,
 
 static uint32_t client_device_type;
 #if CO_CONFIG_OD_COMPACT /* the value at offset 0 of co_od_t.values, its size from its type */
-static co_od_entry_t client_entries[1] = {
-    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = 0}};
+static const co_od_row_t client_rows[1] = {{.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO}};
+static co_od_entry_t client_entries[1] = {{.index = 0x1000, .sub = 0, .row = 0, .offset = 0}};
 #else
 static co_od_entry_t client_entries[1] = {
     {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .size = 4u}};
@@ -119,6 +119,8 @@ int main(int argc, char **argv)
     cc.od.count = 1;
 #if CO_CONFIG_OD_COMPACT
     cc.od.values = &client_device_type;
+    cc.od.rows = client_rows;
+    cc.od.rows_count = 1;
 #endif
     cc.driver = co_sim_port_driver(&cli_port);
     if (co_node_init(&dev, &dc) != CO_OK) {

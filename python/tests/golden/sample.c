@@ -12,9 +12,21 @@
 
 sample_values_t sample_values;
 
+#if !CO_CONFIG_OD_VALIDATE /* canola/config.h: co_od_validate would not refuse it */
+#if !CO_CONFIG_OD_LIMITS
+#error "this dictionary has limits: the core leaves them out (CO_CONFIG_OD_LIMITS 0)"
+#endif
+#if !CO_CONFIG_REAL_LIMITS
+#error "this dictionary has limits on REAL entries: the core leaves them out (CO_CONFIG_REAL_LIMITS 0)"
+#endif
+#if !CO_CONFIG_OD_64BIT
+#error "this dictionary has types wider than 32 bits: the core leaves them out (CO_CONFIG_OD_64BIT 0)"
+#endif
+#endif
+
 #if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */
 /* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per
- * entry whose value is not all zeros: a head (entries skipped, length), wire bytes
+ * entry whose value is not all zeros: a head (entries skipped, length), the bytes
  * (co_od_tables_t.defaults). */
 static const uint8_t k_defaults[] = {
     /* 0x1000 sub 0 */ 0x40, 0x91, 0x01,
@@ -31,11 +43,11 @@ static const uint8_t k_defaults[] = {
     /* 0x2000 sub 0 */ 0x20, 0x01,
     /* 0x2001 sub 0 */ 0x20, 0xFB,
     /* 0x2002 sub 0 */ 0x40, 0xFE, 0xFF,
-    /* 0x2003 sub 0 */ 0x60, 0x00, 0x00, 0x80,
+    /* 0x2003 sub 0 */ 0x80, 0x00, 0x00, 0x80, 0xFF,
     /* 0x2004 sub 0 */ 0x80, 0x00, 0x00, 0x00, 0x80,
-    /* 0x2005 sub 0 */ 0xA0, 0x00, 0x00, 0x00, 0x00, 0x80,
+    /* 0x2005 sub 0 */ 0xE0, 0x08, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0xFF, 0xFF, 0xFF,
     /* 0x2006 sub 0 */ 0xC0, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F,
-    /* 0x2007 sub 0 */ 0xE0, 0x07, 0x00, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
+    /* 0x2007 sub 0 */ 0xE0, 0x08, 0x00, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
     /* 0x2008 sub 0 */ 0xE0, 0x08, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80,
     /* 0x2009 sub 0 */ 0x20, 0xC8,
     /* 0x200A sub 0 */ 0x40, 0xEF, 0xBE,
@@ -81,50 +93,87 @@ static const co_od_tables_t k_tables = {.defaults = k_defaults, .limits = k_limi
 
 _Static_assert(sizeof(sample_values_t) <= 0x10000u, "the compact form addresses values by 16-bit offsets (use the general form, CO_CONFIG_OD_COMPACT 0)");
 
+/* What entries share (co_od_row_t): type, attributes, side table position. */
+static const co_od_row_t k_rows[] = {
+    {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .side = 0},
+    {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO | CO_OD_TPDO, .side = 0},
+    {.type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_CO, .side = 1},
+    {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .side = 0},
+    {.type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .side = 0},
+    {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO, .side = 0},
+    {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_BOOLEAN, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .side = 0},
+    {.type = CO_TYPE_INTEGER8, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .side = 1},
+    {.type = CO_TYPE_INTEGER16, .attr = CO_OD_RWW | CO_OD_RPDO, .side = 0},
+    {.type = CO_TYPE_INTEGER24, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_INTEGER32, .attr = CO_OD_RWR | CO_OD_TPDO, .side = 2},
+    {.type = CO_TYPE_INTEGER40, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_INTEGER48, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_INTEGER56, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_INTEGER64, .attr = CO_OD_RW, .side = 3},
+    {.type = CO_TYPE_UNSIGNED8, .attr = CO_OD_WO | CO_OD_RPDO, .side = 4},
+    {.type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .side = 5},
+    {.type = CO_TYPE_UNSIGNED24, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO | CO_OD_NODEID, .side = 0},
+    {.type = CO_TYPE_UNSIGNED40, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_UNSIGNED48, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_UNSIGNED56, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_UNSIGNED64, .attr = CO_OD_RW, .side = 0},
+    {.type = CO_TYPE_REAL32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .side = 6},
+    {.type = CO_TYPE_REAL64, .attr = CO_OD_RW, .side = 7},
+    {.type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .side = 2},
+    {.type = CO_TYPE_OCTET_STRING, .attr = CO_OD_RO, .side = 3},
+    {.type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .side = 4},
+    {.type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .side = 0},
+    {.type = CO_TYPE_INTEGER32, .attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID, .side = 8},
+    {.type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .side = 0},
+};
+
 static const co_od_entry_t k_entries[] = {
-    {.index = 0x1000, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, device_type)},
-    {.index = 0x1001, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, error_register)},
-    {.index = 0x1008, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_CO, .offset = offsetof(sample_values_t, manufacturer_device_name), .side = 1},
-    {.index = 0x1014, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .offset = offsetof(sample_values_t, cob_id_emcy)},
-    {.index = 0x1017, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, producer_heartbeat_time)},
-    {.index = 0x1018, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.highest_sub_index_supported)},
-    {.index = 0x1018, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.vendor_id)},
-    {.index = 0x1018, .sub = 2, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.product_code)},
-    {.index = 0x1018, .sub = 3, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.revision_number)},
-    {.index = 0x1018, .sub = 4, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, identity_object.serial_number)},
-    {.index = 0x1800, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_CO, .offset = offsetof(sample_values_t, tpdo_communication_parameter.highest_sub_index_supported)},
-    {.index = 0x1800, .sub = 1, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_NODEID, .offset = offsetof(sample_values_t, tpdo_communication_parameter.cob_id_used_by_tpdo)},
-    {.index = 0x1800, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, tpdo_communication_parameter.transmission_type)},
-    {.index = 0x2000, .sub = 0, .type = CO_TYPE_BOOLEAN, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .offset = offsetof(sample_values_t, flag)},
-    {.index = 0x2001, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .offset = offsetof(sample_values_t, int8_value), .side = 1},
-    {.index = 0x2002, .sub = 0, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RWW | CO_OD_RPDO, .offset = offsetof(sample_values_t, int16_value)},
-    {.index = 0x2003, .sub = 0, .type = CO_TYPE_INTEGER24, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int24_value)},
-    {.index = 0x2004, .sub = 0, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWR | CO_OD_TPDO, .offset = offsetof(sample_values_t, int32_value), .side = 2},
-    {.index = 0x2005, .sub = 0, .type = CO_TYPE_INTEGER40, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int40_value)},
-    {.index = 0x2006, .sub = 0, .type = CO_TYPE_INTEGER48, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int48_value)},
-    {.index = 0x2007, .sub = 0, .type = CO_TYPE_INTEGER56, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int56_value)},
-    {.index = 0x2008, .sub = 0, .type = CO_TYPE_INTEGER64, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, int64_value), .side = 3},
-    {.index = 0x2009, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_WO | CO_OD_RPDO, .offset = offsetof(sample_values_t, unsigned8_value), .side = 4},
-    {.index = 0x200A, .sub = 0, .type = CO_TYPE_UNSIGNED16, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned16_value), .side = 5},
-    {.index = 0x200B, .sub = 0, .type = CO_TYPE_UNSIGNED24, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned24_value)},
-    {.index = 0x200C, .sub = 0, .type = CO_TYPE_UNSIGNED32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO | CO_OD_NODEID, .offset = offsetof(sample_values_t, unsigned32_value)},
-    {.index = 0x200D, .sub = 0, .type = CO_TYPE_UNSIGNED40, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned40_value)},
-    {.index = 0x200E, .sub = 0, .type = CO_TYPE_UNSIGNED48, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned48_value)},
-    {.index = 0x200F, .sub = 0, .type = CO_TYPE_UNSIGNED56, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned56_value)},
-    {.index = 0x2010, .sub = 0, .type = CO_TYPE_UNSIGNED64, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, unsigned64_value)},
-    {.index = 0x2011, .sub = 0, .type = CO_TYPE_REAL32, .attr = CO_OD_RW | CO_OD_TPDO | CO_OD_RPDO, .offset = offsetof(sample_values_t, temperature_degc), .side = 6},
-    {.index = 0x2012, .sub = 0, .type = CO_TYPE_REAL64, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, gain), .side = 7},
-    {.index = 0x2013, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, user_label), .side = 2},
-    {.index = 0x2014, .sub = 0, .type = CO_TYPE_OCTET_STRING, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, key_bytes), .side = 3},
-    {.index = 0x2015, .sub = 0, .type = CO_TYPE_VISIBLE_STRING, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, empty_text), .side = 4},
-    {.index = 0x2100, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, analog_inputs.number_of_inputs)},
-    {.index = 0x2100, .sub = 1, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, analog_inputs.input)},
-    {.index = 0x2100, .sub = 2, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, analog_inputs.input_2)},
-    {.index = 0x2100, .sub = 3, .type = CO_TYPE_INTEGER16, .attr = CO_OD_RO | CO_OD_TPDO, .offset = offsetof(sample_values_t, analog_inputs.input_3)},
-    {.index = 0x2300, .sub = 0, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RO, .offset = offsetof(sample_values_t, setpoints.highest_sub_index_supported)},
-    {.index = 0x2300, .sub = 1, .type = CO_TYPE_INTEGER32, .attr = CO_OD_RWW | CO_OD_RPDO | CO_OD_NODEID, .offset = offsetof(sample_values_t, setpoints.speed), .side = 8},
-    {.index = 0x2300, .sub = 2, .type = CO_TYPE_UNSIGNED8, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, setpoints.default_)},
-    {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .offset = offsetof(sample_values_t, mode)},
+    {.index = 0x1000, .sub = 0, .row = 0, .offset = offsetof(sample_values_t, device_type)},
+    {.index = 0x1001, .sub = 0, .row = 1, .offset = offsetof(sample_values_t, error_register)},
+    {.index = 0x1008, .sub = 0, .row = 2, .offset = offsetof(sample_values_t, manufacturer_device_name)},
+    {.index = 0x1014, .sub = 0, .row = 3, .offset = offsetof(sample_values_t, cob_id_emcy)},
+    {.index = 0x1017, .sub = 0, .row = 4, .offset = offsetof(sample_values_t, producer_heartbeat_time)},
+    {.index = 0x1018, .sub = 0, .row = 5, .offset = offsetof(sample_values_t, identity_object.highest_sub_index_supported)},
+    {.index = 0x1018, .sub = 1, .row = 0, .offset = offsetof(sample_values_t, identity_object.vendor_id)},
+    {.index = 0x1018, .sub = 2, .row = 0, .offset = offsetof(sample_values_t, identity_object.product_code)},
+    {.index = 0x1018, .sub = 3, .row = 0, .offset = offsetof(sample_values_t, identity_object.revision_number)},
+    {.index = 0x1018, .sub = 4, .row = 0, .offset = offsetof(sample_values_t, identity_object.serial_number)},
+    {.index = 0x1800, .sub = 0, .row = 6, .offset = offsetof(sample_values_t, tpdo_communication_parameter.highest_sub_index_supported)},
+    {.index = 0x1800, .sub = 1, .row = 3, .offset = offsetof(sample_values_t, tpdo_communication_parameter.cob_id_used_by_tpdo)},
+    {.index = 0x1800, .sub = 2, .row = 7, .offset = offsetof(sample_values_t, tpdo_communication_parameter.transmission_type)},
+    {.index = 0x2000, .sub = 0, .row = 8, .offset = offsetof(sample_values_t, flag)},
+    {.index = 0x2001, .sub = 0, .row = 9, .offset = offsetof(sample_values_t, int8_value)},
+    {.index = 0x2002, .sub = 0, .row = 10, .offset = offsetof(sample_values_t, int16_value)},
+    {.index = 0x2003, .sub = 0, .row = 11, .offset = offsetof(sample_values_t, int24_value)},
+    {.index = 0x2004, .sub = 0, .row = 12, .offset = offsetof(sample_values_t, int32_value)},
+    {.index = 0x2005, .sub = 0, .row = 13, .offset = offsetof(sample_values_t, int40_value)},
+    {.index = 0x2006, .sub = 0, .row = 14, .offset = offsetof(sample_values_t, int48_value)},
+    {.index = 0x2007, .sub = 0, .row = 15, .offset = offsetof(sample_values_t, int56_value)},
+    {.index = 0x2008, .sub = 0, .row = 16, .offset = offsetof(sample_values_t, int64_value)},
+    {.index = 0x2009, .sub = 0, .row = 17, .offset = offsetof(sample_values_t, unsigned8_value)},
+    {.index = 0x200A, .sub = 0, .row = 18, .offset = offsetof(sample_values_t, unsigned16_value)},
+    {.index = 0x200B, .sub = 0, .row = 19, .offset = offsetof(sample_values_t, unsigned24_value)},
+    {.index = 0x200C, .sub = 0, .row = 20, .offset = offsetof(sample_values_t, unsigned32_value)},
+    {.index = 0x200D, .sub = 0, .row = 21, .offset = offsetof(sample_values_t, unsigned40_value)},
+    {.index = 0x200E, .sub = 0, .row = 22, .offset = offsetof(sample_values_t, unsigned48_value)},
+    {.index = 0x200F, .sub = 0, .row = 23, .offset = offsetof(sample_values_t, unsigned56_value)},
+    {.index = 0x2010, .sub = 0, .row = 24, .offset = offsetof(sample_values_t, unsigned64_value)},
+    {.index = 0x2011, .sub = 0, .row = 25, .offset = offsetof(sample_values_t, temperature_degc)},
+    {.index = 0x2012, .sub = 0, .row = 26, .offset = offsetof(sample_values_t, gain)},
+    {.index = 0x2013, .sub = 0, .row = 27, .offset = offsetof(sample_values_t, user_label)},
+    {.index = 0x2014, .sub = 0, .row = 28, .offset = offsetof(sample_values_t, key_bytes)},
+    {.index = 0x2015, .sub = 0, .row = 29, .offset = offsetof(sample_values_t, empty_text)},
+    {.index = 0x2100, .sub = 0, .row = 5, .offset = offsetof(sample_values_t, analog_inputs.number_of_inputs)},
+    {.index = 0x2100, .sub = 1, .row = 30, .offset = offsetof(sample_values_t, analog_inputs.input)},
+    {.index = 0x2100, .sub = 2, .row = 30, .offset = offsetof(sample_values_t, analog_inputs.input_2)},
+    {.index = 0x2100, .sub = 3, .row = 30, .offset = offsetof(sample_values_t, analog_inputs.input_3)},
+    {.index = 0x2300, .sub = 0, .row = 5, .offset = offsetof(sample_values_t, setpoints.highest_sub_index_supported)},
+    {.index = 0x2300, .sub = 1, .row = 31, .offset = offsetof(sample_values_t, setpoints.speed)},
+    {.index = 0x2300, .sub = 2, .row = 7, .offset = offsetof(sample_values_t, setpoints.default_)},
+    {.index = 0x6000, .sub = 0, .row = 32, .offset = offsetof(sample_values_t, mode)},
 };
 #else /* the general form */
 /* Power-on values (without the node-ID where CO_OD_NODEID is set). */
@@ -256,7 +305,7 @@ static const uint16_t k_hash[128] = {
 
 const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL,
 #if CO_CONFIG_OD_COMPACT
-    .values = &sample_values, .tables = &k_tables,
+    .values = &sample_values, .rows = k_rows, .rows_count = 33u, .tables = &k_tables,
 #endif
 #if CO_SHORT_PATHS
 #if !CO_CONFIG_OD_COMPACT

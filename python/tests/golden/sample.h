@@ -16,8 +16,8 @@
 
 #include "canola/od.h"
 
-#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 5
-#error "sample.h was generated for object dictionary format 5: regenerate it with the odgen of this canola"
+#if !defined(CO_OD_FORMAT) || CO_OD_FORMAT != 7
+#error "sample.h was generated for object dictionary format 7: regenerate it with the odgen of this canola"
 #endif
 
 #ifdef __cplusplus

@@ -3,7 +3,8 @@
     canola sync 10 [--counter 8] [--count N | --duration S]   SYNC every 10 ms
     canola time [--period MS] [--count N]                      TIME (now, UTC)
 
-Both run until Ctrl-C, ``--count`` frames or ``--duration`` seconds; ``canola time``
+Both run until Ctrl-C, ``--count`` frames or ``--duration`` seconds (the frames the command
+sent itself: SYNC or TIME of another producer on the bus does not count); ``canola time``
 without ``--period`` sends one frame. The producer is a silent canola.Master (node
 ``--master-id``, no boot-up nor heartbeat): SYNC comes from the core's SYNC producer
 (0x1005/0x1006/0x1019, the first one period after the start), TIME from
@@ -30,11 +31,13 @@ from canola.cli.common import (
     positive_ms,
 )
 from canola.core import SimBus
-from canola.master import Master
+from canola.master import Frame, Master
 
 #: Longest wait between checks for the end (seconds of the master's time); on a simulated
 #: bus a SYNC period if shorter, so that a count stops the producer between two frames.
 _STEP_S = 0.2
+#: The COB-ID of the SYNC :meth:`canola.Master.start_sync` produces.
+_SYNC_COB_ID = 0x080
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
@@ -60,7 +63,7 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     add_bus_options(p)
     add_master_options(p, sdo=False)
     p.add_argument("--count", type=lambda t: int_in_range(t, 1, 1 << 31, "count"),
-                   metavar="N", help="stop after N frames")
+                   metavar="N", help="stop after N frames of its own")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
 
@@ -121,7 +124,11 @@ def _wait(master: Master, done: threading.Event, duration: float | None,
 
 def run_sync(args: argparse.Namespace) -> int:
     def start(master: Master, count: _Count) -> Callable[[], None]:
-        master.on_sync(lambda _counter: count.one(master.stop_sync))
+        def sent(frame: Frame) -> None:  # its own SYNCs: another producer's do not count
+            if frame.can_id == _SYNC_COB_ID:
+                count.one(master.stop_sync)
+
+        master.on_frame_sent(sent)
         master.start_sync(args.period * 1000, args.counter or 0)
         return master.stop_sync
 

@@ -56,8 +56,27 @@ def abort_frame(index: int, sub: int, code: int) -> bytes:
     return bytes([0x80]) + _mux(index, sub) + code.to_bytes(4, "little")
 
 
+def _opens_transfer(data: bytes) -> bool:
+    """A request that names its object: an initiate (ccs 1, 2; block ccs 5 and 6 with
+    their initiate sub-commands) or an abort (ccs 4)."""
+    ccs = data[0] >> 5
+    return (ccs in (1, 2, 4) or (ccs == 5 and data[0] & 0x03 == 0)
+            or (ccs == 6 and data[0] & 0x01 == 0))
+
+
+def _continues_transfer(data: bytes) -> bool:
+    """A request inside a transfer: a segment (ccs 0, 3) or a block sub-command."""
+    return data[0] >> 5 in (0, 3, 5, 6) and not _opens_transfer(data)
+
+
 class RawSdo:
-    """SDO client of node ``node_id`` over ``link``; ``timeout``: seconds per answer."""
+    """SDO client of node ``node_id`` over ``link``; ``timeout``: seconds per answer.
+
+    Each answer is attributed to the transfer in progress: an abort, or an answer to an
+    initiate, that names another multiplexer (index, sub-index) than the transfer's cannot
+    be its answer (it is a late one of an earlier exchange over a slow link, such as the
+    abort of a request that reached the server after its own time-out) and is passed over.
+    If no other answer comes within the time-out, the stray one is the answer, and wrong."""
 
     def __init__(self, link: Link, node_id: int, timeout: float) -> None:
         self.link = link
@@ -65,13 +84,21 @@ class RawSdo:
         self.timeout = timeout
         self.rx = 0x600 + node_id  # the server's receive COB-ID
         self.tx = 0x580 + node_id  # the server's transmit COB-ID
+        self._mux: bytes | None = None  # the transfer in progress's, once a request named it
+        self._initiating = False  # the last request opened a transfer
 
     # ---- single frames
 
     def send(self, data: bytes) -> int:
         """Send one request frame (padded to 8 bytes); the mark before it."""
+        frame = bytes(data).ljust(8, b"\0")
+        if _opens_transfer(frame):
+            self._mux = frame[1:4]
+        elif not _continues_transfer(frame):
+            self._mux = None  # no transfer (an unknown command): any answer is its answer
+        self._initiating = _opens_transfer(frame)
         mark = self.link.mark()
-        self.link.send(self.rx, bytes(data).ljust(8, b"\0"))
+        self.link.send(self.rx, frame)
         return mark
 
     def answer(self, since: int, what: str, timeout: float | None = None) -> bytes:
@@ -80,15 +107,36 @@ class RawSdo:
 
     def answer_at(self, since: int, what: str,
                   timeout: float | None = None) -> tuple[bytes, int]:
-        """The next answer after ``since`` and the mark just after it. Raises NoAnswerError."""
+        """The next answer after ``since`` that can belong to the transfer in progress, and
+        the mark just after it. Raises NoAnswerError."""
         limit = self.timeout if timeout is None else timeout
-        seen = self.link.wait_frame(lambda f: f.can_id == self.tx and not f.rtr, limit, since)
-        if seen is None:
-            raise NoAnswerError(what, limit)
-        return seen.frame.data, seen.pos + 1
+        end = self.link.now() + limit
+        stray: tuple[bytes, int] | None = None
+        found: tuple[bytes, int] | None = None
+        while found is None:
+            left = max(0.0, end - self.link.now())
+            seen = self.link.wait_frame(lambda f: f.can_id == self.tx and not f.rtr, left, since)
+            if seen is None:
+                if stray is None:
+                    raise NoAnswerError(what, limit)
+                found = stray
+            elif self._foreign(seen.frame.data):
+                since = seen.pos + 1
+                stray = stray or (seen.frame.data, since)
+            else:
+                found = seen.frame.data, seen.pos + 1
+        self._initiating = False  # answered: what follows belongs to the transfer
+        return found
+
+    def _foreign(self, answer: bytes) -> bool:
+        """An answer that names another object than the transfer in progress."""
+        if self._mux is None or len(answer) != 8:
+            return False
+        names_object = answer[0] == 0x80 or self._initiating
+        return names_object and answer[1:4] != self._mux
 
     def request(self, data: bytes, what: str, timeout: float | None = None) -> bytes:
-        """Send ``data`` and return the answer (any answer, an abort too)."""
+        """Send ``data`` and return the answer (any answer of its transfer, an abort too)."""
         return self.answer(self.send(data), what, timeout)
 
     def abort(self, index: int, sub: int, code: int = ABORT_GENERAL) -> None:
@@ -96,25 +144,8 @@ class RawSdo:
         self.send(abort_frame(index, sub, code))
 
     def initiate(self, data: bytes, index: int, sub: int, what: str, scs: int) -> bytes:
-        """Send an initiate request and return its answer, checked (:meth:`_expect`). An
-        answer that names another multiplexer is a late one of an earlier exchange (over a
-        slow link) and is passed over; if no other comes, it is the answer, and wrong."""
-        since = self.send(data)
-        mux = _mux(index, sub)
-        end = self.link.now() + self.timeout
-        stray: bytes | None = None
-        while True:
-            try:
-                answer, since = self.answer_at(since, what, max(0.0, end - self.link.now()))
-            except NoAnswerError:
-                if stray is None:
-                    raise NoAnswerError(what, self.timeout) from None
-                answer = stray
-                break
-            if len(answer) != 8 or answer[1:4] == mux:
-                break
-            stray = answer
-        return self._expect(answer, index, sub, what, scs)
+        """Send an initiate request and return its answer, checked (:meth:`_expect`)."""
+        return self._expect(self.request(data, what), index, sub, what, scs)
 
     def _expect(self, data: bytes, index: int | None, sub: int, what: str,
                 scs: int) -> bytes:

@@ -20,11 +20,13 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   program.
 - The ``.c`` file holds the tables in both forms of ``canola/od.h``, chosen by the core's
   ``CO_CONFIG_OD_COMPACT`` (the dictionary and the library must agree, as for every
-  configuration value). The compact form (1), the smaller: 8-byte entries (index, the
-  value's offset in ``<name>_values``, sub-index, type, attributes, a side table position:
-  the limits of a number, the capacity of a string or domain), the power-on values as one
+  configuration value). The compact form (1), the smaller: 6-byte entries (index, the
+  value's offset in ``<name>_values``, sub-index, a row of ``k_rows``: type, attributes, a
+  side table position, the limits of a number or the capacity of a string or domain; each
+  distinct row once), the power-on values as one
   byte image ``k_defaults`` (a record per entry whose value is not all zeros: a head byte of
-  the entries skipped since the previous record and the length, the wire bytes; see
+  the entries skipped since the previous record and the length, then the bytes: a number's
+  storage little-endian, an INTEGER24 sign-extended to its int32_t, the others' wire bytes; see
   ``co_od_tables_t.defaults``), the distinct limits once each in
   ``k_limits``, the distinct capacities once each in ``k_sizes``, all four in ``k_tables``
   (``co_od_tables_t``). The general form (0): 28-byte entries with pointers to
@@ -52,6 +54,10 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   adds CO_OD_TPDO when readable (ro, const, rwr, rw) and CO_OD_RPDO when writable (wo, rww,
   rw).
 - DEFTYPE/DEFSTRUCT/NULL objects (data type definitions) are not part of the table.
+- For a core that does not validate its dictionary (``CO_CONFIG_OD_VALIDATE`` 0), the
+  ``.c`` file refuses with ``#error`` the features it uses that the core leaves out
+  (limits, REAL limits, DOMAIN values in RAM, UNICODE_STRING, types wider than 32 bits),
+  which co_od_validate would otherwise refuse at run time.
 
 Anything the core cannot hold (a DataType it lacks, a value that is not a number of its
 type or does not fit, a missing AccessType) raises :class:`~canola.errors.EdsError` naming
@@ -75,8 +81,9 @@ from canola.formats import eds
 from canola.formats.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 
 # The co_od_entry_t layout this generator writes (canola/od.h: CO_OD_FORMAT).
-OD_FORMAT = 5  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
-# 5: its 8-byte entries (value offsets, co_od_tables_t)
+OD_FORMAT = 7  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFIG_OD_COMPACT);
+# 5: its 8-byte entries (value offsets, co_od_tables_t); 6: numbers in its image as their
+# storage's bytes; 7: its 6-byte entries (co_od_t.rows)
 
 __all__ = ["GenerateOptions", "generate", "generate_files", "main"]
 
@@ -117,6 +124,9 @@ _TYPES: dict[int, tuple[str, int, str, int]] = {
     0x1A: ("UNSIGNED56", 7, "uint64_t", _UNSIGNED),
     0x1B: ("UNSIGNED64", 8, "uint64_t", _UNSIGNED),
 }
+# bytes of a number's native storage (canola/od.h)
+_STORAGE_BYTES = {"uint8_t": 1, "int8_t": 1, "int16_t": 2, "uint16_t": 2, "int32_t": 4,
+                  "uint32_t": 4, "int64_t": 8, "uint64_t": 8}
 _ATTR = {"ro": "CO_OD_RO", "wo": "CO_OD_WO", "rw": "CO_OD_RW", "rwr": "CO_OD_RWR",
          "rww": "CO_OD_RWW", "const": "CO_OD_CO"}
 _READABLE = frozenset({"ro", "const", "rwr", "rw"})
@@ -145,7 +155,9 @@ class _Entry:
     init: str | None  # C initializer of the default, None for none
     limits: str | None
     kind: int
-    default: bytes = b""  # wire bytes of the power-on value, trailing zeros left out
+    # the power-on value's bytes in the compact form's image (a number's storage, little-endian;
+    # the wire bytes of the others), trailing zeros left out
+    default: bytes = b""
 
 
 # ---------------------------------------------------------------------------------------
@@ -284,7 +296,7 @@ class _Gen:
         limits = None
         array = 0
         size = wire
-        data = b""  # the power-on value's wire bytes
+        data = b""  # the power-on value's bytes in the image (Entry.default)
         if kind in (_BOOL, _SIGNED, _UNSIGNED, _REAL):
             value, uses_node = self.number(var, text, key, kind, kind != _REAL)
             if uses_node:
@@ -295,7 +307,9 @@ class _Gen:
             else:
                 assert isinstance(value, int)
                 init = _int_literal(value, kind)
-                data = (value & ((1 << (8 * wire)) - 1)).to_bytes(wire, "little")
+                # the storage's little-endian bytes (an INTEGER24 as its int32_t: sign-extended)
+                width = _STORAGE_BYTES[ctype]
+                data = (value & ((1 << (8 * width)) - 1)).to_bytes(width, "little")
             limits = self.limits(var, kind, wire)
         elif kind == _RAW:
             value, _ = self.number_raw(var, text, key)
@@ -554,6 +568,7 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         out.append(f"const co_od_t {name}_od = {{.entries = NULL, .count = 0, .hook_ctx = NULL}};")
         out.append("")
         return "\n".join(out)
+    out += _feature_guards(entries)
     out.append("#if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */")
     out += _compact_tables(name, entries)
     out.append("#else /* the general form */")
@@ -575,7 +590,9 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out.append(f"const co_od_t {name}_od = {{.entries = k_entries, .count = {len(entries)}u, "
                ".hook_ctx = NULL,")
     out.append("#if CO_CONFIG_OD_COMPACT")
-    out.append(f"    .values = &{name}_values, .tables = &k_tables,")
+    rows = len(_rows(entries)[0])
+    out.append(f"    .values = &{name}_values, .rows = k_rows, .rows_count = {rows}u, "
+               ".tables = &k_tables,")
     out.append("#endif")
     out.append("#if CO_SHORT_PATHS")
     out.append("#if !CO_CONFIG_OD_COMPACT")
@@ -587,6 +604,29 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out.append("};")
     out.append("")
     return "\n".join(out)
+
+
+def _feature_guards(entries: list[_Entry]) -> list[str]:
+    """Compile-time refusal of the features the dictionary uses and the core may leave out,
+    for a core that does not validate its dictionary (CO_CONFIG_OD_VALIDATE 0), where
+    co_od_validate would not refuse it at run time."""
+    kinds = {_TYPES[e.var.data_type or 0][3] for e in entries}
+    wide = any(_TYPES[e.var.data_type or 0][2] in ("int64_t", "uint64_t", "double")
+               for e in entries)
+    real_limits = any(e.limits and _TYPES[e.var.data_type or 0][3] == _REAL for e in entries)
+    used = [(any(e.limits for e in entries), "CO_CONFIG_OD_LIMITS", "limits"),
+            (real_limits, "CO_CONFIG_REAL_LIMITS", "limits on REAL entries"),
+            (_DOMAIN in kinds, "CO_CONFIG_OD_DOMAIN", "DOMAIN values in RAM"),
+            (_USTRING in kinds, "CO_CONFIG_OD_UNICODE", "UNICODE_STRING entries"),
+            (wide, "CO_CONFIG_OD_64BIT", "types wider than 32 bits")]
+    out = ["#if !CO_CONFIG_OD_VALIDATE /* canola/config.h: co_od_validate would not refuse "
+           "it */"]
+    for uses, switch, what in used:
+        if uses:
+            out += [f"#if !{switch}",
+                    f'#error "this dictionary has {what}: the core leaves them out ({switch} 0)"',
+                    "#endif"]
+    return [*out, "#endif", ""] if len(out) > 1 else []
 
 
 def _distinct_limits(entries: list[_Entry]) -> list[str]:
@@ -630,12 +670,30 @@ def _side_table(what: str, declaration: str, items: list[str]) -> list[str]:
     return out
 
 
+def _rows(entries: list[_Entry]) -> tuple[list[str], list[int]]:
+    """The compact form's rows (co_od_row_t: type, attributes, side table position), each
+    once, in the order of their first entry, and the row of each entry."""
+    limit_pos = {text: i + 1 for i, text in enumerate(_distinct_limits(entries))}
+    size_pos = {n: i + 1 for i, n in enumerate(_distinct_sizes(entries))}
+    rows: dict[str, int] = {}
+    placed = []
+    for e in entries:
+        v = e.var
+        if _TYPES[v.data_type or 0][1] == 0:
+            side = size_pos[e.size]
+        else:
+            side = limit_pos[e.limits] if e.limits else 0
+        row = f"{{.type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, .side = {side}}}"
+        placed.append(rows.setdefault(row, len(rows)))
+    return list(rows), placed
+
+
 def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
     """The compact form's tables: power-on values as one image without zeros, the distinct
-    limits and capacities (co_od_tables_t), 8-byte entries that give their value's offset
-    in the values struct."""
+    limits and capacities (co_od_tables_t), the distinct rows (co_od_row_t), 6-byte entries
+    that give their value's offset in the values struct and their row."""
     out = ["/* Power-on values (without the node-ID where CO_OD_NODEID is set), one record per",
-           " * entry whose value is not all zeros: a head (entries skipped, length), wire bytes",
+           " * entry whose value is not all zeros: a head (entries skipped, length), the bytes",
            " * (co_od_tables_t.defaults). */",
            "static const uint8_t k_defaults[] = {"]
     next_pos = 0
@@ -661,19 +719,21 @@ def _compact_tables(name: str, entries: list[_Entry]) -> list[str]:
     out.append(f"_Static_assert(sizeof({name}_values_t) <= 0x10000u, \"the compact form addresses "
                "values by 16-bit offsets (use the general form, CO_CONFIG_OD_COMPACT 0)\");")
     out.append("")
-    limit_pos = {text: i + 1 for i, text in enumerate(limits)}
-    size_pos = {n: i + 1 for i, n in enumerate(sizes)}
+    rows, placed = _rows(entries)
+    if len(rows) > 256:
+        out.append('#error "more than 256 different (type, attributes, side) rows: the compact '
+                   'form names at most 256 (use the general form, CO_CONFIG_OD_COMPACT 0)"')
+    out.append("/* What entries share (co_od_row_t): type, attributes, side table position. */")
+    out.append("static const co_od_row_t k_rows[] = {")
+    out += [f"    {row}," for row in rows]
+    out.append("};")
+    out.append("")
     out.append("static const co_od_entry_t k_entries[] = {")
-    for e in entries:
+    for e, row in zip(entries, placed, strict=True):
         v = e.var
-        if _TYPES[v.data_type or 0][1] == 0:
-            more = f", .side = {size_pos[e.size]}"
-        else:
-            more = f", .side = {limit_pos[e.limits]}" if e.limits else ""
         out.append(
-            f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, "
-            f".type = CO_TYPE_{_TYPES[v.data_type or 0][0]}, .attr = {e.attr}, "
-            f".offset = offsetof({name}_values_t, {e.member}){more}}},")
+            f"    {{.index = 0x{v.index:04X}, .sub = {v.subindex}, .row = {row}, "
+            f".offset = offsetof({name}_values_t, {e.member})}},")
     out.append("};")
     return out
 
