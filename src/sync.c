@@ -48,6 +48,13 @@ uint8_t co_sync_counter(const co_node_t *node) { return node->sync.last_counter;
 
 /* ---- lifecycle and object dictionary */
 
+/* The SYNC consumer's route: every node with 0x1005 consumes SYNC; bit 31 means nothing for
+ * this object. */
+static void route(co_node_t *node, bool present)
+{
+    co_route_set(node, CO_ROUTE_SYNC, 0, present ? co_cob_key(node->sync.cob_id) : CO_ROUTE_OFF);
+}
+
 void co_sync_reset_comm(co_node_t *node)
 {
     co_sync_t *s = &node->sync;
@@ -58,8 +65,7 @@ void co_sync_reset_comm(co_node_t *node)
     s->last_us = CO_TIME_NEVER;
     s->last_counter = 0;
     co_sync_producer_reset(node);
-    /* Every node with 0x1005 consumes SYNC; bit 31 means nothing for this object. */
-    co_route_set(node, CO_ROUTE_SYNC, 0, cob != NULL ? co_cob_key(s->cob_id) : CO_ROUTE_OFF);
+    route(node, cob != NULL);
 }
 
 co_abort_t co_sync_check_write(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
@@ -79,7 +85,7 @@ void co_sync_written(co_node_t *node, const co_od_entry_t *entry)
     co_sync_t *s = &node->sync;
     if (entry->index == 0x1005) {
         s->cob_id = (uint32_t)co_od_entry_uint(&node->cfg.od, entry);
-        co_route_set(node, CO_ROUTE_SYNC, 0, co_cob_key(s->cob_id)); /* (the same: no change) */
+        route(node, true); /* (the same: no change) */
     }
     co_sync_producer_written(node, entry->index); /* 0x1007 is read at each use */
 }
