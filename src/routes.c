@@ -5,7 +5,7 @@
  * dispatched in O(log routes) whatever the number of services. Each service sets and clears
  * its own routes when its COB-ID objects change (reset communication, a write, a new watch),
  * one per kind and slot. A key with two owners keeps both, side by side: the first, the
- * lower kind (kernel.h orders the kinds), takes the frames; the other waits behind it and
+ * lower kind (routes.h orders the kinds), takes the frames; the other waits behind it and
  * takes over when the first goes.
  */
 #include "kernel.h"

@@ -145,6 +145,36 @@ static void test_block_upload_slow_sub_block_with_a_lost_segment_completes(void)
     CHECK_EQ(g_r.len, 28);
 }
 
+/* The same in a later sub-block: after one that made progress, the segments seen so far
+ * start again from none, so a lost segment there still lets the later ones count. */
+static void test_block_upload_lost_segment_in_a_later_sub_block_completes(void)
+{
+    client();
+    start_upload(CO_SDO_BLOCK, 64);
+    reply("C2 00 20 00 38 00 00 00"); /* 56 bytes: two sub-blocks of 4 */
+    reply("01 01 02 03 04 05 06 07");
+    reply("02 01 02 03 04 05 06 07");
+    reply("03 01 02 03 04 05 06 07");
+    reply("04 01 02 03 04 05 06 07");
+    CHECK_STR(last_sent(), "605#A204040000000000");
+    /* segment 1 of the second sub-block lost; the rest and the repetition 60 ms apart (the
+     * time-out is 100 ms) */
+    static const char *const segs[] = {"02 01 02 03 04 05 06 07", "03 01 02 03 04 05 06 07",
+                                       "04 01 02 03 04 05 06 07", "01 01 02 03 04 05 06 07",
+                                       "02 01 02 03 04 05 06 07", "03 01 02 03 04 05 06 07",
+                                       "84 01 02 03 04 05 06 07"};
+    for (int i = 0; i < 7; i++) {
+        g_now += 60000;
+        co_node_poll(&g_t.node, g_now);
+        reply(segs[i]);
+    }
+    CHECK_STR(last_sent(), "605#A204040000000000");
+    reply("C1 00 00 00 00 00 00 00");
+    CHECK_EQ(g_r.calls, 1);
+    CHECK_EQ(g_r.abort, CO_ABORT_NONE);
+    CHECK_EQ(g_r.len, 56);
+}
+
 /* Sequence numbers outside 1..blksize belong to no sub-block the client asked for. */
 static void test_block_upload_invalid_sequence_number(void)
 {
@@ -254,6 +284,7 @@ int main(void)
     RUN(test_block_upload_sequence_never_advances);
     RUN(test_block_upload_sub_block_repeated_without_progress);
     RUN(test_block_upload_slow_sub_block_with_a_lost_segment_completes);
+    RUN(test_block_upload_lost_segment_in_a_later_sub_block_completes);
     RUN(test_block_upload_invalid_sequence_number);
     RUN(test_block_upload_endless);
     RUN(test_segmented_upload_toggle_never_alternates);

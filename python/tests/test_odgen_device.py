@@ -161,8 +161,12 @@ def _run(cmd: list[str], what: str) -> None:
     assert done.returncode == 0, f"{what}:\n{done.stderr[:3000]}"
 
 
-# The two forms of the dictionary (canola/od.h) the generated code compiles in.
-FORMS = {"general": [], "compact": ["-DCO_CONFIG_OD_COMPACT=1"]}
+# The two forms of the dictionary (canola/od.h) the generated code compiles in, and the
+# compact one as the size profiles build it ("firmware": -Os, a core that trusts its
+# dictionary and keeps no counters, configs/*.h).
+FORMS = {"general": [], "compact": ["-DCO_CONFIG_OD_COMPACT=1"],
+         "firmware": ["-DCO_CONFIG_OD_COMPACT=1", "-DCO_CONFIG_OD_VALIDATE=0",
+                      "-DCO_CONFIG_STATS=0", "-Os"]}
 
 
 @pytest.fixture(scope="module", params=sorted(FORMS))
