@@ -59,13 +59,14 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_manager_reset_comm(node); /* first: leaving SDO's states ends the boot's transfers */
     enter(node, CO_NMT_INITIALISING);
     co_lss_slave_reset(node, application);
+    co_store_fault_t app_image = CO_STORE_NONE;
     if (application) {
-        co_storage_reset_group(node, CO_PARAMS_APPLICATION); /* 0x2000..0x9FFF */
+        app_image = co_storage_reset_group(node, CO_PARAMS_APPLICATION); /* 0x2000..0x9FFF */
         if (node->cfg.on_reset) {
             node->cfg.on_reset(node->cfg.user, CO_RESET_APPLICATION);
         }
     }
-    co_storage_reset_group(node, CO_PARAMS_COMMUNICATION); /* 0x1000..0x1FFF */
+    co_store_fault_t comm_image = co_storage_reset_group(node, CO_PARAMS_COMMUNICATION);
     /* Every service takes its parameters again, and with them its receive routes. */
     co_route_set(node, CO_ROUTE_NMT, 0, 0x000);
     co_storage_reset_comm(node);
@@ -78,6 +79,9 @@ void co_nmt_reset(co_node_t *node, bool application)
     co_emcy_reset_comm(node);
     co_pdo_reset_comm(node);
     co_manager_routes(node);
+    /* Rejected images now, when the history (0x1003, reset above) can keep their EMCYs. */
+    co_storage_report(node, CO_PARAMS_COMMUNICATION, comm_image);
+    co_storage_report(node, CO_PARAMS_APPLICATION, app_image);
     if (node->cfg.on_reset) {
         node->cfg.on_reset(node->cfg.user, CO_RESET_COMMUNICATION);
     }

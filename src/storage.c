@@ -268,15 +268,23 @@ static CO_SIZE_INLINE bool apply_records(co_node_t *node, co_param_group_t group
     return true;
 }
 
-/* A rejected image (the group holds its defaults): an EMCY and on_error. */
-static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fault)
+/* A rejected image (the group holds its defaults): an EMCY and on_error. Called once reset
+ * communication is done: the reset of the communication group clears the error history
+ * (0x1003), which must keep the EMCY, and the EMCY goes out on the COB-ID just loaded. */
+_Static_assert(CO_NODE_ERR_STORED_APP - CO_NODE_ERR_STORED_COMM ==
+                   CO_PARAMS_APPLICATION - CO_PARAMS_COMMUNICATION,
+               "on_error's codes follow the groups");
+void co_storage_report(co_node_t *node, co_param_group_t group, co_store_fault_t fault)
 {
+    if (fault == CO_STORE_INTACT || fault == CO_STORE_NONE) {
+        return;
+    }
     const uint8_t mfr[5] = {(uint8_t)fault, 0, 0, 0, 0};
     (void)co_emcy_raise(node, (uint16_t)(CO_EMCY_STORE_REJECTED + group), mfr);
     if (node->cfg.on_error) {
-        node->cfg.on_error(node->cfg.user, group == CO_PARAMS_COMMUNICATION
-                                               ? CO_NODE_ERR_STORED_COMM
-                                               : CO_NODE_ERR_STORED_APP);
+        /* (STORED_COMM and STORED_APP follow each other as the groups do) */
+        node->cfg.on_error(node->cfg.user, (co_node_error_t)(CO_NODE_ERR_STORED_COMM + group -
+                                                             CO_PARAMS_COMMUNICATION));
     }
 }
 #endif
@@ -284,7 +292,7 @@ static void reject(co_node_t *node, co_param_group_t group, co_store_fault_t fau
 #if CO_CONFIG_STORAGE
 /* The group's power-on values, then the values stored for it; an image that cannot be
  * applied whole leaves the power-on values. */
-void co_storage_reset_group(co_node_t *node, co_param_group_t group)
+co_store_fault_t co_storage_reset_group(co_node_t *node, co_param_group_t group)
 {
     co_group_defaults(node, group);
     co_store_fault_t fault = co_storage_verify(node, group);
@@ -292,9 +300,7 @@ void co_storage_reset_group(co_node_t *node, co_param_group_t group)
         co_group_defaults(node, group); /* no half image */
         fault = CO_STORE_READ_ERROR;
     }
-    if (fault != CO_STORE_INTACT && fault != CO_STORE_NONE) {
-        reject(node, group, fault);
-    }
+    return fault;
 }
 #endif
 

@@ -26,13 +26,27 @@ static inline void co_group_defaults(co_node_t *node, co_param_group_t group)
     co_od_reset(&node->cfg.od, co_group_first(group), co_group_last(group), id);
 }
 
-/* Reset application or communication: the group's power-on values, then those stored. */
+/* Reset application or communication: the group's power-on values, then those stored.
+ * Returns what was wrong with the stored image (CO_STORE_INTACT, or CO_STORE_NONE when
+ * nothing is stored), for co_storage_report once reset communication is done. */
 #if CO_CONFIG_STORAGE
-void co_storage_reset_group(co_node_t *node, co_param_group_t group);
+co_store_fault_t co_storage_reset_group(co_node_t *node, co_param_group_t group);
+void co_storage_report(co_node_t *node, co_param_group_t group, co_store_fault_t fault);
 void co_storage_show_capability(co_node_t *node, const co_od_entry_t *entry);
 void co_storage_reset_comm(co_node_t *node);
 #else
-#define co_storage_reset_group co_group_defaults /* nothing is ever stored */
+static inline co_store_fault_t co_storage_reset_group(co_node_t *node, co_param_group_t group)
+{
+    co_group_defaults(node, group); /* nothing is ever stored */
+    return CO_STORE_NONE;
+}
+static inline void co_storage_report(co_node_t *node, co_param_group_t group,
+                                     co_store_fault_t fault)
+{
+    (void)node;
+    (void)group;
+    (void)fault;
+}
 #define co_storage_reset_comm co_none_node
 #endif
 

@@ -300,6 +300,26 @@ static void test_application_image_refused_alone(void)
     CHECK(!co_emcy_active(&t.node, 0xFF11));
     CHECK_EQ(t.error_count, 1);
     CHECK_EQ(t.errors[0], CO_NODE_ERR_STORED_APP);
+    /* the error history keeps it: the reset of the communication group (0x1003 among it)
+     * that follows the application's does not wipe it */
+    CHECK_EQ(t.od.error_count, 1);
+    CHECK_EQ(t.od.error_history[0], 0x0004FF12u); /* manufacturer byte 0: CO_STORE_BAD_CRC */
+}
+
+/* Both images refused: both EMCYs in the history, the communication group's first. */
+static void test_both_refused_images_are_in_the_history(void)
+{
+    static test_node_t t;
+    save_777(&t);
+    g_storage.images[0].data[20] ^= 0x10u;
+    g_storage.images[1].data[g_storage.images[1].len - 1u] ^= 0x80u;
+    power_on(&t, 5, true);
+    CHECK(co_emcy_active(&t.node, 0xFF11));
+    CHECK(co_emcy_active(&t.node, 0xFF12));
+    CHECK_EQ(t.od.error_count, 2);
+    CHECK_EQ(t.od.error_history[0] & 0xFFFFu, 0xFF12u);
+    CHECK_EQ(t.od.error_history[1] & 0xFFFFu, 0xFF11u);
+    CHECK_EQ(t.od.error_register & 0x01u, 0x01u); /* generic error */
 }
 
 int main(void)
@@ -316,5 +336,6 @@ int main(void)
     RUN(test_foreign_and_random_images_are_refused);
     RUN(test_a_save_or_restore_ends_the_error);
     RUN(test_application_image_refused_alone);
+    RUN(test_both_refused_images_are_in_the_history);
     return check_summary();
 }

@@ -22,9 +22,10 @@
  * error while applying a verified image restores them again), the node
  * raises EMCY CO_EMCY_STORE_REJECTED + group (0xFF11 communication, 0xFF12 application;
  * manufacturer byte 0 = the co_store_fault_t) and calls on_error with
- * CO_NODE_ERR_STORED_COMM / CO_NODE_ERR_STORED_APP. The EMCY leaves after boot-up; the
- * error stays active until a save or restore of that group succeeds (or the application
- * clears it). co_storage_verify says what is wrong with an image.
+ * CO_NODE_ERR_STORED_COMM / CO_NODE_ERR_STORED_APP, once reset communication is done (so
+ * the error history 0x1003, which that reset clears, keeps it). The EMCY leaves after
+ * boot-up; the error stays active until a save or restore of that group succeeds (or the
+ * application clears it). co_storage_verify says what is wrong with an image.
  *
  * 0x1010 sub1 saves both groups, sub2 the communication group, sub3 the application
  * group, when written the signature "save" (0x65766173); 0x1011 sub1..3 forgets the
