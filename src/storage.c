@@ -268,12 +268,13 @@ static CO_SIZE_INLINE bool apply_records(co_node_t *node, co_param_group_t group
     return true;
 }
 
-/* A rejected image (the group holds its defaults): an EMCY and on_error. Called once reset
- * communication is done: the reset of the communication group clears the error history
- * (0x1003), which must keep the EMCY, and the EMCY goes out on the COB-ID just loaded. */
 _Static_assert(CO_NODE_ERR_STORED_APP - CO_NODE_ERR_STORED_COMM ==
                    CO_PARAMS_APPLICATION - CO_PARAMS_COMMUNICATION,
                "on_error's codes follow the groups");
+
+/* A rejected image (the group holds its defaults): an EMCY and on_error. Called once reset
+ * communication is done: the reset of the communication group clears the error history
+ * (0x1003), which must keep the EMCY, and the EMCY goes out on the COB-ID just loaded. */
 void co_storage_report(co_node_t *node, co_param_group_t group, co_store_fault_t fault)
 {
     if (fault == CO_STORE_INTACT || fault == CO_STORE_NONE) {
