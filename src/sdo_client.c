@@ -242,7 +242,8 @@ static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const
     if (seqno == 0 || seqno > c->blksize) {
         return CO_ABORT_SEQUENCE; /* a segment of no sub-block the client asked for */
     }
-    if (seqno == c->seq + 1) {
+    bool kept = seqno == c->seq + 1;
+    if (kept) {
         uint64_t total = (uint64_t)c->done + CO_SDO_SEG_BYTES;
         if (!last && c->size_known && total > c->size) {
             return CO_ABORT_LEN_HIGH;
@@ -256,9 +257,9 @@ static co_abort_t on_block_upload_seg(co_node_t *node, co_sdo_client_t *c, const
         if (last) {
             c->state = BUP_END;
         }
-        touch(node, c);
-    } else if (seqno > c->seen) {
-        touch(node, c); /* a sub-block going on past a lost segment */
+    }
+    if (kept || seqno > c->seen) {
+        touch(node, c); /* progress, or a sub-block going on past a lost segment */
     }
     c->seen = seqno > c->seen ? seqno : c->seen;
     if (seqno == c->blksize || last) {
