@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # canola -- the commands of the README. Everything builds out of tree with CMake.
 #   make demo    the demo network (canola demo, from the Python environment)
 #   make demo-c  the C demo network on the simulated bus, as a candump log

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * bench_core.c -- operations of the core, each run inside a never-inlined function
  * measure_<operation> so that callgrind (--toggle-collect=measure_<operation>)

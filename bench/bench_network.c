@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * bench_network.c -- a full network on the simulated bus, as fast as one core runs it:
  * how many times faster than real time canola simulates a busy 1 Mbit/s network.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """python-canopen's master (RemoteNode) and device (LocalNode) in one process on
 python-can's virtual bus: expedited SDO uploads of 0x1000 sub 0 (a u32), back to back.
 The anchor of canola's round-trip row (bench/bench_sdo_net.c expedited_rtt does the same

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """canola from Python against python-canopen, like for like: both stacks in one process on
 python-can's virtual bus with the same EDS (bench/ds301_objects.eds). Prints one line of
 key=value pairs (bench/run turns them into rows). Wall-clock figures are the best of RUNS;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * bench_sdo_net.c -- SDO between a canola client node and a canola server node: block
  * transfer throughput on the simulated bus's timing model, and expedited round trips per

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * size_firmware.c -- the smallest firmware of a device on canola, for the size rows of
  * bench/run: the core, the dictionary canola.odgen generated (ds301.h, from the size rows'

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # cmake/CanolaInstalledConfig.cmake -- writes the installed canola/config.h (a script:
 # cmake -DMACROS=... -DSOURCE=... -DCHOSEN=... -DOUT=... -P this file; see CanolaPackage.cmake).
 #   MACROS  the compiler's -dM -E listing of the source tree's canola/config.h, preprocessed

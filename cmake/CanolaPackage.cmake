@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # cmake/CanolaPackage.cmake -- canola as a package (included by the top CMakeLists.txt once
 # the core and the ports are defined):
 #   1. the configuration header chosen at build time (CANOLA_CONFIG_FILE) on the core target,
@@ -105,6 +106,8 @@ write_basic_package_version_file("${CANOLA_GENERATED}/canolaConfigVersion.cmake"
 install(FILES "${CANOLA_GENERATED}/canolaConfig.cmake"
               "${CANOLA_GENERATED}/canolaConfigVersion.cmake"
         DESTINATION "${CANOLA_CMAKE_DIR}")
+# The license travels with the libraries (Apache-2.0: LICENSE and NOTICE).
+install(FILES LICENSE NOTICE DESTINATION "${CMAKE_INSTALL_DOCDIR}")
 
 # pkg-config: canola (the core), canola-sim and canola-linux (each requiring canola). The
 # prefix is found from the .pc file's own place (${pcfiledir}), so an installed tree can

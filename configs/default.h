@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* configs/default.h -- the bench's "CANopenNode default set", as issue 4 defines it word for
  * word: "segmented SDO, heartbeat consumer, EMCY with history, SYNC producer+consumer,
  * TIME, storage, 4+4 PDO with timers", on top of the minimal profile (configs/minimal.h:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* configs/minimal.h -- the bench's "minimal" profile, as issue 4 defines it word for word:
  * "NMT + heartbeat, expedited SDO server, 4+4 PDO, SYNC consumer, EMCY producer".
  * Read literally: a heartbeat producer only (no consumer), an SDO server for expedited

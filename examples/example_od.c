@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* example_od.c -- see example_od.h. */
 #include "example_od.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * example_od.h -- a hand-written object dictionary for the examples and tests.
  *

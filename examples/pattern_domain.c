@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* pattern_domain.c -- see pattern_domain.h. */
 #include "pattern_domain.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pattern_domain.h -- a DOMAIN that is never stored: uploads produce a pattern, downloads
  * are checked against it.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * sim_network.c -- a master and three devices on the simulated bus.
  *

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """libFuzzer target (atheris): the EDS/DCF parser, canola.eds, on arbitrary bytes.
 
 The parser's contract (canola.eds.parse): bad input raises EdsError and never another

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """atheris fuzz target: the CiA 309-3 gateway line parser and value formats.
 
     build-py/venv/bin/python fuzz/fuzz_gateway_parser.py -max_total_time=30

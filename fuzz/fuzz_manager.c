@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * fuzz_manager.c -- libFuzzer target: the CiA 302-2 manager (canola/manager.h) against
  * hostile slaves. A master (node 1) boots slaves 2, 3 and 4 from a description the input

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * fuzz_node.c -- libFuzzer target: any sequence of frames, time steps and network writes
  * into a node with every service enabled (the example dictionary), then the invariants a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * fuzz/fuzz_reader.h -- the fuzz input read byte by byte; past its end, zeros.
  */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * fuzz_sdo_client.c -- libFuzzer target: the SDO client state machine against a hostile
  * server. A node (ID 1) runs client channel 0 towards server 6; the fuzzer starts

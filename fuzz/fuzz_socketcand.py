@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """atheris fuzz target: the socketcand protocol parser of the ``canola bus serve`` hub.
 
     build-py/venv/bin/python fuzz/fuzz_socketcand.py -max_total_time=30 fuzz/corpus/socketcand

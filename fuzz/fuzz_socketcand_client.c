@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * fuzz_socketcand_client.c -- libFuzzer target: canola's socketcand client
  * (port/linux/socketcand.c, the transport canola-node uses) against a hostile server on

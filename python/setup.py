@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Hooks the cffi extension into the build and the C core into the sdist; the metadata is in
 pyproject.toml.
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/build.h -- what the build's goal changes in the core: hints for the compiler, the
  * short paths a build for size (-Os) leaves out, and the copies of a size known only at

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * copy.c -- the byte loops behind co_copy and co_zero (build.h) in a build for size.
  */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/counters.h -- the node's counters (co_node_stats_t, canola/node.h) as the core counts
  * them: one statement per event, nothing at all in a build without them (CO_CONFIG_STATS 0,

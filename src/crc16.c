@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * crc16.c -- CRC-16-CCITT as SDO block transfer uses it: polynomial 0x1021,
  * initial value 0, no reflection, no final XOR ("123456789" -> 0x31C3).

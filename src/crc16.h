@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/crc16.h -- CRC-16-CCITT (crc16.c): polynomial 0x1021, initial value 0, no reflection,
  * no final XOR. SDO block transfers and the stored parameters' images use it. Not installed.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * emcy.c -- the EMCY producer: the error register 0x1001, the active errors, raise and
  * clear, the frames and bus events (see canola/emcy.h). The inhibit time and its queue

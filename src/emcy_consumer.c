@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * emcy_consumer.c -- the EMCY consumer: 0x1028 subN holds COB-IDs to watch; each EMCY
  * frame received on one of them goes to on_emcy. Left out with CO_EMCY_CONSUMERS_MAX 0

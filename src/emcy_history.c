@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * emcy_history.c -- the EMCY error history 0x1003: every raise recorded, newest at sub1,
  * sub0 the number recorded; writing 0 to sub0 clears it, anything else is refused with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/emcy_internal.h -- the EMCY family (see canola/emcy.h): the producer (emcy.c), its
  * inhibit time and queue (emcy_queue.c, CO_EMCY_QUEUE_LEN > 0), the error history 0x1003

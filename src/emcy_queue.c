@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * emcy_queue.c -- the EMCY inhibit time (0x1015, units of 100 us): frames raised faster
  * wait in a queue of CO_EMCY_QUEUE_LEN and leave one inhibit time apart, and frames raised

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/errctl_internal.h -- error control (see canola/errctl.h): the heartbeat producer
  * (heartbeat.c), the heartbeat consumer (hb_consumer.c, CO_HB_CONSUMERS_MAX > 0) and node

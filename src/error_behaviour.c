@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * error_behaviour.c -- communication errors and what the node does about them: error-control
  * events (to the application and the manager), EMCY 0x8130 while communication is lost, the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * guarding.c -- node guarding: the node's answers to guarding RTRs and its life
  * guarding (0x100C x 0x100D), and the master's watch of guarded nodes.

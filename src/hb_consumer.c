@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * hb_consumer.c -- the heartbeat consumer (0x1016 sub1..N, see canola/errctl.h). Left out
  * with CO_HB_CONSUMERS_MAX 0 (errctl_internal.h): 0x1016 is then a plain entry.

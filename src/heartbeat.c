@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * heartbeat.c -- the heartbeat producer (0x1017). The consumer (0x1016) is
  * hb_consumer.c, left out with CO_HB_CONSUMERS_MAX 0.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kernel.c -- what every service may call below the node (kernel.h): the schedule, the NMT
  * gate (which services each state allows: the send and receive paths ask it), and the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/kernel.h -- what every service may use: COB-IDs, the receive routes (routes.h),
  * sending, the schedule and time, the dictionary's parameters; at the end, the calls up to

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/lss_internal.h -- LSS (CiA 305, see canola/lss.h): the slave (lss_slave.c,
  * CO_CONFIG_LSS_SLAVE) and the master (lss_master.c, CO_CONFIG_LSS_MASTER). The slave's reset

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * lss_master.c -- the LSS master (CiA 305): one request at a time on 0x7E5, answers on
  * 0x7E4, time-outs from the node's poll, fastscan as a walk over the address bits.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * lss_slave.c -- the LSS slave (CiA 305): answers the master on 0x7E5, keeps the
  * pending node-ID and bit timing, and boots an unconfigured node once it has an ID.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * manager.c -- the CANopen manager (CiA 302-2): boots the listed slaves one after the
  * other over SDO (identity checks, concise DCF, heartbeat), then starts the network.

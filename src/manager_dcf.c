@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * manager_dcf.c -- the concise DCF format (0x1F22) and the texts of the manager's
  * reports.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/manager_internal.h -- the CANopen manager (CiA 302-2, see canola/manager.h): the slaves'
  * boot (manager.c) and program download (program_master.c), both CO_CONFIG_MANAGER; both drive

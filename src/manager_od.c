@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * manager_od.c -- the manager's network description read from the master's own object
  * dictionary (0x1F80, 0x1F81, 0x1F84..0x1F88, 0x1F22, 0x1F26, 0x1F27, 0x1016), as a DCF

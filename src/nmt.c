@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * nmt.c -- the NMT state machine of a node and its fan-out: every service resets its
  * communication, starts, stops or catches up as the state says; and NMT commands as a master.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * node.c -- the node's life: init (the services bind their objects, the node's wiring),
  * start, ingest (a frame to the service its route names) and poll (every service's due work).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/node_internal.h -- the node on top of the services: what node.c (life: init, start,
  * ingest, poll), nmt.c (the state machine and its fan-out to the services), node_od.c (object

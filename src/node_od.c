@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * node_od.c -- the dictionary as the node reads and writes it: access rights as the network
  * has them, and the effects of a write on the services that own the object (a table).

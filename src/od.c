@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * od.c -- the object dictionary: look-up, wire conversion, checks, hooks, reset.
  *

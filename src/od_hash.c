@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * od_hash.c -- building the optional hash table of a dictionary (co_od_t.hash) at run
  * time; canola.odgen writes the same table into generated dictionaries.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/od_plain.h -- values read and written in place: the parameters the services read on
  * every SYNC or poll, and entries whose storage is their wire form, which the short paths

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo.c -- what RPDOs and TPDOs share (see canola/pdo.h): binding the dictionary's PDOs,
  * loading their communication parameters, the rules of writes to 0x1400..0x1BFF, routes,

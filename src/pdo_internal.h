@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/pdo_internal.h -- the PDO family (see canola/pdo.h): what the node and SYNC call, and what
  * pdo.c, pdo_map.c, pdo_rx.c, pdo_tx.c and pdo_timers.c tell each other. Not installed.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_map.c -- PDO mappings (see canola/pdo.h): each mapping entry resolved to its
  * object's storage and a bit count once, when the mapping becomes valid, so that frames

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_rx.c -- RPDOs: length checks, applying the data to the mapped objects (at once or
  * at the next SYNC) and deadline monitoring (see canola/pdo.h).

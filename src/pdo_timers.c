@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_timers.c -- the PDO timers (see canola/pdo.h): the TPDO inhibit time (0x1800+n sub3)
  * and event timer (sub5), and RPDO deadline monitoring (0x1400+n sub5). Left out with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/pdo_timers.h -- the PDO timers of pdo_timers.c (inhibit time, event timer, RPDO
  * deadline) as the rest of the PDO family calls them; with CO_CONFIG_PDO_TIMERS 0, stand-ins

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_tx.c -- TPDOs: packing the mapped values and sending them by transmission type
  * (see canola/pdo.h). Values come from co_od_read, so read hooks produce them.

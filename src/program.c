@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * program.c -- program download, device side (CiA 302-3): the hooks of 0x1F50 program
  * data, 0x1F51 program control, 0x1F56 software identification and 0x1F57 flash status.

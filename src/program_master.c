@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * program_master.c -- program download, master side (CiA 302-3): stop, clear, block
  * download of 0x1F50, start, check 0x1F56; progress from the SDO client's count.

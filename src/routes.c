@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * routes.c -- the receive routes: which service takes the frames of which COB-ID.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/routes.h -- the receive routes (routes.c): which service takes the frames of a COB-ID.
  * Not installed; kernel.h includes it (every service sets its own routes).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * sdo_client.c -- the SDO client: expedited, segmented and block transfer in
  * both directions (see canola/sdo.h for the behaviour).

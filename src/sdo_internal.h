@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/sdo_internal.h -- the SDO family (see canola/sdo.h): the server channels (sdo_server.c),
  * the client channels (sdo_client.c, CO_SDO_CLIENTS_MAX > 0, and sdo_value.c over them), and

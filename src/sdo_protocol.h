@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/sdo_protocol.h -- the words of the SDO protocol (CiA 301, 7.2.4.3), named once for the
  * server (sdo_server.c) and the client (sdo_client.c): the command specifiers of byte 0, the

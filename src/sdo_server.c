@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * sdo_server.c -- the SDO server: expedited, segmented and block transfer in
  * both directions (see canola/sdo.h for the behaviour).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * sdo_value.c -- typed one-call reads and writes over an SDO client channel, for C
  * masters: the value travels in the channel's own 8-byte buffer, so the caller keeps

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/standin.h -- the shapes of the stand-ins a family header maps a left-out feature's
  * functions onto (canola/config.h): no-ops the compiler removes with their calls, so that a

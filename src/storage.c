@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * storage.c -- stored parameters (0x1010, 0x1011); see canola/storage.h.
  */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/storage_internal.h -- stored parameters (see canola/storage.h): 0x1010 and 0x1011, and
  * the loads at reset (storage.c; CO_CONFIG_STORAGE 0 keeps the dictionary's values and

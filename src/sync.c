@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * sync.c -- the SYNC consumer (0x1005, 0x1007, 0x1019); the producer (0x1005 bit 30,
  * 0x1006) is sync_producer.c, left out with CO_CONFIG_SYNC_PRODUCER 0.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/sync_internal.h -- the SYNC family (see canola/sync.h): the consumer (sync.c) and the
  * producer (sync_producer.c, CO_CONFIG_SYNC_PRODUCER). A SYNC taken goes on to the PDOs

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * sync_producer.c -- the SYNC producer (0x1005 bit 30, 0x1006 period, the counter of
  * 0x1019; see canola/sync.h). Left out with CO_CONFIG_SYNC_PRODUCER 0 (sync_internal.h).

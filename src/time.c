@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * time.c -- TIME producer and consumer (0x1012), TIME_OF_DAY on the wire.
  */

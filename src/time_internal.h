@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/time_internal.h -- TIME (see canola/time.h): the consumer and producer of 0x1012
  * (time.c, CO_CONFIG_TIME; without it neither role, whatever 0x1012 says). Not installed.

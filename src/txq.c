@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * txq.c -- sending frames: straight to the driver when it is free, else into a
  * bounded queue kept in arbitration order (the frame the bus would let through

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * tests/example_od_domain.h -- the example dictionary with a streamed DOMAIN at 0x3000
  * (pattern_domain.h), for the tests that move large SDO transfers over the simulated bus.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * tests/harness.h -- a fake driver that records frames, and frame helpers.
  */

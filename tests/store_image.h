@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * tests/store_image.h -- a stored parameter image built by hand (the format of
  * canola/storage.h): a test writes records, seals them with a header and CRC, and then

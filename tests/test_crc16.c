@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_crc16.c -- the SDO block CRC against a bitwise reference, every table entry. */
 #include "check.h"
 #include "crc16.h"

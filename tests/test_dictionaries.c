@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_dictionaries.c -- nodes on dictionaries other than the example's: more heartbeat
  * consumer entries than the node can watch, none at all, SDO client parameters 0x1280 kept
  * in step with the channel, stored parameters next to hook-served objects. Each dictionary

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_emcy.c -- EMCY producer (0x1001, 0x1003, 0x1014, 0x1015) and consumer (0x1028). */
 #include "check.h"
 #include "harness.h"

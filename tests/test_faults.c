@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_faults.c -- fault injection on the simulated bus: what a real network does to a
  * device, and what the device must do about it.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_file_storage.c -- parameter storage in files: saves survive a power cycle, a save
  * cut off before its commit leaves the old image, restore removes it; damaged files are
  * refused whole, a link at the temporary name is not followed, a failed save leaves no

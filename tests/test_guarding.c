@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_guarding.c -- node guarding: the node's replies and life guarding, the master's watch. */
 #include "check.h"
 #include "harness.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_heartbeat.c -- heartbeat producer (0x1017) and consumer (0x1016). */
 #include "check.h"
 #include "harness.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_lss.c -- LSS (CiA 305) slave and master, byte-exact on a fake driver: every
  * command, its answer, the states it is allowed in, malformed frames; the master's

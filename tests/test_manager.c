@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_manager.c -- the CANopen manager (CiA 302-2): concise DCF helpers, reason texts,
  * and networks booted from one description on the simulated bus.

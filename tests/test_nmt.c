@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_nmt.c -- NMT state machine: boot-up, commands, resets, per-state services. */
 #include "check.h"
 #include "harness.h"

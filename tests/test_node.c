@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_node.c -- node lifecycle, transmit queue, receive routes, OD access through the node. */
 #include "check.h"
 #include "harness.h"

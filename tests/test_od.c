@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_od.c -- the object dictionary (src/od.c): look-up, wire forms, checks, hooks, reset. */
 #include "check.h"
 #include "example_od.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_od_compact.c -- the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1, the core
  * built so: tests/CMakeLists.txt): 8-byte entries (values by offset into one struct, sizes
  * from the type or the side table), power-on values from the image without zeros (numbers

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_pdo.c -- RPDOs and TPDOs: transmission types, timing, length errors, deadline
  * monitoring, the re-mapping procedure and bit-level mapping. */
 #include "check.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_pdo_compact.c -- PDOs on the compact form of the dictionary (CO_CONFIG_OD_COMPACT 1,
  * the core built so: tests/CMakeLists.txt), where a PDO's mapping slots hold entry positions
  * instead of pointers (canola/pdo.h, co_pdo_item_t): an RPDO with a dummy entry between its

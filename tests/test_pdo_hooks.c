@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_pdo_hooks.c -- PDOs that map objects served by application hooks: a TPDO reads
  * through the read hook, an RPDO hands its bytes to the write hook and runs the written
  * hook of a stored value; partial (bit-level) mapping goes through the same hooks. RPDO

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_profile.c -- a device built in one of the bench's size profiles (configs/minimal.h
  * or configs/default.h, the core compiled in that configuration: tests/CMakeLists.txt builds
  * this file once per profile) on the simulated bus, seen from a raw port: it boots, answers

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_program.c -- program download (CiA 302-3): the device objects 0x1F50, 0x1F51,
  * 0x1F56, 0x1F57 as the network sees them, and a 1 MiB download on the simulated bus

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_scenarios.c -- a master and devices on the simulated bus walking through the
  * procedures of the seeds: power-on and boot-up, NMT commands to one node and to all,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_sdo_channels.c -- several SDO server and client channels at once.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/test_sdo_client.c -- the SDO client, byte by byte against a scripted server, and
  * against the real server over the simulated bus. Client: node 1; server: node 5 (requests
  * on 0x605, responses on 0x585). */

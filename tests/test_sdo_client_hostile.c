@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/test_sdo_client_hostile.c -- the SDO client against a server that keeps talking
  * but makes no progress (silence after the start, sequence numbers that never advance, a
  * sub-block repeated without its first segment, a toggle that never alternates, more data

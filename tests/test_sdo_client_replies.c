@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/test_sdo_client_replies.c -- the SDO client against replies a correct server never
  * sends (each one ends the transfer with the CiA code for it, and the abort goes out), and
  * the argument checks of the client API. Client: node 1, server: node 5. */

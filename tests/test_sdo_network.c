@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_sdo_network.c -- SDO clients and servers on the simulated bus: large transfers in
  * every mode, many transfers at once, and transfers through a lossy bus.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_sdo_server.c -- the SDO server (channel 0 of node 5: requests on 0x605,
  * responses on 0x585): expedited, segmented and block transfer in both

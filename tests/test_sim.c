@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/test_sim.c -- the simulated bus: timing, arbitration, faults, trace, nodes on it. */
 #include "canola/sim.h"
 #include "check.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/test_sim_delivery.c -- the simulated bus's shortcuts behave as the plain rules:
  * the delivery index gives each node exactly the frames co_node_accepts passes at its turn,
  * the pending heap sends frames in the order arbitration (or send order) decides, and the

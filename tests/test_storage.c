@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_storage.c -- stored parameters: 0x1010 save, 0x1011 restore defaults, power cycles. */
 #include "canola/sim_storage.h"
 #include "check.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_storage_faults.c -- stored parameters against a storage that fails and images that
  * are damaged or written by another firmware: saves report 0x06060000 and leave nothing
  * behind, loads apply an image whole or not at all, and of an intact image only records

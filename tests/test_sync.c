@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_sync.c -- SYNC producer and consumer (0x1005, 0x1006, 0x1007, 0x1019). */
 #include "check.h"
 #include "harness.h"

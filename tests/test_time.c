@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_time.c -- TIME_OF_DAY coding, TIME producer and consumer (0x1012). */
 #include "check.h"
 #include "harness.h"

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # under_load.sh -- run the test suite beside CPU hogs, as on a busy laptop or CI runner:
 # the suite must stay green when it gets a fraction of the machine.
 #

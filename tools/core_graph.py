@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The file-level call graph of the core, read from its object files.
 
 A file calls another when its object file has an undefined symbol the other defines (a call,

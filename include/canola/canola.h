@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/canola.h -- the whole public API of the canola core in one include.
  * See each header for its manual; README.md for the picture.

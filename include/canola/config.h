@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/config.h -- compile-time sizes of the core, with their defaults.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/emcy.h -- emergency objects: the EMCY producer of a device (with its
  * error register 0x1001 and error history 0x1003) and the EMCY consumer (0x1028).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/errctl.h -- NMT error control: heartbeat and node guarding, both roles.
  *

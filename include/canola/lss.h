@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/lss.h -- layer setting services (CiA 305): give a node its node-ID and bit
  * rate over the bus, and find devices that have none.

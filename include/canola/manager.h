@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/manager.h -- the CANopen manager of CiA 302-2: an NMT master that boots the
  * network from one description -- checks each slave's identity, downloads its

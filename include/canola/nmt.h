@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/nmt.h -- network management: the NMT state machine of a node and the
  * NMT commands a master sends.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/node.h -- a CANopen node: the object that owns every service of one
  * device (or master) and the only entry points the driver and the clock use.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/od.h -- the object dictionary: a sorted, constant table of entries.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/pdo.h -- process data objects: RPDOs received and applied to the object
  * dictionary, TPDOs packed from it and sent, with every CiA 301 transmission type.

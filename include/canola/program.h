@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/program.h -- program download (CiA 302-3): the device side of 0x1F50, 0x1F51,
  * 0x1F56, 0x1F57, and a master that downloads a program and checks what runs after.

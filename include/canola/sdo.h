@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/sdo.h -- service data objects: the SDO server of a device and the SDO
  * client of a master or tool. Expedited, segmented and block transfer, both

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/storage.h -- stored parameters: 0x1010 store parameters and 0x1011 restore
  * default parameters, through a storage interface that a port implements (files on

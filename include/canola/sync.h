@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/sync.h -- the SYNC object: producer and consumer.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/time.h -- the TIME object (time stamp): producer and consumer.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/types.h -- the vocabulary every canola module shares.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola_node.c -- canola-node: the example device (examples/example_od.c) as a Linux
  * program, firmware-style: one node on SocketCAN or on a socketcand server/hub, run by

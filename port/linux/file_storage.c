@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* file_storage.c -- parameter storage in files, written atomically; see
  * canola/file_storage.h. */
 #define _POSIX_C_SOURCE 200809L

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* linux_loop.c -- the epoll + timerfd event loop; see canola/linux_loop.h. */
 #define _GNU_SOURCE
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* socketcan.c -- CAN driver on Linux SocketCAN raw sockets; see canola/socketcan.h. */
 #define _GNU_SOURCE
 

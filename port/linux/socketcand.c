@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* socketcand.c -- CAN over TCP in socketcand's ASCII protocol; see canola/socketcand.h. */
 #define _GNU_SOURCE
 

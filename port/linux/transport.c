@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* transport.c -- what every transport shares; see canola/transport.h. */
 #include "canola/transport.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The binding layer between the core and the Python package (canola._core, built by
  * python/src/canola/_build_core.py with cffi): what Python allocates, and the C ends of
  * the callbacks that go to Python.

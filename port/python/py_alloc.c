@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Every allocation of the binding layer (see canola_py.h), counted. */
 #include "canola_py.h"
 

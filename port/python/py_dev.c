@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* canola.Device / canola.Master: a node with every callback routed to Python, on a
  * simulated bus or on a link (see canola_py.h). */
 #include "canola_py.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A python-can bus object and the canola devs on it (see canola_py.h): what one dev sends
  * the others receive at once, in C, as they would on a real bus; Python hands the same
  * frames to python-can for everybody else. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Program download, device side, on a canola.Device (see canola_py.h): the node's
  * hook_ctx is the Python engine, so the entries 0x1F50/51/56/57 get hooks of their own
  * that find their co_program_t from the hooks pointer, and the program's callbacks go to

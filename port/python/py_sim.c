@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The simulated bus for canola.core.SimBus (see canola_py.h). */
 #include "canola_py.h"
 

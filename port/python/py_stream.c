@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Streamed DOMAIN entries of a canola.Device (canola.domain.DomainStream; see
  * canola_py.h): the entry gets read/write hooks of its own that hand each piece to Python,
  * so it holds any size (no co_od_domain_t buffer, no CO_SDO_BUF_SIZE limit); the node's

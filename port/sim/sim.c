@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * port/sim/sim.c -- the simulated CAN bus; see canola/sim.h.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* sim_storage.c -- parameter storage in RAM; see canola/sim_storage.h. */
 #include "canola/sim_storage.h"
 

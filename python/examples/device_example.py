@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A CANopen device in a few lines: canola.Device on a python-can bus.
 
     python device_example.py                              # python-can virtual bus

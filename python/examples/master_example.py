@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A CANopen master in a few lines: canola.Master with two canola.Devices.
 
     python master_example.py          # everything on canola's simulated bus, virtual time

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared pieces of the CLI tests: run ``canola`` in this process and check its errors."""
 
 from __future__ import annotations

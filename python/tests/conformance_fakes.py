@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Nodes for canola.conformance's tests to fail on purpose.
 
 :class:`FakeNode` is a hand-written responder on the simulated bus (its frames go through

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared fixtures: python-can buses for the tests that talk over a real(istic) bus.
 
 ``can_bus`` makes python-can buses that see each other: the ``virtual`` interface on a

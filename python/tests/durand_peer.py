@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """durand (a CANopen responder library from PyPI, independent of canola) as a device on
 canola's simulated bus, in virtual time: its network interface over a raw port (a quiet
 canola.Master that only moves frames), its scheduler advanced with the bus's clock."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared pieces of the gateway tests: a fake master, a line client with time-outs, and a
 gateway served on a real backend."""
 

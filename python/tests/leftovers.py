@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Nothing a test starts may outlive it: processes are found by a mark in their environment.
 
 Before each test ``conftest`` puts ``CANOLA_TEST_PROCESS=<pytest's pid>:<test id>`` into this

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A model of an LSS slave that behaves like CANopenNode's (CO_LSSslave.c, read for its
 behaviour): once a fastscan matched its whole address it is in LSS configuration, and
 there it answers every fastscan request, whatever it asks. A raw node on the bus (a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Helpers of the issue 7 tests: devices of managed_device.eds with an identity of their
 own, and DCF files made from that EDS."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The binding boundary: one typed door to the compiled module."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Master.boot: the CANopen manager (CiA 302-2) booting a network of canola.Devices
 described in YAML and DCF files, on the simulated bus in virtual time."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Network descriptions of the CANopen manager: YAML files, DCF files, concise DCFs."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The canola command: help, argument errors, nmt, scan, dump, monitor (in-process through
 canola.cli.main, peers on a hub or a python-can virtual bus)."""
 

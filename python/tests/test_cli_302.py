@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola boot, canola flash, canola lss: the CLI against canola.Devices on a python-can
 virtual bus in this process (each command opens its own bus on the channel)."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The EDS in the everyday commands: ``--eds``/``--dcf`` (per node: ``--eds N=FILE``) give
 ``canola sdo``, ``scan``, ``dump`` and ``monitor`` entry names, types, typed values and PDO
 mappings. Against a canola device (node 5) and python-canopen's LocalNode (node 6) on one

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The canola command against real devices: a hub (``canola bus serve``) and two devices
 (``canola device``) in their own processes, the CLI in this process (and a few runs as
 programs), python-canopen as an independent peer on the same hub."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola sync and canola time in virtual time: the CLI's master produces the frames with
 the core's SYNC producer and the master's TIME production, on a simulated bus the
 commands open (exact stamps, counters and counts). Over python-can: test_cli_eds.py."""

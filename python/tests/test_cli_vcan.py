@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A device and the canola command on one bus, in separate processes: SocketCAN when
 CANOLA_VCAN names an interface (the SocketCAN tier runs these with -m vcan), otherwise a hub
 (``canola bus serve`` in a subprocess), so the same test runs everywhere."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.conformance in virtual time on the simulated bus: canola.Device passes every
 check (with canola-node's dictionary too), leaves its values as it found them, each check
 runs alone with the same outcome; a device that deviates from its EDS and a hand-written

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola conformance``: the check list, argument errors, and runs against a canola.Device
 on a python-can virtual bus in this process (exit 0 when no check fails, 1 otherwise; the
 Markdown and JUnit reports written)."""

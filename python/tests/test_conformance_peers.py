@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.conformance over python-can, against real implementations in other threads and
 processes: canola.Device, canola-node (the C device: through the hub, or on SocketCAN in the
 SocketCAN tier, the one run there: a whole run in the emulated VM takes about a minute) and

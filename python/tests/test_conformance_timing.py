@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.conformance's verdicts on a late node, in virtual time: a frame the node sends
 late (as a node starved of CPU does on a busy host) still counts for the SYNC or reset it
 answers, and a frame too many is still found however late it comes.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The C core through cffi: two nodes from the sample EDS on a simulated bus."""
 
 from __future__ import annotations

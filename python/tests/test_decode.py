@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CANopen decoder and the candump reader, on hand-made frames and on real traffic of the
 C core (SimBus trace: expedited, segmented and block SDO, NMT, heartbeats)."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A default bus: ``CANOLA_BUS`` and python-can's own configuration name the bus of every
 command; ``--iface``/``--bus`` override them; a bus without a channel, or none at all, is
 a one-line error."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola demo: every step passes and is in the summary, a broken step fails the demo and is
 named, the trace shows the story, and the demo runs on a hub or a SocketCAN bus where
 another program can watch it."""

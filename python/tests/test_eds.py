@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of canola.eds: one behaviour per test, plus the shared corpus of real files."""
 
 from __future__ import annotations

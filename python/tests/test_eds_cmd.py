@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola eds check | show | dcf | diff: small EDS files written here, the repo's test EDS,
 the real-world corpus beside the repo (when present), and ``diff --node`` against a
 canola.Device on a python-can virtual bus."""

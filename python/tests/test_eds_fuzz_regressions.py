@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Inputs the EDS fuzzer (fuzz/fuzz_eds.py) found: each parses, or fails with EdsError only,
 and what parses survives write() and parse() again."""
 

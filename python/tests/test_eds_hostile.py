@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.eds against hostile and careless files: every input ends as an ObjectDictionary
 (with warnings) or an EdsError, whatever its size, and every warning says where (file,
 line, section, key) so that a tool can print it."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """PDO mapping objects in an EDS/DCF are checked against CiA 301 (canola.formats._eds_pdo): every
 rule has a file that breaks it, and a file that keeps them all has no warning."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The examples in python/examples run (so they cannot rot) and print what they promise."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Master.flash (CiA 302-3 program download) to a canola.Device with a ProgramSlot, on the
 simulated bus and on python-can."""
 

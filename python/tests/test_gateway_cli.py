@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola gateway`` / ``python -m canola.gateway`` as processes (simulated network)."""
 
 from __future__ import annotations

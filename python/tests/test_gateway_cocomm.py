@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway as ``cocomm`` and CANopenDemo's scripts see it: replies framed and numbered
 as CANopenNode's gateway frames them (fake master; the LSS codes are in
 test_gateway_lss.py, NMT frames on a bus in test_gateway_master.py)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """1 MiB through the gateway by SDO block transfer: a canola.Device whose DOMAIN streams
 (canola.domain.DomainStream) on a simulated bus (virtual time)."""
 

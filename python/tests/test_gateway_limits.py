@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway's bounds (docs/security.md), tried as a hostile client would, on loopback:
 parse time, other clients while one parses, idle clients, client slots, shutdown, the
 SYNC period of its own dictionary."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway's lss_* commands (CiA 309-3) through canola.Master's LSS master, against
 canola.Devices without node-ID (0xFF) on a simulated bus (virtual time)."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway on canola.Master with canola.Device peers: a simulated bus (virtual time)
 and a python-can bus (real time, the master's and devices' bus threads)."""
 

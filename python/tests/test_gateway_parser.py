@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CiA 309-3 line parser and value formats: pure functions, no network."""
 
 from __future__ import annotations

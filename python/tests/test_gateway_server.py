@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway server against a fake master: sessions, concurrency, limits, disconnects."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway end to end: a TCP client, the gateway (:class:`MasterBackend` on a
 :class:`canola.Master`, as ``canola gateway --simulate`` runs it) and :class:`canola.Device`
 peers, all on the simulated bus (virtual time)."""

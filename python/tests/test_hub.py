@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The socketcand hub with python-can's own socketcand interface as the clients."""
 
 from __future__ import annotations

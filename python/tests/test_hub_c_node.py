@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola-node (the C device of port/linux, with its own socketcand client) on the hub,
 driven by the canola command.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """python-canopen (an independent implementation) against canola.Device over python-can.
 
 python-canopen's RemoteNode is the master here: SDO in every form and size, abort codes,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Master (and its CiA 302-2 manager and LSS master) against durand, a CANopen
 responder library from PyPI written independently of canola: SDO in every protocol, NMT,
 boot-up and heartbeat, EMCY, PDO re-mapping by a concise DCF, SYNC and RPDOs, LSS

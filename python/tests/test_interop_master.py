@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Master against python-canopen's LocalNode (an independent SDO server and NMT
 slave) over python-can: SDO expedited and segmented, aborts, time-outs, NMT, heartbeat,
 boot-up and EMCY events, SYNC and TIME production, raw PDO frames, asyncio."""

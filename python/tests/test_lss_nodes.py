@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """master.lss (CiA 305) with canola.Devices that have no node-ID (0xFF): fastscan, node-IDs
 given, the devices boot; on the simulated bus (virtual time) and on python-can."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Master after its own node was reset (NMT reset node / reset communication, to
 its node-ID or to all, from another bus participant or the gateway's own commands): it
 serves every node again, those it talked to before included; the manager on it boots the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Device and canola.Master on python-can buses: the bus thread, the lock, callbacks."""
 
 from __future__ import annotations

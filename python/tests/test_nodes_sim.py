@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Device and canola.Master on the simulated bus: virtual time, deterministic."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of canola.odgen: golden files, C compilation and linking, the corpus, the CLI.
 
 The golden files are tests/golden/sample.h and sample.c, generated from tests/golden/sample.eds

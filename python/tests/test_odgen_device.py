@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A device built from odgen's generated C answers SDO reads of every entry.
 
 For each EDS (the test EDS files here, and the real ones of ../shared/eds-corpus when that

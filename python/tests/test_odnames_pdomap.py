@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.odnames (entries named as python-canopen names them) and canola.pdomap (PDOs
 from a dictionary, decoded, read and configured by SDO), without a bus."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The package as its users get it. ``python -m build`` makes the sdist and, from it, away
 from the repository's C sources (the sdist carries them in csrc/), the wheel; the wheel
 installs into a fresh virtual environment, with its runtime dependencies resolved from their

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The README's ``canola`` command block works as written: every line of it runs, in its
 order, against the files it names (``examples/eds/``), on a ``canola bus serve`` hub with
 a ``canola device``. What the test makes its own: the hub's port (the README's 29536 may

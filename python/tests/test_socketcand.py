@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The socketcand protocol functions: splitting, parsing, formatting (pure, no sockets)."""
 
 from __future__ import annotations

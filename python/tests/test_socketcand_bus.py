@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola's socketcand client (canola.bus.open.open_bus of a socketcand:// URL) against a
 scripted server: the stream read as a stream, whatever the TCP segments."""
 

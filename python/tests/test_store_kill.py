@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Parameter storage survives SIGKILL during a save.
 
 A device (canola.Device with a store folder, on a hub) gets new parameter values over SDO,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Stored parameter files (``store_dir``) that are damaged: refused whole, and said so.
 
 A file that fails any check (a flipped bit, a cut, random bytes, a FIFO in its place) is

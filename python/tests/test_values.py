@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.values: Python values <-> CANopen wire bytes, by CiA 301 / CiA 309-3 type names."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * tests/linux/loop_wait.h -- waiting on the wall clock for something the event loop does,
  * as a busy machine allows: the loop runs in short slices until the awaited state holds,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * tests/linux/tcp_loopback.h -- a TCP listening socket on 127.0.0.1, at a port the kernel
  * chooses, for the tests that play a socketcand server.

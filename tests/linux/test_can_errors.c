@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_can_errors.c -- SocketCAN error frames to the core's bus events and EMCYs,
  * natively: the decoder on crafted frames, then whole error frames through the SocketCAN

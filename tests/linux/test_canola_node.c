@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_canola_node.c -- the canola-node program, natively: run over --bus against a fake
  * socketcand server in this process (loopback TCP), and with bad arguments.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_linux_loop.c -- the epoll + timerfd event loop, natively (no CAN needed).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_socketcan.c -- the SocketCAN driver on a real Linux CAN stack (vcan0).
  *

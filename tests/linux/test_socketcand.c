@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * test_socketcand.c -- the socketcand client transport, natively (no CAN, no server).
  *

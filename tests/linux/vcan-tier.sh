@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # vcan-tier.sh BUILD -- the SocketCAN tier on vcan0 (which must exist and be up): run it
 # through tests/linux/run-vcan-tier, which finds vcan0 natively or inside canvm.
 #

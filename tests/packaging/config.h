@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/packaging/config.h -- the configuration of tests/packaging/c-install: values
  * unlike the defaults, so that a program compiled with the defaults instead of the library's
  * values would disagree with it on the layout of co_node_t. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/file_storage.h -- parameter storage in files, for Linux (port/linux).
  *

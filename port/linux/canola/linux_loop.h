@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/linux_loop.h -- one event loop per process: nodes, transports and the
  * application's own file descriptors on one epoll (port/linux).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/socketcan.h -- a CAN driver on Linux SocketCAN (port/linux).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/socketcand.h -- a CAN transport over TCP to a socketcand server or hub
  * (port/linux).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/transport.h -- a CAN transport for the Linux event loop (port/linux).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/sim.h -- a simulated CAN bus with a virtual clock (port/sim).
  *

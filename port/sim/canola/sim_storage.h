@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/sim_storage.h -- parameter storage in RAM for the simulated bus: it outlives
  * the nodes that use it, so a test can "power-cycle" a node (initialise and start it

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola: the Python side of the canola CANopen stack."""
 
 import importlib

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """cffi builder of ``canola._core``: the C core of the repository plus the simulated bus.
 
 API mode (a compiled extension). Used by setuptools through ``cffi_modules`` in

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The one door to the compiled module ``canola._core`` (cffi; built by ``_build_core.py``
 from the core and ``port/python``): ``ffi`` and ``lib``, typed by ``_core.pyi`` so that
 ``mypy --strict`` checks every call into C, and the core's error codes in words. No other

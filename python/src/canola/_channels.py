@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The SDO client channels of a master's C node and who uses them: :class:`canola.Master`
 (one channel per server it talks to), the CANopen manager (one channel of its own) and
 program download. They share the node's engine and this allocator, not the master."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The C nodes and what drives them: a simulated bus (virtual time) or a python-can bus
 (real time). Shared by :class:`canola.Device` and :class:`canola.Master`; not public.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What :class:`canola.Device` and :class:`canola.Master` share: an engine, the NMT
 state, start/stop, callbacks, and typed local access to the node's own dictionary."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Waiting for work the C node does on its own (an LSS request, a network boot, a program
 download): on a SimBus by running the bus in virtual time, on python-can by sleeping on an
 event the C callbacks set. Shared by canola.lss, canola.manager and canola.flash."""

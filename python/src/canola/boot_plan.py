@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Network descriptions for the CANopen manager (:meth:`canola.Master.boot`): which slaves
 the network has, what each must be, how it is configured, how the network starts.
 

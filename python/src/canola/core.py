@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The canola C core, from Python: object dictionaries, nodes and the simulated bus.
 
 Built on the cffi extension ``canola._core`` (through ``canola._c``). Everything runs on

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """CAN frames to CANopen meaning (``canola dump``, ``canola monitor``).
 
 :class:`Decoder` reads frames of the pre-defined connection set (CiA 301) one by one and

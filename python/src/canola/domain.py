@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """DOMAIN entries of any size on a :class:`canola.Device`: the value streams through Python.
 
     dev = canola.Device("drive.eds", 5, bus)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Emergency messages in words: CiA 301 error codes (table 21), the error register
 (0x1001), and the codes canola's core raises itself.
 

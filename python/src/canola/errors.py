@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The error tree of the canola package.
 
 Every error canola raises on purpose derives from :class:`Error`. Problems found in an

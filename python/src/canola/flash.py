@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Program download (CiA 302-3), master side: :meth:`canola.Master.flash`.
 
     def shown(done, total): print(f"{done}/{total}")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Layer setting services (CiA 305) from a :class:`canola.Master`: find devices without a
 node-ID and give them one.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CANopen manager (CiA 302-2) from Python: boot a network from its description.
 
     net = canola.boot_plan.load("plant.yaml")          # or network.from_dcfs([...])

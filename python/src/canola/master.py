@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.Master: an NMT master and SDO client run by the C core, on a python-can bus or a
 SimBus.
 

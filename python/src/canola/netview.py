@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What a monitor knows about every node, from decoded frames (:mod:`canola.decode`).
 
 :class:`NetworkView` is fed frames with their time and keeps, per node: NMT state, time of

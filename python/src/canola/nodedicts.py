@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The dictionaries of the nodes on a bus, from ``--eds FILE`` (every node) and
 ``--eds N=FILE`` (node N) as the ``canola`` commands take them.
 

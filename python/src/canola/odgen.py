@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola.odgen`` and ``python -m canola.odgen``, as the docs name them:
 :mod:`canola.formats.odgen` (C object dictionaries from an EDS/DCF) under its first name.
 Nothing lives here."""

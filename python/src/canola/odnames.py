@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Entries of an EDS/DCF named as python-canopen names them, and their values in words.
 
     >>> var = find_entry(od, "Identity object.Vendor-ID")   # or "0x1018:1", "1018:1"

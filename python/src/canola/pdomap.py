@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """PDOs as their communication and mapping parameters describe them (CiA 301 7.5.2.35..38):
 from an EDS/DCF, read from a device by SDO, configured by the re-mapping procedure, and the
 values of a PDO frame by its mapping.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Program download (CiA 302-3), device side: a :class:`canola.Device` that takes a new
 program over the network.
 

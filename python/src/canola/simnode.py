@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A bare node on a :class:`canola.core.SimBus`, for tests and tools that work in virtual
 time: the node's own entries as the network would access them (access rights apply), NMT
 master commands, and an SDO client (channel 0) that runs the bus until the transfer is

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola.values``, as the README names it: :mod:`canola.formats.values` (Python values <->
 CANopen data types) under its first name. Nothing lives here."""
 

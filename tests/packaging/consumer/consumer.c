@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * consumer.c -- a program built against canola the way its users build: against an
  * installed tree (find_package(canola) or pkg-config) or with add_subdirectory(canola).

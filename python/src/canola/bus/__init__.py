@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Buses and transports: how canola reaches a CAN bus, and the bus it can serve itself.
 
 - :mod:`~canola.bus.open`: a python-can bus from ``--iface`` / ``--bus URL`` / the default

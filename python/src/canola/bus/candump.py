@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Reading candump output: the log format (``candump -l``) and the screen format.
 
     (1700000000.123456) can0 705#05            log format; ``705#R`` remote, ``705#R1`` DLC

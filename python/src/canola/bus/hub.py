@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A software CAN bus: a hub that speaks the socketcand protocol (``canola bus serve``).
 
 Clients (python-can's ``socketcand`` interface, canola's C socketcand client, ``canola``

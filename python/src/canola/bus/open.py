@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Opening python-can buses from what a user types: ``--iface IFACE`` or ``--bus URL``,
 else the default bus of the environment.
 

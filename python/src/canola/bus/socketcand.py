@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The socketcand text protocol: splitting a byte stream into elements, parsing and formatting.
 
 Pure functions, no I/O: the hub (:mod:`canola.bus.hub`) and the fuzz target use them. The subset

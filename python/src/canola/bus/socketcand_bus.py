@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola's socketcand client: a python-can bus on a socketcand server (``canola bus serve``
 or the daemon) in raw mode, for the buses :func:`canola.bus.open.open_bus` opens.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The ``canola`` command: one sub-command group per module of this package.
 
     canola odgen DEVICE.eds -o DIR            C object dictionary from an EDS/DCF

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola boot NETWORK.yaml | DCF...``: boot a network with the CANopen manager (CiA
 302-2) and print each node's outcome. Exit code 0 only when the network started; 1 when
 it did not (a mandatory node failed) or the bus failed; 2 for bad arguments, a bad

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola bus serve``: the software CAN bus (a socketcand hub, :mod:`canola.bus.hub`)."""
 
 from __future__ import annotations

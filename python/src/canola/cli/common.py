@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What every ``canola`` sub-command shares: the parser class, bus options, argument types,
 and the one-line error convention."""
 

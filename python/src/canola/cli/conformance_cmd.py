@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola conformance``: the CiA 301 test suite (canola.conformance) against a node."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola demo``: the demo network (:mod:`canola.demo`), on the simulated bus or a real one."""
 
 from __future__ import annotations

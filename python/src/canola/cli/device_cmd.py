@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola device``: run a canola device (canola.Device) from an EDS/DCF on a bus; it
 prints its NMT states and every EMCY it sends or receives, in words."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola dump``: CAN traffic in CANopen terms, live from a bus or from a candump file;
 ``--node``, ``--service`` and ``--id`` choose the frames shown, ``--eds`` names entries and
 decodes PDOs by their mapping."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola eds``: check, show, make a DCF from, and compare EDS/DCF files (the library
 behind it: :mod:`canola.formats.edstools`).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola flash NODE FILE``: program download (CiA 302-3) with a progress bar."""
 
 from __future__ import annotations

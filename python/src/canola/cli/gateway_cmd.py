@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola gateway``: the CiA 309-3 ASCII gateway (see :mod:`canola.gateway.cli`)."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola lss scan | set-id | inquire``: layer setting services (CiA 305).
 
     canola lss scan                          devices without node-ID (fastscan)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola monitor``: a live view of every node (state, heartbeat age, EMCY, PDO rates)."""
 
 from __future__ import annotations

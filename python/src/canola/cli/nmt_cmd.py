@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola nmt CMD NODE|all``: NMT master commands."""
 
 from __future__ import annotations

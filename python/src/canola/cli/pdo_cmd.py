@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola pdo``: a node's PDOs, read and configured by SDO.
 
     canola pdo show NODE [PDO...]               communication and mapping parameters

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A transfer progress bar on stderr, fed from the SDO server's frames.
 
 The master's SDO client does not report progress, so :class:`SdoProgress` watches the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola scan``: which node-IDs answer an SDO read of 0x1000 (device type); with
 ``--eds`` each answer is compared with the node's EDS (product name, device type)."""
 

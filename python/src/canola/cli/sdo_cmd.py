@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola sdo``: read, write, upload to a file, download from a file (SDO client).
 
     canola sdo read NODE 0x1018:1 [TYPE]        TYPE as in CiA 309-3: u8..u64, i8..i64,

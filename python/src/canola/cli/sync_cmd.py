@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola sync`` and ``canola time``: produce SYNC and TIME.
 
     canola sync 10 [--counter 8] [--count N | --duration S]   SYNC every 10 ms

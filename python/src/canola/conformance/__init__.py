@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """canola.conformance: a CiA 301 test suite for any CANopen node, from its EDS.
 
     import canola.conformance

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What a check works with: the node (raw frames, a raw SDO client, NMT), its EDS, the
 run's options, and the bookkeeping of the check (findings, notes, what to restore).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The EDS from the checks' side: which entries are readable, writable, of fixed size,
 PDO-mappable, and the values the EDS fixes."""
 

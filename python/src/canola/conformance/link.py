@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Raw frames to and from the node under test, through a :class:`canola.Master`.
 
 :class:`Link` sends frames (``Master.send``) and sees every frame of the other nodes

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """How a run behaves: :class:`Options` (light: the command line reads its defaults without
 loading the suite)."""
 

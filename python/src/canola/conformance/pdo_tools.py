@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """PDOs from the checks' side: which PDOs the EDS has, their configuration read from the
 node, and the CiA 301 re-mapping procedure (§7.5.2.36/38) to change and restore them:
 invalidate (COB-ID bit 31), mapping count 0, entries, count, parameters, COB-ID valid."""

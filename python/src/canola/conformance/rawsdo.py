@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """An SDO client made of raw frames, for the checks: every request and answer is a frame
 the tester sends or sees (so a failure can quote them), and every answer is checked
 against CiA 301 §7.2.4.3 as it arrives.

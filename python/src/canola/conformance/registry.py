@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The checks of the suite: what each is called, its group, the clause it tests, and the
 function that runs it. Check modules register with :func:`check` when
 :mod:`canola.conformance.checks` is imported (:func:`select` and ``canola.conformance.CHECKS``

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A report as text: the check list (``--list``), a live line per check for a terminal,
 Markdown (grouped, with each failure's expected, got and frames), JUnit XML."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What a run gives: one :class:`Result` per check, gathered in a :class:`Report`."""
 
 from __future__ import annotations

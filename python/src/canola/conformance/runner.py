@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Running the checks against one node: a tester (a :class:`canola.Master`) on the bus, the
 node's NMT state learnt first and restored at the end, each check started in
 PRE-OPERATIONAL and followed by its undo actions."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola demo``: a master and three devices walking through the life of a CANopen network
 (boot-up, NMT, the CiA 302-2 manager's configuration and start, SYNC and PDOs, EMCY,
 heartbeat loss), every frame decoded and every step checked.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The three devices of the demo network: their EDS files, node-IDs, the PDO mappings the
 master gives them, and the small application each one runs.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Where the demo runs: the simulated bus in virtual time, or python-can buses.
 
 Both transports give the demo the same four things: a bus for each node, ``wait(seconds)``

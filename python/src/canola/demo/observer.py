@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What the demo's nodes report while it runs: the master's boot-up, heartbeat and EMCY
 events, the CANopen manager's reports and the TPDOs it receives (kept for the checks), the
 RPDO values the devices apply, all turned into lines of the trace at the time they happened.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The demo's verdict: one :class:`Step` per stage of the flow, printed as a table with
 a check mark or a cross, or as JSON."""
 

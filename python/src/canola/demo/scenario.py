@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The flow of the demo (seed 001, "Logic Summary"), step by step, each step checked.
 
 A master (node 0x3F = 63, :class:`canola.Master`) and the three devices of

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The demo's trace: every frame decoded by :class:`canola.decode.Decoder`, the master's
 reports and the devices' applications in between, one line each.
 

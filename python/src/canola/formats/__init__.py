@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """File and data formats: what CANopen files and values look like, read and written.
 
 - :mod:`~canola.formats.eds`: EDS/DCF (CiA 306), read, checked, written (lines by

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CiA 301 rules of the PDO mapping objects of a parsed EDS/DCF (0x1600-0x17FF RPDOs,
 0x1A00-0x1BFF TPDOs), checked on the values the file gives (ParameterValue, else
 DefaultValue):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Line-level reading of CiA 306 files: sections of ``key=value`` entries with line numbers.
 
 Rules (the ones real files need):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Concise DCF (the 0x1F22 format of CiA 302): what the CANopen manager downloads to a
 slave.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """CANopen basic data types (CiA 301) and the number syntax of CiA 306 files."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Read, check and write CiA 306 electronic data sheets (EDS) and device configuration files (DCF).
 
 ``parse(source, strict=False, node_id=None)`` builds an :class:`ObjectDictionary`;

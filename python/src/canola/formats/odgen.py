@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Generate a C object dictionary (``co_od_t`` of ``canola/od.h``) from an EDS or DCF.
 
 ``generate(od, name)`` returns the text of ``<name>.h`` and ``<name>.c``; ``main()`` is the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Python values <-> CANopen data types (CiA 301 wire form, CiA 309-3 type names).
 
 One place for the conversion that ``canola.Device.od``, the ``canola`` command and the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CiA 309-3 ASCII gateway: a master node exposed as text lines (``canola gateway``).
 
 - :mod:`~canola.gateway.parser`: one line -> one typed request (pure, linear; fuzzed)

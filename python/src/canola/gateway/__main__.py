@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``python -m canola.gateway``: the same as ``canola gateway``."""
 
 import sys

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What the gateway needs from a CANopen master: a small interface, and the events.
 
 :class:`Backend` is the whole contract between the executor and the master it drives;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """``canola gateway``: the CiA 309-3 ASCII gateway as a command.
 
     canola gateway [--iface IFACE | --bus URL | --simulate EDS] [--listen WHERE]

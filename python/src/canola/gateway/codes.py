@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """CiA 309-3 gateway error codes (the ``ERROR:<code>`` replies that are not SDO aborts)."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """One client of the gateway: its session, and the three small tasks that serve it.
 
 The reader splits the client's bytes into lines (at most ``max_line`` bytes each; a longer

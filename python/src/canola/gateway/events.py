@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Network events to the clients that asked for them, in CiA 309-3 event syntax.
 
 Lines (no sequence number; ``<net>`` is the gateway's network number)::

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Runs parsed gateway requests against a master (:class:`~canola.gateway.backend.Backend`).
 
 One :class:`Session` per client holds what CiA 309-3 makes per-connection: default

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Values in CiA 309-3 text form: one parser and one formatter per gateway data type.
 
 The type names are those of CiA 309-3 (``b``, ``i8``..``i64``, ``u8``..``u64``, ``r32``,

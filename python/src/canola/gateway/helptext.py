@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The texts of ``help``, ``help datatype`` and ``help lss``.
 
 Each is one reply of several lines: the executor joins them with LF and the server ends

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Where the gateway listens: ``tcp:HOST:PORT``, ``tcp:PORT`` (loopback), ``unix:PATH`` or
 ``stdio``."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway's ``lss_*`` commands (CiA 309-3 over CiA 305) on its backend's LSS master.
 
 Arguments and error codes follow CANopenNode's gateway, which ``cocomm`` scripts know:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A :class:`~canola.gateway.backend.Backend` over :class:`canola.Master` (python-can bus
 or simulated bus).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CiA 309-3 command line parser: one line of text -> one typed request.
 
 Pure: no I/O, no state, no dependence on the network. :func:`parse_line` returns a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The values mapped to one of the gateway's own PDOs, read from its dictionary."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The typed requests of the CiA 309-3 ASCII gateway, as the line parser produces them.
 
 Every request carries the client's sequence number (``seq``) and the network / node the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The gateway's transport: clients over TCP, a Unix socket or stdio, one
 :class:`~canola.gateway.connection.Connection` (session, reader, worker, writer) each.
 Clients never wait for each other (except for SDO transfers to one and the same node).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The check modules, one per group (SYNC, EMCY and TIME share one): importing this
 package registers every check (:mod:`canola.conformance.registry`), in the order they run
 within their group."""

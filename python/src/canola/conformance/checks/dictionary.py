@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Group ``dictionary``: the node's object dictionary against its EDS -- every entry there,
 access types, value lengths, limits, missing objects and sub-indices, the values the EDS
 fixes, the mandatory objects."""

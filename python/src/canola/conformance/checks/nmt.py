@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Group ``nmt``: boot-up after the resets, the state machine seen in heartbeats, SDO
 gating, what the resets do to the values, the heartbeat period, node guarding, and (with
 ``--destructive``) storing and restoring parameters."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Group ``pdo``: the mapping procedure (a valid PDO is locked, the procedure works for
 every mappable entry, wrong mappings are refused), TPDO transmission types (SYNC cyclic and
 acyclic, event timer, inhibit time), RPDOs applied at once or at the SYNC, an RPDO that is

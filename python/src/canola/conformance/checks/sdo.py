@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Group ``sdo``: the SDO server frame by frame -- expedited, segmented and block transfer
 both ways at sizes around the frame boundaries, wrong toggle bit, unknown command
 specifier, client abort, block CRC and block size, the server's own time-out."""

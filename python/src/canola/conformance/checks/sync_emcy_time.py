@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Groups ``sync``, ``emcy`` and ``time``: the SYNC counter (0x1019) as consumer and
 producer, a TPDO's SYNC start value; EMCY on a heartbeat consumer time-out (0x1014 COB-ID,
 0x1001, 0x1003 and its clearing); the TIME consumer setting (0x1012)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tools over parsed EDS/DCF files (:mod:`canola.formats.eds`), the library behind ``canola eds``:
 
 - :mod:`~canola.formats.edstools.check`: the parser's diagnostics as a linter's findings;

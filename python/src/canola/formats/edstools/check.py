@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """An EDS/DCF linter: the problems :func:`canola.formats.eds.parse` finds, each a warning (the file
 gives a usable dictionary but deviates from CiA 306/301) or an error (the file cannot be
 used: the parser refuses it, or it cannot be read). ``strict`` makes every warning an

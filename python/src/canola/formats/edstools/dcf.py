@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A DCF from an EDS (``canola eds dcf``): the node-ID in [DeviceComissioning] and the
 values given (ParameterValue), each checked against its entry (it exists and may be
 written, the value is of its data type and within its LowLimit/HighLimit), so that the

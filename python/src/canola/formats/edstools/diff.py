@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What differs between two dictionaries (``canola eds diff``): objects and entries only
 in one of them, and entries whose name, data type, access, PDO mapping, default or
 (DCF) value differ; or, with :func:`diff_live`, between a dictionary's values and those a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The dictionary of an EDS/DCF as rows of a table (``canola eds show``): one row per
 object, then one per sub-object of an ARRAY/RECORD; filtered by index range and name.
 
