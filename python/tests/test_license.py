@@ -11,6 +11,7 @@ who generates it, so odgen stamps no license on it)."""
 from __future__ import annotations
 
 import subprocess
+from importlib import metadata
 from pathlib import Path
 
 import pytest
@@ -85,7 +86,5 @@ def test_license_text_and_package_metadata() -> None:
 
 
 def test_installed_package_says_its_license() -> None:
-    from importlib import metadata
-
     meta = metadata.metadata("canola")
     assert meta.get("License-Expression") == "Apache-2.0" or meta.get("License") == "Apache-2.0"
