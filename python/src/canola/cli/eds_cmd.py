@@ -11,8 +11,6 @@ behind it: :mod:`canola.formats.edstools`).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import os
 import sys
 from pathlib import Path
 
@@ -28,6 +26,7 @@ from canola.cli.common import (
     node_id,
 )
 from canola.errors import SdoAbort
+from canola.files import FileError, write_file
 from canola.formats import eds
 from canola.formats.edstools.check import check_file
 from canola.formats.edstools.dcf import DcfValueError, make_dcf, parse_setting
@@ -167,15 +166,10 @@ def run_dcf(args: argparse.Namespace) -> int:
     if args.output == "-":
         sys.stdout.write(text)
         return 0
-    tmp = f"{args.output}.part"
     try:
-        with open(tmp, "w", encoding="utf-8", newline="") as out:
-            out.write(text)
-        os.replace(tmp, args.output)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise CliError(f"cannot write {args.output}: {exc.strerror or exc}") from None
+        write_file(args.output, text)
+    except FileError as exc:
+        raise CliError(str(exc)) from None
     return 0
 
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
 import sys
 from collections.abc import Iterator
 
@@ -35,6 +34,7 @@ from canola.cli.common import (
 )
 from canola.cli.progress import SdoProgress
 from canola.errors import SdoAbort
+from canola.files import FileError, write_file
 from canola.formats import values
 from canola.formats.eds import Variable
 from canola.master import SdoTimeout
@@ -231,15 +231,10 @@ def run_upload(args: argparse.Namespace) -> int:
         data = master.sdo(args.node).upload(index, sub, block=not args.no_block,
                                             max_size=args.max_size)
     progress.finish()
-    tmp = f"{args.file}.part"
     try:
-        with open(tmp, "wb") as out:
-            out.write(data)
-        os.replace(tmp, args.file)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise CliError(f"cannot write {args.file}: {exc.strerror or exc}") from None
+        write_file(args.file, data)
+    except FileError as exc:
+        raise CliError(str(exc)) from None
     if args.json:
         emit_json({**target.json(), "bytes": len(data)})
     return 0
