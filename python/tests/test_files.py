@@ -17,6 +17,7 @@ from cli_helpers import cli, one_line_error
 from test_eds import make
 
 from canola import EdsError
+from canola.cli.device_cmd import _store_folder
 from canola.files import EDS_MAX_BYTES, FileError, read_file, write_file
 from canola.formats import eds
 
@@ -202,3 +203,47 @@ def test_every_corpus_file_loads() -> None:
         assert found and all(w.file == str(CORPUS / name) and w.line for w in found)
         with pytest.raises(EdsError):
             eds.parse(CORPUS / name, strict=True)
+
+
+# ---- canola device --store DIR
+
+
+def _device(capsys: Capsys, store: Path) -> tuple[int, str, str]:
+    return cli(capsys, "device", "--eds", str(EDS), "--node-id", "5", "--bus",
+               "virtual://store-test", "--store", str(store))
+
+
+@pytest.mark.parametrize(("setup", "message"), [
+    (lambda p: p.write_text("x"), "not a folder"),
+    (lambda p: None, "no such folder (nor its parent {parent})"),
+], ids=["a-file", "no-parent"])
+def test_store_that_cannot_be_a_folder_is_refused_in_one_line(
+        capsys: Capsys, tmp_path: Path, setup: object, message: str) -> None:
+    store = tmp_path / "store" if "parent" not in message else tmp_path / "a" / "store"
+    setup(store)  # type: ignore[operator]
+    code, _, err = _device(capsys, store)
+    assert code == 1 and err.endswith(
+        f"--store {store}: {message.format(parent=store.parent)}\n"), err
+    one_line_error(err)
+
+
+def test_a_missing_store_folder_is_made_when_its_parent_exists(tmp_path: Path) -> None:
+    """canola device --store /var/lib/drive works when /var/lib exists (the README's
+    example runs as it is, the device making drive-store in the current folder)."""
+    store = tmp_path / "drive"
+    _store_folder(str(store))
+    assert store.is_dir()
+    _store_folder(str(store))  # there now: used as it is
+
+
+def test_a_store_folder_without_permission_is_refused(capsys: Capsys, tmp_path: Path) -> None:
+    """A folder this user may not write in: a 0500 folder, or for root (who may write in
+    any folder of a normal file system) /proc/1, which nobody may write in."""
+    store = tmp_path / "locked"
+    store.mkdir(mode=0o500)
+    if os.geteuid() == 0:
+        store = Path("/proc/1")
+    code, _, err = _device(capsys, store)
+    assert code == 1 and err.endswith(
+        f"--store {store}: no permission to read and write in the folder\n"), err
+    one_line_error(err)
