@@ -334,7 +334,7 @@ def test_monitor_once(capsys: pytest.CaptureFixture[str],
 @pytest.mark.slow
 def test_module_runs_as_a_program() -> None:
     proc = subprocess.run([sys.executable, "-m", "canola.cli", "nmt", "start", "0"],
-                          capture_output=True, text=True, timeout=60, check=False,
+                          capture_output=True, text=True, timeout=300, check=False,
                           env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert proc.returncode == 2
     one_line_error(proc.stderr)
@@ -401,7 +401,7 @@ def test_sync_until_ctrl_c(hub: HubThread) -> None:
             if msg is not None and msg.arbitration_id == 0x080:
                 counters.append(msg.data[0])
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
+        out, err = proc.communicate(timeout=300)
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import canopen
 import pytest
+from bounded import first_line
 from cli_helpers import cli, one_line_error
 
 from canola.bus.open import open_bus
@@ -279,7 +280,7 @@ def test_dump_sees_an_sdo_read(capsys: pytest.CaptureFixture[str],
         wait_joined(url, before + 1)  # the dump process is listening
         assert sdo(capsys, "read", "6", "0x1018:2", "--bus", url)[:2] == (
             0, "0x00000042\n")
-        out, _ = dump.communicate(timeout=60)
+        out, _ = dump.communicate(timeout=300)
     finally:
         if dump.poll() is None:
             dump.kill()
@@ -293,10 +294,10 @@ def test_cli_as_programs(net: tuple[str, list[Proc]]) -> None:
     url = net[0]
     ok = subprocess.run([PY, "-m", "canola.cli", "sdo", "read", "6", "0x1000:0", "u32",
                          "--bus", url, "--timeout", SDO_MS], capture_output=True, text=True,
-                        timeout=60, check=False)
+                        timeout=300, check=False)
     assert (ok.returncode, ok.stdout, ok.stderr) == (0, f"{0x20192}\n", "")
     bad = subprocess.run([PY, "-m", "canola.cli", "sdo", "read", "99", "0x1000:0", "--bus", url,
-                          "--timeout", "200"], capture_output=True, text=True, timeout=60,
+                          "--timeout", "200"], capture_output=True, text=True, timeout=300,
                          check=False)
     assert bad.returncode == 1
     assert bad.stderr == "canola: no response from node 99 (SDO time-out 200 ms)\n"
@@ -310,7 +311,7 @@ def test_device_errors(tmp_path: Path, net: tuple[str, list[Proc]]) -> None:
                  ["--eds", str(broken), "--node-id", "7"],
                  ["--eds", str(EDS), "--node-id", "7", "--store", str(tmp_path / "nodir")]):
         proc = subprocess.run([PY, "-m", "canola.cli", "device", *args, "--bus", url],
-                              capture_output=True, text=True, timeout=60, check=False)
+                              capture_output=True, text=True, timeout=300, check=False)
         assert proc.returncode == 1, args
         one_line_error(proc.stderr)
 
@@ -339,13 +340,13 @@ def test_python_canopen_process_on_the_same_hub(capsys: pytest.CaptureFixture[st
     peer = subprocess.Popen([PY, "-c", CANOPEN_PEER, url, str(EDS)],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:
-        assert peer.stdout is not None and peer.stdout.readline() == "ready\n"
+        assert first_line(peer.stdout, "the python-canopen peer", 120) == "ready\n"
         code, out, _ = cli(capsys, "scan", "--bus", url, "--json", "--timeout", "3000")
         assert code == 0 and [n["node"] for n in json.loads(out)] == [5, 6, 9]
         assert sdo(capsys, "read", "9", "0x1008:0", "vs", "--bus", url)[1] == (
             "canola cli test\n")
         assert sdo(capsys, "write", "9", "0x2000:0", "u32", "0xBEEF", "--bus", url)[0] == 0
-        out, _ = peer.communicate("", timeout=60)
+        out, _ = peer.communicate("", timeout=300)
         assert out == "0x2000 = 0xbeef\n"
     finally:
         if peer.poll() is None:
