@@ -11,13 +11,13 @@ import canopen
 import pytest
 
 from canola.errors import SdoAbort
-from canola.master import SdoTimeout
 from canola.formats import eds
+from canola.master import SdoTimeout
 from canola.odnames import EntryError, entry_name, find_entry, parse_address, value_text
 from canola.pdomap import (
-    PdoConfigError,
     Mapped,
     Pdo,
+    PdoConfigError,
     PdoError,
     configure_pdo,
     decode,

@@ -274,6 +274,15 @@ class NetworkManager:
         self._waiter.wait(self.settled, timeout)
         return self.started
 
+    def wait_until(self, condition: Callable[[], bool], timeout: float | None) -> bool:
+        """Block until ``condition()`` (checked as the boot moves on) or ``timeout``
+        seconds (virtual on a SimBus); whether it held. The manager keeps booting slaves
+        that send their boot-up meanwhile."""
+        if not self._started:
+            raise Error("the manager is not started")
+        self._waiter.check()
+        return self._waiter.wait(condition, timeout)
+
     @property
     def started(self) -> bool:
         """True once the network was started (every mandatory slave booted)."""
