@@ -309,7 +309,8 @@ def test_device_errors(tmp_path: Path, net: tuple[str, list[Proc]]) -> None:
     broken.write_text("[1000]\nDataType=0x0007\n")
     for args in (["--eds", str(tmp_path / "none.eds"), "--node-id", "7"],
                  ["--eds", str(broken), "--node-id", "7"],
-                 ["--eds", str(EDS), "--node-id", "7", "--store", str(tmp_path / "nodir")]):
+                 ["--eds", str(EDS), "--node-id", "7", "--store",
+                  str(tmp_path / "noparent" / "dir")]):  # a missing folder alone is made
         proc = subprocess.run([PY, "-m", "canola.cli", "device", *args, "--bus", url],
                               capture_output=True, text=True, timeout=300, check=False)
         assert proc.returncode == 1, args
