@@ -69,7 +69,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     c = eds_subs.add_parser(
         "check", help="list every deviation from CiA 306 (a linter)",
         description="Print each problem of each file as FILE:LINE: [SECTION] KEY: "
-                    "error|warning: MESSAGE. An error is a file the parser refuses; a "
+                    "error|warning: MESSAGE. An error is what the parser, canola odgen or "
+                    "canola device refuses; a "
                     "warning a deviation it reads past; then a count on stderr. A clean "
                     "file prints nothing. Exit code 0 without errors, 1 with errors.")
     c.add_argument("files", nargs="+", metavar="FILE")

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """An EDS/DCF linter: the problems :func:`canola.formats.eds.parse` finds, each a warning (the file
 gives a usable dictionary but deviates from CiA 306/301) or an error (the file cannot be
-used: the parser refuses it, or it cannot be read). ``strict`` makes every warning an
-error, as ``eds.parse(strict=True)`` refuses every deviation.
+used: the parser refuses it, canola odgen and canola device refuse it, or it cannot be
+read). ``strict`` makes every warning an error, as ``eds.parse(strict=True)`` refuses every
+deviation.
 
     >>> for finding in check_file("drive.eds"):
     ...     print(finding)     # drive.eds:12: [1017] DefaultValue: warning: ...
