@@ -318,15 +318,16 @@ def test_monitor_once(capsys: pytest.CaptureFixture[str],
                       peers: tuple[str, canopen.Network]) -> None:
     url, net = peers
     net.send_message(0x085, b"\x10\x42\x08\x00\x00\x00\x00\x00")
-    # heartbeats every 100 ms: several in 2 s, however busy the machine (how regular they
-    # are is not this test's business)
-    code, out, _ = cli(capsys, "monitor", "--bus", url, "--json", "--duration", "2")
+    # heartbeats every 100 ms: several in 5 s, however busy the machine (how regular they
+    # are is not this test's business: a starved sender bunches them, a gap of 0.0 was
+    # measured at load 50)
+    code, out, _ = cli(capsys, "monitor", "--bus", url, "--json", "--duration", "5")
     assert code == 0
     view = json.loads(out)
     nodes = {n["node"]: n for n in view["nodes"]}
     assert nodes[5]["state"] == "OPERATIONAL" and nodes[9]["state"] == "PRE-OPERATIONAL"
-    assert 0 <= nodes[5]["heartbeat_age"] < 2
-    assert 0 < nodes[5]["heartbeat_gap"] < 2
+    assert 0 <= nodes[5]["heartbeat_age"] < 5
+    assert 0 <= nodes[5]["heartbeat_gap"] < 5
     code, out, _ = cli(capsys, "monitor", "--bus", url, "--once", "--duration", "2")
     assert code == 0 and "OPERATIONAL" in out and out.splitlines()[0].split()[0] == "node"
 

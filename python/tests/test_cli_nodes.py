@@ -405,7 +405,9 @@ def test_device_domain_and_string_sizes(capsys: pytest.CaptureFixture[str],
             assert (code, err) == (0, "")
             assert (tmp_path / "out.bin").read_bytes() == data
         text = "x" * 9000
-        slow = ["--bus", url, "--timeout", "30000"]  # a whole segmented transfer's bound
+        # a whole segmented transfer's bound (1,286 segments through the hub to another
+        # process: more than 30 s at load 50), at most the SDO client's 65,535 ms
+        slow = ["--bus", url, "--timeout", "65000"]
         assert sdo(capsys, "write", "22", "0x2002:0", "vs", text, *slow)[0] == 0
         assert sdo(capsys, "read", "22", "0x2002:0", "vs", *slow)[1] == text + "\n"
         # device 5 runs with the default 4096-byte DOMAIN
