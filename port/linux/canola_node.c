@@ -213,6 +213,12 @@ static const char *error_text(co_node_error_t error)
     case CO_NODE_ERR_STORED_APP:
         return "stored application parameters (app.params) failed their checks: ignored, "
                "defaults in use (EMCY 0xFF12)";
+    case CO_NODE_ERR_STORE_FAILED:
+        return "storing parameters failed (full disk, read-only or broken storage): the "
+               "files stored before stay, EMCY 0x5530";
+    case CO_NODE_ERR_SDO_COB_FIXED:
+        return "the dictionary gives 0x1200 sub1/sub2 other COB-IDs than CiA 301 fixes: "
+               "the default SDO server serves on 0x600/0x580 + node-ID regardless";
     }
     return "unknown error";
 }
