@@ -48,6 +48,8 @@ class Device(NodeBase):
                  sdo_timeout_ms: int = 1000) -> None:
         if not isinstance(node_id, int) or not (1 <= node_id <= 127 or node_id == 0xFF):
             raise Error(f"node-ID {node_id!r} is outside 1..127 (or 0xFF: none, for LSS)")
+        if not isinstance(eds_or_dcf, eds.ObjectDictionary):
+            self._source = os.fspath(eds_or_dcf)
         od = load_od(eds_or_dcf, node_id, GenerateOptions(domain_size=domain_size,
                                                           min_string_size=string_size))
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms,
