@@ -5,6 +5,8 @@
 
 #include "canola/file_storage.h"
 
+#include "canola/node.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -130,10 +132,19 @@ static co_err_t failed(co_file_storage_t *fs)
     return CO_ERR_STATE;
 }
 
-/* The temporary file is made anew, never opened through whatever stands at its name: a
+/* A temporary file made anew, never opened through whatever stands at its name: a
  * leftover (an interrupted save, or a link planted there) is removed first, and the
- * creation is exclusive and follows no link, so a link that reappears fails the save. A
- * save of both groups begins its second image after staging the first; any other begin
+ * creation is exclusive and follows no link, so a link that reappears fails the save.
+ * Its fd, or -1. */
+static int create_fresh(const char *tmp)
+{
+    if (unlink(tmp) != 0 && errno != ENOENT) {
+        return -1;
+    }
+    return open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+}
+
+/* A save of both groups begins its second image after staging the first; any other begin
  * starts a new save (finishing first a committed one a crash interrupted). */
 static co_err_t begin(void *ctx, co_param_group_t group)
 {
@@ -146,10 +157,7 @@ static co_err_t begin(void *ctx, co_param_group_t group)
         return failed(fs);
     }
     fs->group = group;
-    if (path_of(fs, group, true, tmp, sizeof tmp) != 0 || (unlink(tmp) != 0 && errno != ENOENT)) {
-        return failed(fs);
-    }
-    fs->fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    fs->fd = path_of(fs, group, true, tmp, sizeof tmp) == 0 ? create_fresh(tmp) : -1;
     return fs->fd >= 0 ? CO_OK : failed(fs);
 }
 
@@ -218,6 +226,75 @@ static co_err_t commit(void *ctx)
     fs->staged = 0;
     fs->failed = false;
     return sync_dir(fs) == 0 ? CO_OK : CO_ERR_STATE;
+}
+
+/* ---- the LSS configuration (CiA 305 store configuration): lss.params, one line of text */
+
+#define LSS_FILE "lss.params"
+#define LSS_FORMAT "canola-lss 1 node-id %u bit-timing %u\n"
+
+static int lss_path(const co_file_storage_t *fs, bool tmp, char *out, size_t cap)
+{
+    int n = snprintf(out, cap, "%s/" LSS_FILE "%s", fs->dir, tmp ? ".tmp" : "");
+    return n > 0 && (size_t)n < cap ? 0 : -1;
+}
+
+co_err_t co_file_storage_store_lss(void *ctx, uint8_t node_id, uint8_t bit_timing)
+{
+    const co_file_storage_t *fs = ctx;
+    char tmp[CO_FILE_STORAGE_PATH_MAX + 32];
+    char final[CO_FILE_STORAGE_PATH_MAX + 32];
+    char line[64];
+    int len = snprintf(line, sizeof line, LSS_FORMAT, node_id, bit_timing);
+    if (lss_path(fs, true, tmp, sizeof tmp) != 0 || lss_path(fs, false, final, sizeof final) != 0) {
+        return CO_ERR_STATE;
+    }
+    int fd = create_fresh(tmp);
+    if (fd < 0) {
+        return CO_ERR_STATE;
+    }
+    int rc = write(fd, line, (size_t)len) == len ? 0 : -1;
+    rc |= fsync(fd);
+    rc |= close(fd);
+    if (rc != 0 || rename(tmp, final) != 0) {
+        (void)unlink(tmp);
+        return CO_ERR_STATE;
+    }
+    return sync_dir(fs) == 0 ? CO_OK : CO_ERR_STATE;
+}
+
+co_err_t co_file_storage_load_lss(const co_file_storage_t *fs, uint8_t *node_id,
+                                  uint8_t *bit_timing)
+{
+    char path[CO_FILE_STORAGE_PATH_MAX + 32];
+    char text[64];
+    if (lss_path(fs, false, path, sizeof path) != 0) {
+        return CO_ERR_STATE;
+    }
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        return errno == ENOENT ? CO_ERR_NOT_FOUND : CO_ERR_STATE;
+    }
+    struct stat st;
+    ssize_t got = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, text, sizeof text - 1) : -1;
+    close(fd);
+    unsigned id = 0;
+    unsigned timing = 0;
+    char again[64];
+    if (got <= 0) {
+        return CO_ERR_STATE;
+    }
+    text[got] = '\0';
+    /* exactly the line store_lss writes: read back, printed again, the same text */
+    if (sscanf(text, "canola-lss 1 node-id %3u bit-timing %3u", &id, &timing) != 2 ||
+        !((id >= 1 && id <= 127) || id == CO_NODE_ID_UNCONFIGURED) || timing > 0xFF ||
+        snprintf(again, sizeof again, LSS_FORMAT, id, timing) != (int)got ||
+        strcmp(again, text) != 0) {
+        return CO_ERR_STATE;
+    }
+    *node_id = (uint8_t)id;
+    *bit_timing = (uint8_t)timing;
+    return CO_OK;
 }
 
 /* ---- reading and erasing */

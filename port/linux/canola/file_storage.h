@@ -26,6 +26,9 @@
  * or mount, on a full disk, and after a save that failed (a file size limit, an I/O
  * error); a command is still tried, and one that succeeds makes it read 1 again.
  *
+ * The same folder keeps the LSS configuration (co_file_storage_store_lss): lss.params, the
+ * node-ID a CiA 305 store configuration saved, which the program uses at its next start.
+ *
  * Not part of the portable core: uses POSIX file calls. One save at a time per object.
  */
 #ifndef CANOLA_FILE_STORAGE_H
@@ -47,6 +50,19 @@ typedef struct co_file_storage {
     unsigned staged; /**< bit (1 << group) per temporary file of the save in progress */
     bool failed;     /**< a save failed since the last one that succeeded */
 } co_file_storage_t;
+
+/** LSS store configuration (CiA 305, cs 0x17; give it as co_lss_slave_config_t.store with
+ *  ctx = the co_file_storage_t): the node-ID and bit timing index (0xFF: none) into
+ *  lss.params in the folder, one line of text ("canola-lss 1 node-id 7 bit-timing 255"),
+ *  written atomically like the images (a temporary file, fsync, rename, folder fsync).
+ *  Returns CO_ERR_STATE when the folder refused. */
+co_err_t co_file_storage_store_lss(void *fs, uint8_t node_id, uint8_t bit_timing);
+
+/** What store configuration kept: the node-ID (1..127, or 0xFF: unconfigured) and the
+ *  bit timing index (0xFF: none). CO_ERR_NOT_FOUND when nothing was stored, CO_ERR_STATE
+ *  when lss.params is not exactly such a line (or not a regular file); nothing is set then. */
+co_err_t co_file_storage_load_lss(const co_file_storage_t *fs, uint8_t *node_id,
+                                  uint8_t *bit_timing);
 
 /** Storage in folder `dir` (which must exist); finishes a save of both groups that a
  *  crash interrupted after its commit point. Returns CO_ERR_ARG when the path is too

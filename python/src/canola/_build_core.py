@@ -192,6 +192,7 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    void *user, co_err_t *err);
 void canola_py_dev_free(canola_py_dev_t *dev);
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id);
 void canola_py_dev_touch(canola_py_dev_t *dev);
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
 void canola_py_dev_set_active(canola_py_dev_t *dev, bool active);
