@@ -147,9 +147,9 @@ static const char *in_dir(const char *name)
 
 static void clean_dir(void)
 {
-    const char *names[] = {"comm.params", "app.params", "comm.params.tmp", "app.params.tmp",
-                           "params.commit"};
-    for (unsigned i = 0; i < 5; i++) {
+    const char *names[] = {"comm.params",    "app.params",    "comm.params.tmp",
+                           "app.params.tmp", "params.commit", "lss.params"};
+    for (unsigned i = 0; i < 6; i++) {
         unlink(in_dir(names[i]));
     }
     CHECK_EQ(rmdir(g_dir), 0); /* nothing else was left behind */
@@ -418,6 +418,51 @@ static void test_full_disk_reads_as_cannot_save(void)
     clean_dir();
 }
 
+/* ---- the LSS configuration (lss.params) */
+
+/* Stored, read back; anything but the exact line is refused whole (nothing set). */
+static void test_lss_configuration_round_trip_and_damage(void)
+{
+    fresh_dir();
+    uint8_t id = 0x55;
+    uint8_t timing = 0x55;
+    CHECK_EQ(co_file_storage_load_lss(&g_fs, &id, &timing), CO_ERR_NOT_FOUND);
+    CHECK_EQ(co_file_storage_store_lss(&g_fs, 9, 0xFF), CO_OK);
+    CHECK_EQ(co_file_storage_load_lss(&g_fs, &id, &timing), CO_OK);
+    CHECK_EQ(id, 9);
+    CHECK_EQ(timing, 0xFF);
+    CHECK(!exists("lss.params.tmp"));
+    CHECK_EQ(co_file_storage_store_lss(&g_fs, CO_NODE_ID_UNCONFIGURED, 2), CO_OK);
+    CHECK_EQ(co_file_storage_load_lss(&g_fs, &id, &timing), CO_OK);
+    CHECK_EQ(id, 0xFF);
+    CHECK_EQ(timing, 2);
+    const char *damaged[] = {
+        "",
+        "canola-lss 1 node-id 9 bit-timing 255",      /* no end of line */
+        "canola-lss 1 node-id 0 bit-timing 255\n",    /* 0 is no node-ID */
+        "canola-lss 1 node-id 128 bit-timing 255\n",  /* nor 128 */
+        "canola-lss 1 node-id 9 bit-timing 256\n",    /* not an index */
+        "canola-lss 2 node-id 9 bit-timing 255\n",    /* another format */
+        "canola-lss 1 node-id 09 bit-timing 255\n",   /* not as written */
+        "canola-lss 1 node-id 9 bit-timing 255\nx\n", /* more */
+        "node-id 9\n",
+    };
+    for (unsigned i = 0; i < sizeof damaged / sizeof damaged[0]; i++) {
+        spill("lss.params", (const uint8_t *)damaged[i], strlen(damaged[i]));
+        id = 0x55;
+        CHECK_EQ(co_file_storage_load_lss(&g_fs, &id, &timing), CO_ERR_STATE);
+        CHECK_EQ(id, 0x55);
+    }
+    unlink(in_dir("lss.params"));
+    CHECK_EQ(mkfifo(in_dir("lss.params"), 0600), 0); /* refused, not waited on */
+    CHECK_EQ(co_file_storage_load_lss(&g_fs, &id, &timing), CO_ERR_STATE);
+    unlink(in_dir("lss.params"));
+    g_read_only = true;
+    CHECK_EQ(co_file_storage_store_lss(&g_fs, 9, 0xFF), CO_ERR_STATE);
+    g_read_only = false;
+    clean_dir();
+}
+
 /* ---- a save of both groups killed at every step */
 
 /* Saved (777, 0xCAFE); a child sets (888, 0xBEEF) and saves both groups, killed before
@@ -524,6 +569,7 @@ int main(void)
     RUN(test_failed_save_leaves_no_temporary_file);
     RUN(test_read_only_folder_reads_as_cannot_save);
     RUN(test_full_disk_reads_as_cannot_save);
+    RUN(test_lss_configuration_round_trip_and_damage);
     RUN(test_save_of_both_groups_killed_at_every_step);
     return check_summary();
 }
