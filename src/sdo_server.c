@@ -99,9 +99,10 @@ void co_sdo_server_stop(co_node_t *node)
 co_abort_t co_sdo_server_check_write(co_node_t *node, const co_od_entry_t *entry,
                                      const uint8_t *data, uint32_t len)
 {
-    uint32_t fixed = entry->sub == 1 ? 0x600u : 0x580u;
+    (void)len; /* 4: the dictionary's own check came first */
+    const co_sdo_server_t *s = &node->sdo_servers[0];
     bool cob = entry->index == 0x1200 && (entry->sub == 1 || entry->sub == 2);
-    if (cob && (len != 4 || co_get_u32(data) != fixed + node->node_id)) {
+    if (cob && co_get_u32(data) != (entry->sub == 1 ? s->cob_rx : s->cob_tx)) {
         return CO_ABORT_READ_ONLY;
     }
     return CO_ABORT_NONE;
