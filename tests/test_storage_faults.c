@@ -129,15 +129,6 @@ static const co_storage_t k_storage = {.begin = s_begin,
                                        .discard = s_discard,
                                        .stage = s_stage};
 
-/* The same storage without `stage`: it commits one group at a time. */
-static const co_storage_t k_per_group = {.begin = s_begin,
-                                         .write = s_write,
-                                         .commit = s_commit,
-                                         .read = s_read,
-                                         .erase = s_erase,
-                                         .ctx = &g_s,
-                                         .can_save = s_can_save,
-                                         .discard = s_discard};
 
 static void power_on(test_node_t *t)
 {
@@ -379,7 +370,10 @@ static void test_storage_without_stage_commits_each_group(void)
     CHECK_EQ(write_u32(&t, 0x1010, 2, CO_STORE_SIGNATURE), CO_ABORT_NONE);
     int comm_writes = g_s.writes;
     saved_then_changed(&t);
-    t.node.cfg.storage = &k_per_group;
+    static co_storage_t per_group; /* the same storage without `stage`: a group at a time */
+    per_group = k_storage;
+    per_group.stage = NULL;
+    t.node.cfg.storage = &per_group;
     g_s.fail_write_at = comm_writes + 2; /* in the application group, after a commit */
     CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
     CHECK_EQ(g_s.commits, 1);

@@ -20,7 +20,14 @@ from canola.master import Master
 
 EDS = Path(__file__).parent / "data" / "cli_device.eds"
 
-SERVER_PARAMETERS = """
+def _cob_id(sub: int, name: str, base: int) -> str:
+    """Section [1200subN]: a COB-ID that OreSat's DCF sets to 0x80000000 (not valid)."""
+    return (f"\n[1200sub{sub}]\nParameterName={name}\nObjectType=0x7\nDataType=0x0007\n"
+            f"AccessType=ro\nDefaultValue=$NODEID+0x{base:X}\nParameterValue=0x80000000\n"
+            "PDOMapping=0\n")
+
+
+SERVER_PARAMETERS = ("""
 [1200]
 ParameterName=SDO server parameter
 ObjectType=0x9
@@ -33,25 +40,8 @@ DataType=0x0005
 AccessType=ro
 DefaultValue=2
 PDOMapping=0
-
-[1200sub1]
-ParameterName=COB-ID client to server
-ObjectType=0x7
-DataType=0x0007
-AccessType=ro
-DefaultValue=$NODEID+0x600
-ParameterValue=0x80000000
-PDOMapping=0
-
-[1200sub2]
-ParameterName=COB-ID server to client
-ObjectType=0x7
-DataType=0x0007
-AccessType=ro
-DefaultValue=$NODEID+0x580
-ParameterValue=0x80000000
-PDOMapping=0
-"""
+""" + _cob_id(1, "COB-ID client to server", 0x600)
+                     + _cob_id(2, "COB-ID server to client", 0x580))
 
 
 def _dcf(tmp_path: Path) -> Path:
