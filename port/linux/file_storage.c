@@ -214,9 +214,12 @@ static co_err_t commit(void *ctx)
         if (rc != 0 || make_record(fs) != 0) {
             return failed(fs);
         }
-        fs->staged = 0; /* committed: a failure below is finished by the next begin */
+        /* Committed: the new images are the stored ones (reads honour the record) even if
+         * a rename below fails; the next start or begin finishes them. */
+        fs->staged = 0;
         fs->failed = false;
-        return roll_forward(fs);
+        (void)roll_forward(fs);
+        return CO_OK;
     }
     rc |= path_of(fs, fs->group, true, tmp, sizeof tmp);
     rc |= path_of(fs, fs->group, false, final, sizeof final);
