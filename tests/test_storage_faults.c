@@ -129,7 +129,6 @@ static const co_storage_t k_storage = {.begin = s_begin,
                                        .discard = s_discard,
                                        .stage = s_stage};
 
-
 static void power_on(test_node_t *t)
 {
     CHECK_EQ(test_node_init(t, 5, 0), CO_OK);
