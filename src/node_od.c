@@ -162,6 +162,9 @@ co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_
         return abort;
     }
     abort = co_od_access(&node->cfg.od, entry, false);
+    if (abort == CO_ABORT_NONE) {
+        abort = co_od_read_check(node, entry);
+    }
     if (abort != CO_ABORT_NONE) {
         return abort;
     }

@@ -259,7 +259,8 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
 
 /** Read a wire value as the network would: up to `cap` bytes into `buf`, `*len` = bytes
  *  copied. Returns CO_ABORT_NONE or the CiA abort code (CO_ABORT_LEN_HIGH when the value
- *  does not fit into `cap`). */
+ *  does not fit into `cap`; CO_ABORT_NO_DATA for a sub-index of 0x1003 above the number
+ *  of errors recorded). */
 co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                             uint32_t cap, uint32_t *len);
 
