@@ -116,7 +116,8 @@ def test_a_failing_run_exits_1(capsys: pytest.CaptureFixture[str], tmp_path: Pat
                        "--markdown", str(md))
     assert code == 1
     assert out.splitlines() == [
-        "[1/1] FAILED  dictionary.identity  value of 0x1018:1 (Vendor-ID, ro UNSIGNED32): "
+        "[1/1] FAILED  dictionary.identity [CiA 301 §7.5.2.21, CiA 306 §4.4 (DeviceInfo)]  "
+        "value of 0x1018:1 (Vendor-ID, ro UNSIGNED32): "
         "expected 0xBAD ([DeviceInfo] VendorNumber), got 0xCA0",
         "node 21: FAILED (0 passed, 1 failed, 0 skipped)"]
     text = md.read_text()
