@@ -226,7 +226,7 @@ def test_a_responder_with_gaps_fails_exactly_those_checks(checks_toggle: bool) -
         toggle = report.result("sdo.toggle_download").findings[0]
         assert (toggle.expected, toggle.got) == (
             "abort 0x05030000 (Toggle bit not alternated)", "[30 00 00 00 00 00 00 00]")
-        assert "-> 614  10 63 61 6E 6F 6C 61 20" in toggle.frames[-2]
+        assert "-> 614  17 63 61 6E 6F 00 00 00" in toggle.frames[-2]  # the 4 bytes it holds
         assert "<- 594  30 00 00 00 00 00 00 00" in toggle.frames[-1]
 
 
