@@ -220,10 +220,10 @@ class Context:
 
     def enter(self, command: str) -> None:
         """Send NMT ``command`` (start, stop, preop) and wait until the node reports the
-        state in its heartbeat (switched on for the check at 100 ms when it is off and
-        0x1017 writable): a node may take the command in a while (CANopenLinux in its next
-        pass, RPDOs before it), and a check acts on the state. Without a heartbeat it
-        waits ``quiet`` seconds. A node that does not report the state fails the check."""
+        state in its heartbeat (at 100 ms for the check where 0x1017 is writable): a node
+        may take the command in a while (CANopenLinux in its next pass, RPDOs before it),
+        and a check acts on the state. Without a heartbeat it waits ``quiet`` seconds. A
+        node that does not report the state fails the check."""
         period = self._state_heartbeat()
         mark = self.link.mark()
         self.nmt(command)
@@ -237,12 +237,12 @@ class Context:
                       "none", clause="CiA 301 §7.2.8.3.2.2, §7.3.2")
 
     def _state_heartbeat(self) -> int:
-        """The node's heartbeat period now (ms), 100 ms for the check where 0x1017 is 0
-        and writable; 0 without heartbeat. Read once per check (before it stops the node)."""
+        """The node's heartbeat period (ms) for the check: 100 ms where 0x1017 is writable,
+        else its own; 0 without heartbeat. Read once per check (before it stops the node)."""
         if self._heartbeat_ms is None:
             var = self.var(0x1017, 0)
             period = self.read_uint(0x1017) if var is not None else 0
-            if not period and var is not None and writable(var):
+            if period != _STATE_HEARTBEAT_MS and var is not None and writable(var):
                 self.keep(0x1017, 0)
                 if self.try_write(0x1017, 0, _STATE_HEARTBEAT_MS.to_bytes(2, "little")) is None:
                     period = _STATE_HEARTBEAT_MS
