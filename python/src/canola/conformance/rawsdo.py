@@ -25,13 +25,14 @@ from canola.conformance.link import Link
 from canola.errors import Error
 
 __all__ = ["MAX_STALLED_ACKS", "MAX_VALUE_BYTES", "NoAnswerError", "RawSdo",
-           "SdoProtocolError", "TransferLimitError", "abort_frame", "crc16"]
+           "SdoProtocolError", "TransferLimitError", "ValueTooLargeError", "abort_frame",
+           "crc16"]
 
 ABORT_TIMEOUT = 0x05040000
 ABORT_NO_MEMORY = 0x05040005
 ABORT_GENERAL = 0x08000000
 #: The most bytes one transfer moves (the tester's probes are 890 bytes at most).
-MAX_VALUE_BYTES = 64 * 1024
+MAX_VALUE_BYTES = 16 * 1024
 #: Segments of an upload: as many as MAX_VALUE_BYTES fill, and a last one.
 _MAX_SEGMENTS = MAX_VALUE_BYTES // 7 + 2
 #: Block download acknowledgements in a row that take no segment (ackseq 0).
@@ -52,6 +53,11 @@ class SdoProtocolError(Error):
 
 class TransferLimitError(SdoProtocolError):
     """A transfer the tester stopped at one of its bounds (the message says which)."""
+
+
+class ValueTooLargeError(TransferLimitError):
+    """An upload of more than :data:`MAX_VALUE_BYTES` (announced or sent) the tester
+    stopped: a large DOMAIN, or a server that does not stop."""
 
 
 def crc16(data: bytes, crc: int = 0) -> int:
@@ -218,7 +224,7 @@ class RawSdo:
     def _bound(size: int | None, where: str) -> None:
         """TransferLimitError when a value of ``size`` bytes is more than the tester takes."""
         if size is not None and size > MAX_VALUE_BYTES:
-            raise TransferLimitError(f"{where}: {size} bytes, more than the {MAX_VALUE_BYTES} "
+            raise ValueTooLargeError(f"{where}: {size} bytes, more than the {MAX_VALUE_BYTES} "
                                 "the tester takes")
 
     def _upload_segments(self, index: int, sub: int, size: int | None, where: str) -> bytes:

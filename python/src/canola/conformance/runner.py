@@ -99,9 +99,9 @@ class _Run:
         initial = self.start()
         try:
             for n, chk in enumerate(checks):
+                self.current = chk.name
                 if progress is not None:
                     progress(n, len(checks), chk, None)
-                self.current = chk.name
                 result = self.one(chk)
                 self.report.results.append(result)
                 if progress is not None:
