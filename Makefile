@@ -18,7 +18,7 @@ FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find in
 
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
         test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
-        fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
+        fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand fuzz-conformance coverage py-env lint cortex-m test-m32 \
         test-clang analyse clean
 
 all: $(BUILD)/build.stamp
@@ -134,7 +134,7 @@ FUZZ_EXTRA_node = examples/example_od.c
 FUZZ_EXTRA_sdo_client = examples/example_od.c
 FUZZ_EXTRA_manager = examples/example_od.c
 FUZZ_EXTRA_socketcand_client = port/linux/socketcand.c port/linux/transport.c
-fuzz: fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand
+fuzz: fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand fuzz-conformance
 
 build-fuzz/fuzz_%: FORCE
 	@mkdir -p build-fuzz
@@ -155,7 +155,7 @@ fuzz-c: $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
 # Every target (C and Python) for FUZZ_LONG_SECONDS each, one after the other, then one
 # table: executions, coverage, corpus, findings (fuzz/run-long; logs in build-fuzz/long/).
 FUZZ_LONG_SECONDS ?= 600
-FUZZ_LONG_TARGETS ?= $(FUZZ_TARGETS) eds gateway socketcand
+FUZZ_LONG_TARGETS ?= $(FUZZ_TARGETS) eds gateway socketcand conformance
 fuzz-long: py-env $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
 	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
 	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
@@ -185,6 +185,18 @@ fuzz-gateway: py-env
 	  build-fuzz/corpus-gateway fuzz/corpus/gateway > build-fuzz/fuzz-gateway.log 2>&1; \
 	  rc=$$?; grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)' build-fuzz/fuzz-gateway.log; \
 	  tail -n 1 build-fuzz/fuzz-gateway.log; echo "fuzz_gateway: exit $$rc"; exit $$rc
+
+# The conformance tester against a node whose answers are the fuzzer's (without atheris the
+# seed corpus is replayed).
+fuzz-conformance: py-env
+	@mkdir -p build-fuzz/corpus-conformance
+	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
+	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
+	  >/dev/null 2>&1 || echo "fuzz_conformance: atheris not installable here: replaying the corpus only"
+	@$(PY_VENV)/bin/python fuzz/fuzz_conformance.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-conformance fuzz/corpus/conformance \
+	  > build-fuzz/fuzz-conformance.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-conformance.log; \
+	  echo "fuzz_conformance: exit $$rc"; exit $$rc
 
 fuzz-socketcand: py-env
 	@mkdir -p build-fuzz/corpus-socketcand
