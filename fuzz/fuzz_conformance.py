@@ -30,10 +30,10 @@ except ImportError:  # replay only
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python" / "src"))
 
 # the rest of canola first, uninstrumented: the fuzzer is after the tester's own handling
-from canola import Error, Master  # noqa: E402
-from canola.core import SimBus  # noqa: E402
-from canola.formats import eds  # noqa: E402
-from canola.master import Frame  # noqa: E402
+from canola import Error, Master
+from canola.core import SimBus
+from canola.formats import eds
+from canola.master import Frame
 
 if atheris is not None:
     with atheris.instrument_imports(include=["canola.conformance"]):
