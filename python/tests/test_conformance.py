@@ -133,6 +133,14 @@ def test_dictionaries_unlike_the_usual(name: str) -> None:
     assert {i for i, _ in (k for k in before if before[k] != after[k])} <= ERROR_STATE
 
 
+def test_canola_device_passes_every_check_destructive_too(tmp_path: Path) -> None:
+    """All 54 checks, store and restore included, against canola.Device with storage."""
+    bus = SimBus()
+    Device(EXAMPLE, NODE, bus, store_dir=tmp_path).start()
+    report = cc.run(bus, NODE, EXAMPLE, options=Options(destructive=True))
+    assert report.names(Status.PASSED) == {c.name for c in cc.CHECKS}, cc.markdown(report)
+
+
 def test_store_restore_with_destructive(tmp_path: Path) -> None:
     bus = SimBus()
     Device(EXAMPLE, NODE, bus, store_dir=tmp_path).start()
