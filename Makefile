@@ -18,8 +18,8 @@ FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find in
 
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
         test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
-        fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand fuzz-conformance coverage py-env lint cortex-m test-m32 \
-        test-clang analyse clean
+        fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
+        test-clang analyse clean fuzz-conformance
 
 all: $(BUILD)/build.stamp
 
@@ -162,16 +162,18 @@ fuzz-long: py-env $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
 	  >/dev/null 2>&1 || echo "fuzz-long: atheris not installable here: Python targets NOT RUN"
 	@fuzz/run-long $(FUZZ_LONG_SECONDS) $(FUZZ_LONG_TARGETS)
 
-# atheris has no wheel for every Python: without it the EDS corpus is still replayed.
-fuzz-eds: py-env
-	@mkdir -p build-fuzz/corpus-eds
+# atheris has no wheel for every Python: without it these targets still replay their seed
+# corpus (fuzz_eds: the EDS parser; fuzz_conformance: the conformance tester against a
+# node whose answers are the fuzzer's).
+fuzz-eds fuzz-conformance: fuzz-%: py-env
+	@mkdir -p build-fuzz/corpus-$*
 	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
 	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
-	  >/dev/null 2>&1 || echo "fuzz_eds: atheris not installable here: replaying the corpus only"
-	@$(PY_VENV)/bin/python fuzz/fuzz_eds.py -artifact_prefix=build-fuzz/ \
-	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-eds fuzz/corpus/eds \
-	  > build-fuzz/fuzz-eds.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-eds.log; \
-	  echo "fuzz_eds: exit $$rc"; exit $$rc
+	  >/dev/null 2>&1 || echo "fuzz_$*: atheris not installable here: replaying the corpus only"
+	@$(PY_VENV)/bin/python fuzz/fuzz_$*.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-$* fuzz/corpus/$* \
+	  > build-fuzz/fuzz-$*.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-$*.log; \
+	  echo "fuzz_$*: exit $$rc"; exit $$rc
 
 fuzz-gateway: py-env
 	@mkdir -p build-fuzz/corpus-gateway
@@ -185,18 +187,6 @@ fuzz-gateway: py-env
 	  build-fuzz/corpus-gateway fuzz/corpus/gateway > build-fuzz/fuzz-gateway.log 2>&1; \
 	  rc=$$?; grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)' build-fuzz/fuzz-gateway.log; \
 	  tail -n 1 build-fuzz/fuzz-gateway.log; echo "fuzz_gateway: exit $$rc"; exit $$rc
-
-# The conformance tester against a node whose answers are the fuzzer's (without atheris the
-# seed corpus is replayed).
-fuzz-conformance: py-env
-	@mkdir -p build-fuzz/corpus-conformance
-	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
-	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
-	  >/dev/null 2>&1 || echo "fuzz_conformance: atheris not installable here: replaying the corpus only"
-	@$(PY_VENV)/bin/python fuzz/fuzz_conformance.py -artifact_prefix=build-fuzz/ \
-	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-conformance fuzz/corpus/conformance \
-	  > build-fuzz/fuzz-conformance.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-conformance.log; \
-	  echo "fuzz_conformance: exit $$rc"; exit $$rc
 
 fuzz-socketcand: py-env
 	@mkdir -p build-fuzz/corpus-socketcand

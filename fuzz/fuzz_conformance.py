@@ -21,19 +21,25 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from replay import replay
+
 try:
     import atheris
 except ImportError:  # replay only
     atheris = None
 
-# the sources themselves: an editable install's import finder escapes atheris' import hook
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python" / "src"))
+# the sources themselves: an editable install's import finder escapes atheris' import hook;
+# the tests' fake node's dictionary
+_ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(_ROOT / "python" / "src"), str(_ROOT / "python" / "tests")]
 
 # the rest of canola first, uninstrumented: the fuzzer is after the tester's own handling
-from canola import Error, Master
-from canola.core import SimBus
-from canola.formats import eds
-from canola.master import Frame
+from conformance_fakes import FAKE_EDS  # noqa: E402
+
+from canola import Error, Master  # noqa: E402 -- after the path
+from canola.core import SimBus  # noqa: E402
+from canola.formats import eds  # noqa: E402
+from canola.master import Frame  # noqa: E402
 
 if atheris is not None:
     with atheris.instrument_imports(include=["canola.conformance"]):
@@ -49,67 +55,7 @@ CHECKS = ["dictionary.mandatory", "sdo.expedited_upload", "sdo.segmented_downloa
 #: Short waits in virtual time: each costs the fuzzer time, not the verdicts any meaning.
 OPTIONS = cc.Options(timeout=0.01, boot_timeout=0.02, server_timeout=0.02, quiet=0.005,
                      transfer_timeout=1.0)
-EDS = """[DeviceInfo]
-VendorNumber=0x12345
-ProductNumber=0x77
-[1000]
-ParameterName=Device type
-ObjectType=0x7
-DataType=0x0007
-AccessType=ro
-DefaultValue=0x191
-[1001]
-ParameterName=Error register
-ObjectType=0x7
-DataType=0x0005
-AccessType=ro
-[1008]
-ParameterName=Manufacturer device name
-ObjectType=0x7
-DataType=0x0009
-AccessType=const
-DefaultValue=fuzz
-[1017]
-ParameterName=Producer heartbeat time
-ObjectType=0x7
-DataType=0x0006
-AccessType=rw
-DefaultValue=0
-[1018]
-ParameterName=Identity
-ObjectType=0x9
-SubNumber=3
-[1018sub0]
-ParameterName=Highest sub-index supported
-ObjectType=0x7
-DataType=0x0005
-AccessType=const
-DefaultValue=2
-[1018sub1]
-ParameterName=Vendor-ID
-ObjectType=0x7
-DataType=0x0007
-AccessType=ro
-DefaultValue=0x12345
-[1018sub2]
-ParameterName=Product code
-ObjectType=0x7
-DataType=0x0007
-AccessType=ro
-DefaultValue=0x77
-[2000]
-ParameterName=A string
-ObjectType=0x7
-DataType=0x0009
-AccessType=rw
-DefaultValue=hello
-[2001]
-ParameterName=A blob
-ObjectType=0x7
-DataType=0x000F
-AccessType=rw
-"""
-MODEL = eds.parse(EDS, node_id=NODE)
+MODEL = eds.parse(FAKE_EDS, node_id=NODE)  # the dictionary of the tests' fake node
 
 
 class Scripted:
@@ -159,17 +105,9 @@ def one_input(data: bytes) -> None:
     cc.junit(report)
 
 
-def replay(paths: list[str]) -> None:
-    files = [p for a in paths for p in (sorted(Path(a).iterdir()) if Path(a).is_dir()
-                                        else [Path(a)])]
-    for path in files:
-        one_input(path.read_bytes())
-    print(f"fuzz_conformance: replayed {len(files)} inputs (atheris not installed: no fuzzing)")
-
-
 if __name__ == "__main__":
     if atheris is None:
-        replay([a for a in sys.argv[1:] if not a.startswith("-")])
+        replay("fuzz_conformance", one_input, sys.argv[1:])
     else:
         atheris.Setup(sys.argv, one_input)
         atheris.Fuzz()
