@@ -21,7 +21,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from replay import replay
+from replay import main
 
 try:
     import atheris
@@ -106,8 +106,4 @@ def one_input(data: bytes) -> None:
 
 
 if __name__ == "__main__":
-    if atheris is None:
-        replay("fuzz_conformance", one_input, sys.argv[1:])
-    else:
-        atheris.Setup(sys.argv, one_input)
-        atheris.Fuzz()
+    main("fuzz_conformance", one_input, atheris)

@@ -13,9 +13,8 @@ the seed corpus still runs. For hours:
 
 from __future__ import annotations
 
-import sys
 
-from replay import replay
+from replay import main
 
 try:
     import atheris
@@ -45,8 +44,4 @@ def one_input(data: bytes) -> None:
 
 
 if __name__ == "__main__":
-    if atheris is None:
-        replay("fuzz_eds", one_input, sys.argv[1:])
-    else:
-        atheris.Setup(sys.argv, one_input)
-        atheris.Fuzz()
+    main("fuzz_eds", one_input, atheris)

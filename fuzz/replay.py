@@ -4,8 +4,10 @@ every Python): the seed corpus still runs through the target's contract."""
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 
 def replay(name: str, one_input: Callable[[bytes], None], args: list[str]) -> None:
@@ -16,3 +18,12 @@ def replay(name: str, one_input: Callable[[bytes], None], args: list[str]) -> No
     for path in files:
         one_input(path.read_bytes())
     print(f"{name}: replayed {len(files)} inputs (atheris not installed: no fuzzing)")
+
+
+def main(name: str, one_input: Callable[[bytes], None], atheris: Any) -> None:
+    """The target's command line: libFuzzer's under ``atheris``, a replay without it."""
+    if atheris is None:
+        replay(name, one_input, sys.argv[1:])
+    else:
+        atheris.Setup(sys.argv, one_input)
+        atheris.Fuzz()
