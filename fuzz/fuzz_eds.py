@@ -13,7 +13,6 @@ the seed corpus still runs. For hours:
 
 from __future__ import annotations
 
-
 from replay import main
 
 try:
