@@ -45,6 +45,8 @@ class FakeMaster:
         self.local_nmt_done: list[str] = []
         self.calls: list[tuple[str, int, bool, int]] = []
         self._listeners: list[Listener] = []
+        self.nmt_state = "OPERATIONAL"
+        self.sdo_closings = 0
 
     @property
     def node_id(self) -> int:
