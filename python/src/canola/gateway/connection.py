@@ -15,7 +15,8 @@ this client's last line that had one (0 before any), as CANopenNode's gateway do
 
 For the idle time-out: a client is active when a complete line comes in or a reply has
 been written to it, and while one of its requests is running (a long transfer); the bytes
-of a line that does not end do not count.
+of a line that does not end do not count. The same times, and whether a reply waits to be
+written, decide whose slot goes to a newcomer (:mod:`canola.gateway.slots`).
 """
 
 from __future__ import annotations
@@ -134,7 +135,10 @@ class Connection:
         self.max_line = max_line
         self.session = executor.new_session()
         self.last_seq = 0
-        self.last_active = asyncio.get_running_loop().time()
+        self.connected_at = self.last_active = self._now()
+        self.last_line_at: float | None = None  # its last complete line
+        self.last_reply_at: float | None = None  # the last reply or event written to it
+        self.unwritten_since: float | None = None  # a reply or event waits since then
         self.running = False  # a request of this client is being executed
         self.dropped: str | None = None
         self.task: asyncio.Task[None] | None = None
@@ -157,8 +161,12 @@ class Connection:
         if self.task is not None:
             self.task.cancel()
 
+    @staticmethod
+    def _now() -> float:
+        return asyncio.get_running_loop().time()
+
     def _touch(self) -> None:
-        self.last_active = asyncio.get_running_loop().time()
+        self.last_active = self._now()
 
     async def _request(self, item: bytes | tuple[int | None]) -> Request | str:
         """A line's request, or the reply it gets without running (errors, empty lines)."""
@@ -185,9 +193,14 @@ class Connection:
         out: asyncio.Queue[str | None] = asyncio.Queue(maxsize=_QUEUED_LINES)
         requests: asyncio.Queue[Request | str | None] = asyncio.Queue(maxsize=64)
 
+        def waiting() -> None:
+            if self.unwritten_since is None:
+                self.unwritten_since = self._now()
+
         def deliver(line: str) -> None:
             if not out.full():
                 out.put_nowait(line)
+                waiting()
 
         token = None
         if self.hub is not None:
@@ -202,19 +215,25 @@ class Connection:
                 except (ConnectionError, OSError):
                     return
                 self._touch()
+                self.last_reply_at = self.last_active
+                self.unwritten_since = None if out.empty() else self.last_active
+
+        async def reply(line: str) -> None:
+            await out.put(line)
+            waiting()
 
         async def worker() -> None:
             while (item := await requests.get()) is not None:
                 if isinstance(item, str):
-                    await out.put(item)
+                    await reply(item)
                     continue
                 self.running = True
                 try:
-                    reply = await self.executor.execute(session, item)
+                    answer = await self.executor.execute(session, item)
                 finally:
                     self.running = False
                     self._touch()
-                await out.put(reply)
+                await reply(answer)
 
         write_task = asyncio.create_task(writer())
         work_task = asyncio.create_task(worker())
@@ -227,6 +246,7 @@ class Connection:
                     items.append(last)
                 for item in items:
                     self._touch()
+                    self.last_line_at = self.last_active
                     await requests.put(await self._request(item))
                 if not chunk:
                     break

@@ -9,11 +9,12 @@ stdio, the end of input lets pending requests finish first (``canola gateway --l
 stdio < script`` answers every line).
 
 Bounds (docs/security.md): at most ``max_clients`` socket clients at once; one more takes
-the slot of the client idle longest (that one is dropped and the log says so), or, when
-every client has a request running, is answered ``[0] ERROR:102`` and closed. A socket
-client idle for ``idle_timeout`` seconds is dropped (logged), unless it asked for events
-(it then stays until its slot is needed). :meth:`GatewayServer.close` drops every client
-at once, whatever it is doing.
+the slot of a silent, stuck or quiet client (:mod:`canola.gateway.slots`: that one is
+dropped and the log says so), or, when every client has a request running or traffic
+within ``quiet_s``, is answered ``[0] ERROR:102`` and closed. A socket client idle for
+``idle_timeout`` seconds is dropped (logged), unless it asked for events (it then stays
+until its slot is needed). :meth:`GatewayServer.close` drops every client at once,
+whatever it is doing.
 """
 
 from __future__ import annotations
@@ -31,9 +32,10 @@ from canola.gateway.connection import Connection, LineSplitter, Read, Write, off
 from canola.gateway.events import EventHub
 from canola.gateway.executor import Executor, error_reply
 from canola.gateway.listen import DEFAULT_LISTEN, Listen, parse_listen
+from canola.gateway.slots import QUIET_S, victim
 
-__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "GatewayServer",
-           "LineSplitter", "Listen", "parse_listen"]
+__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "QUIET_S",
+           "GatewayServer", "LineSplitter", "Listen", "parse_listen"]
 
 MAX_LINE = 4 * 1024 * 1024  # a 1 MiB domain in base64 fits three times over
 MAX_CLIENTS = 16
@@ -47,12 +49,13 @@ class GatewayServer:
 
     def __init__(self, executor: Executor, hub: EventHub | None = None, *,
                  max_clients: int = MAX_CLIENTS, max_line: int = MAX_LINE,
-                 idle_timeout: float = IDLE_TIMEOUT) -> None:
+                 idle_timeout: float = IDLE_TIMEOUT, quiet_s: float = QUIET_S) -> None:
         self.executor = executor
         self.hub = hub
         self.max_clients = max_clients
         self.max_line = max_line
         self.idle_timeout = idle_timeout  # 0: never
+        self.quiet_s = quiet_s  # traffic this recent keeps a client's slot
         self._servers: list[asyncio.Server] = []
         self._connections: set[Connection] = set()
         self._sockets: set[Connection] = set()
@@ -150,13 +153,6 @@ class GatewayServer:
             self._connections.discard(conn)
             self._sockets.discard(conn)
 
-    def _idlest(self) -> tuple[Connection, float] | None:
-        """The socket client idle longest (none with a request running), and for how long."""
-        now = asyncio.get_running_loop().time()
-        idle = [(conn, t) for conn in self._sockets
-                if conn.dropped is None and (t := conn.idle_for(now)) is not None]
-        return max(idle, key=lambda pair: pair[1], default=None)
-
     def _peer(self, writer: asyncio.StreamWriter) -> str:
         self._count += 1
         peer = writer.get_extra_info("peername")
@@ -173,17 +169,18 @@ class GatewayServer:
         name = self._peer(writer)
         conn: Connection | None = None
         try:
-            if sum(conn.dropped is None for conn in self._sockets) >= self.max_clients:
-                idlest = self._idlest()
-                if idlest is None:
-                    log.warning("%s refused: all %d client slots have a request running",
-                                name, self.max_clients)
+            live = [conn for conn in self._sockets if conn.dropped is None]
+            if len(live) >= self.max_clients:
+                chosen = victim(live, asyncio.get_running_loop().time(), self.quiet_s)
+                if chosen is None:
+                    log.warning("%s refused: all %d clients have a request running or "
+                                "traffic within %g s", name, self.max_clients, self.quiet_s)
                     writer.write(f"{error_reply(0, GatewayError.INTERNAL_STATE)}\r\n".encode())
                     with contextlib.suppress(ConnectionError):
                         await writer.drain()
                     return
-                victim, idle = idlest
-                victim.drop(f"idle for {idle:.1f} s, its slot goes to {name}")
+                loser, why = chosen
+                loser.drop(f"{why}, its slot goes to {name}")
 
             async def read() -> bytes:
                 try:
