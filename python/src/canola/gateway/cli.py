@@ -3,7 +3,8 @@
 
     canola gateway [--iface IFACE | --bus URL | --simulate EDS] [--listen WHERE]
                    [--node-id N] [--sdo-timeout MS] [--eds FILE] [--max-clients N]
-                   [--max-line BYTES] [--idle-timeout S]
+                   [--max-line BYTES] [--max-queued BYTES] [--max-queued-total BYTES]
+                   [--idle-timeout S]
 
 ``--listen`` is ``tcp:HOST:PORT`` (default tcp:127.0.0.1:6000, loopback only),
 ``unix:PATH`` or ``stdio``. ``--simulate EDS`` runs the gateway's master and the devices
@@ -33,6 +34,8 @@ from canola.gateway.server import (
     IDLE_TIMEOUT,
     MAX_CLIENTS,
     MAX_LINE,
+    MAX_QUEUED,
+    MAX_QUEUED_TOTAL,
     GatewayServer,
 )
 from canola.gateway.server import parse_listen as _parse_listen
@@ -101,6 +104,12 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
                         help=f"clients at once (default {MAX_CLIENTS})")
     parser.add_argument("--max-line", type=_positive, default=MAX_LINE, metavar="BYTES",
                         help=f"longest request line (default {MAX_LINE})")
+    parser.add_argument("--max-queued", type=_positive, default=MAX_QUEUED, metavar="BYTES",
+                        help="request lines and replies held per client (default "
+                             f"{MAX_QUEUED}; a line beyond: ERROR:600)")
+    parser.add_argument("--max-queued-total", type=_positive, default=MAX_QUEUED_TOTAL,
+                        metavar="BYTES", help="the same over all clients (default "
+                                              f"{MAX_QUEUED_TOTAL})")
     parser.add_argument("--idle-timeout", type=_seconds, default=IDLE_TIMEOUT, metavar="S",
                         help=f"drop a client silent for S seconds (default {IDLE_TIMEOUT:g}; "
                              "0: never; clients that asked for events stay)")
@@ -143,7 +152,10 @@ async def _serve(args: argparse.Namespace) -> int:
     hub = EventHub(backend)
     server = GatewayServer(Executor(backend, hub), hub, max_clients=args.max_clients,
                            max_line=args.max_line,
-                           idle_timeout=getattr(args, "idle_timeout", IDLE_TIMEOUT))
+                           idle_timeout=getattr(args, "idle_timeout", IDLE_TIMEOUT),
+                           max_queued=getattr(args, "max_queued", MAX_QUEUED),
+                           max_queued_total=getattr(args, "max_queued_total",
+                                                    MAX_QUEUED_TOTAL))
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -184,6 +196,11 @@ async def _serve(args: argparse.Namespace) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Run the gateway until SIGINT / SIGTERM (or the end of stdin with ``stdio``)."""
+    queued = getattr(args, "max_queued", MAX_QUEUED)
+    if not args.max_line <= queued <= getattr(args, "max_queued_total", MAX_QUEUED_TOTAL):
+        print("canola gateway: --max-queued must hold a line (--max-line) and "
+              "--max-queued-total must hold --max-queued", file=sys.stderr)
+        return 2
     try:
         return asyncio.run(_serve(args))
     except ValueError as exc:  # e.g. a host name that is not an address

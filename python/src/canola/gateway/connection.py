@@ -28,6 +28,7 @@ import threading
 from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
+from canola.gateway.budget import Budget, Share
 from canola.gateway.codes import GatewayError
 from canola.gateway.events import EventHub
 from canola.gateway.executor import Executor, error_reply
@@ -40,6 +41,7 @@ __all__ = ["INLINE_PARSE", "Connection", "LineSplitter", "Read", "Write", "off_l
 #: a thread.
 INLINE_PARSE = 4096
 _QUEUED_LINES = 1024  # per client: replies and events not yet sent
+_QUEUED_REQUESTS = 64  # per client: lines read, not yet run (and their bytes: the share)
 _FLUSH_S = 5.0  # the last replies to a client that left, unless it does not read them
 
 log = logging.getLogger("canola.gateway")
@@ -125,14 +127,16 @@ def _parse(raw: bytes) -> Request | ParseError | None:
 
 
 class Connection:
-    """One client: ``name`` (for the log), its session, its activity."""
+    """One client: ``name`` (for the log), its session, its activity, and ``share``: the
+    bytes it may have held at once (:mod:`canola.gateway.budget`)."""
 
     def __init__(self, name: str, executor: Executor, hub: EventHub | None,
-                 max_line: int) -> None:
+                 max_line: int, share: Share | None = None) -> None:
         self.name = name
         self.executor = executor
         self.hub = hub
         self.max_line = max_line
+        self.share = share if share is not None else Share(Budget())
         self.session = executor.new_session()
         self.last_seq = 0
         self.connected_at = self.last_active = self._now()
@@ -142,6 +146,12 @@ class Connection:
         self.running = False  # a request of this client is being executed
         self.dropped: str | None = None
         self.task: asyncio.Task[None] | None = None
+        # replies and events on their way out (with the bytes each holds of the share); a
+        # client that does not read fills it, then its own requests wait (and its events
+        # are dropped), nobody else's
+        self._out: asyncio.Queue[tuple[str, int] | None] = asyncio.Queue(maxsize=_QUEUED_LINES)
+        self._requests: asyncio.Queue[tuple[Request, int] | str | None] = asyncio.Queue(
+            maxsize=_QUEUED_REQUESTS)
 
     @property
     def listening(self) -> bool:
@@ -168,13 +178,25 @@ class Connection:
     def _touch(self) -> None:
         self.last_active = self._now()
 
-    async def _request(self, item: bytes | tuple[int | None]) -> Request | str:
-        """A line's request, or the reply it gets without running (errors, empty lines)."""
+    def _seq_of(self, head: bytes) -> int:
+        seq = read_seq(head[:32].decode("latin-1"))
+        if seq is not None:
+            self.last_seq = seq
+        return self.last_seq
+
+    async def _request(self, item: bytes | tuple[int | None]) -> tuple[Request, int] | str:
+        """A line's request and the bytes it holds, or the reply it gets without running
+        (errors, empty lines, no room)."""
         if isinstance(item, tuple):
             if item[0] is not None:
                 self.last_seq = item[0]
             return error_reply(self.last_seq, GatewayError.OUT_OF_MEMORY)
+        if not self.share.accept(len(item)):
+            return error_reply(self._seq_of(item), GatewayError.OUT_OF_MEMORY,
+                               note="too many bytes queued: wait for the replies")
         parsed = _parse(item) if len(item) <= INLINE_PARSE else await off_loop(_parse, item)
+        if not isinstance(parsed, Request):
+            self.share.ran(len(item))
         if parsed is None:
             return ""
         if isinstance(parsed, ParseError):
@@ -182,61 +204,62 @@ class Connection:
                 self.last_seq = parsed.seq
             return error_reply(self.last_seq, parsed.code)
         self.last_seq = parsed.seq
-        return parsed
+        return parsed, len(item)
+
+    def _waiting(self) -> None:
+        if self.unwritten_since is None:
+            self.unwritten_since = self._now()
+
+    def _event(self, line: str) -> None:
+        if not self._out.full():  # a client that does not read loses its events
+            self._out.put_nowait((line, 0))
+            self._waiting()
+
+    async def _reply(self, line: str) -> None:
+        self.share.reply(len(line))
+        await self._out.put((line, len(line)))
+        self._waiting()
+
+    async def _writer(self, write: Write) -> None:
+        while (item := await self._out.get()) is not None:
+            line, held = item
+            try:
+                await write(line.encode("utf-8") + b"\r\n")
+            except (ConnectionError, OSError):
+                return
+            finally:
+                if held:
+                    self.share.written(held)
+            self._touch()
+            self.last_reply_at = self.last_active
+            self.unwritten_since = None if self._out.empty() else self.last_active
+
+    async def _worker(self) -> None:
+        while (item := await self._requests.get()) is not None:
+            if isinstance(item, str):
+                await self._reply(item)
+                continue
+            request, held = item
+            await self.share.room_for_replies()
+            self.running = True
+            try:
+                answer = await self.executor.execute(self.session, request)
+            finally:
+                self.running = False
+                self.share.ran(held)
+                self._touch()
+            await self._reply(answer)
 
     async def serve(self, read: Read, write: Write, *, eof_cancels: bool) -> None:
         """Serve the client reading with ``read`` (b"" at the end) and writing with
         ``write``. ``eof_cancels``: the end of input drops pending requests (sockets)."""
-        session = self.session
-        # replies and events on their way out; a client that does not read fills it, then
-        # its own requests wait (and its events are dropped), nobody else's
-        out: asyncio.Queue[str | None] = asyncio.Queue(maxsize=_QUEUED_LINES)
-        requests: asyncio.Queue[Request | str | None] = asyncio.Queue(maxsize=64)
-
-        def waiting() -> None:
-            if self.unwritten_since is None:
-                self.unwritten_since = self._now()
-
-        def deliver(line: str) -> None:
-            if not out.full():
-                out.put_nowait(line)
-                waiting()
-
         token = None
         if self.hub is not None:
             hub = self.hub
-            token = hub.add_sink(deliver)
-            session.on_events_changed = lambda kinds: hub.set_kinds(token, kinds)
-
-        async def writer() -> None:
-            while (line := await out.get()) is not None:
-                try:
-                    await write(line.encode("utf-8") + b"\r\n")
-                except (ConnectionError, OSError):
-                    return
-                self._touch()
-                self.last_reply_at = self.last_active
-                self.unwritten_since = None if out.empty() else self.last_active
-
-        async def reply(line: str) -> None:
-            await out.put(line)
-            waiting()
-
-        async def worker() -> None:
-            while (item := await requests.get()) is not None:
-                if isinstance(item, str):
-                    await reply(item)
-                    continue
-                self.running = True
-                try:
-                    answer = await self.executor.execute(session, item)
-                finally:
-                    self.running = False
-                    self._touch()
-                await reply(answer)
-
-        write_task = asyncio.create_task(writer())
-        work_task = asyncio.create_task(worker())
+            token = hub.add_sink(self._event)
+            self.session.on_events_changed = lambda kinds: hub.set_kinds(token, kinds)
+        write_task = asyncio.create_task(self._writer(write))
+        work_task = asyncio.create_task(self._worker())
         splitter = LineSplitter(self.max_line)
         try:
             while True:
@@ -247,13 +270,13 @@ class Connection:
                 for item in items:
                     self._touch()
                     self.last_line_at = self.last_active
-                    await requests.put(await self._request(item))
+                    await self._requests.put(await self._request(item))
                 if not chunk:
                     break
             if eof_cancels:
                 work_task.cancel()
             else:
-                await requests.put(None)
+                await self._requests.put(None)
             with contextlib.suppress(asyncio.CancelledError):
                 await work_task
         finally:
@@ -262,16 +285,16 @@ class Connection:
                 await work_task
             if token is not None and self.hub is not None:
                 self.hub.remove_sink(token)
-            await self._finish(out, write_task)
+            await self._finish(write_task)
+            self.share.release()
 
-    async def _finish(self, out: asyncio.Queue[str | None],
-                      write_task: asyncio.Task[None]) -> None:
+    async def _finish(self, write_task: asyncio.Task[None]) -> None:
         """The last replies to a client that left on its own; none to a dropped one."""
         if self.dropped is not None:
             write_task.cancel()
         else:
             try:
-                out.put_nowait(None)
+                self._out.put_nowait(None)
             except asyncio.QueueFull:
                 write_task.cancel()
         try:

@@ -13,7 +13,9 @@ the slot of a silent, stuck or quiet client (:mod:`canola.gateway.slots`: that o
 dropped and the log says so), or, when every client has a request running or traffic
 within ``quiet_s``, is answered ``[0] ERROR:102`` and closed. A socket client idle for
 ``idle_timeout`` seconds is dropped (logged), unless it asked for events (it then stays
-until its slot is needed). :meth:`GatewayServer.close` drops every client at once,
+until its slot is needed). Request lines and replies held: at most ``max_queued`` bytes
+per client and ``max_queued_total`` over all (:mod:`canola.gateway.budget`; a line beyond
+is answered ``ERROR:600``). :meth:`GatewayServer.close` drops every client at once,
 whatever it is doing.
 """
 
@@ -27,6 +29,7 @@ import socket
 import stat
 import sys
 
+from canola.gateway.budget import MAX_QUEUED, MAX_QUEUED_TOTAL, Budget, Share
 from canola.gateway.codes import GatewayError
 from canola.gateway.connection import Connection, LineSplitter, Read, Write, off_loop
 from canola.gateway.events import EventHub
@@ -34,8 +37,9 @@ from canola.gateway.executor import Executor, error_reply
 from canola.gateway.listen import DEFAULT_LISTEN, Listen, parse_listen
 from canola.gateway.slots import QUIET_S, victim
 
-__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "QUIET_S",
-           "GatewayServer", "LineSplitter", "Listen", "parse_listen"]
+__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "MAX_QUEUED",
+           "MAX_QUEUED_TOTAL", "QUIET_S", "GatewayServer", "LineSplitter", "Listen",
+           "parse_listen"]
 
 MAX_LINE = 4 * 1024 * 1024  # a 1 MiB domain in base64 fits three times over
 MAX_CLIENTS = 16
@@ -49,11 +53,18 @@ class GatewayServer:
 
     def __init__(self, executor: Executor, hub: EventHub | None = None, *,
                  max_clients: int = MAX_CLIENTS, max_line: int = MAX_LINE,
-                 idle_timeout: float = IDLE_TIMEOUT, quiet_s: float = QUIET_S) -> None:
+                 idle_timeout: float = IDLE_TIMEOUT, quiet_s: float = QUIET_S,
+                 max_queued: int = MAX_QUEUED, max_queued_total: int = MAX_QUEUED_TOTAL
+                 ) -> None:
+        if max_queued < max_line or max_queued_total < max_queued:
+            raise ValueError(f"queued bytes: {max_queued} per client and {max_queued_total} "
+                             f"in total must hold a {max_line}-byte line")
         self.executor = executor
         self.hub = hub
         self.max_clients = max_clients
         self.max_line = max_line
+        self.max_queued = max_queued  # bytes held per client (requests, replies)
+        self.budget = Budget(max_queued_total)  # the same over all clients
         self.idle_timeout = idle_timeout  # 0: never
         self.quiet_s = quiet_s  # traffic this recent keeps a client's slot
         self._servers: list[asyncio.Server] = []
@@ -119,8 +130,7 @@ class GatewayServer:
         """Serve one client reading with ``read`` (b"" at the end) and writing with
         ``write`` (no idle time-out). ``eof_cancels``: the end of input drops pending
         requests (sockets)."""
-        await self._serve(Connection(name, self.executor, self.hub, self.max_line), read,
-                          write, eof_cancels=eof_cancels)
+        await self._serve(self._connection(name), read, write, eof_cancels=eof_cancels)
 
     async def close(self) -> None:
         """Stop listening and drop every client at once (their transfers are aborted)."""
@@ -142,6 +152,10 @@ class GatewayServer:
         self._watch = None
 
     # ---- clients
+
+    def _connection(self, name: str) -> Connection:
+        return Connection(name, self.executor, self.hub, self.max_line,
+                          Share(self.budget, self.max_queued))
 
     async def _serve(self, conn: Connection, read: Read, write: Write, *,
                      eof_cancels: bool) -> None:
@@ -192,7 +206,7 @@ class GatewayServer:
                 writer.write(data)
                 await writer.drain()
 
-            conn = Connection(name, self.executor, self.hub, self.max_line)
+            conn = self._connection(name)
             self._sockets.add(conn)
             await self._serve(conn, read, write, eof_cancels=True)
         except asyncio.CancelledError:
