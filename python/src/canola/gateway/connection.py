@@ -13,6 +13,11 @@ between them, as CANopenNode's gateway does): an empty or comment-only line gets
 reply, and a line without a readable ``[seq]`` is answered with the sequence number of
 this client's last line that had one (0 before any), as CANopenNode's gateway does too.
 
+With a token (:mod:`canola.access`), a client's first line must be ``[seq] auth <token>``
+(answered ``[seq] OK``) and come within :data:`AUTH_S` seconds; any other line, a wrong
+token or silence gets ``ERROR:102`` (``#`` and why) and the connection is closed. Until
+then its lines count as no traffic. Without a token, ``auth`` lines are answered OK.
+
 For the idle time-out: a client is active when a complete line comes in or a reply has
 been written to it, and while one of its requests is running (a long transfer); the bytes
 of a line that does not end do not count. The same times, and whether a reply waits to be
@@ -28,14 +33,16 @@ import threading
 from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
+from canola.access import same_token
 from canola.gateway.budget import Budget, Share
 from canola.gateway.codes import GatewayError
 from canola.gateway.events import EventHub
 from canola.gateway.executor import Executor, error_reply
 from canola.gateway.parser import ParseError, parse_line, read_seq
-from canola.gateway.requests import Request
+from canola.gateway.requests import Auth, Request
 
-__all__ = ["INLINE_PARSE", "Connection", "LineSplitter", "Read", "Write", "off_loop"]
+__all__ = ["AUTH_S", "INLINE_PARSE", "Connection", "LineSplitter", "Read", "Write",
+           "off_loop"]
 
 #: Lines up to this many bytes are parsed on the event loop (microseconds); longer ones in
 #: a thread.
@@ -43,6 +50,9 @@ INLINE_PARSE = 4096
 _QUEUED_LINES = 1024  # per client: replies and events not yet sent
 _QUEUED_REQUESTS = 64  # per client: lines read, not yet run (and their bytes: the share)
 _FLUSH_S = 5.0  # the last replies to a client that left, unless it does not read them
+#: Seconds a client has to prove its token (where one is asked for).
+AUTH_S = 10.0
+_AUTH_LINE = 256  # the longest line read before the token is proved
 
 log = logging.getLogger("canola.gateway")
 T = TypeVar("T")
@@ -127,12 +137,16 @@ def _parse(raw: bytes) -> Request | ParseError | None:
 
 
 class Connection:
-    """One client: ``name`` (for the log), its session, its activity, and ``share``: the
-    bytes it may have held at once (:mod:`canola.gateway.budget`)."""
+    """One client: ``name`` (for the log), its session, its activity, ``share``: the
+    bytes it may have held at once (:mod:`canola.gateway.budget`), and ``token``: what it
+    must send first (None: nothing)."""
 
     def __init__(self, name: str, executor: Executor, hub: EventHub | None,
-                 max_line: int, share: Share | None = None) -> None:
+                 max_line: int, share: Share | None = None, *,
+                 token: str | None = None) -> None:
         self.name = name
+        self.token = token
+        self.authed = token is None
         self.executor = executor
         self.hub = hub
         self.max_line = max_line
@@ -204,7 +218,28 @@ class Connection:
                 self.last_seq = parsed.seq
             return error_reply(self.last_seq, parsed.code)
         self.last_seq = parsed.seq
+        if isinstance(parsed, Auth):
+            self.share.ran(len(item))
+            if self.token is None or same_token(parsed.token, self.token):
+                return f"[{parsed.seq}] OK"
+            return error_reply(parsed.seq, GatewayError.INTERNAL_STATE, note="wrong token")
         return parsed, len(item)
+
+    def _prove(self, item: bytes | tuple[int | None]) -> tuple[str, str | None]:
+        """The reply to a line that must prove the token, and why it did not (None: it
+        did)."""
+        why = "authentication required: send '[<seq>] auth <token>' first"
+        parsed: Request | ParseError | None = None
+        if isinstance(item, bytes) and len(item) <= _AUTH_LINE:
+            parsed = _parse(item)
+        seq = self._seq_of(item) if isinstance(item, bytes) else (item[0] or 0)
+        if isinstance(parsed, Auth):
+            assert self.token is not None
+            if same_token(parsed.token, self.token):
+                self.authed = True
+                return f"[{parsed.seq}] OK", None
+            why = "wrong token"
+        return error_reply(seq, GatewayError.INTERNAL_STATE, note=why), why
 
     def _waiting(self) -> None:
         if self.unwritten_since is None:
@@ -261,19 +296,28 @@ class Connection:
         write_task = asyncio.create_task(self._writer(write))
         work_task = asyncio.create_task(self._worker())
         splitter = LineSplitter(self.max_line)
+        refused = False
         try:
-            while True:
-                chunk = await read()
+            while not refused:
+                chunk = await self._read(read)
                 items = splitter.feed(chunk) if chunk else []
                 if not chunk and (last := splitter.tail()) is not None:
                     items.append(last)
                 for item in items:
+                    if not self.authed:
+                        reply, why = self._prove(item)
+                        await self._requests.put(reply)
+                        if why is not None:
+                            log.warning("%s refused: %s", self.name, why)
+                            refused = True
+                            break
+                        continue
                     self._touch()
                     self.last_line_at = self.last_active
                     await self._requests.put(await self._request(item))
                 if not chunk:
                     break
-            if eof_cancels:
+            if eof_cancels and not refused:
                 work_task.cancel()
             else:
                 await self._requests.put(None)
@@ -287,6 +331,17 @@ class Connection:
                 self.hub.remove_sink(token)
             await self._finish(write_task)
             self.share.release()
+
+    async def _read(self, read: Read) -> bytes:
+        """The next bytes; until the token is proved, only within :data:`AUTH_S` of the
+        connection (then b"": the end)."""
+        if self.authed:
+            return await read()
+        try:
+            return await asyncio.wait_for(read(), self.connected_at + AUTH_S - self._now())
+        except TimeoutError:
+            log.warning("%s refused: no token within %g s", self.name, AUTH_S)
+            return b""
 
     async def _finish(self, write_task: asyncio.Task[None]) -> None:
         """The last replies to a client that left on its own; none to a dropped one."""

@@ -15,7 +15,8 @@ within ``quiet_s``, is answered ``[0] ERROR:102`` and closed. A socket client id
 ``idle_timeout`` seconds is dropped (logged), unless it asked for events (it then stays
 until its slot is needed). Request lines and replies held: at most ``max_queued`` bytes
 per client and ``max_queued_total`` over all (:mod:`canola.gateway.budget`; a line beyond
-is answered ``ERROR:600``). :meth:`GatewayServer.close` drops every client at once,
+is answered ``ERROR:600``). With a ``token``, every socket client proves it first
+(:mod:`canola.gateway.connection`). :meth:`GatewayServer.close` drops every client at once,
 whatever it is doing.
 """
 
@@ -54,8 +55,8 @@ class GatewayServer:
     def __init__(self, executor: Executor, hub: EventHub | None = None, *,
                  max_clients: int = MAX_CLIENTS, max_line: int = MAX_LINE,
                  idle_timeout: float = IDLE_TIMEOUT, quiet_s: float = QUIET_S,
-                 max_queued: int = MAX_QUEUED, max_queued_total: int = MAX_QUEUED_TOTAL
-                 ) -> None:
+                 max_queued: int = MAX_QUEUED, max_queued_total: int = MAX_QUEUED_TOTAL,
+                 token: str | None = None) -> None:
         if max_queued < max_line or max_queued_total < max_queued:
             raise ValueError(f"queued bytes: {max_queued} per client and {max_queued_total} "
                              f"in total must hold a {max_line}-byte line")
@@ -64,6 +65,7 @@ class GatewayServer:
         self.max_clients = max_clients
         self.max_line = max_line
         self.max_queued = max_queued  # bytes held per client (requests, replies)
+        self.token = token  # what every socket client sends first (None: nothing)
         self.budget = Budget(max_queued_total)  # the same over all clients
         self.idle_timeout = idle_timeout  # 0: never
         self.quiet_s = quiet_s  # traffic this recent keeps a client's slot
@@ -128,9 +130,9 @@ class GatewayServer:
     async def serve_stream(self, read: Read, write: Write, *, eof_cancels: bool,
                            name: str = "stream") -> None:
         """Serve one client reading with ``read`` (b"" at the end) and writing with
-        ``write`` (no idle time-out). ``eof_cancels``: the end of input drops pending
-        requests (sockets)."""
-        await self._serve(self._connection(name), read, write, eof_cancels=eof_cancels)
+        ``write`` (no idle time-out, no token: the process's own stdin, say).
+        ``eof_cancels``: the end of input drops pending requests (sockets)."""
+        await self._serve(self._connection(name, None), read, write, eof_cancels=eof_cancels)
 
     async def close(self) -> None:
         """Stop listening and drop every client at once (their transfers are aborted)."""
@@ -153,9 +155,9 @@ class GatewayServer:
 
     # ---- clients
 
-    def _connection(self, name: str) -> Connection:
+    def _connection(self, name: str, token: str | None) -> Connection:
         return Connection(name, self.executor, self.hub, self.max_line,
-                          Share(self.budget, self.max_queued))
+                          Share(self.budget, self.max_queued), token=token)
 
     async def _serve(self, conn: Connection, read: Read, write: Write, *,
                      eof_cancels: bool) -> None:
@@ -206,7 +208,7 @@ class GatewayServer:
                 writer.write(data)
                 await writer.drain()
 
-            conn = self._connection(name)
+            conn = self._connection(name, self.token)
             self._sockets.add(conn)
             await self._serve(conn, read, write, eof_cancels=True)
         except asyncio.CancelledError:
