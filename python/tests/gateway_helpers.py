@@ -181,6 +181,22 @@ async def serving(backend: MasterBackend) -> AsyncIterator[str]:
         hub.close()
 
 
+@contextlib.asynccontextmanager
+async def client_of(backend: MasterBackend) -> AsyncIterator[Client]:
+    """A client of the gateway on ``backend`` over TCP, with no event pump: on a SimBus
+    the test alone moves virtual time. Client, server and event hub closed after."""
+    hub = EventHub(backend)
+    server = GatewayServer(Executor(backend, hub), hub)
+    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+    client = await Client.connect(GatewayServer.address(srv))
+    try:
+        yield client
+    finally:
+        await client.close()
+        await server.close()
+        hub.close()
+
+
 async def start_gateway(master: FakeMaster, **limits: float) -> tuple[GatewayServer, str]:
     """The gateway (and its event hub) on ``master``, listening on a free TCP port of
     127.0.0.1 (``limits``: GatewayServer's max_clients, max_line, idle_timeout)."""

@@ -14,12 +14,10 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from gateway_helpers import Client, run
+from gateway_helpers import Client, client_of, run
 
 from canola import Device, Master
 from canola.core import SimBus
-from canola.gateway import Executor, GatewayServer, parse_listen
-from canola.gateway.events import EventHub
 from canola.gateway.masterbackend import MasterBackend
 from canola.master import Frame
 
@@ -59,16 +57,8 @@ async def network() -> AsyncIterator[Net]:
         node.start()
     bus.run_for(10_000)
     backend = MasterBackend(master)
-    hub = EventHub(backend)
-    server = GatewayServer(Executor(backend, hub), hub)
-    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
-    client = await Client.connect(GatewayServer.address(srv))
-    try:
+    async with client_of(backend) as client:
         yield Net(bus, backend, device, hostile, client)
-    finally:
-        await client.close()
-        await server.close()
-        hub.close()
 
 
 def test_stopped_gateway_answers_wrong_state_and_recovers_when_started() -> None:

@@ -240,19 +240,8 @@ static void hear(rig_t *r)
     r->heard[r->heard_len] = '\0';
 }
 
-/* Handshake with `greeting` already written by the server; returns open_fd's result. */
-static co_err_t rig_connect(rig_t *r, const char *greeting, unsigned timeout_ms)
-{
-    memset(r, 0, sizeof *r);
-    int sv[2];
-    CHECK(socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) == 0);
-    r->server = sv[1];
-    CHECK(fcntl(r->server, F_SETFL, O_NONBLOCK) == 0);
-    say(r, greeting);
-    return co_socketcand_open_fd(&r->sc, sv[0], "vcan0", timeout_ms);
-}
-
-/* The same, proving `token` first. */
+/* Handshake with `greeting` already written by the server, proving `token` (NULL: none)
+ * first; returns open_fd_auth's result. */
 static co_err_t rig_connect_auth(rig_t *r, const char *greeting, const char *token,
                                  unsigned timeout_ms)
 {
@@ -263,6 +252,12 @@ static co_err_t rig_connect_auth(rig_t *r, const char *greeting, const char *tok
     CHECK(fcntl(r->server, F_SETFL, O_NONBLOCK) == 0);
     say(r, greeting);
     return co_socketcand_open_fd_auth(&r->sc, sv[0], "vcan0", token, timeout_ms);
+}
+
+/* The same without a token, as co_socketcand_open_fd runs it. */
+static co_err_t rig_connect(rig_t *r, const char *greeting, unsigned timeout_ms)
+{
+    return rig_connect_auth(r, greeting, NULL, timeout_ms);
 }
 
 static void rig_node(rig_t *r, uint16_t hb_ms)
