@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The bytes the gateway holds for its clients: request lines accepted and not yet run,
-replies not yet written. Bounded per client (:class:`Share`) and over all clients
+"""The bytes the gateway holds for its clients: request lines being read, accepted and not
+yet run, replies not yet written. Bounded per client (:class:`Share`) and over all clients
 (:class:`Budget`).
 
 A request line is accepted only when it fits both bounds; one that does not is answered
 ``ERROR:600`` (out of memory) and dropped, and what was accepted before it is untouched.
+(The connection does not even collect a line longer than the room left: it skips the
+rest of it, so a refused line costs no memory either.)
 A reply cannot be refused (its request ran): it is held even past the bounds, and the
 client's next request does not run while its replies waiting to be written reach its
 bound (a client that does not read stalls itself, nobody else). So the bytes held are at
@@ -50,8 +52,20 @@ class Share:
         self.limit = limit
         self.used = 0
         self.replies = 0  # of which replies not yet written
+        self.partial = 0  # of which the part of a line still coming
         self._room = asyncio.Event()
         self._room.set()
+
+    def room(self) -> int:
+        """The longest request line this share and the budget could hold now."""
+        return max(0, min(self.limit - self.used, self.budget.limit - self.budget.used))
+
+    def hold_partial(self, n: int) -> None:
+        """Hold ``n`` bytes for the part of a line read so far (instead of the last
+        count): a line on its way takes room as it grows, so the bounds hold for lines
+        being read too."""
+        self._take(n - self.partial)
+        self.partial = n
 
     def accept(self, n: int) -> bool:
         """Hold a request line of ``n`` bytes, if it fits this share and the budget."""
@@ -84,7 +98,7 @@ class Share:
     def release(self) -> None:
         """The client is gone: everything held for it goes back to the budget."""
         self.budget.give(self.used)
-        self.used = self.replies = 0
+        self.used = self.replies = self.partial = 0
         self._room.set()
 
     def _take(self, n: int) -> None:

@@ -53,6 +53,7 @@ _FLUSH_S = 5.0  # the last replies to a client that left, unless it does not rea
 #: Seconds a client has to prove its token (where one is asked for).
 AUTH_S = 10.0
 _AUTH_LINE = 256  # the longest line read before the token is proved
+_NO_ROOM = "too many bytes queued: wait for the replies"
 
 log = logging.getLogger("canola.gateway")
 T = TypeVar("T")
@@ -120,6 +121,11 @@ class LineSplitter:
             start = end + 1 if nl >= 0 else len(data)
         return out
 
+    @property
+    def pending(self) -> int:
+        """Bytes of a line collected so far (not yet complete)."""
+        return len(self._buf)
+
     def tail(self) -> bytes | None:
         """What is left at the end of the stream (a last line without line feed)."""
         if self._skipping or not self._buf:
@@ -134,6 +140,17 @@ def _parse(raw: bytes) -> Request | ParseError | None:
         return parse_line(raw.decode("utf-8", "replace"))
     except ParseError as exc:
         return exc
+
+
+#: Long lines parsed at once, over all clients: a parse holds a few copies of its line
+#: (its text, the value's bytes) for a moment; these copies stay within this many lines.
+_LONG_PARSES = threading.BoundedSemaphore(2)
+
+
+def _parse_long(raw: bytes) -> Request | ParseError | None:
+    """:func:`_parse` in turn with the other long lines (in the parse's own thread)."""
+    with _LONG_PARSES:
+        return _parse(raw)
 
 
 class Connection:
@@ -198,17 +215,20 @@ class Connection:
             self.last_seq = seq
         return self.last_seq
 
-    async def _request(self, item: bytes | tuple[int | None]) -> tuple[Request, int] | str:
+    async def _request(self, item: bytes | tuple[int | None], *,
+                       short: bool) -> tuple[Request, int] | str:
         """A line's request and the bytes it holds, or the reply it gets without running
-        (errors, empty lines, no room)."""
+        (errors, empty lines, no room). ``short``: the lines were collected up to the room
+        left in the share, shorter than ``max_line``."""
         if isinstance(item, tuple):
             if item[0] is not None:
                 self.last_seq = item[0]
-            return error_reply(self.last_seq, GatewayError.OUT_OF_MEMORY)
+            return error_reply(self.last_seq, GatewayError.OUT_OF_MEMORY,
+                               note=_NO_ROOM if short else "")
         if not self.share.accept(len(item)):
-            return error_reply(self._seq_of(item), GatewayError.OUT_OF_MEMORY,
-                               note="too many bytes queued: wait for the replies")
-        parsed = _parse(item) if len(item) <= INLINE_PARSE else await off_loop(_parse, item)
+            return error_reply(self._seq_of(item), GatewayError.OUT_OF_MEMORY, note=_NO_ROOM)
+        parsed = (_parse(item) if len(item) <= INLINE_PARSE
+                  else await off_loop(_parse_long, item))
         if not isinstance(parsed, Request):
             self.share.ran(len(item))
         if parsed is None:
@@ -283,6 +303,7 @@ class Connection:
                 self.running = False
                 self.share.ran(held)
                 self._touch()
+                del item, request  # its value: not held while the next one is awaited
             await self._reply(answer)
 
     async def serve(self, read: Read, write: Write, *, eof_cancels: bool) -> None:
@@ -300,7 +321,11 @@ class Connection:
         try:
             while not refused:
                 chunk = await self._read(read)
+                self.share.hold_partial(0)
+                splitter.limit = min(self.max_line, self.share.room())  # collect what fits
+                short = splitter.limit < self.max_line
                 items = splitter.feed(chunk) if chunk else []
+                self.share.hold_partial(splitter.pending)  # a line still coming holds room
                 if not chunk and (last := splitter.tail()) is not None:
                     items.append(last)
                 for item in items:
@@ -314,7 +339,7 @@ class Connection:
                         continue
                     self._touch()
                     self.last_line_at = self.last_active
-                    await self._requests.put(await self._request(item))
+                    await self._requests.put(await self._request(item, short=short))
                 if not chunk:
                     break
             if eof_cancels and not refused:
