@@ -10,10 +10,13 @@ from __future__ import annotations
 import base64
 import contextlib
 import os
+import time
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import can
+import pytest
 from gateway_helpers import Client, client_of, run
 
 from canola import Device, Master
@@ -186,3 +189,34 @@ def test_an_nmt_storm_with_stops_gets_values_or_the_state_error_only() -> None:
                 assert await net.ask(f"[{i}] 2 r 0x2200 0 d") == f"[{i}] {text}"
 
     run(main())
+
+
+@pytest.mark.realtime
+def test_on_python_can_too(tmp_path: Path) -> None:
+    """The same on python-can (the master's bus thread runs the state callbacks): OPERATIONAL
+    by itself, stopped by a frame from another node, OPERATIONAL again after a reset
+    communication to all (bounded waits, seconds of margin)."""
+    channel = f"own-{tmp_path.name}"
+    bus = can.Bus(interface="virtual", channel=channel)
+    master = Master(bus, node_id=1)
+    other = can.Bus(interface="virtual", channel=channel)
+    master.start()
+    try:
+        backend = MasterBackend(master)
+
+        def reaches(state: str) -> bool:
+            end = time.monotonic() + 10
+            while backend.nmt_state != state and time.monotonic() < end:
+                time.sleep(0.01)
+            return backend.nmt_state == state
+
+        assert reaches("OPERATIONAL")
+        other.send(can.Message(arbitration_id=0, data=b"\x02\x01", is_extended_id=False))
+        assert reaches("STOPPED")
+        other.send(can.Message(arbitration_id=0, data=b"\x82\x00", is_extended_id=False))
+        assert reaches("OPERATIONAL")
+        assert backend.sdo_closings >= 2
+    finally:
+        master.stop()
+        bus.shutdown()
+        other.shutdown()
