@@ -30,7 +30,7 @@ import time
 import weakref
 from collections import deque
 from collections.abc import Callable, Iterator
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 import can
 
@@ -39,7 +39,7 @@ from canola._c import ffi, lib
 from canola.core import Od, SimBus
 from canola.errors import Error
 
-__all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame", "Link"]
+__all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame", "Link", "NodeEvents"]
 
 log = logging.getLogger("canola")
 
@@ -136,6 +136,11 @@ class Link:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._frame = ffi.new("co_frame_t *")
+        #: The receive token: its holder alone takes frames from python-can (pump).
+        self.rx = threading.Lock()
+        #: Application threads in :meth:`wait` (the bus thread stands aside meanwhile).
+        self.waiting = 0
+        self._clock_us = 0  # the latest time handed to the nodes
         weakref.finalize(self, _free_link, raw, self._retired)
 
     def now_us(self) -> int:
@@ -203,6 +208,17 @@ class Link:
             lib.canola_py_dev_free(self._retired.popleft())
         return self.now_us()
 
+    def app_clock(self) -> int:
+        """First thing under the lock for an application's call: the time now, but short of
+        the nodes' next deadline, which the receiving thread judges once the frames received
+        before it count (:meth:`pump`), never an application's call."""
+        now = self.enter()
+        due = int(self.c.due_us)
+        if now >= due != _NEVER:
+            now = max(self._clock_us, due - 1)
+        self._clock_us = now
+        return now
+
     def flush(self, now_us: int) -> None:
         """Deliver what the nodes sent to the others, then hand it to python-can (under
         the lock, so that python-can sees the frames in order)."""
@@ -256,7 +272,108 @@ class Link:
             finally:
                 self._dispatching.release()
 
-    # ---- the bus thread
+    # ---- receiving: the bus thread, or an application thread that waits for an answer
+
+    def pump(self, wait_s: float) -> int:
+        """Holding :attr:`rx`: take every frame python-can has received (waiting up to
+        ``wait_s`` for the first; the rest under the lock, so that what arrived while the
+        lock was busy counts too), ingest each at its bus time, then poll: a time-out is
+        judged only once the frames that arrived before it count. Returns the earliest
+        deadline of the nodes (their clock). Callbacks are left queued (:meth:`dispatch`)."""
+        first = self._receive(wait_s)
+        c, frame = self.c, self._frame
+        with self.lock:
+            now = self.enter()
+            msgs = self._drain(first) if first is not None else []
+            if msgs:
+                offset = now - time.time() * 1e6  # python-can's clock (s) -> ours (us)
+                for msg in msgs:
+                    if msg.is_error_frame or msg.is_fd or msg.dlc > 8:
+                        continue
+                    # its bus time, never before what the nodes saw already nor after now
+                    at = min(now, max(self._clock_us, int(msg.timestamp * 1e6 + offset)))
+                    self._clock_us = at
+                    frame.id = msg.arbitration_id
+                    frame.flags = (_EXT if msg.is_extended_id else 0) | \
+                        (_RTR if msg.is_remote_frame else 0)
+                    frame.len = msg.dlc
+                    if not msg.is_remote_frame:
+                        ffi.memmove(frame.data, msg.data, min(len(msg.data), 8))
+                    lib.canola_py_link_ingest(c, at, frame)
+            self._clock_us = now
+            due = int(lib.canola_py_link_poll(c, now))
+            self.flush(now)
+        if msgs:
+            self._listen(msgs)
+        for engine in self.timers:
+            engine.run_timers(now)
+            timer = engine.next_timer_us()
+            due = min(due, timer) if timer is not None else due
+        return due
+
+    def _receive(self, wait_s: float) -> can.Message | None:
+        """The next frame from python-can (waiting up to ``wait_s``), None without one."""
+        try:
+            return self.bus.recv(wait_s)
+        except can.CanError as exc:
+            log.warning("%s: receive failed: %s", self._thread_name(), exc)
+            time.sleep(0.05)
+            return None
+
+    def _drain(self, first: can.Message) -> list[can.Message]:
+        """``first`` and what python-can holds already, up to :data:`_DRAIN_MAX` frames."""
+        msgs = [first]
+        while len(msgs) < _DRAIN_MAX:
+            msg = self._receive(0)
+            if msg is None:
+                break
+            msgs.append(msg)
+        return msgs
+
+    def _listen(self, msgs: list[can.Message]) -> None:
+        listening = [e for e in self.engines if e.frame_listeners]
+        for msg in msgs if listening else ():
+            if msg.is_error_frame or msg.is_fd or msg.dlc > 8:
+                continue
+            seen = Frame(msg.arbitration_id, b"" if msg.is_remote_frame else bytes(msg.data),
+                         rtr=msg.is_remote_frame, extended=msg.is_extended_id,
+                         timestamp=msg.timestamp)
+            for engine in listening:
+                engine.frame_seen(seen)
+
+    def wait(self, engine: Engine, done: Callable[[], bool], end: float | None) -> bool:
+        """Until ``done()`` or time.monotonic() passes ``end``: this thread receives and runs
+        the link while it waits (the bus thread stands aside: no hand-off between threads
+        for an answer), or waits for the thread that receives now to let go. False at
+        ``end``. Raises Error when ``engine`` is stopped meanwhile."""
+        with self.lock:
+            self.waiting += 1
+        rx = self.rx
+        try:
+            while not done():
+                left = 0.05 if end is None else min(0.05, end - time.monotonic())
+                if left <= 0:
+                    return False
+                if not engine.running:
+                    raise Error(f"{engine.name} was stopped while a call waited for it")
+                if not rx.acquire(timeout=left):
+                    continue
+                try:
+                    if done():
+                        break
+                    self.pump(self._wait_s(int(self.c.due_us), left))
+                finally:
+                    rx.release()
+                self.dispatch()
+            return True
+        finally:
+            with self.lock:
+                self.waiting -= 1
+
+    def _wait_s(self, due: int, cap_s: float) -> float:
+        if due == _NEVER:
+            return cap_s
+        return min(cap_s, max(0.0, (due - self.now_us()) / 1e6))
 
     def _run(self, stop: threading.Event) -> None:
         while not stop.is_set():
@@ -267,56 +384,47 @@ class Link:
                 stop.wait(0.05)
 
     def _loop(self, stop: threading.Event) -> None:
-        bus, c, frame = self.bus, self.c, self._frame
-        msg: can.Message | None = None
+        rx, due = self.rx, _NEVER
         while not stop.is_set():
-            with self.lock:
-                now = self.enter()
-                if msg is not None:
-                    lib.canola_py_link_ingest(c, now, frame)
-                due = int(lib.canola_py_link_poll(c, now))
-                self.flush(now)
-            for engine in self.timers:
-                engine.run_timers(now)
-            self.dispatch()
-            for engine in self.timers:
-                timer = engine.next_timer_us()
-                due = min(due, timer) if timer is not None else due
-            wait = MAX_WAIT_S
-            if due != _NEVER:
-                wait = min(MAX_WAIT_S, max(0.0, (due - self.now_us()) / 1e6))
+            if self.waiting:  # an application thread receives (wait): stand aside
+                stop.wait(MAX_WAIT_S)
+                continue
+            if not rx.acquire(timeout=MAX_WAIT_S):
+                continue
             try:
-                msg = bus.recv(wait)
-            except can.CanError as exc:
-                log.warning("%s: receive failed: %s", self._thread_name(), exc)
-                stop.wait(0.05)
-                msg = None
-                continue
-            if msg is None or msg.is_error_frame or msg.is_fd or msg.dlc > 8:
-                msg = None
-                continue
-            frame.id = msg.arbitration_id
-            frame.flags = (_EXT if msg.is_extended_id else 0) | (_RTR if msg.is_remote_frame
-                                                                 else 0)
-            frame.len = msg.dlc
-            data = b"" if msg.is_remote_frame else bytes(msg.data)
-            ffi.memmove(frame.data, data.ljust(8, b"\0")[:8], 8)
-            for engine in self.engines:
-                if engine.frame_listeners:
-                    engine.frame_seen(Frame(msg.arbitration_id, data, rtr=msg.is_remote_frame,
-                                            extended=msg.is_extended_id,
-                                            timestamp=msg.timestamp))
+                due = self.pump(self._wait_s(due, MAX_WAIT_S))
+            finally:
+                rx.release()
+            self.dispatch()
 
 
 #: Frames python-can refused that wait for the next flush, at most.
 _UNSENT_MAX = 4096
 
+#: Frames taken from python-can in one go before the nodes are polled, at most.
+_DRAIN_MAX = 256
+
+
+class NodeEvents(Protocol):
+    """What an engine's owner hears from its C node, called under the lock (queue the work
+    for after it with :meth:`Engine.later`). :class:`canola._nodebase.NodeBase` is one."""
+
+    def _on_state(self, state: int) -> None: ...
+    def _on_reset(self, what: int) -> None: ...
+    def _on_errctl(self, kind: int, node_id: int, state: int, previous: int) -> None: ...
+    def _on_error(self, error: int) -> None: ...
+    def _on_emcy(self, cob_id: int, code: int, reg: int, manufacturer: bytes) -> None: ...
+    def _on_sync(self, counter: int) -> None: ...
+    def _on_time(self, ms: int, days: int) -> None: ...
+    def _on_rpdo(self, rpdo: int) -> None: ...
+    def _on_written(self, index: int, sub: int, by_app: bool) -> None: ...
+
 
 class Engine:
-    """A C node (``canola_py_dev_t``) on ``bus``; ``owner`` gets the C callbacks through
-    its ``_on_*`` methods (called under the lock; they queue work with :meth:`later`)."""
+    """A C node (``canola_py_dev_t``) on ``bus``; ``owner`` hears the C node's events
+    (:class:`NodeEvents`)."""
 
-    def __init__(self, bus: Bus, od: Od, node_id: int, owner: Any, *, sdo_timeout_ms: int,
+    def __init__(self, bus: Bus, od: Od, node_id: int, owner: NodeEvents, *, sdo_timeout_ms: int,
                  store_dir: str | None, raw_frames: bool, name: str,
                  quiet: bool = False) -> None:
         if not isinstance(bus, SimBus | can.BusABC):
@@ -335,7 +443,6 @@ class Engine:
         self._handle = ffi.new_handle(self)
         self.frame_listeners: list[Callable[[Frame], None]] = []
         self.sent_listeners: list[Callable[[Frame], None]] = []
-        self.app_writing = False
         err = ffi.new("co_err_t *")
         store = ffi.new("char[]", store_dir.encode()) if store_dir is not None else ffi.NULL
 
@@ -388,7 +495,7 @@ class Engine:
         link = self.link
         assert link is not None
         with link.lock:
-            now = link.enter()
+            now = link.app_clock()
             lib.co_node_poll(self.node, now)
             try:
                 yield self.node
@@ -404,7 +511,7 @@ class Engine:
             with self.locked() as node:
                 return fn(node)
         with link.lock:
-            now = link.enter()
+            now = link.app_clock()
             lib.co_node_poll(self.node, now)
             try:
                 result = fn(self.node)
@@ -538,92 +645,68 @@ class Engine:
 # C callbacks -> the owner (under the lock)
 
 
+def _logged(what: str) -> Callable[..., None]:
+    """A callback's onerror: the exception logged, never into C."""
+    def onerror(kind: Any, exc: Any, tb: Any) -> None:
+        log.error("canola: %s", what, exc_info=(kind, exc, tb))
+    return onerror
+
+
 def _engine(ctx: Any) -> Engine:
     engine: Engine = ffi.from_handle(ctx)
     return engine
 
 
-def _call(ctx: Any, method: str, *args: Any) -> None:
-    engine = _engine(ctx)
-    fn = getattr(engine.owner, method, None)
-    if fn is not None:
-        fn(*args)
+def _owner(ctx: Any) -> NodeEvents:
+    return _engine(ctx).owner
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("state callback"))
 def canola_py_on_state(user: Any, state: int) -> None:
-    try:
-        _call(user, "_on_state", int(state))
-    except Exception:
-        log.exception("canola: state callback")
+    _owner(user)._on_state(int(state))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("reset callback"))
 def canola_py_on_reset(user: Any, what: int) -> None:
-    try:
-        _call(user, "_on_reset", int(what))
-    except Exception:
-        log.exception("canola: reset callback")
+    _owner(user)._on_reset(int(what))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("error control callback"))
 def canola_py_on_errctl(user: Any, event: Any) -> None:
-    try:
-        _call(user, "_on_errctl", int(event.kind), int(event.node_id), int(event.state),
-              int(event.previous))
-    except Exception:
-        log.exception("canola: error control callback")
+    _owner(user)._on_errctl(int(event.kind), int(event.node_id), int(event.state),
+                            int(event.previous))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("node error callback"))
 def canola_py_on_error(user: Any, error: int) -> None:
-    try:
-        _call(user, "_on_error", int(error))
-    except Exception:
-        log.exception("canola: node error callback")
+    _owner(user)._on_error(int(error))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("EMCY callback"))
 def canola_py_on_emcy(user: Any, emcy: Any) -> None:
-    try:
-        _call(user, "_on_emcy", int(emcy.cob_id), int(emcy.code), int(emcy.reg),
-              bytes(emcy.manufacturer))
-    except Exception:
-        log.exception("canola: EMCY callback")
+    _owner(user)._on_emcy(int(emcy.cob_id), int(emcy.code), int(emcy.reg),
+                          bytes(emcy.manufacturer))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("SYNC callback"))
 def canola_py_on_sync(user: Any, counter: int) -> None:
-    try:
-        _call(user, "_on_sync", int(counter))
-    except Exception:
-        log.exception("canola: SYNC callback")
+    _owner(user)._on_sync(int(counter))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("TIME callback"))
 def canola_py_on_time(user: Any, tod: Any) -> None:
-    try:
-        _call(user, "_on_time", int(tod.ms), int(tod.days))
-    except Exception:
-        log.exception("canola: TIME callback")
+    _owner(user)._on_time(int(tod.ms), int(tod.days))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("RPDO callback"))
 def canola_py_on_rpdo(user: Any, rpdo: int) -> None:
-    try:
-        _call(user, "_on_rpdo", int(rpdo))
-    except Exception:
-        log.exception("canola: RPDO callback")
+    _owner(user)._on_rpdo(int(rpdo))
 
 
-@ffi.def_extern()
-def canola_py_written(ctx: Any, entry: Any) -> None:
-    try:
-        engine = _engine(ctx)
-        if not engine.app_writing:
-            _call(ctx, "_on_written", int(entry.index), int(entry.sub))
-    except Exception:
-        log.exception("canola: write callback")
+@ffi.def_extern(onerror=_logged("write callback"))
+def canola_py_written(user: Any, entry: Any, origin: int) -> None:
+    _owner(user)._on_written(int(entry.index), int(entry.sub),
+                             origin == lib.CANOLA_PY_BY_APP)
 
 
 @ffi.def_extern()
