@@ -44,7 +44,8 @@ def test_the_sdo_server_takes_the_segment_that_arrived_in_time(
     device.start()
     try:
         text = b"0123456789"
-        client.send(_msg(0x600 + NODE, bytes([0x21, 0x09, 0x20, 0]) + len(text).to_bytes(4, "little")))
+        size = len(text).to_bytes(4, "little")
+        client.send(_msg(0x600 + NODE, bytes([0x21, 0x09, 0x20, 0]) + size))
         assert _answer(client, 0x580 + NODE)[0] == 0x60
         client.send(_msg(0x600 + NODE, bytes([0x00]) + text[:7]))
         assert _answer(client, 0x580 + NODE)[0] == 0x20
@@ -70,7 +71,7 @@ def test_the_sdo_client_takes_the_answer_that_arrived_in_time(
     def upload() -> None:
         try:
             result.append(master.sdo(NODE).upload(0x1018, 1))
-        except Exception as exc:  # noqa: BLE001 -- the test reports it
+        except Exception as exc:  # the test reports it
             result.append(exc)
 
     def serve() -> None:

@@ -46,16 +46,17 @@ class Transfer:
     server sent the abort). ``waker`` runs at the completion (under the engine's lock)."""
 
     __slots__ = ("abort", "by_server", "dev", "done", "handle", "keep", "length", "request_id",
-                 "started", "waker")
+                 "started_us", "waker")
 
-    def __init__(self, dev: CData | None = None, server_id: int = 0) -> None:
+    def __init__(self, dev: CData | None = None, server_id: int = 0,
+                 started_us: int = 0) -> None:
         self.done = False
         self.abort = 0
         self.length = 0
         self.by_server = False
         self.dev = dev  # the client's dev: which side ended the transfer (None: unknown)
         self.request_id = 0x600 + server_id
-        self.started = time.monotonic()
+        self.started_us = started_us  # the engine's clock: virtual time on a SimBus
         self.keep: Any = None  # what C points to until the completion
         self.waker: Callable[[], None] | None = None
         self.handle = ffi.new_handle(self)
@@ -232,7 +233,7 @@ class SdoChannels:
         ``answer_ms`` (0: the node's)."""
         begin, keep, what = how
         engine = self.engine
-        t = Transfer(engine.dev, server_id)
+        t = Transfer(engine.dev, server_id, engine.now_us())
         t.keep = keep
 
         def start(node: CData) -> int:
@@ -272,14 +273,15 @@ class SdoChannels:
             elif not t.done:  # else answered at once: a node of the same bus object
                 link = engine.link
                 assert link is not None
-                end = None if timeout is None else t.started + timeout
+                end = None if timeout is None else time.monotonic() + timeout
                 try:
                     if not link.wait(engine, lambda: t.done, end):
                         self.abort(server_id)  # completes the transfer with 0x05040000
                 except Error:
                     self.abort(server_id)
                     raise Error("the master was stopped during an SDO transfer") from None
-            return self._finish(t, server_id, timeout, answer_ms or default_ms)
+            return self._finish(t, server_id, timeout, answer_ms or default_ms,
+                                (engine.now_us() - t.started_us) / 1e6)
         finally:
             busy.release()
 
@@ -325,18 +327,20 @@ class SdoChannels:
             except asyncio.CancelledError:
                 self.abort(server_id)  # ends the transfer before the channel is reused
                 raise
-            return self._finish(t, server_id, timeout, answer_ms or default_ms)
+            return self._finish(t, server_id, timeout, answer_ms or default_ms,
+                                (engine.now_us() - t.started_us) / 1e6)
         finally:
             busy.release()
 
     @staticmethod
-    def _finish(t: Transfer, server_id: int, timeout: float | None, answer_ms: int) -> Transfer:
-        """``t`` done: its abort raised, telling the server's abort from the master's."""
+    def _finish(t: Transfer, server_id: int, timeout: float | None, answer_ms: int,
+                after: float) -> Transfer:
+        """``t`` done after ``after`` seconds: its abort raised, telling the server's abort
+        from the master's."""
         if not t.done:  # pragma: no cover -- the core always completes on abort
             raise SdoTimeout(server_id, answer_ms)
         if not t.abort:
             return t
-        after = time.monotonic() - t.started
         if t.abort == _TIMED_OUT and not t.by_server:
             raise SdoTimeout(server_id, answer_ms if timeout is None else round(timeout * 1000),
                              after)
