@@ -246,9 +246,9 @@ class Lss:
     def inquire(self, address: LssAddress | None = None) -> dict[str, int]:
         """Every value of one device: the one with ``address`` (selected, then back to
         waiting), or without address the one in configuration now."""
-        if address is not None:
-            self.select(address)
-        try:
+        try:  # a select whose answer was lost may have switched the device all the same
+            if address is not None:
+                self.select(address)
             return {what: self.inquire_value(what) for what in _INQUIRE}
         finally:
             if address is not None:
@@ -326,8 +326,8 @@ class Lss:
         A device that had none boots with it at once; one that had one takes it at its
         next reset communication."""
         _node_id(node_id)
-        self.select(address)
-        try:
+        try:  # a select whose answer was lost may have switched the device all the same
+            self.select(address)
             self.configure_node_id(node_id)
             if store:
                 self.store()
