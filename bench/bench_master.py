@@ -9,14 +9,15 @@ usage: bench_master.py SETUP ROUND_TRIPS RUNS PDOS [--node CANOLA_NODE]
       virtual  two python-can virtual bus objects of one channel in one process: the master
                on one, the device on the other (canola.Device for canola, LocalNode for
                python-canopen), each bus object with its own receive thread. The process's
-               CPU is the master's and the device's. A third contender, ``floor``, is
-               python-can alone: one thread sends the request and receives the answer, a
-               second one answers it (no CANopen at all): what any stack pays for the
-               python-can objects and the two thread hand-offs.
+               CPU is the master's and the device's.
       hub      the socketcand hub (``canola bus serve``, a process) and canola-node (C, a
                process) on its channel; each master on canola's socketcand client.
       vcan     vcan0 (SocketCAN) and canola-node on it; each master on python-can's
                socketcan interface.
+    A third contender, ``floor``, is python-can alone: the calling thread sends the request
+    and receives the answer (on the virtual bus a second bus object's thread answers it), no
+    CANopen stack at all: what any Python stack pays for python-can's bus objects (and, on
+    the virtual bus, the two thread hand-offs).
     Per contender, each run in a fresh process of its own (only the measured master
     exists; runs interleaved), idle and then beside 4 CPU-bound processes:
       rate     expedited SDO uploads of 0x1018 sub 1 per second, back to back (best run);
@@ -30,7 +31,6 @@ internal: bench_master.py child CONTENDER SETUP URL ROUND_TRIPS PDOS
 from __future__ import annotations
 
 import os
-import shutil
 import socket
 import subprocess
 import sys
@@ -48,8 +48,8 @@ INDEX, SUB = 0x1018, 1
 PDO_ID = 0x185
 PDO_RATE = 2000  # frames per second
 LOADS = 4  # CPU-bound processes of the loaded runs
-CONTENDERS = {"virtual": ("canola", "pycanopen", "floor"), "hub": ("canola", "pycanopen"),
-              "vcan": ("canola", "pycanopen")}
+CONTENDERS = {"virtual": ("canola", "pycanopen", "floor"),
+              "hub": ("canola", "pycanopen", "floor"), "vcan": ("canola", "pycanopen", "floor")}
 
 
 def eds_of(setup: str) -> str:
@@ -106,23 +106,27 @@ def pycanopen_master(setup: str, url: str) -> tuple[Callable[[], bytes], Any, li
 
 
 def floor_pair(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[Any]]:
-    """python-can alone: a request out, an answer back from another bus object's thread."""
-    del setup
-    bus, other = open_bus(url), open_bus(url)
+    """python-can alone: the request sent and the answer received by the calling thread,
+    no CANopen stack; on the virtual bus a second bus object's thread answers it."""
+    bus = open_bus(url)
     stop = threading.Event()
-    answer_to = {0x600 + SERVER_ID: 0x580 + SERVER_ID}
+    closing: list[Any] = []
+    if setup == "virtual":
+        other = open_bus(url)
 
-    def serve() -> None:
-        while not stop.is_set():
-            msg = other.recv(0.05)
-            if msg is not None and msg.arbitration_id in answer_to:
-                other.send(can.Message(arbitration_id=answer_to[msg.arbitration_id],
-                                       data=b"\x43\x18\x10\x01\0\0\0\0", is_extended_id=False))
-    thread = threading.Thread(target=serve, daemon=True)
-    thread.start()
+        def serve() -> None:
+            while not stop.is_set():
+                msg = other.recv(0.05)
+                if msg is not None and msg.arbitration_id == 0x600 + SERVER_ID:
+                    other.send(can.Message(arbitration_id=0x580 + SERVER_ID,
+                                           data=b"\x43\x18\x10\x01\0\0\0\0",
+                                           is_extended_id=False))
+        thread = threading.Thread(target=serve, daemon=True)
+        thread.start()
+        closing.append(_Closer(lambda: (stop.set(), thread.join(2.0), other.shutdown())))
+    closing.append(_Closer(bus.shutdown))
     request = can.Message(arbitration_id=0x600 + SERVER_ID, data=b"\x40\x18\x10\x01\0\0\0\0",
                           is_extended_id=False)
-    subscribers: list[Callable[[], None]] = []
 
     def upload() -> bytes:
         bus.send(request)
@@ -132,15 +136,15 @@ def floor_pair(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[Any
                 raise SystemExit("bench_master: floor: no answer")
             if msg.arbitration_id == 0x580 + SERVER_ID:
                 return bytes(msg.data[4:])
+    return upload, None, closing
 
-    class Closer:
-        def disconnect(self) -> None:
-            stop.set()
-            thread.join(2.0)
-            bus.shutdown()
-            other.shutdown()
-    del subscribers
-    return upload, None, [Closer()]
+
+class _Closer:
+    def __init__(self, fn: Callable[[], object]) -> None:
+        self.fn = fn
+
+    def disconnect(self) -> None:
+        self.fn()
 
 
 MAKERS = {"canola": canola_master, "pycanopen": pycanopen_master, "floor": floor_pair}
@@ -248,9 +252,10 @@ def start_device(setup: str, node: str) -> tuple[str, list[subprocess.Popen[byte
     return url, procs
 
 
-def run_child(contender: str, setup: str, url: str, round_trips: int, pdos: int) -> dict[str, float]:
+def run_child(contender: str, setup: str, url: str, round_trips: int,
+              pdos: int) -> dict[str, float]:
     cmd = [sys.executable, __file__, "child", contender, setup, url, str(round_trips), str(pdos)]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=1800)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=1800, check=False)
     if r.returncode != 0:
         raise SystemExit(f"bench_master: {contender} on {setup} failed:\n{r.stderr}")
     return {k: float(v) for k, v in (f.split("=") for f in r.stdout.split())}

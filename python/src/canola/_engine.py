@@ -138,9 +138,13 @@ class Link:
         self._frame = ffi.new("co_frame_t *")
         #: The receive token: its holder alone takes frames from python-can (pump).
         self.rx = threading.Lock()
-        #: Application threads in :meth:`wait` (the bus thread stands aside meanwhile).
-        self.waiting = 0
+        #: Application threads in :meth:`wait` (the bus thread stands aside meanwhile); a
+        #: set: adding and discarding are atomic, no lock needed.
+        self.waiting: set[object] = set()
+        self._waited_ns = 0  # when the last of them left (time.monotonic_ns)
         self._clock_us = 0  # the latest time handed to the nodes
+        #: Some engine of the link has frame listeners (pump hands them the frames).
+        self.listening = False
         weakref.finalize(self, _free_link, raw, self._retired)
 
     def now_us(self) -> int:
@@ -282,10 +286,18 @@ class Link:
         deadline of the nodes (their clock). Callbacks are left queued (:meth:`dispatch`)."""
         first = self._receive(wait_s)
         c, frame = self.c, self._frame
+        msgs: list[can.Message] = []
         with self.lock:
-            now = self.enter()
-            msgs = self._drain(first) if first is not None else []
-            if msgs:
+            while self._retired:
+                lib.canola_py_dev_free(self._retired.popleft())
+            now = (time.monotonic_ns() - self._t0) // 1000
+            if first is not None:
+                msgs.append(first)
+                while len(msgs) < _DRAIN_MAX:
+                    more = self._receive(0)
+                    if more is None:
+                        break
+                    msgs.append(more)
                 offset = now - time.time() * 1e6  # python-can's clock (s) -> ours (us)
                 for msg in msgs:
                     if msg.is_error_frame or msg.is_fd or msg.dlc > 8:
@@ -303,7 +315,7 @@ class Link:
             self._clock_us = now
             due = int(lib.canola_py_link_poll(c, now))
             self.flush(now)
-        if msgs:
+        if msgs and self.listening:
             self._listen(msgs)
         for engine in self.timers:
             engine.run_timers(now)
@@ -319,16 +331,6 @@ class Link:
             log.warning("%s: receive failed: %s", self._thread_name(), exc)
             time.sleep(0.05)
             return None
-
-    def _drain(self, first: can.Message) -> list[can.Message]:
-        """``first`` and what python-can holds already, up to :data:`_DRAIN_MAX` frames."""
-        msgs = [first]
-        while len(msgs) < _DRAIN_MAX:
-            msg = self._receive(0)
-            if msg is None:
-                break
-            msgs.append(msg)
-        return msgs
 
     def _listen(self, msgs: list[can.Message]) -> None:
         listening = [e for e in self.engines if e.frame_listeners]
@@ -346,29 +348,32 @@ class Link:
         the link while it waits (the bus thread stands aside: no hand-off between threads
         for an answer), or waits for the thread that receives now to let go. False at
         ``end``. Raises Error when ``engine`` is stopped meanwhile."""
-        with self.lock:
-            self.waiting += 1
-        rx = self.rx
+        me = object()
+        self.waiting.add(me)
+        rx, c = self.rx, self.c
         try:
             while not done():
                 left = 0.05 if end is None else min(0.05, end - time.monotonic())
                 if left <= 0:
                     return False
-                if not engine.running:
+                if not engine._active and not engine.sim:
                     raise Error(f"{engine.name} was stopped while a call waited for it")
-                if not rx.acquire(timeout=left):
+                if not rx.acquire(True, left):
                     continue
                 try:
                     if done():
                         break
-                    self.pump(self._wait_s(int(self.c.due_us), left))
+                    due = c.due_us
+                    self.pump(left if due == _NEVER else
+                              min(left, max(0.0, (due - self.now_us()) / 1e6)))
                 finally:
                     rx.release()
-                self.dispatch()
+                if self.events:
+                    self.dispatch()
             return True
         finally:
-            with self.lock:
-                self.waiting -= 1
+            self._waited_ns = time.monotonic_ns()
+            self.waiting.discard(me)
 
     def _wait_s(self, due: int, cap_s: float) -> float:
         if due == _NEVER:
@@ -386,9 +391,9 @@ class Link:
     def _loop(self, stop: threading.Event) -> None:
         rx, due = self.rx, _NEVER
         while not stop.is_set():
-            if self.waiting:  # an application thread receives (wait): stand aside
-                stop.wait(MAX_WAIT_S)
-                continue
+            if self.waiting or time.monotonic_ns() - self._waited_ns < _ASIDE_NS:
+                stop.wait(MAX_WAIT_S)  # an application thread receives (wait): stand aside,
+                continue  # and a while after it, for its next transfer
             if not rx.acquire(timeout=MAX_WAIT_S):
                 continue
             try:
@@ -400,6 +405,10 @@ class Link:
 
 #: Frames python-can refused that wait for the next flush, at most.
 _UNSENT_MAX = 4096
+
+#: How long the bus thread stays aside after an application thread waited (a next transfer
+#: then finds the receive token free); frames wait in python-can meanwhile.
+_ASIDE_NS = int(MAX_WAIT_S * 1e9)
 
 #: Frames taken from python-can in one go before the nodes are polled, at most.
 _DRAIN_MAX = 256
@@ -602,6 +611,7 @@ class Engine:
         if self.link is not None:
             with self.lock:
                 lib.canola_py_dev_set_raw(self.dev, True)
+            self.link.listening = True
 
     def frame_seen(self, frame: Frame) -> None:
         for fn in self.frame_listeners:
