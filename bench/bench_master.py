@@ -60,10 +60,12 @@ def eds_of(setup: str) -> str:
 
 def open_bus(url: str) -> can.BusABC:
     """virtual://CHANNEL, socketcan://IFACE or socketcand://HOST:PORT/CHANNEL."""
-    from canola.bus.open import open_bus as canola_open  # noqa: PLC0415
-
     if url.startswith("virtual://"):
         return can.Bus(interface="virtual", channel=url[10:], receive_own_messages=False)
+    if url.startswith("socketcan://"):
+        return can.Bus(interface="socketcan", channel=url[12:])
+    from canola.bus.open import open_bus as canola_open  # noqa: PLC0415 -- the socketcand client
+
     return canola_open(url=url)
 
 
@@ -202,7 +204,7 @@ def child(contender: str, setup: str, url: str, round_trips: int, pdos: int) -> 
                 sender.join(pdos / PDO_RATE * 20 + 30)
             else:
                 subprocess.run([sys.executable, __file__, "send", url, str(pdos)], check=True,
-                               timeout=pdos / PDO_RATE * 20 + 60)
+                               timeout=pdos / PDO_RATE * 20 + 600)  # an emulated VM's start
             end = time.monotonic() + 5.0
             while seen[0] < pdos and time.monotonic() < end:
                 time.sleep(0.05)

@@ -55,6 +55,8 @@ class SocketcandBus(can.BusABC):
         #: True once the server closed the connection (seen by a receive).
         self.lost = False
         self._sock = socket.create_connection((host, port), timeout=timeout)
+        # one frame per element, each awaited by somebody: no coalescing delay (Nagle)
+        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         try:
             deadline = time.monotonic() + timeout
             self._expect("hi", deadline)
