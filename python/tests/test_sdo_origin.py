@@ -81,3 +81,42 @@ def test_a_silent_server_is_the_masters_time_out(can_bus: Callable[[], can.BusAB
     assert exc.value.after_s is not None and 0.3 <= exc.value.after_s <= took + 0.01
     assert str(exc.value).startswith("no response from node 5 (SDO time-out 300 ms, after ")
 
+
+
+def test_a_callback_run_while_waiting_cannot_wait_for_itself(
+        can_bus: Callable[[], can.BusABC]) -> None:
+    """The thread that waits for an answer runs the callbacks of what it receives: one that
+    makes a blocking call to the same node is refused at once (it would wait for the
+    transfer it runs inside), one to another node works."""
+    master = Master(can_bus(), node_id=1, sdo_timeout_ms=300)
+    other = can_bus()
+    outcome: list[str] = []
+
+    @master.on_frame
+    def nested(frame: object) -> None:
+        del frame
+        try:
+            master.sdo(SERVER).upload(0x1018, 1)
+        except Exception as exc:  # the test reports it
+            outcome.append(str(exc))
+
+    master.start()
+    try:
+        request_seen = threading.Event()
+
+        def poke() -> None:  # a frame arrives while the master waits for node SERVER
+            end = time.monotonic() + 10.0
+            while time.monotonic() < end and not request_seen.is_set():
+                msg = other.recv(0.05)
+                if msg is not None and msg.arbitration_id == 0x600 + SERVER:
+                    request_seen.set()
+                    other.send(can.Message(arbitration_id=0x181, data=b"\x01",
+                                           is_extended_id=False))
+        thread = threading.Thread(target=poke, daemon=True)
+        thread.start()
+        with pytest.raises(SdoTimeout):
+            master.sdo(SERVER).upload(0x1018, 1)
+        thread.join(10.0)
+    finally:
+        master.stop()
+    assert outcome and "would wait for itself" in outcome[0]

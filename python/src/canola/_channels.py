@@ -99,6 +99,7 @@ class SdoChannels:
         self.table: dict[int, int] = {}  # server node-ID -> channel; 0: the manager's
         self._locks: dict[int, threading.Lock] = {}
         self._buffers: dict[int, CData] = {}  # server node-ID -> its upload buffer
+        self._holders: dict[int, int] = {}  # server node-ID -> the thread in run() for it
 
     @property
     def node_id(self) -> int:
@@ -258,8 +259,13 @@ class SdoChannels:
         engine.check_may_block()
         self._ready(timeout)
         busy = self.lock_of(server_id)
+        me = threading.get_ident()
+        if self._holders.get(server_id) == me:  # a callback run while this thread waits
+            raise Error(f"a blocking SDO call to node {server_id} from a callback run during "
+                        "one to the same node would wait for itself")
         if not busy.acquire(timeout=600):
             raise Error(f"SDO client of node {server_id} stays busy")
+        self._holders[server_id] = me
         try:
             t = self._start(server_id, how, answer_ms)
             bus = engine.bus
@@ -283,6 +289,7 @@ class SdoChannels:
             return self._finish(t, server_id, timeout, answer_ms or default_ms,
                                 (engine.now_us() - t.started_us) / 1e6)
         finally:
+            del self._holders[server_id]
             busy.release()
 
     async def arun(self, server_id: int, how: tuple[Begin, CData, str], timeout: float | None,
