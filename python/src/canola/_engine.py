@@ -7,17 +7,24 @@ lock and one thread (not one per node). A frame one node sends reaches the other
 nodes of the same bus object at once, in C (``port/python/py_link.c``), in the thread
 that caused it: an SDO request of a :class:`~canola.Master` to a :class:`~canola.Device`
 of the same bus object is answered before the call that sent it returns, with no thread
-hand-off. Python hands the same frames to python-can, for every other listener. The
-thread receives the frames of others with a time-out equal to the nodes' next deadline,
-capped at :data:`MAX_WAIT_S` so that deadlines that application calls move earlier are met
-within that cap; each received frame (or time-out) is one acquisition of the lock.
+hand-off. Python hands the same frames to python-can, for every other listener.
+
+Receiving: one thread at a time holds the link's receive token (:attr:`Link.rx`). The bus
+thread does, waiting for frames up to the nodes' next deadline, capped at
+:data:`MAX_WAIT_S` so that deadlines that application calls move earlier are met within
+that cap. A thread that waits for an answer (a blocking SDO transfer, an LSS request, a
+boot, a program download) receives it itself (:meth:`Link.wait`) while the bus thread
+stands aside, so the answer needs no hand-off between threads. Whoever receives takes
+every frame python-can holds, ingests each at its bus time and only then polls the timers
+(:meth:`Link.pump`): a time-out is judged after the frames that arrived before it.
 
 Callbacks of the C nodes only record events; the application's callbacks run afterwards,
 never under the lock, in the order the events happened, by the thread that released the
-lock (the bus thread, or the application's thread whose call made the nodes work), one
-thread at a time; on a SimBus inside :meth:`SimBus.run_until`. They may call any method of
-the nodes. They must not block on a node that only the bus thread can answer: a blocking
-SDO call run by the bus thread raises :class:`~canola.errors.Error`.
+lock (the bus thread, a thread that waits for an answer, or the application's thread whose
+call made the nodes work), one thread at a time; on a SimBus inside
+:meth:`SimBus.run_until`. They may call any method of the nodes. They must not block on a
+node that only the bus thread can answer: a blocking SDO call run by the bus thread raises
+:class:`~canola.errors.Error`, and so does one to the node a waiting thread is waiting for.
 """
 
 from __future__ import annotations
