@@ -142,6 +142,7 @@ typedef enum co_ec_event_kind { CO_EC_BOOT, CO_EC_REMOTE_RESET, CO_EC_STARTED,
 
 typedef enum co_node_error { CO_NODE_ERR_TX_OVERFLOW, CO_NODE_ERR_TX_DRIVER,
                              CO_NODE_ERR_STORED_COMM, CO_NODE_ERR_STORED_APP,
+                             CO_NODE_ERR_STORE_FAILED, CO_NODE_ERR_SDO_COB_FIXED,
                              ... } co_node_error_t;
 typedef enum co_param_group { CO_PARAMS_COMMUNICATION, CO_PARAMS_APPLICATION,
                               ... } co_param_group_t;
@@ -149,6 +150,7 @@ typedef enum co_store_fault { CO_STORE_INTACT, CO_STORE_NONE, CO_STORE_BAD_HEADE
                               CO_STORE_BAD_LENGTH, CO_STORE_BAD_CRC, CO_STORE_BAD_RECORDS,
                               CO_STORE_READ_ERROR, ... } co_store_fault_t;
 #define CO_EMCY_STORE_REJECTED ...
+#define CO_EMCY_STORE_FAILED ...
 co_store_fault_t co_storage_verify(const co_node_t *node, co_param_group_t group);
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame);
 uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
@@ -203,6 +205,7 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    void *user, co_err_t *err);
 void canola_py_dev_free(canola_py_dev_t *dev);
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id);
 void canola_py_dev_touch(canola_py_dev_t *dev);
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
 bool canola_py_dev_sent_abort(const canola_py_dev_t *dev, uint32_t cob_id);
