@@ -72,7 +72,8 @@ test-configs:
 PY_VENV = build-py/venv
 PY_INPUTS = python/pyproject.toml python/setup.py python/src/canola/_build_core.py \
             $(wildcard port/python/*.[ch]) \
-            $(wildcard src/*.[ch] include/canola/*.h port/sim/*.[ch] port/linux/file_storage.c)
+            $(wildcard src/*.[ch] include/canola/*.h port/sim/*.[ch] port/linux/file_storage.c) \
+            $(wildcard port/linux/transport.c port/linux/socketcan*.c port/linux/canola/*.h)
 py-env: build-py/env.stamp
 build-py/env.stamp: $(PY_INPUTS)
 	@test -x $(PY_VENV)/bin/python || python3 -m venv $(PY_VENV)

@@ -153,6 +153,20 @@ static int set_filters(co_socketcan_t *can, const co_node_t *node)
                       (socklen_t)(count * sizeof filters[0]));
 }
 
+co_err_t co_socketcan_pass_all(co_socketcan_t *can)
+{
+    if (can == NULL || can->transport.fd < 0) {
+        return CO_ERR_ARG;
+    }
+    if (!can->is_can) {
+        return CO_OK; /* a plain packet fd has no filter */
+    }
+    struct can_filter all = {.can_id = 0, .can_mask = 0};
+    return setsockopt(can->transport.fd, SOL_CAN_RAW, CAN_RAW_FILTER, &all, sizeof all) == 0
+               ? CO_OK
+               : CO_ERR_STATE;
+}
+
 static void sc_set_filter(co_transport_t *t, const co_node_t *node)
 {
     co_socketcan_t *can = (co_socketcan_t *)t;

@@ -61,6 +61,11 @@ co_err_t co_socketcan_open(co_socketcan_t *can, const char *ifname);
  *  Returns CO_ERR_ARG for a NULL `can` or a negative fd. */
 co_err_t co_socketcan_open_fd(co_socketcan_t *can, int fd);
 
+/** Let every frame through the kernel filter, for a program that takes the bus's whole
+ *  traffic and sorts it itself (several nodes on one socket, a bus monitor). Returns
+ *  CO_ERR_ARG for NULL or a closed socket, CO_ERR_STATE when the kernel refused. */
+co_err_t co_socketcan_pass_all(co_socketcan_t *can);
+
 /** The driver to put into co_node_config_t.driver (not needed with the event loop). */
 co_driver_t co_socketcan_driver(co_socketcan_t *can);
 

@@ -46,6 +46,10 @@ _SOURCES = [
     os.path.join(_ROOT, "port", "sim", "sim.c"),
     os.path.join(_ROOT, "port", "sim", "sim_storage.c"),
     os.path.join(_ROOT, "port", "linux", "file_storage.c"),
+    # the transports of the links that own their bus (port/python/py_io.c)
+    os.path.join(_ROOT, "port", "linux", "transport.c"),
+    os.path.join(_ROOT, "port", "linux", "socketcan.c"),
+    os.path.join(_ROOT, "port", "linux", "socketcand.c"),
 ]
 _INCLUDES = [os.path.join(_ROOT, "include"), os.path.join(_ROOT, "src"),
              os.path.join(_ROOT, "port", "python"),
@@ -228,6 +232,10 @@ co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint
 co_abort_t canola_py_dev_write(canola_py_dev_t *dev, uint16_t index, uint8_t sub,
                                const uint8_t *data, uint32_t len);
 int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel);
+typedef struct canola_py_xfer { bool done; bool by_server; co_abort_t abort; uint32_t len;
+                                const canola_py_dev_t *dev; uint32_t request_id; void *notify;
+                                ...; } canola_py_xfer_t;
+void canola_py_xfer_done(void *ctx, uint8_t channel, co_abort_t abort, uint32_t len);
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
 void canola_py_bus_free(co_sim_bus_t *bus);
 uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
@@ -251,6 +259,46 @@ extern "Python+C" void canola_py_written(void *user, const co_od_entry_t *entry,
                                        canola_py_origin_t origin);
 extern "Python+C" void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
 extern "Python+C" void canola_py_sent(void *ctx, const co_frame_t *frame);
+"""
+
+
+# A link that owns its bus (port/python/py_io.c): canola.bus.native.NativeBus and
+# canola._native.NativeLink.
+
+CDEF += """
+#define CANOLA_PY_IO_DRAIN ...
+typedef enum canola_py_io_rc { CANOLA_PY_IO_TIMEOUT, CANOLA_PY_IO_DONE, CANOLA_PY_IO_PYTHON,
+                               CANOLA_PY_IO_ROUND, CANOLA_PY_IO_FAILED, ... } canola_py_io_rc_t;
+typedef struct canola_py_io { uint64_t aside_us; uint64_t rounds; uint64_t waiter_rounds;
+                              uint64_t thread_wakeups; uint64_t frames_in; uint64_t frames_out;
+                              uint64_t ring_dropped; bool failed; ...; } canola_py_io_t;
+canola_py_io_t *canola_py_io_socketcan(const char *ifname, char *why, size_t why_cap);
+canola_py_io_t *canola_py_io_socketcand(const char *url, const char *token, unsigned timeout_ms,
+                                        char *why, size_t why_cap);
+void canola_py_io_free(canola_py_io_t *io);
+void canola_py_io_close(canola_py_io_t *io);
+canola_py_link_t *canola_py_io_link(canola_py_io_t *io);
+int canola_py_io_start(canola_py_io_t *io, void *user);
+bool canola_py_io_stop(canola_py_io_t *io, uint32_t timeout_ms);
+bool canola_py_io_in_thread(const canola_py_io_t *io);
+uint64_t canola_py_io_enter(canola_py_io_t *io, co_node_t *node);
+void canola_py_io_leave(canola_py_io_t *io, uint64_t now_us);
+void canola_py_io_lock(canola_py_io_t *io);
+void canola_py_io_unlock(canola_py_io_t *io);
+canola_py_io_rc_t canola_py_io_wait(canola_py_io_t *io, const canola_py_xfer_t *x,
+                                    uint64_t until_us);
+void canola_py_io_note(canola_py_io_t *io);
+uint64_t canola_py_io_python_begin(canola_py_io_t *io);
+void canola_py_io_set_py_due(canola_py_io_t *io, uint64_t due_us);
+void canola_py_io_listen(canola_py_io_t *io, int cob_id);
+uint32_t canola_py_io_take_seen(canola_py_io_t *io, co_frame_t *frames, uint64_t *stamps,
+                                uint32_t cap);
+co_err_t canola_py_io_send(canola_py_io_t *io, const co_frame_t *frame);
+canola_py_io_rc_t canola_py_io_recv(canola_py_io_t *io, co_frame_t *frame, uint64_t *stamp_us,
+                                    uint64_t until_us);
+const char *canola_py_io_error(const canola_py_io_t *io);
+uint64_t co_linux_now_us(void);
+extern "Python+C" uint64_t canola_py_io_python(void *user, uint64_t now_us);
 """
 
 
@@ -426,6 +474,7 @@ class FFI:
     def sizeof(self, cdecl: str | CData) -> int: ...
     def offsetof(self, cdecl: str, field: str) -> int: ...
     def cast(self, cdecl: str, value: Any) -> CData: ...
+    def addressof(self, cdata: CData | Lib, *fields: str | int) -> CData: ...
     def def_extern(self, name: str = ..., error: Any = ...,
                    onerror: Callable[..., Any] | None = ...) -> Callable[[F], F]: ...
 

@@ -5,7 +5,7 @@
 allocator, not the master.
 
 A blocking transfer is waited for by the calling thread, which receives the answers itself
-on python-can (:meth:`canola._engine.Link.wait`: no hand-off between threads); an asyncio
+on python-can (``link.wait``, :mod:`canola._engine`: no hand-off between threads); an asyncio
 one is completed by whichever thread receives; on a SimBus the caller runs the bus."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from canola._engine import Engine
 from canola.core import SimBus
 from canola.errors import Error, SdoAbort, SdoTimeout
 
-__all__ = ["CHANNELS", "SdoChannels", "Transfer"]
+__all__ = ["CHANNELS", "XFER_DONE", "SdoChannels", "Transfer"]
 
 log = logging.getLogger("canola")
 
@@ -36,41 +36,59 @@ _INVALID = (0x80000000).to_bytes(4, "little")
 #: Abort code of a transfer that timed out (CiA 301).
 _TIMED_OUT = 0x05040000
 
-#: Begins a transfer on (C node, channel, completion handle): a co_err_t.
+#: The completion of a Transfer (its ``x`` the ctx): records the end in C.
+XFER_DONE: CData = ffi.addressof(lib, "canola_py_xfer_done")
+
+#: Begins a transfer on (C node, channel, its canola_py_xfer_t): a co_err_t.
 Begin = Callable[[CData, int, CData], int]
 
 
 class Transfer:
-    """One SDO transfer of a client channel, as its completion (canola_py_sdo_done) left
-    it: ``done``, ``abort`` (0: none), ``length`` (bytes moved) and ``by_server`` (the
-    server sent the abort). ``waker`` runs at the completion (under the engine's lock)."""
+    """One SDO transfer of a client channel, as its completion (``canola_py_xfer_done``, in
+    C) leaves it in ``x``: ``done``, ``abort`` (0: none), ``length`` (bytes moved) and
+    ``by_server`` (the server sent the abort). A thread waiting in C on a link that owns its
+    bus sees the end without entering Python. ``wake_with(fn)``: ``fn`` runs at the end too
+    (under the engine's lock)."""
 
-    __slots__ = ("abort", "by_server", "dev", "done", "handle", "keep", "length", "request_id",
-                 "started_us", "waker")
+    __slots__ = ("handle", "keep", "started_us", "waker", "x")
 
     def __init__(self, dev: CData | None = None, server_id: int = 0,
                  started_us: int = 0) -> None:
-        self.done = False
-        self.abort = 0
-        self.length = 0
-        self.by_server = False
-        self.dev = dev  # the client's dev: which side ended the transfer (None: unknown)
-        self.request_id = 0x600 + server_id
+        self.x = ffi.new("canola_py_xfer_t *")
+        if dev is not None:  # the client's dev: which side ended the transfer
+            self.x.dev = dev
+        self.x.request_id = 0x600 + server_id
         self.started_us = started_us  # the engine's clock: virtual time on a SimBus
         self.keep: Any = None  # what C points to until the completion
         self.waker: Callable[[], None] | None = None
+        self.handle: Any = None
+
+    def wake_with(self, waker: Callable[[], None]) -> None:
+        self.waker = waker
         self.handle = ffi.new_handle(self)
+        self.x.notify = self.handle
+
+    @property
+    def done(self) -> bool:
+        return bool(self.x.done)
+
+    @property
+    def abort(self) -> int:
+        return int(self.x.abort)
+
+    @property
+    def length(self) -> int:
+        return int(self.x.len)
+
+    @property
+    def by_server(self) -> bool:
+        return bool(self.x.by_server)
 
 
 @ffi.def_extern(onerror=lambda *_: log.exception("canola: SDO completion failed"))
 def canola_py_sdo_done(ctx: Any, channel: int, abort: int, length: int) -> None:
-    del channel
+    del channel, abort, length  # in the transfer's x already
     t: Transfer = ffi.from_handle(ctx)
-    t.abort = int(abort)
-    t.length = int(length)
-    if t.abort and t.dev is not None:  # the client sends its own abort just before this
-        t.by_server = not lib.canola_py_dev_sent_abort(t.dev, t.request_id)
-    t.done = True
     if t.waker is not None:
         t.waker()
 
@@ -212,9 +230,9 @@ class SdoChannels:
             buf = self._buffers[server_id] = ffi.new("uint8_t[]", max_size)
         mode = lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO
 
-        def begin(node: CData, channel: int, handle: CData) -> int:
+        def begin(node: CData, channel: int, xfer: CData) -> int:
             return int(lib.co_sdo_upload(node, channel, index, sub, mode, buf, max_size,
-                                         lib.canola_py_sdo_done, handle))
+                                         XFER_DONE, xfer))
         return begin, buf, f"SDO upload 0x{index:04X} sub {sub}"
 
     @staticmethod
@@ -224,24 +242,27 @@ class SdoChannels:
         ffi.memmove(src, data, len(data))
         mode = lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO
 
-        def begin(node: CData, channel: int, handle: CData) -> int:
+        def begin(node: CData, channel: int, xfer: CData) -> int:
             return int(lib.co_sdo_download(node, channel, index, sub, mode, src, len(data),
-                                           lib.canola_py_sdo_done, handle))
+                                           XFER_DONE, xfer))
         return begin, src, f"SDO download 0x{index:04X} sub {sub}"
 
-    def _start(self, server_id: int, how: tuple[Begin, CData, str], answer_ms: int) -> Transfer:
+    def _start(self, server_id: int, how: tuple[Begin, CData, str], answer_ms: int,
+               waker: Callable[[], None] | None = None) -> Transfer:
         """A transfer begun on the channel of ``server_id``, its time-out per answer
-        ``answer_ms`` (0: the node's)."""
+        ``answer_ms`` (0: the node's); ``waker`` runs at its end."""
         begin, keep, what = how
         engine = self.engine
         t = Transfer(engine.dev, server_id, engine.now_us())
         t.keep = keep
+        if waker is not None:
+            t.wake_with(waker)
 
         def start(node: CData) -> int:
             channel = self.channel(node, server_id)
             check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
                   "co_sdo_client_set_timeout")
-            return begin(node, channel, t.handle)
+            return begin(node, channel, t.x)
         check(engine.call(start), f"{what} of node {server_id}")
         return t
 
@@ -281,7 +302,7 @@ class SdoChannels:
                 assert link is not None
                 end = None if timeout is None else time.monotonic() + timeout
                 try:
-                    if not link.wait(engine, lambda: t.done, end):
+                    if not link.wait(engine, lambda: t.done, end, t.x):
                         self.abort(server_id)  # completes the transfer with 0x05040000
                 except Error:
                     self.abort(server_id)
@@ -314,10 +335,7 @@ class SdoChannels:
                 with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
                     loop.call_soon_threadsafe(resolve)
 
-            t = self._start(server_id, how, answer_ms)
-            with engine.lock:
-                if not t.done:
-                    t.waker = wake
+            t = self._start(server_id, how, answer_ms, wake)
             try:
                 end = None if timeout is None else loop.time() + timeout
                 while not t.done:

@@ -11,11 +11,18 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-__all__ = ["ABORT_TEXT", "Diagnostic", "EdsError", "Error", "SdoAbort", "SdoTimeout"]
+__all__ = ["ABORT_TEXT", "BusLostError", "Diagnostic", "EdsError", "Error", "SdoAbort",
+           "SdoTimeout"]
 
 
 class Error(Exception):
     """Base class of every error raised by canola."""
+
+
+class BusLostError(Error):
+    """The bus failed or was closed while a call needed it (a socketcand server that went
+    away, a CAN interface that was removed, the bus object shut down): the message says
+    which."""
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Literal
 
 from canola._c import CData, check, ffi, lib
-from canola._channels import Transfer
+from canola._channels import XFER_DONE, Transfer
 from canola._nodebase import NodeBase
 from canola.core import NMT_CMDS, NMT_STATES, Od, SimBus
 from canola.errors import Error, SdoAbort
@@ -134,10 +134,9 @@ class Node(NodeBase):
         self._setup(server_id)
         buf = ffi.new("uint8_t[]", cap)
         t = Transfer()
-        handle = ffi.new_handle(t)
         with self.locked() as node:
             err = lib.co_sdo_upload(node, 0, index, sub, _MODES[mode], buf, cap,
-                                    lib.canola_py_sdo_done, handle)
+                                    XFER_DONE, t.x)
         check(err, "co_sdo_upload")
         self._wait(t, timeout_us, f"SDO upload 0x{index:04X} sub {sub} of node {server_id}")
         return bytes(ffi.buffer(buf, t.length))
@@ -149,9 +148,8 @@ class Node(NodeBase):
         self._setup(server_id)
         src = ffi.new("uint8_t[]", data)
         t = Transfer()
-        handle = ffi.new_handle(t)
         with self.locked() as node:
             err = lib.co_sdo_download(node, 0, index, sub, _MODES[mode], src, len(data),
-                                      lib.canola_py_sdo_done, handle)
+                                      XFER_DONE, t.x)
         check(err, "co_sdo_download")
         self._wait(t, timeout_us, f"SDO download 0x{index:04X} sub {sub} of node {server_id}")
