@@ -21,7 +21,7 @@ from typing import Any
 from canola._c import CData, check, ffi, lib
 from canola._engine import Engine
 from canola.core import SimBus
-from canola.errors import Error, SdoAbort, SdoTimeout
+from canola.errors import BusLostError, Error, SdoAbort, SdoTimeout
 
 __all__ = ["CHANNELS", "XFER_DONE", "SdoChannels", "Transfer"]
 
@@ -304,6 +304,9 @@ class SdoChannels:
                 try:
                     if not link.wait(engine, lambda: t.done, end, t.x):
                         self.abort(server_id)  # completes the transfer with 0x05040000
+                except (BusLostError, KeyboardInterrupt):
+                    self.abort(server_id)  # the channel is free again, the bus or not
+                    raise
                 except Error:
                     self.abort(server_id)
                     raise Error("the master was stopped during an SDO transfer") from None

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Waiting for work the C node does on its own (an LSS request, a network boot, a program
 download): on a SimBus by running the bus in virtual time, on python-can by receiving in
-the waiting thread (:meth:`canola._engine.Link.wait`): the answers that arrived count
+the waiting thread (``link.wait``, :mod:`canola._engine`): the answers that arrived count
 before a time-out is judged. Shared by canola.lss, canola.manager and canola.flash."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 from canola._engine import Engine
 from canola.core import SimBus
-from canola.errors import Error
+from canola.errors import BusLostError, Error
 
 __all__ = ["Waiter"]
 
@@ -49,5 +49,7 @@ class Waiter:
         deadline = None if limit_s is None else time.monotonic() + limit_s
         try:
             return link.wait(self.engine, done, deadline)  # this thread receives meanwhile
+        except BusLostError:
+            raise
         except Error:
             raise Error("the master was stopped") from None
