@@ -71,7 +71,7 @@ def test_frames_in_the_segment_of_the_handshake_reply(server: Callable[[Script],
         conn.sendall(b"me 00000181 2.500000 0102 >< rtr 7E5 3.000000 2 >")
         done.wait(10)  # then the server goes away
 
-    bus = open_bus(url=server(script))
+    bus = open_bus(url=server(script), native=False)
     try:
         first = bus.recv(10)
         assert first is not None
@@ -101,7 +101,7 @@ def test_refused_and_silent_servers(server: Callable[[Script], str]) -> None:
 
     with pytest.raises(BusError, match=r"cannot open socketcand://.*/net: expected '< ok >', "
                                        r"got '< error no such channel >'"):
-        open_bus(url=server(refuses))
+        open_bus(url=server(refuses), native=False)
 
     release = threading.Event()
 
@@ -111,6 +111,6 @@ def test_refused_and_silent_servers(server: Callable[[Script], str]) -> None:
     url = server(silent)
     try:
         with pytest.raises(BusError, match=r"cannot open .*: no '< hi >' from the server"):
-            open_bus(url=url, timeout=0.5)
+            open_bus(url=url, timeout=0.5, native=False)
     finally:
         release.set()

@@ -12,9 +12,9 @@ nobody reads; ``dropped`` counts them). The frames the canola nodes send are not
 received back, as on SocketCAN without loopback.
 
 Threading: ``send`` and ``recv`` may be called from any thread; ``recv`` waits in C
-without the GIL. ``shutdown`` closes the socket: a call waiting on it ends with an error
-(:class:`canola.errors.BusLostError` for a canola node's call, ``can.CanOperationError``
-here)."""
+without the GIL. ``shutdown`` closes the socket: a canola node's call waiting on it raises
+:class:`canola.errors.BusLostError`; ``recv`` returns None at once once the bus failed or
+was closed (``lost`` is then true, as on :class:`canola.bus.socketcand_bus.SocketcandBus`)."""
 
 from __future__ import annotations
 
@@ -92,9 +92,7 @@ class NativeBus(can.BusABC):
         until = (1 << 63) if timeout is None else int((time.monotonic() + timeout) * 1e6)
         f, stamp = ffi.new("co_frame_t *"), ffi.new("uint64_t *")  # per call: any thread
         rc = int(lib.canola_py_io_recv(self.io, f, stamp, until))
-        if rc == _FAILED:
-            raise can.CanOperationError(f"{self.channel_info}: {self.error()}")
-        if rc != _DONE:
+        if rc != _DONE:  # FAILED: nothing more, at once (``lost`` says so, as SocketcandBus)
             return None, False
         rtr = bool(f.flags & _RTR)
         return can.Message(timestamp=int(stamp[0]) / 1e6, arbitration_id=int(f.id),

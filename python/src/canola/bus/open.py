@@ -33,6 +33,7 @@ from typing import Any
 import can
 
 from canola.access import token_from
+from canola.bus.native import NativeBus
 from canola.bus.socketcand_bus import SocketcandBus
 from canola.errors import Error
 
@@ -110,9 +111,12 @@ def default_bus() -> tuple[dict[str, object], str]:
 
 
 def open_bus(*, iface: str | None = None, url: str | None = None,
-             timeout: float = 3.0) -> can.BusABC:
+             timeout: float = 3.0, native: bool = True) -> can.BusABC:
     """Open the bus named by ``iface`` (SocketCAN) or ``url``, else the
-    :func:`default_bus`. Raises BusError."""
+    :func:`default_bus`. SocketCAN and socketcand buses are canola's C link
+    (:class:`~canola.bus.native.NativeBus`: the canola nodes on it read and write the socket
+    in C) unless ``native`` is false (then python-can's SocketCAN bus and canola's Python
+    socketcand client, :class:`SocketcandBus`). Raises BusError."""
     if iface is not None and url is not None:
         raise BusError("name one bus: --iface IFACE or --bus URL")
     if iface is not None:
@@ -122,6 +126,16 @@ def open_bus(*, iface: str | None = None, url: str | None = None,
         config, where = parse_bus_url(url), url
     else:
         config, where = default_bus()
+    native_kind = config["interface"] if native and set(config) <= _NATIVE_KEYS else None
+    if native_kind == "socketcan":
+        try:
+            return NativeBus.socketcan(str(config["channel"]))
+        except OSError as exc:
+            raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
+    if native_kind == "socketcand":
+        return _open_native_socketcand(str(config.get("host", "127.0.0.1")),
+                                       int(str(config.get("port", DEFAULT_SOCKETCAND_PORT))),
+                                       str(config["channel"]), timeout)
     if config["interface"] == "socketcand":
         return _open_socketcand(str(config.get("host", "127.0.0.1")),
                                 int(str(config.get("port", DEFAULT_SOCKETCAND_PORT))),
@@ -135,6 +149,22 @@ def open_bus(*, iface: str | None = None, url: str | None = None,
 def _reason(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__
+
+
+#: python-can settings canola's C link honours (others, e.g. a bitrate: python-can's bus).
+_NATIVE_KEYS = {"interface", "channel", "host", "port"}
+
+
+def _open_native_socketcand(host: str, port: int, channel: str, timeout: float) -> can.BusABC:
+    where = f"socketcand://{host}:{port}/{channel}"
+    try:
+        token = token_from(None)
+    except ValueError as exc:
+        raise BusError(str(exc)) from None
+    try:
+        return NativeBus.socketcand(where, token, timeout)
+    except OSError as exc:
+        raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
 
 
 def _open_socketcand(host: str, port: int, channel: str, timeout: float) -> can.BusABC:
@@ -157,7 +187,7 @@ def connection_lost(bus: can.BusABC) -> bool:
     Receives just return nothing once the server is gone: canola's client says so
     (:class:`SocketcandBus`); for python-can's, peek at its socket.
     """
-    if isinstance(bus, SocketcandBus):
+    if isinstance(bus, SocketcandBus | NativeBus):
         return bus.lost
     sock = getattr(bus, "_SocketCanDaemonBus__socket", None)
     if not isinstance(sock, socket.socket):
