@@ -4,16 +4,21 @@
 cross a python-can bus object to a device that another bus object (or process) serves.
 Prints one line of key=value pairs (bench/run turns them into rows).
 
-usage: bench_master.py SETUP ROUND_TRIPS RUNS PDOS [--node CANOLA_NODE]
+usage: bench_master.py SETUP ROUND_TRIPS RUNS PDOS [--node CANOLA_NODE] [--block KIB]
     SETUP is where the device is:
       virtual  two python-can virtual bus objects of one channel in one process: the master
                on one, the device on the other (canola.Device for canola, LocalNode for
                python-canopen), each bus object with its own receive thread. The process's
                CPU is the master's and the device's.
       hub      the socketcand hub (``canola bus serve``, a process) and canola-node (C, a
-               process) on its channel; each master on canola's socketcand client.
-      vcan     vcan0 (SocketCAN) and canola-node on it; each master on python-can's
-               socketcan interface.
+               process) on its channel; canola.Master on its C link (canola.bus.native:
+               the C side owns the socket), the others on canola's Python socketcand
+               client.
+      vcan     vcan0 (SocketCAN) and canola-node on it; canola.Master on its C link, the
+               others on python-can's socketcan interface.
+    On hub and vcan a fourth contender, ``canola_pycan``, is canola.Master on the
+    python-can bus object the others use (the path before the C link: before/after in one
+    run).
     A third contender, ``floor``, is python-can alone: the calling thread sends the request
     and receives the answer (on the virtual bus a second bus object's thread answers it), no
     CANopen stack at all: what any Python stack pays for python-can's bus objects (and, on
@@ -24,7 +29,11 @@ usage: bench_master.py SETUP ROUND_TRIPS RUNS PDOS [--node CANOLA_NODE]
       cpu_us   CPU time of the master's process per round trip (that run);
       pdo      of PDOS frames sent on 0x185 at 2,000 per second by another bus object (or
                process), how many reached the master's callback (canola: Master.on_frame
-               with the COB-ID; python-canopen: Network.subscribe, the level its RPDOs use).
+               with the COB-ID; python-canopen: Network.subscribe, the level its RPDOs use);
+      blk_kbs  KB/s of a 1 MiB block upload of DOMAIN 0x2003 from node 6, a canola.Device
+               with a 1 MiB domain (the same device for every contender: a process of its
+               own on hub and vcan, on the other bus object on virtual), after a 1 MiB block
+               download to it (dl_kbs); --block KIB another size (0: none).
 internal: bench_master.py child CONTENDER SETUP URL ROUND_TRIPS PDOS
           bench_master.py send URL PDOS
 """
@@ -48,8 +57,10 @@ INDEX, SUB = 0x1018, 1
 PDO_ID = 0x185
 PDO_RATE = 2000  # frames per second
 LOADS = 4  # CPU-bound processes of the loaded runs
+BLOCK_ID, BLOCK_INDEX, BLOCK_SIZE = 6, 0x2003, 1 << 20
 CONTENDERS = {"virtual": ("canola", "pycanopen", "floor"),
-              "hub": ("canola", "pycanopen", "floor"), "vcan": ("canola", "pycanopen", "floor")}
+              "hub": ("canola", "canola_pycan", "pycanopen", "floor"),
+              "vcan": ("canola", "canola_pycan", "pycanopen", "floor")}
 
 
 def eds_of(setup: str) -> str:
@@ -58,23 +69,26 @@ def eds_of(setup: str) -> str:
     return os.path.join(ROOT, "examples", "example_od.eds")  # canola-node's dictionary
 
 
-def open_bus(url: str) -> can.BusABC:
-    """virtual://CHANNEL, socketcan://IFACE or socketcand://HOST:PORT/CHANNEL."""
+def open_bus(url: str, native: bool = False) -> can.BusABC:
+    """virtual://CHANNEL, socketcan://IFACE or socketcand://HOST:PORT/CHANNEL; ``native``:
+    canola's C link (canola.bus.native), else python-can's bus or canola's Python
+    socketcand client."""
     if url.startswith("virtual://"):
         return can.Bus(interface="virtual", channel=url[10:], receive_own_messages=False)
-    if url.startswith("socketcan://"):
+    if url.startswith("socketcan://") and not native:
         return can.Bus(interface="socketcan", channel=url[12:])
-    from canola.bus.open import open_bus as canola_open  # noqa: PLC0415 -- the socketcand client
+    from canola.bus.open import open_bus as canola_open  # noqa: PLC0415
 
-    return canola_open(url=url)
+    return canola_open(url=url, native=native)
 
 
 # ---- a contender in its own process
 
-def canola_master(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[Any]]:
+def canola_master(setup: str, url: str,
+                  native: bool = True) -> tuple[Callable[[], bytes], Any, list[Any]]:
     import canola  # noqa: PLC0415
 
-    bus = open_bus(url)
+    bus = open_bus(url, native)
     closing: list[Any] = []
     if setup == "virtual":
         device = canola.Device(eds_of(setup), SERVER_ID, open_bus(url))
@@ -84,10 +98,26 @@ def canola_master(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[
     master.start()
     closing.insert(0, master)
     client = master.sdo(SERVER_ID)
+    blocks = master.sdo(BLOCK_ID)
 
     def subscribe(fn: Callable[[], None]) -> None:
         master.on_frame(lambda frame: fn(), PDO_ID)
-    return (lambda: client.upload(INDEX, SUB)), subscribe, closing
+
+    def block(data: bytes) -> tuple[float, float]:
+        t0 = time.perf_counter()
+        blocks.download(BLOCK_INDEX, 0, data, block=True, timeout=600, answer_timeout=10)
+        t1 = time.perf_counter()
+        back = blocks.upload(BLOCK_INDEX, 0, block=True, max_size=len(data), timeout=600,
+                             answer_timeout=10)
+        t2 = time.perf_counter()
+        if back != data:
+            raise SystemExit("bench_master: canola: the block upload differs")
+        return t1 - t0, t2 - t1
+    return (lambda: client.upload(INDEX, SUB)), (subscribe, block), closing
+
+
+def canola_pycan_master(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[Any]]:
+    return canola_master(setup, url, native=False)
 
 
 def pycanopen_master(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[Any]]:
@@ -104,7 +134,22 @@ def pycanopen_master(setup: str, url: str) -> tuple[Callable[[], bytes], Any, li
 
     def subscribe(fn: Callable[[], None]) -> None:
         net.subscribe(PDO_ID, lambda can_id, data, timestamp: fn())
-    return (lambda: remote.sdo.upload(INDEX, SUB)), subscribe, closing
+
+    blocks = net.add_node(BLOCK_ID, eds_of("hub"))
+    blocks.sdo.RESPONSE_TIMEOUT = 10.0
+
+    def block(data: bytes) -> tuple[float, float]:
+        t0 = time.perf_counter()
+        with blocks.sdo.open(BLOCK_INDEX, 0, "wb", size=len(data), block_transfer=True) as f:
+            f.write(data)
+        t1 = time.perf_counter()
+        with blocks.sdo.open(BLOCK_INDEX, 0, "rb", block_transfer=True) as f:
+            back = f.read()
+        t2 = time.perf_counter()
+        if back != data:
+            raise SystemExit("bench_master: pycanopen: the block upload differs")
+        return t1 - t0, t2 - t1
+    return (lambda: remote.sdo.upload(INDEX, SUB)), (subscribe, block), closing
 
 
 def floor_pair(setup: str, url: str) -> tuple[Callable[[], bytes], Any, list[Any]]:
@@ -149,7 +194,17 @@ class _Closer:
         self.fn()
 
 
-MAKERS = {"canola": canola_master, "pycanopen": pycanopen_master, "floor": floor_pair}
+MAKERS = {"canola": canola_master, "canola_pycan": canola_pycan_master,
+          "pycanopen": pycanopen_master, "floor": floor_pair}
+
+
+def block_device(url: str) -> None:
+    """Node BLOCK_ID: a canola.Device with a BLOCK_SIZE domain, until stdin closes."""
+    import canola  # noqa: PLC0415
+
+    with canola.Device(eds_of("hub"), BLOCK_ID, open_bus(url, native=not url.startswith(
+            "virtual://")), domain_size=BLOCK_SIZE, sdo_timeout_ms=10000):
+        sys.stdin.read()
 
 
 def close_all(objs: list[Any]) -> None:
@@ -176,12 +231,14 @@ def send_pdos(url: str, count: int) -> None:
                     time.sleep(delay)
             bus.send(can.Message(arbitration_id=PDO_ID, data=i.to_bytes(4, "little"),
                                  is_extended_id=False))
+        time.sleep(1.0)  # the last frames leave before the close (no reset drops them)
     finally:
         bus.shutdown()
 
 
 def child(contender: str, setup: str, url: str, round_trips: int, pdos: int) -> None:
-    upload, subscribe, closing = MAKERS[contender](setup, url)
+    upload, extras, closing = MAKERS[contender](setup, url)
+    subscribe, block = extras if extras is not None else (None, None)
     try:
         expected = upload()  # first use: set-up, imports
         for _ in range(max(1, round_trips // 10)):
@@ -209,7 +266,20 @@ def child(contender: str, setup: str, url: str, round_trips: int, pdos: int) -> 
             while seen[0] < pdos and time.monotonic() < end:
                 time.sleep(0.05)
             got = seen[0]
-        print(f"rate={round_trips / wall:.1f} cpu_us={cpu / round_trips * 1e6:.1f} pdo={got}")
+        kbs = ""
+        size = int(os.environ.get("BENCH_BLOCK_KIB", "1024")) * 1024
+        if block is not None and size:
+            if setup == "virtual":  # the block device on a bus object of its own, from now
+                import canola  # noqa: PLC0415
+
+                device = canola.Device(eds_of("hub"), BLOCK_ID, open_bus(url),
+                                       domain_size=BLOCK_SIZE, sdo_timeout_ms=10000)
+                device.start()
+                closing.append(device)
+            down_s, up_s = block(bytes(i * 7 & 0xFF for i in range(size)))
+            kbs = f" blk_kbs={size / 1024 / up_s:.1f} dl_kbs={size / 1024 / down_s:.1f}"
+        print(f"rate={round_trips / wall:.1f} cpu_us={cpu / round_trips * 1e6:.1f} pdo={got}"
+              + kbs)
     finally:
         close_all(closing)
 
@@ -250,6 +320,8 @@ def start_device(setup: str, node: str) -> tuple[str, list[subprocess.Popen[byte
         url, bus_arg = "socketcan://vcan0", ["--iface", "vcan0"]
     procs.append(subprocess.Popen([node, *bus_arg, "--node-id", str(SERVER_ID),
                                    "--heartbeat", "0"], stdout=subprocess.DEVNULL))
+    procs.append(subprocess.Popen([sys.executable, __file__, "device", url],
+                                  stdin=subprocess.PIPE, stdout=subprocess.DEVNULL))
     time.sleep(1.0)
     return url, procs
 
@@ -283,6 +355,9 @@ def parent(setup: str, round_trips: int, runs: int, pdos: int, node: str) -> Non
                         if f["rate"] > b["rate"]:
                             b["rate"], b["cpu_us"] = f["rate"], f["cpu_us"]
                         b["pdo"] = min(b["pdo"], f["pdo"])
+                        for k in ("blk_kbs", "dl_kbs"):
+                            if k in f:
+                                b[k] = max(b[k], f[k])
             finally:
                 for p in load_procs:
                     p.kill()
@@ -307,13 +382,22 @@ def main() -> int:
     if args[:1] == ["child"] and len(args) == 6:
         child(args[1], args[2], args[3], int(args[4]), int(args[5]))
         return 0
+    if args[:1] == ["device"] and len(args) == 2:
+        block_device(args[1])
+        return 0
     if args[:1] == ["send"] and len(args) == 3:
         send_pdos(args[1], int(args[2]))
         return 0
     node = os.path.join(ROOT, "build", "canola-node")
-    if len(args) == 6 and args[4] == "--node":
-        node = args.pop(5)
-        args.pop(4)
+    for flag in ("--block", "--node"):
+        if flag in args[4:-1]:
+            at = args.index(flag)
+            value = args.pop(at + 1)
+            args.pop(at)
+            if flag == "--node":
+                node = value
+            else:
+                os.environ["BENCH_BLOCK_KIB"] = value  # the children's
     if len(args) != 4 or args[0] not in CONTENDERS:
         print(__doc__, file=sys.stderr)
         return 2
