@@ -320,8 +320,9 @@ def start_device(setup: str, node: str) -> tuple[str, list[subprocess.Popen[byte
         url, bus_arg = "socketcan://vcan0", ["--iface", "vcan0"]
     procs.append(subprocess.Popen([node, *bus_arg, "--node-id", str(SERVER_ID),
                                    "--heartbeat", "0"], stdout=subprocess.DEVNULL))
-    procs.append(subprocess.Popen([sys.executable, __file__, "device", url],
-                                  stdin=subprocess.PIPE, stdout=subprocess.DEVNULL))
+    if os.environ.get("BENCH_BLOCK_KIB", "1024") != "0":  # the block transfers' device
+        procs.append(subprocess.Popen([sys.executable, __file__, "device", url],
+                                      stdin=subprocess.PIPE, stdout=subprocess.DEVNULL))
     time.sleep(1.0)
     return url, procs
 
