@@ -218,6 +218,10 @@ lint:
 # The core for a Cortex-M4 (arm-none-eabi-gcc): the strictest warnings, no host headers.
 ARM_FLAGS = -std=c11 -mcpu=cortex-m4 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion \
             -Wshadow -Wcast-align -Werror -pedantic -Iinclude -Isrc
+# The CAN side of port/cortex-m and the STM32 drivers, for a Cortex-M0 and a Cortex-M4.
+ARM_PORT_FLAGS = -std=c11 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion -Wshadow \
+                 -Wcast-align -Werror -pedantic -Iinclude -Iport/cortex-m -Iport/stm32
+ARM_PORT_SRC = port/cortex-m/cm_can.c $(wildcard port/stm32/*.c)
 cortex-m:
 	@if command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
 	  mkdir -p build-arm && for f in src/*.c; do \
@@ -226,7 +230,11 @@ cortex-m:
 	    -c src/node.c -o build-arm/node-minimal.o && for f in src/od*.c; do \
 	    arm-none-eabi-gcc $(ARM_FLAGS) -DCO_CONFIG_OD_COMPACT=1 -c $$f \
 	      -o build-arm/$$(basename $$f .c)-compact.o || exit 1; \
-	  done && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)"; \
+	  done && for cpu in cortex-m0 cortex-m4; do for f in $(ARM_PORT_SRC); do \
+	    arm-none-eabi-gcc $(ARM_PORT_FLAGS) -mcpu=$$cpu -c $$f -o build-arm/$$cpu-$$(basename $$f .c).o \
+	      || exit 1; \
+	  done; done && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)" && \
+	  echo "cortex-m: port/cortex-m CAN side and port/stm32 drivers build for M0 and M4"; \
 	else echo "cortex-m: SKIPPED (arm-none-eabi-gcc not installed; .ci/run installs it as root)"; fi
 
 # A 32-bit host build of the core and the tests (gcc -m32, from gcc-multilib), tests run.

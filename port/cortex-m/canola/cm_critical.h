@@ -1,0 +1,48 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/*
+ * canola/cm_critical.h -- the critical section of port/cortex-m's CAN side: what the main
+ * loop and the CAN interrupts both touch (the transmit queue and the mailboxes, the bus
+ * events) is changed with interrupts masked.
+ *
+ * On a Cortex-M (any: M0 to M33) enter saves PRIMASK and masks every interrupt but the
+ * NMI and HardFault; leave restores the saved PRIMASK, so sections nest and one entered in
+ * an interrupt handler leaves interrupts as the handler found them. A section lasts a
+ * mailbox write and a few queue moves: a few hundred cycles at most.
+ *
+ * CO_CM_CRITICAL_EXTERN: enter and leave are functions defined elsewhere: the host tests
+ * (which interleave a model's interrupts at every enter and leave), or a port that masks
+ * by BASEPRI or through its RTOS.
+ *
+ * co_cm_barrier() keeps the compiler from moving memory accesses across it: the receive
+ * ring's slot is written before its index moves (one core sees its own stores in order).
+ */
+#ifndef CANOLA_CM_CRITICAL_H
+#define CANOLA_CM_CRITICAL_H
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+typedef uint32_t co_cm_irq_t; /* what leave restores */
+
+#if defined(CO_CM_CRITICAL_EXTERN)
+co_cm_irq_t co_cm_critical_enter(void);
+void co_cm_critical_leave(co_cm_irq_t saved);
+#elif defined(__ARM_ARCH)
+static inline co_cm_irq_t co_cm_critical_enter(void)
+{
+    co_cm_irq_t primask;
+    __asm__ volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask) : : "memory");
+    return primask;
+}
+
+static inline void co_cm_critical_leave(co_cm_irq_t saved)
+{
+    __asm__ volatile("msr primask, %0" : : "r"(saved) : "memory");
+}
+#else
+#error "cm_critical.h: not a Cortex-M; define CO_CM_CRITICAL_EXTERN and provide enter/leave"
+#endif
+
+static inline void co_cm_barrier(void) { atomic_signal_fence(memory_order_seq_cst); }
+
+#endif /* CANOLA_CM_CRITICAL_H */
