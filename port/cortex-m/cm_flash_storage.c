@@ -301,7 +301,8 @@ co_err_t co_cm_flash_storage_init(co_cm_flash_storage_t *st, const co_cm_flash_t
     bool valid[2] = {slot_valid(st, 0, &seq[0], images), slot_valid(st, 1, &seq[1], images)};
     if (valid[0] || valid[1]) {
         /* Both valid: the later one (serial number arithmetic: a sequence may wrap). */
-        st->current = valid[0] && (!valid[1] || (int32_t)(seq[0] - seq[1]) > 0) ? 0u : 1u;
+        st->current =
+            (uint8_t)(valid[0] && (!valid[1] || (int32_t)(seq[0] - seq[1]) > 0) ? 0u : 1u);
         st->seq = seq[st->current];
     }
     return CO_OK;
