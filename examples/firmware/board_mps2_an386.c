@@ -20,8 +20,8 @@
 
 #define REG(addr) (*(volatile uint32_t *)(addr))
 
-#define TICKS_PER_US 25u                   /* the APB clock: 25 MHz */
-#define SLEEP_MAX_TICKS (100000000u * 25u) /* 100 s: timer 0 wraps in 171 s */
+#define TICKS_PER_US 25u        /* the APB clock: 25 MHz */
+#define SLEEP_MAX_US 100000000u /* 100 s: timer 0 wraps in 171 s */
 
 #define UART0 0x40004000u
 #define UART_DATA (UART0 + 0x00)
@@ -58,8 +58,12 @@
 
 typedef void (*vector_t)(void);
 
+/* Timer 0 as microseconds: the count last read, and the ticks short of a whole microsecond
+ * since (no 64-bit division: 32 bits hold the ticks between two reads). */
 typedef struct board_state {
-    uint64_t ticks; /* timer 0 widened to 64 bits (co_cm_clock_extend) */
+    uint64_t now_us;
+    uint32_t count;
+    uint32_t ticks_left;
 } board_state_t;
 
 static board_state_t g_board;
@@ -115,29 +119,32 @@ const board_flash_t *board_flash(void) { return &k_flash; }
 
 /* ---- the time base: timer 0 counts down from 0xFFFFFFFF, for ever */
 
-static uint64_t ticks_now(board_state_t *b)
+static uint64_t timer_now_us(void *ctx)
 {
-    return co_cm_clock_extend(&b->ticks, ~REG(TIMER0 + TIMER_VALUE), 0xFFFFFFFFu);
+    board_state_t *b = ctx;
+    uint32_t count = ~REG(TIMER0 + TIMER_VALUE); /* counting up */
+    uint32_t ticks = count - b->count + b->ticks_left;
+    b->count = count;
+    b->now_us += ticks / TICKS_PER_US;
+    b->ticks_left = ticks % TICKS_PER_US;
+    return b->now_us;
 }
-
-static uint64_t timer_now_us(void *ctx) { return ticks_now(ctx) / TICKS_PER_US; }
 
 /* Timer 1 from the deadline's distance, its interrupt the wake-up (at most 100 s ahead: the
  * loop reads timer 0 once per wrap); a deadline already passed pends it at once. */
 static void timer_wake_at(void *ctx, uint64_t deadline_us)
 {
-    uint64_t now = ticks_now(ctx);
-    uint64_t at = deadline_us < UINT64_MAX / TICKS_PER_US ? deadline_us * TICKS_PER_US : UINT64_MAX;
-    uint64_t wait = at > now ? at - now : 0;
+    uint64_t now = timer_now_us(ctx);
     REG(TIMER1 + TIMER_CTRL) = 0;
     REG(TIMER1 + TIMER_INTCLEAR) = 1;
-    if (wait == 0) {
+    if (deadline_us <= now) {
         REG(NVIC_ISPR) = 1u << TIMER1_IRQ;
         return;
     }
-    uint32_t ticks = wait < SLEEP_MAX_TICKS ? (uint32_t)wait : SLEEP_MAX_TICKS;
-    REG(TIMER1 + TIMER_RELOAD) = ticks;
-    REG(TIMER1 + TIMER_VALUE) = ticks;
+    uint32_t wait_us =
+        deadline_us - now < SLEEP_MAX_US ? (uint32_t)(deadline_us - now) : SLEEP_MAX_US;
+    REG(TIMER1 + TIMER_RELOAD) = wait_us * TICKS_PER_US;
+    REG(TIMER1 + TIMER_VALUE) = wait_us * TICKS_PER_US;
     REG(TIMER1 + TIMER_CTRL) = TIMER_ENABLE | TIMER_INT;
 }
 

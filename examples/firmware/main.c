@@ -21,17 +21,14 @@
 #define NODE_ID 5u
 #endif
 
-/* The firmware's state, in .bss: one node, its port, its CAN driver, its storage. */
-typedef struct app {
-    co_cm_port_t port;
-    co_node_t node;
-    slcan_uart_t can;
-    co_cm_flash_storage_t storage;
-} app_t;
+/* The firmware's state, in .bss: one node, its port, its CAN driver, its storage (each its
+ * own object, so that the size rows of bench/run can tell canola's RAM from the rest). */
+static co_node_t g_node;
+static co_cm_port_t g_port;
+static slcan_uart_t g_can;
+static co_cm_flash_storage_t g_storage;
 
-static app_t g_app;
-
-void board_uart_irq(void) { slcan_uart_isr(&g_app.can); }
+void board_uart_irq(void) { slcan_uart_isr(&g_can); }
 
 static bool start(void)
 {
@@ -39,34 +36,34 @@ static bool start(void)
     co_node_config_t config = {
         .node_id = NODE_ID,
         .od = device_od_od,
-        .driver = co_cm_can_driver(&g_app.port.can),
+        .driver = co_cm_can_driver(&g_port.can),
     };
-    if (co_cm_flash_storage_init(&g_app.storage, &flash->flash, flash->slot[0], flash->slot[1],
+    if (co_cm_flash_storage_init(&g_storage, &flash->flash, flash->slot[0], flash->slot[1],
                                  flash->slot_size) == CO_OK) {
-        config.storage = &g_app.storage.api;
+        config.storage = &g_storage.api;
     }
     co_od_reset(&device_od_od, 0x0000, 0xFFFF, NODE_ID);
-    if (co_node_init(&g_app.node, &config) != CO_OK) {
+    if (co_node_init(&g_node, &config) != CO_OK) {
         return false;
     }
-    co_cm_port_bind(&g_app.port, &g_app.node);
+    co_cm_port_bind(&g_port, &g_node);
     board_uart_start();
-    return co_node_start(&g_app.node, g_app.port.time.now_us(g_app.port.time.ctx)) == CO_OK;
+    return co_node_start(&g_node, g_port.time.now_us(g_port.time.ctx)) == CO_OK;
 }
 
 int main(void)
 {
     board_init();
-    slcan_uart_init(&g_app.can, &g_app.port);
-    co_cm_port_init(&g_app.port, &slcan_uart_ops, &g_app.can, board_time());
+    slcan_uart_init(&g_can, &g_port);
+    co_cm_port_init(&g_port, &slcan_uart_ops, &g_can, board_time());
     if (!start()) {
         for (;;) {
             __asm__ volatile("wfi");
         }
     }
     for (;;) {
-        uint64_t deadline = co_cm_port_step(&g_app.port);
-        slcan_uart_poll(&g_app.can);
-        co_cm_port_sleep(&g_app.port, deadline);
+        uint64_t deadline = co_cm_port_step(&g_port);
+        slcan_uart_poll(&g_can);
+        co_cm_port_sleep(&g_port, deadline);
     }
 }
