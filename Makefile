@@ -221,7 +221,7 @@ ARM_FLAGS = -std=c11 -mcpu=cortex-m4 -mthumb -Os -ffreestanding -Wall -Wextra -W
 # The CAN side of port/cortex-m and the STM32 drivers, for a Cortex-M0 and a Cortex-M4.
 ARM_PORT_FLAGS = -std=c11 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion -Wshadow \
                  -Wcast-align -Werror -pedantic -Iinclude -Iport/cortex-m -Iport/stm32
-ARM_PORT_SRC = port/cortex-m/cm_can.c $(wildcard port/stm32/*.c)
+ARM_PORT_SRC = $(wildcard port/cortex-m/*.c) $(wildcard port/stm32/*.c)
 cortex-m:
 	@if command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
 	  mkdir -p build-arm && for f in src/*.c; do \
