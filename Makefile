@@ -218,10 +218,11 @@ lint:
 # The core for a Cortex-M4 (arm-none-eabi-gcc): the strictest warnings, no host headers.
 ARM_FLAGS = -std=c11 -mcpu=cortex-m4 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion \
             -Wshadow -Wcast-align -Werror -pedantic -Iinclude -Isrc
-# The CAN side of port/cortex-m and the STM32 drivers, for a Cortex-M0 and a Cortex-M4.
+# port/cortex-m (CAN side, main loop, time base, flash storage) and the STM32 drivers, for a
+# Cortex-M0 and a Cortex-M4.
 ARM_PORT_FLAGS = -std=c11 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion -Wshadow \
                  -Wcast-align -Werror -pedantic -Iinclude -Iport/cortex-m -Iport/stm32
-ARM_PORT_SRC = $(wildcard port/cortex-m/*.c) $(wildcard port/stm32/*.c)
+ARM_PORT_SRC = $(wildcard port/cortex-m/*.c port/stm32/*.c)
 cortex-m:
 	@if command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
 	  mkdir -p build-arm && for f in src/*.c; do \

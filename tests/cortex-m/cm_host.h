@@ -20,12 +20,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "canola/cm_can.h"
-
-/** The host's port object: the CAN side alone (cm_port.h's co_cm_port_t begins with it). */
-struct co_cm_port {
-    co_cm_can_t can;
-};
+#include "canola/cm_port.h" /* the port object, co_cm_port_t, whose CAN side the tests use */
 
 /** An interrupt source: run one pending handler and return true, or false when none is
  *  pending (enabled and flagged). */

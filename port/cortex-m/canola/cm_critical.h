@@ -9,9 +9,15 @@
  * an interrupt handler leaves interrupts as the handler found them. A section lasts a
  * mailbox write and a few queue moves: a few hundred cycles at most.
  *
+ * CO_CM_BASEPRI (a priority value, e.g. 0x50; 0 or unset: PRIMASK): on ARMv7-M and ARMv8-M
+ * Mainline (M3, M4, M7, M33) enter raises BASEPRI to it instead, so that interrupts of a
+ * higher priority (a lower value: a motor's current loop, say) stay live; they must not call
+ * the port. The CAN, UART and time base interrupts need a value at or above it. ARMv6-M
+ * (M0, M0+) has no BASEPRI: PRIMASK there whatever it says.
+ *
  * CO_CM_CRITICAL_EXTERN: enter and leave are functions defined elsewhere: the host tests
  * (which interleave a model's interrupts at every enter and leave), or a port that masks
- * by BASEPRI or through its RTOS.
+ * through its RTOS.
  *
  * co_cm_barrier() keeps the compiler from moving memory accesses across it: the receive
  * ring's slot is written before its index moves (one core sees its own stores in order).
@@ -27,6 +33,22 @@ typedef uint32_t co_cm_irq_t; /* what leave restores */
 #if defined(CO_CM_CRITICAL_EXTERN)
 co_cm_irq_t co_cm_critical_enter(void);
 void co_cm_critical_leave(co_cm_irq_t saved);
+#elif defined(__ARM_ARCH) && defined(CO_CM_BASEPRI) && CO_CM_BASEPRI != 0 &&                       \
+    (defined(__ARM_ARCH_7M__) || defined(__ARM_ARCH_7EM__) || defined(__ARM_ARCH_8M_MAIN__))
+static inline co_cm_irq_t co_cm_critical_enter(void)
+{
+    co_cm_irq_t basepri;
+    __asm__ volatile("mrs %0, basepri\n\tmsr basepri_max, %1"
+                     : "=&r"(basepri)
+                     : "r"((uint32_t)(CO_CM_BASEPRI))
+                     : "memory");
+    return basepri;
+}
+
+static inline void co_cm_critical_leave(co_cm_irq_t saved)
+{
+    __asm__ volatile("msr basepri, %0" : : "r"(saved) : "memory");
+}
 #elif defined(__ARM_ARCH)
 static inline co_cm_irq_t co_cm_critical_enter(void)
 {
