@@ -61,20 +61,56 @@ static void queue_pump(co_cm_can_t *can)
             can->tx_queue[i - taken] = can->tx_queue[i];
         }
         can->tx_count = (uint8_t)(can->tx_count - taken);
-        if (can->tx_refused) { /* the node holds frames: room for them now */
+#if !defined(CO_TEST_FAULT_NO_TX_WAKE) /* test-only: the node never hears of the room */
+        if (can->tx_refused) {         /* the node holds frames: room for them now */
             can->tx_refused = false;
             can->tx_room = true;
         }
+#endif
     }
 }
+
+/* Test-only faults (tests/cortex-m builds each, to show that its test catches it): the
+ * transmit path of other stacks' ports. CO_TEST_FAULT_TX_WAIT: the send waits for a free
+ * mailbox (the examples' busy loop; here it gives up after a while, where a real one waits
+ * for the bus). CO_TEST_FAULT_TX_DROP: a full mailbox set loses the frame.
+ * CO_TEST_FAULT_TX_SPLIT: the mailboxes and the queue in two critical sections (the
+ * transmit-complete interrupt can come between). */
+#if defined(CO_TEST_FAULT_TX_WAIT)
+static bool wait_for_mailbox(co_cm_can_t *can, const co_frame_t *frame)
+{
+    for (uint32_t spin = 0; spin < 100000u; spin++) {
+        co_cm_irq_t irq = co_cm_critical_enter();
+        bool put = can->tx_count == 0 && can->ops->mailbox_put(can->hw, frame);
+        bool queued = can->tx_count != 0;
+        co_cm_critical_leave(irq);
+        if (put || queued) {
+            return put;
+        }
+    }
+    return false;
+}
+#endif
 
 static co_err_t cm_tx(void *ctx, const co_frame_t *frame)
 {
     co_cm_can_t *can = ctx;
     co_err_t err = CO_OK;
+#if defined(CO_TEST_FAULT_TX_WAIT)
+    if (wait_for_mailbox(can, frame)) {
+        return CO_OK;
+    }
+#endif
     co_cm_irq_t irq = co_cm_critical_enter();
     if (can->tx_count == 0) {
         if (!can->ops->mailbox_put(can->hw, frame)) {
+#if defined(CO_TEST_FAULT_TX_DROP)
+            co_cm_critical_leave(irq);
+            return CO_OK;
+#elif defined(CO_TEST_FAULT_TX_SPLIT)
+            co_cm_critical_leave(irq);
+            irq = co_cm_critical_enter();
+#endif
             (void)queue_insert(can, frame);
         }
     } else if (can->tx_count < CO_CM_TX_QUEUE_LEN) {

@@ -43,6 +43,7 @@ static void port_rx(void *ctx, uint64_t now_us, const co_frame_t *frame)
 {
     can_model_t *m = ctx;
     can_model_tick(m, now_us);
+    m->reads_in_a_row = 0;
     if (m->bus_off) {
         return;
     }
@@ -91,6 +92,7 @@ static void port_sent(void *ctx, uint64_t now_us, const co_frame_t *frame)
 {
     can_model_t *m = ctx;
     can_model_tick(m, now_us);
+    m->reads_in_a_row = 0;
     int slot = slot_holding(m, frame);
     if (slot >= 0) {
         slot_left(m, (uint32_t)slot);
@@ -156,6 +158,9 @@ uint32_t co_stm32_read(const volatile uint32_t *reg)
     if (!m) {
         return *reg; /* not a model's: plain memory */
     }
+    if (++m->reads_in_a_row > m->max_reads_in_a_row) {
+        m->max_reads_in_a_row = m->reads_in_a_row;
+    }
     return in_ram ? m->ram[offset / 4] : m->cls->read(m, offset);
 }
 
@@ -168,6 +173,7 @@ void co_stm32_write(volatile uint32_t *reg, uint32_t value)
         *reg = value;
         return;
     }
+    m->reads_in_a_row = 0;
     if (in_ram) {
         m->ram[offset / 4] = value;
     } else {
@@ -275,6 +281,7 @@ bool can_model_complete(can_model_t *m)
         return false;
     }
     co_frame_t frame = m->slot_frame[slot];
+    m->reads_in_a_row = 0;
     slot_left(m, (uint32_t)slot);
     if (m->on_wire) {
         m->on_wire(m->on_wire_ctx, &frame);

@@ -92,6 +92,10 @@ struct can_model {
     uint32_t tx_sent;       /* frames that left the wire */
     uint32_t max_pending;   /* the most slots pending at once */
     uint32_t full_requests; /* transmit requests that made every slot pending */
+    /* A driver that waits on its controller reads registers with nothing changing: the
+     * reads since the latest write or bus event, and the longest such run. */
+    uint32_t reads_in_a_row;
+    uint32_t max_reads_in_a_row;
 };
 
 /** Prepare the shared part (zeroes the model's counters; the class fills in the rest). */

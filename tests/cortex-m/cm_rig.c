@@ -12,6 +12,26 @@ static void bx_rx0(void *ctx) { co_bxcan_isr_rx0(ctx); }
 static void bx_sce(void *ctx) { co_bxcan_isr_sce(ctx); }
 static void fd_it0(void *ctx) { co_fdcan_isr(ctx); }
 
+static uint64_t rig_now(void *ctx) { return ((rig_dut_t *)ctx)->now_us; }
+
+/* cm_port.c's WFI (host builds): what the test wants to look at, then on at once. */
+static void (*g_wfi)(void *ctx);
+static void *g_wfi_ctx;
+
+void rig_on_wfi(void (*fn)(void *ctx), void *ctx)
+{
+    g_wfi = fn;
+    g_wfi_ctx = ctx;
+}
+
+void co_cm_wait_for_interrupt(void);
+void co_cm_wait_for_interrupt(void)
+{
+    if (g_wfi) {
+        g_wfi(g_wfi_ctx);
+    }
+}
+
 static co_err_t driver_init(rig_dut_t *d, const rig_options_t *o, uint32_t bit_rate)
 {
     if (o->ctrl == RIG_BXCAN) {
@@ -59,20 +79,22 @@ co_err_t rig_dut_init(rig_dut_t *d, co_sim_bus_t *bus, const rig_options_t *o)
     if (err != CO_OK) {
         return err;
     }
-    co_cm_can_init(&d->port.can, o->ctrl == RIG_BXCAN ? &co_bxcan_ops : &co_fdcan_ops,
-                   o->ctrl == RIG_BXCAN ? (void *)&d->bx : (void *)&d->fd);
+    co_cm_port_init(&d->port, o->ctrl == RIG_BXCAN ? &co_bxcan_ops : &co_fdcan_ops,
+                    o->ctrl == RIG_BXCAN ? (void *)&d->bx : (void *)&d->fd,
+                    (co_cm_time_t){.now_us = rig_now, .ctx = d});
     co_node_config_t cfg = {.node_id = o->node_id ? o->node_id : 5,
                             .od = example_od_with_domain(&d->od, o->hb_ms, d->entries)};
     cfg.od.hook_ctx = &d->domain;
     cfg.driver = co_cm_can_driver(&d->port.can);
     err = co_node_init(&d->node, &cfg);
-    co_cm_can_bind(&d->port.can, &d->node);
+    co_cm_port_bind(&d->port, &d->node);
     return err;
 }
 
 co_err_t rig_dut_start(rig_dut_t *d, uint64_t now_us)
 {
     uint64_t now = d->model->bus ? d->model->bus->now_us : now_us;
+    d->now_us = now;
     co_err_t err = co_node_start(&d->node, now);
     rig_dut_loop(d, now);
     return err;
@@ -80,8 +102,8 @@ co_err_t rig_dut_start(rig_dut_t *d, uint64_t now_us)
 
 void rig_dut_loop(rig_dut_t *d, uint64_t now_us)
 {
-    co_cm_can_process(&d->port.can, now_us);
-    d->due_us = co_node_poll(&d->node, now_us);
+    d->now_us = now_us;
+    d->due_us = co_cm_port_step(&d->port);
 }
 
 co_err_t rig_peer_start(rig_peer_t *p, co_sim_bus_t *bus, uint8_t node_id, uint16_t hb_ms)

@@ -5,10 +5,11 @@
  * (cm_can.c), a register-level driver (bxCAN or FDCAN) and the model of its controller,
  * joined to the simulated bus where ordinary canola nodes are the rest of the network.
  *
- * Its main loop does what a firmware's does after each wake-up: co_cm_can_process, then
- * co_node_poll. rig_run advances the bus in steps of RIG_STEP_US and runs the main loop
- * after each (a main loop woken by the CAN interrupt runs within that); the interrupts
- * themselves run when the model raises them, as on the chip.
+ Its main loop is port/cortex-m's (cm_port.c: co_cm_port_step, the CAN side's work then
+ * co_node_poll), its time base the bus's clock. rig_run advances the bus in steps of
+ * RIG_STEP_US and runs a step of the main loop after each (a main loop woken by the CAN
+ * interrupt runs within that); the interrupts themselves run when the model raises them, as
+ * on the chip.
  */
 #ifndef CANOLA_TEST_CM_RIG_H
 #define CANOLA_TEST_CM_RIG_H
@@ -45,7 +46,8 @@ typedef struct rig_dut {
     co_od_entry_t entries[EXAMPLE_OD_MAX_ENTRIES + 1];
     pattern_domain_t domain;
     co_node_t node;
-    uint64_t due_us;
+    uint64_t now_us; /* the time base: the bus's clock at the latest step */
+    uint64_t due_us; /* the deadline the latest step returned */
 } rig_dut_t;
 
 /** A sim node: the example dictionary with the DOMAIN, on its own sim port. */
@@ -64,6 +66,10 @@ co_err_t rig_dut_init(rig_dut_t *d, co_sim_bus_t *bus, const rig_options_t *o);
 co_err_t rig_dut_start(rig_dut_t *d, uint64_t now_us);
 /** One turn of the device's main loop at `now_us`. */
 void rig_dut_loop(rig_dut_t *d, uint64_t now_us);
+
+/** Call `fn(ctx)` when the main loop's sleep executes its WFI (NULL: nothing; the WFI
+ *  itself returns at once here: rig_run is the loop that waits). */
+void rig_on_wfi(void (*fn)(void *ctx), void *ctx);
 
 /** Attach and start a sim node with `node_id` (heartbeat `hb_ms`). */
 co_err_t rig_peer_start(rig_peer_t *p, co_sim_bus_t *bus, uint8_t node_id, uint16_t hb_ms);

@@ -288,6 +288,8 @@ static void test_error_counters_are_read(void)
 static void test_a_silent_controller_is_an_error(void)
 {
     rig_dut_t *d = calloc(1, sizeof *d);
+    cm_host_reset();
+    can_model_detach_all(); /* the previous test's models are gone */
     if (g_ctrl == RIG_BXCAN) {
         bxcan_model_init(&d->bx_model);
         d->bx_model.stuck_in_init = true;
