@@ -269,6 +269,45 @@ static void test_bit_rates_and_the_lss_switch(void)
     }
 }
 
+static void lss_done(void *ctx, const co_lss_result_t *result)
+{
+    *(int *)ctx = result->status == CO_LSS_OK ? 1 : -1;
+}
+
+/* LSS end to end: a master configures bit timing index 3 (250 kbit/s) and activates it; the
+ * device's LSS slave calls co_cm_can_lss_bit_timing, the driver switches the controller;
+ * the network follows, and the device answers SDO at the new rate. */
+static void test_lss_switches_the_bit_rate(void)
+{
+    net_t *n = net_new((rig_options_t){.bit_rate = 500000});
+    co_lss_slave_config_t lc = {.bit_timings = 0x1DF, /* table 0 but index 5 */
+                                .on_bit_timing = co_cm_can_lss_bit_timing,
+                                .ctx = &n->dut.port.can};
+    CHECK_EQ(co_lss_slave_setup(&n->dut.node, &lc), CO_OK);
+    rig_run(&n->bus, &n->dut, 5 * MS, NULL, NULL);
+    CHECK_EQ(n->dut.model->bit_rate, 500000);
+    int done = 0;
+    CHECK_EQ(co_lss_switch_global(&n->master.node, CO_LSS_CONFIGURATION), CO_OK);
+    CHECK_EQ(co_lss_configure_bit_timing(&n->master.node, 0, 3, lss_done, &done), CO_OK);
+    rig_run(&n->bus, &n->dut, n->bus.now_us + 20 * MS, NULL, NULL);
+    CHECK_EQ(done, 1);
+    CHECK_EQ(co_lss_activate_bit_timing(&n->master.node, 10), CO_OK);
+    rig_run(&n->bus, &n->dut, n->bus.now_us + 15 * MS, NULL, NULL);
+    CHECK_EQ(n->dut.model->bit_rate, 250000);
+    n->bus.bitrate = 250000; /* the rest of the network switches too */
+    rig_run(&n->bus, &n->dut, n->bus.now_us + 20 * MS, NULL, NULL);
+    CHECK_EQ(co_lss_switch_global(&n->master.node, CO_LSS_WAITING), CO_OK);
+    uint8_t buf[4];
+    CHECK_EQ(co_sdo_upload(&n->master.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, sizeof buf,
+                           sdo_result_done, &n->result),
+             CO_OK);
+    rig_run(&n->bus, &n->dut, n->bus.now_us + 20 * MS, NULL, NULL);
+    CHECK_EQ(n->result.calls, 1);
+    CHECK_EQ(n->result.abort, CO_ABORT_NONE);
+    CHECK_EQ(n->dut.model->violations, 0);
+    free(n);
+}
+
 static void test_error_counters_are_read(void)
 {
     rig_dut_t *d = calloc(1, sizeof *d);
@@ -335,6 +374,7 @@ int main(void)
         RUN(test_mixed_identifiers);
         RUN(test_mailboxes_by_identifier_or_by_request);
         RUN(test_bit_rates_and_the_lss_switch);
+        RUN(test_lss_switches_the_bit_rate);
         RUN(test_error_counters_are_read);
         RUN(test_a_silent_controller_is_an_error);
     }
