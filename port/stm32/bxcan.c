@@ -84,11 +84,6 @@ static uint32_t ir_of(const co_frame_t *frame)
     return (frame->flags & CO_FRAME_RTR) ? (ir | IR_RTR) : ir;
 }
 
-static uint32_t le32(const uint8_t *b)
-{
-    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-}
-
 static bool bx_mailbox_put(void *hw, const co_frame_t *frame)
 {
     co_bxcan_t *drv = hw;
@@ -105,8 +100,8 @@ static bool bx_mailbox_put(void *hw, const co_frame_t *frame)
     }
     co_bxcan_mailbox_t *box = &r->tx[(empty & 1u) ? 0 : (empty & 2u) ? 1 : 2];
     wr(&box->dtr, frame->len > 8 ? 8u : frame->len);
-    wr(&box->dlr, le32(&frame->data[0]));
-    wr(&box->dhr, le32(&frame->data[4]));
+    wr(&box->dlr, co_stm32_data_word(frame, 0));
+    wr(&box->dhr, co_stm32_data_word(frame, 4));
     wr(&box->ir, ir | IR_TXRQ);
     return true;
 }
@@ -269,10 +264,7 @@ static co_frame_t read_fifo0(co_bxcan_regs_t *r)
                         .flags = (uint8_t)(((ir & IR_IDE) ? CO_FRAME_EXT : 0u) |
                                            ((ir & IR_RTR) ? CO_FRAME_RTR : 0u)),
                         .len = (uint8_t)(dlc > 8 ? 8 : dlc)};
-    for (uint32_t i = 0; i < 4; i++) {
-        frame.data[i] = (uint8_t)(lo >> (8 * i));
-        frame.data[4 + i] = (uint8_t)(hi >> (8 * i));
-    }
+    co_stm32_data_set(&frame, lo, hi);
     wr(&r->rf0r, RF0R_RFOM); /* release the output: the next frame moves up */
     return frame;
 }

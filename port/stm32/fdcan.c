@@ -78,11 +78,6 @@ static uint32_t nbtp_of(const co_cm_bit_timing_t *t)
 
 /* ---- Transmit (the port's critical section held). */
 
-static uint32_t le32(const uint8_t *b)
-{
-    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-}
-
 static bool fd_mailbox_put(void *hw, const co_frame_t *frame)
 {
     co_fdcan_t *drv = hw;
@@ -104,8 +99,8 @@ static bool fd_mailbox_put(void *hw, const co_frame_t *frame)
     volatile uint32_t *e = element(drv, CO_FDCAN_RAM_TX_BUFFERS, put);
     wr(&e[0], t0);
     wr(&e[1], (uint32_t)(frame->len > 8 ? 8u : frame->len) << 16); /* classic, no event */
-    wr(&e[2], le32(&frame->data[0]));
-    wr(&e[3], le32(&frame->data[4]));
+    wr(&e[2], co_stm32_data_word(frame, 0));
+    wr(&e[3], co_stm32_data_word(frame, 4));
     wr(&r->txbar, 1u << put);
     return true;
 }
@@ -245,10 +240,7 @@ static co_frame_t read_element(const volatile uint32_t *e)
         .id = (r0 & E_XTD) ? (r0 & 0x1FFFFFFFu) : (r0 >> 18 & 0x7FFu),
         .flags = (uint8_t)(((r0 & E_XTD) ? CO_FRAME_EXT : 0u) | ((r0 & E_RTR) ? CO_FRAME_RTR : 0u)),
         .len = (uint8_t)(dlc > 8 ? 8 : dlc)};
-    for (uint32_t i = 0; i < 4; i++) {
-        frame.data[i] = (uint8_t)(lo >> (8 * i));
-        frame.data[4 + i] = (uint8_t)(hi >> (8 * i));
-    }
+    co_stm32_data_set(&frame, lo, hi);
     return frame;
 }
 

@@ -139,3 +139,27 @@ void rig_run(co_sim_bus_t *bus, rig_dut_t *d, uint64_t until_us,
         }
     }
 }
+
+static void monitor_rx(void *ctx, uint64_t now_us, const co_frame_t *frame)
+{
+    rig_monitor_t *mon = ctx;
+    if (mon->count < RIG_MONITOR_MAX) {
+        mon->at_us[mon->count] = now_us;
+        mon->frames[mon->count++] = *frame;
+    }
+}
+
+co_err_t rig_monitor_attach(rig_monitor_t *mon, co_sim_bus_t *bus)
+{
+    mon->count = 0;
+    return co_sim_port_attach_raw(bus, &mon->port, monitor_rx, mon);
+}
+
+uint32_t rig_monitor_count(const rig_monitor_t *mon, uint32_t id, uint64_t since_us)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < mon->count; i++) {
+        n += mon->frames[i].id == id && mon->at_us[i] >= since_us;
+    }
+    return n;
+}

@@ -59,6 +59,19 @@ typedef struct rig_peer {
     co_sim_port_t port;
 } rig_peer_t;
 
+/** A raw port that keeps every frame the others send, with its time. */
+#define RIG_MONITOR_MAX 8192
+typedef struct rig_monitor {
+    co_sim_port_t port;
+    co_frame_t frames[RIG_MONITOR_MAX];
+    uint64_t at_us[RIG_MONITOR_MAX];
+    uint32_t count;
+} rig_monitor_t;
+
+co_err_t rig_monitor_attach(rig_monitor_t *mon, co_sim_bus_t *bus);
+/** Frames seen with `id` from `since_us` on. */
+uint32_t rig_monitor_count(const rig_monitor_t *mon, uint32_t id, uint64_t since_us);
+
 /** Reset the host (cm_host, the models' routing), set the device up on `bus` (NULL: no bus,
  *  by hand) and co_node_init it (not started). Returns the first error. */
 co_err_t rig_dut_init(rig_dut_t *d, co_sim_bus_t *bus, const rig_options_t *o);

@@ -23,38 +23,11 @@ static const co_cm_can_ops_t *ops_of(const rig_dut_t *d)
 
 static void *hw_of(rig_dut_t *d) { return d->ctrl == RIG_BXCAN ? (void *)&d->bx : (void *)&d->fd; }
 
-/* ---- frames seen on the bus */
-
-typedef struct monitor {
-    co_sim_port_t port;
-    co_frame_t frames[4096];
-    uint64_t at_us[4096];
-    uint32_t count;
-} monitor_t;
-
-static void monitor_rx(void *ctx, uint64_t now_us, const co_frame_t *frame)
-{
-    monitor_t *mon = ctx;
-    if (mon->count < 4096) {
-        mon->at_us[mon->count] = now_us;
-        mon->frames[mon->count++] = *frame;
-    }
-}
-
-static uint32_t monitor_count(const monitor_t *mon, uint32_t id)
-{
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < mon->count; i++) {
-        n += mon->frames[i].id == id;
-    }
-    return n;
-}
-
 typedef struct net {
     co_sim_bus_t bus;
     rig_dut_t dut;
     rig_peer_t master;
-    monitor_t mon;
+    rig_monitor_t mon;
     sdo_result_t result;
 } net_t;
 
@@ -64,7 +37,7 @@ static net_t *net_new(rig_options_t o)
     co_sim_bus_init(&n->bus, o.bit_rate ? o.bit_rate : 1000000u);
     o.ctrl = g_ctrl;
     CHECK_EQ(rig_dut_init(&n->dut, &n->bus, &o), CO_OK);
-    CHECK_EQ(co_sim_port_attach_raw(&n->bus, &n->mon.port, monitor_rx, &n->mon), CO_OK);
+    CHECK_EQ(rig_monitor_attach(&n->mon, &n->bus), CO_OK);
     CHECK_EQ(rig_peer_start(&n->master, &n->bus, 1, 0), CO_OK);
     CHECK_EQ(co_sdo_client_setup(&n->master.node, 0, co_node_id(&n->dut.node)), CO_OK);
     CHECK_EQ(rig_dut_start(&n->dut, 0), CO_OK);
@@ -77,7 +50,7 @@ static void test_device_boots_and_serves_sdo(void)
 {
     net_t *n = net_new((rig_options_t){.hb_ms = 100});
     rig_run(&n->bus, &n->dut, 10 * MS, NULL, NULL);
-    CHECK_EQ(monitor_count(&n->mon, 0x705), 1); /* boot-up */
+    CHECK_EQ(rig_monitor_count(&n->mon, 0x705, 0), 1); /* boot-up */
 
     uint8_t buf[4] = {0};
     CHECK_EQ(co_sdo_upload(&n->master.node, 0, 0x1000, 0, CO_SDO_AUTO, buf, sizeof buf,
@@ -101,7 +74,7 @@ static void test_device_boots_and_serves_sdo(void)
     CHECK_EQ(n->result.len, sizeof big);
     CHECK(pattern_matches(big, 3, sizeof big));
     /* heartbeats every 100 ms from the boot-up on */
-    CHECK_EQ(monitor_count(&n->mon, 0x705), 1 + n->bus.now_us / (100 * MS));
+    CHECK_EQ(rig_monitor_count(&n->mon, 0x705, 0), 1 + n->bus.now_us / (100 * MS));
     CHECK_EQ(n->dut.model->violations, 0);
     CHECK_EQ(co_node_stats(&n->dut.node)->tx_overflow, 0);
     free(n);

@@ -35,24 +35,12 @@ typedef struct net {
     co_sim_bus_t bus;
     rig_dut_t dut;
     rig_peer_t master;
-    co_sim_port_t mon_port;
-    co_frame_t seen[8192];
-    uint64_t seen_at[8192];
-    uint32_t seen_count;
+    rig_monitor_t mon;
     co_sim_port_t load_port;
     bool load_on;             /* bursts of 3 ms of frames at 0x010 every 4 ms */
     co_sim_port_t burst_port; /* frames the test sends in bursts */
     sdo_result_t result;
 } net_t;
-
-static void mon_rx(void *ctx, uint64_t now_us, const co_frame_t *frame)
-{
-    net_t *n = ctx;
-    if (n->seen_count < 8192) {
-        n->seen_at[n->seen_count] = now_us;
-        n->seen[n->seen_count++] = *frame;
-    }
-}
 
 static net_t *net_new(bool request_order, uint16_t hb_ms)
 {
@@ -60,7 +48,7 @@ static net_t *net_new(bool request_order, uint16_t hb_ms)
     co_sim_bus_init(&n->bus, 1000000u);
     rig_options_t o = {.ctrl = g_ctrl, .request_order = request_order, .hb_ms = hb_ms};
     CHECK_EQ(rig_dut_init(&n->dut, &n->bus, &o), CO_OK);
-    CHECK_EQ(co_sim_port_attach_raw(&n->bus, &n->mon_port, mon_rx, n), CO_OK);
+    CHECK_EQ(rig_monitor_attach(&n->mon, &n->bus), CO_OK);
     CHECK_EQ(co_sim_port_attach_raw(&n->bus, &n->load_port, NULL, NULL), CO_OK);
     CHECK_EQ(co_sim_port_attach_raw(&n->bus, &n->burst_port, NULL, NULL), CO_OK);
     CHECK_EQ(rig_peer_start(&n->master, &n->bus, 1, 0), CO_OK);
@@ -84,23 +72,14 @@ static void run(net_t *n, uint64_t for_us)
     rig_run(&n->bus, &n->dut, n->bus.now_us + for_us, load_step, n);
 }
 
-/* The device's frames seen with this identifier from `since` on. */
-static uint32_t seen_count(const net_t *n, uint32_t id, uint64_t since_us)
-{
-    uint32_t count = 0;
-    for (uint32_t i = 0; i < n->seen_count; i++) {
-        count += n->seen[i].id == id && n->seen_at[i] >= since_us;
-    }
-    return count;
-}
-
 /* The time of the first EMCY of the device with `code` from `since` on (0: none). */
 static uint64_t emcy_at(const net_t *n, uint16_t code, uint64_t since_us)
 {
-    for (uint32_t i = 0; i < n->seen_count; i++) {
-        const co_frame_t *f = &n->seen[i];
-        if (f->id == 0x085 && n->seen_at[i] >= since_us && (f->data[0] | f->data[1] << 8) == code) {
-            return n->seen_at[i];
+    for (uint32_t i = 0; i < n->mon.count; i++) {
+        const co_frame_t *f = &n->mon.frames[i];
+        if (f->id == 0x085 && n->mon.at_us[i] >= since_us &&
+            (f->data[0] | f->data[1] << 8) == code) {
+            return n->mon.at_us[i];
         }
     }
     return 0;
@@ -247,7 +226,7 @@ static void test_c_bus_off_and_recovery(void)
     run(n, 5 * MS);
     start_device(n);
     run(n, 30 * MS);
-    CHECK(seen_count(n, 0x705, 0) >= 3);
+    CHECK(rig_monitor_count(&n->mon, 0x705, 0) >= 3);
     uint64_t t0 = n->bus.now_us;
     can_model_tx_errors(n->dut.model, 32); /* TEC 256: bus-off */
     CHECK(n->dut.model->bus_off);
@@ -257,20 +236,21 @@ static void test_c_bus_off_and_recovery(void)
     CHECK(!n->dut.model->bus_off);
     /* back on the bus no sooner than 128 x 11 bits (1.4 ms at 1 Mbit/s), and soon after */
     uint64_t first = 0;
-    for (uint32_t i = 0; i < n->seen_count && !first; i++) {
-        if (n->seen_at[i] >= t0 && (n->seen[i].id & 0x7F) == 5 && n->seen[i].id != 0x605) {
-            first = n->seen_at[i];
+    for (uint32_t i = 0; i < n->mon.count && !first; i++) {
+        if (n->mon.at_us[i] >= t0 && (n->mon.frames[i].id & 0x7F) == 5 &&
+            n->mon.frames[i].id != 0x605) {
+            first = n->mon.at_us[i];
         }
     }
     CHECK(first >= t0 + 1408);
     CHECK(first != 0 && first < t0 + 20 * MS);
     CHECK(emcy_at(n, 0x8140, t0) != 0);
     /* heartbeats resume, pre-operational */
-    CHECK(seen_count(n, 0x705, t0 + 20 * MS) >= 5);
+    CHECK(rig_monitor_count(&n->mon, 0x705, t0 + 20 * MS) >= 5);
     bool preop = false;
-    for (uint32_t i = 0; i < n->seen_count; i++) {
-        preop |=
-            n->seen[i].id == 0x705 && n->seen_at[i] > t0 + 20 * MS && n->seen[i].data[0] == 0x7F;
+    for (uint32_t i = 0; i < n->mon.count; i++) {
+        preop |= n->mon.frames[i].id == 0x705 && n->mon.at_us[i] > t0 + 20 * MS &&
+                 n->mon.frames[i].data[0] == 0x7F;
     }
     CHECK(preop);
     check_nothing_lost(n);
