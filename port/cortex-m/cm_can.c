@@ -13,6 +13,7 @@
 #include "canola/cm_can.h"
 
 #include "canola/cm_critical.h"
+#include "canola/cm_port.h"
 
 /* Bus events the interrupt leaves for the main loop (co_cm_can_t.events). */
 #define EV_OFF 1u
@@ -129,7 +130,7 @@ static co_err_t cm_tx(void *ctx, const co_frame_t *frame)
 
 void co_cm_isr_tx_done(co_cm_port_t *port)
 {
-    co_cm_can_t *can = co_cm_port_can(port);
+    co_cm_can_t *can = &port->can;
     co_cm_irq_t irq = co_cm_critical_enter();
     queue_pump(can);
     co_cm_critical_leave(irq);
@@ -139,7 +140,7 @@ void co_cm_isr_tx_done(co_cm_port_t *port)
 
 void co_cm_isr_rx(co_cm_port_t *port, const co_frame_t *frame)
 {
-    co_cm_can_t *can = co_cm_port_can(port);
+    co_cm_can_t *can = &port->can;
     uint16_t head = can->rx_head;
     if ((uint16_t)(head - can->rx_tail) >= CO_CM_RX_RING_LEN) {
         can->rx_lost++; /* the ring is full: the newest frame is lost */
@@ -150,13 +151,13 @@ void co_cm_isr_rx(co_cm_port_t *port, const co_frame_t *frame)
     can->rx_head = (uint16_t)(head + 1u);
 }
 
-void co_cm_isr_rx_overrun(co_cm_port_t *port) { co_cm_port_can(port)->rx_lost++; }
+void co_cm_isr_rx_overrun(co_cm_port_t *port) { port->can.rx_lost++; }
 
 /* ---- Bus states. */
 
 void co_cm_isr_bus_state(co_cm_port_t *port, co_cm_can_state_t state)
 {
-    co_cm_can_t *can = co_cm_port_can(port);
+    co_cm_can_t *can = &port->can;
     co_cm_irq_t irq = co_cm_critical_enter();
     co_cm_can_state_t was = (co_cm_can_state_t)can->state;
     uint8_t events = 0;
