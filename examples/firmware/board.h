@@ -2,7 +2,7 @@
 /*
  * board.h -- what a board file gives the QEMU example firmware (main.c, slcan_uart.c): its
  * start, a time base, flash for the stored parameters, and the UART that carries the CAN
- * stand-in. board_netduinoplus2.c (STM32F405, Cortex-M4) and board_microbit.c (nRF51822,
+ * stand-in. board_mps2_an386.c (Arm MPS2+ AN386, Cortex-M4) and board_microbit.c (nRF51822,
  * Cortex-M0) implement it; a board with a CAN controller gives port/stm32's driver instead
  * of the UART.
  *
