@@ -13,6 +13,7 @@
 #include "canola/cm_can.h"
 
 #include "canola/cm_critical.h"
+#include "canola/cm_port.h"
 
 /* Bus events the interrupt leaves for the main loop (co_cm_can_t.events). */
 #define EV_OFF 1u
@@ -61,20 +62,56 @@ static void queue_pump(co_cm_can_t *can)
             can->tx_queue[i - taken] = can->tx_queue[i];
         }
         can->tx_count = (uint8_t)(can->tx_count - taken);
-        if (can->tx_refused) { /* the node holds frames: room for them now */
+#if !defined(CO_TEST_FAULT_NO_TX_WAKE) /* test-only: the node never hears of the room */
+        if (can->tx_refused) {         /* the node holds frames: room for them now */
             can->tx_refused = false;
             can->tx_room = true;
         }
+#endif
     }
 }
+
+/* Test-only faults (tests/cortex-m builds each, to show that its test catches it): the
+ * transmit path of other stacks' ports. CO_TEST_FAULT_TX_WAIT: the send waits for a free
+ * mailbox (the examples' busy loop; here it gives up after a while, where a real one waits
+ * for the bus). CO_TEST_FAULT_TX_DROP: a full mailbox set loses the frame.
+ * CO_TEST_FAULT_TX_SPLIT: the mailboxes and the queue in two critical sections (the
+ * transmit-complete interrupt can come between). */
+#if defined(CO_TEST_FAULT_TX_WAIT)
+static bool wait_for_mailbox(co_cm_can_t *can, const co_frame_t *frame)
+{
+    for (uint32_t spin = 0; spin < 100000u; spin++) {
+        co_cm_irq_t irq = co_cm_critical_enter();
+        bool put = can->tx_count == 0 && can->ops->mailbox_put(can->hw, frame);
+        bool queued = can->tx_count != 0;
+        co_cm_critical_leave(irq);
+        if (put || queued) {
+            return put;
+        }
+    }
+    return false;
+}
+#endif
 
 static co_err_t cm_tx(void *ctx, const co_frame_t *frame)
 {
     co_cm_can_t *can = ctx;
     co_err_t err = CO_OK;
+#if defined(CO_TEST_FAULT_TX_WAIT)
+    if (wait_for_mailbox(can, frame)) {
+        return CO_OK;
+    }
+#endif
     co_cm_irq_t irq = co_cm_critical_enter();
     if (can->tx_count == 0) {
         if (!can->ops->mailbox_put(can->hw, frame)) {
+#if defined(CO_TEST_FAULT_TX_DROP)
+            co_cm_critical_leave(irq);
+            return CO_OK;
+#elif defined(CO_TEST_FAULT_TX_SPLIT)
+            co_cm_critical_leave(irq);
+            irq = co_cm_critical_enter();
+#endif
             (void)queue_insert(can, frame);
         }
     } else if (can->tx_count < CO_CM_TX_QUEUE_LEN) {
@@ -93,7 +130,7 @@ static co_err_t cm_tx(void *ctx, const co_frame_t *frame)
 
 void co_cm_isr_tx_done(co_cm_port_t *port)
 {
-    co_cm_can_t *can = co_cm_port_can(port);
+    co_cm_can_t *can = &port->can;
     co_cm_irq_t irq = co_cm_critical_enter();
     queue_pump(can);
     co_cm_critical_leave(irq);
@@ -103,7 +140,7 @@ void co_cm_isr_tx_done(co_cm_port_t *port)
 
 void co_cm_isr_rx(co_cm_port_t *port, const co_frame_t *frame)
 {
-    co_cm_can_t *can = co_cm_port_can(port);
+    co_cm_can_t *can = &port->can;
     uint16_t head = can->rx_head;
     if ((uint16_t)(head - can->rx_tail) >= CO_CM_RX_RING_LEN) {
         can->rx_lost++; /* the ring is full: the newest frame is lost */
@@ -114,13 +151,13 @@ void co_cm_isr_rx(co_cm_port_t *port, const co_frame_t *frame)
     can->rx_head = (uint16_t)(head + 1u);
 }
 
-void co_cm_isr_rx_overrun(co_cm_port_t *port) { co_cm_port_can(port)->rx_lost++; }
+void co_cm_isr_rx_overrun(co_cm_port_t *port) { port->can.rx_lost++; }
 
 /* ---- Bus states. */
 
 void co_cm_isr_bus_state(co_cm_port_t *port, co_cm_can_state_t state)
 {
-    co_cm_can_t *can = co_cm_port_can(port);
+    co_cm_can_t *can = &port->can;
     co_cm_irq_t irq = co_cm_critical_enter();
     co_cm_can_state_t was = (co_cm_can_state_t)can->state;
     uint8_t events = 0;

@@ -14,6 +14,7 @@ typedef struct host {
     void *ctx[SOURCES_MAX];
     uint32_t sources;
     bool masked;
+    bool held;
     bool in_handler;
     uint32_t points;
     void (*at_point)(void *ctx);
@@ -39,7 +40,7 @@ static void take_interrupts(void)
 {
     uint32_t runs = 0;
     bool ran = true;
-    while (ran && !host.masked && !host.in_handler) {
+    while (ran && !host.masked && !host.held && !host.in_handler) {
         ran = false;
         for (uint32_t i = 0; i < host.sources && !ran; i++) {
             host.in_handler = true;
@@ -57,6 +58,12 @@ static void take_interrupts(void)
 }
 
 void cm_host_raise(void) { take_interrupts(); }
+
+void cm_host_hold(bool hold)
+{
+    host.held = hold;
+    take_interrupts();
+}
 
 bool cm_host_masked(void) { return host.masked; }
 bool cm_host_in_handler(void) { return host.in_handler; }

@@ -20,6 +20,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "canola/cm_port.h" /* the port object, co_cm_port_t, whose CAN side the tests use */
+
 /** An interrupt source: run one pending handler and return true, or false when none is
  *  pending (enabled and flagged). */
 typedef bool (*cm_host_irq_fn)(void *ctx);
@@ -34,6 +36,9 @@ void cm_host_raise(void);
 bool cm_host_masked(void);
 /** True while a handler runs. */
 bool cm_host_in_handler(void);
+/** Hold interrupts off (a long critical section elsewhere, a higher-priority handler) or
+ *  let them come again (the pending ones run at once). */
+void cm_host_hold(bool hold);
 /** Points passed since the reset. */
 uint32_t cm_host_points(void);
 /** Call `fn(ctx)` at each point (NULL: none). */

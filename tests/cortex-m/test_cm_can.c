@@ -14,10 +14,6 @@
 #include "example_od.h"
 #include "harness.h"
 
-struct co_cm_port {
-    co_cm_can_t can;
-};
-
 #define MAILBOXES 3
 #define WIRE_MAX 256
 

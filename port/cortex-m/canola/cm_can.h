@@ -27,9 +27,8 @@
  * section held (interrupts masked, cm_critical.h); the others from the main loop only. The
  * driver calls co_cm_isr_rx and co_cm_isr_rx_overrun from one interrupt priority (the ring
  * has one producer); the other co_cm_isr_* calls from any CAN interrupt.
- * Memory: the driver's state is its own (hw); the port's CAN side is a co_cm_can_t, the
- * first member of co_cm_port_t (cm_port.h), so that the interrupt calls reach it from the
- * port (co_cm_port_can). No allocation.
+ * Memory: the driver's state is its own (hw); the port's CAN side is a co_cm_can_t in
+ * co_cm_port_t (cm_port.h), where the interrupt calls find it. No allocation.
  */
 #ifndef CANOLA_CM_CAN_H
 #define CANOLA_CM_CAN_H
@@ -119,13 +118,7 @@ typedef struct co_cm_can {
     co_node_t *node;
 } co_cm_can_t;
 
-typedef struct co_cm_port co_cm_port_t; /* cm_port.h: its first member is a co_cm_can_t */
-
-/** The CAN side of a port (its first member). */
-static inline co_cm_can_t *co_cm_port_can(co_cm_port_t *port)
-{
-    return (co_cm_can_t *)(void *)port;
-}
+typedef struct co_cm_port co_cm_port_t; /* cm_port.h */
 
 /* ---- The main loop's calls. */
 

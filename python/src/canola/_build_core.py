@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import glob
 import os
+import re
 
 import cffi  # type: ignore[import-untyped]
 
@@ -23,6 +24,15 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 _PROJECT = os.path.normpath(os.path.join(_HERE, "..", ".."))  # python/, or an unpacked sdist
 _SDIST_C = os.path.join(_PROJECT, "csrc")
 _ROOT = _SDIST_C if os.path.isdir(_SDIST_C) else os.path.dirname(_PROJECT)
+
+
+def version() -> str:
+    """canola's version, as include/canola/version.h writes it (the one place it is kept)."""
+    with open(os.path.join(_ROOT, "include", "canola", "version.h"), encoding="utf-8") as f:
+        found = re.search(r'^#define CANOLA_VERSION "([0-9]+\.[0-9]+\.[0-9]+)"', f.read(), re.M)
+    if found is None:
+        raise RuntimeError("include/canola/version.h: no CANOLA_VERSION \"X.Y.Z\" line")
+    return found.group(1)
 
 
 def _rel(path: str) -> str:
