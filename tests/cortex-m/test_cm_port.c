@@ -151,18 +151,24 @@ void co_cm_wait_for_interrupt(void)
     g_board.now_us = g_board.wake_at != CO_TIME_NEVER ? g_board.wake_at : g_board.now_us + 1000;
 }
 
+/* A node (heartbeat every `hb_ms`) started on a port on the fake board, at time 0. */
+static void start_on_port(co_cm_port_t *port, test_node_t *t, uint16_t hb_ms)
+{
+    cm_host_reset();
+    g_board = (fake_board_t){.port = port, .wake_at = CO_TIME_NEVER};
+    co_cm_port_init(port, &k_ops, &g_board,
+                    (co_cm_time_t){.now_us = board_now, .wake_at = board_wake_at, .ctx = &g_board});
+    CHECK_EQ(test_node_init(t, 5, hb_ms), CO_OK);
+    t->node.cfg.driver = co_cm_can_driver(&port->can);
+    co_cm_port_bind(port, &t->node);
+    CHECK_EQ(co_node_start(&t->node, 0), CO_OK);
+}
+
 static void test_step_and_sleep(void)
 {
     static co_cm_port_t port;
     static test_node_t t;
-    cm_host_reset();
-    g_board = (fake_board_t){.port = &port, .wake_at = CO_TIME_NEVER};
-    co_cm_port_init(&port, &k_ops, &g_board,
-                    (co_cm_time_t){.now_us = board_now, .wake_at = board_wake_at, .ctx = &g_board});
-    CHECK_EQ(test_node_init(&t, 5, 100), CO_OK);
-    t.node.cfg.driver = co_cm_can_driver(&port.can);
-    co_cm_port_bind(&port, &t.node);
-    CHECK_EQ(co_node_start(&t.node, 0), CO_OK);
+    start_on_port(&port, &t, 100);
     CHECK_EQ(g_board.sent_count, 1); /* the boot-up */
 
     uint64_t deadline = co_cm_port_step(&port);
@@ -201,14 +207,7 @@ static void test_run_keeps_the_heartbeat(void)
     /* 10 s of the loop: ten heartbeats at 1 s, each at its deadline, one sleep per beat */
     static co_cm_port_t port;
     static test_node_t t;
-    cm_host_reset();
-    g_board = (fake_board_t){.port = &port, .wake_at = CO_TIME_NEVER};
-    co_cm_port_init(&port, &k_ops, &g_board,
-                    (co_cm_time_t){.now_us = board_now, .wake_at = board_wake_at, .ctx = &g_board});
-    CHECK_EQ(test_node_init(&t, 5, 1000), CO_OK);
-    t.node.cfg.driver = co_cm_can_driver(&port.can);
-    co_cm_port_bind(&port, &t.node);
-    CHECK_EQ(co_node_start(&t.node, 0), CO_OK);
+    start_on_port(&port, &t, 1000);
     while (g_board.now_us <= 10000000u) {
         co_cm_port_sleep(&port, co_cm_port_step(&port));
     }
