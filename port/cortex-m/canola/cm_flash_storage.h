@@ -27,7 +27,7 @@
  *
  * Threading: main loop only (the node calls it from co_node_ingest/poll). Erasing a page
  * stalls the CPU on single-bank STM32 parts (tens of ms for a 16 KB sector): saves are
- * rare and on command. Memory: this object (about 60 bytes); no image buffer.
+ * rare and on command. Memory: this object (96 bytes on a Cortex-M); no image buffer.
  * Cost: a save programs (image + other image + 64) / unit units after erasing the slot's
  * pages; a read is a copy.
  */

@@ -59,7 +59,7 @@ typedef struct co_cm_time {
     void *ctx;
 } co_cm_time_t;
 
-/** The port: the CAN side first (the interrupt calls reach it through the port, cm_can.h). */
+/** The port: its CAN side (where the driver's interrupt calls find it), time base and node. */
 struct co_cm_port {
     co_cm_can_t can;
     co_cm_time_t time;
