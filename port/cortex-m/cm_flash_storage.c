@@ -137,18 +137,22 @@ static uint32_t room(const co_cm_flash_storage_t *st)
 }
 
 /* Finish the next slot and make it the one in use: the image of st->group (st->written
- * bytes, already programmed from CO_CM_FLASH_SLOT_HEAD on; NO_IMAGE: none), the other
- * group's image copied from the slot in use, the header, and last the commit unit. */
+ * bytes, programmed from st->base on; NO_IMAGE: none), the other group's image (staged in
+ * this slot, or copied from the slot in use), the header, and last the commit unit. */
 static co_err_t switch_slots(co_cm_flash_storage_t *st, uint32_t new_len)
 {
     image_at_t images[2];
     unsigned mine = group_index((co_param_group_t)st->group);
-    images[mine].off = CO_CM_FLASH_SLOT_HEAD;
+    images[mine].off = st->base;
     images[mine].len = new_len;
     image_at_t from;
     image_at_t *other = &images[1u - mine];
     other->len = NO_IMAGE;
-    if (stored_image(st, mine == 0 ? CO_PARAMS_APPLICATION : CO_PARAMS_COMMUNICATION, &from)) {
+    if (st->staged) {
+        other->off = CO_CM_FLASH_SLOT_HEAD;
+        other->len = st->staged_len;
+    } else if (stored_image(st, mine == 0 ? CO_PARAMS_APPLICATION : CO_PARAMS_COMMUNICATION,
+                            &from)) {
         other->off =
             CO_CM_FLASH_SLOT_HEAD + (new_len == NO_IMAGE ? 0u : round_up(new_len, st->flash->unit));
         other->len = from.len;
@@ -158,6 +162,7 @@ static co_err_t switch_slots(co_cm_flash_storage_t *st, uint32_t new_len)
             return err;
         }
     }
+    st->staged = false;
 
     uint8_t header[HEADER_LEN];
     co_put_u32(header, SLOT_MAGIC);
@@ -181,12 +186,33 @@ static co_err_t switch_slots(co_cm_flash_storage_t *st, uint32_t new_len)
     return CO_OK;
 }
 
+/* The end of the save in progress: nothing more programmed, nothing staged. */
+static void end_save(co_cm_flash_storage_t *st)
+{
+    st->saving = false;
+    st->staged = false;
+}
+
+/* A new image for `group`: the next slot erased; or, after stage, the second image of a save
+ * of both groups, in the same slot after the first. */
 static co_err_t begin(void *ctx, co_param_group_t group)
 {
     co_cm_flash_storage_t *st = ctx;
     st->saving = false;
-    st->group = (uint8_t)group;
     st->written = 0;
+    if (st->staged) {
+        if (group == (co_param_group_t)st->group) {
+            end_save(st);
+            return CO_ERR_STATE; /* one image a group */
+        }
+        st->group = (uint8_t)group;
+        st->base = CO_CM_FLASH_SLOT_HEAD + round_up(st->staged_len, st->flash->unit);
+        st->room = st->slot_size - st->base;
+        st->saving = true;
+        return CO_OK;
+    }
+    st->group = (uint8_t)group;
+    st->base = CO_CM_FLASH_SLOT_HEAD;
     st->room = room(st);
     co_err_t err = erase_next_slot(st);
     st->saving = err == CO_OK;
@@ -201,16 +227,16 @@ static co_err_t write(void *ctx, const uint8_t *data, uint32_t len)
         return CO_ERR_STATE;
     }
     if (len > st->room - st->written) {
-        st->saving = false;
+        end_save(st);
         return CO_ERR_FULL;
     }
     for (uint32_t i = 0; i < len; i++) {
         st->partial[st->written % unit] = data[i];
         st->written++;
         if (st->written % unit == 0) {
-            co_err_t err = put_unit(st, CO_CM_FLASH_SLOT_HEAD + st->written - unit, st->partial);
+            co_err_t err = put_unit(st, st->base + st->written - unit, st->partial);
             if (err != CO_OK) {
-                st->saving = false;
+                end_save(st);
                 return err;
             }
         }
@@ -218,26 +244,54 @@ static co_err_t write(void *ctx, const uint8_t *data, uint32_t len)
     return CO_OK;
 }
 
-static co_err_t commit(void *ctx)
+/* The image's last bytes, its unit padded with erased bytes. */
+static co_err_t finish_image(co_cm_flash_storage_t *st)
+{
+    uint8_t unit = st->flash->unit;
+    uint32_t rest = st->written % unit;
+    if (rest == 0) {
+        return CO_OK;
+    }
+    memset(st->partial + rest, 0xFF, unit - rest);
+    return put_unit(st, st->base + st->written - rest, st->partial);
+}
+
+/* The image written since begin is kept for the commit; the next begin writes the other
+ * group's beside it, and the commit switches to both at once. */
+static co_err_t stage(void *ctx)
 {
     co_cm_flash_storage_t *st = ctx;
-    uint8_t unit = st->flash->unit;
-    if (!st->saving) {
+    if (!st->saving || st->staged) {
+        end_save(st);
         return CO_ERR_STATE;
     }
     st->saving = false;
-    uint32_t rest = st->written % unit;
-    if (rest != 0) {
-        memset(st->partial + rest, 0xFF, unit - rest);
-        co_err_t err = put_unit(st, CO_CM_FLASH_SLOT_HEAD + st->written - rest, st->partial);
-        if (err != CO_OK) {
-            return err;
-        }
+    co_err_t err = finish_image(st);
+    if (err != CO_OK) {
+        return err;
     }
-    return switch_slots(st, st->written);
+    st->staged = true;
+    st->staged_len = st->written;
+    return CO_OK;
 }
 
-static void discard(void *ctx) { ((co_cm_flash_storage_t *)ctx)->saving = false; }
+static co_err_t commit(void *ctx)
+{
+    co_cm_flash_storage_t *st = ctx;
+    if (!st->saving) {
+        end_save(st);
+        return CO_ERR_STATE;
+    }
+    st->saving = false;
+    co_err_t err = finish_image(st);
+    if (err == CO_OK) {
+        err = switch_slots(st, st->written);
+    }
+    st->staged = false;
+    return err;
+}
+
+static void discard(void *ctx) { end_save(ctx); }
 
 static co_err_t read(void *ctx, co_param_group_t group, uint32_t offset, uint8_t *buf, uint32_t cap,
                      uint32_t *n)
@@ -260,11 +314,12 @@ static co_err_t erase(void *ctx, co_param_group_t group)
 {
     co_cm_flash_storage_t *st = ctx;
     image_at_t image;
-    st->saving = false;
+    end_save(st);
     if (!stored_image(st, group, &image)) {
         return CO_OK;
     }
     st->group = (uint8_t)group;
+    st->base = CO_CM_FLASH_SLOT_HEAD;
     co_err_t err = erase_next_slot(st);
     return err == CO_OK ? switch_slots(st, NO_IMAGE) : err;
 }
@@ -290,6 +345,7 @@ co_err_t co_cm_flash_storage_init(co_cm_flash_storage_t *st, const co_cm_flash_t
                              .read = read,
                              .erase = erase,
                              .discard = discard,
+                             .stage = stage,
                              .ctx = st};
     st->flash = flash;
     st->slot[0] = slot0;

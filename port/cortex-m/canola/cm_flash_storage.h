@@ -11,7 +11,9 @@
  * and of two the one with the higher sequence number. So until the commit unit is
  * programmed the old slot is the valid one, whatever state the power cut left the other
  * in (half erased, half programmed, a unit partly programmed); once it is, the new one.
- * 0x1011 (forget a group) is a save of the other group alone, as atomic.
+ * A save of both groups (0x1010 sub1) writes both images into the one new slot (the
+ * storage's `stage`): both old or both new, never one of each. 0x1011 (forget a group) is
+ * a slot with the other group's image alone, as atomic.
  *
  *   slot:  0  header: magic "CNFS", sequence, offset and length of each group's image
  *              (length 0xFFFFFFFF: none), CRC-32 of the 28 bytes before it  (32 bytes)
@@ -27,7 +29,7 @@
  *
  * Threading: main loop only (the node calls it from co_node_ingest/poll). Erasing a page
  * stalls the CPU on single-bank STM32 parts (tens of ms for a 16 KB sector): saves are
- * rare and on command. Memory: this object (96 bytes on a Cortex-M); no image buffer.
+ * rare and on command. Memory: this object (108 bytes on a Cortex-M); no image buffer.
  * Cost: a save programs (image + other image + 64) / unit units after erasing the slot's
  * pages; a read is a copy.
  */
@@ -66,12 +68,15 @@ typedef struct co_cm_flash_storage {
     const co_cm_flash_t *flash;
     uintptr_t slot[2];
     uint32_t slot_size;
-    uint32_t seq;     /**< the sequence number of the slot in use */
-    uint32_t written; /**< bytes of the image being saved */
-    uint32_t room;    /**< bytes it may take (the slot less the other group's image) */
-    uint8_t current;  /**< the slot in use: 0, 1, or 2 (none: nothing stored) */
-    uint8_t group;    /**< the group being saved (co_param_group_t) */
-    bool saving;      /**< a save has begun and neither committed nor failed */
+    uint32_t seq;        /**< the sequence number of the slot in use */
+    uint32_t written;    /**< bytes of the image being saved */
+    uint32_t base;       /**< where in the slot it starts */
+    uint32_t room;       /**< bytes it may take (the slot less the other group's image) */
+    uint32_t staged_len; /**< bytes of the image staged before it (a save of both groups) */
+    uint8_t current;     /**< the slot in use: 0, 1, or 2 (none: nothing stored) */
+    uint8_t group;       /**< the group being saved (co_param_group_t) */
+    bool saving;         /**< a save has begun and neither committed nor failed */
+    bool staged;         /**< the other group's new image waits in the slot for the commit */
     uint8_t partial[CO_CM_FLASH_UNIT_MAX]; /**< the image's bytes not yet programmed */
 } co_cm_flash_storage_t;
 
