@@ -66,7 +66,10 @@ class FakeAdapter:
                 line, rest = rest.split(b"\r", 1)
                 text = line.decode()
                 if text[:1] in ("O", "C"):
-                    conn.sendall(b"\r")
+                    try:
+                        conn.sendall(b"\r")
+                    except OSError:  # the client went (python-can closes with C)
+                        return
                 elif text:
                     self.lines.append(text)
 
@@ -148,48 +151,76 @@ def test_frames_cross_the_bridge_both_ways(adapter: FakeAdapter) -> None:
                 shutdown(bus)
 
 
-def _bridge_cli(adapter_port: int, hub_port: int) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, "-m", "canola.cli", "bus", "bridge", f"slcan://127.0.0.1:{adapter_port}",
-         "--bus", f"socketcand://127.0.0.1:{hub_port}/can0"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+class BridgeCli:
+    """``canola bus bridge`` in a subprocess, its output read as it comes (a thread)."""
+
+    def __init__(self, adapter_port: int, hub_port: int) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "canola.cli", "bus", "bridge",
+             f"slcan://127.0.0.1:{adapter_port}",
+             "--bus", f"socketcand://127.0.0.1:{hub_port}/can0"],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.lines: list[str] = []
+        self._joined = threading.Event()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip("\n"))
+            if " joined to " in line:
+                self._joined.set()
+
+    def joined(self) -> bool:
+        """True once it says both sides are open (at most WAIT_S)."""
+        return self._joined.wait(WAIT_S)
+
+    def end(self) -> int:
+        """Its exit code (SIGTERM first if it still runs; killed past WAIT_S)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            self.proc.wait(WAIT_S)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait(10)
+        self._reader.join(10)
+        return self.proc.returncode
 
 
 def test_bridge_command_stops_on_sigterm(adapter: FakeAdapter) -> None:
     with HubThread() as hub:
-        proc = _bridge_cli(adapter.port, hub.port)
+        cli = BridgeCli(adapter.port, hub.port)
         try:
-            adapter.send("t7051" + "00")  # reaches the hub once the bridge is up
+            assert cli.joined(), cli.lines
             peer = open_bus(url=f"socketcand://127.0.0.1:{hub.port}/can0")
             try:
-                adapter.send("t7051" + "7F")
-                assert _recv(peer, WAIT_S) is not None
+                got = None
+                deadline = time.monotonic() + WAIT_S
+                while got is None and time.monotonic() < deadline:
+                    adapter.send("t70517F")  # again until the peer has joined the channel
+                    got = _recv(peer, 0.5)
+                assert got is not None and got.arbitration_id == 0x705, cli.lines
             finally:
-                peer.shutdown()
-            proc.send_signal(signal.SIGTERM)
-            out, err = proc.communicate(timeout=WAIT_S)
+                shutdown(peer)
         finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait(10)
-    assert proc.returncode == 0, err
-    assert "joined to socketcand://" in out
+            code = cli.end()
+    assert code == 0, cli.lines
+    assert cli.lines[-1].startswith("canola bus: ") and " frames from " in cli.lines[-1]
 
 
 def test_bridge_command_says_which_side_closed(adapter: FakeAdapter) -> None:
     with HubThread() as hub:
-        proc = _bridge_cli(adapter.port, hub.port)
+        cli = BridgeCli(adapter.port, hub.port)
         try:
-            adapter.send("t7051" + "00")
+            assert cli.joined(), cli.lines
             adapter.close()
-            _, err = proc.communicate(timeout=WAIT_S)
+            cli.proc.wait(WAIT_S)
         finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait(10)
-    assert proc.returncode == 1
-    assert err.strip().startswith(f"canola: bus bridge: slcan://127.0.0.1:{adapter.port}: ")
-    assert len(err.strip().splitlines()) == 1
+            code = cli.end()
+    assert code == 1, cli.lines
+    assert cli.lines[-1].startswith(f"canola: bus bridge: slcan://127.0.0.1:{adapter.port}: ")
 
 
 def test_bridge_command_refused_adapter() -> None:
