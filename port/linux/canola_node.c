@@ -37,11 +37,12 @@
 #define PROG "canola-node"
 #define CONNECT_TIMEOUT_MS 5000u
 #define BUS_ENV "CANOLA_BUS"
+#define TOKEN_ENV "CANOLA_TOKEN"
 #define SOCKETCAN_SCHEME "socketcan://"
 
 static const char usage[] =
     "usage: " PROG " [--iface IFACE | --bus URL] --node-id N [--store DIR] [--heartbeat MS]\n"
-    "                   [--sdo-timeout MS]\n"
+    "                   [--sdo-timeout MS] [--token TOKEN]\n"
     "  --iface IFACE    SocketCAN interface (can0, vcan0)\n"
     "  --bus URL        socketcand://HOST[:PORT]/CHANNEL (a socketcand server or the\n"
     "                   `canola bus serve` hub) or socketcan://IFACE; without --iface and\n"
@@ -51,12 +52,15 @@ static const char usage[] =
     "                   (store configuration) in files in DIR\n"
     "  --heartbeat MS   producer heartbeat time 0x1017 at power-on (default 1000)\n"
     "  --sdo-timeout MS SDO server time-out: a transfer the client leaves waiting that\n"
-    "                   long is aborted (1..65535, default 1000)\n";
+    "                   long is aborted (1..65535, default 1000)\n"
+    "  --token TOKEN    the secret a hub that asks for one (canola bus serve --token)\n"
+    "                   gets first; default $" TOKEN_ENV "\n";
 
 typedef struct args {
     const char *iface; /* SocketCAN interface, or NULL */
     const char *bus;   /* socketcand URL, or NULL */
     const char *store;
+    const char *token; /* for a socketcand hub that asks for one, or NULL */
     long node_id;
     long heartbeat_ms;
     long sdo_timeout_ms;
@@ -175,6 +179,8 @@ static int parse_args(int argc, char **argv, args_t *a)
             a->bus = val;
         } else if (strcmp(opt, "--store") == 0) {
             a->store = val;
+        } else if (strcmp(opt, "--token") == 0) {
+            a->token = val;
         } else if (strcmp(opt, "--node-id") == 0) {
             if ((a->node_id = number(val, 1, 127)) < 0) {
                 return bad_args("--node-id must be 1..127, not '%s'", val);
@@ -196,6 +202,9 @@ static int parse_args(int argc, char **argv, args_t *a)
     }
     if (a->node_id < 0 && a->store == NULL) {
         return bad_args("--node-id is required%s", "");
+    }
+    if (a->token == NULL) {
+        a->token = getenv(TOKEN_ENV);
     }
     return choose_bus(a);
 }
@@ -309,7 +318,7 @@ int main(int argc, char **argv)
         t = &app.can.transport;
     } else {
         app.where = args.bus;
-        if (co_socketcand_open(&app.scd, args.bus, CONNECT_TIMEOUT_MS) != CO_OK) {
+        if (co_socketcand_open_auth(&app.scd, args.bus, args.token, CONNECT_TIMEOUT_MS) != CO_OK) {
             fprintf(stderr, PROG ": %s\n", app.scd.transport.error);
             return 1;
         }

@@ -200,7 +200,7 @@ def test_sdo_write_read_back_and_python_canopen_agrees(
     (["read", "5", "0x5555:0"], 1, "node 5 0x5555:00: SDO abort 0x06020000: Object does not"),
     (["read", "5", "0x1018:9"], 1, "SDO abort 0x06090011"),
     (["read", "9", "0x1000:0", "--timeout", "300"], 1,
-     "no response from node 9 (SDO time-out 300 ms)"),
+     "no response from node 9 (SDO time-out 300 ms, after "),
 ])
 def test_sdo_errors(capsys: pytest.CaptureFixture[str], net: tuple[str, list[Proc]],
                     args: list[str], code: int, message: str) -> None:
@@ -299,7 +299,7 @@ def test_cli_as_programs(net: tuple[str, list[Proc]]) -> None:
                           "--timeout", "200"], capture_output=True, text=True, timeout=60,
                          check=False)
     assert bad.returncode == 1
-    assert bad.stderr == "canola: no response from node 99 (SDO time-out 200 ms)\n"
+    assert bad.stderr.startswith("canola: no response from node 99 (SDO time-out 200 ms, after ")
 
 
 def test_device_errors(tmp_path: Path, net: tuple[str, list[Proc]]) -> None:

@@ -68,12 +68,14 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
 
 def run_command(args: argparse.Namespace) -> int:
     from canola.conformance import (  # noqa: PLC0415 -- the suite loads when it runs
+        Interrupted,
         LiveProgress,
         check_list,
         junit,
         markdown,
         run,
         select,
+        verdict,
     )
 
     try:
@@ -97,6 +99,8 @@ def run_command(args: argparse.Namespace) -> int:
     try:
         report = run(bus, args.node_id, model, only=args.only or (), options=options,
                      master_id=args.master_id, progress=LiveProgress(sys.stdout))
+    except Interrupted as stop:  # Ctrl-C: the report of what ran, then exit 130
+        report = stop.report
     finally:
         bus.shutdown()
     for path, text in ((args.markdown, markdown), (args.junit, junit)):
@@ -106,6 +110,8 @@ def run_command(args: argparse.Namespace) -> int:
                     out.write(text(report))
             except OSError as exc:
                 raise CliError(f"cannot write {path}: {exc.strerror}") from None
-    verdict = "PASSED" if report.passed else "FAILED"
-    print(f"node {report.node_id}: {verdict} ({report.totals})")
+    print(f"node {report.node_id}: {verdict(report)} ({report.totals})")
+    if report.interrupted:
+        print(report.notes[-1])
+        return 130
     return 0 if report.passed else 1

@@ -147,12 +147,17 @@ def sdo_errors(node: int, timeout_ms: int, where: str | None = None) -> Iterator
     abort says ``where`` (default: the node)."""
     try:
         yield
-    except SdoTimeout:
-        raise CliError(f"no response from node {node} (SDO time-out {timeout_ms} ms)"
+    except SdoTimeout as exc:
+        took = f", after {exc.after_s:.2f} s" if exc.after_s is not None else ""
+        raise CliError(f"no response from node {node} (SDO time-out {timeout_ms} ms{took})"
                        ) from None
     except SdoAbort as exc:
         at = where or f"node {node}"
-        raise CliError(f"{at}: SDO abort 0x{exc.code:08X}: {exc.text}") from None
+        who = ""
+        if exc.by_server is not None and exc.after_s is not None:
+            sender = f"node {exc.node}" if exc.by_server else "the master"
+            who = f" (sent by {sender} after {exc.after_s:.2f} s)"
+        raise CliError(f"{at}: SDO abort 0x{exc.code:08X}: {exc.text}{who}") from None
 
 
 def _sdo_errors(args: argparse.Namespace,
