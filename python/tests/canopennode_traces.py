@@ -148,7 +148,7 @@ def _section(name: str, keys: list[tuple[str, str]]) -> str:
     return f"[{name}]\n" + "".join(f"{k}={v}\n" for k, v in keys) + "\n"
 
 
-def _var(name: str, title: str, datatype: str, access: str, default: str,
+def _var(name: str, title: str, datatype: str, access: str, default: str, *,
          pdo: str = "0") -> str:
     return _section(name, [("ParameterName", title), ("ObjectType", "0x7"),
                            ("DataType", datatype), ("AccessType", access),
@@ -177,7 +177,7 @@ def canopend_eds() -> str:
             "ProductName=New Product\nNrOfRXPDO=4\nNrOfTXPDO=4\nLSS_Supported=1\n\n"
             "[MandatoryObjects]\nSupportedObjects=3\n1=0x1000\n2=0x1001\n3=0x1018\n\n")
     text += _var("1000", "Device type", u32, "ro", "0x00000000")
-    text += _var("1001", "Error register", u8, "ro", "0x00", "1")
+    text += _var("1001", "Error register", u8, "ro", "0x00", pdo="1")
     text += _head("1018", "Identity", "0x9", 5)
     text += _var("1018sub0", "Highest sub-index supported", u8, "ro", "0x04")
     for sub, title in enumerate(("Vendor-ID", "Product code", "Revision number",
@@ -214,12 +214,12 @@ def canopend_eds() -> str:
     text += _var("1019", "Synchronous counter overflow value", u8, "rw", "0")
     text += _head("1200", "SDO server parameter", "0x9", 3)
     text += _var("1200sub0", "Highest sub-index supported", u8, "ro", "2")
-    text += _var("1200sub1", "COB-ID client to server (rx)", u32, "ro", "0x600+$NODEID", "1")
-    text += _var("1200sub2", "COB-ID server to client (tx)", u32, "ro", "0x580+$NODEID", "1")
+    text += _var("1200sub1", "COB-ID client to server (rx)", u32, "ro", "0x600+$NODEID", pdo="1")
+    text += _var("1200sub2", "COB-ID server to client (tx)", u32, "ro", "0x580+$NODEID", pdo="1")
     text += _head("1280", "SDO client parameter", "0x9", 4)
     text += _var("1280sub0", "Highest sub-index supported", u8, "ro", "0x03")
-    text += _var("1280sub1", "COB-ID client to server (tx)", u32, "rw", "0x80000000", "1")
-    text += _var("1280sub2", "COB-ID server to client (rx)", u32, "rw", "0x80000000", "1")
+    text += _var("1280sub1", "COB-ID client to server (tx)", u32, "rw", "0x80000000", pdo="1")
+    text += _var("1280sub2", "COB-ID server to client (rx)", u32, "rw", "0x80000000", pdo="1")
     text += _var("1280sub3", "Node-ID of the SDO server", u8, "rw", "0x01")
     for i in range(4):
         index = f"140{i}"
