@@ -10,9 +10,10 @@
 BUILD      ?= build
 BUILD_SAN  ?= build-san
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
-# Tests run side by side: most of the C tests' and Python tests' time is waiting.
+# Tests run side by side, counted from the machine's cores: most of the C tests' and Python
+# tests' time is waiting, so pytest runs two workers a core.
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
-PY_WORKERS ?= 4
+PY_WORKERS ?= $(shell echo $$((2 * $(JOBS))))
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 

@@ -19,6 +19,7 @@ from canola.cli.common import (
 from canola.conformance.options import Options
 from canola.conformance.registry import GROUPS
 from canola.errors import Error
+from canola.files import FileError, write_file
 from canola.formats import eds
 
 
@@ -106,10 +107,9 @@ def run_command(args: argparse.Namespace) -> int:
     for path, text in ((args.markdown, markdown), (args.junit, junit)):
         if path is not None:
             try:
-                with open(path, "w", encoding="utf-8") as out:
-                    out.write(text(report))
-            except OSError as exc:
-                raise CliError(f"cannot write {path}: {exc.strerror}") from None
+                write_file(path, text(report))
+            except FileError as exc:
+                raise CliError(str(exc)) from None
     print(f"node {report.node_id}: {verdict(report)} ({report.totals})")
     if report.interrupted:
         print(report.notes[-1])
