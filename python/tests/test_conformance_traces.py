@@ -18,7 +18,8 @@ models of test_conformance_canopennode.py.
 from __future__ import annotations
 
 import pytest
-from canopennode_traces import NODE, ReplayNode, answers, canopend_eds, header, load
+from canopennode_dictionaries import EDS, canopend_eds
+from canopennode_traces import NODE, ReplayNode, answers, header, load
 
 import canola.conformance as cc
 from canola.conformance import Status
@@ -38,22 +39,38 @@ SDO_ONLY = ("dictionary.mandatory", "dictionary.entries", "dictionary.read_write
             "sdo.block_crc", "sdo.block_size")
 
 
+TRACES = ("canopend", "demodevice")
+
+
 def _abort(frame: bytes) -> int | None:
     return int.from_bytes(frame[4:8], "little") if frame[0] == 0x80 else None
 
 
-def test_the_trace_says_where_it_comes_from() -> None:
+def _replay(name: str, node: ReplayNode | None = None, bus: SimBus | None = None) -> cc.Report:
+    """The SDO-only checks run against the trace's device (``node``: a replay of it whose
+    answers a test changed)."""
+    if node is None:
+        bus = SimBus()
+        node = ReplayNode(bus, load(name))
+    assert bus is not None
+    node.start()
+    return cc.run(bus, NODE, eds.parse(EDS[name](), node_id=NODE), only=SDO_ONLY)
+
+
+@pytest.mark.parametrize("name", TRACES)
+def test_the_trace_says_where_it_comes_from(name: str) -> None:
     """The header names the device, the upstream commits and how the run was made."""
-    text = header("canopend")
+    text = header(name)
     for fact in ("candump -L", "CANopenLinux", "CANopenNode", "canola conformance",
-                 "--destructive"):
+                 "--destructive", "Run 1 of 2", "Run 2"):
         assert fact in text
 
 
-def test_an_empty_error_history_is_answered_no_data() -> None:
-    """canopend answers 0x1003:0 with 0 and 0x1003:1..16 with abort 0x08000024, as CiA 301
-    §7.5.2.4 prescribes (the tester flagged these 16 answers before issue 34's fix)."""
-    table = answers(load("canopend"))
+@pytest.mark.parametrize("name", TRACES)
+def test_an_empty_error_history_is_answered_no_data(name: str) -> None:
+    """Both devices answer 0x1003:0 with 0 and 0x1003:1..16 with abort 0x08000024, as CiA
+    301 §7.5.2.4 prescribes (the tester flagged these 16 answers before issue 34's fix)."""
+    table = answers(load(name))
     count = table[bytes.fromhex("4003100000000000")][0]
     assert count == [bytes.fromhex("4F03100000000000")]
     for sub in range(1, 17):
@@ -66,36 +83,87 @@ def test_the_sdo_checks_judge_the_recorded_answers() -> None:
     """The SDO-only checks replayed on canopend's own answers: all pass or are skipped for
     the reason the EDS gives (no string, no entry longer than 4 bytes), none fails; every
     request of the tester found its recorded answer."""
-    bus = SimBus()
-    node = ReplayNode(bus, load("canopend"))
-    node.start()
-    od = eds.parse(canopend_eds(), node_id=NODE)
-    report = cc.run(bus, NODE, od, only=SDO_ONLY)
+    report = _replay("canopend")
     assert report.names(Status.FAILED) == set(), cc.markdown(report)
-    assert node.missed == []
     assert "dictionary.entries" in report.names(Status.PASSED)
     assert report.result("sdo.segmented_download").summary.endswith(
         "the EDS has no readable and writable entry longer than 4 bytes")
 
 
-@pytest.mark.parametrize("check", ["dictionary.entries", "sdo.block_download"])
-def test_a_replayed_check_fails_when_the_device_answers_otherwise(check: str) -> None:
+def test_demodevice_fails_only_on_its_empty_software_version() -> None:
+    """demoDevice's SDO checks replayed on its own answers: every request found its recorded
+    answer (so no probe went to the DOMAIN 0x2122, which takes only its own byte sequence:
+    the segmented and block checks wrote the 1000-byte string 0x2121:2, every length taken);
+    the one failure is a TRUE deviation: 0x100A (VISIBLE_STRING, empty in this build) read
+    is aborted with 0x06040047, where CiA 301 lets an upload carry 0 bytes."""
+    bus = SimBus()
+    node = ReplayNode(bus, load("demodevice"))
+    report = _replay("demodevice", node, bus)
+    assert node.missed == []
+    assert report.names(Status.FAILED) == {"dictionary.entries"}, cc.markdown(report)
+    (finding,) = report.result("dictionary.entries").findings
+    assert "0x100A:0" in finding.what and "0x06040047" in finding.got
+    assert "CiA 306 §4.5.2" in report.result("dictionary.entries").check.clause
+    for name in ("sdo.segmented_download", "sdo.block_download", "sdo.block_upload"):
+        assert report.result(name).status is Status.PASSED
+        assert report.result(name).summary.startswith("0x2121:2 (String long")
+    assert "sdo.toggle_download" in report.names(Status.PASSED)
+
+
+def test_the_toggle_download_announces_what_the_string_holds() -> None:
+    """Issue 34's false verdict, pinned on demoDevice's frames: sdo.toggle_download once
+    announced 14 bytes to the 3-byte string 0x2121:1 (rightly refused with 0x06070012);
+    now it announces the 110 bytes 0x2121:2 read as, the device takes the transfer (60) and
+    answers the first segment's wrong toggle bit with 0x05030000."""
+    frames = _texts("demodevice")
+    initiate = next(i for i, (_, t) in enumerate(frames) if t == "605#212121026E000000"
+                    and frames[i + 2][1].startswith("605#10"))  # toggle 1 on segment 1
+    assert _answer(frames, initiate) == "585#6021210200000000"
+    assert _answer(frames, initiate + 2) == "585#8021210200000305"
+    upload = _after(frames, 0, "605#4021210200000000")
+    assert _answer(frames, upload) == "585#41212102" + (110).to_bytes(4, "little").hex().upper()
+    assert not [t for _, t in frames if t.startswith("605#21212101")]
+
+
+@pytest.mark.parametrize("name, check", [("canopend", "dictionary.entries"),
+                                         ("canopend", "sdo.block_download"),
+                                         ("demodevice", "sdo.toggle_download")])
+def test_a_replayed_check_fails_when_the_device_answers_otherwise(name: str, check: str) -> None:
     """The replay is a real test: the same run with one recorded answer changed (0x1003:1
     read as the value 0, as canola's core once answered; the block download's end not
-    confirmed) makes the tester fail that check."""
-    frames = load("canopend")
+    confirmed; the segment with the wrong toggle bit taken) makes the tester fail that
+    check."""
+    frames = load(name)
     table = answers(frames)
     bus = SimBus()
     node = ReplayNode(bus, frames)
     node.table = table
     if check == "dictionary.entries":
         table[bytes.fromhex("4003100100000000")][0][:] = [bytes.fromhex("4303100100000000")]
-    else:
+    elif check == "sdo.block_download":
         end = next(k for k in table if k[0] & 0xE3 == 0xC1)
         table[end][0][:] = []
-    node.start()
-    report = cc.run(bus, NODE, eds.parse(canopend_eds(), node_id=NODE), only=SDO_ONLY)
+    else:
+        wrong = next(k for k, v in table.items() if v and v[0] == [
+            bytes.fromhex("8021210200000305")])
+        table[wrong][0][:] = [bytes.fromhex("2021210200000000")]
+    report = _replay(name, node, bus)
     assert check in report.names(Status.FAILED), cc.markdown(report)
+
+
+def test_demodevice_passes_with_a_software_version() -> None:
+    """The other way round: with 0x100A answered as a 4-byte string, as a tagged build of
+    CANopenDemo would, demoDevice's replay fails nothing."""
+    frames = load("demodevice")
+    table = answers(frames)
+    table[bytes.fromhex("400A100000000000")][0][:] = [bytes.fromhex("430A100076342E30")]
+    bus = SimBus()
+    node = ReplayNode(bus, frames)
+    node.table = table
+    node.start()
+    report = cc.run(bus, NODE, eds.parse(EDS["demodevice"](), node_id=NODE),
+                    only=("dictionary.mandatory", "dictionary.entries"))
+    assert report.names(Status.PASSED) == {"dictionary.mandatory", "dictionary.entries"}
 
 
 # ---- the verdicts that rest on the tester's timing: asserted from the recorded frames
