@@ -31,8 +31,8 @@ def _head(name: str, title: str, object_type: str, subs: int) -> str:
                            ("SubNumber", hex(subs))])
 
 
-def _array(index: str, title: str, item: str, datatype: str, access: str, count: int,
-           default: str, *, pdo: str = "0") -> str:
+def _array(index: str, title: str, item: str, datatype: str, access: str, *, count: int,
+           default: str, pdo: str = "0") -> str:
     """An ARRAY of ``count`` equal entries after its sub-index 0."""
     text = _head(index, title, "0x8", count + 1)
     text += _var(f"{index}sub0", "Highest sub-index supported", U8, "ro", f"0x{count:02X}")
@@ -195,21 +195,21 @@ def demodevice_eds() -> str:
                           0x1601: (4, [0x64110110 + (k << 8) for k in range(4)]),
                           0x1A00: (2, [0x60000108 + (k << 8) for k in range(8)]),
                           0x1A01: (4, [0x64010110 + (k << 8) for k in range(4)])}))
-    objects[0x6000] = _array("6000", "Read digital input 8-bit", "Input", U8, "ro", 8,
-                             "0x00", pdo="1")
-    objects[0x6200] = _array("6200", "Write digital output 8-bit", "Output", U8, "rw", 8,
-                             "0x00", pdo="1")
-    objects[0x6401] = _array("6401", "Read analog input 16-bit", "Input", I16, "ro", 16, "0",
-                             pdo="1")
-    objects[0x6411] = _array("6411", "Write analog output 16-bit", "Output", I16, "rw", 8, "0",
-                             pdo="1")
+    for index, title, item, datatype, access, count, default in (
+            (0x6000, "Read digital input 8-bit", "Input", U8, "ro", 8, "0x00"),
+            (0x6200, "Write digital output 8-bit", "Output", U8, "rw", 8, "0x00"),
+            (0x6401, "Read analog input 16-bit", "Input", I16, "ro", 16, "0"),
+            (0x6411, "Write analog output 16-bit", "Output", I16, "rw", 8, "0")):
+        objects[index] = _array(f"{index:04X}", title, item, datatype, access, count=count,
+                                default=default, pdo="1")
     manufacturer = (0x2100, 0x2106, 0x2110, 0x2111, 0x2112, 0x2120, 0x2121, 0x2122)
     objects[0x2100] = _var("2100", "Error status bits", OSTRING, "ro", "00" * 10, pdo="1")
     objects[0x2106] = _var("2106", "Power-on counter", U32, "ro", "0")
-    objects[0x2110] = _array("2110", "Variable Int32", "int32", I32, "rw", 16, "0", pdo="1")
-    objects[0x2111] = _array("2111", "Variable Int32 save", "int32", I32, "rw", 16, "0")
-    objects[0x2112] = _array("2112", "Variable NV Int32 auto save", "int32", I32, "rw", 16,
-                             "0")
+    for index, title, pdo in ((0x2110, "Variable Int32", "1"),
+                              (0x2111, "Variable Int32 save", "0"),
+                              (0x2112, "Variable NV Int32 auto save", "0")):
+        objects[index] = _array(f"{index:04X}", title, "int32", I32, "rw", count=16,
+                                default="0", pdo=pdo)
     objects[0x2120] = (_head("2120", "Demo record", "0x9", 7)
                        + _var("2120sub0", "Highest sub-index supported", U8, "ro", "0x06")
                        + _var("2120sub1", "I64", I64, "rw", "-1234567890123456789", pdo="1")

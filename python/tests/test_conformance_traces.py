@@ -17,8 +17,10 @@ models of test_conformance_canopennode.py.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
-from canopennode_dictionaries import EDS, canopend_eds
+from canopennode_dictionaries import EDS
 from canopennode_traces import NODE, ReplayNode, answers, header, load
 
 import canola.conformance as cc
@@ -40,6 +42,7 @@ SDO_ONLY = ("dictionary.mandatory", "dictionary.entries", "dictionary.read_write
 
 
 TRACES = ("canopend", "demodevice")
+CORPUS = Path(__file__).resolve().parents[2] / ".." / "shared" / "eds-corpus"
 
 
 def _abort(frame: bytes) -> int | None:
@@ -66,6 +69,22 @@ def test_the_trace_says_where_it_comes_from(name: str) -> None:
         assert fact in text
 
 
+def _entries(od: eds.ObjectDictionary) -> dict[tuple[int, int], tuple[object, ...]]:
+    return {(i, s): (v.name, v.data_type, v.access_type, v.default, v.pdo_mapping,
+                     v.low_limit, v.high_limit)
+            for i, obj in od.objects.items() for s, v in obj.subs.items()}
+
+
+def test_the_replayed_dictionary_is_demodevice_eds() -> None:
+    """The dictionary the demoDevice replay gives the tester is demoDevice.eds's, entry by
+    entry (names, types, access, defaults, PDO mapping, limits), where ../shared has it."""
+    path = CORPUS / "CANopenNode__CANopenDemo__demoDevice.eds"
+    if not path.is_file():
+        pytest.skip("../shared/eds-corpus is not here")
+    real = eds.parse(path.read_text(encoding="utf-8"), node_id=NODE)
+    assert _entries(eds.parse(EDS["demodevice"](), node_id=NODE)) == _entries(real)
+
+
 @pytest.mark.parametrize("name", TRACES)
 def test_an_empty_error_history_is_answered_no_data(name: str) -> None:
     """Both devices answer 0x1003:0 with 0 and 0x1003:1..16 with abort 0x08000024, as CiA
@@ -83,8 +102,11 @@ def test_the_sdo_checks_judge_the_recorded_answers() -> None:
     """The SDO-only checks replayed on canopend's own answers: all pass or are skipped for
     the reason the EDS gives (no string, no entry longer than 4 bytes), none fails; every
     request of the tester found its recorded answer."""
-    report = _replay("canopend")
+    bus = SimBus()
+    node = ReplayNode(bus, load("canopend"))
+    report = _replay("canopend", node, bus)
     assert report.names(Status.FAILED) == set(), cc.markdown(report)
+    assert node.missed == []
     assert "dictionary.entries" in report.names(Status.PASSED)
     assert report.result("sdo.segmented_download").summary.endswith(
         "the EDS has no readable and writable entry longer than 4 bytes")
@@ -188,25 +210,27 @@ def _read_after(frames: list[tuple[float, str]], start: int, index: int) -> byte
     return bytes.fromhex(_answer(frames, _after(frames, start, request))[4:])
 
 
-def test_reset_communication_keeps_a_written_heartbeat_time() -> None:
-    """A TRUE deviation (nmt.reset_comm_values, CiA 301 §7.3.2.2.1): canopend takes 0x1017 =
-    1000, is reset (NMT reset communication, its boot-up follows) and still reads 1000,
-    where its power-on value is its EDS default 0 (nothing stored)."""
-    frames = _texts("canopend")
+@pytest.mark.parametrize("name", TRACES)
+def test_reset_communication_keeps_a_written_heartbeat_time(name: str) -> None:
+    """A TRUE deviation (nmt.reset_comm_values, CiA 301 §7.3.2.2.1), on both devices: the
+    device takes 0x1017 = 1000, is reset (NMT reset communication, its boot-up follows) and
+    still reads 1000, where its power-on value is its EDS default 0 (nothing stored)."""
+    frames = _texts(name)
     write = _after(frames, 0, "605#2B171000E8030000")
     assert _answer(frames, write) == "585#6017100000000000"
     reset = _after(frames, write, "000#8205")
     boot = _after(frames, reset, "705#00")
     assert _read_after(frames, boot, 0x1017)[:6] == bytes.fromhex("4B171000E803")
-    default = eds.parse(canopend_eds(), node_id=NODE).objects[0x1017].subs[0].default
+    default = eds.parse(EDS[name](), node_id=NODE).objects[0x1017].subs[0].default
     assert default == 0
 
 
-def test_a_saved_value_is_not_what_reset_communication_restores() -> None:
-    """A TRUE deviation (nmt.store_restore, CiA 301 §7.5.2.13): canopend confirms 'save'
-    of 1000, takes 1001 after it, and after reset communication reads 1001, not the saved
-    1000 (CANopenLinux loads stored values only at its start)."""
-    frames = _texts("canopend")
+@pytest.mark.parametrize("name", TRACES)
+def test_a_saved_value_is_not_what_reset_communication_restores(name: str) -> None:
+    """A TRUE deviation (nmt.store_restore, CiA 301 §7.5.2.13), on both devices: the device
+    confirms 'save' of 1000, takes 1001 after it, and after reset communication reads 1001,
+    not the saved 1000 (CANopenLinux loads stored values only at its start)."""
+    frames = _texts(name)
     save = next(i for i, (_, t) in enumerate(frames)
                 if t.startswith("605#231010") and t.endswith("73617665"))
     assert _answer(frames, save).startswith("585#601010")
@@ -218,14 +242,19 @@ def test_a_saved_value_is_not_what_reset_communication_restores() -> None:
     assert _read_after(frames, boot, 0x1017)[:6] == bytes.fromhex("4B171000E903")
 
 
-def test_the_rpdo_counts_once_the_heartbeat_says_operational() -> None:
-    """The tester's timing, pinned on canopend (nmt.pdo_gating PASSED): the RPDO (mapped to
-    0x1280:1) sent in PRE-OPERATIONAL and in STOPPED is not applied, the one sent after NMT
-    start went out only after the heartbeat reported OPERATIONAL (issue 34: the tester sent
-    it 2-9 ms after 'start', before the node's state changed) and is applied."""
-    frames = _texts("canopend")
-    applied = next(i for i, (_, t) in enumerate(frames) if t == "585#4380120101000080")
-    rpdo = max(i for i in range(applied) if frames[i][1].startswith("205#"))
+@pytest.mark.parametrize("name, read, before, applied", [
+    ("canopend", "605#4080120100000000", "585#4380120100000080", "585#4380120101000080"),
+    ("demodevice", "605#4000620100000000", "585#4F00620100000000", "585#4F00620101000000")])
+def test_the_rpdo_counts_once_the_heartbeat_says_operational(
+        name: str, read: str, before: str, applied: str) -> None:
+    """The tester's timing, pinned on both devices (nmt.pdo_gating PASSED): the RPDO (mapped
+    to canopend's 0x1280:1, to demoDevice's outputs 0x6200:1..2) sent in PRE-OPERATIONAL and
+    in STOPPED is not applied, the one sent after NMT start went out only after the
+    heartbeat reported OPERATIONAL (issue 34: the tester sent it 2-9 ms after 'start',
+    before the node's state changed) and is applied."""
+    frames = _texts(name)
+    applied_at = next(i for i, (_, t) in enumerate(frames) if t == applied)
+    rpdo = max(i for i in range(applied_at) if frames[i][1].startswith("205#"))
     start = max(i for i in range(rpdo) if frames[i][1] == "000#0105")
     beat = _after(frames, start, "705#05")
     assert start < beat < rpdo
@@ -233,15 +262,15 @@ def test_the_rpdo_counts_once_the_heartbeat_says_operational() -> None:
     earlier = [i for i in range(start) if frames[i][1].startswith("205#")][-2:]
     assert len(earlier) == 2
     for at in earlier:
-        read = _after(frames, at, "605#4080120100000000")
-        assert _answer(frames, read) == "585#4380120100000080"  # not applied
+        assert _answer(frames, _after(frames, at, read)) == before  # not applied
 
 
-def test_the_heartbeat_loss_emcy_lacks_the_generic_bit() -> None:
-    """A TRUE deviation (emcy.heartbeat_loss, CiA 301 §7.5.2.2): canopend's EMCY 0x8130
-    for the heartbeat consumer time-out carries the error register 0x10, bit 0 (generic
-    error) clear; its reset EMCY follows with 0x00."""
-    frames = _texts("canopend")
+@pytest.mark.parametrize("name", TRACES)
+def test_the_heartbeat_loss_emcy_lacks_the_generic_bit(name: str) -> None:
+    """A TRUE deviation (emcy.heartbeat_loss, CiA 301 §7.5.2.2), on both devices: the EMCY
+    0x8130 for the heartbeat consumer time-out carries the error register 0x10, bit 0
+    (generic error) clear; its reset EMCY follows with 0x00."""
+    frames = _texts(name)
     emcys = [t for _, t in frames if t[:4] in ("085#", "086#")]
     losses = [bytes.fromhex(t[4:]) for t in emcys if t[4:8] == "3081"]
     assert losses and all(d[2] == 0x10 for d in losses)
