@@ -41,11 +41,12 @@ def _array(index: str, title: str, item: str, datatype: str, access: str, *, cou
     return text
 
 
-def _file(name: str, product: str, objects: dict[int, str], mandatory: tuple[int, ...],
+def _file(name: str, info: str, objects: dict[int, str], mandatory: tuple[int, ...],
           manufacturer: tuple[int, ...] = ()) -> str:
-    """The EDS text: its header, the three object lists and the objects' sections."""
-    text = (f"[FileInfo]\nFileName={name}\nEDSVersion=4.0\n\n[DeviceInfo]\n"
-            f"ProductName={product}\nNrOfRXPDO=4\nNrOfTXPDO=4\nLSS_Supported=1\n\n")
+    """The EDS text: its header (``info``: [DeviceInfo]'s lines of the tester's interest),
+    the three object lists and the objects' sections."""
+    text = (f"[FileInfo]\nFileName={name}\nEDSVersion=4.0\n\n[DeviceInfo]\n{info}\n"
+            "NrOfRXPDO=4\nNrOfTXPDO=4\nLSS_Supported=1\n\n")
     optional = [i for i in objects if i not in mandatory and i not in manufacturer]
     for title, indices in (("MandatoryObjects", mandatory), ("OptionalObjects", optional),
                            ("ManufacturerObjects", manufacturer)):
@@ -161,7 +162,8 @@ def canopend_eds() -> str:
                        + _var("1280sub3", "Node-ID of the SDO server", U8, "rw", "0x01"))
     objects.update(_pdos((0x80000200, 0x80000300, 0x80000400, 0x80000500,
                           0xC0000180, 0xC0000280, 0xC0000380, 0xC0000480), (254,) * 8, {}))
-    return _file("DS301_profile.eds", "New Product", objects, (0x1000, 0x1001, 0x1018))
+    return _file("DS301_profile.eds", "ProductName=New Product", objects,
+                 (0x1000, 0x1001, 0x1018))
 
 
 #: 0x2121:2's default, as demoDevice.eds gives it (a tab and a euro sign in it).
@@ -225,8 +227,8 @@ def demodevice_eds() -> str:
                        + _var("2121sub2", "String long", VSTRING, "rw", LONG_STRING)
                        + _var("2121sub3", "Octet string", OSTRING, "rw", "C83DBB"))
     objects[0x2122] = _var("2122", "Demo domain", DOMAIN, "rw", "")
-    return _file("demoDevice.eds", "Demo device", objects, (0x1000, 0x1001, 0x1018),
-                 manufacturer)
+    return _file("demoDevice.eds", "VendorNumber=0\nProductName=Demo device\nProductNumber=1\n"
+                 "RevisionNumber=0", objects, (0x1000, 0x1001, 0x1018), manufacturer)
 
 
 #: The EDS text of each recorded device, by its trace's name.

@@ -77,12 +77,16 @@ def _entries(od: eds.ObjectDictionary) -> dict[tuple[int, int], tuple[object, ..
 
 def test_the_replayed_dictionary_is_demodevice_eds() -> None:
     """The dictionary the demoDevice replay gives the tester is demoDevice.eds's, entry by
-    entry (names, types, access, defaults, PDO mapping, limits), where ../shared has it."""
+    entry (names, types, access, defaults, PDO mapping, limits), and so are the
+    [DeviceInfo] keys it gives, where ../shared has the file."""
     path = CORPUS / "CANopenNode__CANopenDemo__demoDevice.eds"
     if not path.is_file():
         pytest.skip("../shared/eds-corpus is not here")
     real = eds.parse(path.read_text(encoding="utf-8"), node_id=NODE)
-    assert _entries(eds.parse(EDS["demodevice"](), node_id=NODE)) == _entries(real)
+    replayed = eds.parse(EDS["demodevice"](), node_id=NODE)
+    assert _entries(replayed) == _entries(real)
+    for key, value in replayed.device_info.items():
+        assert real.device_info[key] == value
 
 
 @pytest.mark.parametrize("name", TRACES)
