@@ -134,6 +134,9 @@ def test_demodevice_fails_only_on_its_empty_software_version() -> None:
         assert report.result(name).status is Status.PASSED
         assert report.result(name).summary.startswith("0x2121:2 (String long")
     assert "sdo.toggle_download" in report.names(Status.PASSED)
+    downloads = [f.data for f in load("demodevice") if f.cob == 0x600 + NODE
+                 and f.data[0] >> 5 in (1, 6) and f.data[1:4] == b"\x22\x21\x00"]
+    assert downloads == []  # 0x2122 only read
 
 
 def test_the_toggle_download_announces_what_the_string_holds() -> None:
