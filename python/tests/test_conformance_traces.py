@@ -180,12 +180,14 @@ def test_a_replayed_check_fails_when_the_device_answers_otherwise(name: str, che
     assert check in report.names(Status.FAILED), cc.markdown(report)
 
 
-def test_demodevice_passes_with_a_software_version() -> None:
+@pytest.mark.parametrize("answer", ["430A100076342E30", "800A100024000008"])
+def test_demodevice_passes_with_a_software_version_or_no_data(answer: str) -> None:
     """The other way round: with 0x100A answered as a 4-byte string, as a tagged build of
-    CANopenDemo would, demoDevice's replay fails nothing."""
+    CANopenDemo would, or aborted with 0x08000024 (no data: the abort CiA 301 has for an
+    empty value), demoDevice's dictionary.entries passes."""
     frames = load("demodevice")
     table = answers(frames)
-    table[bytes.fromhex("400A100000000000")][0][:] = [bytes.fromhex("430A100076342E30")]
+    table[bytes.fromhex("400A100000000000")][0][:] = [bytes.fromhex(answer)]
     bus = SimBus()
     node = ReplayNode(bus, frames)
     node.table = table
