@@ -20,7 +20,8 @@ Run (the session's folder holds links to the repository's ``examples/``, ``pytho
 - ``build/canola-node ...``: the C device (``make`` builds it; the page is skipped
   without it).
 - ``python FILE ...``: the program, with this Python.
-- ``ls ...``: to show what a command left behind.
+- ``ls ...``, ``mkdir ...``: to show what a command left behind, to make a folder (in
+  the session's folder).
 - ``export NAME=VALUE``: for every command after it.
 
 Checked, not run (they build or install for minutes, or fuzz for hours; what runs them
@@ -453,7 +454,7 @@ def _python(session: Session, words: list[str], step: Step, env: dict[str, str])
     session.run_program([sys.executable, *words[1:]], words, step, env)
 
 
-def _ls(session: Session, words: list[str], step: Step, env: dict[str, str]) -> None:
+def _file_tool(session: Session, words: list[str], step: Step, env: dict[str, str]) -> None:
     session.run_program(words, words, step, env)
 
 
@@ -557,7 +558,8 @@ RULES: dict[str, Rule] = {
     "python": _python,
     "python3": _python,
     "build-py/venv/bin/python": _python,
-    "ls": _ls,
+    "ls": _file_tool,
+    "mkdir": _file_tool,
     "make": _make,
     "cmake": _cmake,
     "cc": _cc,

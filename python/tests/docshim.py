@@ -25,7 +25,7 @@ def _virtual_instead(*args: Any, **kwargs: Any) -> can.BusABC:
     return _Bus(*args, **kwargs)
 
 
-can.Bus = can.interface.Bus = _virtual_instead  # type: ignore[assignment,misc]
+can.Bus = can.interface.Bus = _virtual_instead
 
 if __name__ == "__main__":
     script = sys.argv[1]

@@ -11,10 +11,11 @@ is checked:
   in order (``...`` for any text), ports as the page shows them;
 - ``python`` blocks: run as programs (docshim.py swaps a real interface for python-can's
   virtual bus); a ``text`` block right after one is its output, compared the same way;
-- ``c`` blocks that start with ``#include`` (and are not marked ``not run``): compiled (``cc -fsyntax-only``, C11, every
-  warning an error) against include/, port/linux/, examples/ (the example dictionary) and
-  ``drive.h``, the dictionary ``canola odgen`` makes of examples/eds/drive.eds; the other
-  C blocks are fragments of a page's text and only read;
+- ``c`` blocks that start with ``#include`` (and are not marked ``not run``): compiled
+  (``cc -fsyntax-only``, C11, every warning an error) against include/, port/linux/,
+  examples/ (the example dictionary) and ``drive.h``, the dictionary ``canola odgen``
+  makes of examples/eds/drive.eds; the other C blocks are fragments of a page's text and
+  only read;
 - ``yaml`` blocks: parsed; one with ``nodes`` is a network description and must be one
   :mod:`canola.boot_plan` accepts, the files it names found in ``examples/eds/``;
 - ``cmake``, ``text`` and unmarked blocks are read, not run;
