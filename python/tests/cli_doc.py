@@ -5,7 +5,9 @@
 its help text, and nothing else (``test_cli_doc.py`` compares).
 
 Each table follows a marker line ``<!-- arguments: canola sdo read -->`` on the page;
-``python tests/cli_doc.py`` (from python/) writes every table anew."""
+``python tests/cli_doc.py`` (from python/) writes every table anew, and gives a section
+of a command (its heading ``### `canola view` ``) that has no table yet its marker and
+table."""
 
 from __future__ import annotations
 
@@ -87,12 +89,37 @@ def table(parser: argparse.ArgumentParser, shared: dict[str, str] | None = None)
     return rows
 
 
+_HEADING = re.compile(r"^#{2,4} `(canola[a-z -]*?)`$")
+
+
+def _with_markers(lines: list[str], parsers: dict[str, argparse.ArgumentParser]) -> list[str]:
+    """``lines`` with a marker at the end of each command's section (a heading
+    ``### `canola WORDS` ``) that has none yet: a command that came with a section of
+    prose gets its table from the next ``python tests/cli_doc.py``."""
+    out: list[str] = []
+    pending: str | None = None  # the command whose section is open and has no marker
+    for line in lines:
+        heading = line.startswith("#")
+        if heading and pending is not None:
+            out += [f"<!-- arguments: {pending} -->", ""]
+        if heading:
+            m = _HEADING.match(line)
+            pending = m.group(1) if m and m.group(1) in parsers else None
+        elif MARKER.match(line):
+            pending = None
+        out.append(line)
+    if pending is not None:
+        out += ["", f"<!-- arguments: {pending} -->"]
+    return out
+
+
 def render(text: str) -> str:
-    """``text`` (the page) with every table after a marker made anew."""
+    """``text`` (the page) with every table after a marker made anew, and a marker and
+    table for each command's section that has none."""
     parsers = commands()
     shared = _shared_help()
     out: list[str] = []
-    lines = text.splitlines()
+    lines = _with_markers(text.splitlines(), parsers)
     i = 0
     while i < len(lines):
         out.append(lines[i])

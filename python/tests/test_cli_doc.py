@@ -21,3 +21,12 @@ def test_the_tables_are_the_parsers() -> None:
     diff = "".join(difflib.unified_diff(page.splitlines(True), made.splitlines(True),
                                         "docs/cli.md", "from the parsers"))
     assert made == page, f"run `python tests/cli_doc.py` in python/:\n{diff}"
+
+
+def test_a_section_without_a_table_gets_one() -> None:
+    page = "### `canola nmt`\n\nProse.\n\n### `canola sync`\n\nMore.\n"
+    made = render(page)
+    assert "<!-- arguments: canola nmt -->\n| argument | what it is |" in made
+    assert "<!-- arguments: canola sync -->\n| argument | what it is |" in made
+    assert made.index("Prose.") < made.index("canola nmt -->") < made.index("### `canola sync`")
+    assert render(made) == made
