@@ -13,10 +13,10 @@ Run (the session's folder holds links to the repository's ``examples/``, ``pytho
 
 - ``canola ...``: the command, from this Python environment. Commands that run until
   stopped (``canola bus serve``, ``canola bus bridge``, ``canola device``, ``canola
-  gateway``, a ``canola dump`` of the bus without a bound) are stopped by SIGINT, or
-  SIGTERM at the page's end, once they printed what the page shows (else ``READY``);
-  every other one (``canola monitor`` too: its output is no terminal) must end by itself
-  with exit code 0 and nothing on stderr.
+  gateway``, ``canola view``, a ``canola dump`` of the bus without a bound) are stopped
+  by SIGINT, or SIGTERM at the page's end, once they printed what the page shows (else
+  ``READY``); every other one (``canola monitor`` too: its output is no terminal) must
+  end by itself with exit code 0 and nothing on stderr.
 - ``build/canola-node ...``: the C device (``make`` builds it; the page is skipped
   without it).
 - ``python FILE ...``: the program, with this Python.
@@ -47,7 +47,8 @@ What the session makes its own, so that a page's commands run anywhere, side by 
   does ``--iface IFACE`` (as ``--bus socketcand://...:PORT/IFACE``): a hub the page
   starts (``canola bus serve &``), else one the session starts for the page;
 - the hub listens on port 0 (``--port`` and ``--host`` replaced), the gateway on
-  ``tcp:127.0.0.1:0`` (a Unix socket in the session's folder), ``--store`` folders are
+  ``tcp:127.0.0.1:0`` (a Unix socket in the session's folder), ``canola view`` on
+  ``127.0.0.1:0``, ``--store`` folders are
   in the session's folder;
 - commands that wait for a device get a time-out a starved machine meets
   (:func:`starved_timeouts`; they end when the answer comes);
@@ -97,10 +98,11 @@ READY = {
     "canola bus bridge": r"canola bus: .* joined to ",
     "canola device": r"canola device: node \d+ from .* running",
     "canola gateway": r"listening on ",
+    "canola view": r"canola view: http://",
     "build/canola-node": r"canola-node: node \d+ on ",
 }
 _ALWAYS_RUNNING = ("canola bus serve", "canola bus bridge", "canola device", "canola gateway",
-                   "build/canola-node")
+                   "canola view", "build/canola-node")
 
 #: Environment a reader's shell may have that names a default bus: not the session's.
 _BUS_ENV = ("CANOLA_BUS", "CAN_INTERFACE", "CAN_CHANNEL", "CAN_CONFIG", "CAN_BITRATE")
@@ -196,6 +198,7 @@ class Session:
         self.hub_port: str | None = None
         self.shown_ports: dict[str, str] = {}  # a port really used -> the page's
         self.shown_listen: str | None = None  # where the page's gateway listens
+        self.shown_view: str | None = None  # where the page's canola view serves
         self.build_dirs: set[str] = set()
         self.transcript: list[tuple[str, str]] = []  # (command, what it printed)
         for name in LINKED:
@@ -296,6 +299,8 @@ class Session:
             text = re.sub(rf"(?<=:){real}\b", page, text)
         if self.shown_listen is not None:
             text = re.sub(r"(?<=listening on )\S+", self.shown_listen, text)
+        if self.shown_view is not None:
+            text = re.sub(r"(?<=canola view: http://)[^/\s]+", self.shown_view, text)
         return text
 
     def _bus_words(self, words: list[str]) -> list[str]:
@@ -411,6 +416,9 @@ def _canola(session: Session, words: list[str], step: Step, env: dict[str, str])
         return
     if line[:2] == ["canola", "gateway"]:
         line = _gateway_listen(session, line)
+    if line[:2] == ["canola", "view"]:  # its page on a free port
+        session.shown_view = _option(line, "--listen") or "127.0.0.1:8080"
+        line = [*_without(line, "--listen"), "--listen", "127.0.0.1:0"]
     if "--store" in line[:-1]:
         i = line.index("--store") + 1
         line[i] = str(session.folder / Path(line[i]).name)
