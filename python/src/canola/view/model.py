@@ -66,12 +66,12 @@ class BusModel:
             event = self.decoder.decode(can_id, data, rtr=rtr, extended=extended)
             self.traffic.feed(t, can_id, data, rtr=rtr, extended=extended, kind=event.kind,
                               node=event.node, text=event.text)
+            if event.kind == "nmt":  # before what it does to the node table
+                self.note(t, "nmt", event.node, event.text)
             from_node = not extended and (can_id & 0x780) in _FROM_NODE
             for kind, node, text in self.nodes.feed(t, event, from_node):
                 self.note(t, kind, node, text)
-            if event.kind == "nmt":
-                self.note(t, "nmt", event.node, event.text)
-            elif event.kind == "emcy":
+            if event.kind == "emcy":
                 self.note(t, "emcy", event.node, event.text)
             elif event.kind == "sdo" and "abort" in event.fields:
                 self.note(t, "sdo", event.node, event.text)

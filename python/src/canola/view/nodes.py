@@ -24,6 +24,8 @@ __all__ = ["LOST_AFTER_MIN_S", "NodeTable"]
 LOST_AFTER_MIN_S = 1.0
 
 _IDENTITY = {1: "vendor", 2: "product", 3: "revision", 4: "serial"}
+#: Where an NMT command puts a node (a reset: unknown until its boot-up).
+_NMT_STATES = {"start": "OPERATIONAL", "stop": "STOPPED", "preop": "PRE-OPERATIONAL"}
 
 Note = tuple[str, int, str]  # kind, node, text: one entry for the event log
 
@@ -34,6 +36,7 @@ class _Node:
     first_seen: float
     last_seen: float
     state: str = "?"
+    state_by: str = ""  # heartbeat, boot-up, guard (answers), NMT (a command it was sent)
     name: str = ""
     name_from: str = ""
     identity: dict[str, int] = field(default_factory=dict)
@@ -62,17 +65,19 @@ class NodeTable:
 
     def feed(self, t: float, event: Event, from_node: bool) -> list[Note]:
         """Take one decoded frame; ``from_node``: the node sent it (not a request to it)."""
-        if event.node is None or event.kind in ("nmt", "lss", "unknown"):
+        if event.kind == "nmt":
+            return self._nmt(event)
+        if event.node is None or event.kind in ("lss", "unknown"):
             return []
         n = self._node(event.node, t)
         if from_node:
             n.last_seen = t
         notes: list[Note] = []
-        if event.kind == "bootup":
+        if event.kind == "bootup":  # then in pre-operational (CiA 301 7.3.2.2)
             n.bootups += 1
             n.last_heartbeat, n.period_s = t, None
             notes.append(("bootup", n.node, f"node {n.node} boot-up (#{n.bootups})"))
-            notes += self._state(n, STATE_NAMES[0])
+            notes += self._state(n, "PRE-OPERATIONAL", "boot-up")
             n.lost = False
         elif event.kind in ("heartbeat", "guard") and "state" in event.fields:
             if event.kind == "heartbeat":
@@ -80,7 +85,7 @@ class NodeTable:
                     n.period_s = t - n.last_heartbeat
                 n.last_heartbeat = t
             state = event.fields["state"]
-            notes += self._state(n, STATE_NAMES.get(state, f"0x{state:02X}"))
+            notes += self._state(n, STATE_NAMES.get(state, f"0x{state:02X}"), event.kind)
             if n.lost:
                 n.lost = False
                 notes.append(("heartbeat", n.node, f"node {n.node} heard again ({n.state})"))
@@ -90,13 +95,25 @@ class NodeTable:
             self._sdo_value(n, event)
         return notes
 
-    def _state(self, n: _Node, state: str) -> list[Note]:
+    def _state(self, n: _Node, state: str, by: str) -> list[Note]:
+        n.state_by = by
         if state == n.state:
             return []
         before, n.state = n.state, state
+        how = " (NMT command; it sends no heartbeat)" if by == "NMT" else ""
         if before == "?":
-            return [("state", n.node, f"node {n.node} is {state}")]
-        return [("state", n.node, f"node {n.node} {before} -> {state}")]
+            return [("state", n.node, f"node {n.node} is {state}{how}")]
+        return [("state", n.node, f"node {n.node} {before} -> {state}{how}")]
+
+    def _nmt(self, event: Event) -> list[Note]:
+        """A node that sends no heartbeat is taken to be where an NMT command puts it."""
+        state = _NMT_STATES.get(str(event.fields.get("command")))
+        target = event.fields.get("target")
+        notes: list[Note] = []
+        for n in self._nodes.values():
+            if target in (0, n.node) and n.period_s is None:
+                notes += self._state(n, state or "?", "NMT")
+        return notes
 
     def _sdo_value(self, n: _Node, event: Event) -> None:
         index, sub = event.fields.get("index"), event.fields.get("sub")
@@ -128,7 +145,8 @@ class NodeTable:
 
     def rows(self, now: float) -> list[dict[str, Any]]:
         return [{
-            "node": n.node, "state": n.state, "name": n.name, "name_from": n.name_from,
+            "node": n.node, "state": n.state, "state_by": n.state_by, "name": n.name,
+            "name_from": n.name_from,
             "identity": dict(n.identity), "bootups": n.bootups, "lost": n.lost,
             "period_ms": None if n.period_s is None else round(n.period_s * 1000, 1),
             "configured_ms": n.configured_ms, "emcys": n.emcys,

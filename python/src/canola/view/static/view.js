@@ -110,7 +110,9 @@ function nodes(rows) {
     tr.dataset.node = n.node;
     if (n.lost) tr.className = "lost";
     tr.append(el("td", n.node), el("td", n.name || "-"), el("td", identity(n.identity)));
-    const st = el("td", n.lost ? `${n.state} (lost)` : n.state, "state");
+    let shown = n.state + (n.state_by === "NMT" ? " (by NMT command)" : "");
+    if (n.lost) shown += " (lost)";
+    const st = el("td", shown, "state");
     st.dataset.state = n.state;
     tr.append(st);
     let hb = n.period_ms === null ? "-" : `${n.period_ms.toFixed(0)} ms`;
@@ -402,6 +404,8 @@ async function sdo(write) {
 
 async function nmt() {
   const out = $("nmt-result");
+  out.textContent = "…";
+  out.className = "";
   try {
     const r = await api("/api/nmt", {node: Number($("nmt-node").value),
                                      command: $("nmt-command").value});
@@ -413,6 +417,8 @@ async function nmt() {
 
 async function readPdos() {
   const out = $("sdo-result");
+  out.textContent = "…";
+  out.className = "";
   try {
     const r = await api("/api/pdos", {node: Number($("sdo-node").value)});
     const valid = r.pdos.filter((p) => p.valid).map((p) => p.name);
