@@ -19,11 +19,6 @@ from __future__ import annotations
 
 import json
 import os
-import queue
-import signal
-import subprocess
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -31,6 +26,7 @@ from pathlib import Path
 import can
 import pytest
 from browser import Browser, chromium
+from view_helpers import CanolaProcess
 
 from canola import Device
 from canola.formats import eds
@@ -62,50 +58,6 @@ def browser() -> Iterator[Browser]:
         b.close()
 
 
-class DemoProcess:
-    """``canola demo --view`` with its output read line by line (bounded waits)."""
-
-    def __init__(self, *extra: str) -> None:
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "canola.cli", "demo", "--view", "--listen", "127.0.0.1:0",
-             "--quiet", *extra], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-            env=env)
-        self.lines: queue.Queue[str] = queue.Queue()
-        self.seen: list[str] = []
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            self.lines.put(line.rstrip("\n"))
-
-    def wait_line(self, start: str, timeout: float) -> str:
-        end = time.monotonic() + timeout
-        while (left := end - time.monotonic()) > 0:
-            try:
-                line = self.lines.get(timeout=left)
-            except queue.Empty:
-                break
-            self.seen.append(line)
-            if line.startswith(start):
-                return line
-        raise AssertionError(f"no line {start!r} within {timeout:.0f} s; output so far:\n"
-                             + "\n".join(self.seen))
-
-    def stop(self) -> int:
-        """Ctrl-C, as a user ends it: the exit code (it must end within 60 s)."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            return self.proc.wait(60)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait(10)
-            raise AssertionError("canola demo --view did not end on Ctrl-C within 60 s") \
-                from None
-
-
 def _rows(b: Browser) -> dict[str, dict[str, object]]:
     return dict(b.js("""Object.fromEntries([...document.querySelectorAll('#nodes tbody tr')]
         .map(r => [r.dataset.node, {state: r.querySelector('td.state').dataset.state,
@@ -135,7 +87,7 @@ def _result(b: Browser, element: str) -> tuple[str, str]:
 
 
 def test_demo_network_in_the_browser(browser: Browser) -> None:
-    demo = DemoProcess()
+    demo = CanolaProcess("demo", "--view", "--listen", "127.0.0.1:0", "--quiet")
     try:
         url = demo.wait_line("canola view: http://", 120).split()[2]
         demo.wait_line("canola demo: the network keeps running", STORY_S)
