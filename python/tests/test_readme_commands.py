@@ -2,9 +2,9 @@
 """The README's ``canola`` command block works as written: every line of it runs, in its
 order, against the files it names (``examples/eds/``), on a ``canola bus serve`` hub with
 a ``canola device``. What the test makes its own: the hub's port (the README's 29536 may
-be taken), the ``--store`` folder, the gateway's port, and the two program images
-(``firmware.bin``, ``app.bin``), which a user brings; every other word runs as written.
-Commands that run until stopped (hub, device, live dump, gateway) are stopped by SIGINT
+be taken), the ``--store`` folder, the gateway's and the view's ports, and the two program
+images (``firmware.bin``, ``app.bin``), which a user brings; every other word runs as written.
+Commands that run until stopped (hub, device, live dump, gateway, view) are stopped by SIGINT
 or SIGTERM once they showed what they are for."""
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ EXPECTED = {
     "canola eds diff examples": r"^0x1017:00 Producer heartbeat time: value: A \(none\), B 1000$",
     "canola eds diff drive5.dcf": r"^0x1A00:02 \S.*: value: A 0, B 1617166368 \(0x60640020\)$",
     "canola monitor": r"TPDO1: Statusword = \d+ \(0x[0-9A-F]+\), Position actual value = ",
+    "canola view": r"canola view: http://127\.0\.0\.1:\d+/",
     "canola dump": r"TPDO1 node 5 Statusword = \d+ \(0x[0-9A-F]+\), Position actual value = ",
     "canola boot": r"network started",
     "canola lss scan": r"0 device\(s\) without node-ID",
@@ -48,7 +49,8 @@ EXPECTED = {
     "canola bus serve": r"127\.0\.0\.1:\d+",
 }
 #: Commands that run until stopped.
-LONG_RUNNING = ("canola bus serve", "canola device", "canola dump", "canola gateway")
+LONG_RUNNING = ("canola bus serve", "canola device", "canola dump", "canola gateway",
+                "canola view")
 
 
 def readme_block() -> list[str]:
@@ -134,6 +136,8 @@ def test_the_readme_block_runs_as_written(tmp_path: Path, background: list[Proc]
             argv += ["--port", "0"]
         if words[:2] == ["canola", "gateway"]:
             argv += ["--listen", "tcp:127.0.0.1:0"]
+        if words[:2] == ["canola", "view"]:
+            argv += ["--listen", "127.0.0.1:0"]
         if words[:3] == ["canola", "lss", "set-id"]:
             # the answering device is another process behind the hub: on a starved machine
             # it answers later than LSS's default 100 ms (a run at load 28 got no answer)
