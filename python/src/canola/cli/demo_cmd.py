@@ -119,7 +119,8 @@ def _unicode_ok() -> bool:
 
 def _run_viewed(args: argparse.Namespace) -> int:
     """``--view``: the demo in real time on its bus with ``canola view`` on it, then the
-    network kept running until Ctrl-C (:mod:`canola.demo.viewing`)."""
+    network kept running until Ctrl-C (:mod:`canola.demo.viewing`). Exits as the demo does
+    (1 when a step failed), or 130 when Ctrl-C came before the story ended."""
     from canola.demo.viewing import (  # noqa: PLC0415 (aiohttp: only for --view)
         keep_running,
         start_demo_view,
@@ -140,6 +141,7 @@ def _run_viewed(args: argparse.Namespace) -> int:
     net = _network(args)
     view = None
     scenario = None
+    code = 130  # Ctrl-C before the story ended
     try:
         view = start_demo_view(args.bus, args.iface, listen=args.listen,
                                allow_write=args.allow_write)
@@ -151,6 +153,7 @@ def _run_viewed(args: argparse.Namespace) -> int:
         failed = failure_line(steps)
         if failed is not None:
             print(failed, file=sys.stderr, flush=True)
+        code = 0 if failed is None else 1
         keep_running(scenario, net, threading.Event(), lambda text: print(text, flush=True))
     except KeyboardInterrupt:
         pass
@@ -160,4 +163,4 @@ def _run_viewed(args: argparse.Namespace) -> int:
         if view is not None:
             view.stop()
         net.close()
-    return 0
+    return code

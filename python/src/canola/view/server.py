@@ -25,7 +25,7 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
-from canola.odnames import parse_address
+from canola.odnames import EntryError, find_entry, parse_address
 from canola.view.actions import ActionError, BusActions, od_tree
 from canola.view.model import BusModel, Cursor
 
@@ -173,13 +173,24 @@ class ViewServer:
         return value
 
     def _entry(self, body: dict[str, Any]) -> tuple[int, int, int]:
+        """Node, index and sub-index of a request: ``entry`` as INDEX:SUB or a name of the
+        node's EDS ("Identity object.Vendor-ID"), else ``index`` and ``sub``."""
         node = self._int(body, "node", 1, 127)
-        if isinstance(body.get("entry"), str):
-            address = parse_address(body["entry"])
-            if address is None:
-                raise ActionError(f"bad entry {body['entry']!r}: INDEX:SUB, e.g. 0x1018:1")
+        text = body.get("entry")
+        if not isinstance(text, str):
+            return node, self._int(body, "index", 0, 0xFFFF), self._int(body, "sub", 0, 0xFF)
+        address = parse_address(text)
+        if address is not None:
             return node, *address
-        return node, self._int(body, "index", 0, 0xFFFF), self._int(body, "sub", 0, 0xFF)
+        od = self.model.dictionaries.get(node)
+        if od is None:
+            raise ActionError(f"bad entry {text!r}: INDEX:SUB, e.g. 0x1018:1 (names need the "
+                              "node's EDS)")
+        try:
+            var = find_entry(od, text)
+        except EntryError as exc:
+            raise ActionError(str(exc)) from None
+        return node, var.index, var.subindex
 
     def _note(self, node: int | None, text: str) -> None:
         with self.model.lock:
