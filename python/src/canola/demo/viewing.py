@@ -20,8 +20,10 @@ import can
 from canola.bus.open import open_bus
 from canola.decode import Decoder
 from canola.demo.devices import DEVICES, eds_path
+from canola.demo.devices import Mapped as DemoMapped
 from canola.demo.network import Network
 from canola.demo.scenario import MASTER_ID, Scenario
+from canola.formats.eds import ObjectDictionary
 from canola.master import MASTER_EDS, Master
 from canola.nodedicts import NodeDictionaries
 from canola.pdomap import Mapped, Pdo
@@ -44,24 +46,26 @@ def _dictionaries() -> NodeDictionaries:
     return NodeDictionaries([*specs, f"{MASTER_ID}={MASTER_EDS}"])
 
 
+def _pdo(od: ObjectDictionary | None, kind: str, cob_id: int,
+         mapping: tuple[DemoMapped, ...]) -> Pdo:
+    """One PDO of a demo device, its entries typed by the device's EDS."""
+    entries = []
+    for m in mapping:
+        obj = None if od is None else od.objects.get(m.index)
+        var = None if obj is None else obj.subs.get(m.sub)
+        entries.append(Mapped(m.index, m.sub, m.bits, m.name,
+                              None if var is None else var.data_type))
+    return Pdo(kind, 1, cob_id, entries=entries)
+
+
 def _pdos(dicts: NodeDictionaries) -> dict[int, list[Pdo]]:
     """The TPDO1 and RPDO1 of each device as the demo's manager maps them."""
     out: dict[int, list[Pdo]] = {}
     for spec in DEVICES:
         od = dicts.get(spec.node_id)
-        types = {}
-        for m in (*spec.tpdo, *spec.rpdo):
-            obj = None if od is None else od.objects.get(m.index)
-            var = None if obj is None else obj.subs.get(m.sub)
-            types[m] = None if var is None else var.data_type
-        pdos = [Pdo("TPDO", 1, 0x180 + spec.node_id,
-                    entries=[Mapped(m.index, m.sub, m.bits, m.name, types[m])
-                             for m in spec.tpdo])]
+        out[spec.node_id] = [_pdo(od, "TPDO", 0x180 + spec.node_id, spec.tpdo)]
         if spec.rpdo:
-            pdos.append(Pdo("RPDO", 1, 0x200 + spec.node_id,
-                            entries=[Mapped(m.index, m.sub, m.bits, m.name, types[m])
-                                     for m in spec.rpdo]))
-        out[spec.node_id] = pdos
+            out[spec.node_id].append(_pdo(od, "RPDO", 0x200 + spec.node_id, spec.rpdo))
     return out
 
 
