@@ -64,10 +64,10 @@ static const service_object_t k_service_objects[] = {
     {OBJECTS(0x1028, 0x1028), COB_SUB1_UP, NULL,
      CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
 #if CO_SDO_CLIENTS_MAX > 0
-    {OBJECTS(0x1200, 0x127F), COB_SUB1_2, NULL, co_sdo_server_written},
+    {OBJECTS(0x1200, 0x127F), COB_SUB1_2, co_sdo_server_check_write, co_sdo_server_written},
     {OBJECTS(0x1280, 0x12FF), COB_SUB1_2, NULL, co_sdo_client_written},
 #else /* without clients 0x1280.. have no effect: no server channel is 0x1200 + 0x80 or more */
-    {OBJECTS(0x1200, 0x12FF), COB_SUB1_2, NULL, co_sdo_server_written},
+    {OBJECTS(0x1200, 0x12FF), COB_SUB1_2, co_sdo_server_check_write, co_sdo_server_written},
 #endif
     {OBJECTS(0x1400, 0x1BFF), COB_NONE, co_pdo_check_write, co_pdo_written},
 };

@@ -74,6 +74,13 @@ typedef enum co_node_error {
     CO_NODE_ERR_STORED_COMM,     /**< stored communication parameters failed their checks:
                                       ignored, defaults in use (canola/storage.h) */
     CO_NODE_ERR_STORED_APP,      /**< the same for the application parameters */
+    CO_NODE_ERR_STORE_FAILED,    /**< a save or restore (0x1010/0x1011) failed: the stored
+                                      images are as they were, EMCY 0x5530 (storage.h) */
+    CO_NODE_ERR_SDO_COB_FIXED,   /**< the dictionary gives 0x1200 sub1/sub2 other COB-IDs
+                                      than CiA 301 fixes (0x600/0x580 + node-ID): the
+                                      default SDO server serves on those regardless, and
+                                      0x1200 reads them (canola/sdo.h); at reset
+                                      communication */
 } co_node_error_t;
 
 typedef struct co_node_config {

@@ -5,7 +5,11 @@
  * directions, several channels at once.
  *
  * Server. Channel 0 is the default server on 0x600 + node-ID (requests) and
- * 0x580 + node-ID (responses); channel i >= 1 takes its COB-IDs from 0x1200 + i
+ * 0x580 + node-ID (responses), fixed by CiA 301 whatever the dictionary says: 0x1200 sub1
+ * and sub2 with other values (a DCF that marks them not valid, say) are overruled at reset
+ * communication, made to read the fixed ones and reported (on_error
+ * CO_NODE_ERR_SDO_COB_FIXED); a write of another value is refused (0x06010002). Channel
+ * i >= 1 takes its COB-IDs from 0x1200 + i
  * (sub1 client->server, sub2 server->client, bit 31 = not valid) and is off until
  * configured. SDO runs in pre-operational and operational only. Every request
  * frame must be 8 bytes long; other lengths are ignored and counted as

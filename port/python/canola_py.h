@@ -98,6 +98,10 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    void *user, co_err_t *err);
 void canola_py_dev_free(canola_py_dev_t *dev);
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+/* The node-ID an LSS store configuration left in `store_dir` (canola/file_storage.h):
+ * CO_OK with *node_id set, CO_ERR_NOT_FOUND (none), CO_ERR_STATE (lss.params damaged), or
+ * CO_ERR_ARG (not a folder). */
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id);
 /* The application changed the node between two runs of the simulated bus: poll it at the
  * next instant the bus runs (its deadline may have moved). */
 void canola_py_dev_touch(canola_py_dev_t *dev);

@@ -126,6 +126,10 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
         d->port.bus_off = true;
         return d;
     }
+    if (store_dir) { /* LSS store configuration: into the folder, as the parameters */
+        const co_lss_slave_config_t lss = {.store = co_file_storage_store_lss, .ctx = &d->fs};
+        (void)co_lss_slave_setup(&d->node, &lss);
+    }
     if (bus) {
         co_sim_port_bind(&d->port, &d->node);
     }
@@ -141,6 +145,14 @@ void canola_py_dev_free(canola_py_dev_t *dev)
 }
 
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev) { return &dev->node; }
+
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id)
+{
+    co_file_storage_t fs;
+    uint8_t bit_timing = 0;
+    co_err_t err = co_file_storage_init(&fs, store_dir);
+    return err == CO_OK ? co_file_storage_load_lss(&fs, node_id, &bit_timing) : err;
+}
 
 void canola_py_dev_touch(canola_py_dev_t *dev) { dev->port.node_due_us = 0; }
 

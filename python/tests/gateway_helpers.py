@@ -45,6 +45,8 @@ class FakeMaster:
         self.local_nmt_done: list[str] = []
         self.calls: list[tuple[str, int, bool, int]] = []
         self._listeners: list[Listener] = []
+        self.nmt_state = "OPERATIONAL"
+        self.sdo_closings = 0
 
     @property
     def node_id(self) -> int:
@@ -175,6 +177,22 @@ async def serving(backend: MasterBackend) -> AsyncIterator[str]:
         pump.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await pump
+        await server.close()
+        hub.close()
+
+
+@contextlib.asynccontextmanager
+async def client_of(backend: MasterBackend) -> AsyncIterator[Client]:
+    """A client of the gateway on ``backend`` over TCP, with no event pump: on a SimBus
+    the test alone moves virtual time. Client, server and event hub closed after."""
+    hub = EventHub(backend)
+    server = GatewayServer(Executor(backend, hub), hub)
+    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+    client = await Client.connect(GatewayServer.address(srv))
+    try:
+        yield client
+    finally:
+        await client.close()
         await server.close()
         hub.close()
 

@@ -59,6 +59,8 @@ def test_canola_command_arguments() -> None:
     assert canola_main(["gateway", "--max-clients", "0", *SIM]) == 2
     assert canola_main(["gateway", "--idle-timeout", "-1", *SIM]) == 2
     assert canola_main(["gateway", "--idle-timeout", "soon", *SIM]) == 2
+    assert canola_main(["gateway", "--max-queued", "1000", *SIM]) == 2  # a line must fit
+    assert canola_main(["gateway", "--max-queued-total", "5000000", *SIM]) == 2
 
 
 def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:

@@ -205,9 +205,11 @@ def test_a_new_client_takes_the_slot_of_the_idlest(caplog: pytest.LogCaptureFixt
     caplog.set_level(logging.INFO, logger="canola.gateway")
 
     async def main() -> None:
-        server, address = await start_gateway(_master(), max_clients=2, idle_timeout=0)
+        server, address = await start_gateway(_master(), max_clients=2, idle_timeout=0,
+                                              quiet_s=0.5)
         oldest = await Client.connect(address)
         assert await oldest.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
+        await asyncio.sleep(0.6)  # quiet: its slot may go
         newer = await Client.connect(address)
         assert await newer.ask("[1] 5 r 0x1000 0 u32") == "[1] 401"
         third = await Client.connect(address)

@@ -48,6 +48,7 @@ class Lib:
     CO_EC_REMOTE_RESET: int
     CO_EC_STARTED: int
     CO_EC_STATE_CHANGED: int
+    CO_EMCY_STORE_FAILED: int
     CO_EMCY_STORE_REJECTED: int
     CO_ERR_ABORT: int
     CO_ERR_ARG: int
@@ -106,8 +107,10 @@ class Lib:
     CO_NMT_OPERATIONAL: int
     CO_NMT_PRE_OPERATIONAL: int
     CO_NMT_STOPPED: int
+    CO_NODE_ERR_SDO_COB_FIXED: int
     CO_NODE_ERR_STORED_APP: int
     CO_NODE_ERR_STORED_COMM: int
+    CO_NODE_ERR_STORE_FAILED: int
     CO_NODE_ERR_TX_DRIVER: int
     CO_NODE_ERR_TX_OVERFLOW: int
     CO_NODE_ID_UNCONFIGURED: int
@@ -190,6 +193,7 @@ class Lib:
     def canola_py_prog_status(self, a0: CData, /) -> int: ...
     def canola_py_sdo_client_done(self, a0: CData, a1: int, /) -> int: ...
     def canola_py_sdo_client_server(self, a0: CData, a1: int, /) -> int: ...
+    def canola_py_stored_node_id(self, a0: CData | bytes, a1: CData | bytes, /) -> int: ...
     def canola_py_stream_free(self, a0: CData, /) -> None: ...
     def canola_py_stream_new(self, a0: CData, a1: int, a2: int, a3: int, a4: CData | bytes, /) -> CData: ...
     def co_boot_reason_text(self, a0: int, /) -> CData: ...

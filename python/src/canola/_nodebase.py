@@ -134,6 +134,7 @@ class NodeBase:
     """Engine, NMT state, start/stop, callbacks."""
 
     _kind = "node"
+    _source = "its dictionary"  # what warnings name: the EDS/DCF file where known
 
     def __init__(self, bus: Bus, od: Od, node_id: int, *, sdo_timeout_ms: int,
                  store_dir: str | os.PathLike[str] | None, raw_frames: bool,
@@ -277,6 +278,17 @@ class NodeBase:
         self._fire(self._emcy_cbs, EmcyEvent(cob_id & 0x7F, code, reg, manufacturer, cob_id))
 
     def _on_error(self, error: int) -> None:
+        if error == lib.CO_NODE_ERR_SDO_COB_FIXED:
+            log.warning("%s %d: %s: [1200] sub1/sub2 are not 0x%03X/0x%03X, the COB-IDs CiA "
+                        "301 fixes for the default SDO server: served on those regardless",
+                        self._kind, self.node_id, self._source, 0x600 + self.node_id,
+                        0x580 + self.node_id)
+            return
+        if error == lib.CO_NODE_ERR_STORE_FAILED:
+            log.warning("%s %d: storing parameters failed (full disk, read-only or broken "
+                        "storage): the files stored before stay (EMCY 0x%04X)", self._kind,
+                        self.node_id, int(lib.CO_EMCY_STORE_FAILED))
+            return
         refused = _STORE_ERRORS.get(error)
         if refused is None:
             return  # transmit losses: counted by the core (co_node_stats)

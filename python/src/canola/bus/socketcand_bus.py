@@ -36,11 +36,12 @@ _READ = 4096
 
 class SocketcandBus(can.BusABC):
     """Connected, channel ``channel`` opened and in raw mode once constructed; every step of
-    the connection bounded by ``timeout`` seconds. Raises OSError (no server to connect to)
-    or can.CanError (no answer, a refusal, not the protocol)."""
+    the connection bounded by ``timeout`` seconds. With a ``token``, ``< auth TOKEN >``
+    goes first (canola's hub asks for it: :mod:`canola.access`). Raises OSError (no server
+    to connect to) or can.CanError (no answer, a refusal, not the protocol)."""
 
-    def __init__(self, host: str, port: int, channel: str, timeout: float = 3.0,
-                 **kwargs: Any) -> None:
+    def __init__(self, host: str, port: int, channel: str, timeout: float = 3.0, *,
+                 token: str | None = None, **kwargs: Any) -> None:
         self._channel = channel
         self._rest = b""
         self._frames: collections.deque[can.Message] = collections.deque()
@@ -51,6 +52,9 @@ class SocketcandBus(can.BusABC):
         try:
             deadline = time.monotonic() + timeout
             self._expect("hi", deadline)
+            if token:
+                self._sock.sendall(f"< auth {token} >".encode("ascii", "replace"))
+                self._expect("ok", deadline)
             self._sock.sendall(f"< open {channel} >".encode("ascii"))
             self._expect("ok", deadline)
             self._sock.sendall(b"< rawmode >")

@@ -106,16 +106,16 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"{args.eds}: {exc}") from None
 
         def on_state(state: str) -> None:
-            print(f"node {args.node_id}: {state}", flush=True)
+            print(f"node {device.node_id}: {state}", flush=True)
 
         def on_store_rejected(event: StoreRejectedEvent) -> None:
             where = os.path.join(args.store, event.file)
-            print(f"canola device: node {args.node_id}: {where}: {event.reason}; ignored, "
+            print(f"canola device: node {device.node_id}: {where}: {event.reason}; ignored, "
                   f"{event.group} parameters start with their defaults "
                   f"(EMCY 0x{event.code:04X})", file=sys.stderr, flush=True)
 
         def on_emcy(event: EmcyEvent) -> None:  # another node's, when 0x1028 watches it
-            print(f"node {args.node_id}: EMCY from node {event.node} "
+            print(f"node {device.node_id}: EMCY from node {event.node} "
                   f"{emcy_line(event.code, event.register, event.manufacturer)}", flush=True)
 
         device.on_state(on_state)
@@ -123,14 +123,14 @@ def run(args: argparse.Namespace) -> int:
         device.on_emcy(on_emcy)
         _report_own_emcys(device)
         device.start()
-        print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
+        print(f"canola device: node {device.node_id} from {args.eds} running", flush=True)
         try:
             while not stop.wait(0.2):
                 if connection_lost(bus):
                     raise CliError("the bus connection was closed by the server")
         finally:
             device.stop()
-        print(f"canola device: node {args.node_id} stopped", flush=True)
+        print(f"canola device: node {device.node_id} stopped", flush=True)
     finally:
         bus.shutdown()
         for s, handler in old.items():
