@@ -53,6 +53,14 @@ def is_loopback(host: str | None) -> bool:
         return False
 
 
+def _host_name(request: web.Request) -> str | None:
+    """The name or address in the request's ``Host`` header, without the port."""
+    try:
+        return urllib.parse.urlsplit("//" + request.host).hostname
+    except ValueError:  # a malformed Host
+        return None
+
+
 def _refuse(status: int, message: str) -> web.Response:
     return web.json_response({"error": message}, status=status, headers=_HEADERS)
 
@@ -82,7 +90,7 @@ class ViewServer:
     @staticmethod
     def _local(request: web.Request) -> bool:
         """A client on this machine that reached the server by a loopback name."""
-        return is_loopback(request.remote) and is_loopback(request.url.host)
+        return is_loopback(request.remote) and is_loopback(_host_name(request))
 
     def _may_write(self, request: web.Request) -> str | None:
         """None when ``request`` may write, else why not."""
@@ -98,7 +106,7 @@ class ViewServer:
 
     @web.middleware
     async def _guard(self, request: web.Request, handler: Any) -> web.StreamResponse:
-        if self.loopback_only and not is_loopback(request.url.host):
+        if self.loopback_only and not is_loopback(_host_name(request)):
             return _refuse(403, "this server answers to its loopback address only")
         origin = request.headers.get("Origin")
         if origin is not None and urllib.parse.urlsplit(origin).netloc != request.host:
