@@ -26,3 +26,11 @@ uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t 
     (void)co_od_get_uint(&node->cfg.od, index, sub, &v);
     return (uint32_t)v;
 }
+
+co_abort_t co_od_read_check(const co_node_t *node, const co_od_entry_t *entry)
+{
+    if (entry->index != 0x1003 || entry->sub == 0) {
+        return CO_ABORT_NONE;
+    }
+    return entry->sub > co_od_u32(node, 0x1003, 0, 0xFF) ? CO_ABORT_NO_DATA : CO_ABORT_NONE;
+}

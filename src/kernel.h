@@ -116,6 +116,10 @@ static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 100
  * no integer): the services' parameters, 32 bits at most. */
 uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent);
 
+/* Whether the network may read `entry` now: CO_ABORT_NO_DATA for a sub-index of 0x1003 above
+ * the number of errors recorded (CiA 301 §7.5.2.4: no data), else CO_ABORT_NONE. O(1). */
+co_abort_t co_od_read_check(const co_node_t *node, const co_od_entry_t *entry);
+
 /* ---- the NMT gate: the services each state allows (co_nmt_services, canola/nmt.h; inline
  * for the state changes). The send and receive paths test node->services, set from it. */
 static inline uint16_t co_nmt_gate(uint8_t state)

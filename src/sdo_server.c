@@ -842,6 +842,10 @@ static CO_INLINE const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_
         abort = co_od_access(&node->cfg.od, e, write);
         e = CO_SHORT_PATHS || abort != CO_ABORT_NONE ? NULL : e; /* refused: no entry */
     }
+    if (e != NULL && !write) { /* readable, but has it data now (0x1003)? */
+        abort = co_od_read_check(node, e);
+        e = abort != CO_ABORT_NONE ? NULL : e;
+    }
     if (e == NULL) { /* no entry is never served */
         abort_transfer(node, s, abort);
         return NULL;

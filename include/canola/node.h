@@ -266,9 +266,21 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
 
 /** Read a wire value as the network would: up to `cap` bytes into `buf`, `*len` = bytes
  *  copied. Returns CO_ABORT_NONE or the CiA abort code (CO_ABORT_LEN_HIGH when the value
- *  does not fit into `cap`). */
+ *  does not fit into `cap`; CO_ABORT_NO_DATA for a sub-index of 0x1003 above the number
+ *  of errors recorded). */
 co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                             uint32_t cap, uint32_t *len);
+
+/** Application write of a wire value: as co_node_write_net but without access rights (the
+ *  application may set read-only objects such as the error register); length, limits,
+ *  hooks and service checks apply, the new value takes effect on the services at once and
+ *  event-driven TPDOs mapping the object are triggered. Hooks see it as any write: a
+ *  binding that must tell the application's writes from the network's marks its own
+ *  calls. Returns CO_ABORT_NONE or the CiA abort code (CO_ABORT_NO_OBJECT /
+ *  CO_ABORT_NO_SUB for an entry the dictionary lacks). Cost: one dictionary look-up and
+ *  the write; no allocation, callbacks as for a network write. */
+co_abort_t co_node_write_app(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                             uint32_t len);
 
 /** Application write of an unsigned/signed integer value (no access rights: the
  *  application may set read-only objects such as the error register). Limits, hooks and

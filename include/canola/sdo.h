@@ -210,6 +210,12 @@ co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code);
 /** True while the channel has a transfer open. */
 bool co_sdo_client_busy(const co_node_t *node, uint8_t channel);
 
+/** Progress of the channel's transfer: the bytes moved so far (uploads: received; downloads:
+ *  sent, and in a block download those the server acknowledged), for a progress display
+ *  polled from outside. After the transfer's end the figure of its last step stays until
+ *  the next transfer begins. 0 for a bad channel. Cost: a field read. */
+uint32_t co_sdo_client_progress(const co_node_t *node, uint8_t channel);
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,6 +11,8 @@ import sys
 from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import TypeVar
 
+from bounded import first_line
+
 from canola.errors import SdoAbort
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import Event, Listener, LssOp
@@ -20,10 +22,10 @@ from canola.gateway.masterbackend import MasterBackend
 from canola.gateway.requests import NmtCommand
 
 T = TypeVar("T")
-TIMEOUT = 20.0
+TIMEOUT = 60.0  # a bound a starved machine meets (load 20), not an expected answer time
 
 
-def run(coro: Awaitable[T], timeout: float = 60.0) -> T:
+def run(coro: Awaitable[T], timeout: float = 300.0) -> T:
     """Run a test coroutine with an overall time limit (never a hang)."""
 
     async def bounded() -> T:
@@ -213,13 +215,12 @@ def gateway_process(*options: str) -> Iterator[tuple[subprocess.Popen[str], str]
     proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *options, "--listen",
                              "tcp:127.0.0.1:0"], stderr=subprocess.PIPE, text=True)
     try:
-        assert proc.stderr is not None
-        line = proc.stderr.readline()
+        line = first_line(proc.stderr, "the gateway process")
         assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
         yield proc, line.split()[-1]
     finally:
         if proc.poll() is None:
             proc.kill()
-            proc.wait(timeout=20)
+            proc.wait(timeout=300)
         if proc.stderr is not None:
             proc.stderr.close()

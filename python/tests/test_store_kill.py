@@ -35,6 +35,7 @@ from pathlib import Path
 
 import can
 import pytest
+from bounded import Lines
 
 from canola.bus.hub import HubThread
 from canola.core import SimBus
@@ -122,6 +123,7 @@ def test_sigkill_during_save_keeps_old_or_new(tmp_path: Path,
     rng = random.Random(2026)
     outcomes = {"old": 0, "new": 0, "mid-save": 0}
     assert driver.stdin is not None and driver.stdout is not None
+    lines = Lines(driver.stdout, "the forked device")
     with HubThread() as hub:
         url = f"socketcand://127.0.0.1:{hub.port}/store"
         bus = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port, channel="store")
@@ -133,7 +135,7 @@ def test_sigkill_during_save_keeps_old_or_new(tmp_path: Path,
             def spawn(node_id: int) -> int:
                 driver.stdin.write(f"{url} {store} {node_id}\n")  # type: ignore[union-attr]
                 driver.stdin.flush()  # type: ignore[union-attr]
-                line = driver.stdout.readline()  # type: ignore[union-attr]
+                line = lines.line(60)  # a device that died says nothing: a failed test
                 assert line.startswith("ready "), line
                 return int(line.split()[1])
 

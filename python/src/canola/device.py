@@ -86,7 +86,7 @@ class Device(NodeBase):
 
     def _on_state(self, state: int) -> None:
         # an LSS master may have given the node its (new) node-ID at this reset
-        self.node_id = int(lib.co_node_id(self._engine.node))
+        self.node_id = int(lib.co_node_id(self._c_node))
         super()._on_state(state)
 
     def emcy_raise(self, code: int, manufacturer: bytes = b"") -> None:
@@ -97,7 +97,7 @@ class Device(NodeBase):
         if len(manufacturer) > 5:
             raise Error(f"EMCY manufacturer data has at most 5 bytes, got {len(manufacturer)}")
         data = bytes(manufacturer).ljust(5, b"\0")
-        with self._engine.locked() as node:
+        with self.locked() as node:
             err = int(lib.co_emcy_raise(node, code, data))
         if err not in (lib.CO_OK, lib.CO_ERR_FULL):
             check(err, "co_emcy_raise")
@@ -105,25 +105,25 @@ class Device(NodeBase):
     def emcy_clear(self, code: int) -> None:
         """Clear error ``code``; the last one clearing sends the error-reset EMCY (0x0000).
         Raises Error when the code was not active."""
-        with self._engine.locked() as node:
+        with self.locked() as node:
             err = int(lib.co_emcy_clear(node, code))
         if err == lib.CO_ERR_NOT_FOUND:
             raise Error(f"EMCY error code 0x{code:04X} is not active")
         check(err, "co_emcy_clear")
 
     def emcy_active(self, code: int) -> bool:
-        with self._engine.locked() as node:
+        with self.locked() as node:
             return bool(lib.co_emcy_active(node, code))
 
     def nmt_apply(self, command: str | int) -> None:
         """Apply an NMT command to this device itself (as if received)."""
         spec = nmt_command(command)
-        with self._engine.locked() as node:
+        with self.locked() as node:
             check(int(lib.co_nmt_apply(node, spec)), "co_nmt_apply")
 
     def tpdo_request(self, n: int) -> None:
         """Send TPDO ``n`` (0-based) now if it is event-driven (or at the next SYNC if
         acyclic). Raises Error when the PDO does not exist, is not valid or the device is
         not operational."""
-        with self._engine.locked() as node:
+        with self.locked() as node:
             check(int(lib.co_tpdo_request(node, n)), f"TPDO {n + 1}")

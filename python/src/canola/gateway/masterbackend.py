@@ -126,21 +126,21 @@ class MasterBackend:
     def local_read(self, index: int, sub: int) -> bytes:
         buf = ffi.new("uint8_t[]", self.upload_cap)
         n = ffi.new("uint32_t *")
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             code = int(lib.co_node_read_net(node, index, sub, buf, self.upload_cap, n))
         if code:
             raise SdoAbort(code)
         return bytes(ffi.buffer(buf, int(n[0])))
 
     def local_write(self, index: int, sub: int, data: bytes) -> None:
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             code = int(lib.co_node_write_net(node, index, sub, bytes(data), len(data)))
         if code:
             raise SdoAbort(code)
 
     async def pdo_send(self, num: int) -> None:
         """Send the gateway's TPDO ``num`` (1-based) now, if it is event-driven."""
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             lib.co_tpdo_request(node, num - 1)
 
     # ---- NMT
@@ -153,7 +153,7 @@ class MasterBackend:
 
     def _apply(self, command: NmtCommand) -> None:
         spec = nmt_command(_NMT_NAMES[command])
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             lib.co_nmt_apply(node, spec)
 
     # ---- LSS
