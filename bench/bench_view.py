@@ -19,8 +19,10 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import queue
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -62,15 +64,22 @@ def start_view(port: int) -> tuple[subprocess.Popen[str], int]:
         [sys.executable, "-m", "canola.cli", "view", "--bus",
          f"socketcand://127.0.0.1:{port}/can0", "--eds", str(EDS), "--listen", "127.0.0.1:0"],
         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None
+    stdout = proc.stdout
+    assert stdout is not None
+    lines: queue.Queue[str] = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(line) for line in stdout], daemon=True).start()
     end = time.monotonic() + 120
-    while time.monotonic() < end:
-        line = proc.stdout.readline()  # the view prints its URL at once, or exits
-        if not line:
-            break
+    while (left := end - time.monotonic()) > 0:
+        try:
+            line = lines.get(timeout=min(left, 1.0))  # the view prints its URL at once
+        except queue.Empty:
+            if proc.poll() is not None:
+                break  # it exited instead
+            continue
         if line.startswith("canola view: http://"):
             return proc, int(line.split(":")[3].split("/")[0])
     proc.kill()
+    proc.wait(10)
     raise SystemExit("bench_view: canola view did not start")
 
 
