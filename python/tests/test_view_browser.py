@@ -37,6 +37,7 @@ ROOT = Path(__file__).resolve().parents[2]
 DEMO = ROOT / "python" / "src" / "canola" / "data" / "demo"
 SCREENSHOT = ROOT / "build-logs" / "view.png"
 XSS = '<img src=x onerror="window.__xss=1">'
+BUS_XSS = "<script>window.__xss=2</script>"  # the device's 0x1008: from the bus, not a file
 # A loaded 2-core machine: the demo's story takes seconds of real time, chromium starts slowly.
 STORY_S = 300.0
 PAGE_S = 90.0
@@ -162,6 +163,7 @@ def _hostile_eds(tmp_path: Path) -> Path:
     text = (DEMO / "io_module.eds").read_text(encoding="utf-8")
     text = text.replace("ProductName=canola DIO-8", f"ProductName={XSS}")
     text = text.replace("ParameterName=Read input 8-bit", f"ParameterName=inputs {XSS}")
+    text = text.replace("DefaultValue=canola DIO-8", f"DefaultValue={BUS_XSS}")
     lines = text.split("\n")
     at = lines.index("[1800sub5]")
     default = next(i for i in range(at, at + 8) if lines[i].startswith("DefaultValue="))
@@ -224,6 +226,17 @@ def test_hostile_eds_is_text_and_writes_work_when_allowed(browser: Browser,
         _click(browser, "sdo-read", **{"sdo-entry": "Write output 8-bit.Write output 1h-8h"})
         assert _result(browser, "sdo-result")[1].startswith(
             "Write output 8-bit.Write output 1h-8h = 42 (UNSIGNED8)")
+
+        # the device's name read by SDO: what the bus carried, shown as text in the node table
+        _click(browser, "sdo-read", **{"sdo-entry": "0x1008:0"})
+        klass, text = _result(browser, "sdo-result")
+        assert klass == "ok" and BUS_XSS in text, text
+        browser.wait_for(f"""document.querySelector('#nodes tbody tr[data-node="5"]')
+            .children[1].textContent === {json.dumps(BUS_XSS)}""", PAGE_S,
+                         "the name from the bus in the node table, as text")
+        assert browser.js("document.querySelectorAll('img').length") == 0
+        assert browser.js("document.scripts.length") == 2  # the page's own: uPlot, view.js
+        assert browser.js("typeof window.__xss") == "undefined"
         browser.screenshot(SCREENSHOT.with_name("view-hostile-eds.png"))
     finally:
         device.stop()
