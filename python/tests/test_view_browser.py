@@ -8,8 +8,9 @@ as build-logs/view.png.
   last PDO frame on the bus, an SDO read through the page, writes and NMT refused without
   ``--allow-write``.
 - A view started in this process with a device whose EDS is hostile (``<img onerror>`` in
-  its names): shown as text, no element made of it; with writes allowed, an NMT command and
-  an SDO write from the page reach the device.
+  its names, a ``<script>`` in its 0x1008 read over the bus): shown as text, no element
+  made of it; with writes allowed, an NMT command and an SDO write from the page reach
+  the device.
 
 Run by ``make test-view`` (it sets CANOLA_BROWSER_TESTS=1; the test stage says NOT RUN
 where chromium is missing); skipped in the other pytest runs.
