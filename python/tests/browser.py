@@ -143,9 +143,11 @@ class Browser:
                            f"(last value {value!r})")
 
     def screenshot(self, path: Path) -> None:
-        """The whole page (beyond the window, without its scroll bar) as a PNG file."""
-        size = self.call("Page.getLayoutMetrics")["cssContentSize"]
-        clip = {"x": 0, "y": 0, "width": size["width"], "height": size["height"], "scale": 1}
+        """The whole page (beyond the window) as a PNG file. The capture lays the page out
+        as tall as its content, without a scroll bar: the window's whole width."""
+        height = self.call("Page.getLayoutMetrics")["cssContentSize"]["height"]
+        clip = {"x": 0, "y": 0, "width": self.js("window.innerWidth"), "height": height,
+                "scale": 1}
         data = self.call("Page.captureScreenshot", format="png", captureBeyondViewport=True,
                          clip=clip)
         path.parent.mkdir(parents=True, exist_ok=True)
