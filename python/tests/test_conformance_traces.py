@@ -11,12 +11,16 @@ pinned on what the real device sent.
   heartbeat after NMT start and when, 0x1017 after reset communication, the EMCY's
   register byte), with the verdict the recorded run gave.
 
-Live interaction (the tester's waits, RPDOs before the state change) stays with the scripted
+The traces: canopend's full run, demoDevice's full run, and demoDevice with only its 3-byte
+string or only its DOMAIN in the EDS (where issue 34's false SDO verdicts came from). Live
+interaction (the tester's waits, RPDOs before the state change) stays with the scripted
 models of test_conformance_canopennode.py.
 """
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -49,15 +53,29 @@ def _abort(frame: bytes) -> int | None:
     return int.from_bytes(frame[4:8], "little") if frame[0] == 0x80 else None
 
 
-def _replay(name: str, node: ReplayNode | None = None, bus: SimBus | None = None) -> cc.Report:
-    """The SDO-only checks run against the trace's device (``node``: a replay of it whose
-    answers a test changed)."""
-    if node is None:
-        bus = SimBus()
-        node = ReplayNode(bus, load(name))
-    assert bus is not None
+Table = dict[bytes, deque[list[bytes]]]
+
+
+def _replayed(name: str, *, od: eds.ObjectDictionary | None = None,
+              only: tuple[str, ...] = SDO_ONLY,
+              edit: Callable[[Table], None] | None = None) -> tuple[cc.Report, ReplayNode]:
+    """The checks ``only`` run against the device of trace ``name`` (its EDS, or ``od``),
+    replayed; ``edit`` changes recorded answers first."""
+    bus = SimBus()
+    node = ReplayNode(bus, load(name))
+    if edit is not None:
+        edit(node.table)
     node.start()
-    return cc.run(bus, NODE, eds.parse(EDS[name](), node_id=NODE), only=SDO_ONLY)
+    if od is None:
+        od = eds.parse(EDS[name](), node_id=NODE)
+    return cc.run(bus, NODE, od, only=only), node
+
+
+def _answered(request: str, reply: str) -> Callable[[Table], None]:
+    """An edit: the first time ``request`` comes, ``reply`` answers it (hex)."""
+    def edit(table: Table) -> None:
+        table[bytes.fromhex(request)][0][:] = [bytes.fromhex(reply)]
+    return edit
 
 
 @pytest.mark.parametrize("name", TRACES)
@@ -106,9 +124,7 @@ def test_the_sdo_checks_judge_the_recorded_answers() -> None:
     """The SDO-only checks replayed on canopend's own answers: all pass or are skipped for
     the reason the EDS gives (no string, no entry longer than 4 bytes), none fails; every
     request of the tester found its recorded answer."""
-    bus = SimBus()
-    node = ReplayNode(bus, load("canopend"))
-    report = _replay("canopend", node, bus)
+    report, node = _replayed("canopend")
     assert report.names(Status.FAILED) == set(), cc.markdown(report)
     assert node.missed == []
     assert "dictionary.entries" in report.names(Status.PASSED)
@@ -122,9 +138,7 @@ def test_demodevice_fails_only_on_its_empty_software_version() -> None:
     the segmented and block checks wrote the 1000-byte string 0x2121:2, every length taken);
     the one failure is a TRUE deviation: 0x100A (VISIBLE_STRING, empty in this build) read
     is aborted with 0x06040047, where CiA 301 lets an upload carry 0 bytes."""
-    bus = SimBus()
-    node = ReplayNode(bus, load("demodevice"))
-    report = _replay("demodevice", node, bus)
+    report, node = _replayed("demodevice")
     assert node.missed == []
     assert report.names(Status.FAILED) == {"dictionary.entries"}, cc.markdown(report)
     (finding,) = report.result("dictionary.entries").findings
@@ -162,21 +176,18 @@ def test_a_replayed_check_fails_when_the_device_answers_otherwise(name: str, che
     read as the value 0, as canola's core once answered; the block download's end not
     confirmed; the segment with the wrong toggle bit taken) makes the tester fail that
     check."""
-    frames = load(name)
-    table = answers(frames)
-    bus = SimBus()
-    node = ReplayNode(bus, frames)
-    node.table = table
-    if check == "dictionary.entries":
-        table[bytes.fromhex("4003100100000000")][0][:] = [bytes.fromhex("4303100100000000")]
-    elif check == "sdo.block_download":
-        end = next(k for k in table if k[0] & 0xE3 == 0xC1)
-        table[end][0][:] = []
-    else:
-        wrong = next(k for k, v in table.items() if v and v[0] == [
-            bytes.fromhex("8021210200000305")])
-        table[wrong][0][:] = [bytes.fromhex("2021210200000000")]
-    report = _replay(name, node, bus)
+    def edit(table: Table) -> None:
+        if check == "dictionary.entries":
+            _answered("4003100100000000", "4303100100000000")(table)
+        elif check == "sdo.block_download":
+            end = next(k for k in table if k[0] & 0xE3 == 0xC1)
+            table[end][0][:] = []
+        else:
+            wrong = next(k for k, v in table.items() if v and v[0] == [
+                bytes.fromhex("8021210200000305")])
+            _answered(wrong.hex(), "2021210200000000")(table)
+
+    report, _ = _replayed(name, edit=edit)
     assert check in report.names(Status.FAILED), cc.markdown(report)
 
 
@@ -185,15 +196,8 @@ def test_demodevice_passes_with_a_software_version_or_no_data(answer: str) -> No
     """The other way round: with 0x100A answered as a 4-byte string, as a tagged build of
     CANopenDemo would, or aborted with 0x08000024 (no data: the abort CiA 301 has for an
     empty value), demoDevice's dictionary.entries passes."""
-    frames = load("demodevice")
-    table = answers(frames)
-    table[bytes.fromhex("400A100000000000")][0][:] = [bytes.fromhex(answer)]
-    bus = SimBus()
-    node = ReplayNode(bus, frames)
-    node.table = table
-    node.start()
-    report = cc.run(bus, NODE, eds.parse(EDS["demodevice"](), node_id=NODE),
-                    only=("dictionary.mandatory", "dictionary.entries"))
+    report, _ = _replayed("demodevice", only=("dictionary.mandatory", "dictionary.entries"),
+                          edit=_answered("400A100000000000", answer))
     assert report.names(Status.PASSED) == {"dictionary.mandatory", "dictionary.entries"}
 
 
@@ -215,28 +219,14 @@ def _demo_without(*entries: tuple[int, int | None]) -> eds.ObjectDictionary:
     return od
 
 
-def _replay_probes(name: str, od: eds.ObjectDictionary,
-                   change: tuple[str, str] | None = None) -> tuple[cc.Report, ReplayNode]:
-    """The string and DOMAIN checks against the recorded trace ``name`` (``change``: one
-    recorded answer replaced, the first time its request comes)."""
-    frames = load(name)
-    bus = SimBus()
-    node = ReplayNode(bus, frames)
-    if change is not None:
-        request, reply = change
-        node.table[bytes.fromhex(request)][0][:] = [bytes.fromhex(reply)]
-    node.start()
-    return cc.run(bus, NODE, od, only=PROBES), node
-
-
 def test_the_3_byte_string_is_announced_3_bytes() -> None:
     """Issue 34: sdo.toggle_download announced 14 bytes to demoDevice's 3-byte string
     0x2121:1 (rightly refused, 0x06070012: a false FAIL). With that string alone in the EDS
     the real device takes the 3 bytes announced, answers the wrong toggle bit with
     0x05030000, and refuses the longer probes with 0x06070012: not applicable, with the
     reason; every check passes on its recorded answers."""
-    report, node = _replay_probes("demodevice_short_string",
-                                  _demo_without((0x2121, 2), (0x2121, 3), (0x2122, None)))
+    report, node = _replayed("demodevice_short_string", only=PROBES,
+                             od=_demo_without((0x2121, 2), (0x2121, 3), (0x2122, None)))
     assert node.missed == []
     assert report.names(Status.PASSED) == set(PROBES), cc.markdown(report)
     assert "not applicable: 4, 5, 7, 8, 14, 15, 21, 22 bytes" in report.result(
@@ -254,7 +244,8 @@ def test_the_domain_refuses_probes_and_takes_its_own_value() -> None:
     0x06090030 (six false FAILs). With the DOMAIN alone in the EDS the real device refuses
     every probe so, and takes its own 1024 bytes: the checks pass on that, the refusal
     named."""
-    report, node = _replay_probes("demodevice_domain", _demo_without((0x2121, None)))
+    report, node = _replayed("demodevice_domain", only=PROBES,
+                             od=_demo_without((0x2121, None)))
     assert node.missed == []
     assert report.names(Status.PASSED) == set(PROBES), cc.markdown(report)
     for name in ("sdo.segmented_download", "sdo.block_download"):
@@ -271,8 +262,8 @@ def test_a_refusal_that_is_no_application_s_fails() -> None:
     frames = _texts("demodevice_domain")
     refusal = frames.index(next(f for f in frames if f[1] == "585#8022210030000906"))
     request = next(t for _, t in reversed(frames[:refusal]) if t.startswith("605#"))[4:]
-    report, _ = _replay_probes("demodevice_domain", _demo_without((0x2121, None)),
-                               change=(request, "8022210001000405"))
+    report, _ = _replayed("demodevice_domain", only=PROBES, od=_demo_without((0x2121, None)),
+                          edit=_answered(request, "8022210001000405"))
     assert "sdo.segmented_download" in report.names(Status.FAILED), cc.markdown(report)
 
 
