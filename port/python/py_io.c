@@ -505,6 +505,18 @@ void canola_py_io_leave(canola_py_io_t *io, uint64_t now_us)
 
 /* ---- waiting */
 
+/* Under the lock, the token free: an application's thread takes it, runs one receive round
+ * until `until_us`, gives it back and tells the others. */
+static void round_as_waiter(canola_py_io_t *io, uint64_t until_us)
+{
+    io->rx_busy = true;
+    pthread_mutex_unlock(&io->lock);
+    io_round(io, until_us, false);
+    pthread_mutex_lock(&io->lock);
+    io->rx_busy = false;
+    pthread_cond_broadcast(&io->changed);
+}
+
 canola_py_io_rc_t canola_py_io_wait(canola_py_io_t *io, const canola_py_xfer_t *x,
                                     uint64_t until_us)
 {
@@ -534,12 +546,7 @@ canola_py_io_rc_t canola_py_io_wait(canola_py_io_t *io, const canola_py_xfer_t *
             break;
         }
         if (!io->rx_busy) {
-            io->rx_busy = true;
-            pthread_mutex_unlock(&io->lock);
-            io_round(io, min_u64(until_us, io->py_due_us), false);
-            pthread_mutex_lock(&io->lock);
-            io->rx_busy = false;
-            pthread_cond_broadcast(&io->changed);
+            round_as_waiter(io, min_u64(until_us, io->py_due_us));
         } else {
             if (io->thread_holds) {
                 wake(io); /* the link's thread leaves the bus to this thread */
@@ -643,12 +650,7 @@ canola_py_io_rc_t canola_py_io_recv(canola_py_io_t *io, co_frame_t *frame, uint6
             break;
         }
         if (!io->rx_busy) {
-            io->rx_busy = true;
-            pthread_mutex_unlock(&io->lock);
-            io_round(io, until_us, false);
-            pthread_mutex_lock(&io->lock);
-            io->rx_busy = false;
-            pthread_cond_broadcast(&io->changed);
+            round_as_waiter(io, until_us);
         } else {
             timed_wait(&io->changed, &io->lock, until_us);
         }

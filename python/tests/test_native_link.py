@@ -105,18 +105,25 @@ def test_frames_and_callbacks_reach_python(native: tuple[Callable[[], NativeBus]
             assert frames[0] == 0x705
 
 
-def _wait_in_thread(fn: Callable[[], object]) -> tuple[threading.Thread, list[BaseException]]:
+def _lost_while_waiting(bus: NativeBus, cut: Callable[[], object]) -> BaseException:
+    """What an SDO upload to a silent node raised when ``cut()`` ran while it waited (it
+    must end within a bound: a dead bus never hangs a call)."""
     raised: list[BaseException] = []
+    with Master(bus, node_id=1) as master:
+        def run() -> None:
+            try:
+                master.sdo(SILENT).upload(0x1018, 1, timeout=120)
+            except BaseException as exc:  # what the call raised is the point
+                raised.append(exc)
 
-    def run() -> None:
-        try:
-            fn()
-        except BaseException as exc:  # what the call raised is the point
-            raised.append(exc)
-
-    thread = threading.Thread(target=run, daemon=True)
-    thread.start()
-    return thread, raised
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        time.sleep(0.3)
+        cut()
+        thread.join(30)
+        assert not thread.is_alive()
+    assert len(raised) == 1
+    return raised[0]
 
 
 def test_the_server_going_away_mid_transfer(native: tuple[Callable[[], NativeBus],
@@ -125,28 +132,16 @@ def test_the_server_going_away_mid_transfer(native: tuple[Callable[[], NativeBus
     if hub is None:
         pytest.skip("a SocketCAN interface cannot go away here")
     bus = make()
-    with Master(bus, node_id=1) as master:
-        thread, raised = _wait_in_thread(lambda: master.sdo(SILENT).upload(0x1018, 1,
-                                                                           timeout=120))
-        time.sleep(0.3)
-        hub.stop()
-        thread.join(30)
-        assert not thread.is_alive()
-        assert isinstance(raised[0], BusLostError), raised
-        assert bus.lost and bus.error()
+    raised = _lost_while_waiting(bus, hub.stop)
+    assert isinstance(raised, BusLostError), raised
+    assert bus.lost and bus.error()
 
 
 def test_close_while_a_transfer_waits(native: tuple[Callable[[], NativeBus], None]) -> None:
     make, _ = native
     bus = make()
-    with Master(bus, node_id=1) as master:
-        thread, raised = _wait_in_thread(lambda: master.sdo(SILENT).upload(0x1018, 1,
-                                                                           timeout=120))
-        time.sleep(0.3)
-        bus.shutdown()
-        thread.join(30)
-        assert not thread.is_alive()
-        assert isinstance(raised[0], BusLostError) and "closed" in str(raised[0])
+    raised = _lost_while_waiting(bus, bus.shutdown)
+    assert isinstance(raised, BusLostError) and "closed" in str(raised), raised
 
 
 def test_ctrl_c_while_a_transfer_waits(native: tuple[Callable[[], NativeBus], None]) -> None:

@@ -150,14 +150,10 @@ def open_bus(*, iface: str | None = None, url: str | None = None,
             return NativeBus.socketcan(str(config["channel"]))
         except OSError as exc:
             raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
-    if native_kind == "socketcand":
-        return _open_native_socketcand(str(config.get("host", "127.0.0.1")),
-                                       int(str(config.get("port", DEFAULT_SOCKETCAND_PORT))),
-                                       str(config["channel"]), timeout)
     if config["interface"] == "socketcand":
         return _open_socketcand(str(config.get("host", "127.0.0.1")),
                                 int(str(config.get("port", DEFAULT_SOCKETCAND_PORT))),
-                                str(config["channel"]), timeout)
+                                str(config["channel"]), timeout, native_kind == "socketcand")
     try:
         return can.Bus(**config)
     except (OSError, can.CanError, ValueError, TypeError, ImportError) as exc:
@@ -173,28 +169,20 @@ def _reason(exc: BaseException) -> str:
 _NATIVE_KEYS = {"interface", "channel", "host", "port"}
 
 
-def _open_native_socketcand(host: str, port: int, channel: str, timeout: float) -> can.BusABC:
+def _open_socketcand(host: str, port: int, channel: str, timeout: float,
+                     native: bool) -> can.BusABC:
     where = f"socketcand://{host}:{port}/{channel}"
     try:
         token = token_from(None)
     except ValueError as exc:
         raise BusError(str(exc)) from None
     try:
-        return NativeBus.socketcand(where, token, timeout)
-    except OSError as exc:
-        raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
-
-
-def _open_socketcand(host: str, port: int, channel: str, timeout: float) -> can.BusABC:
-    where = f"socketcand://{host}:{port}/{channel}"
-    try:
-        token = token_from(None)
-    except ValueError as exc:
-        raise BusError(str(exc)) from None
-    try:
+        if native:
+            return NativeBus.socketcand(where, token, timeout)
         return SocketcandBus(host, port, channel, timeout, token=token)
     except OSError as exc:
-        raise BusError(f"cannot connect to {where}: {_reason(exc)}") from exc
+        verb = "open" if native else "connect to"  # the C side's reason names the step
+        raise BusError(f"cannot {verb} {where}: {_reason(exc)}") from exc
     except can.CanError as exc:
         raise BusError(f"cannot open {where}: {_reason(exc)}") from exc
 
