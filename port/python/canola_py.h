@@ -336,7 +336,9 @@ uint64_t canola_py_io_python(void *user, uint64_t now_us);
 /* python-can's side of the bus object: send one frame now (CO_OK; CO_ERR_BUSY: the bus
  * takes nothing now; CO_ERR_ARG: not a frame the bus carries; CO_ERR_STATE: failed), and
  * receive the next frame read from the bus (CANOLA_PY_IO_DONE with *frame and *stamp_us
- * set, TIMEOUT, or FAILED). Frames the link's own nodes send are not received. */
+ * set, TIMEOUT, or FAILED). Frames the link's own nodes send are not received. A call whose
+ * `until_us` has passed still reads what the bus holds once when no other thread reads it
+ * (python-can's recv(0): what came, without waiting). */
 co_err_t canola_py_io_send(canola_py_io_t *io, const co_frame_t *frame);
 canola_py_io_rc_t canola_py_io_recv(canola_py_io_t *io, co_frame_t *frame, uint64_t *stamp_us,
                                     uint64_t until_us);

@@ -632,6 +632,7 @@ canola_py_io_rc_t canola_py_io_recv(canola_py_io_t *io, co_frame_t *frame, uint6
     pthread_mutex_lock(&io->lock);
     io->waiters++;
     canola_py_io_rc_t rc;
+    bool read_once = false; /* a reader that may not wait still reads what the bus holds */
     for (;;) {
         if (io->ring_count > 0) {
             *frame = io->ring[io->ring_head];
@@ -645,12 +646,14 @@ canola_py_io_rc_t canola_py_io_recv(canola_py_io_t *io, co_frame_t *frame, uint6
             rc = CANOLA_PY_IO_FAILED;
             break;
         }
-        if (co_linux_now_us() >= until_us) {
+        bool late = co_linux_now_us() >= until_us;
+        if (late && (read_once || io->rx_busy)) {
             rc = CANOLA_PY_IO_TIMEOUT;
             break;
         }
         if (!io->rx_busy) {
             round_as_waiter(io, until_us);
+            read_once = true;
         } else {
             timed_wait(&io->changed, &io->lock, until_us);
         }

@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+import can
 import pytest
 from conftest import VCAN, wait_until
 
@@ -172,3 +173,22 @@ def test_python_can_readers_see_the_frames(native: tuple[Callable[[], NativeBus]
             if msg is not None and msg.arbitration_id == 0x705:
                 seen = msg
         assert seen is not None and bytes(seen.data) == b"\x00"  # the boot-up
+
+
+def test_a_reader_that_does_not_wait_still_reads(native: tuple[Callable[[], NativeBus],
+                                                               None]) -> None:
+    """recv(0) on a bus object without nodes (no thread of its own reads it) takes what the
+    bus holds: a trace drained with recv(0) sees every frame (canola demo's listener)."""
+    make, _ = native
+    watch, sender = make(), make()
+    for i in range(20):
+        sender.send(can.Message(arbitration_id=0x181, data=bytes([i]), is_extended_id=False))
+    seen: list[int] = []
+    end = time.monotonic() + 30
+    while len(seen) < 20 and time.monotonic() < end:
+        msg = watch.recv(0.0)
+        if msg is None:
+            time.sleep(0.01)
+        elif msg.arbitration_id == 0x181:
+            seen.append(msg.data[0])
+    assert seen == list(range(20))
