@@ -23,7 +23,7 @@ from canola.bus.hub import HubThread
 from canola.bus.native import NativeBus
 from canola.errors import BusLostError, Error
 
-pytestmark = pytest.mark.realtime
+pytestmark = [pytest.mark.realtime, pytest.mark.vcan]  # the SocketCAN tier: on vcan0
 
 INTEROP = Path(__file__).parent / "data" / "interop.eds"
 
