@@ -311,6 +311,26 @@ def test_unvalidated_core_refuses_unicode_strings_when_compiling(tmp_path: Path)
     assert "(CO_CONFIG_OD_UNICODE 0)" in result.stderr, result.stderr
 
 
+# A configuration whose node would refuse the dictionary at start (co_node_init:
+# CO_ERR_CONFIG) is refused when compiling it: here more heartbeat consumer entries (0x1016)
+# than CO_HB_CONSUMERS_MAX (issue 30: the default set's 4 against its profile's 8).
+def test_too_few_heartbeat_consumers_refused_when_compiling(tmp_path: Path) -> None:
+    subs = "".join(f"[1016sub{i}]\nParameterName=C{i}\nObjectType=0x7\nDataType=0x0007\n"
+                   f"AccessType=rw\nDefaultValue=0\n\n" for i in range(1, 4))
+    text = HEADER + ("[1016]\nParameterName=Consumers\nObjectType=0x8\nSubNumber=4\n\n"
+                     "[1016sub0]\nParameterName=N\nObjectType=0x7\nDataType=0x0005\n"
+                     "AccessType=ro\nDefaultValue=3\n\n" + subs)
+    source = tmp_path / "hb.eds"
+    source.write_text(text)
+    _, code = odgen.generate_files(source, "hb", tmp_path)
+    cc = compiler()
+    for allowed, ok in (("3", True), ("127", True), ("0", True), ("2", False)):
+        result = compile_c(cc, code, tmp_path, (f"-DCO_HB_CONSUMERS_MAX={allowed}",))
+        assert (result.returncode == 0) == ok, (allowed, result.stderr)
+        if not ok:
+            assert "0x1016 has 3 heartbeat consumer entries" in result.stderr, result.stderr
+
+
 # --- errors -------------------------------------------------------------------------------
 
 HEADER = """[FileInfo]
@@ -455,8 +475,8 @@ def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> No
         out.mkdir()
         (out / "od.h").write_text(header)
         (out / "od.c").write_text(code)
-        for form in FORMS:
-            result = compile_c(cc, out / "od.c", out, form)
+        for form in FORMS:  # (a master's 0x1016 has up to 127 entries: a node that takes them)
+            result = compile_c(cc, out / "od.c", out, (*form, "-DCO_HB_CONSUMERS_MAX=127"))
             assert result.returncode == 0, f"{path.name} {form}:\n{result.stderr[:2000]}"
         compiled.append(path.name)
     print(f"\nodgen corpus: {len(compiled)} generated and compiled, {len(refused)} refused")
@@ -502,7 +522,8 @@ def test_every_generated_dictionary_passes_co_od_validate(tmp_path: Path) -> Non
     main_c.write_text(_validating_main(names))
     for form in FORMS:
         for optimise in ("-O0", "-Os"):
-            flags = (optimise, *form)
+            # (a master's 0x1016 has up to 127 entries: a node that takes them)
+            flags = (optimise, *form, "-DCO_HB_CONSUMERS_MAX=127")
             build = tmp_path / ("build" + "".join(flags))
             build.mkdir()
             objects = []

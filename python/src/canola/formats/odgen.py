@@ -55,6 +55,9 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   adds CO_OD_TPDO when readable (ro, const, rwr, rw) and CO_OD_RPDO when writable (wo, rww,
   rw).
 - DEFTYPE/DEFSTRUCT/NULL objects (data type definitions) are not part of the table.
+- The ``.c`` file refuses with ``#error`` a configuration whose node would refuse the
+  dictionary at start (``co_node_init``: CO_ERR_CONFIG): more heartbeat consumer entries
+  (0x1016) than ``CO_HB_CONSUMERS_MAX``, where the consumer is built.
 - For a core that does not validate its dictionary (``CO_CONFIG_OD_VALIDATE`` 0), the
   ``.c`` file refuses with ``#error`` the features it uses that the core leaves out
   (limits, REAL limits, DOMAIN values in RAM, UNICODE_STRING, types wider than 32 bits),
@@ -570,6 +573,7 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         out.append("")
         return "\n".join(out)
     out += _feature_guards(entries)
+    out += _start_guards(entries)
     out.append("#if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */")
     out += _compact_tables(name, entries)
     out.append("#else /* the general form */")
@@ -628,6 +632,23 @@ def _feature_guards(entries: list[_Entry]) -> list[str]:
                     f'#error "this dictionary has {what}: the core leaves them out ({switch} 0)"',
                     "#endif"]
     return [*out, "#endif", ""] if len(out) > 1 else []
+
+
+def _start_guards(entries: list[_Entry]) -> list[str]:
+    """Compile-time refusal of a configuration that co_node_init would refuse with this
+    dictionary (CO_ERR_CONFIG): more heartbeat consumer entries (0x1016 sub 1, 2, ... in a
+    row, as the node binds them) than CO_HB_CONSUMERS_MAX holds, where the consumer is built
+    (CO_HB_CONSUMERS_MAX > 0; without it 0x1016 is a plain entry)."""
+    subs = {e.var.subindex for e in entries if e.var.index == 0x1016}
+    consumers = 0
+    while consumers + 1 in subs:
+        consumers += 1
+    if consumers == 0:
+        return []
+    return [f"#if CO_HB_CONSUMERS_MAX > 0 && CO_HB_CONSUMERS_MAX < {consumers}",
+            f'#error "0x1016 has {consumers} heartbeat consumer entries: CO_HB_CONSUMERS_MAX '
+            f'is smaller, so co_node_init would refuse this dictionary (CO_ERR_CONFIG)"',
+            "#endif", ""]
 
 
 def _distinct_limits(entries: list[_Entry]) -> list[str]:
