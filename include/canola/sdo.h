@@ -95,16 +95,16 @@ typedef struct co_sdo_server {
     bool size_known;
     bool crc_on;
     bool last_sent;
+    bool resent; /**< block upload: the client acknowledged nothing of the sub-block sent */
     uint16_t index;
     uint16_t crc;
     co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
     const co_od_entry_t *entry;
-    uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
-    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
-    uint32_t cob_rx;     /**< client -> server; bit 31 = off */
-    uint32_t cob_tx;     /**< server -> client */
-    uint32_t size;       /**< indicated or known total size */
-    uint32_t done;       /**< bytes transferred so far */
+    uint64_t last_us; /**< time of the transfer's last progress: the time-out counts from it */
+    uint32_t cob_rx;  /**< client -> server; bit 31 = off */
+    uint32_t cob_tx;  /**< server -> client */
+    uint32_t size;    /**< indicated or known total size */
+    uint32_t done;    /**< bytes transferred so far */
     uint32_t buf_len;
     uint8_t buf[CO_SDO_BUF_SIZE + 6]; /**< + room for a block's last segment padding */
     uint8_t last_len;                 /**< block upload: bytes in the final segment sent */
