@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
- * src/build.h -- what the build's goal changes in the core: hints for the compiler, the
- * short paths a build for size (-Os) leaves out, and the copies of a size known only at
- * run time. Not installed; every module includes it (through kernel.h, or directly).
+ * src/build.h -- what the build's goal changes in the core: hints for the compiler, and the
+ * copies of a size known only at run time. Not installed; every module includes it
+ * (through kernel.h, or directly).
  */
 #ifndef CANOLA_BUILD_H
 #define CANOLA_BUILD_H
@@ -11,7 +11,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "canola/config.h" /* CO_SHORT_PATHS */
+#include "canola/config.h"
 
 /* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
  * compilers without the attribute just decide for themselves). */
@@ -55,34 +55,14 @@
 #define CO_INLINE inline
 #endif
 
-/* Short paths (CO_SHORT_PATHS, canola/config.h: 0 in a build for size): tests/CMakeLists.txt
- * runs the SDO, PDO and dictionary tests without them too. */
-
-/* Copies and fills of a size known only at run time. Without the short paths (a build for
- * size) they are the byte loops of copy.c, a few instructions each, instead of the C
- * library's memcpy and memset, which no other call needs (about 470 bytes on Cortex-M4 with
- * newlib-nano, 310 on Cortex-M0). Otherwise the library's, faster on long runs. Both take
- * NULL pointers when `n` is 0. Copies of a size known at compile time stay memcpy: the
- * compiler turns those into moves. */
+/* Copies and fills of a size known only at run time: the byte loops of copy.c, a few
+ * instructions each, instead of the C library's memcpy and memset, which no other call needs
+ * (about 470 bytes on Cortex-M4 with newlib-nano, 310 on Cortex-M0): the core's copies are
+ * short (a segment, a value, a frame). Both take NULL pointers when `n` is 0. Copies of a
+ * size known at compile time stay memcpy: the compiler turns those into moves. */
 void co_copy_bytes(void *dst, const void *src, size_t n);
 void co_zero_bytes(void *dst, size_t n);
-
-static inline void co_copy(void *dst, const void *src, size_t n)
-{
-    if (!CO_SHORT_PATHS) {
-        co_copy_bytes(dst, src, n);
-    } else if (n > 0) {
-        memcpy(dst, src, n);
-    }
-}
-
-static inline void co_zero(void *dst, size_t n)
-{
-    if (!CO_SHORT_PATHS) {
-        co_zero_bytes(dst, n);
-    } else if (n > 0) {
-        memset(dst, 0, n);
-    }
-}
+#define co_copy co_copy_bytes
+#define co_zero co_zero_bytes
 
 #endif /* CANOLA_BUILD_H */

@@ -66,34 +66,6 @@ co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t servi
 /* Nothing waits to be sent: a sender of many frames (block transfer) sends only then. */
 static inline bool co_txq_idle(const co_node_t *node) { return node->txq_count == 0; }
 
-/* co_node_send_as for a sender that knows the queue is empty (co_txq_idle): the driver is
- * called from here, without a call into txq.c. */
-static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *frame, uint16_t service)
-{
-#if !CO_SHORT_PATHS
-    return co_node_send_as(node, frame, service); /* a build for size: one send path */
-#else
-    if (!(node->services & service)) {
-        return co_node_send_as(node, frame, service);
-    }
-    co_err_t err = node->cfg.driver.tx(node->cfg.driver.ctx, frame);
-    if (err != CO_OK) {
-        return co_txq_refused(node, frame, service, err);
-    }
-    CO_COUNT(node, tx_frames);
-    return CO_OK;
-#endif
-}
-
-/* co_node_send_as for the per-frame paths (PDO, SDO). `service` is not 0. */
-static inline co_err_t co_node_send_hot(co_node_t *node, const co_frame_t *frame, uint16_t service)
-{
-    if (node->txq_count != 0) {
-        return co_node_send_as(node, frame, service);
-    }
-    return co_node_send_idle(node, frame, service);
-}
-
 /* ---- time and the schedule (kernel.c) */
 
 /* Run co_node_poll again by `due_us` at the latest (a service's new deadline). O(1). */

@@ -46,8 +46,7 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     node->hb_next_us = CO_TIME_NEVER;
     co_guard_bind(node);
     node->error_behaviour = co_od_find(&config->od, 0x1029, 1, NULL);
-    co_err_t err = co_hb_bind(node);
-    return err == CO_OK ? co_pdo_bind(node) : err;
+    return co_hb_bind(node);
 }
 
 co_err_t co_node_start(co_node_t *node, uint64_t now_us)
@@ -155,24 +154,6 @@ static CO_INLINE void deliver(co_node_t *node, uint16_t route, const co_frame_t 
     dispatch(node, route, frame);
 }
 
-/* A frame on another COB-ID than the last one routed: the search, then delivered. */
-static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
-{
-    uint16_t found = co_routes_find(node, key);
-    if (found == node->route_count) {
-        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
-            CO_COUNT(node, rx_malformed);
-        } else {
-            CO_COUNT(node, rx_unrouted);
-        }
-        return;
-    }
-    if (CO_SHORT_PATHS) {
-        node->route_hint = found; /* (a build for size keeps no hint) */
-    }
-    deliver(node, found, frame);
-}
-
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
@@ -184,16 +165,16 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         CO_COUNT(node, rx_malformed); /* no controller delivers this: never let it match */
         return;
     }
-    /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
-     * the one the last frame took; this path makes no call but the service's (a short
-     * path: without it every frame takes the search). */
-    uint32_t key = co_route_key(frame);
-    uint16_t hint = node->route_hint;
-    if (!CO_SHORT_PATHS || hint >= node->route_count || node->route_keys[hint] != key) {
-        ingest_searched(node, frame, key);
+    uint16_t found = co_routes_find(node, co_route_key(frame));
+    if (found == node->route_count) {
+        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
+            CO_COUNT(node, rx_malformed);
+        } else {
+            CO_COUNT(node, rx_unrouted);
+        }
         return;
     }
-    deliver(node, hint, frame);
+    deliver(node, found, frame);
 }
 
 /* ---- time */

@@ -5,7 +5,6 @@
  * co_node_write_entry is the node's wiring for every service's co_node_write (kernel.h).
  */
 #include "node_internal.h"
-#include "od_plain.h"
 
 /* ---- The services' objects: which service checks a write to which communication object,
  * and takes the new value into effect. A table, searched on each write to 0x1000..0x1FFF,
@@ -97,9 +96,8 @@ static co_abort_t service_check(co_node_t *node, const service_object_t *o,
     return o->check != NULL ? o->check(node, entry, data, len) : CO_ABORT_NONE;
 }
 
-/* co_node_write_entry of anything but a plain application number. */
-static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_entry_t *entry,
-                                                  const uint8_t *data, uint32_t len)
+co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len)
 {
     /* The services own objects of the communication profile area only (0x1000..0x1FFF):
      * an application object needs neither their checks nor their effects. */
@@ -124,19 +122,6 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
         hooks->written(od->hook_ctx, entry);
     }
     return CO_ABORT_NONE;
-}
-
-co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                               uint32_t len)
-{
-    const co_od_t *od = &node->cfg.od;
-    if (CO_SHORT_PATHS && entry->index >= 0x2000u && co_od_writes_plain(od, entry) &&
-        len == co_od_size(od, entry)) {
-        co_copy_number(co_od_value(od, entry), data, len); /* what check + store would come to */
-        co_pdo_changed(node, entry);                       /* change of state, as below */
-        return CO_ABORT_NONE;
-    }
-    return write_entry_general(node, entry, data, len);
 }
 
 /* ---- the public access (canola/node.h) */

@@ -1,9 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/od_plain.h -- values read and written in place: the parameters the services read on
- * every SYNC or poll, and entries whose storage is their wire form, which the short paths
- * (the SDO server's answers, the node's writes, the PDOs' copies) move without the
- * dictionary's general read and write. Not installed.
+ * every SYNC or poll, and entries whose storage is their wire form, which the PDOs copy
+ * without the dictionary's general read and write. Not installed.
  */
 #ifndef CANOLA_OD_PLAIN_H
 #define CANOLA_OD_PLAIN_H
@@ -11,14 +10,14 @@
 #include "build.h"
 #include "canola/od.h"
 
-/* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place (a short path). */
+/* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place. */
 static inline uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry)
 {
     if (entry == NULL) {
         return 0;
     }
     const void *value = co_od_value(od, entry);
-    if (CO_SHORT_PATHS && value != NULL) {
+    if (value != NULL) {
         switch (co_od_type(od, entry)) {
         case CO_TYPE_UNSIGNED8:
             return *(const uint8_t *)value;
@@ -46,26 +45,8 @@ static inline uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *ent
 #define CO_WIRE_NATIVE_TYPES 0u
 #endif
 
-/* A readable entry of a validated table whose storage is its wire value (`size` bytes at
- * `value`): the SDO server answers from it without co_od_read. */
-static inline bool co_od_reads_plain(const co_od_t *od, const co_od_entry_t *e)
-{
-    const co_od_hooks_t *hooks = co_od_hooks_of(e);
-    return ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u) &&
-           (hooks == NULL || hooks->read == NULL);
-}
-
-/* A writable entry whose new value is just its `size` wire bytes copied into storage: no
- * hook, no limits (co_od_check would accept any value of the right length, co_od_store
- * would copy it). */
-static inline bool co_od_writes_plain(const co_od_t *od, const co_od_entry_t *e)
-{
-    return ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u) &&
-           co_od_hooks_of(e) == NULL && !co_od_has_limits(od, e) && co_od_value(od, e) != NULL;
-}
-
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no
- * library call, so a loop around it needs no saved registers (the short paths' copies). */
+ * library call, so a loop around it needs no saved registers (the PDOs' copies). */
 static inline void co_copy_number(void *dst, const void *src, uint32_t bytes)
 {
     switch (bytes) {

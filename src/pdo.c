@@ -1,13 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
- * pdo.c -- what RPDOs and TPDOs share (see canola/pdo.h): binding the dictionary's PDOs,
+ * pdo.c -- what RPDOs and TPDOs share (see canola/pdo.h): the dictionary's PDOs,
  * loading their communication parameters, the rules of writes to 0x1400..0x1BFF, routes,
  * and handing NMT states and SYNCs to pdo_rx.c / pdo_tx.c. Mappings are pdo_map.c, the
  * timers pdo_timers.c.
  *
- * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n); rpdo_count / tpdo_count
- * reach up to the highest such PDO below CO_RPDO_MAX / CO_TPDO_MAX that the dictionary
- * has (a build for size takes all of them), and slots in gaps stay not present. Parameters are
+ * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n), CO_RPDO_MAX / CO_TPDO_MAX of
+ * them; the slots of PDOs the dictionary lacks stay not present. Parameters are
  * loaded at reset communication and when written through the node; values set natively
  * (co_od_set_uint) count from the next reset communication.
  */
@@ -73,63 +72,6 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
 
 /* ---- node hooks */
 
-/* 1 + the highest PDO number below `max` whose communication object exists. */
-static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
-{
-    uint16_t count = 0;
-    for (unsigned n = 0; n < max; n++) {
-        if (co_od_find(od, (uint16_t)(base + n), 1, NULL) != NULL) {
-            count = (uint16_t)(n + 1u);
-        }
-    }
-    return count;
-}
-
-co_err_t co_pdo_bind(co_node_t *node)
-{
-    /* The counts bound the loops over PDOs (a short path): a build for size takes every
-     * slot, the ones the dictionary lacks staying not present. */
-    node->rpdo_count =
-        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1400u, rpdo_max()) : rpdo_max();
-    node->tpdo_count =
-        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1800u, tpdo_max()) : tpdo_max();
-    return CO_OK;
-}
-
-#if CO_SHORT_PATHS
-/* After parameters or mapping loaded (NMT states do not change it): may a frame of this
- * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
-static bool fast_widths(const co_od_t *od, const co_pdo_t *p)
-{
-    for (unsigned i = 0; i < p->count; i++) {
-        uint8_t b = pdo_item_bits(od, p, i);
-        if (b != 8 && b != 16 && b != 32 && b != 64) {
-            return false; /* co_copy_number copies 1, 2, 4 or 8 bytes */
-        }
-    }
-    return true;
-}
-#endif
-
-static void decide_fast(const co_od_t *od, co_pdo_t *p, bool tpdo)
-{
-#if CO_SHORT_PATHS
-    bool plain = pdo_has(p, PDO_F_PLAIN) && fast_widths(od, p);
-    if (tpdo) {
-        bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
-        bool std_id = !(p->cob_id & CO_COB_EXT); /* its frame: the COB-ID's low 11 bits */
-        p->fast = pdo_active(p) && plain && cyclic && std_id ? pdo_bytes(p) : 0;
-        return;
-    }
-    bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
-    p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
-#else
-    (void)od;
-    (void)tpdo;
-    p->fast = 0; /* -Os: no short paths */
-#endif
-}
-
 /* Every active RPDO listens to its COB-ID; a TPDO, for its remote requests, when it is sent on
  * request only (types 252 and 253) and its COB-ID allows them. */
 static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
@@ -140,11 +82,9 @@ static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
                  listens ? co_cob_key(p->cob_id) : CO_ROUTE_OFF);
 }
 
-/* New parameters or a new mapping take effect: the short path's choice, the runtime state,
- * the route. */
+/* New parameters or a new mapping take effect: the runtime state, the route. */
 static CO_SIZE_NOINLINE void take_effect(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
-    decide_fast(&node->cfg.od, p, tpdo);
     restart(node, p, tpdo);
     route(node, p, tpdo, num);
 }
@@ -161,9 +101,6 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
  * RPDOs. Counted again whenever a PDO changes. */
 static void count_listeners(co_node_t *node)
 {
-    if (!CO_SHORT_PATHS) {
-        return; /* a build for size looks at every PDO (co_pdo_sync, co_pdo_changed) */
-    }
     uint16_t listeners = 0;
     uint16_t sync_end = 0;
     for (unsigned n = 0; n < pdo_tx_count(node); n++) {
@@ -208,35 +145,20 @@ void co_pdo_state_entered(co_node_t *node)
     }
 }
 
-/* How far a SYNC looks among RPDOs and TPDOs (read again at each step: an application
- * callback may change the PDOs); a build for size keeps no counts and looks at all. */
-static inline unsigned rpdo_sync_end(const co_node_t *node)
-{
-    return CO_SHORT_PATHS ? node->rpdo_sync_end : pdo_rx_count(node);
-}
-static inline unsigned tpdo_sync_end(const co_node_t *node)
-{
-    return CO_SHORT_PATHS ? node->tpdo_sync_end : pdo_tx_count(node);
-}
-
 void co_pdo_sync(co_node_t *node, uint8_t counter)
 {
     /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
      * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
      * Both loops test the NMT state first (an application callback may change it). */
-    for (unsigned n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
+    /* The loops end at the last PDO a SYNC drives (count_listeners; read again at each step:
+     * an application callback may change the PDOs). */
+    for (unsigned n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
         if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
             rpdo_sync(node, (uint8_t)n);
         }
     }
-    for (unsigned n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
-        co_pdo_t *p = &node->tpdo[n];
-        if (!CO_SHORT_PATHS || !p->fast) {
-            tpdo_sync(node, p, counter);
-        } else if (++p->sync_count >= p->type) { /* the usual one: cyclic, whole values */
-            p->sync_count = 0;
-            tpdo_send_plain(node, p);
-        }
+    for (unsigned n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
+        tpdo_sync(node, &node->tpdo[n], counter);
     }
 }
 
@@ -266,7 +188,7 @@ static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
 
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
 {
-    if (CO_SHORT_PATHS && node->tpdo_listeners == 0) {
+    if (node->tpdo_listeners == 0) {
         return; /* no TPDO listens (see count_listeners) */
     }
     if ((co_od_attr(&node->cfg.od, entry) & CO_OD_TPDO) && pdo_running(node)) {
@@ -333,7 +255,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
         uint8_t flags = p->flags;
         load_comm(node, p, r.tpdo, r.num);
         p->flags =
-            (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR | PDO_F_PLAIN)));
+            (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
     take_effect(node, p, r.tpdo, r.num);
     count_listeners(node);

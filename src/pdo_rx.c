@@ -22,7 +22,7 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
                        uint8_t bits, const uint8_t *data, uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* what co_od_store does */
+    if (pdo_direct(p, i) && pos % 8u == 0) { /* stored as it travels: what co_od_store does */
         pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
         return true;
     }
@@ -49,29 +49,26 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
     return true;
 }
 
-/* Every value of the frame is stored first, then TPDOs hear of the changes: an event-driven
- * TPDO the first one triggers carries the new values of the others too. */
+/* Every value of the frame is stored first, then TPDOs hear of the changes (when some TPDO
+ * listens): an event-driven TPDO the first one triggers carries the new values of the
+ * others too. */
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) {
-        pdo_apply_plain(node, p, data);
-    } else {
-        const co_od_t *od = &node->cfg.od;
-        const co_od_entry_t *stored[CO_PDO_MAP_MAX];
-        uint8_t count = 0;
-        uint32_t pos = 0;
-        for (unsigned i = 0; i < p->count; i++) {
-            const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
-            uint8_t bits = pdo_item_bits(od, p, i);
-            if (e != NULL && store_item(node, p, i, e, bits, data, pos)) {
-                stored[count++] = e;
-            }
-            pos += bits;
+    const co_od_t *od = &node->cfg.od;
+    const co_od_entry_t *stored[CO_PDO_MAP_MAX];
+    uint8_t count = 0;
+    uint32_t pos = 0;
+    for (unsigned i = 0; i < p->count; i++) {
+        const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
+        uint8_t bits = pdo_item_bits(od, p, i);
+        if (e != NULL && store_item(node, p, i, e, bits, data, pos)) {
+            stored[count++] = e;
         }
-        for (unsigned i = 0; i < count; i++) {
-            co_pdo_changed(node, stored[i]);
-        }
+        pos += bits;
+    }
+    for (unsigned i = 0; i < count && node->tpdo_listeners != 0; i++) {
+        co_pdo_changed(node, stored[i]);
     }
     if (node->cfg.on_rpdo) {
         node->cfg.on_rpdo(node->cfg.user, n);
@@ -118,15 +115,21 @@ static CO_SIZE_NOINLINE void hold_for_sync(co_node_t *node, co_pdo_t *p, const c
     if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
-    co_copy(p->data, frame->data, frame->len); /* at least the mapped bits (rx_general) */
+    co_copy(p->data, frame->data, frame->len); /* at least the mapped bits (co_pdo_rx) */
     pdo_set(p, PDO_F_WAITING);
 }
 
-/* Every frame of an active RPDO that is not the usual one (see co_pdo_rx). Kept out of
- * line so that the usual frame does not pay for this path's registers. */
-static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
-    co_pdo_t *p = &node->rpdo[rpdo];
+    if (frame->flags & CO_FRAME_RTR) {
+        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
+        return;
+    }
+    /* `rpdo` comes from a route; the bound is checked all the same before the array is read */
+    co_pdo_t *p = rpdo < pdo_rx_count(node) ? &node->rpdo[rpdo] : NULL;
+    if (p == NULL || !pdo_active(p)) {
+        return;
+    }
     if (8u * frame->len < p->bits) {
         length_error(node, p, EMCY_PDO_LENGTH);
         return;
@@ -142,59 +145,6 @@ static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame
     } else {
         length_ok(node, p);
     }
-}
-
-/* After the short path's copies: the TPDOs that listen, the application. Out of line so
- * that the copies need no saved registers. */
-static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
-{
-    const co_pdo_t *p = &node->rpdo[rpdo];
-    if (node->tpdo_listeners != 0) {
-        for (unsigned i = 0; i < p->count; i++) {
-            co_pdo_changed(node, pdo_mapped(&node->cfg.od, p, i));
-        }
-    }
-    if (node->cfg.on_rpdo) {
-        node->cfg.on_rpdo(node->cfg.user, rpdo);
-    }
-}
-
-/* Every frame the short path does not take. */
-static CO_FAST_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
-{
-    if (frame->flags & CO_FRAME_RTR) {
-        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
-        return;
-    }
-    if (rpdo >= pdo_rx_count(node)) {
-        return;
-    }
-    if (pdo_active(&node->rpdo[rpdo])) {
-        rx_general(node, rpdo, frame);
-    }
-}
-
-void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
-{
-    /* The usual frame: asynchronous, exactly the mapped length (`fast`), data, nothing
-     * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
-     * a route; the bound is checked all the same before the array is read. */
-    const co_pdo_t *p = rpdo < pdo_rx_count(node) ? &node->rpdo[rpdo] : NULL;
-    if (CO_SHORT_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
-        !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
-        const co_od_t *od = &node->cfg.od;
-        const uint8_t *data = frame->data;
-        for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
-            uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-            co_copy_number(pdo_value(od, p, i), data, bytes);
-            data += bytes;
-        }
-        if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {
-            rx_fast_tell(node, rpdo);
-        }
-        return;
-    }
-    rx_other(node, rpdo, frame);
 }
 
 void rpdo_sync(co_node_t *node, uint8_t n)

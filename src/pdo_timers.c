@@ -21,9 +21,14 @@ void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_inde
     p->inhibit = tpdo ? od_u16(node, comm_index, 3) : 0;
 }
 
-#if !CO_SHORT_PATHS
-void tpdo_start(co_node_t *node, co_pdo_t *p) { tpdo_start_inline(node, p); }
-#endif
+void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
 
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 {

@@ -17,22 +17,8 @@ static inline void pdo_timers_restart(co_pdo_t *p)
     p->next_us = CO_TIME_NEVER;
     p->inhibit_until_us = 0;
 }
-/* Entering operational / new parameters: an event-driven TPDO's event timer starts. Inline
- * on the state changes' path; one copy in a build for size (pdo_timers.c), which both
- * callers call. */
-static inline void tpdo_start_inline(co_node_t *node, co_pdo_t *p)
-{
-    p->next_us = CO_TIME_NEVER;
-    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
-}
-#if CO_SHORT_PATHS
-#define tpdo_start tpdo_start_inline
-#else
+/* Entering operational / new parameters: an event-driven TPDO's event timer starts. */
 void tpdo_start(co_node_t *node, co_pdo_t *p);
-#endif
 /* Inside the inhibit time: true, and a poll is scheduled for its end. */
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */

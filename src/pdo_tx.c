@@ -9,14 +9,15 @@
 
 static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
-/* Slot i's value (`bits` of it) into the frame at bit `pos`: whole bytes straight from
- * co_od_read, anything else through a bit copy of the value's low bits. */
+/* Slot i's value (`bits` of it) into the frame at bit `pos`: a value stored as it travels
+ * copied, other whole bytes straight from co_od_read, anything else through a bit copy of
+ * the value's low bits. */
 static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t bits, uint8_t *out,
                       uint32_t pos)
 {
     uint32_t n;
-    const co_od_entry_t *e = pdo_mapped(od, p, i);             /* TPDOs map no dummy entries */
-    if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* as co_od_read would */
+    const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
+    if (pdo_direct(p, i) && pos % 8u == 0) {      /* as co_od_read would */
         pdo_copy_value(out + pos / 8u, co_od_value(od, e), bits / 8u);
         return;
     }
@@ -31,19 +32,10 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t 
 #endif
 }
 
+/* The mapped values into `out` (zeroed first: bits no item fills are 0). */
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_DATA_MAX])
 {
     const co_od_t *od = &node->cfg.od;
-    co_zero(out, CO_FRAME_DATA_MAX);
-    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) { /* whole values as stored: one copy each */
-        uint8_t *at = out;
-        for (unsigned i = 0; i < p->count; i++) {
-            uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-            pdo_copy_value(at, pdo_value(od, p, i), bytes);
-            at += bytes;
-        }
-        return;
-    }
     uint32_t pos = 0;
     for (unsigned i = 0; i < p->count; i++) {
         uint8_t bits = pdo_item_bits(od, p, i);
@@ -52,31 +44,20 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
     }
 }
 
+/* The TPDO's frame: `data` (a sample), or the mapped values read now (NULL). */
 static CO_SIZE_NOINLINE void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
-    (void)co_node_send_cob(node, p->cob_id, data, pdo_bytes(p), CO_SVC_PDO);
-}
-
-static void send_fresh(co_node_t *node, const co_pdo_t *p)
-{
-    uint8_t data[CO_FRAME_DATA_MAX];
-    pack(node, p, data);
-    send_data(node, p, data);
-}
-
-/* A TPDO with `fast` set: `fast` bytes of whole values on an 11-bit identifier. */
-void tpdo_send_plain(co_node_t *node, const co_pdo_t *p)
-{
-    co_frame_t f = {.id = p->cob_id & CO_ID_STD_MAX, .len = p->fast}; /* data zeroed */
-    const co_od_t *od = &node->cfg.od;
-    uint8_t *at = f.data;
-    for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
-        uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-        co_copy_number(at, pdo_value(od, p, i), bytes);
-        at += bytes;
+    co_frame_t f = {.len = 0};
+    co_frame_address(&f, p->cob_id, pdo_bytes(p));
+    if (data != NULL) {
+        memcpy(f.data, data, sizeof f.data);
+    } else {
+        pack(node, p, f.data);
     }
-    (void)co_node_send_hot(node, &f, CO_SVC_PDO);
+    (void)co_node_send_as(node, &f, CO_SVC_PDO);
 }
+
+static void send_fresh(co_node_t *node, const co_pdo_t *p) { send_data(node, p, NULL); }
 
 /* An event-driven transmission: the inhibit time and the event timer count from it. */
 void tpdo_send_event(co_node_t *node, co_pdo_t *p)
@@ -133,6 +114,7 @@ void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter)
             send_fresh(node, p);
         }
     } else if (p->type == 252) {
+        memset(p->data, 0, sizeof p->data);
         pack(node, p, p->data);
         pdo_set(p, PDO_F_SAMPLED);
     }

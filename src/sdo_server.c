@@ -109,7 +109,7 @@ static void send_reply(co_node_t *node, co_sdo_server_t *s)
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
     }
-    (void)co_node_send_hot(node, &s->reply, CO_SVC_SDO);
+    (void)co_node_send_as(node, &s->reply, CO_SVC_SDO);
 }
 
 /* A whole frame to the client. */
@@ -161,7 +161,7 @@ static co_abort_t store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data
     }
     co_put_u32(&served.data[0], ok);
     co_put_u32(&served.data[4], 0);
-    (void)co_node_send_hot(node, &served, CO_SVC_SDO);
+    (void)co_node_send_as(node, &served, CO_SVC_SDO);
     return CO_ABORT_NONE;
 }
 
@@ -566,7 +566,7 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
         s->reply.data[0] = ++seq;
         memcpy(&s->reply.data[1], next, CO_SDO_SEG_BYTES);
         next += CO_SDO_SEG_BYTES;
-        (void)co_node_send_idle(node, &s->reply, CO_SVC_SDO);
+        (void)co_node_send_as(node, &s->reply, CO_SVC_SDO);
     }
     if (seq == plain && seq < segments && co_txq_idle(node)) { /* the final segment */
         uint32_t offset = (uint32_t)seq * CO_SDO_SEG_BYTES;

@@ -94,9 +94,6 @@ typedef struct co_pdo {
     uint8_t type;       /**< transmission type */
     uint8_t sync_count; /**< SYNCs counted towards the next transmission */
     uint8_t flags;      /**< internal state bits (src/pdo_internal.h) */
-    uint8_t fast;       /**< the short path's frame length, else 0. RPDO: active, plain,
-                           asynchronous, no deadline; TPDO: active, plain, type 1..240,
-                           no SYNC start value, an 11-bit COB-ID */
     uint8_t map_direct[(CO_PDO_MAP_MAX + 7) / 8]; /**< bit i: slot i copied as stored */
     uint8_t data[CO_FRAME_DATA_MAX]; /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 #if CO_CONFIG_PDO_BIT_MAPPING
