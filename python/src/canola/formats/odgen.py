@@ -33,7 +33,8 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   (``co_od_tables_t``). The general form (0): 28-byte entries with pointers to
   the value, its power-on value in a const ``<name>_values_t``, its limits and hooks
   (NULL), and the dense key array ``k_keys``. Both share the look-up hash ``k_hash``, left
-  out where the core does not read it (``CO_SHORT_PATHS`` 0, a build for size).
+  out where the core does not read it (``CO_CONFIG_OD_HASH`` 0: by default the compact
+  form).
 - Power-on values come from ``ParameterValue`` when present (DCF), else ``DefaultValue``,
   else zero / empty. A value using ``$NODEID`` is stored without the node-ID and the entry
   gets ``CO_OD_NODEID``: ``co_od_reset`` adds the node-ID (``$NODEID+0x180`` -> 0x180).
@@ -580,12 +581,12 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out += _general_tables(name, entries)
     out.append("#endif")
     out.append("")
-    # The look-up's hash, left out where the core does not read it (CO_SHORT_PATHS 0, a
-    # build for size): entry position + 1 per slot, 0 = empty; the same in both forms.
+    # The look-up's hash, left out where the core does not read it (CO_CONFIG_OD_HASH 0: by
+    # default the compact form): entry position + 1 per slot, 0 = empty; the same in both
+    # forms.
     slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
     if slots:
-        out.append("#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which does not "
-                   "read it */")
+        out.append("#if CO_CONFIG_OD_HASH /* canola/config.h: 0 where the core does not read it */")
         out.append(f"static const uint16_t k_hash[{len(slots)}] = {{")
         for i in range(0, len(slots), 16):
             out.append("    " + ", ".join(str(v) for v in slots[i:i + 16]) + ",")
@@ -599,10 +600,10 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out.append(f"    .values = &{name}_values, .rows = k_rows, .rows_count = {rows}u, "
                ".tables = &k_tables,")
     out.append("#endif")
-    out.append("#if CO_SHORT_PATHS")
     out.append("#if !CO_CONFIG_OD_COMPACT")
     out.append("    .keys = k_keys,")
     out.append("#endif")
+    out.append("#if CO_CONFIG_OD_HASH")
     if slots:
         out.append(f"    .hash = k_hash, .hash_mask = {len(slots) - 1}u")
     out.append("#endif")
@@ -791,15 +792,12 @@ def _general_tables(name: str, entries: list[_Entry]) -> list[str]:
             f".limits = {lim}, .hooks = NULL}},")
     out.append("};")
     out.append("")
-    # The dense key array the look-up searches (co_od_t.keys), 4 bytes per entry, left out
-    # where the core does not read it (CO_SHORT_PATHS 0, a build for size).
-    out.append("#if CO_SHORT_PATHS")
+    # The dense key array the look-up searches (co_od_t.keys), 4 bytes per entry.
     out.append("static const uint32_t k_keys[] = {")
     keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]
     for i in range(0, len(keys), 8):
         out.append("    " + ", ".join(keys[i:i + 8]) + ",")
     out.append("};")
-    out.append("#endif")
     return out
 
 
