@@ -88,6 +88,25 @@ static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 100
  * no integer): the services' parameters, 32 bits at most. */
 uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent);
 
+/* ---- the services' objects: each service's internal header lists the rows of the objects
+ * it owns in the communication area (a macro of CO_OBJECT_ROWs), node_od.c puts the lists
+ * together and, on every write there, runs the owner's check and effect. */
+typedef co_abort_t (*co_object_check_fn)(co_node_t *node, const co_od_entry_t *entry,
+                                         const uint8_t *data, uint32_t len);
+typedef void (*co_object_written_fn)(co_node_t *node, const co_od_entry_t *entry);
+typedef struct co_object_row {
+    unsigned first : 12;          /* the objects 0x1000 + first .. + span */
+    unsigned span : 12;
+    unsigned cob : 8;             /* CO_COB_SUB*: the sub-indices holding a COB-ID */
+    co_object_check_fn check;     /* refuse a value the service cannot take (NULL: none) */
+    co_object_written_fn written; /* the new value takes effect (NULL: nothing to do) */
+} co_object_row_t;
+/* A bit per sub-index 0..6, bit 7 for 7 and above: a new COB-ID must name an identifier of
+ * its own format (co_cob_valid). */
+enum { CO_COB_NONE = 0x00, CO_COB_SUB0 = 0x01, CO_COB_SUB1_2 = 0x06, CO_COB_SUB1_UP = 0xFE };
+#define CO_OBJECT_ROW(first, last, cob, check, written)                                           \
+    {(first)-0x1000u, (last) - (first), (cob), (check), (written)},
+
 /* ---- the NMT gate: the services each state allows (co_nmt_services, canola/nmt.h; inline
  * for the state changes). The send and receive paths test node->services, set from it. */
 static inline uint16_t co_nmt_gate(uint8_t state)

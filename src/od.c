@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "build.h"
+#include "od_plain.h" /* co_copy_number */
 
 /* REAL32/REAL64 are copied bit for bit through uint32_t/uint64_t. */
 _Static_assert(sizeof(float) == 4, "REAL32 needs a 4-byte float");
@@ -124,6 +125,7 @@ static bool wire_is_native(const type_info_t *t)
     return false;
 }
 #endif
+
 
 static bool has_read_hook(const co_od_entry_t *e)
 {
@@ -490,29 +492,37 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 }
 
 /* Position of the first entry whose key is >= key (count when there is none): a bisection
- * without a data-dependent branch (each halving a load, a compare and a conditional move),
- * over the general form's dense keys when given, else over the entries themselves. */
+ * without a data-dependent branch (each halving a load, a compare and a conditional move).
+ * Over the general form's dense keys when given; else over the entries' indices alone (a
+ * 16-bit load and compare a step, no key to compose), then forward over the sub-indices of
+ * the index found, which are few. */
 static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 {
     uint32_t n = od->count;
     if (n == 0) {
         return 0;
     }
-    uint32_t lo = 0;
 #if !CO_CONFIG_OD_COMPACT
     if (od->keys != NULL) {
-        const uint32_t *keys = od->keys;
+        const uint32_t *k = od->keys;
+        uint32_t lo = 0;
         for (; n > 1u; n -= n / 2u) {
-            lo = keys[lo + n / 2u] < key ? lo + n / 2u : lo;
+            lo = k[lo + n / 2u] < key ? lo + n / 2u : lo;
         }
-        return lo + (keys[lo] < key ? 1u : 0u);
+        return lo + (k[lo] < key ? 1u : 0u);
     }
 #endif
+    uint16_t index = (uint16_t)(key >> 8);
     const co_od_entry_t *e = od->entries;
     for (; n > 1u; n -= n / 2u) {
-        lo = entry_key(&e[lo + n / 2u]) < key ? lo + n / 2u : lo;
+        e = e[n / 2u].index < index ? &e[n / 2u] : e;
     }
-    return lo + (entry_key(&e[lo]) < key ? 1u : 0u);
+    e += e->index < index ? 1 : 0; /* the first entry of `index`, or the one after */
+    const co_od_entry_t *end = od->entries + od->count;
+    while (e != end && entry_key(e) < key) {
+        e++;
+    }
+    return (uint32_t)(e - od->entries);
 }
 
 /* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
@@ -651,12 +661,12 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
     if (value == NULL) {
         return CO_ABORT_WRITE_ONLY;
     }
-    const type_info_t *t = entry_info(od, entry);
-    if (wire_is_native(t) && offset == 0 && cap >= t->wire) {
-        memcpy(buf, value, t->wire); /* a whole number, as stored */
-        *n = t->wire;
+    uint32_t native = co_native_size(co_od_type(od, entry));
+    if (native != 0 && offset == 0 && cap >= native) {
+        co_copy_number(buf, value, native); /* a whole number, as stored */
+        *n = native;
         if (total != NULL) {
-            *total = t->wire;
+            *total = native;
         }
         return CO_ABORT_NONE;
     }
@@ -766,6 +776,11 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
             return co_od_hooks_of(entry)->write(od->hook_ctx, entry, 0, data, len, len, true);
         }
         return CO_ABORT_UNSUPPORTED;
+    }
+    uint32_t native = co_native_size(co_od_type(od, entry));
+    if (native != 0 && len == native) { /* a whole number, stored as it travels */
+        co_copy_number(value, data, len);
+        return CO_ABORT_NONE;
     }
     const type_info_t *t = entry_info(od, entry);
     co_abort_t abort = check_len(od, entry, t, len); /* never overrun the storage */

@@ -12,9 +12,6 @@
  */
 #include "pdo_internal.h"
 
-static inline uint16_t rpdo_max(void) { return CO_RPDO_MAX; }
-static inline uint16_t tpdo_max(void) { return CO_TPDO_MAX; }
-
 /* Which PDO an index of 0x1400..0x1BFF belongs to. */
 typedef struct pdo_ref {
     bool tpdo;

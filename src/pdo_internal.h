@@ -24,6 +24,10 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
 /* co_pdo_poll: pdo_timers.h */
 
+/* The PDOs' objects (node_od.c): communication and mapping parameters, 0x1400..0x1BFF. */
+#define CO_PDO_OBJECT_ROWS                                                                         \
+    CO_OBJECT_ROW(0x1400, 0x1BFF, CO_COB_NONE, co_pdo_check_write, co_pdo_written)
+
 /* ---- inside the family */
 
 /* co_pdo_t.flags */
@@ -67,17 +71,6 @@ static inline bool pdo_running(const co_node_t *node)
     return node->nmt_state == CO_NMT_OPERATIONAL;
 }
 
-/* Copy a whole mapped value: the usual widths as fixed-size copies (co_copy_number: not
- * a library call), anything else with co_copy. */
-static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
-{
-    if (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8) {
-        co_copy_number(dst, src, bytes);
-    } else {
-        co_copy(dst, src, bytes);
-    }
-}
-
 /* Slot i's entry, for a slot that is no dummy entry (a plain or direct one, or any slot
  * without bit-granular mapping). */
 static inline const co_od_entry_t *pdo_mapped(const co_od_t *od, const co_pdo_t *p, unsigned i)
@@ -105,6 +98,15 @@ static inline void *pdo_value(const co_od_t *od, const co_pdo_t *p, unsigned i)
     return co_od_value(od, pdo_mapped(od, p, i));
 }
 
+/* Bytes of a mapped entry's value (what a slot maps without bit-granular mapping): the
+ * common numbers without a call. */
+static inline uint32_t pdo_value_size(const co_od_t *od, const co_od_entry_t *e)
+{
+    unsigned type = co_od_type(od, e);
+    uint32_t n = co_native_size(type);
+    return n != 0 ? n : co_type_size((co_type_t)type);
+}
+
 /* Bits slot i maps: without bit-granular mapping always the whole value (no dummies). */
 static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsigned i)
 {
@@ -113,18 +115,21 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     return p->map_bits[i];
 #else
     /* (a mapped object's size is its type's: mappable, pdo_map.c) */
-    return (uint8_t)(8u * co_type_size((co_type_t)co_od_type(od, pdo_mapped(od, p, i))));
+    return (uint8_t)(8u * pdo_value_size(od, pdo_mapped(od, p, i)));
 #endif
+}
+
+/* A whole number stored as it travels, at a byte boundary: copied between the frame and its
+ * storage (what co_od_store and co_od_read would do, without their type table). */
+static inline uint32_t pdo_copies_whole(const co_od_t *od, const co_od_entry_t *e, uint8_t bits,
+                                        uint32_t pos)
+{
+    uint32_t n = co_native_size(co_od_type(od, e));
+    return n != 0 && 8u * n == bits && pos % 8u == 0 && co_od_hooks_of(e) == NULL ? n : 0u;
 }
 
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
-
-/* Slot i of the mapping is copied straight between frame and storage. */
-static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
-{
-    return ((unsigned)p->map_direct[i / 8u] >> (i % 8u)) & 1u;
-}
 
 /* pdo_map.c: resolving mappings into co_pdo_t, checking a new one; copying `n` bits from bit
  * `spos` of src to bit `dpos` of dst (LSB first). */

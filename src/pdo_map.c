@@ -79,12 +79,6 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
 #else
     out->map_entry[k] = e;
 #endif
-    /* A whole number stored as it travels (and no hook to run): copied straight to and from
-     * the frame (pdo_rx.c, pdo_tx.c). */
-    if (bits == 8u * size && co_od_hooks_of(e) == NULL &&
-        co_od_value(od, e) != NULL && ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u)) {
-        out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
-    }
     return CO_ABORT_NONE;
 }
 
@@ -95,7 +89,6 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
 {
     out->count = 0;
     out->bits = 0;
-    memset(out->map_direct, 0, sizeof out->map_direct);
     if (n == 0) {
         return CO_ABORT_NONE;
     }

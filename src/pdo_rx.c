@@ -15,20 +15,20 @@
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
 
-/* Slot i's value (entry e, `bits` of it) from the frame at bit `pos`; false when the
+/* A slot's value (entry e, `bits` of it) from the frame at bit `pos`; false when the
  * object's write hook refused it (then nothing changed). A whole value is stored as it
  * comes; a value mapped with fewer bits keeps the bits the frame does not carry. */
-static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_od_entry_t *e,
-                       uint8_t bits, const uint8_t *data, uint32_t pos)
+static bool store_item(co_node_t *node, const co_od_entry_t *e, uint8_t bits, const uint8_t *data,
+                       uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    if (pdo_direct(p, i) && pos % 8u == 0) { /* stored as it travels: what co_od_store does */
-        pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
+    uint32_t whole = pdo_copies_whole(od, e, bits, pos);
+    if (whole != 0) {
+        co_copy_number(co_od_value(od, e), data + pos / 8u, whole);
         return true;
     }
     /* without bit mapping always a whole value: `bits` are its size */
-    uint32_t size =
-        CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)co_od_type(od, e)) : bits / 8u;
+    uint32_t size = CO_CONFIG_PDO_BIT_MAPPING ? pdo_value_size(od, e) : bits / 8u;
     const uint8_t *value = data + pos / 8u;
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};
@@ -62,7 +62,7 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
     for (unsigned i = 0; i < p->count; i++) {
         const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
         uint8_t bits = pdo_item_bits(od, p, i);
-        if (e != NULL && store_item(node, p, i, e, bits, data, pos)) {
+        if (e != NULL && store_item(node, e, bits, data, pos)) {
             stored[count++] = e;
         }
         pos += bits;

@@ -9,16 +9,17 @@
 
 static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
-/* Slot i's value (`bits` of it) into the frame at bit `pos`: a value stored as it travels
- * copied, other whole bytes straight from co_od_read, anything else through a bit copy of
- * the value's low bits. */
+/* Slot i's value (`bits` of it) into the frame at bit `pos`: a whole number copied, other
+ * whole bytes straight from co_od_read, anything else through a bit copy of the value's
+ * low bits. */
 static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t bits, uint8_t *out,
                       uint32_t pos)
 {
     uint32_t n;
     const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
-    if (pdo_direct(p, i) && pos % 8u == 0) {      /* as co_od_read would */
-        pdo_copy_value(out + pos / 8u, co_od_value(od, e), bits / 8u);
+    uint32_t whole = pdo_copies_whole(od, e, bits, pos);
+    if (whole != 0) {
+        co_copy_number(out + pos / 8u, co_od_value(od, e), whole);
         return;
     }
     if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
@@ -47,11 +48,12 @@ static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_
 /* The TPDO's frame: `data` (a sample), or the mapped values read now (NULL). */
 static CO_SIZE_NOINLINE void send_data(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
 {
-    co_frame_t f = {.len = 0};
+    co_frame_t f;
     co_frame_address(&f, p->cob_id, pdo_bytes(p));
     if (data != NULL) {
-        memcpy(f.data, data, sizeof f.data);
+        co_copy_fixed(f.data, data, sizeof f.data);
     } else {
+        co_zero_fixed(f.data, sizeof f.data);
         pack(node, p, f.data);
     }
     (void)co_node_send_as(node, &f, CO_SVC_PDO);
@@ -114,7 +116,7 @@ void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter)
             send_fresh(node, p);
         }
     } else if (p->type == 252) {
-        memset(p->data, 0, sizeof p->data);
+        co_zero_fixed(p->data, sizeof p->data);
         pack(node, p, p->data);
         pdo_set(p, PDO_F_SAMPLED);
     }

@@ -115,7 +115,7 @@ static void send_reply(co_node_t *node, co_sdo_server_t *s)
 /* A whole frame to the client. */
 static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[CO_SDO_FRAME_LEN])
 {
-    memcpy(s->reply.data, data, CO_SDO_FRAME_LEN);
+    co_copy_fixed(s->reply.data, data, CO_SDO_FRAME_LEN);
     send_reply(node, s);
 }
 
@@ -154,14 +154,22 @@ static CO_NOINLINE void fail(co_node_t *node, co_sdo_server_t *s, co_abort_t cod
 static co_abort_t store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
                         uint32_t ok)
 {
-    co_frame_t served = s->reply; /* valid: else the request had not come */
+    co_frame_t *r = &s->reply;
+    uint32_t served_id = r->id; /* (valid: else the request had not come) */
+    uint8_t served_flags = r->flags;
     co_abort_t abort = co_node_write(node, s->entry, data, len);
     if (abort != CO_ABORT_NONE) {
         return abort;
     }
-    co_put_u32(&served.data[0], ok);
-    co_put_u32(&served.data[4], 0);
-    (void)co_node_send_as(node, &served, CO_SVC_SDO);
+    uint32_t id = r->id; /* the channel's address from now on */
+    uint8_t flags = r->flags;
+    r->id = served_id;
+    r->flags = served_flags;
+    co_put_u32(&r->data[0], ok);
+    co_put_u32(&r->data[4], 0);
+    (void)co_node_send_as(node, r, CO_SVC_SDO);
+    r->id = id;
+    r->flags = flags;
     return CO_ABORT_NONE;
 }
 
@@ -266,7 +274,7 @@ static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *da
             return abort;
         }
     }
-    memcpy(&s->buf[s->buf_len], data, CO_SDO_SEG_BYTES); /* (a fixed size: moves, no loop) */
+    co_copy_fixed(&s->buf[s->buf_len], data, CO_SDO_SEG_BYTES); /* (a fixed size: no loop) */
     s->buf_len += n;
     return CO_ABORT_NONE;
 }
@@ -564,7 +572,7 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
     const uint8_t *next = &s->buf[(size_t)seq * CO_SDO_SEG_BYTES];
     while (seq < plain && co_txq_idle(node)) {
         s->reply.data[0] = ++seq;
-        memcpy(&s->reply.data[1], next, CO_SDO_SEG_BYTES);
+        co_copy_fixed(&s->reply.data[1], next, CO_SDO_SEG_BYTES);
         next += CO_SDO_SEG_BYTES;
         (void)co_node_send_as(node, &s->reply, CO_SVC_SDO);
     }

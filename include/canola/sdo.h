@@ -95,7 +95,6 @@ typedef struct co_sdo_server {
     bool size_known;
     bool crc_on;
     bool last_sent;
-    bool resent; /**< block upload: the client acknowledged nothing of the sub-block sent */
     uint16_t index;
     uint16_t crc;
     co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
@@ -106,8 +105,11 @@ typedef struct co_sdo_server {
     uint32_t size;    /**< indicated or known total size */
     uint32_t done;    /**< bytes transferred so far */
     uint32_t buf_len;
-    uint8_t buf[CO_SDO_BUF_SIZE + 6]; /**< + room for a block's last segment padding */
-    uint8_t last_len;                 /**< block upload: bytes in the final segment sent */
+    /** Segmented and block transfers' data (+ room for a block's last segment padding);
+     *  an expedited-only server needs none. */
+    uint8_t buf[CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK ? CO_SDO_BUF_SIZE + 6 : 1];
+    uint8_t last_len; /**< block upload: bytes in the final segment sent */
+    bool resent;      /**< block upload: the client acknowledged nothing of the sub-block sent */
 } co_sdo_server_t;
 
 /** One SDO client channel (embedded in the node; fields are internal). */
