@@ -15,13 +15,20 @@ uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry);
 
 /* The wire size of a type whose storage is its wire form (on a little-endian host: the
  * numbers as wide as their wire form), 1, 2, 4 or 8 bytes; 0 for the others. By type code,
- * without a table: the common reads and writes of a whole number copy it as it is. */
-#define CO_NATIVE_1 ((1u << CO_TYPE_INTEGER8) | (1u << CO_TYPE_UNSIGNED8))
-#define CO_NATIVE_2 ((1u << CO_TYPE_INTEGER16) | (1u << CO_TYPE_UNSIGNED16))
-#define CO_NATIVE_4                                                                                \
-    ((1u << CO_TYPE_INTEGER32) | (1u << CO_TYPE_UNSIGNED32) | (1u << CO_TYPE_REAL32))
-#define CO_NATIVE_8                                                                                \
-    ((1u << CO_TYPE_INTEGER64) | (1u << CO_TYPE_UNSIGNED64) | (1u << CO_TYPE_REAL64))
+ * without a table (the common reads and writes of a whole number copy it as it is): the
+ * size's log2 + 1 in bit planes, one mask per bit. */
+#define CO_NATIVE_BIT(t) (1u << (t))
+#define CO_NATIVE_PLANE0                                                                           \
+    (CO_NATIVE_BIT(CO_TYPE_INTEGER8) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED8) |                          \
+     CO_NATIVE_BIT(CO_TYPE_INTEGER32) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED32) |                        \
+     CO_NATIVE_BIT(CO_TYPE_REAL32)) /* 1 and 3: 1 and 4 bytes */
+#define CO_NATIVE_PLANE1                                                                           \
+    (CO_NATIVE_BIT(CO_TYPE_INTEGER16) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED16) |                        \
+     CO_NATIVE_BIT(CO_TYPE_INTEGER32) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED32) |                        \
+     CO_NATIVE_BIT(CO_TYPE_REAL32)) /* 2 and 3: 2 and 4 bytes */
+#define CO_NATIVE_PLANE2                                                                           \
+    (CO_NATIVE_BIT(CO_TYPE_INTEGER64) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED64) |                        \
+     CO_NATIVE_BIT(CO_TYPE_REAL64)) /* 4: 8 bytes */
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 #define CO_NATIVE_HOST 1u
 #else
@@ -29,12 +36,10 @@ uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry);
 #endif
 static inline uint32_t co_native_size(unsigned type)
 {
-    uint32_t bit = CO_NATIVE_HOST && type < 32u ? 1u << type : 0u;
-    return (bit & CO_NATIVE_4)                         ? 4u
-           : (bit & CO_NATIVE_2)                       ? 2u
-           : (bit & CO_NATIVE_1)                       ? 1u
-           : CO_CONFIG_OD_64BIT && (bit & CO_NATIVE_8) ? 8u
-                                                       : 0u;
+    uint32_t t = type & 31u;
+    uint32_t code = ((CO_NATIVE_PLANE0 >> t) & 1u) | (((CO_NATIVE_PLANE1 >> t) & 1u) << 1) |
+                    (CO_CONFIG_OD_64BIT ? ((CO_NATIVE_PLANE2 >> t) & 1u) << 2 : 0u);
+    return CO_NATIVE_HOST && type < 32u ? (1u << code) >> 1 : 0u;
 }
 
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no

@@ -99,25 +99,24 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 static void count_listeners(co_node_t *node)
 {
     uint16_t listeners = 0;
-    uint16_t sync_end = 0;
-    for (unsigned n = 0; n < pdo_tx_count(node); n++) {
-        const co_pdo_t *p = &node->tpdo[n];
-        if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
-            listeners++;
-        }
-        if (pdo_active(p) && (p->type <= 240 || p->type == 252)) {
-            sync_end = (uint16_t)(n + 1u);
+    uint16_t sync_end[2] = {0, 0}; /* RPDOs, TPDOs: 1 + the last one a SYNC drives */
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        unsigned count;
+        const co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (unsigned n = 0; n < count; n++) {
+            uint8_t type = table[n].type;
+            if (!pdo_active(&table[n])) {
+                continue;
+            }
+            if (type <= 240 || (tpdo && type == 252)) {
+                sync_end[tpdo] = (uint16_t)(n + 1u);
+            }
+            listeners = (uint16_t)(listeners + (tpdo && (type == 0 || type >= 254)));
         }
     }
     node->tpdo_listeners = listeners;
-    node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
-    uint16_t rx_end = 0;
-    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
-        if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
-            rx_end = (uint16_t)(n + 1u);
-        }
-    }
-    node->rpdo_sync_end = rx_end; /* nor at an RPDO past this one */
+    node->rpdo_sync_end = sync_end[0]; /* a SYNC looks at no RPDO past this one */
+    node->tpdo_sync_end = sync_end[1]; /* nor at a TPDO past this one */
 }
 
 void co_pdo_reset_comm(co_node_t *node)

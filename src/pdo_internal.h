@@ -98,15 +98,6 @@ static inline void *pdo_value(const co_od_t *od, const co_pdo_t *p, unsigned i)
     return co_od_value(od, pdo_mapped(od, p, i));
 }
 
-/* Bytes of a mapped entry's value (what a slot maps without bit-granular mapping): the
- * common numbers without a call. */
-static inline uint32_t pdo_value_size(const co_od_t *od, const co_od_entry_t *e)
-{
-    unsigned type = co_od_type(od, e);
-    uint32_t n = co_native_size(type);
-    return n != 0 ? n : co_type_size((co_type_t)type);
-}
-
 /* Bits slot i maps: without bit-granular mapping always the whole value (no dummies). */
 static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsigned i)
 {
@@ -115,17 +106,22 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
     return p->map_bits[i];
 #else
     /* (a mapped object's size is its type's: mappable, pdo_map.c) */
-    return (uint8_t)(8u * pdo_value_size(od, pdo_mapped(od, p, i)));
+    return (uint8_t)(8u * co_type_size((co_type_t)co_od_type(od, pdo_mapped(od, p, i))));
 #endif
 }
 
-/* A whole number stored as it travels, at a byte boundary: copied between the frame and its
- * storage (what co_od_store and co_od_read would do, without their type table). */
-static inline uint32_t pdo_copies_whole(const co_od_t *od, const co_od_entry_t *e, uint8_t bits,
-                                        uint32_t pos)
+/* Slot i of a frame: its entry, and the bytes of a whole number it maps that is stored as it
+ * travels (copied between the frame and the storage, as co_od_read and co_od_store would do,
+ * without their type table), else 0. Returns the slot's bits. */
+static inline uint8_t pdo_item(const co_od_t *od, const co_pdo_t *p, unsigned i,
+                               const co_od_entry_t **entry, uint32_t *whole)
 {
-    uint32_t n = co_native_size(co_od_type(od, e));
-    return n != 0 && 8u * n == bits && pos % 8u == 0 && co_od_hooks_of(e) == NULL ? n : 0u;
+    const co_od_entry_t *e = pdo_entry(od, p, i);
+    uint32_t n = e != NULL && co_od_hooks_of(e) == NULL ? co_native_size(co_od_type(od, e)) : 0u;
+    uint8_t bits = CO_CONFIG_PDO_BIT_MAPPING || n == 0 ? pdo_item_bits(od, p, i) : (uint8_t)(8u * n);
+    *entry = e;
+    *whole = bits == 8u * n ? n : 0u;
+    return bits;
 }
 
 /* Bytes the mapping fills. */

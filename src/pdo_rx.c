@@ -15,20 +15,17 @@
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
 
-/* A slot's value (entry e, `bits` of it) from the frame at bit `pos`; false when the
- * object's write hook refused it (then nothing changed). A whole value is stored as it
- * comes; a value mapped with fewer bits keeps the bits the frame does not carry. */
-static bool store_item(co_node_t *node, const co_od_entry_t *e, uint8_t bits, const uint8_t *data,
-                       uint32_t pos)
+/* A slot's value (entry e, `bits` of it) from the frame at bit `pos`, other than a whole
+ * number stored as it travels (apply copies those); false when the object's write hook
+ * refused it (then nothing changed). A whole value is stored as it comes; a value mapped
+ * with fewer bits keeps the bits the frame does not carry. */
+static CO_FAST_NOINLINE bool store_item(co_node_t *node, const co_od_entry_t *e, uint8_t bits,
+                                        const uint8_t *data, uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    uint32_t whole = pdo_copies_whole(od, e, bits, pos);
-    if (whole != 0) {
-        co_copy_number(co_od_value(od, e), data + pos / 8u, whole);
-        return true;
-    }
     /* without bit mapping always a whole value: `bits` are its size */
-    uint32_t size = CO_CONFIG_PDO_BIT_MAPPING ? pdo_value_size(od, e) : bits / 8u;
+    uint32_t size =
+        CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)co_od_type(od, e)) : bits / 8u;
     const uint8_t *value = data + pos / 8u;
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t wire[PDO_VALUE_MAX] = {0};
@@ -60,9 +57,13 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
     uint8_t count = 0;
     uint32_t pos = 0;
     for (unsigned i = 0; i < p->count; i++) {
-        const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
-        uint8_t bits = pdo_item_bits(od, p, i);
-        if (e != NULL && store_item(node, e, bits, data, pos)) {
+        const co_od_entry_t *e;
+        uint32_t whole;
+        uint8_t bits = pdo_item(od, p, i, &e, &whole);
+        if (whole != 0 && pos % 8u == 0) {
+            co_copy_number(co_od_value(od, e), data + pos / 8u, whole);
+            stored[count++] = e;
+        } else if (e != NULL && store_item(node, e, bits, data, pos)) { /* NULL: a dummy */
             stored[count++] = e;
         }
         pos += bits;

@@ -9,19 +9,13 @@
 
 static bool event_driven(const co_pdo_t *p) { return p->type >= 254; }
 
-/* Slot i's value (`bits` of it) into the frame at bit `pos`: a whole number copied, other
- * whole bytes straight from co_od_read, anything else through a bit copy of the value's
- * low bits. */
-static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t bits, uint8_t *out,
-                      uint32_t pos)
+/* A slot's value (entry e, `bits` of it) into the frame at bit `pos`, other than a whole
+ * number stored as it travels (pack copies those): whole bytes straight from co_od_read,
+ * anything else through a bit copy of the value's low bits. */
+static CO_FAST_NOINLINE void pack_item(const co_od_t *od, const co_od_entry_t *e, uint8_t bits,
+                                       uint8_t *out, uint32_t pos)
 {
     uint32_t n;
-    const co_od_entry_t *e = pdo_mapped(od, p, i); /* TPDOs map no dummy entries */
-    uint32_t whole = pdo_copies_whole(od, e, bits, pos);
-    if (whole != 0) {
-        co_copy_number(out + pos / 8u, co_od_value(od, e), whole);
-        return;
-    }
     if (!CO_CONFIG_PDO_BIT_MAPPING || (pos % 8u == 0 && bits % 8u == 0)) {
         (void)co_od_read(od, e, 0, out + pos / 8u, bits / 8u, &n, NULL);
         return;
@@ -33,14 +27,21 @@ static void pack_item(const co_od_t *od, const co_pdo_t *p, unsigned i, uint8_t 
 #endif
 }
 
-/* The mapped values into `out` (zeroed first: bits no item fills are 0). */
+/* The mapped values into `out` (zeroed: bits no item fills stay 0). TPDOs map no dummy
+ * entries. */
 static void pack(const co_node_t *node, const co_pdo_t *p, uint8_t out[CO_FRAME_DATA_MAX])
 {
     const co_od_t *od = &node->cfg.od;
     uint32_t pos = 0;
     for (unsigned i = 0; i < p->count; i++) {
-        uint8_t bits = pdo_item_bits(od, p, i);
-        pack_item(od, p, i, bits, out, pos);
+        const co_od_entry_t *e;
+        uint32_t whole;
+        uint8_t bits = pdo_item(od, p, i, &e, &whole);
+        if (whole != 0 && pos % 8u == 0) {
+            co_copy_number(out + pos / 8u, co_od_value(od, e), whole);
+        } else {
+            pack_item(od, e, bits, out, pos);
+        }
         pos += bits;
     }
 }
