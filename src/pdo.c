@@ -1,9 +1,11 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
- * pdo.c -- what RPDOs and TPDOs share (see canola/pdo.h): the dictionary's PDOs,
- * loading their communication parameters, the rules of writes to 0x1400..0x1BFF, routes,
- * and handing NMT states and SYNCs to pdo_rx.c / pdo_tx.c. Mappings are pdo_map.c, the
- * timers pdo_timers.c.
+ * pdo.c -- the base of the PDO family (see canola/pdo.h): what RPDOs and TPDOs share. The
+ * dictionary's PDOs, loading their communication parameters and restarting their state
+ * (the event timer's start included), the rules of writes to 0x1400..0x1BFF, routes, and
+ * the counts a SYNC and a changed value look at. It calls nothing above it: pdo_timers.c
+ * (the timers' decisions), pdo_tx.c (TPDOs) and pdo_rx.c (RPDOs, the SYNC's and the
+ * poll's PDO work) call down to it, in that order; mappings are pdo_map.c, below it.
  *
  * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n), CO_RPDO_MAX / CO_TPDO_MAX of
  * them; the slots of PDOs the dictionary lacks stay not present. Parameters are
@@ -50,7 +52,10 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     p->flags = cob ? PDO_F_PRESENT : 0;
     p->cob_id = cob ? (uint32_t)co_od_entry_uint(&node->cfg.od, cob) : CO_COB_INVALID;
     p->type = (uint8_t)co_od_u32(node, idx, 2, 255);
-    pdo_timers_load(node, p, tpdo, idx);
+#if CO_CONFIG_PDO_TIMERS
+    p->event_ms = (uint16_t)co_od_u32(node, idx, 5, 0);
+    p->inhibit = tpdo ? (uint16_t)co_od_u32(node, idx, 3, 0) : 0;
+#endif
     p->sync_start = tpdo ? (uint8_t)co_od_u32(node, idx, 6, 0) : 0;
 }
 
@@ -65,6 +70,29 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
     if (tpdo) {
         tpdo_start(node, p);
     }
+}
+
+#if CO_CONFIG_PDO_TIMERS
+void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
+#endif
+
+/* Another RPDO than `self` has `flag` set. */
+bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
+{
+    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
+        const co_pdo_t *p = &node->rpdo[n];
+        if (p != self && pdo_has(p, flag)) {
+            return true;
+        }
+    }
+    return false;
 }
 
 /* ---- node hooks */
@@ -139,63 +167,6 @@ void co_pdo_state_entered(co_node_t *node)
     for (unsigned n = 0; n < pdo_tx_count(node); n++) {
         restart(node, &node->tpdo[n], true);
     }
-}
-
-void co_pdo_sync(co_node_t *node, uint8_t counter)
-{
-    /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
-     * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
-     * Both loops test the NMT state first (an application callback may change it). */
-    /* The loops end at the last PDO a SYNC drives (count_listeners; read again at each step:
-     * an application callback may change the PDOs). */
-    for (unsigned n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
-        if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
-            rpdo_sync(node, (uint8_t)n);
-        }
-    }
-    for (unsigned n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
-        tpdo_sync(node, &node->tpdo[n], counter);
-    }
-}
-
-/* ---- events */
-
-static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t *entry)
-{
-    for (unsigned i = 0; i < p->count; i++) {
-        if (pdo_entry(od, p, i) == entry) {
-            return true;
-        }
-    }
-    return false;
-}
-
-static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
-{
-    uint32_t marked = 0;
-    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
-        co_pdo_t *p = &node->tpdo[n];
-        if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
-            marked++;
-        }
-    }
-    return marked;
-}
-
-void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
-{
-    if (node->tpdo_listeners == 0) {
-        return; /* no TPDO listens (see count_listeners) */
-    }
-    if ((co_od_attr(&node->cfg.od, entry) & CO_OD_TPDO) && pdo_running(node)) {
-        (void)mark_tpdos(node, entry);
-    }
-}
-
-uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
-{
-    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, NULL);
-    return entry != NULL ? mark_tpdos(node, entry) : 0;
 }
 
 /* ---- writes to 0x1400..0x1BFF */

@@ -164,8 +164,7 @@ bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it 
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
 void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
 
-/* pdo_rx.c */
-void rpdo_sync(co_node_t *node, uint8_t n); /* RPDO n's held data (PDO_F_WAITING) at a SYNC */
+/* pdo.c: another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
 
 /* pdo_timers.c (its header uses the helpers above) */

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_rx.c -- RPDOs: length checks, applying the data to the mapped objects (at once or
- * at the next SYNC) and deadline monitoring (see canola/pdo.h).
+ * at the next SYNC) and deadline monitoring (see canola/pdo.h); the top of the PDO family,
+ * it hands a SYNC and the node's poll to the TPDOs too (pdo_tx.c).
  *
  * Received values are stored with co_od_store, as a PDO is no SDO: no limits, no check
  * hook, no service effects; the entry's written hook runs, and TPDOs mapping the entry
@@ -76,18 +77,6 @@ static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
     }
 }
 
-/* Another RPDO than `self` has `flag` set. */
-bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
-{
-    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
-        const co_pdo_t *p = &node->rpdo[n];
-        if (p != self && pdo_has(p, flag)) {
-            return true;
-        }
-    }
-    return false;
-}
-
 static void length_error(co_node_t *node, co_pdo_t *p, uint16_t code)
 {
     pdo_set(p, PDO_F_LEN_ERROR);
@@ -148,7 +137,8 @@ void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
     }
 }
 
-void rpdo_sync(co_node_t *node, uint8_t n)
+/* RPDO n's held data (PDO_F_WAITING) at a SYNC. */
+static void rpdo_sync(co_node_t *node, uint8_t n)
 {
     co_pdo_t *p = &node->rpdo[n];
     pdo_clear(p, PDO_F_WAITING);
@@ -156,3 +146,34 @@ void rpdo_sync(co_node_t *node, uint8_t n)
         apply(node, n, p->data);
     }
 }
+
+/* ---- a SYNC, the poll: RPDOs here, TPDOs in pdo_tx.c */
+
+void co_pdo_sync(co_node_t *node, uint8_t counter)
+{
+    /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
+     * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
+     * Both loops test the NMT state first (an application callback may change it). */
+    /* The loops end at the last PDO a SYNC drives (count_listeners; read again at each step:
+     * an application callback may change the PDOs). */
+    for (unsigned n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
+        if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
+            rpdo_sync(node, (uint8_t)n);
+        }
+    }
+    for (unsigned n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
+        tpdo_sync(node, &node->tpdo[n], counter);
+    }
+}
+
+#if CO_CONFIG_PDO_TIMERS
+void co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    for (unsigned n = 0; n < pdo_rx_count(node) && pdo_running(node); n++) {
+        rpdo_deadline(node, &node->rpdo[n], now_us);
+    }
+    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
+        tpdo_poll(node, &node->tpdo[n], now_us);
+    }
+}
+#endif

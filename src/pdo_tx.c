@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_tx.c -- TPDOs: packing the mapped values and sending them by transmission type
- * (see canola/pdo.h). Values come from co_od_read, so read hooks produce them.
+ * (see canola/pdo.h), the events of changed values, the event timer's and inhibit time's
+ * due work. Values come from co_od_read, so read hooks produce them.
  */
 #include <string.h>
 
@@ -152,3 +153,57 @@ co_err_t co_tpdo_request(co_node_t *node, uint8_t n)
     (void)tpdo_event(node, p);
     return CO_OK;
 }
+
+/* ---- events */
+
+static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t *entry)
+{
+    for (unsigned i = 0; i < p->count; i++) {
+        if (pdo_entry(od, p, i) == entry) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
+{
+    uint32_t marked = 0;
+    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
+        co_pdo_t *p = &node->tpdo[n];
+        if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
+            marked++;
+        }
+    }
+    return marked;
+}
+
+void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
+{
+    if (node->tpdo_listeners == 0) {
+        return; /* no TPDO listens (see count_listeners) */
+    }
+    if ((co_od_attr(&node->cfg.od, entry) & CO_OD_TPDO) && pdo_running(node)) {
+        (void)mark_tpdos(node, entry);
+    }
+}
+
+uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
+{
+    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, NULL);
+    return entry != NULL ? mark_tpdos(node, entry) : 0;
+}
+
+#if CO_CONFIG_PDO_TIMERS
+/* The event timer's and the inhibit time's due work (pdo_timers.c decides). */
+void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+{
+    if (tpdo_timers_due(node, p, now_us)) {
+        tpdo_send_event(node, p);
+        if (pdo_has(p, PDO_F_PENDING)) {
+            co_node_schedule(node, p->inhibit_until_us);
+        }
+        co_node_schedule(node, p->next_us);
+    }
+}
+#endif
