@@ -47,7 +47,7 @@ static inline bool pdo_has(const co_pdo_t *p, unsigned f) { return (p->flags & f
 
 /* A PDO that runs: present, valid (COB-ID bit 31 clear) and mapping something. A PDO
  * mapping nothing (also one whose mapping failed to resolve) does nothing. */
-static inline bool pdo_active(const co_pdo_t *p)
+static CO_SIZE_INLINE bool pdo_active(const co_pdo_t *p)
 {
     return pdo_has(p, PDO_F_PRESENT) && !(p->cob_id & CO_COB_INVALID) && p->count > 0;
 }

@@ -1,10 +1,10 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_timers.c -- the PDO timers (see canola/pdo.h): the TPDO inhibit time (0x1800+n sub3)
- * and event timer (sub5), and RPDO deadline monitoring (0x1400+n sub5): what is due when,
- * and a missed deadline's reports. It sends nothing (pdo_tx.c sends what is due) and calls
- * only the family's base, pdo.c (which loads the timers' parameters and starts the event
- * timer). Left out with CO_CONFIG_PDO_TIMERS 0 (pdo_timers.h): those sub-indices are then
+ * and event timer (sub5) as a TPDO sends, and RPDO deadline monitoring (0x1400+n sub5): a
+ * deadline restarted, a missed one reported. It sends nothing (pdo_tx.c's poll sends what
+ * is due) and calls only the family's base, pdo.c (which loads the timers' parameters and
+ * starts the event timer). Left out with CO_CONFIG_PDO_TIMERS 0 (pdo_timers.h): those sub-indices are then
  * plain entries.
  */
 #include "pdo_internal.h"
@@ -56,25 +56,6 @@ void rpdo_deadline(co_node_t *node, co_pdo_t *p, uint64_t now_us)
     pdo_set(p, PDO_F_TIMED_OUT);
     (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
     node->wiring->error_behaviour(node); /* the error behaviour of 0x1029 (kernel.h) */
-}
-
-bool tpdo_timers_due(co_node_t *node, co_pdo_t *p, uint64_t now_us)
-{
-    if (!pdo_active(p) || p->type < 254) {
-        return false;
-    }
-    if (now_us >= p->next_us) { /* the event timer is an event */
-        p->next_us = CO_TIME_NEVER;
-        pdo_set(p, PDO_F_PENDING);
-    }
-    bool due = pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us;
-    if (!due) {
-        if (pdo_has(p, PDO_F_PENDING)) {
-            co_node_schedule(node, p->inhibit_until_us);
-        }
-        co_node_schedule(node, p->next_us);
-    }
-    return due;
 }
 
 #endif

@@ -23,11 +23,10 @@ void tpdo_start(co_node_t *node, co_pdo_t *p);
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
 void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
-/* At the poll: an RPDO's deadline missed is reported (EMCY 0x8250, the error behaviour); an
- * event-driven TPDO is due to be sent now (true), else its next deadlines are scheduled. */
+/* At the poll: an RPDO's deadline missed is reported (EMCY 0x8250, the error behaviour);
+ * pdo_tx.c: an event-driven TPDO's event timer and pending event. */
 void rpdo_deadline(co_node_t *node, co_pdo_t *p, uint64_t now_us);
-bool tpdo_timers_due(co_node_t *node, co_pdo_t *p, uint64_t now_us);
-void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us); /* pdo_tx.c: sends a due one */
+void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
 #else
 static inline void co_pdo_poll(co_node_t *node, uint64_t now_us)
 {

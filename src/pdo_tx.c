@@ -195,15 +195,23 @@ uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
 }
 
 #if CO_CONFIG_PDO_TIMERS
-/* The event timer's and the inhibit time's due work (pdo_timers.c decides). */
+/* An event-driven TPDO at the poll: the event timer is an event; a pending event goes once
+ * the inhibit time is over. The next deadlines go to co_node_schedule. */
 void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
 {
-    if (tpdo_timers_due(node, p, now_us)) {
-        tpdo_send_event(node, p);
-        if (pdo_has(p, PDO_F_PENDING)) {
-            co_node_schedule(node, p->inhibit_until_us);
-        }
-        co_node_schedule(node, p->next_us);
+    if (!pdo_active(p) || !event_driven(p)) {
+        return;
     }
+    if (now_us >= p->next_us) {
+        p->next_us = CO_TIME_NEVER;
+        pdo_set(p, PDO_F_PENDING);
+    }
+    if (pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us) {
+        tpdo_send_event(node, p);
+    }
+    if (pdo_has(p, PDO_F_PENDING)) {
+        co_node_schedule(node, p->inhibit_until_us);
+    }
+    co_node_schedule(node, p->next_us);
 }
 #endif
