@@ -38,13 +38,13 @@
 #define CO_SIZE_NOINLINE
 #endif
 
-/* And the reverse: a function of one or two callers that -Os keeps out of line, where
- * the copies are smaller (constant arguments fold, a large frame merges; the functions
- * marked so were found by measuring). Other builds let the compiler decide. */
+/* And the reverse: a small function (or one of one or two callers) that -Os keeps out of
+ * line, where the copies are smaller (constant arguments fold, a large frame merges; the
+ * functions marked so were found by measuring). Other builds let the compiler decide. */
 #if (defined(__GNUC__) || defined(__clang__)) && defined(__OPTIMIZE_SIZE__)
 #define CO_SIZE_INLINE inline __attribute__((always_inline))
 #else
-#define CO_SIZE_INLINE
+#define CO_SIZE_INLINE inline
 #endif
 
 /* The opposite hint: a small hot helper that the compiler's size heuristics would keep
