@@ -10,16 +10,17 @@
 BUILD      ?= build
 BUILD_SAN  ?= build-san
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
-# Tests run side by side: most of the C tests' and Python tests' time is waiting.
+# Tests run side by side, counted from the machine's cores: most of the C tests' and Python
+# tests' time is waiting, so pytest runs two workers a core.
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
-PY_WORKERS ?= 4
+PY_WORKERS ?= $(shell echo $$((2 * $(JOBS))))
 # Hand-written C only: generated golden files (python/tests/golden) keep the generator's layout.
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
         test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
         fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
-        test-clang analyse clean
+        test-clang analyse clean fuzz-conformance
 
 all: $(BUILD)/build.stamp
 
@@ -134,7 +135,7 @@ FUZZ_EXTRA_node = examples/example_od.c
 FUZZ_EXTRA_sdo_client = examples/example_od.c
 FUZZ_EXTRA_manager = examples/example_od.c
 FUZZ_EXTRA_socketcand_client = port/linux/socketcand.c port/linux/transport.c
-fuzz: fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand
+fuzz: fuzz-c fuzz-eds fuzz-gateway fuzz-socketcand fuzz-conformance
 
 build-fuzz/fuzz_%: FORCE
 	@mkdir -p build-fuzz
@@ -155,23 +156,25 @@ fuzz-c: $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
 # Every target (C and Python) for FUZZ_LONG_SECONDS each, one after the other, then one
 # table: executions, coverage, corpus, findings (fuzz/run-long; logs in build-fuzz/long/).
 FUZZ_LONG_SECONDS ?= 600
-FUZZ_LONG_TARGETS ?= $(FUZZ_TARGETS) eds gateway socketcand
+FUZZ_LONG_TARGETS ?= $(FUZZ_TARGETS) eds gateway socketcand conformance
 fuzz-long: py-env $(FUZZ_TARGETS:%=build-fuzz/fuzz_%)
 	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
 	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
 	  >/dev/null 2>&1 || echo "fuzz-long: atheris not installable here: Python targets NOT RUN"
 	@fuzz/run-long $(FUZZ_LONG_SECONDS) $(FUZZ_LONG_TARGETS)
 
-# atheris has no wheel for every Python: without it the EDS corpus is still replayed.
-fuzz-eds: py-env
-	@mkdir -p build-fuzz/corpus-eds
+# atheris has no wheel for every Python: without it these targets still replay their seed
+# corpus (fuzz_eds: the EDS parser; fuzz_conformance: the conformance tester against a
+# node whose answers are the fuzzer's).
+fuzz-eds fuzz-conformance: fuzz-%: py-env
+	@mkdir -p build-fuzz/corpus-$*
 	@$(PY_VENV)/bin/python -c 'import atheris' 2>/dev/null || \
 	  $(PY_VENV)/bin/python -m pip install -q --disable-pip-version-check -e 'python[fuzz]' \
-	  >/dev/null 2>&1 || echo "fuzz_eds: atheris not installable here: replaying the corpus only"
-	@$(PY_VENV)/bin/python fuzz/fuzz_eds.py -artifact_prefix=build-fuzz/ \
-	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-eds fuzz/corpus/eds \
-	  > build-fuzz/fuzz-eds.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-eds.log; \
-	  echo "fuzz_eds: exit $$rc"; exit $$rc
+	  >/dev/null 2>&1 || echo "fuzz_$*: atheris not installable here: replaying the corpus only"
+	@$(PY_VENV)/bin/python fuzz/fuzz_$*.py -artifact_prefix=build-fuzz/ \
+	  -max_total_time=$(FUZZ_SECONDS) build-fuzz/corpus-$* fuzz/corpus/$* \
+	  > build-fuzz/fuzz-$*.log 2>&1; rc=$$?; tail -n 4 build-fuzz/fuzz-$*.log; \
+	  echo "fuzz_$*: exit $$rc"; exit $$rc
 
 fuzz-gateway: py-env
 	@mkdir -p build-fuzz/corpus-gateway

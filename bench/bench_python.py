@@ -17,6 +17,11 @@ usage: bench_python.py same_bus ROUND_TRIPS RUNS
 usage: bench_python.py block BYTES RUNS
     An SDO block upload and a block download of BYTES between canola.Master and
     canola.Device on one python-can bus object: bytes per second of each, best of RUNS.
+usage: bench_python.py segments SEGMENTS RUNS
+    How fast a canola.Device answers each segment of a segmented SDO upload (a DOMAIN of
+    7 x SEGMENTS bytes) to a plain python-can client on another bus object of the channel,
+    idle and beside 4 CPU-bound processes: median, 99th percentile and longest time from a
+    segment request sent to its answer received, over RUNS uploads.
 usage: bench_python.py device_frames FRAMES RUNS
     A canola.Device on a python-can virtual bus receives FRAMES RPDOs sent by a plain
     python-can bus object of the same channel, as fast as they come, each applied to its
@@ -236,6 +241,63 @@ def block(size: int, runs: int) -> None:
           f"upload_Bps={size / best['up']:.0f}")
 
 
+def _segment_times(client: can.BusABC, segments: int) -> list[float]:
+    """One segmented upload of 0x2000 by hand: the time each segment took to answer."""
+    def answer() -> bytes:
+        end = time.monotonic() + 30.0
+        while time.monotonic() < end:
+            msg = client.recv(1.0)
+            if msg is not None and msg.arbitration_id == 0x580 + SERVER_ID:
+                return bytes(msg.data)
+        raise SystemExit("bench_python: the device did not answer within 30 s")
+
+    request = can.Message(arbitration_id=0x600 + SERVER_ID, is_extended_id=False,
+                          data=bytes([0x40, 0x00, 0x20, 0, 0, 0, 0, 0]))
+    client.send(request)
+    if answer()[0] & 0xE0 != 0x40:
+        raise SystemExit("bench_python: the upload did not start")
+    times = []
+    for i in range(segments):
+        t0 = time.perf_counter()
+        client.send(can.Message(arbitration_id=0x600 + SERVER_ID, is_extended_id=False,
+                                data=bytes([0x60 | (i & 1) << 4]) + bytes(7)))
+        if answer()[0] & 0xE0:
+            raise SystemExit("bench_python: a segment was refused")
+        times.append(time.perf_counter() - t0)
+    return times
+
+
+def segments(count: int, runs: int) -> None:
+    import subprocess  # noqa: PLC0415
+
+    import canola  # noqa: PLC0415
+
+    out = [f"segments={count}", f"runs={runs}"]
+    with tempfile.TemporaryDirectory() as tmp:
+        bus, client = virtual("bench-segments"), virtual("bench-segments")
+        device = canola.Device(bench_eds(tmp), SERVER_ID, bus, domain_size=7 * count)
+        device.start()
+        device.od.write(0x2000, 0, bytes(7 * count))
+        try:
+            for load in ("idle", "load"):
+                burners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+                           for _ in range(4 if load == "load" else 0)]
+                try:
+                    times = sorted(t for _ in range(runs) for t in _segment_times(client, count))
+                finally:
+                    for p in burners:
+                        p.kill()
+                        p.wait(10)
+                out += [f"{load}_median_us={times[len(times) // 2] * 1e6:.0f}",
+                        f"{load}_p99_us={times[int(len(times) * 0.99)] * 1e6:.0f}",
+                        f"{load}_max_us={times[-1] * 1e6:.0f}"]
+        finally:
+            device.stop()
+            bus.shutdown()
+            client.shutdown()
+    print(" ".join(out))
+
+
 def device_frames(frames: int, runs: int) -> None:
     import canola  # noqa: PLC0415
 
@@ -283,11 +345,13 @@ def device_frames(frames: int, runs: int) -> None:
 
 
 def main() -> int:
-    if len(sys.argv) != 4 or sys.argv[1] not in ("same_bus", "block", "device_frames"):
+    if len(sys.argv) != 4 or sys.argv[1] not in ("same_bus", "block", "segments",
+                                                  "device_frames"):
         print(__doc__, file=sys.stderr)
         return 2
     what, n, runs = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-    {"same_bus": same_bus, "block": block, "device_frames": device_frames}[what](n, runs)
+    {"same_bus": same_bus, "block": block, "segments": segments,
+     "device_frames": device_frames}[what](n, runs)
     return 0
 
 

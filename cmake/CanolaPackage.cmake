@@ -7,8 +7,8 @@
 #      canola::sim, canola::linux), so a firmware's add_subdirectory(canola) and an
 #      application's find_package(canola) link the same names;
 #   3. cmake --install (CANOLA_INSTALL): headers, static libraries, the CMake package
-#      (find_package(canola)), its version file, and pkg-config files (canola, canola-sim,
-#      canola-linux). The installed canola/config.h is written by the build and holds the
+#      (find_package(canola)), its version file, pkg-config files (canola, canola-sim,
+#      canola-linux), and the program canola-node (bin/). The installed canola/config.h is written by the build and holds the
 #      configuration the libraries were built with (cmake/CanolaInstalledConfig.cmake).
 
 # ---- 1. The configuration header. A path, absolute or relative to the top source folder.
@@ -106,6 +106,10 @@ write_basic_package_version_file("${CANOLA_GENERATED}/canolaConfigVersion.cmake"
 install(FILES "${CANOLA_GENERATED}/canolaConfig.cmake"
               "${CANOLA_GENERATED}/canolaConfigVersion.cmake"
         DESTINATION "${CANOLA_CMAKE_DIR}")
+# canola-node, the example device as a Linux program (the README runs it).
+if(TARGET canola-node)
+  install(TARGETS canola-node RUNTIME DESTINATION "${CMAKE_INSTALL_BINDIR}")
+endif()
 # The license travels with the libraries (Apache-2.0: LICENSE and NOTICE).
 install(FILES LICENSE NOTICE DESTINATION "${CMAKE_INSTALL_DOCDIR}")
 

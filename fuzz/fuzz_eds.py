@@ -13,8 +13,7 @@ the seed corpus still runs. For hours:
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
+from replay import main
 
 try:
     import atheris
@@ -43,16 +42,5 @@ def one_input(data: bytes) -> None:
                                  f"{sorted(again.objects)}")
 
 
-def replay(paths: list[str]) -> None:
-    files = [p for a in paths for p in (sorted(Path(a).iterdir()) if Path(a).is_dir() else [Path(a)])]
-    for path in files:
-        one_input(path.read_bytes())
-    print(f"fuzz_eds: replayed {len(files)} inputs (atheris not installed: no fuzzing)")
-
-
 if __name__ == "__main__":
-    if atheris is None:
-        replay([a for a in sys.argv[1:] if not a.startswith("-")])
-    else:
-        atheris.Setup(sys.argv, one_input)
-        atheris.Fuzz()
+    main("fuzz_eds", one_input, atheris)

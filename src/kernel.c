@@ -48,3 +48,11 @@ uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry)
     }
     return co_od_entry_uint(od, entry);
 }
+
+co_abort_t co_od_read_check(const co_node_t *node, const co_od_entry_t *entry)
+{
+    if (entry->index != 0x1003 || entry->sub == 0) {
+        return CO_ABORT_NONE;
+    }
+    return entry->sub > co_od_u32(node, 0x1003, 0, 0xFF) ? CO_ABORT_NO_DATA : CO_ABORT_NONE;
+}

@@ -107,6 +107,10 @@ enum { CO_COB_NONE = 0x00, CO_COB_SUB0 = 0x01, CO_COB_SUB1_2 = 0x06, CO_COB_SUB1
 #define CO_OBJECT_ROW(first, last, cob, check, written)                                           \
     {(first)-0x1000u, (last) - (first), (cob), (check), (written)},
 
+/* Whether the network may read `entry` now: CO_ABORT_NO_DATA for a sub-index of 0x1003 above
+ * the number of errors recorded (CiA 301 §7.5.2.4: no data), else CO_ABORT_NONE. O(1). */
+co_abort_t co_od_read_check(const co_node_t *node, const co_od_entry_t *entry);
+
 /* ---- the NMT gate: the services each state allows (co_nmt_services, canola/nmt.h; inline
  * for the state changes). The send and receive paths test node->services, set from it. */
 static inline uint16_t co_nmt_gate(uint8_t state)

@@ -81,6 +81,14 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
     return abort != CO_ABORT_NONE ? abort : co_node_write_entry(node, entry, data, len);
 }
 
+co_abort_t co_node_write_app(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                             uint32_t len)
+{
+    co_abort_t abort;
+    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, &abort);
+    return entry != NULL ? co_node_write_entry(node, entry, data, len) : abort;
+}
+
 co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                             uint32_t cap, uint32_t *len)
 {
@@ -90,6 +98,9 @@ co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_
         return abort;
     }
     abort = co_od_access(&node->cfg.od, entry, false);
+    if (abort == CO_ABORT_NONE) {
+        abort = co_od_read_check(node, entry);
+    }
     if (abort != CO_ABORT_NONE) {
         return abort;
     }

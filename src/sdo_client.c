@@ -824,6 +824,11 @@ bool co_sdo_client_busy(const co_node_t *node, uint8_t channel)
            node->sdo_clients[channel].state != IDLE;
 }
 
+uint32_t co_sdo_client_progress(const co_node_t *node, uint8_t channel)
+{
+    return node != NULL && channel < co_sdo_clients_max() ? node->sdo_clients[channel].done : 0;
+}
+
 #else /* no client channel: every channel number is out of range */
 
 co_err_t co_sdo_client_setup(co_node_t *node, uint8_t channel, uint8_t server_id)
@@ -898,6 +903,13 @@ bool co_sdo_client_busy(const co_node_t *node, uint8_t channel)
     (void)node;
     (void)channel;
     return false;
+}
+
+uint32_t co_sdo_client_progress(const co_node_t *node, uint8_t channel)
+{
+    (void)node;
+    (void)channel;
+    return 0;
 }
 
 #endif

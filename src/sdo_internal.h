@@ -27,6 +27,8 @@ void co_sdo_server_reset_comm(co_node_t *node);
 void co_sdo_server_stop(co_node_t *node); /* SDO not allowed now: transfers end silently */
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame);
 void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1200.. */
+co_abort_t co_sdo_server_check_write(co_node_t *node, const co_od_entry_t *entry,
+                                     const uint8_t *data, uint32_t len); /* 0x1200 */
 #if CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK
 uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us);
 #else
@@ -52,11 +54,13 @@ uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);
  * (without clients they have no effect: no server channel is 0x1200 + 0x80 or more). */
 #if CO_SDO_CLIENTS_MAX > 0
 #define CO_SDO_OBJECT_ROWS                                                                         \
-    CO_OBJECT_ROW(0x1200, 0x127F, CO_COB_SUB1_2, NULL, co_sdo_server_written)                     \
+    CO_OBJECT_ROW(0x1200, 0x127F, CO_COB_SUB1_2, co_sdo_server_check_write,                     \
+                  co_sdo_server_written)                     \
     CO_OBJECT_ROW(0x1280, 0x12FF, CO_COB_SUB1_2, NULL, co_sdo_client_written)
 #else
 #define CO_SDO_OBJECT_ROWS                                                                         \
-    CO_OBJECT_ROW(0x1200, 0x12FF, CO_COB_SUB1_2, NULL, co_sdo_server_written)
+    CO_OBJECT_ROW(0x1200, 0x12FF, CO_COB_SUB1_2, co_sdo_server_check_write,                     \
+                  co_sdo_server_written)
 #endif
 
 #endif /* CANOLA_SDO_INTERNAL_H */

@@ -50,6 +50,22 @@ static uint32_t cob_from_od(const co_node_t *node, uint8_t ch, uint8_t sub, uint
     return co_od_u32(node, (uint16_t)(0x1200 + ch), sub, fallback);
 }
 
+/* The default server's COB-IDs are fixed by CiA 301 (0x600/0x580 + node-ID; 0x1200 sub1
+ * and sub2 read-only): a dictionary that gives others is overruled, made to read the
+ * fixed ones, and reported (once its node has an ID; not a reason to be unreachable). */
+static void fix_default_channel(co_node_t *node, co_sdo_server_t *s, uint32_t rx, uint32_t tx)
+{
+    if (rx != CO_COB_INVALID) {
+        (void)co_od_set_uint(&node->cfg.od, 0x1200, 1, rx);
+        (void)co_od_set_uint(&node->cfg.od, 0x1200, 2, tx);
+        if (node->cfg.on_error) {
+            node->cfg.on_error(node->cfg.user, CO_NODE_ERR_SDO_COB_FIXED);
+        }
+    }
+    s->cob_rx = rx;
+    s->cob_tx = tx;
+}
+
 static void load_channel(co_node_t *node, uint8_t ch)
 {
     co_sdo_server_t *s = &node->sdo_servers[ch];
@@ -58,6 +74,9 @@ static void load_channel(co_node_t *node, uint8_t ch)
     uint32_t tx = (ch == 0 && configured) ? 0x580u + node->node_id : CO_COB_INVALID;
     s->cob_rx = cob_from_od(node, ch, 1, rx);
     s->cob_tx = cob_from_od(node, ch, 2, tx);
+    if (ch == 0 && (s->cob_rx != rx || s->cob_tx != tx)) {
+        fix_default_channel(node, s, rx, tx);
+    }
     if (s->cob_tx & CO_COB_INVALID) {
         s->cob_rx = CO_COB_INVALID; /* a server that cannot answer does not listen */
     }
@@ -78,6 +97,19 @@ void co_sdo_server_stop(co_node_t *node)
     for (uint8_t ch = 0; ch < co_sdo_servers_max(); ch++) {
         node->sdo_servers[ch].state = IDLE; /* no frame: SDO may not be sent now */
     }
+}
+
+/* The default server's COB-IDs cannot change (CiA 301): a write of others is refused. */
+co_abort_t co_sdo_server_check_write(co_node_t *node, const co_od_entry_t *entry,
+                                     const uint8_t *data, uint32_t len)
+{
+    (void)len; /* 4: the dictionary's own check came first */
+    const co_sdo_server_t *s = &node->sdo_servers[0];
+    bool cob = entry->index == 0x1200 && (entry->sub == 1 || entry->sub == 2);
+    if (cob && co_get_u32(data) != (entry->sub == 1 ? s->cob_rx : s->cob_tx)) {
+        return CO_ABORT_READ_ONLY;
+    }
+    return CO_ABORT_NONE;
 }
 
 /* New COB-IDs take effect at once: a transfer open on the channel ends (without a frame). */
@@ -695,7 +727,12 @@ static co_abort_t open_entry(co_node_t *node, co_sdo_server_t *s, const uint8_t 
     s->sub = d[3];
     co_abort_t abort = CO_ABORT_NO_OBJECT;
     s->entry = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
-    return s->entry == NULL ? abort : co_od_access(&node->cfg.od, s->entry, write);
+    if (s->entry == NULL) {
+        return abort;
+    }
+    abort = co_od_access(&node->cfg.od, s->entry, write);
+    /* readable, but has it data now (0x1003)? */
+    return abort != CO_ABORT_NONE || write ? abort : co_od_read_check(node, s->entry);
 }
 
 /* Block initiate requests: 110x x0x0 download, 101x x000 upload. */

@@ -100,10 +100,11 @@ static co_err_t each_record(co_node_t *node, co_param_group_t group, bool write,
     return sum->len <= IMAGE_LEN_MAX ? err : CO_ERR_FULL;
 }
 
-/* Two passes: the first sums the records for the header, the second writes header and
- * records; a dictionary that changed between them fails the save (see canola/storage.h).
- * (Out of line in a build for size: inlined, each_group's loop saves more registers.) */
-static CO_SIZE_NOINLINE co_err_t save_group(co_node_t *node, co_param_group_t group)
+/* Begin and write the image of `group`, not committed. Two passes: the first sums the
+ * records for the header, the second writes header and records; a dictionary that changed
+ * between them fails the save (see canola/storage.h). (Out of line in a build for size:
+ * inlined, each_group's loop saves more registers.) */
+static CO_SIZE_NOINLINE co_err_t write_group(co_node_t *node, co_param_group_t group)
 {
     const co_storage_t *st = storage_of(node);
     image_sum_t planned = {0, 0};
@@ -116,42 +117,68 @@ static CO_SIZE_NOINLINE co_err_t save_group(co_node_t *node, co_param_group_t gr
     header_fields(hdr, group, planned.len);
     co_put_u16(&hdr[HEADER_CRC_AT], image_crc(planned.crc, hdr));
     err = st->begin(st->ctx, group);
-    if (err != CO_OK) {
-        return err;
+    if (err == CO_OK) {
+        err = st->write(st->ctx, hdr, sizeof hdr);
     }
-    err = st->write(st->ctx, hdr, sizeof hdr);
     if (err == CO_OK) {
         err = each_record(node, group, true, &written);
     }
     if (err == CO_OK && (written.len != planned.len || written.crc != planned.crc)) {
         err = CO_ERR_STATE;
     }
-    if (err != CO_OK) {
-        if (st->discard != NULL) {
-            st->discard(st->ctx);
-        }
-        return err;
-    }
-    return st->commit(st->ctx);
+    return err;
 }
 
 /* The groups that sub-index `which` of 0x1010/0x1011 names (1: both, 2: communication,
  * 3: application), in that order: each saved, or erased when `restore` (its defaults at
- * the next reset); each group done ends the EMCY of its rejected image. */
+ * the next reset). A save of both through a storage that stages is one commit; otherwise
+ * each group is committed (or erased) alone. Each group done ends the EMCY of its rejected
+ * image; a save that fails is discarded whole (what was staged with it too). */
 static CO_SIZE_INLINE co_err_t each_group(co_node_t *node, uint8_t which, bool restore)
 {
     const co_storage_t *st = storage_of(node);
+    bool one_step = which == 1 && st->stage != NULL && !restore;
     co_err_t err = CO_OK;
     for (uint8_t g = CO_PARAMS_COMMUNICATION; g <= CO_PARAMS_APPLICATION && err == CO_OK; g++) {
         co_param_group_t group = (co_param_group_t)g;
         if (which == 4u - g) {
             continue; /* the other group alone */
         }
-        err = restore ? st->erase(st->ctx, group) : save_group(node, group);
+        if (restore) {
+            err = st->erase(st->ctx, group);
+        } else {
+            err = write_group(node, group);
+            if (err == CO_OK) {
+                bool stage = one_step && group == CO_PARAMS_COMMUNICATION;
+                err = stage ? st->stage(st->ctx) : st->commit(st->ctx);
+            }
+            if (err != CO_OK && st->discard != NULL) {
+                st->discard(st->ctx);
+            }
+        }
         if (err == CO_OK) {
             group_error_clear(node, group);
         }
     }
+    return err;
+}
+
+/* A command of sub-index `which` on 0x1010 (save) or 0x1011 (`restore`): the groups done,
+ * or the failure reported (EMCY, on_error) until a later command succeeds; either way
+ * 0x1010/0x1011 read the storage's capability again. */
+static co_err_t run_command(co_node_t *node, uint8_t which, bool restore)
+{
+    co_err_t err = each_group(node, which, restore);
+    if (err == CO_OK) {
+        (void)co_emcy_clear(node, CO_EMCY_STORE_FAILED);
+    } else {
+        const uint8_t mfr[5] = {which, restore ? 0x11u : 0x10u, 0, 0, 0};
+        (void)co_emcy_raise(node, CO_EMCY_STORE_FAILED, mfr);
+        if (node->cfg.on_error) {
+            node->cfg.on_error(node->cfg.user, CO_NODE_ERR_STORE_FAILED);
+        }
+    }
+    co_storage_reset_comm(node); /* the capability may have come or gone with it */
     return err;
 }
 
@@ -163,7 +190,7 @@ co_err_t co_storage_save(co_node_t *node, uint8_t which)
     if (which < 1 || which > 3) {
         return CO_ERR_ARG;
     }
-    return each_group(node, which, false);
+    return run_command(node, which, false);
 }
 
 /* ---- checking and loading */
@@ -319,12 +346,7 @@ co_abort_t co_storage_check_write(co_node_t *node, const co_od_entry_t *entry, c
     if (storage_of(node) == NULL || entry->sub > 3 || co_get_u32(data) != want) {
         return CO_ABORT_DATA_STORE;
     }
-    co_err_t err = each_group(node, entry->sub, !store);
-    if (err != CO_OK) {
-        co_storage_reset_comm(node); /* the capability may have gone with the failure */
-        return CO_ABORT_HARDWARE;
-    }
-    return CO_ABORT_NONE;
+    return run_command(node, entry->sub, !store) == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
 }
 
 #if CO_CONFIG_STORAGE

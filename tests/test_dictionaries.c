@@ -443,6 +443,63 @@ static void test_parameters_of_channels_the_node_lacks(void)
     CHECK_EQ(diff[0], 0x5A);
 }
 
+/* The default SDO server's COB-IDs are fixed (CiA 301): a dictionary (a DCF such as
+ * OreSat's battery card's) that sets 0x1200 sub1/sub2 to 0x80000000, not valid, does not
+ * silence the node. It serves on 0x605/0x585, 0x1200 reads so, the application hears of
+ * the deviation at each reset communication, and other values cannot be written. */
+static void test_default_sdo_server_cob_ids_are_fixed(void)
+{
+    static const uint8_t two = 2;
+    static const uint32_t invalid = 0x80000000u;
+    static uint8_t count;
+    static uint32_t cob[2];
+    const co_od_entry_t extra[] = {
+        {0x1200, 0, CO_TYPE_UNSIGNED8, CO_OD_RO, 1, &count, &two, NULL, NULL},
+        {0x1200, 1, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &cob[0], &invalid, NULL, NULL},
+        {0x1200, 2, CO_TYPE_UNSIGNED32, CO_OD_RW, 4, &cob[1], &invalid, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, 3), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(g.t.error_count, 1);
+    CHECK_EQ(g.t.errors[0], CO_NODE_ERR_SDO_COB_FIXED);
+    CHECK_EQ(cob[0], 0x605u);
+    CHECK_EQ(cob[1], 0x585u);
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 0, 0x605, "40 00 12 01 00 00 00 00"); /* upload 0x1200 sub1 */
+    char dump[128];
+    CHECK_STR(fake_dump(&g.t.bus, dump, sizeof dump), "585#4300120105060000");
+    /* Read-only in CiA 301, whatever the dictionary says: only the fixed value goes in. */
+    CHECK_EQ(write_u32(&g.t, 0x1200, 1, 0x80000605u), CO_ABORT_READ_ONLY);
+    CHECK_EQ(write_u32(&g.t, 0x1200, 2, 0x586u), CO_ABORT_READ_ONLY);
+    CHECK_EQ(co_node_set_uint(&g.t.node, 0x1200, 1, 0x606u), CO_ABORT_READ_ONLY);
+    CHECK_EQ(write_u32(&g.t, 0x1200, 1, 0x605u), CO_ABORT_NONE);
+    CHECK_EQ(cob[0], 0x605u);
+    /* Reset communication loads the dictionary's values again, and overrules them again. */
+    co_nmt_apply(&g.t.node, CO_NMT_CMD_RESET_COMMUNICATION);
+    CHECK_EQ(g.t.error_count, 2);
+    fake_clear(&g.t.bus);
+    ingest(&g.t, 0, 0x605, "40 00 10 00 00 00 00 00");
+    CHECK_EQ(fake_count_id(&g.t.bus, 0x585), 1);
+}
+
+/* A dictionary that gives the fixed COB-IDs (or none) is no deviation: nothing reported. */
+static void test_default_sdo_server_as_cia_301_says_is_quiet(void)
+{
+    static const uint32_t rx = 0x605u;
+    static const uint32_t tx = 0x585u;
+    static uint32_t cob[2];
+    const co_od_entry_t extra[] = {
+        {0x1200, 1, CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &cob[0], &rx, NULL, NULL},
+        {0x1200, 2, CO_TYPE_UNSIGNED32, CO_OD_RO, 4, &cob[1], &tx, NULL, NULL},
+    };
+    CHECK_EQ(build(0, 0, extra, 2), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(g.t.error_count, 0);
+    CHECK_EQ(build(0, 0, NULL, 0), CO_OK);
+    CHECK_EQ(co_node_start(&g.t.node, 0), CO_OK);
+    CHECK_EQ(g.t.error_count, 0);
+}
+
 /* ---- EMCY without an error history, and more consumer entries than the node binds */
 
 static co_emcy_msg_t g_emcy[4];
@@ -573,6 +630,8 @@ int main(void)
     RUN(test_streamed_values);
     RUN(test_store_sub_index_beyond_the_groups);
     RUN(test_parameters_of_channels_the_node_lacks);
+    RUN(test_default_sdo_server_cob_ids_are_fixed);
+    RUN(test_default_sdo_server_as_cia_301_says_is_quiet);
     RUN(test_emcy_without_error_history);
     RUN(test_more_emcy_consumer_entries_than_the_node_binds);
     RUN(test_tpdo_parameters_with_a_gap);

@@ -143,11 +143,20 @@ static void test_history_newest_first_and_cleared_by_writing_zero(void)
     for (unsigned i = 0; i < EXAMPLE_EMCY_HISTORY; i++) {
         CHECK_EQ(t.od.error_history[i], 0);
     }
+    /* An empty history has no data above sub0 (CiA 301 7.5.2.4): an abort, not 0. */
+    CHECK_EQ(co_node_read_net(&t.node, 0x1003, 1, buf, sizeof buf, &len), CO_ABORT_NO_DATA);
+    CHECK_EQ(co_node_read_net(&t.node, 0x1003, 0, buf, sizeof buf, &len), CO_ABORT_NONE);
+    CHECK_EQ(buf[0], 0);
     /* Clearing the history does not clear the errors. */
     CHECK_EQ(t.od.error_register, 0x0B);
     co_emcy_raise(&t.node, 0x6100, NULL);
     CHECK_EQ(t.od.error_count, 1);
     CHECK_EQ(t.od.error_history[0], 0x6100);
+    /* By SDO: sub1 answers, sub2 (above the count) is aborted with 0x08000024. */
+    fake_clear(&t.bus);
+    ingest(&t, 0, 0x605, "40 03 10 01 00 00 00 00");
+    ingest(&t, 0, 0x605, "40 03 10 02 00 00 00 00");
+    CHECK_STR(bus(&t), "585#4303100100610000 585#8003100224000008");
 }
 
 static void test_inhibit_time_spaces_frames_exactly(void)

@@ -241,6 +241,33 @@ static void test_route_owners_ranked_by_kind_then_slot(void)
     CHECK(routes_sorted(&t.node));
 }
 
+/* co_node_write_app: no access rights, everything else of a network write (length, limits,
+ * the services' checks and effects). */
+static void test_app_write_through_node(void)
+{
+    test_node_t t;
+    test_node_init(&t, 5, 0);
+    co_node_start(&t.node, 0);
+    uint8_t reg = 0x11;
+    CHECK_EQ(co_node_write_app(&t.node, 0x1001, 0, &reg, 1), CO_ABORT_NONE); /* read-only */
+    CHECK_EQ(t.od.error_register, 0x11);
+    uint8_t v4[4] = {1, 2, 3, 4};
+    CHECK_EQ(co_node_write_app(&t.node, 0x2000, 0, v4, 3), CO_ABORT_LEN_LOW);
+    CHECK_EQ(co_node_write_app(&t.node, 0x2000, 0, v4, 4), CO_ABORT_NONE);
+    CHECK_EQ(t.od.app_u32, 0x04030201);
+    uint8_t i16[2];
+    co_put_u16(i16, (uint16_t)101);
+    CHECK_EQ(co_node_write_app(&t.node, 0x2001, 0, i16, 2), CO_ABORT_VALUE_HIGH);
+    CHECK_EQ(co_node_write_app(&t.node, 0x2FFF, 0, v4, 4), CO_ABORT_NO_OBJECT);
+    CHECK_EQ(co_node_write_app(&t.node, 0x1000, 7, v4, 4), CO_ABORT_NO_SUB);
+    uint8_t period[2] = {0xE8, 0x03}; /* 0x1017 = 1000 ms: the producer takes it at once */
+    CHECK_EQ(co_node_write_app(&t.node, 0x1017, 0, period, 2), CO_ABORT_NONE);
+    uint64_t v = 0;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1017, 0, &v), CO_OK);
+    CHECK_EQ(v, 1000);
+    CHECK(co_node_poll(&t.node, 1) <= 1000 * 1000u);
+}
+
 static void test_od_access_through_node(void)
 {
     test_node_t t;
@@ -405,6 +432,7 @@ static void test_standard_frame_with_an_oversized_id_is_malformed(void)
 int main(void)
 {
     RUN(test_init_rejects_bad_config);
+    RUN(test_app_write_through_node);
     RUN(test_poll_before_start_and_when_idle);
     RUN(test_busy_driver_queues_and_poll_sends_by_priority);
     RUN(test_queue_overflow_is_counted_and_reported);

@@ -621,6 +621,35 @@ static void test_block_upload_and_block_download_on_two_server_channels(void)
 
 /* ---- client channels */
 
+/* co_sdo_client_progress: the bytes moved so far, growing, all of them at the end (a
+ * segmented upload of 4,000 bytes, sampled every simulated millisecond). */
+static void test_client_progress_counts_the_bytes_moved(void)
+{
+    world_t *w = world_new();
+    device_t *d = device_join(w, 0, 5);
+    master_t *a = master_join(w, 0, 1);
+    CHECK_EQ(co_sdo_client_setup(&a->node, 0, 5), CO_OK);
+    run_ms(w, 1);
+    d->stream = (pattern_domain_t){.length = 4000, .up_seed = 3, .down_seed = 4};
+    CHECK_EQ(co_sdo_client_progress(&a->node, 0), 0);
+    CHECK_EQ(start_upload(a, 0, 0x3000, 0, CO_SDO_SEGMENTED), CO_OK);
+    uint32_t seen = 0;
+    bool between = false;
+    for (int i = 0; i < 2000 && a->xfer[0].done_calls == 0; i++) {
+        run_ms(w, 1);
+        uint32_t now = co_sdo_client_progress(&a->node, 0);
+        CHECK(now >= seen);
+        between = between || (now > 0 && now < 4000);
+        seen = now;
+    }
+    CHECK(between);
+    CHECK(upload_matches(&a->xfer[0], &d->stream));
+    CHECK_EQ(co_sdo_client_progress(&a->node, 0), 4000);
+    CHECK_EQ(co_sdo_client_progress(&a->node, CO_SDO_CLIENTS_MAX), 0);
+    CHECK_EQ(co_sdo_client_progress(NULL, 0), 0);
+    free(w);
+}
+
 /* One master, four client channels (co_sdo_client_setup), four devices, every kind of
  * transfer at once. Channel 3 has no 0x1283 in the master's dictionary. */
 static void test_one_master_four_client_channels_four_devices(void)
@@ -843,6 +872,7 @@ static void test_client_channel_with_an_invalid_cob_id_does_not_start(void)
 int main(void)
 {
     RUN(test_server_channel_1_is_off_at_power_on);
+    RUN(test_client_progress_counts_the_bytes_moved);
     RUN(test_server_channel_1_answers_on_its_cob_ids_once_configured);
     RUN(test_server_channel_1_off_again_when_sub1_invalid);
     RUN(test_server_channel_with_invalid_response_cob_does_not_listen);

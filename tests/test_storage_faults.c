@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* test_storage_faults.c -- stored parameters against a storage that fails and images that
- * are damaged or written by another firmware: saves report 0x06060000 and leave nothing
- * behind, loads apply an image whole or not at all, and of an intact image only records
+ * are damaged or written by another firmware: saves report 0x06060000, raise EMCY 0x5530
+ * and leave nothing behind (a save of both groups is one step with a storage that
+ * stages), loads apply an image whole or not at all, and of an intact image only records
  * in their group and valid for the entry. */
 #include "check.h"
 #include "harness.h"
@@ -17,6 +18,11 @@ typedef struct script {
     uint8_t staging[2048];
     uint32_t staging_len;
     co_param_group_t group;
+    uint8_t staged[2048]; /* the first image of a save of both groups */
+    uint32_t staged_len;
+    co_param_group_t staged_group;
+    bool has_staged;
+    int stages;
     bool fail_begin;
     int fail_write_at; /* 1-based write call that fails; 0 = none */
     int writes;
@@ -50,9 +56,26 @@ static co_err_t s_write(void *ctx, const uint8_t *data, uint32_t len)
     return CO_OK;
 }
 
+static co_err_t s_stage(void *ctx)
+{
+    script_t *s = ctx;
+    memcpy(s->staged, s->staging, s->staging_len);
+    s->staged_len = s->staging_len;
+    s->staged_group = s->group;
+    s->has_staged = true;
+    s->stages++;
+    return CO_OK;
+}
+
 static co_err_t s_commit(void *ctx)
 {
     script_t *s = ctx;
+    if (s->has_staged) {
+        memcpy(s->image[s->staged_group], s->staged, s->staged_len);
+        s->len[s->staged_group] = s->staged_len;
+        s->stored[s->staged_group] = true;
+        s->has_staged = false;
+    }
     memcpy(s->image[s->group], s->staging, s->staging_len);
     s->len[s->group] = s->staging_len;
     s->stored[s->group] = true;
@@ -89,7 +112,12 @@ static co_err_t s_erase(void *ctx, co_param_group_t group)
 
 static bool s_can_save(void *ctx) { return !((script_t *)ctx)->cannot_save; }
 
-static void s_discard(void *ctx) { ((script_t *)ctx)->discards++; }
+static void s_discard(void *ctx)
+{
+    script_t *s = ctx;
+    s->discards++;
+    s->has_staged = false;
+}
 
 static const co_storage_t k_storage = {.begin = s_begin,
                                        .write = s_write,
@@ -98,7 +126,8 @@ static const co_storage_t k_storage = {.begin = s_begin,
                                        .erase = s_erase,
                                        .ctx = &g_s,
                                        .can_save = s_can_save,
-                                       .discard = s_discard};
+                                       .discard = s_discard,
+                                       .stage = s_stage};
 
 static void power_on(test_node_t *t)
 {
@@ -283,6 +312,115 @@ static void test_capability_follows_the_storage(void)
     }
 }
 
+/* Saved: 0x1017 = 777 (communication) and 0x2000 = 0xCAFE (application); then new values
+ * 888 and 0xBEEF are set, not saved. */
+static void saved_then_changed(test_node_t *t)
+{
+    memset(&g_s, 0, sizeof g_s);
+    power_on(t);
+    co_node_set_uint(&t->node, 0x1017, 0, 777);
+    co_node_set_uint(&t->node, 0x2000, 0, 0xCAFE);
+    CHECK_EQ(write_u32(t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    co_node_set_uint(&t->node, 0x1017, 0, 888);
+    co_node_set_uint(&t->node, 0x2000, 0, 0xBEEF);
+    g_s.commits = 0;
+    g_s.stages = 0;
+    g_s.writes = 0;
+}
+
+/* Which values a fresh start finds: 'o' old, 'n' new, per group (communication first). */
+static void check_loaded(test_node_t *t, const char *want)
+{
+    power_on(t);
+    CHECK_EQ(t->od.hb_period_ms, want[0] == 'n' ? 888 : 777);
+    CHECK_EQ(t->od.app_u32, want[1] == 'n' ? 0xBEEFu : 0xCAFEu);
+}
+
+/* A save of both groups that fails in the application group leaves both groups old: the
+ * communication image was staged, never committed on its own. (Before: the communication
+ * group was committed first, so a failure after it left communication new, application
+ * old.) The same failure at each write of the save. */
+static void test_save_of_both_groups_is_one_step(void)
+{
+    static test_node_t t;
+    saved_then_changed(&t);
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    int writes = g_s.writes; /* of a whole save of both groups */
+    CHECK_EQ(g_s.commits, 1);
+    CHECK_EQ(g_s.stages, 1);
+    check_loaded(&t, "nn");
+    for (int at = 1; at <= writes; at++) {
+        saved_then_changed(&t);
+        g_s.fail_write_at = at;
+        CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+        CHECK_EQ(g_s.commits, 0);
+        CHECK(!g_s.has_staged); /* discarded with the rest */
+        g_s.fail_write_at = 0;
+        check_loaded(&t, "oo");
+    }
+}
+
+/* A storage without `stage` saves each group whole, one after the other: the documented
+ * per-group guarantee. */
+static void test_storage_without_stage_commits_each_group(void)
+{
+    static test_node_t t;
+    saved_then_changed(&t);
+    CHECK_EQ(write_u32(&t, 0x1010, 2, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    int comm_writes = g_s.writes;
+    saved_then_changed(&t);
+    static co_storage_t per_group; /* the same storage without `stage`: a group at a time */
+    per_group = k_storage;
+    per_group.stage = NULL;
+    t.node.cfg.storage = &per_group;
+    g_s.fail_write_at = comm_writes + 2; /* in the application group, after a commit */
+    CHECK_EQ(write_u32(&t, 0x1010, 1, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_EQ(g_s.commits, 1);
+    CHECK_EQ(g_s.stages, 0);
+    g_s.fail_write_at = 0;
+    check_loaded(&t, "no");
+}
+
+/* The EMCY of a failed store: 0x5530 with the command's sub-index and object, and
+ * on_error; a later command that succeeds ends it. A failed restore raises it too. */
+static void test_failed_store_raises_emcy_5530(void)
+{
+    static test_node_t t;
+    memset(&g_s, 0, sizeof g_s);
+    power_on(&t);
+    fake_clear(&t.bus);
+    g_s.fail_begin = true;
+    CHECK_EQ(write_u32(&t, 0x1010, 3, CO_STORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK(co_emcy_active(&t.node, CO_EMCY_STORE_FAILED));
+    char dump[256];
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "085#3055010310000000");
+    CHECK_EQ(t.error_count, 1);
+    CHECK_EQ(t.errors[0], CO_NODE_ERR_STORE_FAILED);
+    uint64_t history = 0;
+    CHECK_EQ(co_node_get_uint(&t.node, 0x1003, 1, &history), CO_OK);
+    CHECK_EQ(history & 0xFFFFu, 0x5530u);
+    /* the wrong signature is no storage failure: 0x08000020, no EMCY */
+    fake_clear(&t.bus);
+    CHECK_EQ(write_u32(&t, 0x1010, 1, 0x12345678u), CO_ABORT_DATA_STORE);
+    CHECK_EQ(t.bus.count, 0);
+    /* a save that works ends the error (EMCY error reset) */
+    g_s.fail_begin = false;
+    CHECK_EQ(write_u32(&t, 0x1010, 2, CO_STORE_SIGNATURE), CO_ABORT_NONE);
+    CHECK(!co_emcy_active(&t.node, CO_EMCY_STORE_FAILED));
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "085#0000000000000000");
+    /* a restore that fails: the same code, 0x1011 in byte 4 */
+    fake_clear(&t.bus);
+    g_s.fail_erase = true;
+    CHECK_EQ(write_u32(&t, 0x1011, 1, CO_RESTORE_SIGNATURE), CO_ABORT_HARDWARE);
+    CHECK_STR(fake_dump(&t.bus, dump, sizeof dump), "085#3055010111000000");
+    /* the API reports its failures the same way */
+    g_s.fail_erase = false;
+    g_s.fail_begin = true;
+    CHECK_EQ(co_storage_save(&t.node, 1), CO_ERR_STATE);
+    CHECK(co_emcy_active(&t.node, CO_EMCY_STORE_FAILED));
+    CHECK(t.error_count > 0 && t.errors[t.error_count - 1] == CO_NODE_ERR_STORE_FAILED);
+}
+
 int main(void)
 {
     RUN(test_failing_storage_aborts_with_hardware_error);
@@ -292,5 +430,8 @@ int main(void)
     RUN(test_read_error_refuses_the_image);
     RUN(test_failed_write_discards_the_save);
     RUN(test_capability_follows_the_storage);
+    RUN(test_save_of_both_groups_is_one_step);
+    RUN(test_storage_without_stage_commits_each_group);
+    RUN(test_failed_store_raises_emcy_5530);
     return check_summary();
 }

@@ -21,7 +21,6 @@
 #include "canola/sync.h"
 #include "canola/time.h"
 #include "canola/types.h"
-
-#define CANOLA_VERSION "0.1.0"
+#include "canola/version.h"
 
 #endif /* CANOLA_CANOLA_H */

@@ -38,7 +38,11 @@
  *     0x700 + id, every COB-ID derived from it);
  *   - otherwise at the next reset communication.
  * Reset application (reset node) restores the pending node-ID to the stored one (the
- * node_id the node was initialised with, or the last one stored by 0x17).
+ * node_id the node was initialised with, or the last one stored by 0x17): a node-ID that
+ * must outlive a reset node or a power cycle must be stored (store configuration), and the
+ * application must start the node with the stored one (co_node_config_t.node_id; the Linux
+ * port keeps it in lss.params: co_file_storage_store_lss / _load_lss, which canola-node
+ * --store and canola.Device(store_dir=...) use).
  * Bit timing: table 0 only (CiA 301 rates: index 0 = 1000, 1 = 800, 2 = 500, 3 = 250,
  * 4 = 125, 6 = 50, 7 = 20, 8 = 10 kbit/s); a rate is accepted when its bit is set in
  * co_lss_slave_config_t.bit_timings. Activate: no service of the node sends or takes a

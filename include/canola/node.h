@@ -74,6 +74,13 @@ typedef enum co_node_error {
     CO_NODE_ERR_STORED_COMM,     /**< stored communication parameters failed their checks:
                                       ignored, defaults in use (canola/storage.h) */
     CO_NODE_ERR_STORED_APP,      /**< the same for the application parameters */
+    CO_NODE_ERR_STORE_FAILED,    /**< a save or restore (0x1010/0x1011) failed: the stored
+                                      images are as they were, EMCY 0x5530 (storage.h) */
+    CO_NODE_ERR_SDO_COB_FIXED,   /**< the dictionary gives 0x1200 sub1/sub2 other COB-IDs
+                                      than CiA 301 fixes (0x600/0x580 + node-ID): the
+                                      default SDO server serves on those regardless, and
+                                      0x1200 reads them (canola/sdo.h); at reset
+                                      communication */
 } co_node_error_t;
 
 typedef struct co_node_config {
@@ -253,9 +260,21 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
 
 /** Read a wire value as the network would: up to `cap` bytes into `buf`, `*len` = bytes
  *  copied. Returns CO_ABORT_NONE or the CiA abort code (CO_ABORT_LEN_HIGH when the value
- *  does not fit into `cap`). */
+ *  does not fit into `cap`; CO_ABORT_NO_DATA for a sub-index of 0x1003 above the number
+ *  of errors recorded). */
 co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                             uint32_t cap, uint32_t *len);
+
+/** Application write of a wire value: as co_node_write_net but without access rights (the
+ *  application may set read-only objects such as the error register); length, limits,
+ *  hooks and service checks apply, the new value takes effect on the services at once and
+ *  event-driven TPDOs mapping the object are triggered. Hooks see it as any write: a
+ *  binding that must tell the application's writes from the network's marks its own
+ *  calls. Returns CO_ABORT_NONE or the CiA abort code (CO_ABORT_NO_OBJECT /
+ *  CO_ABORT_NO_SUB for an entry the dictionary lacks). Cost: one dictionary look-up and
+ *  the write; no allocation, callbacks as for a network write. */
+co_abort_t co_node_write_app(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                             uint32_t len);
 
 /** Application write of an unsigned/signed integer value (no access rights: the
  *  application may set read-only objects such as the error register). Limits, hooks and

@@ -5,7 +5,11 @@
  * directions, several channels at once.
  *
  * Server. Channel 0 is the default server on 0x600 + node-ID (requests) and
- * 0x580 + node-ID (responses); channel i >= 1 takes its COB-IDs from 0x1200 + i
+ * 0x580 + node-ID (responses), fixed by CiA 301 whatever the dictionary says: 0x1200 sub1
+ * and sub2 with other values (a DCF that marks them not valid, say) are overruled at reset
+ * communication, made to read the fixed ones and reported (on_error
+ * CO_NODE_ERR_SDO_COB_FIXED); a write of another value is refused (0x06010002). Channel
+ * i >= 1 takes its COB-IDs from 0x1200 + i
  * (sub1 client->server, sub2 server->client, bit 31 = not valid) and is off until
  * configured. SDO runs in pre-operational and operational only. Every request
  * frame must be 8 bytes long; other lengths are ignored and counted as
@@ -210,6 +214,12 @@ co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code);
 
 /** True while the channel has a transfer open. */
 bool co_sdo_client_busy(const co_node_t *node, uint8_t channel);
+
+/** Progress of the channel's transfer: the bytes moved so far (uploads: received; downloads:
+ *  sent, and in a block download those the server acknowledged), for a progress display
+ *  polled from outside. After the transfer's end the figure of its last step stays until
+ *  the next transfer begins. 0 for a bad channel. Cost: a field read. */
+uint32_t co_sdo_client_progress(const co_node_t *node, uint8_t channel);
 
 #ifdef __cplusplus
 }

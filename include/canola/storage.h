@@ -32,10 +32,25 @@
  * group, when written the signature "save" (0x65766173); 0x1011 sub1..3 forgets the
  * same groups with the signature "load" (0x64616F6C), effective at the next reset.
  * Another value aborts with 0x08000020, as does any sub-index above 3 and a node
- * without storage; a storage failure aborts with 0x06060000. Read, 0x1010/0x1011 subN
- * give 1 when the node has storage that can save now (parameters are saved on command)
- * and 0 otherwise: the storage's can_save says which, at every reset communication and
- * after every command (a read-only folder reads 0; a command is still tried).
+ * without storage (CiA 301 7.5.2.13: a wrong signature). Read, 0x1010/0x1011 subN give 1
+ * when the node has storage that can save now (bit 0, "saves parameters on command") and
+ * 0 otherwise ("does not save parameters"): the storage's can_save says which, at every
+ * reset communication and after every command (a read-only folder or a full disk reads
+ * 0; a command is still tried).
+ *
+ * A save of both groups (sub1) is one step when the storage has `stage`: after a failure
+ * or a crash at any point the storage holds both old images or both new ones, never
+ * communication new and application old. Without `stage` each group is saved alone
+ * (whole per group, the communication group first). A restore of both groups erases them
+ * one after the other (each erase whole).
+ *
+ * A save or restore that fails (the storage refused: full, read-only, broken) aborts with
+ * 0x06060000 (CiA 301 7.5.2.13: storing failed, "hardware error"), leaves the stored
+ * images as they were, and raises EMCY CO_EMCY_STORE_FAILED (0x5530, non-volatile data
+ * memory: the 0x5000 "device hardware" class of CiA 301, the code the device profiles,
+ * CiA 402 among them, give data storage; manufacturer byte 0 = the sub-index of the
+ * failed command, byte 1 = 0x10 for 0x1010 or 0x11 for 0x1011) and calls on_error with
+ * CO_NODE_ERR_STORE_FAILED. The error stays active until a save or restore succeeds.
  * A core built without storage (CO_CONFIG_STORAGE 0) refuses every command the same way
  * and leaves 0x1010/0x1011 as the dictionary gives them (its dictionary says 0 there).
  *
@@ -66,10 +81,14 @@ typedef enum co_param_group {
 
 /** What a port implements. A save is begin, write..., commit (or discard): the
  *  implementation must make it atomic (the old image stays valid until commit returns
- *  CO_OK). The port stores bytes; the core writes and checks the image format below. */
+ *  CO_OK). A save of both groups with `stage`: begin, write..., stage, begin, write...,
+ *  commit: commit makes both images the stored ones in one step. The port stores bytes;
+ *  the core writes and checks the image format below. */
 typedef struct co_storage {
     co_err_t (*begin)(void *ctx, co_param_group_t group);
     co_err_t (*write)(void *ctx, const uint8_t *data, uint32_t len);
+    /** The images written since the last commit (staged, and the one begun last) become
+     *  the stored ones, all together: after a crash, all old or all new. */
     co_err_t (*commit)(void *ctx);
     /** Copy up to `cap` bytes of the stored image of `group` from `offset`; `*n` = bytes
      *  copied (0 past the end). CO_ERR_NOT_FOUND when nothing is stored. */
@@ -82,8 +101,12 @@ typedef struct co_storage {
     /** Whether a save could succeed now (e.g. the folder is writable); NULL: always. */
     bool (*can_save)(void *ctx);
     /** A save begun will not be committed (a write failed, or the dictionary changed
-     *  under it): drop what it wrote. NULL: the next begin starts afresh anyway. */
+     *  under it): drop what it wrote, staged images included. NULL: the next begin
+     *  starts afresh anyway. */
     void (*discard)(void *ctx);
+    /** Keep the image written since begin for the coming commit; the next begin starts
+     *  another group's image. NULL: the port commits one group at a time. */
+    co_err_t (*stage)(void *ctx);
 } co_storage_t;
 
 /** What is wrong with a stored image (co_storage_verify; EMCY manufacturer byte 0). */
@@ -101,13 +124,14 @@ typedef enum co_store_fault {
 #define CO_STORE_FORMAT 1u             /**< the image format version */
 #define CO_STORE_HEADER_SIZE 12u       /**< magic, version, group, length, CRC */
 #define CO_EMCY_STORE_REJECTED 0xFF10u /**< + group: the EMCY code of a rejected image */
+#define CO_EMCY_STORE_FAILED 0x5530u   /**< a save or restore failed (non-volatile memory) */
 
 #define CO_STORE_SIGNATURE 0x65766173u   /**< "save" */
 #define CO_RESTORE_SIGNATURE 0x64616F6Cu /**< "load" */
 
 /** Save groups now, as a write of "save" to 0x1010 would (`which`: 1 all, 2 communication,
- *  3 application). Returns CO_ERR_STATE without storage, CO_ERR_ARG for another `which`,
- *  or the storage's error. */
+ *  3 application), EMCY on failure included. Returns CO_ERR_STATE without storage,
+ *  CO_ERR_ARG for another `which`, or the storage's error. */
 co_err_t co_storage_save(co_node_t *node, uint8_t which);
 
 /** Check the stored image of `group` without applying it: CO_STORE_INTACT, CO_STORE_NONE,

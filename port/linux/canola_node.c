@@ -12,6 +12,12 @@
  * command line reads too (python-can's configuration, its fallback, is the Python side's
  * alone; so is its in-process virtual:// bus).
  *
+ * With --store DIR it keeps stored parameters (0x1010/0x1011) and the LSS configuration
+ * there: an LSS store configuration (CiA 305) writes DIR/lss.params, and its node-ID is the
+ * one canola-node starts with from then on (--node-id is then only the default, and may
+ * be left out); an NMT reset node brings that stored node-ID back, as a power cycle does.
+ * A node-ID configured by LSS and not stored lasts until the next reset node.
+ *
  * NMT state changes are logged to stderr, one line each. SIGTERM or SIGINT stop it
  * cleanly (exit 0). Bad arguments (no bus named among them): one line on stderr, exit 2. A
  * bus that fails or cannot be opened, a CANOLA_BUS it cannot use included: one line, exit 1.
@@ -31,25 +37,30 @@
 #define PROG "canola-node"
 #define CONNECT_TIMEOUT_MS 5000u
 #define BUS_ENV "CANOLA_BUS"
+#define TOKEN_ENV "CANOLA_TOKEN"
 #define SOCKETCAN_SCHEME "socketcan://"
 
 static const char usage[] =
     "usage: " PROG " [--iface IFACE | --bus URL] --node-id N [--store DIR] [--heartbeat MS]\n"
-    "                   [--sdo-timeout MS]\n"
+    "                   [--sdo-timeout MS] [--token TOKEN]\n"
     "  --iface IFACE    SocketCAN interface (can0, vcan0)\n"
     "  --bus URL        socketcand://HOST[:PORT]/CHANNEL (a socketcand server or the\n"
     "                   `canola bus serve` hub) or socketcan://IFACE; without --iface and\n"
     "                   --bus, the URL in $" BUS_ENV " (as for the canola commands)\n"
-    "  --node-id N      1..127\n"
-    "  --store DIR      keep stored parameters (0x1010/0x1011) in files in DIR\n"
+    "  --node-id N      1..127 (with --store, a node-ID stored by LSS wins)\n"
+    "  --store DIR      keep stored parameters (0x1010/0x1011) and the LSS configuration\n"
+    "                   (store configuration) in files in DIR\n"
     "  --heartbeat MS   producer heartbeat time 0x1017 at power-on (default 1000)\n"
     "  --sdo-timeout MS SDO server time-out: a transfer the client leaves waiting that\n"
-    "                   long is aborted (1..65535, default 1000)\n";
+    "                   long is aborted (1..65535, default 1000)\n"
+    "  --token TOKEN    the secret a hub that asks for one (canola bus serve --token)\n"
+    "                   gets first; default $" TOKEN_ENV "\n";
 
 typedef struct args {
     const char *iface; /* SocketCAN interface, or NULL */
     const char *bus;   /* socketcand URL, or NULL */
     const char *store;
+    const char *token; /* for a socketcand hub that asks for one, or NULL */
     long node_id;
     long heartbeat_ms;
     long sdo_timeout_ms;
@@ -168,6 +179,8 @@ static int parse_args(int argc, char **argv, args_t *a)
             a->bus = val;
         } else if (strcmp(opt, "--store") == 0) {
             a->store = val;
+        } else if (strcmp(opt, "--token") == 0) {
+            a->token = val;
         } else if (strcmp(opt, "--node-id") == 0) {
             if ((a->node_id = number(val, 1, 127)) < 0) {
                 return bad_args("--node-id must be 1..127, not '%s'", val);
@@ -187,10 +200,43 @@ static int parse_args(int argc, char **argv, args_t *a)
     if (a->iface != NULL && a->bus != NULL) {
         return bad_args("give exactly one of --iface and --bus%s", "");
     }
-    if (a->node_id < 0) {
+    if (a->node_id < 0 && a->store == NULL) {
         return bad_args("--node-id is required%s", "");
     }
+    if (a->token == NULL) {
+        a->token = getenv(TOKEN_ENV);
+    }
     return choose_bus(a);
+}
+
+/* The node-ID an LSS store configuration left in `dir` replaces `*node_id` (the
+ * --node-id given, or -1), said on stderr. Nonzero (said too) when there is none at all,
+ * or lss.params is damaged and no --node-id was given. */
+static int stored_node_id(const char *dir, long *node_id)
+{
+    uint8_t id = 0;
+    uint8_t timing = 0;
+    co_err_t err = co_file_storage_load_lss(&app.storage, &id, &timing);
+    if (err == CO_OK) {
+        fprintf(stderr, PROG ": node-ID %u, stored by LSS in %s/lss.params", id, dir);
+        if (*node_id >= 0 && *node_id != id) {
+            fprintf(stderr, " (not --node-id %ld)", *node_id);
+        }
+        fputc('\n', stderr);
+        *node_id = id;
+        return 0;
+    }
+    if (err != CO_ERR_NOT_FOUND) {
+        fprintf(stderr, PROG ": %s/lss.params: damaged (not a line of canola-lss 1): %s\n", dir,
+                *node_id >= 0 ? "ignored, --node-id used" : "give --node-id");
+    }
+    if (*node_id < 0) {
+        if (err == CO_ERR_NOT_FOUND) {
+            fprintf(stderr, PROG ": --node-id is required (no node-ID stored by LSS in %s)\n", dir);
+        }
+        return 2;
+    }
+    return 0;
 }
 
 static void on_state(void *user, co_nmt_state_t state)
@@ -213,6 +259,12 @@ static const char *error_text(co_node_error_t error)
     case CO_NODE_ERR_STORED_APP:
         return "stored application parameters (app.params) failed their checks: ignored, "
                "defaults in use (EMCY 0xFF12)";
+    case CO_NODE_ERR_STORE_FAILED:
+        return "storing parameters failed (full disk, read-only or broken storage): the "
+               "files stored before stay, EMCY 0x5530";
+    case CO_NODE_ERR_SDO_COB_FIXED:
+        return "the dictionary gives 0x1200 sub1/sub2 other COB-IDs than CiA 301 fixes: "
+               "the default SDO server serves on 0x600/0x580 + node-ID regardless";
     }
     return "unknown error";
 }
@@ -233,7 +285,6 @@ int main(int argc, char **argv)
     }
     co_node_config_t cfg;
     memset(&cfg, 0, sizeof cfg);
-    cfg.node_id = (uint8_t)args.node_id;
     cfg.od = example_od_init(&app.od, (uint16_t)args.heartbeat_ms);
     cfg.sdo_timeout_ms = (uint16_t)args.sdo_timeout_ms;
     cfg.user = &app;
@@ -246,7 +297,11 @@ int main(int argc, char **argv)
             return 2;
         }
         cfg.storage = &app.storage.api;
+        if (stored_node_id(args.store, &args.node_id) != 0) {
+            return 2;
+        }
     }
+    cfg.node_id = (uint8_t)args.node_id;
 
     /* Signals first: a SIGTERM during the connection must not kill us half-way. */
     if (co_loop_init(&app.loop) != CO_OK || co_loop_handle_signals(&app.loop) != CO_OK) {
@@ -263,7 +318,7 @@ int main(int argc, char **argv)
         t = &app.can.transport;
     } else {
         app.where = args.bus;
-        if (co_socketcand_open(&app.scd, args.bus, CONNECT_TIMEOUT_MS) != CO_OK) {
+        if (co_socketcand_open_auth(&app.scd, args.bus, args.token, CONNECT_TIMEOUT_MS) != CO_OK) {
             fprintf(stderr, PROG ": %s\n", app.scd.transport.error);
             return 1;
         }
@@ -273,7 +328,11 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": cannot set up node %ld\n", args.node_id);
         return 1;
     }
-    fprintf(stderr, PROG ": node %ld on %s, heartbeat %ld ms%s%s\n", args.node_id, app.where,
+    if (args.store != NULL) { /* LSS store configuration: into the folder */
+        const co_lss_slave_config_t lss = {.store = co_file_storage_store_lss, .ctx = &app.storage};
+        (void)co_lss_slave_setup(&app.node, &lss);
+    }
+    fprintf(stderr, PROG ": node %u on %s, heartbeat %ld ms%s%s\n", cfg.node_id, app.where,
             args.heartbeat_ms, args.store ? ", parameters in " : "", args.store ? args.store : "");
     (void)co_node_start(&app.node, co_linux_now_us());
 

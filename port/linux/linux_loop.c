@@ -4,8 +4,6 @@
 
 #include "canola/linux_loop.h"
 
-#include "canola/socketcan.h" /* co_linux_now_us */
-
 #include <errno.h>
 #include <signal.h>
 #include <string.h>
@@ -227,8 +225,10 @@ static bool arm(co_loop_t *loop, uint64_t at)
     return true;
 }
 
-/* Poll every node; returns the earliest time the loop must wake up. */
-static uint64_t poll_nodes(co_loop_t *loop, uint64_t now)
+/* Poll every node at the time its transport was last found empty (drain): no deadline is
+ * judged while a frame that came before it waits unread. Returns the earliest time the
+ * loop must wake up. */
+static uint64_t poll_nodes(co_loop_t *loop)
 {
     uint64_t wake = CO_TIME_NEVER;
     for (unsigned i = 0; i < loop->node_count; i++) {
@@ -236,6 +236,7 @@ static uint64_t poll_nodes(co_loop_t *loop, uint64_t now)
         if (ep->failed) {
             continue;
         }
+        uint64_t now = ep->drained_us;
         if (ep->retry_us <= now) {
             ep->retry_us = CO_TIME_NEVER; /* this poll is the retry */
         }
@@ -265,30 +266,26 @@ static void dispatch_events(co_node_t *node, uint32_t events)
     }
 }
 
-static void node_ready(co_loop_t *loop, co_loop_node_t *ep, uint32_t events)
+/* Up to CO_LOOP_RX_BURST frames of one transport, each to its node with the time it was
+ * read. True when the burst was full (more may wait); false when the transport was found
+ * empty (at ep->drained_us) or failed. */
+static bool read_burst(co_loop_t *loop, co_loop_node_t *ep)
 {
     co_transport_t *t = ep->transport;
-    if (events & EPOLLOUT) {
-        if (t->ops->flush != NULL && t->ops->flush(t) == CO_ERR_STATE) {
-            fail(loop, ep);
-            return;
-        }
-    }
-    if (!(events & (EPOLLIN | EPOLLERR | EPOLLHUP))) {
-        return;
-    }
-    uint64_t now = co_linux_now_us();
     for (int n = 0; n < CO_LOOP_RX_BURST; n++) {
+        uint64_t now = co_linux_now_us(); /* before the read: nothing came later unread */
         co_frame_t frame;
         uint32_t bus = 0;
         co_rx_t r = t->ops->recv(t, &frame, &bus);
         if (r == CO_RX_AGAIN) {
-            return;
+            ep->drained_us = now;
+            return false;
         }
         if (r == CO_RX_ERROR) {
             fail(loop, ep);
-            return;
+            return false;
         }
+        ep->drained_us = now; /* (a flood that outlasts the drain: the last frame's time) */
         if (r == CO_RX_FRAME) {
             loop->stats.frames_in++;
             co_node_ingest(ep->node, now, &frame);
@@ -296,8 +293,42 @@ static void node_ready(co_loop_t *loop, co_loop_node_t *ep, uint32_t events)
             dispatch_events(ep->node, bus);
         }
         if (ep->failed) {
-            return; /* a send inside the ingest broke it */
+            return false; /* a send inside the ingest broke it */
         }
+    }
+    return true;
+}
+
+/* Every frame the transports hold, read before any deadline is judged: in turns of a
+ * burst per transport (so that one busy bus does not keep the others waiting), until
+ * every transport is empty or CO_LOOP_RX_DRAIN_MAX frames were read from one. */
+static void drain(co_loop_t *loop)
+{
+    bool more[CO_LOOP_NODES_MAX];
+    for (unsigned i = 0; i < loop->node_count; i++) {
+        more[i] = !loop->nodes[i].failed;
+    }
+    for (unsigned turn = 0; turn < CO_LOOP_RX_DRAIN_MAX / CO_LOOP_RX_BURST; turn++) {
+        bool any = false;
+        for (unsigned i = 0; i < loop->node_count; i++) {
+            if (more[i]) {
+                more[i] = read_burst(loop, &loop->nodes[i]);
+                any |= more[i];
+            }
+        }
+        if (!any) {
+            return;
+        }
+    }
+}
+
+/* A transport's fd is writable again: its buffered output goes (the frames waiting to be
+ * read are the drain's). */
+static void node_ready(co_loop_t *loop, co_loop_node_t *ep, uint32_t events)
+{
+    co_transport_t *t = ep->transport;
+    if ((events & EPOLLOUT) && t->ops->flush != NULL && t->ops->flush(t) == CO_ERR_STATE) {
+        fail(loop, ep);
     }
 }
 
@@ -347,11 +378,12 @@ co_loop_reason_t co_loop_run_until(co_loop_t *loop, uint64_t until_us)
     loop->reason = loop->failure_news ? CO_LOOP_TRANSPORT_FAILED : CO_LOOP_RUNNING;
     loop->until_us = until_us;
     while (loop->reason == CO_LOOP_RUNNING) {
-        uint64_t now = co_linux_now_us();
-        uint64_t wake = min_u64(poll_nodes(loop, now), until_us);
+        drain(loop); /* first what came: then the deadlines */
+        uint64_t wake = min_u64(poll_nodes(loop), until_us);
         if (loop->reason != CO_LOOP_RUNNING) {
             break;
         }
+        uint64_t now = co_linux_now_us();
         if (now >= until_us) {
             loop->reason = CO_LOOP_DEADLINE;
             break;
@@ -376,17 +408,13 @@ co_loop_reason_t co_loop_run_until(co_loop_t *loop, uint64_t until_us)
         for (int i = 0; i < n; i++) {
             handle(loop, &evs[i]);
         }
-        for (unsigned i = 0; i < loop->node_count && loop->reason == CO_LOOP_RUNNING; i++) {
-            co_loop_node_t *ep = &loop->nodes[i];
-            if (!ep->failed && transport_buffered(ep->transport)) {
-                node_ready(loop, ep, EPOLLIN);
-            }
-        }
         if (loop->reason != CO_LOOP_RUNNING) {
-            /* Let the nodes send what the last frames asked for before returning (a
-             * transport failing now is news for the next run, not a lost signal). */
+            /* Let the nodes take the last frames and send what they ask for before
+             * returning (a transport failing now is news for the next run, not a lost
+             * signal). */
             co_loop_reason_t why = loop->reason;
-            (void)poll_nodes(loop, co_linux_now_us());
+            drain(loop);
+            (void)poll_nodes(loop);
             loop->reason = why;
             break;
         }

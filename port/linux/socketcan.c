@@ -12,15 +12,7 @@
 #include <net/if.h>
 #include <string.h>
 #include <sys/socket.h>
-#include <time.h>
 #include <unistd.h>
-
-uint64_t co_linux_now_us(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-}
 
 static co_rx_t sc_recv(co_transport_t *t, co_frame_t *frame, uint32_t *events);
 static co_err_t sc_send(co_transport_t *t, const co_frame_t *frame);

@@ -603,8 +603,31 @@ static void sd_init(co_socketcand_t *sc)
     sc->transport.fd = -1;
 }
 
+/* Whether `token` is one a hub takes (none is NULL or ""). */
+static bool token_ok(const char *token)
+{
+    size_t n = strlen(token);
+    if (n < CO_SOCKETCAND_TOKEN_MIN || n > CO_SOCKETCAND_TOKEN_MAX) {
+        return false;
+    }
+    for (size_t i = 0; i < n; i++) {
+        char c = token[i];
+        if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+              strchr("._~+/=-", c) != NULL)) {
+            return false;
+        }
+    }
+    return true;
+}
+
 co_err_t co_socketcand_open_fd(co_socketcand_t *sc, int fd, const char *channel,
                                unsigned timeout_ms)
+{
+    return co_socketcand_open_fd_auth(sc, fd, channel, NULL, timeout_ms);
+}
+
+co_err_t co_socketcand_open_fd_auth(co_socketcand_t *sc, int fd, const char *channel,
+                                    const char *token, unsigned timeout_ms)
 {
     if (sc == NULL || fd < 0 || channel == NULL) {
         return CO_ERR_ARG;
@@ -613,6 +636,13 @@ co_err_t co_socketcand_open_fd(co_socketcand_t *sc, int fd, const char *channel,
     size_t ch_len = strlen(channel);
     if (ch_len == 0 || ch_len > CO_SOCKETCAND_CHANNEL_MAX) {
         co_transport_fail(&sc->transport, "socketcand: channel must be 1..16 characters");
+        close(fd);
+        return CO_ERR_ARG;
+    }
+    bool auth = token != NULL && *token != '\0';
+    if (auth && !token_ok(token)) {
+        co_transport_fail(&sc->transport, "socketcand: a token is 16..64 characters of "
+                                          "A-Z a-z 0-9 . _ ~ + / = -");
         close(fd);
         return CO_ERR_ARG;
     }
@@ -626,7 +656,14 @@ co_err_t co_socketcand_open_fd(co_socketcand_t *sc, int fd, const char *channel,
     char open_cmd[CO_SOCKETCAND_CHANNEL_MAX + 16];
     (void)snprintf(open_cmd, sizeof open_cmd, "< open %s >", channel);
     uint64_t end = now_ms() + timeout_ms;
-    if (expect(sc, CO_SCD_HI, "< hi >", end) != CO_SCD_HI || !say(sc, open_cmd, end) ||
+    bool greeted = expect(sc, CO_SCD_HI, "< hi >", end) == CO_SCD_HI;
+    if (greeted && auth) {
+        char auth_cmd[CO_SOCKETCAND_TOKEN_MAX + 16];
+        (void)snprintf(auth_cmd, sizeof auth_cmd, "< auth %s >", token);
+        greeted =
+            say(sc, auth_cmd, end) && expect(sc, CO_SCD_OK, "< ok > to auth", end) == CO_SCD_OK;
+    }
+    if (!greeted || !say(sc, open_cmd, end) ||
         expect(sc, CO_SCD_OK, "< ok > to open", end) != CO_SCD_OK || !say(sc, "< rawmode >", end) ||
         expect(sc, CO_SCD_OK, "< ok > to rawmode", end) != CO_SCD_OK) {
         sd_close(&sc->transport);
@@ -686,6 +723,12 @@ static int connect_to(const co_socketcand_url_t *u, unsigned timeout_ms, co_tran
 
 co_err_t co_socketcand_open(co_socketcand_t *sc, const char *url, unsigned timeout_ms)
 {
+    return co_socketcand_open_auth(sc, url, NULL, timeout_ms);
+}
+
+co_err_t co_socketcand_open_auth(co_socketcand_t *sc, const char *url, const char *token,
+                                 unsigned timeout_ms)
+{
     if (sc == NULL) {
         return CO_ERR_ARG;
     }
@@ -701,7 +744,7 @@ co_err_t co_socketcand_open(co_socketcand_t *sc, const char *url, unsigned timeo
         return fd == -2 ? CO_ERR_NOT_FOUND : CO_ERR_STATE;
     }
     char saved[CO_TRANSPORT_ERROR_MAX];
-    co_err_t rc = co_socketcand_open_fd(sc, fd, u.channel, timeout_ms);
+    co_err_t rc = co_socketcand_open_fd_auth(sc, fd, u.channel, token, timeout_ms);
     if (rc != CO_OK) {
         memcpy(saved, sc->transport.error, sizeof saved);
         co_transport_fail(&sc->transport, "%s: %s", url, saved);

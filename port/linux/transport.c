@@ -1,9 +1,19 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* transport.c -- what every transport shares; see canola/transport.h. */
+#define _POSIX_C_SOURCE 200809L
+
 #include "canola/transport.h"
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <time.h>
+
+uint64_t co_linux_now_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
 
 void co_transport_close(co_transport_t *t)
 {

@@ -35,7 +35,10 @@ void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
 void canola_py_on_sync(void *user, uint8_t counter);
 void canola_py_on_time(void *user, const co_time_of_day_t *time);
 void canola_py_on_rpdo(void *user, uint16_t rpdo);
-void canola_py_written(void *ctx, const co_od_entry_t *entry);
+/* Who wrote an entry (canola_py_written): the network (an SDO server, an RPDO, the
+ * services) or the application through canola_py_dev_write. */
+typedef enum canola_py_origin { CANOLA_PY_BY_NETWORK = 0, CANOLA_PY_BY_APP = 1 } canola_py_origin_t;
+void canola_py_written(void *user, const co_od_entry_t *entry, canola_py_origin_t origin);
 void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
 void canola_py_sent(void *ctx, const co_frame_t *frame);
 co_abort_t canola_py_prog_write(void *ctx, uint32_t offset, const uint8_t *data, uint32_t n,
@@ -64,6 +67,9 @@ uint64_t canola_py_bus_now(const co_sim_bus_t *bus);
 
 typedef struct canola_py_link canola_py_link_t;
 
+/* canola_py_dev_t.abort_sent_id: the last frame sent was no SDO abort. */
+#define CANOLA_PY_NO_ABORT 0xFFFFFFFFu
+
 /* Frames a dev sent on the simulated bus that its raw port has not seen come back. */
 #define CANOLA_PY_OWN_FRAMES 64
 
@@ -80,6 +86,10 @@ typedef struct canola_py_dev {
     bool active;      /* on a link: receives and is polled (canola.Device.start .. stop) */
     bool sent_frames; /* every frame the node puts on the bus goes to canola_py_sent too */
     canola_py_link_t *link;
+    /* the COB-ID of the last frame the node sent when that frame was an SDO abort, else
+     * CANOLA_PY_NO_ABORT (canola_py_dev_sent_abort) */
+    uint32_t abort_sent_id;
+    uint32_t app_writes; /* canola_py_dev_write calls in progress (they may nest) */
     /* the raw port skips the node's own frames (python-can does not hand a bus its own
      * frames either) */
     co_frame_t own[CANOLA_PY_OWN_FRAMES];
@@ -98,6 +108,10 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    void *user, co_err_t *err);
 void canola_py_dev_free(canola_py_dev_t *dev);
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+/* The node-ID an LSS store configuration left in `store_dir` (canola/file_storage.h):
+ * CO_OK with *node_id set, CO_ERR_NOT_FOUND (none), CO_ERR_STATE (lss.params damaged), or
+ * CO_ERR_ARG (not a folder). */
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id);
 /* The application changed the node between two runs of the simulated bus: poll it at the
  * next instant the bus runs (its deadline may have moved). */
 void canola_py_dev_touch(canola_py_dev_t *dev);
@@ -106,13 +120,19 @@ void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
  * canola_py_sent too (true), in the order sent; frames a quiet node keeps off the bus and
  * frames refused (the core sends them again later) do not. */
 void canola_py_dev_set_sent(canola_py_dev_t *dev, bool sent);
+/* True when the last frame the node put on the bus was an SDO abort on `cob_id`: an SDO
+ * client's transfer that ends with an abort was ended by the node itself (it sends the
+ * abort just before the transfer's completion runs), not by the server's abort frame.
+ * A frame the bus refused and the core sends later is not yet counted. */
+bool canola_py_dev_sent_abort(const canola_py_dev_t *dev, uint32_t cob_id);
 
-/* Application access: no access rights; writes take the node's path (limits, service
- * checks, event-driven TPDOs mapping the entry). */
+/* Application access: no access rights; writes take the node's path (co_node_write_app:
+ * limits, service checks, event-driven TPDOs mapping the entry) and reach
+ * canola_py_written as the application's (CANOLA_PY_BY_APP). */
 co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                               uint32_t cap, uint32_t *len, uint8_t *type);
-co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
-                               uint32_t len);
+co_abort_t canola_py_dev_write(canola_py_dev_t *dev, uint16_t index, uint8_t sub,
+                               const uint8_t *data, uint32_t len);
 
 /* ---- a python-can bus object and the devs on it (py_link.c) */
 
@@ -167,9 +187,6 @@ void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident);
 uint32_t canola_py_prog_ident(const canola_py_prog_t *p);
 uint32_t canola_py_prog_status(const canola_py_prog_t *p);
 uint8_t canola_py_prog_state(const canola_py_prog_t *p);
-/* Bytes a client channel's transfer has moved so far (the server acknowledged, for a
- * block download): program download progress sampled by the waiting thread. */
-uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel);
 
 /* ---- streamed DOMAIN entries of a canola.Device (py_stream.c) */
 

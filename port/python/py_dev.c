@@ -2,7 +2,6 @@
 /* canola.Device / canola.Master: a node with every callback routed to Python, on a
  * simulated bus or on a link (see canola_py.h). */
 #include "canola_py.h"
-#include "node_internal.h" /* co_node_write_entry, the node's parts */
 
 #include <string.h>
 
@@ -28,10 +27,21 @@ static co_err_t dev_tx(void *ctx, const co_frame_t *frame)
         return CO_OK;
     }
     co_err_t err = d->sim ? sim_tx(d, frame) : canola_py_link_tx(d, frame);
-    if (err == CO_OK && d->sent_frames) {
-        canola_py_sent(d->user, frame);
+    if (err == CO_OK) {
+        bool abort = frame->len == 8 && frame->data[0] == 0x80u && !(frame->flags & CO_FRAME_RTR);
+        d->abort_sent_id = abort ? frame->id : CANOLA_PY_NO_ABORT;
+        if (d->sent_frames) {
+            canola_py_sent(d->user, frame);
+        }
     }
     return err;
+}
+
+/* Every write that reaches an entry's hooks, with its origin. */
+static void dev_written(void *ctx, const co_od_entry_t *entry)
+{
+    const canola_py_dev_t *d = ctx;
+    canola_py_written(d->user, entry, d->app_writes ? CANOLA_PY_BY_APP : CANOLA_PY_BY_NETWORK);
 }
 
 /* The node's routes changed: the bus's delivery index follows (see canola/sim.h). */
@@ -75,7 +85,7 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
     cfg.node_id = node_id;
     cfg.od.entries = entries;
     cfg.od.count = count;
-    cfg.od.hook_ctx = user;
+    cfg.od.hook_ctx = d;
     cfg.sdo_timeout_ms = sdo_timeout_ms;
     cfg.user = user;
     cfg.on_state = canola_py_on_state;
@@ -86,8 +96,9 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
     cfg.on_sync = canola_py_on_sync;
     cfg.on_time = canola_py_on_time;
     cfg.on_rpdo = canola_py_on_rpdo;
-    d->hooks.written = canola_py_written;
+    d->hooks.written = dev_written;
     d->user = user;
+    d->abort_sent_id = CANOLA_PY_NO_ABORT;
     for (uint32_t i = 0; i < count; i++) {
         if (entries[i].hooks == NULL) {
             entries[i].hooks = &d->hooks;
@@ -126,6 +137,10 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
         d->port.bus_off = true;
         return d;
     }
+    if (store_dir) { /* LSS store configuration: into the folder, as the parameters */
+        const co_lss_slave_config_t lss = {.store = co_file_storage_store_lss, .ctx = &d->fs};
+        (void)co_lss_slave_setup(&d->node, &lss);
+    }
     if (bus) {
         co_sim_port_bind(&d->port, &d->node);
     }
@@ -142,11 +157,33 @@ void canola_py_dev_free(canola_py_dev_t *dev)
 
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev) { return &dev->node; }
 
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id)
+{
+    co_file_storage_t fs;
+    uint8_t bit_timing = 0;
+    co_err_t err = co_file_storage_init(&fs, store_dir);
+    return err == CO_OK ? co_file_storage_load_lss(&fs, node_id, &bit_timing) : err;
+}
+
 void canola_py_dev_touch(canola_py_dev_t *dev) { dev->port.node_due_us = 0; }
 
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet) { dev->quiet = quiet; }
 
 void canola_py_dev_set_sent(canola_py_dev_t *dev, bool sent) { dev->sent_frames = sent; }
+
+bool canola_py_dev_sent_abort(const canola_py_dev_t *dev, uint32_t cob_id)
+{
+    return dev->abort_sent_id == cob_id;
+}
+
+co_abort_t canola_py_dev_write(canola_py_dev_t *dev, uint16_t index, uint8_t sub,
+                               const uint8_t *data, uint32_t len)
+{
+    dev->app_writes++;
+    co_abort_t abort = co_node_write_app(&dev->node, index, sub, data, len);
+    dev->app_writes--;
+    return abort;
+}
 
 co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                               uint32_t cap, uint32_t *len, uint8_t *type)
@@ -163,14 +200,6 @@ co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint
         return CO_ABORT_LEN_HIGH;
     }
     return abort;
-}
-
-co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
-                               uint32_t len)
-{
-    co_abort_t abort;
-    const co_od_entry_t *e = co_od_find(&node->cfg.od, index, sub, &abort);
-    return e ? co_node_write_entry(node, e, data, len) : abort;
 }
 
 int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel)

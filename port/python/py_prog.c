@@ -1,10 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Program download, device side, on a canola.Device (see canola_py.h): the node's
- * hook_ctx is the Python engine, so the entries 0x1F50/51/56/57 get hooks of their own
+ * hook_ctx is the dev (its written hook), so the entries 0x1F50/51/56/57 get hooks of their own
  * that find their co_program_t from the hooks pointer, and the program's callbacks go to
  * Python. */
 #include "canola_py.h"
-#include "node_internal.h" /* the SDO clients of the node */
 
 #include <stddef.h>
 
@@ -117,8 +116,3 @@ void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident)
 uint32_t canola_py_prog_ident(const canola_py_prog_t *p) { return p->prog.ident; }
 uint32_t canola_py_prog_status(const canola_py_prog_t *p) { return p->prog.status; }
 uint8_t canola_py_prog_state(const canola_py_prog_t *p) { return p->prog.state; }
-
-uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel)
-{
-    return channel < CO_SDO_CLIENTS_MAX ? node->sdo_clients[channel].done : 0;
-}

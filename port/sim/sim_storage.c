@@ -30,14 +30,39 @@ static co_err_t write(void *ctx, const uint8_t *data, uint32_t len)
     return CO_OK;
 }
 
+static co_err_t stage(void *ctx)
+{
+    co_sim_storage_t *st = ctx;
+    if (!st->staging.valid) {
+        return CO_ERR_FULL;
+    }
+    st->staged = st->staging;
+    st->staged_group = st->staging_group;
+    st->staging.valid = false;
+    return CO_OK;
+}
+
+static void discard(void *ctx)
+{
+    co_sim_storage_t *st = ctx;
+    st->staging.valid = false;
+    st->staged.valid = false;
+}
+
+/* The staged image and the one written last replace the stored ones together. */
 static co_err_t commit(void *ctx)
 {
     co_sim_storage_t *st = ctx;
     if (st->fail_next_commit || !st->staging.valid) {
         st->fail_next_commit = false;
+        discard(st);
         return CO_ERR_FULL;
     }
+    if (st->staged.valid) {
+        *image_of(st, st->staged_group) = st->staged;
+    }
     *image_of(st, st->staging_group) = st->staging;
+    discard(st);
     st->commits++;
     return CO_OK;
 }
@@ -71,5 +96,7 @@ void co_sim_storage_init(co_sim_storage_t *storage)
                                   .commit = commit,
                                   .read = read,
                                   .erase = erase,
-                                  .ctx = storage};
+                                  .ctx = storage,
+                                  .discard = discard,
+                                  .stage = stage};
 }

@@ -11,6 +11,8 @@ import sys
 from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import TypeVar
 
+from bounded import first_line
+
 from canola.errors import SdoAbort
 from canola.gateway import Executor, GatewayServer, parse_listen
 from canola.gateway.backend import Event, Listener, LssOp
@@ -20,10 +22,10 @@ from canola.gateway.masterbackend import MasterBackend
 from canola.gateway.requests import NmtCommand
 
 T = TypeVar("T")
-TIMEOUT = 20.0
+TIMEOUT = 60.0  # a bound a starved machine meets (load 20), not an expected answer time
 
 
-def run(coro: Awaitable[T], timeout: float = 60.0) -> T:
+def run(coro: Awaitable[T], timeout: float = 300.0) -> T:
     """Run a test coroutine with an overall time limit (never a hang)."""
 
     async def bounded() -> T:
@@ -45,6 +47,8 @@ class FakeMaster:
         self.local_nmt_done: list[str] = []
         self.calls: list[tuple[str, int, bool, int]] = []
         self._listeners: list[Listener] = []
+        self.nmt_state = "OPERATIONAL"
+        self.sdo_closings = 0
 
     @property
     def node_id(self) -> int:
@@ -179,6 +183,22 @@ async def serving(backend: MasterBackend) -> AsyncIterator[str]:
         hub.close()
 
 
+@contextlib.asynccontextmanager
+async def client_of(backend: MasterBackend) -> AsyncIterator[Client]:
+    """A client of the gateway on ``backend`` over TCP, with no event pump: on a SimBus
+    the test alone moves virtual time. Client, server and event hub closed after."""
+    hub = EventHub(backend)
+    server = GatewayServer(Executor(backend, hub), hub)
+    srv = await server.start(parse_listen("tcp:127.0.0.1:0"))
+    client = await Client.connect(GatewayServer.address(srv))
+    try:
+        yield client
+    finally:
+        await client.close()
+        await server.close()
+        hub.close()
+
+
 async def start_gateway(master: FakeMaster, **limits: float) -> tuple[GatewayServer, str]:
     """The gateway (and its event hub) on ``master``, listening on a free TCP port of
     127.0.0.1 (``limits``: GatewayServer's max_clients, max_line, idle_timeout)."""
@@ -195,13 +215,12 @@ def gateway_process(*options: str) -> Iterator[tuple[subprocess.Popen[str], str]
     proc = subprocess.Popen([sys.executable, "-m", "canola.gateway", *options, "--listen",
                              "tcp:127.0.0.1:0"], stderr=subprocess.PIPE, text=True)
     try:
-        assert proc.stderr is not None
-        line = proc.stderr.readline()
+        line = first_line(proc.stderr, "the gateway process")
         assert line.startswith("canola gateway: listening on tcp:127.0.0.1:"), line
         yield proc, line.split()[-1]
     finally:
         if proc.poll() is None:
             proc.kill()
-            proc.wait(timeout=20)
+            proc.wait(timeout=300)
         if proc.stderr is not None:
             proc.stderr.close()

@@ -273,7 +273,8 @@ def test_monitor_live(capsys: pytest.CaptureFixture[str],
     frames = [(0x705, b"\x05"), (0x185, b"\x01"), (0x085, b"\x30\x81\x11\0\0\0\0\0"),
               (0x185, b"\x02"), (0x70A, b"\x04")]
     with _repeating(bus, frames, 0.2):
-        code, out, _ = cli(capsys, "monitor", *opts, "--json", "--duration", "3", "--window",
+        # a window a starved machine fills (an emulated VM at load 24 saw too few frames in 3 s)
+        code, out, _ = cli(capsys, "monitor", *opts, "--json", "--duration", "10", "--window",
                            "10")
     assert code == 0
     view = json.loads(out)
@@ -317,15 +318,16 @@ def test_monitor_once(capsys: pytest.CaptureFixture[str],
                       peers: tuple[str, canopen.Network]) -> None:
     url, net = peers
     net.send_message(0x085, b"\x10\x42\x08\x00\x00\x00\x00\x00")
-    # heartbeats every 100 ms: several in 2 s, however busy the machine (how regular they
-    # are is not this test's business)
-    code, out, _ = cli(capsys, "monitor", "--bus", url, "--json", "--duration", "2")
+    # heartbeats every 100 ms: several in 5 s, however busy the machine (how regular they
+    # are is not this test's business: a starved sender bunches them, a gap of 0.0 was
+    # measured at load 50)
+    code, out, _ = cli(capsys, "monitor", "--bus", url, "--json", "--duration", "5")
     assert code == 0
     view = json.loads(out)
     nodes = {n["node"]: n for n in view["nodes"]}
     assert nodes[5]["state"] == "OPERATIONAL" and nodes[9]["state"] == "PRE-OPERATIONAL"
-    assert 0 <= nodes[5]["heartbeat_age"] < 2
-    assert 0 < nodes[5]["heartbeat_gap"] < 2
+    assert 0 <= nodes[5]["heartbeat_age"] < 5
+    assert 0 <= nodes[5]["heartbeat_gap"] < 5
     code, out, _ = cli(capsys, "monitor", "--bus", url, "--once", "--duration", "2")
     assert code == 0 and "OPERATIONAL" in out and out.splitlines()[0].split()[0] == "node"
 
@@ -334,7 +336,7 @@ def test_monitor_once(capsys: pytest.CaptureFixture[str],
 @pytest.mark.slow
 def test_module_runs_as_a_program() -> None:
     proc = subprocess.run([sys.executable, "-m", "canola.cli", "nmt", "start", "0"],
-                          capture_output=True, text=True, timeout=60, check=False,
+                          capture_output=True, text=True, timeout=300, check=False,
                           env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert proc.returncode == 2
     one_line_error(proc.stderr)
@@ -401,7 +403,7 @@ def test_sync_until_ctrl_c(hub: HubThread) -> None:
             if msg is not None and msg.arbitration_id == 0x080:
                 counters.append(msg.data[0])
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
+        out, err = proc.communicate(timeout=300)
     finally:
         if proc.poll() is None:
             proc.kill()

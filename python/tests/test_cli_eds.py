@@ -242,6 +242,24 @@ def test_pdo_errors(capsys: pytest.CaptureFixture[str], net: Net, args: list[str
     assert message in err
 
 
+def test_pdo_map_that_the_device_refuses_half_way_restores_the_pdo(
+        capsys: pytest.CaptureFixture[str], net: Net) -> None:
+    """0x1017 (not PDO-mappable on the device) as the second entry: the device refuses
+    the mapping (at its count, as CiA 301 lets it) after the PDO was made invalid and its
+    entries written; the command puts the
+    previous configuration back and says so (it left TPDO1 invalid with its new mapping,
+    silently)."""
+    before = json.loads(_pdo(capsys, net, "show", "5", "TPDO1", "--json")[1])
+    code, out, err = _pdo(capsys, net, "map", "5", "TPDO1", "0x6041:0:16", "0x1017:0:16")
+    assert (code, out) == (1, "")
+    one_line_error(err)
+    assert err == (
+        "canola: node 5 TPDO1: SDO abort 0x06040041: Object cannot be mapped to the PDO "
+        "(writing 0x1A00:00 = 0x02); the previous configuration is restored (COB-ID "
+        "0x00000185 (valid), 1 entries)\n")
+    assert json.loads(_pdo(capsys, net, "show", "5", "TPDO1", "--json")[1]) == before
+
+
 def test_pdo_map_changes_what_the_device_sends(capsys: pytest.CaptureFixture[str],
                                                net: Net) -> None:
     assert _pdo(capsys, net, "map", "5", "TPDO1", "Statusword", "Position actual value",

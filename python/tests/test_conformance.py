@@ -133,6 +133,14 @@ def test_dictionaries_unlike_the_usual(name: str) -> None:
     assert {i for i, _ in (k for k in before if before[k] != after[k])} <= ERROR_STATE
 
 
+def test_canola_device_passes_every_check_destructive_too(tmp_path: Path) -> None:
+    """All 54 checks, store and restore included, against canola.Device with storage."""
+    bus = SimBus()
+    Device(EXAMPLE, NODE, bus, store_dir=tmp_path).start()
+    report = cc.run(bus, NODE, EXAMPLE, options=Options(destructive=True))
+    assert report.names(Status.PASSED) == {c.name for c in cc.CHECKS}, cc.markdown(report)
+
+
 def test_store_restore_with_destructive(tmp_path: Path) -> None:
     bus = SimBus()
     Device(EXAMPLE, NODE, bus, store_dir=tmp_path).start()
@@ -226,7 +234,7 @@ def test_a_responder_with_gaps_fails_exactly_those_checks(checks_toggle: bool) -
         toggle = report.result("sdo.toggle_download").findings[0]
         assert (toggle.expected, toggle.got) == (
             "abort 0x05030000 (Toggle bit not alternated)", "[30 00 00 00 00 00 00 00]")
-        assert "-> 614  10 63 61 6E 6F 6C 61 20" in toggle.frames[-2]
+        assert "-> 614  17 63 61 6E 6F 00 00 00" in toggle.frames[-2]  # the 4 bytes it holds
         assert "<- 594  30 00 00 00 00 00 00 00" in toggle.frames[-1]
 
 

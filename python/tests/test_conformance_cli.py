@@ -16,7 +16,7 @@ import pytest
 from cli_helpers import cli, one_line_error
 
 from canola import Device
-from canola.conformance import CHECKS
+from canola.conformance import CHECKS, Check, LiveProgress, Result
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "example_od.eds"
@@ -116,9 +116,37 @@ def test_a_failing_run_exits_1(capsys: pytest.CaptureFixture[str], tmp_path: Pat
                        "--markdown", str(md))
     assert code == 1
     assert out.splitlines() == [
-        "[1/1] FAILED  dictionary.identity  value of 0x1018:1 (Vendor-ID, ro UNSIGNED32): "
+        "[1/1] FAILED  dictionary.identity [CiA 301 §7.5.2.21, CiA 306 §4.4 (DeviceInfo)]  "
+        "value of 0x1018:1 (Vendor-ID, ro UNSIGNED32): "
         "expected 0xBAD ([DeviceInfo] VendorNumber), got 0xCA0",
         "node 21: FAILED (0 passed, 1 failed, 0 skipped)"]
     text = md.read_text()
     assert "### `dictionary.identity`" in text
     assert "SDO upload 0x1018:01 = 0x00000CA0 (node 21)" in text
+
+
+@pytest.mark.realtime
+def test_ctrl_c_prints_the_report_of_what_ran(capsys: pytest.CaptureFixture[str],
+                                              tmp_path: Path, device_channel: str,
+                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C during the second check: the line of the first, the summary, what was
+    interrupted, the reports written; exit 130 (it exited 130 with no report before)."""
+    shown = LiveProgress.__call__
+
+    def progress(self: LiveProgress, done: int, total: int, check: Check,
+                 result: Result | None) -> None:
+        if done == 1 and result is None:
+            raise KeyboardInterrupt
+        shown(self, done, total, check, result)
+
+    monkeypatch.setattr(LiveProgress, "__call__", progress)
+    md = tmp_path / "report.md"
+    code, out, _ = cli(capsys, "conformance", "--node-id", "21", "--eds", str(EXAMPLE),
+                       "--bus", f"virtual://{device_channel}", "--only", "dictionary.mandatory",
+                       "dictionary.entries", "--markdown", str(md))
+    assert code == 130
+    assert out.splitlines() == [
+        "[1/2] PASSED  dictionary.mandatory",
+        "node 21: INTERRUPTED (1 passed, 0 failed, 0 skipped)",
+        "interrupted (Ctrl-C) during dictionary.entries: 1 of 2 checks ran"]
+    assert "- result: **INTERRUPTED** (1 passed, 0 failed, 0 skipped)" in md.read_text()

@@ -378,7 +378,7 @@ def test_demo_on_socketcan_or_virtual(capsys: pytest.CaptureFixture[str]) -> Non
 @pytest.mark.slow
 def test_runs_as_a_program_on_an_ascii_terminal() -> None:
     done = subprocess.run([PY, "-m", "canola.cli", "demo", "--quiet"], capture_output=True,
-                          text=True, timeout=60, check=False,
+                          text=True, timeout=300, check=False,
                           env={**os.environ, "PYTHONIOENCODING": "ascii"})
     assert done.returncode == 0, done.stderr
     assert " ok 2. boot-ups seen by the master" in done.stdout  # no check marks in ASCII

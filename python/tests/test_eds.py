@@ -395,9 +395,17 @@ def test_line_that_is_neither_section_key_nor_comment_is_an_error() -> None:
     assert (err.file, err.line, err.section, err.key) == ("bad.eds", 20, "1000", None)
 
 
-def test_duplicate_section_is_an_error() -> None:
-    err = broken(make(mandatory=VAR_1000 + "\n" + VAR_1000))
-    assert str(err) == "bad.eds:21: [1000] duplicate section (first at line 13)"
+def test_a_section_again_is_merged_with_a_warning_and_refused_when_strict() -> None:
+    # kacanopen's NEMA23 EDS has [1008], [1009], [100A] and [1017] twice
+    text = make(mandatory=VAR_1000 + "\n[1000]\nDefaultValue=0x99\n")
+    od = eds.parse(text, filename="bad.eds")
+    assert od[0x1000].subs[0].default == 0x99 and od[0x1000].name == "Device type"
+    merged = ("bad.eds:21: [1000] section [1000] again (first at line 13): its keys are "
+              "added, later values win")
+    assert merged in [str(w) for w in od.warnings]
+    with pytest.raises(EdsError) as info:
+        eds.parse(text, filename="bad.eds", strict=True)
+    assert merged in str(info.value).splitlines()
 
 
 def test_sub_object_without_object_is_an_error() -> None:

@@ -31,7 +31,7 @@ def test_stdio_script() -> None:
               "[4] 2 w 0x200C 0 u32 0x10\n[5] 2 r 0x200C 0 x32\nnonsense\n[6] 9 9 9 r\n"
               "[7] 127 stop\n[8] 127 r 0x1017 0 u16\n")
     done = subprocess.run([sys.executable, "-m", "canola.gateway", *SIM, "--listen", "stdio"],
-                          input=script.encode(), capture_output=True, timeout=60, check=True)
+                          input=script.encode(), capture_output=True, timeout=300, check=True)
     # one reply per line, each ended by CR LF; the comment's is empty, the line without
     # [seq] has the last sequence number seen (as CANopenNode's gateway answers)
     assert done.stdout.decode().split("\r\n") == [
@@ -49,7 +49,7 @@ def test_tcp_process_and_sigterm() -> None:
 
         run(main())
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=20) == 0
+        assert proc.wait(timeout=300) == 0
 
 
 def test_canola_command_arguments() -> None:
@@ -59,6 +59,8 @@ def test_canola_command_arguments() -> None:
     assert canola_main(["gateway", "--max-clients", "0", *SIM]) == 2
     assert canola_main(["gateway", "--idle-timeout", "-1", *SIM]) == 2
     assert canola_main(["gateway", "--idle-timeout", "soon", *SIM]) == 2
+    assert canola_main(["gateway", "--max-queued", "1000", *SIM]) == 2  # a line must fit
+    assert canola_main(["gateway", "--max-queued-total", "5000000", *SIM]) == 2
 
 
 def test_listen_on_unix_socket_in_process(tmp_path: Path) -> None:

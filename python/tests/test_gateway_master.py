@@ -58,8 +58,9 @@ def test_sim_sdo_nmt_and_local_node() -> None:
             assert devices[2].nmt_state == "OPERATIONAL"
             assert await c.ask("[8] 0 stop") == "[8] OK"
             assert devices[2].nmt_state == devices[3].nmt_state == "STOPPED"
-            assert master.nmt_state == "PRE-OPERATIONAL"  # a master's broadcast is not for it
+            assert master.nmt_state == "STOPPED"  # node-ID 0 is every node, the gateway's too
             assert await c.ask("[9] 0 preop") == "[9] OK"
+            assert master.nmt_state == "PRE-OPERATIONAL"
             before = len(bus.trace)
             assert await c.ask(f"[10] {GW} stop") == "[10] OK"
             assert master.nmt_state == "STOPPED"

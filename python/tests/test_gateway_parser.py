@@ -15,6 +15,7 @@ from canola.gateway import GatewayError, ParseError, parse_line
 from canola.gateway.formats import TYPES, format_value, parse_value
 from canola.gateway.parser import LSS_COMMANDS
 from canola.gateway.requests import (
+    Auth,
     BootUpIndication,
     DisableGuarding,
     DisableHeartbeat,
@@ -81,6 +82,13 @@ def test_other_commands() -> None:
     assert parse_line("[1] 1 lss_store") == Lss(1, 1, command="lss_store")
     assert parse_line("[1] r p 2") == PdoRead(1, num=2)
     assert parse_line("[1] 1 w pdo 1 2 5 0x10") == PdoWrite(1, 1, num=1, values=(5, 16))
+    token = "Zm9vYmFyLXRva2VuLTIwMjQ"
+    assert parse_line(f"[3] AUTH {token} # c") == Auth(3, token=token)
+    assert "Zm9v" not in repr(parse_line("[3] auth Zm9vYmFyLXRva2VuLTIwMjQ"))  # not in logs
+    for bad in ("[4] auth", "[4] auth a b", "[4] 5 auth abc"):
+        with pytest.raises(ParseError) as err:
+            parse_line(bad)
+        assert (err.value.code, err.value.seq) == (GatewayError.SYNTAX, 4)
 
 
 def test_pdo_configuration() -> None:

@@ -122,10 +122,11 @@ def test_local_node_and_nmt() -> None:
         assert await c.ask("[7] 5 preop") == "[7] OK"
         assert await c.ask("[8] 5 reset node") == "[8] OK"
         assert await c.ask("[9] 1 reset comm") == "[9] OK"
-        # to its own node-ID: on the bus (as CANopenNode's gateway) and applied to itself
+        # to its own node-ID or to all: on the bus (as CANopenNode's gateway) and applied
+        # to itself
         assert m.nmt_sent == [(5, "start"), (0, "reset_comm"), (1, "stop"), (5, "preop"),
                               (5, "reset_node"), (1, "reset_comm")]
-        assert m.local_nmt_done == ["stop", "reset_comm"]
+        assert m.local_nmt_done == ["reset_comm", "stop", "reset_comm"]
         assert (await c.ask("[10] info version")).startswith("[10] 3232 0 0.0 0 2 3.0 ")
         await c.close()
         await server.close()

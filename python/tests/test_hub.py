@@ -11,11 +11,14 @@ from collections.abc import Iterator
 
 import can
 import pytest
+from bounded import first_line
 from cli_helpers import cli
 
 from canola.bus import hub as hub_module
 from canola.bus.hub import Hub, HubThread, exposed_addresses
 from canola.bus.socketcand import Frame, parse_server_element, split_elements
+
+TOKEN = "hub-test-token-0123456789"
 
 pytestmark = pytest.mark.realtime
 
@@ -45,12 +48,12 @@ def _settle() -> None:
 
 
 def _raw(port: int) -> socket.socket:
-    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s = socket.create_connection(("127.0.0.1", port), timeout=30)  # a bound, not a wait
     assert s.recv(64) == b"< hi >"
     return s
 
 
-def _recv_until(s: socket.socket, marker: bytes, timeout: float = 5.0) -> bytes:
+def _recv_until(s: socket.socket, marker: bytes, timeout: float = 30.0) -> bytes:
     s.settimeout(timeout)
     data = b""
     while marker not in data:
@@ -174,8 +177,7 @@ def test_serve_command_in_a_subprocess() -> None:
                              str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
+        line = first_line(proc.stdout, "canola bus serve")
         assert f"127.0.0.1:{port}" in line
         a, b = _bus(port), _bus(port)
         _settle()
@@ -195,7 +197,7 @@ def test_port_in_use_is_one_line_error() -> None:
         busy.listen()
         port = busy.getsockname()[1]
         proc = subprocess.run([sys.executable, "-m", "canola.cli", "bus", "serve", "--port",
-                               str(port)], capture_output=True, text=True, timeout=30,
+                               str(port)], capture_output=True, text=True, timeout=300,
                               check=False)
     assert proc.returncode != 0
     assert len(proc.stderr.strip().splitlines()) == 1
@@ -297,25 +299,40 @@ def test_non_loopback_addresses_are_named() -> None:
         Hub("")
 
 
-def test_serve_warns_for_every_non_loopback_address(capsys: pytest.CaptureFixture[str],
-                                                    monkeypatch: pytest.MonkeyPatch) -> None:
-    served: list[str] = []
-    monkeypatch.setattr(hub_module, "serve", lambda host, port, **kw: served.append(host))
+def test_serve_beyond_loopback_only_with_a_token(capsys: pytest.CaptureFixture[str],
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every address that is not loopback is refused in one line without a token (before:
+    a warning, and the hub served anyone); with one (--token or CANOLA_TOKEN) it is
+    served, and a note says the traffic is not encrypted. Loopback needs none."""
+    served: list[tuple[str, str | None]] = []
+    monkeypatch.setattr(hub_module, "serve",
+                        lambda host, port, **kw: served.append((host, kw.get("token"))))
+    monkeypatch.delenv("CANOLA_TOKEN", raising=False)
     for host in ("0.0.0.0", "::", "192.0.2.7"):
         code, out, err = cli(capsys, "bus", "serve", "--host", host)
-        assert code == 0 and out == ""
-        assert err.startswith(f"canola bus: warning: --host {host}: listening on {host}, not "
-                              "a loopback address: "), err
+        assert code == 2 and out == ""
+        assert err.startswith(f"canola bus serve: error: --host {host} listens on {host}, "
+                              "which is not loopback: set a token"), err
         assert len(err.splitlines()) == 1
+        code, out, err = cli(capsys, "bus", "serve", "--host", host, "--token", TOKEN)
+        assert code == 0 and out == ""
+        assert err.startswith(f"canola bus: --host {host}: listening on {host}, not "
+                              "loopback: clients must send the token"), err
+    monkeypatch.setenv("CANOLA_TOKEN", TOKEN)
+    assert cli(capsys, "bus", "serve", "--host", "0.0.0.0")[0] == 0
+    code, _, err = cli(capsys, "bus", "serve", "--host", "0.0.0.0", "--token", "short")
+    assert code == 2 and "--token must be 16..64 characters" in err
+    monkeypatch.delenv("CANOLA_TOKEN")
     code, _, err = cli(capsys, "bus", "serve", "--host", "127.0.0.1")
     assert code == 0 and err == ""
-    assert served == ["0.0.0.0", "::", "192.0.2.7", "127.0.0.1"]
+    assert served == [("0.0.0.0", TOKEN), ("::", TOKEN), ("192.0.2.7", TOKEN),
+                      ("0.0.0.0", TOKEN), ("127.0.0.1", None)]
 
 
 @pytest.mark.slow
 def test_empty_host_is_refused_in_one_line() -> None:
     proc = subprocess.run([sys.executable, "-m", "canola.cli", "bus", "serve", "--host", "",
-                           "--port", "0"], capture_output=True, text=True, timeout=30,
+                           "--port", "0"], capture_output=True, text=True, timeout=300,
                           check=False)
     assert proc.returncode == 2
     assert proc.stderr.splitlines() == [

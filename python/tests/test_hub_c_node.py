@@ -44,7 +44,7 @@ def c_node() -> Iterator[tuple[str, subprocess.Popen[str]]]:
         finally:
             proc.send_signal(signal.SIGTERM)
             try:
-                _, err = proc.communicate(timeout=60)
+                _, err = proc.communicate(timeout=300)
             finally:
                 if proc.poll() is None:
                     proc.kill()
@@ -70,3 +70,32 @@ def test_c_node_through_the_hub(capsys: pytest.CaptureFixture[str],
     node = json.loads(out)["nodes"][0]
     assert (node["node"], node["state"]) == (12, "OPERATIONAL")
     assert 0 < node["heartbeat_gap"] < 2
+
+
+def test_c_node_proves_the_token_of_a_hub_that_asks(capsys: pytest.CaptureFixture[str],
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """A hub with a token: canola-node without it is refused and says why; with
+    CANOLA_TOKEN (or --token) it joins, and a canola command with the same variable
+    reaches it."""
+    token = "c-node-token-0123456789"
+    with HubThread(token=token) as hub:
+        url = f"socketcand://127.0.0.1:{hub.port}/cnode"
+        env = {k: v for k, v in os.environ.items() if k != "CANOLA_TOKEN"}
+        refused = subprocess.run([str(NODE_BIN), "--bus", url, "--node-id", "12"], env=env,
+                                 capture_output=True, text=True, timeout=60, check=False)
+        assert refused.returncode == 1
+        assert "authentication required" in refused.stderr, refused.stderr
+        proc = subprocess.Popen([str(NODE_BIN), "--bus", url, "--node-id", "12"],
+                                env={**env, "CANOLA_TOKEN": token}, stderr=subprocess.PIPE,
+                                text=True)
+        try:
+            deadline = time.monotonic() + 60
+            while not any(c.channel == "cnode" for c in hub.hub.clients()):
+                assert time.monotonic() < deadline and proc.poll() is None
+                time.sleep(0.02)
+            monkeypatch.setenv("CANOLA_TOKEN", token)
+            assert cli(capsys, "sdo", "read", "12", "0x1018:1", "--bus", url)[:2] == (
+                0, "0x00000CA0\n")
+        finally:
+            proc.kill()
+            proc.communicate(timeout=60)

@@ -28,7 +28,7 @@ def tracked_files() -> list[str]:
     """The repository's files as git knows them (untracked new files included)."""
     try:
         out = subprocess.run(["git", "ls-files", "--cached", "--others", "--exclude-standard"],
-                             cwd=ROOT, capture_output=True, text=True, check=True, timeout=60)
+                             cwd=ROOT, capture_output=True, text=True, check=True, timeout=300)
     except (OSError, subprocess.CalledProcessError):
         pytest.skip("not a git checkout: the source list comes from git ls-files")
     return [f for f in out.stdout.splitlines() if f]

@@ -71,14 +71,14 @@ def test_channel_table_follows_the_core() -> None:
     master, other, _ = _network(bus)
     bus.run_for(10_000)
     assert master.sdo(2).read(0x1018, 4, "u32") == 2
-    channel = master._channels[2]
+    channel = master._sdo.table[2]
     # another tool points the master's channel at node 3 through its SDO server
     for sub, value in ((1, 0x603), (2, 0x583), (3, 3)):
         other.sdo(MASTER).write(0x1280 + channel, sub, "u32" if sub < 3 else "u8", value)
     assert master.sdo(3).read(0x1018, 4, "u32") == 3
-    assert master._channels[3] == channel  # adopted: it talks to node 3 now
+    assert master._sdo.table[3] == channel  # adopted: it talks to node 3 now
     assert master.sdo(2).read(0x1018, 4, "u32") == 2
-    assert master._channels[2] != channel
+    assert master._sdo.table[2] != channel
 
 
 def test_manager_boots_the_network_again_after_a_reset_all() -> None:

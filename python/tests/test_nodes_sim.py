@@ -97,7 +97,7 @@ def test_sdo_aborts_and_timeout(net: tuple[SimBus, Master, Device]) -> None:
     with pytest.raises(SdoTimeout) as tmo:
         master.sdo(9).upload(0x1000, 0)
     assert tmo.value.code == 0x05040000
-    assert str(tmo.value) == "no response from node 9 (SDO time-out 1000 ms)"
+    assert str(tmo.value) == "no response from node 9 (SDO time-out 1000 ms, after 1.00 s)"
     with pytest.raises(SdoTimeout, match=r"SDO time-out 200 ms"):
         master.sdo(9).upload(0x1000, 0, timeout=0.2)
     assert master.sdo(5).upload(0x1000, 0) == (0x191).to_bytes(4, "little")  # still usable

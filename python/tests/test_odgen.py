@@ -277,7 +277,7 @@ def test_sample_links_with_the_core_and_runs(tmp_path: Path, optimise: str,
     result = subprocess.run([cc, *objects, "-o", str(exe)], capture_output=True, text=True,
                             check=False)
     assert result.returncode == 0, result.stderr
-    run = subprocess.run([str(exe)], capture_output=True, text=True, check=False, timeout=30)
+    run = subprocess.run([str(exe)], capture_output=True, text=True, check=False, timeout=300)
     assert run.returncode == 0, f"test program failed with {run.returncode}"
 
 
@@ -540,7 +540,7 @@ def test_every_generated_dictionary_passes_co_od_validate(tmp_path: Path) -> Non
                                     text=True, check=False)
             assert result.returncode == 0, result.stderr
             run = subprocess.run([str(exe)], capture_output=True, text=True, check=False,
-                                 timeout=60)
+                                 timeout=300)
             assert run.returncode == 0, f"{flags}: {run.stdout}"
     assert len(names) > 2 or not corpus_files()
 

@@ -12,10 +12,12 @@ import pytest
 
 from canola.errors import SdoAbort
 from canola.formats import eds
+from canola.master import SdoTimeout
 from canola.odnames import EntryError, entry_name, find_entry, parse_address, value_text
 from canola.pdomap import (
     Mapped,
     Pdo,
+    PdoConfigError,
     PdoError,
     configure_pdo,
     decode,
@@ -199,6 +201,65 @@ def test_configure_follows_the_cia301_procedure(od: eds.ObjectDictionary) -> Non
                                                 ["Statusword", "Position actual value"])
     with pytest.raises(PdoError, match="a PDO holds 64"):
         configure_pdo(dev, "TPDO1", [mapped_entry(od, "Position actual value")] * 3)
+
+
+class RefusingSdo(FakeSdo):
+    """A device that refuses one write (``refuse``: (index, sub) -> abort code) and, from
+    the ``dead_after``-th write on, answers nothing."""
+
+    def __init__(self, refuse: dict[tuple[int, int], int], dead_after: int = 1000) -> None:
+        super().__init__(_device().entries)
+        self.refuse, self.dead_after, self.writes = refuse, dead_after, 0
+
+    def download(self, index: int, sub: int, data: bytes, *,
+                 timeout: float | None = None) -> None:
+        self.writes += 1
+        if self.writes >= self.dead_after:
+            raise SdoTimeout(5, 1000)
+        if (index, sub) in self.refuse:
+            raise SdoAbort(self.refuse[index, sub])
+        super().download(index, sub, data, timeout=timeout)
+
+
+def test_a_remap_that_fails_half_way_restores_the_previous_configuration(
+        od: eds.ObjectDictionary) -> None:
+    """The newcomer's TPDO1 was left invalid with its new mapping, and the message did
+    not say so."""
+    dev = RefusingSdo({(0x1A00, 2): 0x06040041})  # the second entry cannot be mapped
+    before = dict(dev.entries)
+    with pytest.raises(PdoConfigError) as info:
+        configure_pdo(dev, "TPDO1", [mapped_entry(od, "Statusword"),
+                                     mapped_entry(od, "Position actual value")],
+                      transmission_type=254, event_timer_ms=100)
+    assert str(info.value) == (
+        "TPDO1: SDO abort 0x06040041: Object cannot be mapped to the PDO (writing "
+        "0x1A00:02 = 0x60640020); the previous configuration is restored (COB-ID "
+        "0x40000185 (valid), 1 entries)")
+    assert dev.entries == before  # every value back, the PDO valid again
+    undo = [(i, s) for kind, i, s, _ in dev.log if kind == "write"][5:]  # after the refusal
+    assert undo == [(0x1800, 1), (0x1800, 2), (0x1800, 5), (0x1A00, 0), (0x1A00, 1),
+                    (0x1A00, 0), (0x1800, 1)]  # CiA 301's order, valid last
+
+
+def test_a_remap_whose_undo_fails_says_what_the_pdo_was_left_with(
+        od: eds.ObjectDictionary) -> None:
+    dev = RefusingSdo({(0x1A00, 2): 0x06040041}, dead_after=6)  # dies during the undo
+    with pytest.raises(PdoConfigError) as info:
+        configure_pdo(dev, "TPDO1", [mapped_entry(od, "Statusword"),
+                                     mapped_entry(od, "Position actual value")])
+    assert info.value.state == (
+        "restoring failed (0x1A00:00 = 0x00): TPDO1 is left with COB-ID 0xC0000185 "
+        "(invalid) and mapping count 0")
+    assert dev.entries[0x1800, 1] == (0xC0000185).to_bytes(4, "little")
+    assert dev.entries[0x1A00, 0] == b"\x00"
+
+
+def test_a_failed_read_before_the_remap_changes_nothing(od: eds.ObjectDictionary) -> None:
+    dev = _device()
+    del dev.entries[0x1800, 5]  # no event timer on this device
+    with pytest.raises(SdoAbort):
+        configure_pdo(dev, "TPDO1", [mapped_entry(od, "Statusword")], event_timer_ms=100)
+    assert [kind for kind, *_ in dev.log] == ["read"]  # the COB-ID; then no write
 
 
 def test_read_pdos_leaves_out_what_the_device_lacks() -> None:

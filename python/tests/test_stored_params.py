@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from bounded import first_line
 
 from canola.bus.hub import HubThread
 from canola.core import SimBus
@@ -126,8 +127,7 @@ def test_device_command_says_so(tmp_path: Path) -> None:
              "--store", str(tmp_path), "--bus", f"socketcand://127.0.0.1:{hub.port}/store"],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         try:
-            assert proc.stderr is not None
-            line = proc.stderr.readline()  # the first thing it says on stderr
+            line = first_line(proc.stderr, "canola device", 120)  # the first thing it says
         finally:
             proc.terminate()
             proc.wait(20)

@@ -287,6 +287,68 @@ static void test_runs_on_a_socketcand_bus(void)
     CHECK(rmdir(dir) == 0);
 }
 
+/* LSS (CiA 305) with --store: a configured node-ID that is stored (store configuration)
+ * survives a reset node and a restart, whatever --node-id says; one configured and not
+ * stored is gone after the reset node. (Before: store configuration answered 1, "not
+ * supported", and reset node brought back the node-ID of --node-id.) */
+static void test_lss_node_id_stored(void)
+{
+    child_t c;
+    conn_t k;
+    int ls;
+    char dir[] = "/tmp/canola-node-lss-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    start_node(&c, &k, dir, &ls);
+    CHECK(wait_text(&k, 0, "< send 707 1 00 >", WAIT_MS) >= 0);
+    size_t from = k.len;
+    send_text(&k, "< frame 7E5 1.000000 0401000000000000 >"); /* configuration state */
+    send_text(&k, "< frame 7E5 1.000000 1109000000000000 >"); /* configure node-ID 9 */
+    CHECK(wait_text(&k, from, "< send 7E4 8 11 00 00 00 00 00 00 00 >", WAIT_MS) >= 0);
+    from = k.len;
+    send_text(&k, "< frame 7E5 1.000000 1700000000000000 >"); /* store configuration */
+    CHECK(wait_text(&k, from, "< send 7E4 8 17 00 00 00 00 00 00 00 >", WAIT_MS) >= 0);
+    send_text(&k, "< frame 7E5 1.000000 0400000000000000 >"); /* waiting */
+    from = k.len;
+    send_text(&k, "< frame 000 1.000000 8107 >"); /* NMT reset node 7 */
+    CHECK(wait_text(&k, from, "< send 709 1 00 >", WAIT_MS) >= 0);
+    kill(c.pid, SIGTERM);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
+    close(k.fd);
+    close(ls);
+    char path[128];
+    snprintf(path, sizeof path, "%s/lss.params", dir);
+    char line[64] = {0};
+    FILE *f = fopen(path, "r");
+    CHECK(f != NULL);
+    if (f != NULL) {
+        CHECK(fgets(line, sizeof line, f) != NULL);
+        fclose(f);
+    }
+    CHECK_STR(line, "canola-lss 1 node-id 9 bit-timing 255\n");
+
+    /* A restart with --node-id 7: node 9, and it says why. */
+    start_node(&c, &k, dir, &ls);
+    CHECK(wait_text(&k, 0, "< send 709 1 00 >", WAIT_MS) >= 0);
+    /* configured to 11 but not stored: the reset node brings 9 back */
+    from = k.len;
+    send_text(&k, "< frame 7E5 1.000000 0401000000000000 >");
+    send_text(&k, "< frame 7E5 1.000000 110B000000000000 >");
+    CHECK(wait_text(&k, from, "< send 7E4 8 11 00 00 00 00 00 00 00 >", WAIT_MS) >= 0);
+    send_text(&k, "< frame 7E5 1.000000 0400000000000000 >");
+    from = k.len;
+    send_text(&k, "< frame 000 1.000000 8109 >");
+    CHECK(wait_text(&k, from, "< send 709 1 00 >", WAIT_MS) >= 0);
+    kill(c.pid, SIGTERM);
+    CHECK_EQ(finish(&c, WAIT_MS), 0);
+    char said[160];
+    snprintf(said, sizeof said, "node-ID 9, stored by LSS in %s/lss.params (not --node-id 7)", dir);
+    CHECK(strstr(c.text, said) != NULL);
+    close(k.fd);
+    close(ls);
+    CHECK(unlink(path) == 0);
+    CHECK(rmdir(dir) == 0);
+}
+
 static void test_sigint_and_server_gone(void)
 {
     child_t c;
@@ -417,6 +479,7 @@ int main(int argc, char **argv)
     prog = argv[1];
     setenv("CANOLA_BUS", OVERRIDDEN_BUS, 1);
     RUN(test_runs_on_a_socketcand_bus);
+    RUN(test_lss_node_id_stored);
     RUN(test_sigint_and_server_gone);
     RUN(test_sdo_timeout_option);
     RUN(test_bad_arguments);

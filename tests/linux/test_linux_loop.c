@@ -29,6 +29,7 @@
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #define MS 1000u
@@ -50,7 +51,10 @@ typedef struct rig {
     int count;
     co_nmt_state_t states[16];
     int state_count;
+    co_ec_event_t events[32];
+    int event_count;
     bool (*until)(const struct rig *r); /* the loop stops once this holds (run_until) */
+    void (*on_seen)(struct rig *r, const struct can_frame *f); /* the peer's reaction */
 } rig_t;
 
 static rig_t R; /* large: not on the stack */
@@ -66,6 +70,9 @@ static void peer_ready(void *ctx, int fd, uint32_t events)
             r->seen[r->count].at_us = co_linux_now_us();
             r->count++;
         }
+        if (r->on_seen != NULL) {
+            r->on_seen(r, &cf);
+        }
     }
     if (r->until != NULL && r->until(r)) {
         co_loop_stop(&r->loop);
@@ -77,6 +84,14 @@ static void on_state(void *user, co_nmt_state_t s)
     rig_t *r = user;
     if (r->state_count < 16) {
         r->states[r->state_count++] = s;
+    }
+}
+
+static void on_errctl(void *user, const co_ec_event_t *ev)
+{
+    rig_t *r = user;
+    if (r->event_count < 32) {
+        r->events[r->event_count++] = *ev;
     }
 }
 
@@ -104,6 +119,7 @@ static void rig_open(rig_t *r, uint8_t id, uint16_t hb_ms)
     r->cfg.od = example_od_init(&r->od, hb_ms);
     r->cfg.user = r;
     r->cfg.on_state = on_state;
+    r->cfg.on_errctl = on_errctl;
     CHECK_EQ(co_loop_add_node(&r->loop, &r->node, &r->cfg, &r->can.transport), CO_OK);
     CHECK_EQ(co_loop_add_fd(&r->loop, r->peer, EPOLLIN, peer_ready, r), CO_OK);
 }
@@ -265,6 +281,91 @@ static void test_answered_on_arrival(void)
     peer_send(r, 0x605, req, 8);
     CHECK(run_until(r, has_sdo_answer));
     CHECK_EQ(co_loop_stats(&r->loop)->timer_wakeups, timer0);
+    rig_close(r);
+}
+
+/* ---- a process starved past a deadline with the frame that meets it already received
+ *
+ * The peer's callback plays the bus and the scheduler at once: it puts the frame that meets
+ * the node's deadline into the node's socket, then sleeps past that deadline (the process
+ * does not run, the frame waits in the kernel). The loop must take the frame before it
+ * judges the deadline. (Before: it polled first, and the time-out won.) */
+
+static void sleep_ms(unsigned ms)
+{
+    struct timespec ts = {(time_t)(ms / 1000u), (long)(ms % 1000u) * 1000000L};
+    while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
+    }
+}
+
+/* The SDO server's answer to the initiate: the last segment goes out, then a stall of
+ * twice the server's time-out. */
+static void segment_then_stall(rig_t *r, const struct can_frame *f)
+{
+    if (f->can_id == 0x585 && f->data[0] == 0x60) {
+        const uint8_t segment[8] = {0x07, 0x44, 0x33, 0x22, 0x11, 0, 0, 0}; /* 4 bytes, last */
+        peer_send(r, 0x605, segment, 8);
+        sleep_ms(400);
+    }
+}
+
+static bool has_segment_answer(const rig_t *r)
+{
+    return seen_count(r, mark, 0x585, 0x20) + seen_count(r, mark, 0x585, 0x80) >= 1;
+}
+
+static void test_sdo_segment_received_before_the_time_out_counts(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 0);
+    r->node.cfg.sdo_timeout_ms = 200;
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    CHECK(run_until(r, has_boot_up));
+    mark = r->count;
+    r->on_seen = segment_then_stall;
+    const uint8_t initiate[8] = {0x21, 0x00, 0x20, 0x00, 4, 0, 0, 0}; /* 0x2000, 4 bytes */
+    peer_send(r, 0x605, initiate, 8);
+    CHECK(run_until(r, has_segment_answer));
+    r->on_seen = NULL;
+    CHECK_EQ(seen_count(r, mark, 0x585, 0x80), 0); /* no abort: neither time-out nor cs */
+    CHECK_EQ(seen_count(r, mark, 0x585, 0x20), 1);
+    CHECK_EQ(r->od.app_u32, 0x11223344u);
+    rig_close(r);
+}
+
+/* Node 9's heartbeats answer node 5's (100 ms); the third comes, then a stall of 450 ms,
+ * past node 5's 300 ms consumer time. */
+static int beats_seen;
+
+static void heartbeat_then_stall(rig_t *r, const struct can_frame *f)
+{
+    if (f->can_id == 0x705 && f->data[0] == 0x7F) {
+        const uint8_t alive[1] = {0x7F};
+        peer_send(r, 0x709, alive, 1);
+        if (++beats_seen == 3) {
+            sleep_ms(450);
+        }
+    }
+}
+
+static bool has_eight_beats(const rig_t *r) { return seen_count(r, mark, 0x705, 0x7F) >= 8; }
+
+static void test_heartbeat_received_before_the_time_out_counts(void)
+{
+    rig_t *r = &R;
+    rig_open(r, 5, 100);
+    CHECK_EQ(co_node_start(&r->node, co_linux_now_us()), CO_OK);
+    CHECK_EQ(co_node_set_uint(&r->node, 0x1016, 1, (9u << 16) | 300u), CO_ABORT_NONE);
+    beats_seen = 0;
+    r->on_seen = heartbeat_then_stall;
+    mark = 0;
+    CHECK(run_until(r, has_eight_beats));
+    r->on_seen = NULL;
+    CHECK(beats_seen >= 8);
+    CHECK_EQ(co_hb_remote_state(&r->node, 9), CO_NMT_PRE_OPERATIONAL); /* watched */
+    for (int i = 0; i < r->event_count; i++) {
+        CHECK(r->events[i].kind != CO_EC_HB_TIMEOUT);
+    }
     rig_close(r);
 }
 
@@ -523,6 +624,8 @@ int main(void)
     RUN(test_no_busy_polling);
     RUN(test_frames_in_nmt_and_sdo);
     RUN(test_answered_on_arrival);
+    RUN(test_sdo_segment_received_before_the_time_out_counts);
+    RUN(test_heartbeat_received_before_the_time_out_counts);
     RUN(test_two_nodes_two_transports);
     RUN(test_sigterm_stops_the_loop);
     RUN(test_stop_from_a_callback_and_remove_fd);

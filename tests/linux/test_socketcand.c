@@ -240,8 +240,10 @@ static void hear(rig_t *r)
     r->heard[r->heard_len] = '\0';
 }
 
-/* Handshake with `greeting` already written by the server; returns open_fd's result. */
-static co_err_t rig_connect(rig_t *r, const char *greeting, unsigned timeout_ms)
+/* Handshake with `greeting` already written by the server, proving `token` (NULL: none)
+ * first; returns open_fd_auth's result. */
+static co_err_t rig_connect_auth(rig_t *r, const char *greeting, const char *token,
+                                 unsigned timeout_ms)
 {
     memset(r, 0, sizeof *r);
     int sv[2];
@@ -249,7 +251,13 @@ static co_err_t rig_connect(rig_t *r, const char *greeting, unsigned timeout_ms)
     r->server = sv[1];
     CHECK(fcntl(r->server, F_SETFL, O_NONBLOCK) == 0);
     say(r, greeting);
-    return co_socketcand_open_fd(&r->sc, sv[0], "vcan0", timeout_ms);
+    return co_socketcand_open_fd_auth(&r->sc, sv[0], "vcan0", token, timeout_ms);
+}
+
+/* The same without a token, as co_socketcand_open_fd runs it. */
+static co_err_t rig_connect(rig_t *r, const char *greeting, unsigned timeout_ms)
+{
+    return rig_connect_auth(r, greeting, NULL, timeout_ms);
 }
 
 static void rig_node(rig_t *r, uint16_t hb_ms)
@@ -450,6 +458,42 @@ static void test_handshake_failures(void)
     CHECK_EQ(co_socketcand_open_fd(&r->sc, -1, "vcan0", 100), CO_ERR_ARG);
 }
 
+/* A hub that asks for a token (canola bus serve --token): it goes first, a refusal says
+ * the server's words, and a token that is not one never leaves. */
+static void test_token(void)
+{
+    rig_t *r = &R;
+    const char *token = "Zm9vYmFyLXRva2VuLTIwMjQ";
+    CHECK_EQ(rig_connect_auth(r, "< hi >< ok >< ok >< ok >", token, 1000), CO_OK);
+    hear(r);
+    CHECK_STR(r->heard, "< auth Zm9vYmFyLXRva2VuLTIwMjQ >< open vcan0 >< rawmode >");
+    co_socketcand_close(&r->sc);
+    close(r->server);
+
+    CHECK_EQ(rig_connect_auth(r, "< hi >< error wrong token >", token, 1000), CO_ERR_STATE);
+    CHECK_STR(r->sc.transport.error,
+              "socketcand: expected < ok > to auth, the server said '< error wrong token >'");
+    close(r->server);
+
+    /* without one, a hub that asks says so */
+    CHECK_EQ(rig_connect_auth(r, "< hi >< error authentication required >", "", 1000),
+             CO_ERR_STATE);
+    CHECK(strstr(r->sc.transport.error, "authentication required") != NULL);
+    hear(r);
+    CHECK_STR(r->heard, "< open vcan0 >");
+    close(r->server);
+
+    const char *bad[] = {"short", "has space in it 0123", "0123456789abcdef<>",
+                         "0123456789012345678901234567890123456789012345678901234567890123X"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        CHECK_EQ(rig_connect_auth(r, "< hi >", bad[i], 1000), CO_ERR_ARG);
+        CHECK(strstr(r->sc.transport.error, "16..64") != NULL);
+        hear(r);
+        CHECK_EQ(r->heard_len, 0u); /* nothing was sent */
+        close(r->server);
+    }
+}
+
 static void test_output_buffer_fills_and_drains(void)
 {
     rig_t *r = &R;
@@ -642,6 +686,7 @@ int main(void)
     RUN(test_error_frames_become_bus_events);
     RUN(test_broken_servers);
     RUN(test_handshake_failures);
+    RUN(test_token);
     RUN(test_output_buffer_fills_and_drains);
     RUN(test_loop_flushes_when_writable);
     RUN(test_tcp_loopback);

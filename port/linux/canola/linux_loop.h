@@ -8,9 +8,20 @@
  * absolute CLOCK_MONOTONIC time, the clock of co_linux_now_us), an application fd is
  * ready, or SIGTERM/SIGINT arrives (a signalfd, when co_loop_handle_signals was called).
  * There is no periodic tick: an idle node with a 1 s heartbeat wakes the process once a
- * second. On each wake-up it reads every frame the transports have (co_node_ingest, bus
- * events to co_node_bus_event), runs the application's fd callbacks, and polls every
- * node, which sends what is due and returns the next deadline.
+ * second. On each wake-up it runs the application's fd callbacks, then reads every frame
+ * the transports hold (co_node_ingest, each with the time it was read; bus events to
+ * co_node_bus_event), and only then polls each node, at the time its transport was found
+ * empty: the node sends what is due and returns the next deadline.
+ *
+ * So a time-out (SDO server and client, LSS, heartbeat consumer, guarding) is judged only
+ * after the frames that had arrived were processed: a process that was starved past a
+ * deadline, with the answer waiting in its socket, takes the answer first. (Each frame is
+ * ingested at the time it is read, not at the time the kernel received it: the core counts
+ * a service's own next time-out from the ingest, e.g. the SDO server's wait for the client
+ * after its answer, and an answer sent late must not start that wait in the past. A
+ * heartbeat consumer's verdict can so come late by a stall, never early.) A flood that
+ * keeps CO_LOOP_RX_DRAIN_MAX frames waiting on one transport has its deadlines judged
+ * after that many.
  *
  * When a transport cannot take a frame (CO_ERR_BUSY) the node keeps it queued; the loop
  * polls that node again when the transport's buffer drains (EPOLLOUT) or, for
@@ -26,7 +37,7 @@
  *     co_loop_handle_signals(&loop);                   // SIGTERM/SIGINT stop the loop
  *     co_socketcan_open(&can, "can0");
  *     co_loop_add_node(&loop, &node, &config, &can.transport);   // co_node_init inside
- *     co_node_start(&node, co_linux_now_us());
+ *     co_node_start(&node, co_linux_now_us());        // the loop's clock (transport.h)
  *     co_loop_run(&loop);                              // returns why it stopped
  *     co_loop_close(&loop);
  *
@@ -52,8 +63,10 @@ extern "C" {
 #endif
 /** Retry delay after a transport without its own buffer said busy. */
 #define CO_LOOP_RETRY_US 1000u
-/** Frames read from one transport per wake-up before the others get their turn. */
+/** Frames read from one transport in one turn before the others get theirs. */
 #define CO_LOOP_RX_BURST 64
+/** Frames read from one transport at most before its node's deadlines are judged. */
+#define CO_LOOP_RX_DRAIN_MAX 1024
 
 /** Why co_loop_run / co_loop_run_until returned. */
 typedef enum co_loop_reason {
@@ -75,10 +88,11 @@ typedef struct co_loop_node {
     co_loop_t *loop;
     co_node_t *node;
     co_transport_t *transport;
-    uint64_t next_us;  /**< what co_node_poll returned last */
-    uint64_t retry_us; /**< poll again then (a busy transport), CO_TIME_NEVER: none */
-    bool watch_out;    /**< EPOLLOUT is armed for the transport's buffer */
-    bool failed;       /**< the transport failed: the node is left alone */
+    uint64_t next_us;    /**< what co_node_poll returned last */
+    uint64_t drained_us; /**< when the transport was last found empty: the poll's time */
+    uint64_t retry_us;   /**< poll again then (a busy transport), CO_TIME_NEVER: none */
+    bool watch_out;      /**< EPOLLOUT is armed for the transport's buffer */
+    bool failed;         /**< the transport failed: the node is left alone */
 } co_loop_node_t;
 
 /** One application fd. Internal. */

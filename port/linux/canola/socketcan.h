@@ -87,9 +87,6 @@ void co_socketcan_close(co_socketcan_t *can);
  *  the node cares about (warnings, protocol errors). Pure function. */
 uint32_t co_socketcan_error_events(uint32_t can_id, const uint8_t data[8]);
 
-/** Microseconds of CLOCK_MONOTONIC: the clock to give co_node_poll/co_node_ingest. */
-uint64_t co_linux_now_us(void);
-
 #ifdef __cplusplus
 }
 #endif

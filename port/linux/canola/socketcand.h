@@ -16,6 +16,9 @@
  *     server: < hi >          client: < open CHANNEL >
  *     server: < ok >          client: < rawmode >
  *     server: < ok >
+ * (co_socketcand_open_auth first proves a token, as `canola bus serve --token` asks:
+ *     server: < hi >          client: < auth TOKEN >
+ *     server: < ok >          client: < open CHANNEL > ...)
  * then, in raw mode, every frame on the bus arrives as
  *     < frame ID SECS.USECS DATA >     ID in hex: 3 digits = 11-bit, 4..8 digits = 29-bit
  *                                       (socketcand writes %03X / %08X); DATA is the bytes
@@ -58,6 +61,8 @@ extern "C" {
 #define CO_SOCKETCAND_MSG_MAX 256 /**< longest message accepted from the server */
 #define CO_SOCKETCAND_RX_BUF 1024
 #define CO_SOCKETCAND_TX_BUF 2048
+#define CO_SOCKETCAND_TOKEN_MIN 16 /**< a token's length: 16..64 characters of */
+#define CO_SOCKETCAND_TOKEN_MAX 64 /**< A-Z a-z 0-9 . _ ~ + / = - */
 
 /** A parsed socketcand://HOST:PORT/CHANNEL. */
 typedef struct co_socketcand_url {
@@ -99,9 +104,20 @@ co_err_t co_socketcand_parse_url(const char *url, co_socketcand_url_t *out, char
  *  handshake failed; sc->transport.error says why in every case. */
 co_err_t co_socketcand_open(co_socketcand_t *sc, const char *url, unsigned timeout_ms);
 
+/** As co_socketcand_open, proving `token` (NULL or "": none) to the server before the
+ *  channel is opened. Returns CO_ERR_ARG for a token that is not one (see
+ *  CO_SOCKETCAND_TOKEN_MIN), CO_ERR_STATE when the server refuses it (transport.error
+ *  holds the server's words). */
+co_err_t co_socketcand_open_auth(co_socketcand_t *sc, const char *url, const char *token,
+                                 unsigned timeout_ms);
+
 /** The handshake on an already connected stream socket (takes ownership of `fd`). */
 co_err_t co_socketcand_open_fd(co_socketcand_t *sc, int fd, const char *channel,
                                unsigned timeout_ms);
+
+/** The same, proving `token` first (as co_socketcand_open_auth). */
+co_err_t co_socketcand_open_fd_auth(co_socketcand_t *sc, int fd, const char *channel,
+                                    const char *token, unsigned timeout_ms);
 
 /** Close the connection (safe to call twice). */
 void co_socketcand_close(co_socketcand_t *sc);

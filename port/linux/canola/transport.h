@@ -64,6 +64,10 @@ struct co_transport {
     char error[CO_TRANSPORT_ERROR_MAX]; /**< why it failed: one line, empty when fine */
 };
 
+/** Microseconds of CLOCK_MONOTONIC: the clock to give co_node_start, co_node_ingest and
+ *  co_node_poll on Linux (the event loop's clock, canola/linux_loop.h). Never fails. */
+uint64_t co_linux_now_us(void);
+
 /** Close a transport through its ops (NULL-safe). */
 void co_transport_close(co_transport_t *t);
 

@@ -5,8 +5,9 @@
  * again with fresh values) and find its saved parameters back.
  *
  * A save goes to a staging image and replaces the stored one only at commit, as an
- * atomic flash or file backend would. `fail_next_commit` makes the next commit fail
- * (to test a storage error), `commits` counts successful saves.
+ * atomic flash or file backend would; a save of both groups stages the first image and
+ * commits both at once. `fail_next_commit` makes the next commit fail (to test a storage
+ * error), `commits` counts successful commits.
  */
 #ifndef CANOLA_SIM_STORAGE_H
 #define CANOLA_SIM_STORAGE_H
@@ -28,6 +29,8 @@ typedef struct co_sim_storage {
     co_sim_image_t images[2]; /**< communication, application */
     co_sim_image_t staging;
     co_param_group_t staging_group;
+    co_sim_image_t staged; /**< the first image of a save of both groups (valid: staged) */
+    co_param_group_t staged_group;
     bool fail_next_commit;
     uint32_t commits;
 } co_sim_storage_t;

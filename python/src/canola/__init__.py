@@ -2,6 +2,7 @@
 """canola: the Python side of the canola CANopen stack."""
 
 import importlib
+from importlib import metadata
 from typing import TYPE_CHECKING, Any
 
 from canola.errors import Diagnostic, EdsError, Error, SdoAbort
@@ -10,7 +11,8 @@ if TYPE_CHECKING:
     from canola.device import Device
     from canola.master import Master, SdoTimeout
 
-__version__ = "0.1.0"
+#: The installed package's version: include/canola/version.h's, read when it was built.
+__version__ = metadata.version("canola")
 
 __all__ = ["Device", "Diagnostic", "EdsError", "Error", "Master", "SdoAbort", "SdoTimeout",
            "__version__"]

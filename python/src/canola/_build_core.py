@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import glob
 import os
+import re
 
 import cffi  # type: ignore[import-untyped]
 
@@ -23,6 +24,15 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 _PROJECT = os.path.normpath(os.path.join(_HERE, "..", ".."))  # python/, or an unpacked sdist
 _SDIST_C = os.path.join(_PROJECT, "csrc")
 _ROOT = _SDIST_C if os.path.isdir(_SDIST_C) else os.path.dirname(_PROJECT)
+
+
+def version() -> str:
+    """canola's version, as include/canola/version.h writes it (the one place it is kept)."""
+    with open(os.path.join(_ROOT, "include", "canola", "version.h"), encoding="utf-8") as f:
+        found = re.search(r'^#define CANOLA_VERSION "([0-9]+\.[0-9]+\.[0-9]+)"', f.read(), re.M)
+    if found is None:
+        raise RuntimeError("include/canola/version.h: no CANOLA_VERSION \"X.Y.Z\" line")
+    return found.group(1)
 
 
 def _rel(path: str) -> str:
@@ -132,6 +142,7 @@ typedef enum co_ec_event_kind { CO_EC_BOOT, CO_EC_REMOTE_RESET, CO_EC_STARTED,
 
 typedef enum co_node_error { CO_NODE_ERR_TX_OVERFLOW, CO_NODE_ERR_TX_DRIVER,
                              CO_NODE_ERR_STORED_COMM, CO_NODE_ERR_STORED_APP,
+                             CO_NODE_ERR_STORE_FAILED, CO_NODE_ERR_SDO_COB_FIXED,
                              ... } co_node_error_t;
 typedef enum co_param_group { CO_PARAMS_COMMUNICATION, CO_PARAMS_APPLICATION,
                               ... } co_param_group_t;
@@ -139,6 +150,7 @@ typedef enum co_store_fault { CO_STORE_INTACT, CO_STORE_NONE, CO_STORE_BAD_HEADE
                               CO_STORE_BAD_LENGTH, CO_STORE_BAD_CRC, CO_STORE_BAD_RECORDS,
                               CO_STORE_READ_ERROR, ... } co_store_fault_t;
 #define CO_EMCY_STORE_REJECTED ...
+#define CO_EMCY_STORE_FAILED ...
 co_store_fault_t co_storage_verify(const co_node_t *node, co_param_group_t group);
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame);
 uint64_t co_node_poll(co_node_t *node, uint64_t now_us);
@@ -159,6 +171,8 @@ co_abort_t co_node_write_net(co_node_t *node, uint16_t index, uint8_t sub, const
                              uint32_t len);
 co_abort_t co_node_read_net(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                             uint32_t cap, uint32_t *len);
+co_abort_t co_node_write_app(co_node_t *node, uint16_t index, uint8_t sub, const uint8_t *data,
+                             uint32_t len);
 co_abort_t co_node_set_uint(co_node_t *node, uint16_t index, uint8_t sub, uint64_t value);
 co_err_t co_node_get_uint(const co_node_t *node, uint16_t index, uint8_t sub, uint64_t *value);
 
@@ -176,6 +190,7 @@ co_err_t co_sdo_download(co_node_t *node, uint8_t channel, uint16_t index, uint8
                          co_sdo_done_fn done, void *ctx);
 co_err_t co_sdo_client_abort(co_node_t *node, uint8_t channel, co_abort_t code);
 bool co_sdo_client_busy(const co_node_t *node, uint8_t channel);
+uint32_t co_sdo_client_progress(const co_node_t *node, uint8_t channel);
 
 co_err_t co_sim_run_until(co_sim_bus_t *bus, uint64_t until_us);
 void co_sim_set_trace(co_sim_bus_t *bus, co_sim_trace_fn fn, void *ctx);
@@ -190,14 +205,17 @@ canola_py_dev_t *canola_py_dev_new(co_sim_bus_t *bus, canola_py_link_t *link,
                                    void *user, co_err_t *err);
 void canola_py_dev_free(canola_py_dev_t *dev);
 co_node_t *canola_py_dev_node(canola_py_dev_t *dev);
+co_err_t canola_py_stored_node_id(const char *store_dir, uint8_t *node_id);
 void canola_py_dev_touch(canola_py_dev_t *dev);
 void canola_py_dev_set_quiet(canola_py_dev_t *dev, bool quiet);
+bool canola_py_dev_sent_abort(const canola_py_dev_t *dev, uint32_t cob_id);
 void canola_py_dev_set_active(canola_py_dev_t *dev, bool active);
 void canola_py_dev_set_raw(canola_py_dev_t *dev, bool raw);
 void canola_py_dev_set_sent(canola_py_dev_t *dev, bool sent);
 #define CANOLA_PY_LINK_FRAMES ...
 #define CANOLA_PY_LINK_DEVS ...
-struct canola_py_link { co_frame_t frames[...]; uint32_t count; uint32_t dev_count; ...; };
+struct canola_py_link { co_frame_t frames[...]; uint32_t count; uint32_t dev_count;
+                        uint64_t due_us; ...; };
 canola_py_link_t *canola_py_link_new(void);
 void canola_py_link_free(canola_py_link_t *link);
 void canola_py_link_detach(canola_py_link_t *link, canola_py_dev_t *dev);
@@ -207,7 +225,7 @@ uint32_t canola_py_link_run(canola_py_link_t *link, uint64_t now_us);
 bool canola_py_link_clear(canola_py_link_t *link);
 co_abort_t canola_py_app_read(co_node_t *node, uint16_t index, uint8_t sub, uint8_t *buf,
                               uint32_t cap, uint32_t *len, uint8_t *type);
-co_abort_t canola_py_app_write(co_node_t *node, uint16_t index, uint8_t sub,
+co_abort_t canola_py_dev_write(canola_py_dev_t *dev, uint16_t index, uint8_t sub,
                                const uint8_t *data, uint32_t len);
 int canola_py_sdo_client_server(const co_node_t *node, uint8_t channel);
 co_sim_bus_t *canola_py_bus_new(uint32_t bitrate);
@@ -227,7 +245,10 @@ extern "Python+C" void canola_py_on_emcy(void *user, const co_emcy_msg_t *emcy);
 extern "Python+C" void canola_py_on_sync(void *user, uint8_t counter);
 extern "Python+C" void canola_py_on_time(void *user, const co_time_of_day_t *time);
 extern "Python+C" void canola_py_on_rpdo(void *user, uint16_t rpdo);
-extern "Python+C" void canola_py_written(void *ctx, const co_od_entry_t *entry);
+typedef enum canola_py_origin { CANOLA_PY_BY_NETWORK = 0, CANOLA_PY_BY_APP = 1
+} canola_py_origin_t;
+extern "Python+C" void canola_py_written(void *user, const co_od_entry_t *entry,
+                                       canola_py_origin_t origin);
 extern "Python+C" void canola_py_raw_rx(void *ctx, uint64_t now_us, const co_frame_t *frame);
 extern "Python+C" void canola_py_sent(void *ctx, const co_frame_t *frame);
 """
@@ -329,7 +350,6 @@ void canola_py_prog_set_ident(canola_py_prog_t *p, uint32_t ident);
 uint32_t canola_py_prog_ident(const canola_py_prog_t *p);
 uint32_t canola_py_prog_status(const canola_py_prog_t *p);
 uint8_t canola_py_prog_state(const canola_py_prog_t *p);
-uint32_t canola_py_sdo_client_done(const co_node_t *node, uint8_t channel);
 
 extern "Python+C" void canola_py_mgr_event(void *ctx, const co_mgr_event_t *event);
 extern "Python+C" void canola_py_lss_done(void *ctx, const co_lss_result_t *result);
@@ -376,7 +396,8 @@ ffibuilder.set_source(
 # every function with its arguments' Python types, every constant an int. The tests check
 # that the file in the package is this text (regenerate: python _build_core.py --stub).
 
-_STUB_HEAD = '''# Generated by _build_core.py (--stub) from its CDEF: do not edit.
+_STUB_HEAD = '''# SPDX-License-Identifier: Apache-2.0
+# Generated by _build_core.py (--stub) from its CDEF: do not edit.
 # ruff: noqa: E501
 # The typed view of the cffi extension canola._core; only canola._c imports it.
 from collections.abc import Callable

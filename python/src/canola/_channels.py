@@ -1,17 +1,27 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The SDO client channels of a master's C node and who uses them: :class:`canola.Master`
-(one channel per server it talks to), the CANopen manager (one channel of its own) and
-program download. They share the node's engine and this allocator, not the master."""
+"""The SDO client channels of a master's C node and the transfers on them: who uses them is
+:class:`canola.master.SdoClient` (one channel per server it talks to), the CANopen manager
+(one channel of its own) and program download. They share the node's engine and this
+allocator, not the master.
+
+A blocking transfer is waited for by the calling thread, which receives the answers itself
+on python-can (:meth:`canola._engine.Link.wait`: no hand-off between threads); an asyncio
+one is completed by whichever thread receives; on a SimBus the caller runs the bus."""
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import logging
 import threading
+import time
+from collections.abc import Callable
 from typing import Any
 
 from canola._c import CData, check, ffi, lib
 from canola._engine import Engine
-from canola.errors import Error
+from canola.core import SimBus
+from canola.errors import Error, SdoAbort, SdoTimeout
 
 __all__ = ["CHANNELS", "SdoChannels", "Transfer"]
 
@@ -23,18 +33,33 @@ CHANNELS = 16
 #: 0x1280 + channel, sub-indices 1 and 2: COB-ID not valid.
 _INVALID = (0x80000000).to_bytes(4, "little")
 
+#: Abort code of a transfer that timed out (CiA 301).
+_TIMED_OUT = 0x05040000
+
+#: Begins a transfer on (C node, channel, completion handle): a co_err_t.
+Begin = Callable[[CData, int, CData], int]
+
 
 class Transfer:
     """One SDO transfer of a client channel, as its completion (canola_py_sdo_done) left
-    it: ``done``, ``abort`` (0: none) and ``length`` (bytes moved)."""
+    it: ``done``, ``abort`` (0: none), ``length`` (bytes moved) and ``by_server`` (the
+    server sent the abort). ``waker`` runs at the completion (under the engine's lock)."""
 
-    def __init__(self) -> None:
+    __slots__ = ("abort", "by_server", "dev", "done", "handle", "keep", "length", "request_id",
+                 "started_us", "waker")
+
+    def __init__(self, dev: CData | None = None, server_id: int = 0,
+                 started_us: int = 0) -> None:
         self.done = False
         self.abort = 0
         self.length = 0
-
-    def notify(self) -> None:
-        """Called (from the C completion) once ``done``, ``abort`` and ``length`` are set."""
+        self.by_server = False
+        self.dev = dev  # the client's dev: which side ended the transfer (None: unknown)
+        self.request_id = 0x600 + server_id
+        self.started_us = started_us  # the engine's clock: virtual time on a SimBus
+        self.keep: Any = None  # what C points to until the completion
+        self.waker: Callable[[], None] | None = None
+        self.handle = ffi.new_handle(self)
 
 
 @ffi.def_extern(onerror=lambda *_: log.exception("canola: SDO completion failed"))
@@ -43,8 +68,11 @@ def canola_py_sdo_done(ctx: Any, channel: int, abort: int, length: int) -> None:
     t: Transfer = ffi.from_handle(ctx)
     t.abort = int(abort)
     t.length = int(length)
+    if t.abort and t.dev is not None:  # the client sends its own abort just before this
+        t.by_server = not lib.canola_py_dev_sent_abort(t.dev, t.request_id)
     t.done = True
-    t.notify()
+    if t.waker is not None:
+        t.waker()
 
 
 def server(node: CData, channel: int) -> int:
@@ -53,11 +81,11 @@ def server(node: CData, channel: int) -> int:
     return int(lib.canola_py_sdo_client_server(node, channel))
 
 
-def unset(node: CData, channel: int) -> None:
+def unset(engine: Engine, channel: int) -> None:
     """Point client channel ``channel`` at no server (under the lock); co_sdo_client_setup()
     gives it one again."""
     for sub, data in ((1, _INVALID), (2, _INVALID), (3, b"\x00")):
-        lib.canola_py_app_write(node, 0x1280 + channel, sub, data, len(data))
+        lib.canola_py_dev_write(engine.dev, 0x1280 + channel, sub, data, len(data))
 
 
 class SdoChannels:
@@ -70,6 +98,8 @@ class SdoChannels:
         self.engine = engine
         self.table: dict[int, int] = {}  # server node-ID -> channel; 0: the manager's
         self._locks: dict[int, threading.Lock] = {}
+        self._buffers: dict[int, CData] = {}  # server node-ID -> its upload buffer
+        self._holders: dict[int, int] = {}  # server node-ID -> the thread in run() for it
 
     @property
     def node_id(self) -> int:
@@ -129,7 +159,7 @@ class SdoChannels:
                 continue
             if lib.co_sdo_client_busy(node, channel):
                 raise Error(f"an SDO transfer to node {server_id} is in progress")
-            unset(node, channel)
+            unset(self.engine, channel)
             del self.table[server_id]
 
     def reserve(self) -> int:
@@ -143,3 +173,189 @@ class SdoChannels:
             raise Error("no free SDO client channel for the manager")
         self.table[0] = free[-1]
         return free[-1]
+
+    # ---- transfers (SdoClient's): one at a time per server, whoever starts it
+
+    def upload(self, server_id: int, index: int, sub: int, *, block: bool, max_size: int,
+               timeout: float | None, answer_ms: int, default_ms: int) -> bytes:
+        """Read (index, sub) of ``server_id``: its wire bytes (see SdoClient.upload)."""
+        t = self.run(server_id, self._upload(server_id, index, sub, block, max_size), timeout,
+                     answer_ms, default_ms)
+        return bytes(ffi.buffer(t.keep, t.length))
+
+    def download(self, server_id: int, index: int, sub: int, data: bytes, *, block: bool,
+                 timeout: float | None, answer_ms: int, default_ms: int) -> None:
+        """Write ``data`` to (index, sub) of ``server_id`` (see SdoClient.download)."""
+        self.run(server_id, self._download(index, sub, data, block), timeout, answer_ms,
+                 default_ms)
+
+    async def aupload(self, server_id: int, index: int, sub: int, *, block: bool,
+                      max_size: int, timeout: float | None, answer_ms: int,
+                      default_ms: int) -> bytes:
+        t = await self.arun(server_id, self._upload(server_id, index, sub, block, max_size),
+                            timeout, answer_ms, default_ms)
+        return bytes(ffi.buffer(t.keep, t.length))
+
+    async def adownload(self, server_id: int, index: int, sub: int, data: bytes, *,
+                        block: bool, timeout: float | None, answer_ms: int,
+                        default_ms: int) -> None:
+        await self.arun(server_id, self._download(index, sub, data, block), timeout, answer_ms,
+                        default_ms)
+
+    def _upload(self, server_id: int, index: int, sub: int, block: bool,
+                max_size: int) -> tuple[Begin, CData, str]:
+        _check_address(index, sub)
+        if not 1 <= max_size <= 0xFFFFFFFF:
+            raise Error(f"max_size {max_size} is outside 1..2**32-1")
+        buf = self._buffers.get(server_id)  # transfers to a server are one at a time
+        if buf is None or len(buf) != max_size:
+            buf = self._buffers[server_id] = ffi.new("uint8_t[]", max_size)
+        mode = lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO
+
+        def begin(node: CData, channel: int, handle: CData) -> int:
+            return int(lib.co_sdo_upload(node, channel, index, sub, mode, buf, max_size,
+                                         lib.canola_py_sdo_done, handle))
+        return begin, buf, f"SDO upload 0x{index:04X} sub {sub}"
+
+    @staticmethod
+    def _download(index: int, sub: int, data: bytes, block: bool) -> tuple[Begin, CData, str]:
+        _check_address(index, sub)
+        src = ffi.new("uint8_t[]", max(len(data), 1))
+        ffi.memmove(src, data, len(data))
+        mode = lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO
+
+        def begin(node: CData, channel: int, handle: CData) -> int:
+            return int(lib.co_sdo_download(node, channel, index, sub, mode, src, len(data),
+                                           lib.canola_py_sdo_done, handle))
+        return begin, src, f"SDO download 0x{index:04X} sub {sub}"
+
+    def _start(self, server_id: int, how: tuple[Begin, CData, str], answer_ms: int) -> Transfer:
+        """A transfer begun on the channel of ``server_id``, its time-out per answer
+        ``answer_ms`` (0: the node's)."""
+        begin, keep, what = how
+        engine = self.engine
+        t = Transfer(engine.dev, server_id, engine.now_us())
+        t.keep = keep
+
+        def start(node: CData) -> int:
+            channel = self.channel(node, server_id)
+            check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
+                  "co_sdo_client_set_timeout")
+            return begin(node, channel, t.handle)
+        check(engine.call(start), f"{what} of node {server_id}")
+        return t
+
+    def _ready(self, timeout: float | None) -> None:
+        if timeout is not None and timeout <= 0:
+            raise Error(f"timeout must be positive, got {timeout}")
+        if not self.engine.running:
+            raise Error("the master is not started: call start() first")
+
+    def run(self, server_id: int, how: tuple[Begin, CData, str], timeout: float | None,
+            answer_ms: int, default_ms: int) -> Transfer:
+        """Start the transfer and wait for its end (``timeout``: the whole transfer's bound,
+        seconds); raise its abort."""
+        engine = self.engine
+        engine.check_may_block()
+        self._ready(timeout)
+        busy = self.lock_of(server_id)
+        me = threading.get_ident()
+        if self._holders.get(server_id) == me:  # a callback run while this thread waits
+            raise Error(f"a blocking SDO call to node {server_id} from a callback run during "
+                        "one to the same node would wait for itself")
+        if not busy.acquire(timeout=600):
+            raise Error(f"SDO client of node {server_id} stays busy")
+        self._holders[server_id] = me
+        try:
+            t = self._start(server_id, how, answer_ms)
+            bus = engine.bus
+            if isinstance(bus, SimBus):
+                begin = bus.now_us
+                while not t.done:
+                    if timeout is not None and bus.now_us - begin >= timeout * 1e6:
+                        self.abort(server_id)
+                        break
+                    bus.run_until(bus.now_us + 1000)
+            elif not t.done:  # else answered at once: a node of the same bus object
+                link = engine.link
+                assert link is not None
+                end = None if timeout is None else time.monotonic() + timeout
+                try:
+                    if not link.wait(engine, lambda: t.done, end):
+                        self.abort(server_id)  # completes the transfer with 0x05040000
+                except Error:
+                    self.abort(server_id)
+                    raise Error("the master was stopped during an SDO transfer") from None
+            return self._finish(t, server_id, timeout, answer_ms or default_ms,
+                                (engine.now_us() - t.started_us) / 1e6)
+        finally:
+            del self._holders[server_id]
+            busy.release()
+
+    async def arun(self, server_id: int, how: tuple[Begin, CData, str], timeout: float | None,
+                   answer_ms: int, default_ms: int) -> Transfer:
+        """:meth:`run` as a coroutine: the thread that receives completes it."""
+        engine = self.engine
+        if isinstance(engine.bus, SimBus):
+            return self.run(server_id, how, timeout, answer_ms, default_ms)  # virtual time
+        self._ready(timeout)
+        loop = asyncio.get_running_loop()
+        busy = self.lock_of(server_id)
+        while not busy.acquire(blocking=False):
+            await asyncio.sleep(0.001)
+        try:
+            fut: asyncio.Future[None] = loop.create_future()
+
+            def resolve() -> None:
+                if not fut.done():
+                    fut.set_result(None)
+
+            def wake() -> None:
+                with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
+                    loop.call_soon_threadsafe(resolve)
+
+            t = self._start(server_id, how, answer_ms)
+            with engine.lock:
+                if not t.done:
+                    t.waker = wake
+            try:
+                end = None if timeout is None else loop.time() + timeout
+                while not t.done:
+                    try:
+                        await asyncio.wait_for(asyncio.shield(fut), 0.05)
+                    except TimeoutError:
+                        if end is not None and loop.time() >= end:
+                            self.abort(server_id)  # completes it with 0x05040000
+                            end = None
+                        elif not engine.running:
+                            self.abort(server_id)
+                            raise Error("the master was stopped during an SDO transfer") \
+                                from None
+            except asyncio.CancelledError:
+                self.abort(server_id)  # ends the transfer before the channel is reused
+                raise
+            return self._finish(t, server_id, timeout, answer_ms or default_ms,
+                                (engine.now_us() - t.started_us) / 1e6)
+        finally:
+            busy.release()
+
+    @staticmethod
+    def _finish(t: Transfer, server_id: int, timeout: float | None, answer_ms: int,
+                after: float) -> Transfer:
+        """``t`` done after ``after`` seconds: its abort raised, telling the server's abort
+        from the master's."""
+        if not t.done:  # pragma: no cover -- the core always completes on abort
+            raise SdoTimeout(server_id, answer_ms)
+        if not t.abort:
+            return t
+        if t.abort == _TIMED_OUT and not t.by_server:
+            raise SdoTimeout(server_id, answer_ms if timeout is None else round(timeout * 1000),
+                             after)
+        raise SdoAbort(t.abort, node=server_id, by_server=t.by_server, after_s=after)
+
+
+def _check_address(index: int, sub: int) -> None:
+    if not (isinstance(index, int) and 0 <= index <= 0xFFFF):
+        raise Error(f"index {index!r} is outside 0x0000..0xFFFF")
+    if not (isinstance(sub, int) and 0 <= sub <= 0xFF):
+        raise Error(f"sub-index {sub!r} is outside 0..255")

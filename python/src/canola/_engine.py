@@ -7,17 +7,24 @@ lock and one thread (not one per node). A frame one node sends reaches the other
 nodes of the same bus object at once, in C (``port/python/py_link.c``), in the thread
 that caused it: an SDO request of a :class:`~canola.Master` to a :class:`~canola.Device`
 of the same bus object is answered before the call that sent it returns, with no thread
-hand-off. Python hands the same frames to python-can, for every other listener. The
-thread receives the frames of others with a time-out equal to the nodes' next deadline,
-capped at :data:`MAX_WAIT_S` so that deadlines that application calls move earlier are met
-within that cap; each received frame (or time-out) is one acquisition of the lock.
+hand-off. Python hands the same frames to python-can, for every other listener.
+
+Receiving: one thread at a time holds the link's receive token (:attr:`Link.rx`). The bus
+thread does, waiting for frames up to the nodes' next deadline, capped at
+:data:`MAX_WAIT_S` so that deadlines that application calls move earlier are met within
+that cap. A thread that waits for an answer (a blocking SDO transfer, an LSS request, a
+boot, a program download) receives it itself (:meth:`Link.wait`) while the bus thread
+stands aside, so the answer needs no hand-off between threads. Whoever receives takes
+every frame python-can holds, ingests each at its bus time and only then polls the timers
+(:meth:`Link.pump`): a time-out is judged after the frames that arrived before it.
 
 Callbacks of the C nodes only record events; the application's callbacks run afterwards,
 never under the lock, in the order the events happened, by the thread that released the
-lock (the bus thread, or the application's thread whose call made the nodes work), one
-thread at a time; on a SimBus inside :meth:`SimBus.run_until`. They may call any method of
-the nodes. They must not block on a node that only the bus thread can answer: a blocking
-SDO call run by the bus thread raises :class:`~canola.errors.Error`.
+lock (the bus thread, a thread that waits for an answer, or the application's thread whose
+call made the nodes work), one thread at a time; on a SimBus inside
+:meth:`SimBus.run_until`. They may call any method of the nodes. They must not block on a
+node that only the bus thread can answer: a blocking SDO call run by the bus thread raises
+:class:`~canola.errors.Error`, and so does one to the node a waiting thread is waiting for.
 """
 
 from __future__ import annotations
@@ -30,7 +37,7 @@ import time
 import weakref
 from collections import deque
 from collections.abc import Callable, Iterator
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 import can
 
@@ -39,7 +46,7 @@ from canola._c import ffi, lib
 from canola.core import Od, SimBus
 from canola.errors import Error
 
-__all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame", "Link"]
+__all__ = ["MAX_WAIT_S", "Bus", "Engine", "Frame", "Link", "NodeEvents"]
 
 log = logging.getLogger("canola")
 
@@ -136,6 +143,15 @@ class Link:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._frame = ffi.new("co_frame_t *")
+        #: The receive token: its holder alone takes frames from python-can (pump).
+        self.rx = threading.Lock()
+        #: Application threads in :meth:`wait` (the bus thread stands aside meanwhile); a
+        #: set: adding and discarding are atomic, no lock needed.
+        self.waiting: set[object] = set()
+        self._waited_ns = 0  # when the last of them left (time.monotonic_ns)
+        self._clock_us = 0  # the latest time handed to the nodes
+        #: Some engine of the link has frame listeners (pump hands them the frames).
+        self.listening = False
         weakref.finalize(self, _free_link, raw, self._retired)
 
     def now_us(self) -> int:
@@ -203,6 +219,17 @@ class Link:
             lib.canola_py_dev_free(self._retired.popleft())
         return self.now_us()
 
+    def app_clock(self) -> int:
+        """First thing under the lock for an application's call: the time now, but short of
+        the nodes' next deadline, which the receiving thread judges once the frames received
+        before it count (:meth:`pump`), never an application's call."""
+        now = self.enter()
+        due = int(self.c.due_us)
+        if now >= due != _NEVER:
+            now = max(self._clock_us, due - 1)
+        self._clock_us = now
+        return now
+
     def flush(self, now_us: int) -> None:
         """Deliver what the nodes sent to the others, then hand it to python-can (under
         the lock, so that python-can sees the frames in order)."""
@@ -256,7 +283,109 @@ class Link:
             finally:
                 self._dispatching.release()
 
-    # ---- the bus thread
+    # ---- receiving: the bus thread, or an application thread that waits for an answer
+
+    def pump(self, wait_s: float) -> int:
+        """Holding :attr:`rx`: take every frame python-can has received (waiting up to
+        ``wait_s`` for the first; the rest under the lock, so that what arrived while the
+        lock was busy counts too), ingest each at its bus time, then poll: a time-out is
+        judged only once the frames that arrived before it count. Returns the earliest
+        deadline of the nodes (their clock). Callbacks are left queued (:meth:`dispatch`)."""
+        first = self._receive(wait_s)
+        c, frame = self.c, self._frame
+        msgs: list[can.Message] = []
+        with self.lock:
+            while self._retired:
+                lib.canola_py_dev_free(self._retired.popleft())
+            now = (time.monotonic_ns() - self._t0) // 1000
+            if first is not None:
+                msgs.append(first)
+                while len(msgs) < _DRAIN_MAX:
+                    more = self._receive(0)
+                    if more is None:
+                        break
+                    msgs.append(more)
+                offset = now - time.time() * 1e6  # python-can's clock (s) -> ours (us)
+                for msg in msgs:
+                    if msg.is_error_frame or msg.is_fd or msg.dlc > 8:
+                        continue
+                    # its bus time, never before what the nodes saw already nor after now
+                    at = min(now, max(self._clock_us, int(msg.timestamp * 1e6 + offset)))
+                    self._clock_us = at
+                    frame.id = msg.arbitration_id
+                    frame.flags = (_EXT if msg.is_extended_id else 0) | \
+                        (_RTR if msg.is_remote_frame else 0)
+                    frame.len = msg.dlc
+                    if not msg.is_remote_frame:
+                        ffi.memmove(frame.data, msg.data, min(len(msg.data), 8))
+                    lib.canola_py_link_ingest(c, at, frame)
+            self._clock_us = now
+            due = int(lib.canola_py_link_poll(c, now))
+            self.flush(now)
+        if msgs and self.listening:
+            self._listen(msgs)
+        for engine in self.timers:
+            engine.run_timers(now)
+            timer = engine.next_timer_us()
+            due = min(due, timer) if timer is not None else due
+        return due
+
+    def _receive(self, wait_s: float) -> can.Message | None:
+        """The next frame from python-can (waiting up to ``wait_s``), None without one."""
+        try:
+            return self.bus.recv(wait_s)
+        except can.CanError as exc:
+            log.warning("%s: receive failed: %s", self._thread_name(), exc)
+            time.sleep(0.05)
+            return None
+
+    def _listen(self, msgs: list[can.Message]) -> None:
+        listening = [e for e in self.engines if e.frame_listeners]
+        for msg in msgs if listening else ():
+            if msg.is_error_frame or msg.is_fd or msg.dlc > 8:
+                continue
+            seen = Frame(msg.arbitration_id, b"" if msg.is_remote_frame else bytes(msg.data),
+                         rtr=msg.is_remote_frame, extended=msg.is_extended_id,
+                         timestamp=msg.timestamp)
+            for engine in listening:
+                engine.frame_seen(seen)
+
+    def wait(self, engine: Engine, done: Callable[[], bool], end: float | None) -> bool:
+        """Until ``done()`` or time.monotonic() passes ``end``: this thread receives and runs
+        the link while it waits (the bus thread stands aside: no hand-off between threads
+        for an answer), or waits for the thread that receives now to let go. False at
+        ``end``. Raises Error when ``engine`` is stopped meanwhile."""
+        me = object()
+        self.waiting.add(me)
+        rx, c = self.rx, self.c
+        try:
+            while not done():
+                left = 0.05 if end is None else min(0.05, end - time.monotonic())
+                if left <= 0:
+                    return False
+                if not engine._active and not engine.sim:
+                    raise Error(f"{engine.name} was stopped while a call waited for it")
+                if not rx.acquire(True, left):
+                    continue
+                try:
+                    if done():
+                        break
+                    due = c.due_us
+                    self.pump(left if due == _NEVER else
+                              min(left, max(0.0, (due - self.now_us()) / 1e6)))
+                finally:
+                    rx.release()
+                if self.events:
+                    self.dispatch()
+            return True
+        finally:
+            self._waited_ns = time.monotonic_ns()
+            self.waiting.discard(me)
+
+    def _wait_s(self, due: int, cap_s: float) -> float:
+        if due == _NEVER:
+            return cap_s
+        return min(cap_s, max(0.0, (due - self.now_us()) / 1e6))
 
     def _run(self, stop: threading.Event) -> None:
         while not stop.is_set():
@@ -267,56 +396,51 @@ class Link:
                 stop.wait(0.05)
 
     def _loop(self, stop: threading.Event) -> None:
-        bus, c, frame = self.bus, self.c, self._frame
-        msg: can.Message | None = None
+        rx, due = self.rx, _NEVER
         while not stop.is_set():
-            with self.lock:
-                now = self.enter()
-                if msg is not None:
-                    lib.canola_py_link_ingest(c, now, frame)
-                due = int(lib.canola_py_link_poll(c, now))
-                self.flush(now)
-            for engine in self.timers:
-                engine.run_timers(now)
-            self.dispatch()
-            for engine in self.timers:
-                timer = engine.next_timer_us()
-                due = min(due, timer) if timer is not None else due
-            wait = MAX_WAIT_S
-            if due != _NEVER:
-                wait = min(MAX_WAIT_S, max(0.0, (due - self.now_us()) / 1e6))
+            if self.waiting or time.monotonic_ns() - self._waited_ns < _ASIDE_NS:
+                stop.wait(MAX_WAIT_S)  # an application thread receives (wait): stand aside,
+                continue  # and a while after it, for its next transfer
+            if not rx.acquire(timeout=MAX_WAIT_S):
+                continue
             try:
-                msg = bus.recv(wait)
-            except can.CanError as exc:
-                log.warning("%s: receive failed: %s", self._thread_name(), exc)
-                stop.wait(0.05)
-                msg = None
-                continue
-            if msg is None or msg.is_error_frame or msg.is_fd or msg.dlc > 8:
-                msg = None
-                continue
-            frame.id = msg.arbitration_id
-            frame.flags = (_EXT if msg.is_extended_id else 0) | (_RTR if msg.is_remote_frame
-                                                                 else 0)
-            frame.len = msg.dlc
-            data = b"" if msg.is_remote_frame else bytes(msg.data)
-            ffi.memmove(frame.data, data.ljust(8, b"\0")[:8], 8)
-            for engine in self.engines:
-                if engine.frame_listeners:
-                    engine.frame_seen(Frame(msg.arbitration_id, data, rtr=msg.is_remote_frame,
-                                            extended=msg.is_extended_id,
-                                            timestamp=msg.timestamp))
+                due = self.pump(self._wait_s(due, MAX_WAIT_S))
+            finally:
+                rx.release()
+            self.dispatch()
 
 
 #: Frames python-can refused that wait for the next flush, at most.
 _UNSENT_MAX = 4096
 
+#: How long the bus thread stays aside after an application thread waited (a next transfer
+#: then finds the receive token free); frames wait in python-can meanwhile.
+_ASIDE_NS = int(MAX_WAIT_S * 1e9)
+
+#: Frames taken from python-can in one go before the nodes are polled, at most.
+_DRAIN_MAX = 256
+
+
+class NodeEvents(Protocol):
+    """What an engine's owner hears from its C node, called under the lock (queue the work
+    for after it with :meth:`Engine.later`). :class:`canola._nodebase.NodeBase` is one."""
+
+    def _on_state(self, state: int) -> None: ...
+    def _on_reset(self, what: int) -> None: ...
+    def _on_errctl(self, kind: int, node_id: int, state: int, previous: int) -> None: ...
+    def _on_error(self, error: int) -> None: ...
+    def _on_emcy(self, cob_id: int, code: int, reg: int, manufacturer: bytes) -> None: ...
+    def _on_sync(self, counter: int) -> None: ...
+    def _on_time(self, ms: int, days: int) -> None: ...
+    def _on_rpdo(self, rpdo: int) -> None: ...
+    def _on_written(self, index: int, sub: int, by_app: bool) -> None: ...
+
 
 class Engine:
-    """A C node (``canola_py_dev_t``) on ``bus``; ``owner`` gets the C callbacks through
-    its ``_on_*`` methods (called under the lock; they queue work with :meth:`later`)."""
+    """A C node (``canola_py_dev_t``) on ``bus``; ``owner`` hears the C node's events
+    (:class:`NodeEvents`)."""
 
-    def __init__(self, bus: Bus, od: Od, node_id: int, owner: Any, *, sdo_timeout_ms: int,
+    def __init__(self, bus: Bus, od: Od, node_id: int, owner: NodeEvents, *, sdo_timeout_ms: int,
                  store_dir: str | None, raw_frames: bool, name: str,
                  quiet: bool = False) -> None:
         if not isinstance(bus, SimBus | can.BusABC):
@@ -335,7 +459,6 @@ class Engine:
         self._handle = ffi.new_handle(self)
         self.frame_listeners: list[Callable[[Frame], None]] = []
         self.sent_listeners: list[Callable[[Frame], None]] = []
-        self.app_writing = False
         err = ffi.new("co_err_t *")
         store = ffi.new("char[]", store_dir.encode()) if store_dir is not None else ffi.NULL
 
@@ -388,7 +511,7 @@ class Engine:
         link = self.link
         assert link is not None
         with link.lock:
-            now = link.enter()
+            now = link.app_clock()
             lib.co_node_poll(self.node, now)
             try:
                 yield self.node
@@ -404,7 +527,7 @@ class Engine:
             with self.locked() as node:
                 return fn(node)
         with link.lock:
-            now = link.enter()
+            now = link.app_clock()
             lib.co_node_poll(self.node, now)
             try:
                 result = fn(self.node)
@@ -495,6 +618,7 @@ class Engine:
         if self.link is not None:
             with self.lock:
                 lib.canola_py_dev_set_raw(self.dev, True)
+            self.link.listening = True
 
     def frame_seen(self, frame: Frame) -> None:
         for fn in self.frame_listeners:
@@ -538,92 +662,68 @@ class Engine:
 # C callbacks -> the owner (under the lock)
 
 
+def _logged(what: str) -> Callable[..., None]:
+    """A callback's onerror: the exception logged, never into C."""
+    def onerror(kind: Any, exc: Any, tb: Any) -> None:
+        log.error("canola: %s", what, exc_info=(kind, exc, tb))
+    return onerror
+
+
 def _engine(ctx: Any) -> Engine:
     engine: Engine = ffi.from_handle(ctx)
     return engine
 
 
-def _call(ctx: Any, method: str, *args: Any) -> None:
-    engine = _engine(ctx)
-    fn = getattr(engine.owner, method, None)
-    if fn is not None:
-        fn(*args)
+def _owner(ctx: Any) -> NodeEvents:
+    return _engine(ctx).owner
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("state callback"))
 def canola_py_on_state(user: Any, state: int) -> None:
-    try:
-        _call(user, "_on_state", int(state))
-    except Exception:
-        log.exception("canola: state callback")
+    _owner(user)._on_state(int(state))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("reset callback"))
 def canola_py_on_reset(user: Any, what: int) -> None:
-    try:
-        _call(user, "_on_reset", int(what))
-    except Exception:
-        log.exception("canola: reset callback")
+    _owner(user)._on_reset(int(what))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("error control callback"))
 def canola_py_on_errctl(user: Any, event: Any) -> None:
-    try:
-        _call(user, "_on_errctl", int(event.kind), int(event.node_id), int(event.state),
-              int(event.previous))
-    except Exception:
-        log.exception("canola: error control callback")
+    _owner(user)._on_errctl(int(event.kind), int(event.node_id), int(event.state),
+                            int(event.previous))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("node error callback"))
 def canola_py_on_error(user: Any, error: int) -> None:
-    try:
-        _call(user, "_on_error", int(error))
-    except Exception:
-        log.exception("canola: node error callback")
+    _owner(user)._on_error(int(error))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("EMCY callback"))
 def canola_py_on_emcy(user: Any, emcy: Any) -> None:
-    try:
-        _call(user, "_on_emcy", int(emcy.cob_id), int(emcy.code), int(emcy.reg),
-              bytes(emcy.manufacturer))
-    except Exception:
-        log.exception("canola: EMCY callback")
+    _owner(user)._on_emcy(int(emcy.cob_id), int(emcy.code), int(emcy.reg),
+                          bytes(emcy.manufacturer))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("SYNC callback"))
 def canola_py_on_sync(user: Any, counter: int) -> None:
-    try:
-        _call(user, "_on_sync", int(counter))
-    except Exception:
-        log.exception("canola: SYNC callback")
+    _owner(user)._on_sync(int(counter))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("TIME callback"))
 def canola_py_on_time(user: Any, tod: Any) -> None:
-    try:
-        _call(user, "_on_time", int(tod.ms), int(tod.days))
-    except Exception:
-        log.exception("canola: TIME callback")
+    _owner(user)._on_time(int(tod.ms), int(tod.days))
 
 
-@ffi.def_extern()
+@ffi.def_extern(onerror=_logged("RPDO callback"))
 def canola_py_on_rpdo(user: Any, rpdo: int) -> None:
-    try:
-        _call(user, "_on_rpdo", int(rpdo))
-    except Exception:
-        log.exception("canola: RPDO callback")
+    _owner(user)._on_rpdo(int(rpdo))
 
 
-@ffi.def_extern()
-def canola_py_written(ctx: Any, entry: Any) -> None:
-    try:
-        engine = _engine(ctx)
-        if not engine.app_writing:
-            _call(ctx, "_on_written", int(entry.index), int(entry.sub))
-    except Exception:
-        log.exception("canola: write callback")
+@ffi.def_extern(onerror=_logged("write callback"))
+def canola_py_written(user: Any, entry: Any, origin: int) -> None:
+    _owner(user)._on_written(int(entry.index), int(entry.sub),
+                             origin == lib.CANOLA_PY_BY_APP)
 
 
 @ffi.def_extern()

@@ -4,14 +4,15 @@ state, start/stop, callbacks, and typed local access to the node's own dictionar
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from canola._c import ffi, lib
-from canola._engine import Bus, Engine, Frame
+from canola._c import CData, ffi, lib
+from canola._engine import Bus, Engine, Frame, _Timer
 from canola.core import NMT_CMDS, Od
 from canola.errors import Error, SdoAbort
 from canola.formats import eds, values
@@ -122,6 +123,7 @@ _STORE_FAULTS: dict[int, str] = {
 
 
 F = TypeVar("F", bound=Callable[..., Any])
+P = TypeVar("P")
 
 
 def load_od(source: str | os.PathLike[str] | eds.ObjectDictionary, node_id: int,
@@ -134,6 +136,7 @@ class NodeBase:
     """Engine, NMT state, start/stop, callbacks."""
 
     _kind = "node"
+    _source = "its dictionary"  # what warnings name: the EDS/DCF file where known
 
     def __init__(self, bus: Bus, od: Od, node_id: int, *, sdo_timeout_ms: int,
                  store_dir: str | os.PathLike[str] | None, raw_frames: bool,
@@ -149,7 +152,7 @@ class NodeBase:
                               store_dir=store, raw_frames=raw_frames,
                               name=f"canola-{self._kind}-{node_id}", quiet=quiet)
         self.node_id = node_id
-        self.od = LocalOd(self)
+        self.od = LocalOd(self._engine, self._types)
         self._state_cbs: list[Callable[[str], None]] = []
         self._write_cbs: list[Callable[[int, int, values.Value], None]] = []
         self._sync_cbs: list[Callable[[int], None]] = []
@@ -162,6 +165,48 @@ class NodeBase:
     @property
     def bus(self) -> Bus:
         return self._engine.bus
+
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[CData]:
+        """The C node (``co_node_t *``) under the node's lock, its clock brought to now: for
+        a short call into the C core (what the parts built on a node do: a gateway's
+        backend, a domain, a program). Frames sent inside go out when it ends; callbacks
+        run after the lock. Never wait inside it: the node cannot receive meanwhile."""
+        with self._engine.locked() as node:
+            yield node
+
+    def hook_entries(self, make: Callable[[CData, int], CData], keep: object) -> CData:
+        """``make(entries, count)`` under the lock: C hooks attached to entries of the
+        node's dictionary (their result); ``keep`` lives as long as the dictionary does
+        (the entries point to it) unless the result is NULL."""
+        od = self._engine.od
+        with self._engine.locked():
+            raw = make(od.entries, od.count)
+        if raw != ffi.NULL:
+            od._keep.append(keep)
+        return raw
+
+    # ---- what the facades built on a node hand to their parts
+
+    @property
+    def _c_node(self) -> CData:
+        """The C node, for a caller that holds the lock already (a C callback) or runs the
+        SimBus itself."""
+        return self._engine.node
+
+    def _add_timer(self, period_us: int, fn: Callable[[], None]) -> _Timer:
+        return self._engine.add_timer(period_us, fn)
+
+    def _remove_timer(self, timer: _Timer) -> None:
+        self._engine.remove_timer(timer)
+
+    def _add_frame_listener(self, fn: Callable[[Frame], None]) -> None:
+        self._engine.add_frame_listener(fn)
+
+    def _build(self, part: Callable[[Engine], P]) -> P:
+        """``part(engine)``: a part of the node, handed the engine (it never reaches back
+        into the node)."""
+        return part(self._engine)
 
     # ---- life cycle
 
@@ -249,8 +294,12 @@ class NodeBase:
     def _on_state(self, state: int) -> None:
         self._fire(self._state_cbs, STATE_NAMES.get(state, f"0x{state:02X}"))
 
-    def _on_written(self, index: int, sub: int) -> None:
-        if not self._write_cbs:
+    def _on_reset(self, what: int) -> None:
+        """The core reset the communication objects (``what``: CO_RESET_*), before its
+        boot-up: what a facade set up there is set again here."""
+
+    def _on_written(self, index: int, sub: int, by_app: bool) -> None:
+        if by_app or not self._write_cbs:  # on_write: what the network wrote
             return
         try:
             value = self.od._read_locked(index, sub)
@@ -277,6 +326,17 @@ class NodeBase:
         self._fire(self._emcy_cbs, EmcyEvent(cob_id & 0x7F, code, reg, manufacturer, cob_id))
 
     def _on_error(self, error: int) -> None:
+        if error == lib.CO_NODE_ERR_SDO_COB_FIXED:
+            log.warning("%s %d: %s: [1200] sub1/sub2 are not 0x%03X/0x%03X, the COB-IDs CiA "
+                        "301 fixes for the default SDO server: served on those regardless",
+                        self._kind, self.node_id, self._source, 0x600 + self.node_id,
+                        0x580 + self.node_id)
+            return
+        if error == lib.CO_NODE_ERR_STORE_FAILED:
+            log.warning("%s %d: storing parameters failed (full disk, read-only or broken "
+                        "storage): the files stored before stay (EMCY 0x%04X)", self._kind,
+                        self.node_id, int(lib.CO_EMCY_STORE_FAILED))
+            return
         refused = _STORE_ERRORS.get(error)
         if refused is None:
             return  # transmit losses: counted by the core (co_node_stats)
@@ -298,25 +358,26 @@ class LocalOd:
     node's service rules; a write to a mapped object triggers event-driven TPDOs.
     Failures raise :class:`~canola.errors.SdoAbort` with the CiA code."""
 
-    def __init__(self, owner: NodeBase) -> None:
-        self._owner = owner
+    def __init__(self, engine: Engine, types: dict[tuple[int, int], tuple[int, int]]) -> None:
+        self._engine = engine
+        self._types = types  # (index, sub) -> (data type, size a read reserves)
 
     def _info(self, index: int, sub: int) -> tuple[int, int]:
         if not (isinstance(index, int) and isinstance(sub, int)):
             raise Error(f"index and sub-index are integers, not {index!r}, {sub!r}")
-        info = self._owner._types.get((index, sub))
+        info = self._types.get((index, sub))
         if info is None:
-            known = any(i == index for i, _ in self._owner._types)
+            known = any(i == index for i, _ in self._types)
             raise SdoAbort(0x06090011 if known else 0x06020000)
         return info
 
     def __contains__(self, key: object) -> bool:
         if isinstance(key, tuple):
-            return key in self._owner._types
-        return any(i == key for i, _ in self._owner._types)
+            return key in self._types
+        return any(i == key for i, _ in self._types)
 
     def __iter__(self) -> Iterator[tuple[int, int]]:
-        return iter(sorted(self._owner._types))
+        return iter(sorted(self._types))
 
     def type_of(self, index: int, sub: int) -> int:
         """The CiA 301 data type code of an entry."""
@@ -325,7 +386,7 @@ class LocalOd:
     def read(self, index: int, sub: int) -> bytes:
         """The wire bytes of an entry."""
         _, size = self._info(index, sub)
-        with self._owner._engine.locked() as node:
+        with self._engine.locked() as node:
             return self._raw_read(node, index, sub, size)
 
     @staticmethod
@@ -341,19 +402,15 @@ class LocalOd:
 
     def _read_locked(self, index: int, sub: int) -> values.Value:
         data_type, size = self._info(index, sub)
-        data = self._raw_read(self._owner._engine.node, index, sub, size)
+        data = self._raw_read(self._engine.node, index, sub, size)
         return values.decode(data_type, data)
 
     def write(self, index: int, sub: int, data: bytes) -> None:
         """Write wire bytes to an entry (application write)."""
         self._info(index, sub)
-        engine = self._owner._engine
-        with engine.locked() as node:
-            engine.app_writing = True
-            try:
-                code = int(lib.canola_py_app_write(node, index, sub, bytes(data), len(data)))
-            finally:
-                engine.app_writing = False
+        engine = self._engine
+        with engine.locked():
+            code = int(lib.canola_py_dev_write(engine.dev, index, sub, bytes(data), len(data)))
         if code:
             raise SdoAbort(code)
 
@@ -361,14 +418,15 @@ class LocalOd:
         """:meth:`set` from a C callback of the node (the lock is held already)."""
         data_type, _ = self._info(index, sub)
         data = values.encode(data_type, value)
-        engine = self._owner._engine
-        writing, engine.app_writing = engine.app_writing, True
-        try:
-            code = int(lib.canola_py_app_write(engine.node, index, sub, data, len(data)))
-        finally:
-            engine.app_writing = writing
+        code = int(lib.canola_py_dev_write(self._engine.dev, index, sub, data, len(data)))
         if code:
             raise SdoAbort(code)
+
+    def reserve(self, index: int, sub: int, size: int) -> None:
+        """Reads of (index, sub) reserve ``size`` bytes from now on (an entry whose value
+        the application sizes, e.g. a streamed DOMAIN)."""
+        data_type, _ = self._info(index, sub)
+        self._types[index, sub] = (data_type, size)
 
     def get(self, index: int, sub: int = 0) -> values.Value:
         data_type, _ = self._info(index, sub)
@@ -381,7 +439,7 @@ class LocalOd:
     def __getitem__(self, key: int | tuple[int, int]) -> Any:
         if isinstance(key, tuple):
             return self.get(*key)
-        self._info(key, 0) if (key, 0) in self._owner._types else self._info(key, 1)
+        self._info(key, 0) if (key, 0) in self._types else self._info(key, 1)
         return _ObjectView(self, key)
 
     def __setitem__(self, key: tuple[int, int], value: values.Value) -> None:

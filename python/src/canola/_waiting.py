@@ -1,11 +1,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """Waiting for work the C node does on its own (an LSS request, a network boot, a program
-download): on a SimBus by running the bus in virtual time, on python-can by sleeping on an
-event the C callbacks set. Shared by canola.lss, canola.manager and canola.flash."""
+download): on a SimBus by running the bus in virtual time, on python-can by receiving in
+the waiting thread (:meth:`canola._engine.Link.wait`): the answers that arrived count
+before a time-out is judged. Shared by canola.lss, canola.manager and canola.flash."""
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
 
@@ -20,14 +20,10 @@ SIM_STEP_US = 1000
 
 
 class Waiter:
-    """``wake()`` from a callback; ``wait(done, limit_s)`` until ``done()`` or the limit."""
+    """``wait(done, limit_s)`` until ``done()`` (set by a C callback) or the limit."""
 
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
-        self._event = threading.Event()
-
-    def wake(self) -> None:
-        self._event.set()
 
     def check(self) -> None:
         """Raise when a blocking wait cannot work: not started, or called from a callback
@@ -48,13 +44,10 @@ class Waiter:
                 step = bus.now_us + SIM_STEP_US
                 bus.run_until(step if end is None else min(step, end))
             return True
+        link = self.engine.link
+        assert link is not None
         deadline = None if limit_s is None else time.monotonic() + limit_s
-        while not done():
-            left = 0.05 if deadline is None else min(0.05, deadline - time.monotonic())
-            if left <= 0:
-                return False
-            self._event.wait(left)
-            self._event.clear()
-            if not self.engine.running:
-                raise Error("the master was stopped")
-        return True
+        try:
+            return link.wait(self.engine, done, deadline)  # this thread receives meanwhile
+        except Error:
+            raise Error("the master was stopped") from None

@@ -38,6 +38,7 @@ from canola.formats.odgen import (
     _VSTRING,
     GenerateOptions,
     _Gen,
+    check_usable,
 )
 
 __all__ = ["NMT_CMDS", "NMT_STATES", "Od", "SimBus"]
@@ -100,6 +101,7 @@ class Od:
         :class:`~canola.errors.EdsError` for what the core cannot hold.
         """
         opts = options or GenerateOptions()
+        check_usable(model, opts)
         gen = _Gen(model, opts)
         built: list[tuple[eds.Variable, int, int, Any, Any, Any]] = []
         keep: list[Any] = []

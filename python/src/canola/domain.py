@@ -87,21 +87,17 @@ class DomainStream:
         self._incoming = bytearray()
         self._lock = threading.Lock()
         self._handle = ffi.new_handle(self)
-        engine = device._engine
-        with engine.locked():
-            raw = lib.canola_py_stream_new(engine.od.entries, engine.od.count, index, sub,
-                                           self._handle)
+        raw = device.hook_entries(lambda entries, count: lib.canola_py_stream_new(
+            entries, count, index, sub, self._handle), self)
         if raw == ffi.NULL:
             raise Error(f"the device's dictionary has no DOMAIN 0x{index:04X} sub {sub}")
         self._stream = ffi.gc(raw, lib.canola_py_stream_free)
-        engine.od._keep.append(self)  # the entry points to it: keep it as long as it
         # dev.od reads an entry into a buffer of its recorded size: keep that the value's
-        self._types = device._types
+        self._od = device.od
         self._sized()
 
     def _sized(self) -> None:
-        data_type, _ = self._types[self.index, self.sub]
-        self._types[self.index, self.sub] = (data_type, len(self._value))
+        self._od.reserve(self.index, self.sub, len(self._value))
 
     @property
     def value(self) -> bytes:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-__all__ = ["ABORT_TEXT", "Diagnostic", "EdsError", "Error", "SdoAbort"]
+__all__ = ["ABORT_TEXT", "Diagnostic", "EdsError", "Error", "SdoAbort", "SdoTimeout"]
 
 
 class Error(Exception):
@@ -118,10 +118,37 @@ class SdoAbort(Error):  # noqa: N818 -- the CiA name of the event
     """An object dictionary access (local or over SDO) ended with a CiA 301 abort code.
 
     ``code`` is the abort code; ``text`` its CiA 301 meaning ("unknown abort code" for
-    codes not in :data:`ABORT_TEXT`).
+    codes not in :data:`ABORT_TEXT`). For an SDO transfer of a :class:`canola.Master`:
+    ``node`` is the server, ``by_server`` is True when the server sent the abort (False:
+    the master ended the transfer itself, e.g. on a bad answer) and ``after_s`` is how long
+    the transfer had run; all three are None for a local access.
     """
 
-    def __init__(self, code: int) -> None:
+    def __init__(self, code: int, *, node: int | None = None, by_server: bool | None = None,
+                 after_s: float | None = None) -> None:
         self.code = code
         self.text = ABORT_TEXT.get(code, "unknown abort code")
-        super().__init__(f"SDO abort 0x{code:08X}: {self.text}")
+        self.node = node
+        self.by_server = by_server
+        self.after_s = after_s
+        message = f"SDO abort 0x{code:08X}: {self.text}"
+        if node is not None and after_s is not None:
+            who = f"node {node}" if by_server else "the master"
+            message += f" (sent by {who} after {after_s:.2f} s)"
+        super().__init__(message)
+
+
+class SdoTimeout(SdoAbort):
+    """The server did not answer in time: the master ended the transfer with abort code
+    0x05040000 (SDO protocol timed out) itself, after ``timeout_ms`` without an answer (or
+    the transfer's whole ``timeout``). A server that sends 0x05040000 raises
+    :class:`SdoAbort` with ``by_server`` True instead."""
+
+    def __init__(self, node: int, timeout_ms: int, after_s: float | None = None) -> None:
+        super().__init__(0x05040000, node=node, by_server=False, after_s=after_s)
+        self.timeout_ms = timeout_ms
+        took = f", after {after_s:.2f} s" if after_s is not None else ""
+        self.args = (f"no response from node {node} (SDO time-out {timeout_ms} ms{took})",)
+
+    def __str__(self) -> str:
+        return str(self.args[0])

@@ -89,7 +89,6 @@ def canola_py_flash_done(ctx: Any, result: Any) -> None:
     d.ident_ok = bool(result.ident_ok)
     d.bytes = int(result.bytes)
     d.done = True
-    d.waiter.wake()
 
 
 def flash(channels: SdoChannels, node: int, data: bytes, *, progress: Progress | None = None,
@@ -143,7 +142,7 @@ def flash(channels: SdoChannels, node: int, data: bytes, *, progress: Progress |
             if not d.done:
                 with engine.locked() as c_node:
                     if state.stage == lib.CO_FLASH_STAGE_DATA:
-                        d.latest = max(d.latest, int(lib.canola_py_sdo_client_done(
+                        d.latest = max(d.latest, int(lib.co_sdo_client_progress(
                             c_node, channel)))
             if d.progress is not None and d.latest > d.reported:
                 d.reported = min(d.latest, d.total)

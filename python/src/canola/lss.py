@@ -139,7 +139,6 @@ def canola_py_lss_done(ctx: Any, result: Any) -> None:
     a = result.address
     call.address = LssAddress(int(a.vendor), int(a.product), int(a.revision), int(a.serial))
     call.done = True
-    call.waiter.wake()
 
 
 def _node_id(node_id: int) -> int:
@@ -153,8 +152,8 @@ class Lss:
     blocks until the devices answered or the time-out passed."""
 
     def __init__(self, engine: Engine, timeout_ms: int = 100) -> None:
-        self._engine = engine
-        self._waiter = Waiter(self._engine)
+        self.engine = engine
+        self._waiter = Waiter(self.engine)
         self._lock = threading.Lock()
         self._timeout_ms = 0
         self.timeout_ms = timeout_ms
@@ -168,7 +167,7 @@ class Lss:
     def timeout_ms(self, value: int) -> None:
         if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 0xFFFF:
             raise Error(f"LSS time-out {value!r} ms is outside 1..65535")
-        with self._engine.locked() as node:
+        with self.engine.locked() as node:
             _check(int(lib.co_lss_master_set_timeout(node, value)), "LSS time-out")
         self._timeout_ms = value
 
@@ -182,13 +181,13 @@ class Lss:
         with self._lock:
             call = _Call(self._waiter)
             handle = ffi.new_handle(call)
-            with self._engine.locked() as node:
+            with self.engine.locked() as node:
                 err = int(start(node, handle))
             _check(err, f"LSS {what}")
             if limit is None:
                 limit = steps * self._timeout_ms / 1000 * 1.5 + 2.0
             if not self._waiter.wait(lambda: call.done, limit):
-                with self._engine.locked() as node:
+                with self.engine.locked() as node:
                     lib.co_lss_master_cancel(node)  # completes it (cancelled)
                 self._waiter.wait(lambda: call.done, 1.0)
             del handle
@@ -206,7 +205,7 @@ class Lss:
         modes = {"waiting": lib.CO_LSS_WAITING, "configuration": lib.CO_LSS_CONFIGURATION}
         if mode not in modes:
             raise Error(f"LSS mode {mode!r}: waiting or configuration")
-        with self._engine.locked() as node:
+        with self.engine.locked() as node:
             _check(int(lib.co_lss_switch_global(node, modes[mode])), "LSS switch")
 
     def select(self, address: LssAddress) -> None:
@@ -247,9 +246,9 @@ class Lss:
     def inquire(self, address: LssAddress | None = None) -> dict[str, int]:
         """Every value of one device: the one with ``address`` (selected, then back to
         waiting), or without address the one in configuration now."""
-        if address is not None:
-            self.select(address)
-        try:
+        try:  # a select whose answer was lost may have switched the device all the same
+            if address is not None:
+                self.select(address)
             return {what: self.inquire_value(what) for what in _INQUIRE}
         finally:
             if address is not None:
@@ -297,13 +296,13 @@ class Lss:
             raise Error(f"max_devices {max_devices!r} is outside 1..127")
         if time_limit is not None and not time_limit > 0:
             raise Error(f"time_limit must be positive, got {time_limit}")
-        began = self._engine.now_us()
+        began = self.engine.now_us()
         found: list[LssAddress] = []
         try:
             while len(found) < max_devices:
                 left = None
                 if time_limit is not None:
-                    left = time_limit - (self._engine.now_us() - began) / 1e6
+                    left = time_limit - (self.engine.now_us() - began) / 1e6
                     if left <= 0:
                         raise FastscanTimeLimitError(time_limit, found)
                 try:
@@ -327,8 +326,8 @@ class Lss:
         A device that had none boots with it at once; one that had one takes it at its
         next reset communication."""
         _node_id(node_id)
-        self.select(address)
-        try:
+        try:  # a select whose answer was lost may have switched the device all the same
+            self.select(address)
             self.configure_node_id(node_id)
             if store:
                 self.store()

@@ -164,8 +164,8 @@ class NetworkManager:
             raise Error(f"{network.source}: node {own.node_id} is the master itself")
         self.channels = channels
         self.network = network
-        self._engine = channels.engine
-        self._waiter = Waiter(self._engine)
+        self.engine = channels.engine
+        self._waiter = Waiter(self.engine)
         self._lock = threading.Lock()
         self.events: list[BootEvent] = []
         self._last_failure: dict[int, BootEvent] = {}
@@ -208,21 +208,20 @@ class NetworkManager:
         if event.kind in ("failed", "lost"):
             self._last_failure[event.node] = event
         if event.kind in ("booted", "failed", "network-started", "network-halted"):
-            self._engine.later(self._idle)
+            self.engine.later(self._idle)
         for fn in list(self._callbacks):
-            self._engine.later(lambda fn=fn: fn(event))  # type: ignore[misc]
-        self._waiter.wake()
+            self.engine.later(lambda fn=fn: fn(event))  # type: ignore[misc]
 
     # ---- running
 
     def start(self) -> None:
         """Attach to the master's node and boot every slave (returns at once)."""
-        if not self._engine.running:
+        if not self.engine.running:
             raise Error("the master is not started: call start() first")
         startup = lib.CO_MGR_NMT_MASTER | _START[self.network.start]
         if not self.network.master_start:
             startup |= lib.CO_MGR_NO_SELF_START
-        with self._engine.locked() as node:
+        with self.engine.locked() as node:
             self._release_clients(node)
             channel = self.channels.reserve()
             self._channel = channel
@@ -242,9 +241,9 @@ class NetworkManager:
         """After a boot settled: the manager's channel lets go of the last slave, so that
         master.sdo() may talk to it (the manager sets the channel up again for the next
         boot)."""
-        with self._engine.locked() as node:
+        with self.engine.locked() as node:
             if self._settled_locked() and not lib.co_sdo_client_busy(node, self._channel):
-                unset(node, self._channel)
+                unset(self.engine, self._channel)
 
     def _settled_locked(self) -> bool:
         states = [(spec, int(lib.co_manager_slave_state(self._mgr, spec.node_id)))
@@ -260,7 +259,7 @@ class NetworkManager:
     def settled(self) -> bool:
         """No slave waits for its boot or is booting, and the network started or cannot
         start (a mandatory slave failed)."""
-        with self._engine.locked():
+        with self.engine.locked():
             return self._settled_locked()
 
     def wait(self, timeout: float | None = None) -> bool:
@@ -274,10 +273,19 @@ class NetworkManager:
         self._waiter.wait(self.settled, timeout)
         return self.started
 
+    def wait_until(self, condition: Callable[[], bool], timeout: float | None) -> bool:
+        """Block until ``condition()`` (checked as the boot moves on) or ``timeout``
+        seconds (virtual on a SimBus); whether it held. The manager keeps booting slaves
+        that send their boot-up meanwhile."""
+        if not self._started:
+            raise Error("the manager is not started")
+        self._waiter.check()
+        return self._waiter.wait(condition, timeout)
+
     @property
     def started(self) -> bool:
         """True once the network was started (every mandatory slave booted)."""
-        with self._engine.locked():
+        with self.engine.locked():
             return bool(lib.co_manager_network_started(self._mgr))
 
     def status(self, node: int) -> SlaveStatus:
@@ -285,7 +293,7 @@ class NetworkManager:
         spec = self.network.slave(node)
         if spec is None:
             raise Error(f"node {node!r} is not in the network description")
-        with self._engine.locked():
+        with self.engine.locked():
             state = _STATES.get(int(lib.co_manager_slave_state(self._mgr, node)), "unknown")
         last = self._last_failure.get(node)
         if state in ("failed", "missing") and last is not None:

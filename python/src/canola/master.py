@@ -38,19 +38,16 @@ another tool) take their power-on values, as CiA 301 says.
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 import datetime as dt
 import os
-import threading
 import time
 from collections.abc import Callable, Sequence
 from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from canola._c import check, ffi, lib
-from canola._channels import SdoChannels, Transfer
-from canola._engine import Bus, Engine, Frame, _Timer
+from canola._channels import SdoChannels
+from canola._engine import Bus, Frame, _Timer
 from canola._nodebase import (
     STATE_NAMES,
     EmcyEvent,
@@ -60,7 +57,7 @@ from canola._nodebase import (
     nmt_command,
 )
 from canola.core import SimBus
-from canola.errors import Error, SdoAbort
+from canola.errors import Error, SdoTimeout
 from canola.formats import eds, values
 from canola.formats.odgen import GenerateOptions
 
@@ -81,69 +78,24 @@ _EPOCH = dt.datetime(1984, 1, 1, tzinfo=dt.UTC)
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-class SdoTimeout(SdoAbort):
-    """The server did not answer: abort code 0x05040000 (SDO protocol timed out)."""
-
-    def __init__(self, node: int, timeout_ms: int) -> None:
-        super().__init__(0x05040000)
-        self.node = node
-        self.timeout_ms = timeout_ms
-        self.args = (f"no response from node {node} (SDO time-out {timeout_ms} ms)",)
-
-    def __str__(self) -> str:
-        return str(self.args[0])
-
-
-class _SdoTransfer(Transfer):
-    def __init__(self, answer_ms: int) -> None:
-        super().__init__()
-        self.answer_ms = answer_ms  # time-out per answer; 0: the master's
-        self.event: threading.Event | None = None  # made when a thread has to wait
-        self.keep: list[Any] = []
-        self.waker: Callable[[], None] | None = None
-
-    def notify(self) -> None:  # under the engine's lock
-        if self.event is not None:
-            self.event.set()
-        if self.waker is not None:
-            self.waker()
-
-    def wake_with(self, engine: Engine, waker: Callable[[], None]) -> bool:
-        """Call ``waker`` once the transfer is done; False when it is done already."""
-        with engine.lock:
-            if self.done:
-                return False
-            self.waker = waker
-            return True
-
-    def waitable(self, engine: Engine) -> threading.Event:
-        """The event :meth:`notify` sets (already set when the transfer is done)."""
-        with engine.lock:
-            if self.event is None:
-                self.event = threading.Event()
-                if self.done:
-                    self.event.set()
-            return self.event
-
-
 class SdoClient:
     """SDO client of one remote node (one client channel of the master).
 
     ``upload``/``download`` block until the transfer ends; ``aupload``/``adownload`` are
     their asyncio forms. ``block=True`` uses block transfer; ``timeout`` (seconds) bounds
     the whole transfer; ``answer_timeout`` (seconds, up to 65.535) is how long each answer
-    may take in this transfer (default: the master's ``sdo_timeout_ms``). An abort (from
-    either side) raises :class:`~canola.errors.SdoAbort` with its ``code``; no answer raises
-    :class:`SdoTimeout` (code 0x05040000). One transfer at a time per node: a second one
-    waits for the first. On a SimBus every form runs the simulated bus until the transfer
-    ends (the asyncio forms too: virtual time has no other driver).
+    may take in this transfer (default: ``timeout_ms``, the master's ``sdo_timeout_ms``). An
+    abort raises :class:`~canola.errors.SdoAbort` with its ``code``, who sent it
+    (``by_server``) and after how long (``after_s``); no answer in time raises
+    :class:`SdoTimeout` (code 0x05040000, sent by the master). One transfer at a time per
+    node: a second one waits for the first. On a SimBus every form runs the simulated bus
+    until the transfer ends (the asyncio forms too: virtual time has no other driver).
     """
 
-    def __init__(self, master: Master, node: int) -> None:
-        self._master = master
+    def __init__(self, channels: SdoChannels, node: int, timeout_ms: int) -> None:
+        self._channels = channels
         self.node = node
-        self._busy = master._sdo.lock_of(node)
-        self._buf: Any = None
+        self.timeout_ms = timeout_ms
 
     # ---- blocking
 
@@ -151,16 +103,17 @@ class SdoClient:
                timeout: float | None = None, max_size: int = 65536,
                answer_timeout: float | None = None) -> bytes:
         """Read (index, sub) of the node: its wire bytes."""
-        t = self._run(self._start_upload, (index, sub, block, max_size), timeout,
-                      self._answer_ms(answer_timeout))
-        return bytes(ffi.buffer(t.keep[0], t.length))
+        return self._channels.upload(self.node, index, sub, block=block, max_size=max_size,
+                                     timeout=timeout, answer_ms=_answer_ms(answer_timeout),
+                                     default_ms=self.timeout_ms)
 
     def download(self, index: int, sub: int, data: bytes, *, block: bool = False,
                  timeout: float | None = None, answer_timeout: float | None = None) -> None:
         """Write ``data`` (wire bytes) to (index, sub): expedited up to 4 bytes, else
         segmented (or block with ``block=True``)."""
-        self._run(self._start_download, (index, sub, bytes(data), block), timeout,
-                  self._answer_ms(answer_timeout))
+        self._channels.download(self.node, index, sub, bytes(data), block=block,
+                                timeout=timeout, answer_ms=_answer_ms(answer_timeout),
+                                default_ms=self.timeout_ms)
 
     def read(self, index: int, sub: int, data_type: str | int, **kw: Any) -> values.Value:
         """upload + :func:`canola.formats.values.decode` as ``data_type`` (e.g. "u16", "vs")."""
@@ -176,162 +129,29 @@ class SdoClient:
     async def aupload(self, index: int, sub: int, *, block: bool = False,
                       timeout: float | None = None, max_size: int = 65536,
                       answer_timeout: float | None = None) -> bytes:
-        """:meth:`upload` as a coroutine (the bus thread completes it)."""
-        t = await self._arun(self._start_upload, (index, sub, block, max_size), timeout,
-                             self._answer_ms(answer_timeout))
-        return bytes(ffi.buffer(t.keep[0], t.length))
+        """:meth:`upload` as a coroutine (the thread that receives completes it)."""
+        return await self._channels.aupload(self.node, index, sub, block=block,
+                                            max_size=max_size, timeout=timeout,
+                                            answer_ms=_answer_ms(answer_timeout),
+                                            default_ms=self.timeout_ms)
 
     async def adownload(self, index: int, sub: int, data: bytes, *, block: bool = False,
                         timeout: float | None = None,
                         answer_timeout: float | None = None) -> None:
         """:meth:`download` as a coroutine."""
-        await self._arun(self._start_download, (index, sub, bytes(data), block), timeout,
-                         self._answer_ms(answer_timeout))
+        await self._channels.adownload(self.node, index, sub, bytes(data), block=block,
+                                       timeout=timeout, answer_ms=_answer_ms(answer_timeout),
+                                       default_ms=self.timeout_ms)
 
-    # ---- machinery
 
-    def _buffer(self, size: int) -> Any:
-        """The upload buffer: one per client, made again for another size (transfers of
-        a client are one at a time; the result is copied out before the next)."""
-        buf = self._buf
-        if buf is None or len(buf) != size:
-            buf = self._buf = ffi.new("uint8_t[]", size)
-        return buf
-
-    def _start_upload(self, t: _SdoTransfer, index: int, sub: int, block: bool,
-                      max_size: int) -> None:
-        _check_address(index, sub)
-        if not 1 <= max_size <= 0xFFFFFFFF:
-            raise Error(f"max_size {max_size} is outside 1..2**32-1")
-        buf = self._buffer(max_size)
-        handle = ffi.new_handle(t)
-        t.keep[:] = [buf, handle]
-        self._master._start(self.node, lambda node, ch: lib.co_sdo_upload(
-            node, ch, index, sub, lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO, buf,
-            max_size, lib.canola_py_sdo_done, handle), f"SDO upload 0x{index:04X} sub {sub}",
-            t.answer_ms)
-
-    def _start_download(self, t: _SdoTransfer, index: int, sub: int, data: bytes,
-                        block: bool) -> None:
-        _check_address(index, sub)
-        src = ffi.new("uint8_t[]", max(len(data), 1))
-        ffi.memmove(src, data, len(data))
-        handle = ffi.new_handle(t)
-        t.keep[:] = [src, handle]
-        self._master._start(self.node, lambda node, ch: lib.co_sdo_download(
-            node, ch, index, sub, lib.CO_SDO_BLOCK if block else lib.CO_SDO_AUTO, src,
-            len(data), lib.canola_py_sdo_done, handle), f"SDO download 0x{index:04X} sub {sub}",
-            t.answer_ms)
-
-    def _timeout_ms(self, timeout: float | None, answer_ms: int = 0) -> int:
-        """The time-out a silent node ran into: the transfer's bound, else the answer's."""
-        if timeout is None:
-            return answer_ms or self._master.sdo_timeout_ms
-        if timeout <= 0:
-            raise Error(f"timeout must be positive, got {timeout}")
-        return round(timeout * 1000)
-
-    @staticmethod
-    def _answer_ms(answer_timeout: float | None) -> int:
-        """``answer_timeout`` in ms for co_sdo_client_set_timeout (0: the master's)."""
-        if answer_timeout is None:
-            return 0
-        ms = round(answer_timeout * 1000)
-        if not 1 <= ms <= 0xFFFF:
-            raise Error(f"answer_timeout must be 0.001..65.535 s, got {answer_timeout}")
-        return ms
-
-    def _finish(self, t: _SdoTransfer, timeout: float | None) -> _SdoTransfer:
-        if t.abort == 0x05040000:
-            raise SdoTimeout(self.node, self._timeout_ms(timeout, t.answer_ms))
-        if t.abort:
-            raise SdoAbort(t.abort)
-        return t
-
-    def _run(self, start: Callable[..., None], args: tuple[Any, ...],
-             timeout: float | None, answer_ms: int) -> _SdoTransfer:
-        master = self._master
-        engine = master._engine
-        engine.check_may_block()
-        self._timeout_ms(timeout)
-        if not master._engine.running:
-            raise Error("the master is not started: call start() first")
-        if not self._busy.acquire(timeout=600):
-            raise Error(f"SDO client of node {self.node} stays busy")
-        try:
-            t = _SdoTransfer(answer_ms)
-            start(t, *args)
-            bus = engine.bus
-            limit = None if timeout is None else timeout
-            if isinstance(bus, SimBus):
-                begin = bus.now_us
-                while not t.done:
-                    if limit is not None and bus.now_us - begin >= limit * 1e6:
-                        master._sdo.abort(self.node)
-                        break
-                    bus.run_until(bus.now_us + 1000)
-            elif not t.done:  # else answered at once: a node of the same bus object
-                end = None if limit is None else time.monotonic() + limit
-                event = t.waitable(engine)
-                while not event.wait(0.05):
-                    if end is not None and time.monotonic() >= end:
-                        master._sdo.abort(self.node)  # completes the transfer with 0x05040000
-                        event.wait(5.0)
-                        break
-                    if not engine.running:
-                        master._sdo.abort(self.node)
-                        raise Error("the master was stopped during an SDO transfer")
-            if not t.done:  # pragma: no cover -- the core always completes on abort
-                raise SdoTimeout(self.node, self._timeout_ms(timeout, answer_ms))
-            return self._finish(t, timeout)
-        finally:
-            self._busy.release()
-
-    async def _arun(self, start: Callable[..., None], args: tuple[Any, ...],
-                    timeout: float | None, answer_ms: int) -> _SdoTransfer:
-        master = self._master
-        if isinstance(master._engine.bus, SimBus):
-            return self._run(start, args, timeout, answer_ms)  # virtual time: the bus runs here
-        self._timeout_ms(timeout)
-        if not master._engine.running:
-            raise Error("the master is not started: call start() first")
-        loop = asyncio.get_running_loop()
-        while not self._busy.acquire(blocking=False):
-            await asyncio.sleep(0.001)
-        try:
-            fut: asyncio.Future[None] = loop.create_future()
-
-            def resolve() -> None:
-                if not fut.done():
-                    fut.set_result(None)
-
-            def wake() -> None:
-                with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
-                    loop.call_soon_threadsafe(resolve)
-
-            t = _SdoTransfer(answer_ms)
-            start(t, *args)
-            if t.done or not t.wake_with(master._engine, wake):
-                return self._finish(t, timeout)  # answered at once: same bus object
-            try:
-                end = None if timeout is None else loop.time() + timeout
-                while not fut.done():
-                    try:
-                        await asyncio.wait_for(asyncio.shield(fut), 0.05)
-                    except TimeoutError:
-                        if end is not None and loop.time() >= end:
-                            master._sdo.abort(self.node)  # completes it with 0x05040000
-                            end = None
-                        elif not master._engine.running:
-                            master._sdo.abort(self.node)
-                            raise Error("the master was stopped during an SDO transfer") \
-                                from None
-            except asyncio.CancelledError:
-                master._sdo.abort(self.node)  # ends the transfer before the channel is reused
-                raise
-            return self._finish(t, timeout)
-        finally:
-            self._busy.release()
+def _answer_ms(answer_timeout: float | None) -> int:
+    """``answer_timeout`` in ms for co_sdo_client_set_timeout (0: the master's)."""
+    if answer_timeout is None:
+        return 0
+    ms = round(answer_timeout * 1000)
+    if not 1 <= ms <= 0xFFFF:
+        raise Error(f"answer_timeout must be 0.001..65.535 s, got {answer_timeout}")
+    return ms
 
 
 #: 0x1012 of a TIME producer on COB-ID 0x100 (bit 30).
@@ -342,13 +162,6 @@ def _sync_writes(period_us: int, overflow: int) -> list[tuple[int, int]]:
     """(index, value) writes at sub 0 that make a SYNC producer of ``period_us`` with
     counter ``overflow``: the period goes to 0 first (0x1019 may change only then)."""
     return [(0x1006, 0), (0x1019, overflow), (0x1005, 0x40000080), (0x1006, period_us)]
-
-
-def _check_address(index: int, sub: int) -> None:
-    if not (isinstance(index, int) and 0 <= index <= 0xFFFF):
-        raise Error(f"index {index!r} is outside 0x0000..0xFFFF")
-    if not (isinstance(sub, int) and 0 <= sub <= 0xFF):
-        raise Error(f"sub-index {sub!r} is outside 0..255")
 
 
 class Master(NodeBase):
@@ -376,7 +189,7 @@ class Master(NodeBase):
         super().__init__(bus, od, node_id, sdo_timeout_ms=sdo_timeout_ms, store_dir=None,
                          raw_frames=True, quiet=not announce)
         self._clients: dict[int, SdoClient] = {}
-        self._sdo = SdoChannels(self._engine)
+        self._sdo = self._build(SdoChannels)
         self._frame_cbs: list[tuple[int | None, Callable[[Frame], None]]] = []
         self._bootup_cbs: list[Callable[[int], None]] = []
         self._time_timer: _Timer | None = None
@@ -411,24 +224,8 @@ class Master(NodeBase):
             raise Error(f"node {node} is the master itself")
         client = self._clients.get(node)
         if client is None:
-            client = self._clients[node] = SdoClient(self, node)
+            client = self._clients[node] = SdoClient(self._sdo, node, self.sdo_timeout_ms)
         return client
-
-    def _start(self, node_id: int, begin: Callable[[Any, int], int], what: str,
-               answer_ms: int = 0) -> None:
-        """Start a transfer on the channel of ``node_id``, whose time-out per answer is
-        ``answer_ms`` (0: ``sdo_timeout_ms``)."""
-        def start(node: Any) -> int:
-            channel = self._sdo.channel(node, node_id)
-            check(int(lib.co_sdo_client_set_timeout(node, channel, answer_ms)),
-                  "co_sdo_client_set_timeout")
-            return int(begin(node, channel))
-        check(self._engine.call(start), f"{what} of node {node_id}")
-
-    @property
-    def _channels(self) -> dict[int, int]:
-        """Server node-ID -> SDO client channel (see :class:`canola._channels.SdoChannels`)."""
-        return self._sdo.table
 
     # ---- heartbeat consumer, boot-up, EMCY consumer
 
@@ -448,7 +245,7 @@ class Master(NodeBase):
 
     def heartbeat_state(self, node: int) -> str | None:
         """The state ``node`` last reported to the heartbeat consumer, None if not heard."""
-        with self._engine.locked() as n:
+        with self.locked() as n:
             state = int(lib.co_hb_remote_state(n, node))
         return None if state == 0xFF else STATE_NAMES.get(state, f"0x{state:02X}")
 
@@ -471,7 +268,7 @@ class Master(NodeBase):
         """Frames of other nodes come to :meth:`_frame` from the first callback on (a
         master nobody asks for them does not pay for them)."""
         if not self._bootup_cbs and not self._frame_cbs:
-            self._engine.add_frame_listener(self._frame)
+            self._add_frame_listener(self._frame)
 
     def _frame(self, frame: Frame) -> None:  # runs outside the lock, in order
         if 0x701 <= frame.can_id <= 0x77F and frame.data == b"\x00" and not frame.rtr:
@@ -492,7 +289,7 @@ class Master(NodeBase):
         frame.flags = lib.CO_FRAME_RTR if rtr else 0
         frame.len = len(data)
         ffi.memmove(frame.data, bytes(data), len(data))
-        with self._engine.locked() as node:
+        with self.locked() as node:
             err = int(lib.co_node_send(node, frame))
         check(err, "send")
 
@@ -531,7 +328,7 @@ class Master(NodeBase):
         if self.od.get(0x1012, 0) != _TIME_PRODUCER:
             self.od.set(0x1012, 0, _TIME_PRODUCER)
         tod = lib.co_time_from_us(us)
-        with self._engine.locked() as node:
+        with self.locked() as node:
             err = int(lib.co_time_send(node, ffi.new("co_time_of_day_t *", tod)))
         check(err, "co_time_send")
 
@@ -542,13 +339,13 @@ class Master(NodeBase):
         if not isinstance(period_ms, int) or not 1 <= period_ms <= 86_400_000:
             raise Error(f"TIME period {period_ms!r} ms is outside 1..86400000")
         self.stop_time()
-        self._time_timer = self._engine.add_timer(
+        self._time_timer = self._add_timer(
             period_ms * 1000, lambda: self.send_time(clock() if clock else None))
 
     def stop_time(self) -> None:
         """Stop producing TIME periodically."""
         if self._time_timer is not None:
-            self._engine.remove_timer(self._time_timer)
+            self._remove_timer(self._time_timer)
             self._time_timer = None
 
     # ---- the master's own reset
@@ -596,7 +393,7 @@ class Master(NodeBase):
         from canola.lss import Lss  # noqa: PLC0415
 
         if self._lss is None:
-            self._lss = Lss(self._engine)
+            self._lss = self._build(Lss)
         return self._lss
 
     def flash(self, node: int, data: bytes, *, progress: Callable[[int, int], None] | None
@@ -612,7 +409,7 @@ class Master(NodeBase):
 
     def wait(self, seconds: float) -> None:
         """Let ``seconds`` pass: virtual time on a SimBus, a sleep on python-can."""
-        bus = self._engine.bus
+        bus = self.bus
         if isinstance(bus, SimBus):
             bus.run_for(round(seconds * 1e6))
         else:

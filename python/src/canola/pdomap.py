@@ -25,9 +25,9 @@ from canola.formats.datatypes import DATA_TYPES, type_bits
 from canola.formats.eds import ObjectDictionary, Variable
 from canola.odnames import entry_name, find_entry, parse_address
 
-__all__ = ["Mapped", "Pdo", "PdoError", "configure_pdo", "decode", "describe",
-           "mapped_entry", "parse_pdo_name", "pdos_from_od", "read_pdo", "read_pdos",
-           "type_bits"]
+__all__ = ["Mapped", "Pdo", "PdoConfigError", "PdoError", "configure_pdo", "decode",
+           "describe", "mapped_entry", "parse_pdo_name", "pdos_from_od", "read_pdo",
+           "read_pdos", "type_bits"]
 
 #: What the PDOs of a device without an EDS are probed for (the pre-defined set).
 DEFAULT_PDOS = ("RPDO1", "RPDO2", "RPDO3", "RPDO4", "TPDO1", "TPDO2", "TPDO3", "TPDO4")
@@ -276,28 +276,98 @@ def describe(pdo: Pdo) -> list[str]:
     return lines
 
 
+class PdoConfigError(PdoError):
+    """A re-mapping that failed half-way (an abort, or no answer): ``cause`` is the SDO
+    error, ``step`` what was being written, ``state`` what the PDO was left as (restored
+    to the configuration it had, or, when that failed too, its COB-ID and mapping count as
+    last written)."""
+
+    def __init__(self, name: str, cause: SdoAbort, step: str, state: str) -> None:
+        super().__init__(f"{name}: {cause} (writing {step}); {state}")
+        self.cause, self.step, self.state = cause, step, state
+
+
+def _cob_text(cob: int) -> str:
+    return f"COB-ID 0x{cob:08X} ({'invalid' if cob & _COB_INVALID else 'valid'})"
+
+
+class _Remap:
+    """The writes of one re-mapping, each noted, so that a failure can say where it
+    stopped and what the PDO holds."""
+
+    def __init__(self, sdo: SdoAccess, pdo: Pdo, timeout: float | None) -> None:
+        self.sdo, self.pdo, self.timeout = sdo, pdo, timeout
+        self.cob: int | None = None  # the COB-ID and mapping count as last written
+        self.count: int | None = None
+        self.step = ""
+
+    def put(self, index: int, sub: int, value: int, size: int) -> None:
+        self.step = f"0x{index:04X}:{sub:02X} = 0x{value:0{2 * size}X}"
+        _put(self.sdo, index, sub, value, size, timeout=self.timeout)
+        if (index, sub) == (self.pdo.comm_index, 1):
+            self.cob = value
+        elif (index, sub) == (self.pdo.map_index, 0):
+            self.count = value
+
+    def apply(self, cob: int, comm: dict[int, tuple[int, int]], words: list[int]) -> None:
+        """CiA 301's order: invalid, communication parameters, count 0, entries, count,
+        valid (``cob`` as given)."""
+        self.put(self.pdo.comm_index, 1, cob | _COB_INVALID, 4)
+        for sub, (value, size) in comm.items():
+            self.put(self.pdo.comm_index, sub, value, size)
+        self.put(self.pdo.map_index, 0, 0, 1)
+        for i, word in enumerate(words, 1):
+            self.put(self.pdo.map_index, i, word, 4)
+        self.put(self.pdo.map_index, 0, len(words), 1)
+        self.put(self.pdo.comm_index, 1, cob, 4)
+
+    def left(self, cob: int) -> str:
+        """What the PDO holds after a failed undo, from the writes that succeeded."""
+        now = cob if self.cob is None else self.cob
+        count = "as before" if self.count is None else str(self.count)
+        return (f"restoring failed ({self.step}): {self.pdo.name} is left with "
+                f"{_cob_text(now)} and mapping count {count}")
+
+
 def configure_pdo(sdo: SdoAccess, name: str, entries: list[Mapped], *,
                   transmission_type: int | None = None, event_timer_ms: int | None = None,
                   inhibit_100us: int | None = None, timeout: float | None = None) -> Pdo:
     """Configure PDO ``name`` by the CiA 301 re-mapping procedure: invalidate it (COB-ID
     bit 31), set the communication parameters given, mapping count 0, the entries, the
-    count, and make it valid again with its COB-ID. Returns the PDO as configured."""
+    count, and make it valid again with its COB-ID. Returns the PDO as configured.
+
+    The configuration it had is read first. When a step fails (an abort: the device
+    refuses an entry, say; or no answer), that configuration is written back by the same
+    procedure and :class:`PdoConfigError` says what failed and that the PDO was restored,
+    or, when the undo failed too, the COB-ID (valid or not) and mapping count it was left
+    with. A failure while reading changes nothing and is raised as it is (SdoAbort)."""
     kind, number = parse_pdo_name(name)
     if sum(m.bits for m in entries) > 64:
         raise PdoError(f"{name}: the entries take {sum(m.bits for m in entries)} bits, "
                        "a PDO holds 64")
     pdo = Pdo(kind, number, 0, entries=list(entries))
     cob = _u(sdo, pdo.comm_index, 1, timeout)
-    _put(sdo, pdo.comm_index, 1, cob | _COB_INVALID, 4, timeout=timeout)
-    for sub, value, size in ((2, transmission_type, 1), (3, inhibit_100us, 2),
-                             (5, event_timer_ms, 2)):
-        if value is not None:
-            _put(sdo, pdo.comm_index, sub, value, size, timeout=timeout)
-    _put(sdo, pdo.map_index, 0, 0, 1, timeout=timeout)
-    for i, m in enumerate(entries, 1):
-        _put(sdo, pdo.map_index, i, m.word, 4, timeout=timeout)
-    _put(sdo, pdo.map_index, 0, len(entries), 1, timeout=timeout)
-    _put(sdo, pdo.comm_index, 1, cob & ~_COB_INVALID, 4, timeout=timeout)
+    sizes = {2: 1, 3: 2, 5: 2}
+    asked = {sub: value for sub, value in ((2, transmission_type), (3, inhibit_100us),
+                                           (5, event_timer_ms)) if value is not None}
+    old_comm = {sub: (_u(sdo, pdo.comm_index, sub, timeout), sizes[sub]) for sub in asked}
+    old_count = min(_u(sdo, pdo.map_index, 0, timeout), 64)
+    old_words = [_u(sdo, pdo.map_index, i, timeout) for i in range(1, old_count + 1)]
+    remap = _Remap(sdo, pdo, timeout)
+    try:
+        remap.apply(cob & ~_COB_INVALID, {sub: (value, sizes[sub]) for sub, value in
+                                          asked.items()}, [m.word for m in entries])
+    except SdoAbort as exc:
+        step = remap.step
+        undo = _Remap(sdo, pdo, timeout)
+        undo.cob, undo.count = remap.cob, remap.count
+        try:
+            undo.apply(cob, old_comm, old_words)
+            state = (f"the previous configuration is restored ({_cob_text(cob)}, "
+                     f"{old_count} entries)")
+        except SdoAbort:
+            state = undo.left(cob)
+        raise PdoConfigError(name, exc, step, state) from exc
     pdo.cob_id, pdo.rtr_allowed = cob & 0x7FF, not cob & _COB_NO_RTR
     pdo.transmission_type, pdo.event_timer_ms = transmission_type, event_timer_ms
     pdo.inhibit_100us = inhibit_100us

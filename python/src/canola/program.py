@@ -77,14 +77,11 @@ class ProgramSlot:
         self.commands: list[str] = []  # 0x1F51 commands, as names, in order
         self._buf = bytearray()
         self._handle = ffi.new_handle(self)
-        engine = device._engine
-        with engine.locked():
-            raw = lib.canola_py_prog_new(engine.od.entries, engine.od.count, program, running,
-                                         ident, self._handle)
+        raw = device.hook_entries(lambda entries, count: lib.canola_py_prog_new(
+            entries, count, program, running, ident, self._handle), self)
         if raw == ffi.NULL:
             raise Error(f"the device's dictionary has no 0x1F50/0x1F51 sub-index {program}")
         self._prog = ffi.gc(raw, lib.canola_py_prog_free)
-        engine.od._keep.append(self)  # the entries point to it: keep it as long as them
 
     # ---- what the network does (called inside the node)
 

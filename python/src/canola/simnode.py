@@ -49,7 +49,7 @@ class Node(NodeBase):
 
     @property
     def _node(self) -> CData:
-        return self._engine.node
+        return self._c_node
 
     def _on_state(self, state: int) -> None:
         self.node_id = int(lib.co_node_id(self._node))  # an LSS master may have set it
@@ -70,7 +70,7 @@ class Node(NodeBase):
         """Read an entry's wire value (access rights apply). Raises SdoAbort."""
         buf = ffi.new("uint8_t[]", cap)
         n = ffi.new("uint32_t *")
-        with self._engine.locked() as node:
+        with self.locked() as node:
             code = int(lib.co_node_read_net(node, index, sub, buf, cap, n))
         if code:
             raise SdoAbort(code)
@@ -78,7 +78,7 @@ class Node(NodeBase):
 
     def write(self, index: int, sub: int, data: bytes) -> None:
         """Write an entry's wire value (access rights, length, limits). Raises SdoAbort."""
-        with self._engine.locked() as node:
+        with self.locked() as node:
             code = int(lib.co_node_write_net(node, index, sub, data, len(data)))
         if code:
             raise SdoAbort(code)
@@ -91,7 +91,7 @@ class Node(NodeBase):
 
     def set_uint(self, index: int, sub: int, value: int) -> None:
         """Application write of an integer entry (no access rights). Raises SdoAbort."""
-        with self._engine.locked() as node:
+        with self.locked() as node:
             code = int(lib.co_node_set_uint(node, index, sub, value))
         if code:
             raise SdoAbort(code)
@@ -103,7 +103,7 @@ class Node(NodeBase):
         ``"reset-node"``, ``"reset-communication"`` or the specifier) to ``target``
         (0: all nodes) and let the bus deliver it."""
         spec = NMT_CMDS[cmd] if isinstance(cmd, str) else cmd
-        with self._engine.locked() as node:
+        with self.locked() as node:
             check(lib.co_nmt_send(node, spec, target), "co_nmt_send")
 
     # ---- SDO client (channel 0)
@@ -135,7 +135,7 @@ class Node(NodeBase):
         buf = ffi.new("uint8_t[]", cap)
         t = Transfer()
         handle = ffi.new_handle(t)
-        with self._engine.locked() as node:
+        with self.locked() as node:
             err = lib.co_sdo_upload(node, 0, index, sub, _MODES[mode], buf, cap,
                                     lib.canola_py_sdo_done, handle)
         check(err, "co_sdo_upload")
@@ -150,7 +150,7 @@ class Node(NodeBase):
         src = ffi.new("uint8_t[]", data)
         t = Transfer()
         handle = ffi.new_handle(t)
-        with self._engine.locked() as node:
+        with self.locked() as node:
             err = lib.co_sdo_download(node, 0, index, sub, _MODES[mode], src, len(data),
                                       lib.canola_py_sdo_done, handle)
         check(err, "co_sdo_download")

@@ -28,8 +28,12 @@ Robustness rules:
   ``queue_limit`` it lets the replies go out first: a client that reads its replies is
   never disconnected, however many commands it sends at once.
 - Clients that do not open a channel within ``handshake_timeout`` seconds are closed.
-- It listens on loopback unless told otherwise; ``canola bus serve`` warns for an address
-  that is not loopback (:func:`exposed_addresses`) and refuses an empty one.
+- With a ``token`` (:mod:`canola.access`), a client's first element must be
+  ``< auth TOKEN >`` (answered ``< ok >``); anything else, or another token, gets
+  ``< error ... >`` and the connection is closed. Without one, ``< auth ... >`` is
+  answered ``< ok >`` whatever it holds.
+- It listens on loopback unless told otherwise; ``canola bus serve`` refuses an address
+  that is not loopback (:func:`exposed_addresses`) without a token, and an empty one.
 
 :class:`Hub` runs on an asyncio loop; :class:`HubThread` runs one in a background thread
 (tests, embedding); :func:`serve` is the command's blocking entry point.
@@ -39,7 +43,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ipaddress
 import logging
 import signal
 import socket
@@ -48,6 +51,7 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 
+from canola.access import exposed_addresses, same_token
 from canola.bus.socketcand import (
     Frame,
     ProtocolError,
@@ -102,6 +106,7 @@ class _Client:
     limit: int
     reply_limit: int
     raw: bool = False
+    authed: bool = False
     queue: deque[str] = field(default_factory=deque)
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     closing: bool = False
@@ -124,39 +129,13 @@ class _Client:
         return True
 
 
-def exposed_addresses(host: str, port: int = DEFAULT_PORT) -> list[str]:
-    """The addresses a server listening on ``host`` would take that are not loopback
-    (what ``canola bus serve`` warns about): ``0.0.0.0`` and ``::`` (every address), a
-    LAN address, a name that resolves to one. A name that does not resolve gives [] (the
-    listen itself then fails). ``host`` must not be empty (that is every address too, and
-    refused)."""
-    if not host:
-        raise ValueError("an empty host means every address: give one (127.0.0.1: this "
-                         "machine only)")
-    try:
-        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
-                                   flags=socket.AI_PASSIVE)
-    except (OSError, UnicodeError):
-        return []
-    exposed: list[str] = []
-    for *_, sockaddr in infos:
-        address = str(sockaddr[0])
-        try:
-            loopback = ipaddress.ip_address(address.split("%", 1)[0]).is_loopback
-        except ValueError:
-            loopback = False
-        if not loopback and address not in exposed:
-            exposed.append(address)
-    return exposed
-
-
 class Hub:
     """The socketcand hub. ``port`` 0 picks a free port (see :attr:`port` once started)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, *,
                  queue_limit: int = 1024, reply_limit: int = DEFAULT_REPLY_LIMIT,
                  handshake_timeout: float = 10.0, read_chunk: int = 4096,
-                 write_buffer: int = 16384) -> None:
+                 write_buffer: int = 16384, token: str | None = None) -> None:
         if not host:
             raise ValueError("an empty host means every address: give one (127.0.0.1: "
                              "this machine only)")
@@ -164,6 +143,7 @@ class Hub:
             raise ValueError("queue_limit and reply_limit must be at least 1")
         self.host = host
         self.port = port
+        self.token = token  # every client sends it first (None: nobody needs to)
         self.queue_limit = queue_limit
         self.reply_limit = reply_limit
         #: Clients disconnected for not reading their replies (see the module's rules).
@@ -295,6 +275,15 @@ class Hub:
 
     def _handle(self, client: _Client, element: str) -> None:
         cmd = parse_command(element)
+        if cmd.verb == "auth":
+            if self.token is not None and not same_token(cmd.token, self.token):
+                log.warning("%s: wrong token", client.stats.peer)
+                raise ProtocolError("wrong token")
+            client.authed = True
+            client.push("< ok >", control=True)
+            return
+        if self.token is not None and not client.authed:
+            raise ProtocolError("authentication required: < auth TOKEN > first")
         if cmd.verb == "open":
             if client.stats.channel:
                 raise ProtocolError("a channel is already open")
@@ -363,7 +352,8 @@ class Hub:
 class HubThread:
     """A :class:`Hub` on its own event loop in a daemon thread (``with HubThread() as hub``)."""
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 0, **options: int | float) -> None:
+    def __init__(self, host: str = "127.0.0.1", port: int = 0,
+                 **options: int | float | str | None) -> None:
         self.hub = Hub(host, port, **options)  # type: ignore[arg-type]
         self._loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._run, name="canola-hub", daemon=True)
@@ -407,11 +397,12 @@ class HubThread:
 
 
 def serve(host: str, port: int, *, queue_limit: int = 1024,
-          reply_limit: int = DEFAULT_REPLY_LIMIT, ready: threading.Event | None = None) -> None:
+          reply_limit: int = DEFAULT_REPLY_LIMIT, ready: threading.Event | None = None,
+          token: str | None = None) -> None:
     """Run a hub until SIGINT or SIGTERM (``canola bus serve``)."""
 
     async def main() -> None:
-        hub = Hub(host, port, queue_limit=queue_limit, reply_limit=reply_limit)
+        hub = Hub(host, port, queue_limit=queue_limit, reply_limit=reply_limit, token=token)
         await hub.start()
         print(f"canola bus: socketcand hub on {host}:{hub.port} (Ctrl-C stops)", flush=True)
         if ready is not None:

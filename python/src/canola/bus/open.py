@@ -15,6 +15,9 @@ variables ``CAN_INTERFACE``, ``CAN_CHANNEL``, ``CAN_CONFIG`` and its configurati
 ``~/can.conf``, ``/etc/can.conf``, ``~/.can``, ``~/.canrc``, as ``can.util.load_config``
 reads them).
 
+A socketcand server that asks for a token (``canola bus serve --token``) gets the one in
+the environment variable ``CANOLA_TOKEN`` (:mod:`canola.access`).
+
 Failures are :class:`BusError` with a one-line message; nothing waits longer than
 ``timeout`` seconds for a server that does not answer.
 """
@@ -29,6 +32,7 @@ from typing import Any
 
 import can
 
+from canola.access import token_from
 from canola.bus.socketcand_bus import SocketcandBus
 from canola.errors import Error
 
@@ -136,7 +140,11 @@ def _reason(exc: BaseException) -> str:
 def _open_socketcand(host: str, port: int, channel: str, timeout: float) -> can.BusABC:
     where = f"socketcand://{host}:{port}/{channel}"
     try:
-        return SocketcandBus(host, port, channel, timeout)
+        token = token_from(None)
+    except ValueError as exc:
+        raise BusError(str(exc)) from None
+    try:
+        return SocketcandBus(host, port, channel, timeout, token=token)
     except OSError as exc:
         raise BusError(f"cannot connect to {where}: {_reason(exc)}") from exc
     except can.CanError as exc:

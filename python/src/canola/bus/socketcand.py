@@ -4,7 +4,8 @@
 Pure functions, no I/O: the hub (:mod:`canola.bus.hub`) and the fuzz target use them. The subset
 spoken here is what python-can's ``socketcand`` interface and canola's C client need:
 
-- server greeting ``< hi >``; client ``< open CHANNEL >`` (1..16 characters of
+- server greeting ``< hi >``; client ``< auth TOKEN >`` (canola's hub, where it asks for
+  one: :mod:`canola.access`), server ``< ok >``; client ``< open CHANNEL >`` (1..16 characters of
   ``A-Z a-z 0-9 _ . -``), server ``< ok >``; ``< rawmode >`` / ``< bcmmode >``, server ``< ok >``;
   ``< echo >`` answered by itself.
 - client ``< send ID LEN B0 B1 ... >``: ID hex (8 hex digits = 29-bit identifier, otherwise
@@ -74,11 +75,12 @@ class Frame:
 @dataclass(frozen=True)
 class Command:
     """One parsed client element: ``verb`` and, for send/sendrtr, the frame; for open the
-    channel."""
+    channel; for auth the token."""
 
     verb: str
     channel: str = ""
     frame: Frame | None = None
+    token: str = ""
 
 
 def split_elements(buffer: bytes) -> tuple[list[str], bytes]:
@@ -161,6 +163,10 @@ def parse_command(element: str) -> Command:
         if len(words) != 1:
             raise ProtocolError(f"'{verb}' takes no arguments")
         return Command(verb)
+    if verb == "auth":
+        if len(words) != 2:
+            raise ProtocolError("usage: < auth TOKEN >")
+        return Command(verb, token=words[1])
     if verb == "open":
         if len(words) != 2 or not _CHANNEL.fullmatch(words[1]):
             raise ProtocolError("usage: < open CHANNEL > (1..16 of A-Z a-z 0-9 _ . -)")

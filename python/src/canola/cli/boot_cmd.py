@@ -20,6 +20,7 @@ from canola.cli.common import (
 
 if TYPE_CHECKING:
     from canola.boot_plan import Network
+    from canola.manager import NetworkManager
 
 #: Longest one slave's boot may take, per SDO time-out (reads, DCF records, retries).
 _STEPS_PER_SLAVE = 16
@@ -30,16 +31,19 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
         "boot", help="boot a network (CANopen manager, CiA 302-2)",
         description="Check every slave's identity, download its configuration (the DCF's "
                     "ParameterValues), watch its heartbeat and start the network. NETWORK "
-                    "is one YAML description, or DCF files (one mandatory slave each). Exit "
-                    "code 0 only when the network started. The master runs the network: it "
+                    "is one YAML description, or DCF files (one mandatory slave each). With "
+                    "--timeout, a slave that does not answer yet is booted when its boot-up "
+                    "comes, until then. Exit code 0 only when the network started. The "
+                    "master runs the network: it "
                     "announces itself as node --master-id (boot-up, heartbeat if its 0x1017 "
                     "says so).")
     p.add_argument("files", nargs="+", metavar="NETWORK.yaml|DCF")
     add_bus_options(p)
     add_master_options(p, announce=False)  # the network's master announces itself
     p.add_argument("--timeout", type=float, default=None, metavar="S",
-                   help="give up after S seconds (default: enough for every slave's "
-                        "time-outs)")
+                   help="wait up to S seconds, for late slaves too (no answer yet: "
+                        "booted at their boot-up; default: until the boot settled, at "
+                        "most enough for every slave's time-outs)")
     p.add_argument("--json", action="store_true",
                    help="one JSON object: started, nodes, events")
     p.set_defaults(func=run)
@@ -55,6 +59,19 @@ def _limit(args: argparse.Namespace, network: Network) -> float:
     return 5.0 + per_slave * len(network.slaves) + heartbeat
 
 
+def _nothing_to_wait_for(manager: NetworkManager, late: bool) -> bool:
+    """The boot settled (:meth:`NetworkManager.settled`) and, with ``late``, no slave is
+    still to come: every one booted, or failed for a reason other than no answer (B) or a
+    lost heartbeat. A slave that has not answered yet may boot late: CiA 302-2 boots a
+    slave when its boot-up arrives, mandatory or optional, for as long as the manager runs
+    (as canola.Master.boot(wait=False) does); --timeout is how long the command waits for
+    it (the role of the boot time, 0x1F89)."""
+    if not manager.settled():
+        return False
+    return not late or not any(s.state == "missing" or (s.state == "failed" and s.reason == "B")
+                               for s in manager.slaves())
+
+
 def run(args: argparse.Namespace) -> int:
     from canola.boot_plan import NetworkError, from_files  # noqa: PLC0415 -- on first use
 
@@ -65,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
     limit = _limit(args, network)
     with master_from_args(args, announce=True) as master:
         manager = master.boot(network, wait=False)
-        manager.wait(limit)
+        late = args.timeout is not None
+        manager.wait_until(lambda: _nothing_to_wait_for(manager, late), limit)
         settled = manager.settled()
         started = manager.started
         statuses = manager.slaves()

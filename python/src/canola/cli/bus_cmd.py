@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from canola import access
 from canola.bus import hub
 from canola.cli.common import CliError, Parser
 
@@ -23,7 +24,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "(each channel is one bus). Stops on Ctrl-C or SIGTERM.")
     serve.add_argument("--host", default="127.0.0.1",
                        help="address to listen on (default 127.0.0.1, this machine only; "
-                            "any other is reachable from the network: a warning says so)")
+                            "any other is reachable from the network and needs --token)")
     serve.add_argument("--port", type=int, default=hub.DEFAULT_PORT,
                        help=f"TCP port (default {hub.DEFAULT_PORT}; 0 picks a free one)")
     serve.add_argument("--queue", type=int, default=1024, metavar="FRAMES",
@@ -32,6 +33,9 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     serve.add_argument("--replies", type=int, default=hub.DEFAULT_REPLY_LIMIT, metavar="N",
                        help="replies queued beyond that for a client that does not read "
                             f"them before it is disconnected (default {hub.DEFAULT_REPLY_LIMIT})")
+    serve.add_argument("--token", metavar="TOKEN",
+                       help="a secret every client sends first (< auth TOKEN >); default "
+                            f"${access.TOKEN_ENV}; needed to listen beyond loopback")
     serve.set_defaults(func=run_serve)
 
 
@@ -45,13 +49,20 @@ def run_serve(args: argparse.Namespace) -> int:
     if not args.host.strip():
         raise CliError("canola bus serve: error: --host '' would listen on every address: "
                        "give one (127.0.0.1: this machine only)", 2)
-    for address in hub.exposed_addresses(args.host, args.port):
-        print(f"canola bus: warning: --host {args.host}: listening on {address}, not a "
-              "loopback address: whoever reaches the port can send and receive on every "
-              "channel, without authentication (prefer 127.0.0.1 and an SSH tunnel; see "
-              "docs/security.md)", file=sys.stderr, flush=True)
     try:
-        hub.serve(args.host, args.port, queue_limit=args.queue, reply_limit=args.replies)
+        token = access.token_from(args.token)
+    except ValueError as exc:
+        raise CliError(f"canola bus serve: error: {exc}", 2) from None
+    refused = access.unguarded(args.host, token)
+    if refused is not None:
+        raise CliError(f"canola bus serve: error: {refused}", 2)
+    for address in access.exposed_addresses(args.host, args.port):
+        print(f"canola bus: --host {args.host}: listening on {address}, not loopback: "
+              "clients must send the token; the traffic is not encrypted (docs/security.md)",
+              file=sys.stderr, flush=True)
+    try:
+        hub.serve(args.host, args.port, queue_limit=args.queue, reply_limit=args.replies,
+                  token=token)
     except OSError as exc:
         raise CliError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}"
                        ) from None

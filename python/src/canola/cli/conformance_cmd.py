@@ -19,6 +19,7 @@ from canola.cli.common import (
 from canola.conformance.options import Options
 from canola.conformance.registry import GROUPS
 from canola.errors import Error
+from canola.files import FileError, write_file
 from canola.formats import eds
 
 
@@ -68,12 +69,14 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
 
 def run_command(args: argparse.Namespace) -> int:
     from canola.conformance import (  # noqa: PLC0415 -- the suite loads when it runs
+        Interrupted,
         LiveProgress,
         check_list,
         junit,
         markdown,
         run,
         select,
+        verdict,
     )
 
     try:
@@ -97,15 +100,18 @@ def run_command(args: argparse.Namespace) -> int:
     try:
         report = run(bus, args.node_id, model, only=args.only or (), options=options,
                      master_id=args.master_id, progress=LiveProgress(sys.stdout))
+    except Interrupted as stop:  # Ctrl-C: the report of what ran, then exit 130
+        report = stop.report
     finally:
         bus.shutdown()
     for path, text in ((args.markdown, markdown), (args.junit, junit)):
         if path is not None:
             try:
-                with open(path, "w", encoding="utf-8") as out:
-                    out.write(text(report))
-            except OSError as exc:
-                raise CliError(f"cannot write {path}: {exc.strerror}") from None
-    verdict = "PASSED" if report.passed else "FAILED"
-    print(f"node {report.node_id}: {verdict} ({report.totals})")
+                write_file(path, text(report))
+            except FileError as exc:
+                raise CliError(str(exc)) from None
+    print(f"node {report.node_id}: {verdict(report)} ({report.totals})")
+    if report.interrupted:
+        print(report.notes[-1])
+        return 130
     return 0 if report.passed else 1

@@ -26,7 +26,7 @@ from canola.cli.common import (
 )
 from canola.device import Device, StoreRejectedEvent
 from canola.emcycodes import emcy_line
-from canola.errors import Error
+from canola.errors import EdsError, Error
 
 log = logging.getLogger("canola.device")
 
@@ -47,7 +47,9 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     p.add_argument("--eds", required=True, metavar="FILE", help="EDS or DCF file")
     p.add_argument("--node-id", type=node_id, required=True, metavar="N", help="1..127")
     add_bus_options(p)
-    p.add_argument("--store", metavar="DIR", help="parameter storage folder")
+    p.add_argument("--store", metavar="DIR",
+                   help="parameter storage folder (made when missing and its parent "
+                        "exists; you need permission to write in it)")
     p.add_argument("--sdo-timeout", type=positive_ms, default=1000, metavar="MS",
                    help="the SDO server's time-out (default 1000 ms; max 65535)")
     p.add_argument("--domain-size", type=lambda t: int_in_range(t, 1, MAX_DOMAIN, "size",
@@ -81,14 +83,31 @@ def _report_own_emcys(device: Device) -> None:
     device.on_frame_sent(sent)
 
 
+def _store_folder(path: str) -> None:
+    """``--store``: a folder to write in, made when missing (its parent must exist: a
+    mistyped path makes no tree of folders); a one-line CliError when it cannot be."""
+    if not os.path.exists(path):
+        parent = os.path.dirname(os.path.abspath(path))
+        if not os.path.isdir(parent):
+            raise CliError(f"--store {path}: no such folder (nor its parent {parent})")
+        try:
+            os.mkdir(path)
+        except OSError as exc:
+            raise CliError(f"--store {path}: cannot make the folder: {exc.strerror}") from None
+    if not os.path.isdir(path):
+        raise CliError(f"--store {path}: not a folder")
+    if not os.access(path, os.R_OK | os.W_OK | os.X_OK):
+        raise CliError(f"--store {path}: no permission to read and write in the folder")
+
+
 def run(args: argparse.Namespace) -> int:
     if not os.path.isfile(args.eds):
         raise CliError(f"cannot read {args.eds}: no such file")
     if args.sdo_timeout > 0xFFFF:
         raise CliError(f"canola device: error: --sdo-timeout {args.sdo_timeout}: at most 65535",
                        2)
-    if args.store is not None and not os.path.isdir(args.store):
-        raise CliError(f"--store {args.store}: not a folder")
+    if args.store is not None:
+        _store_folder(args.store)
     stop = threading.Event()
 
     def on_signal(signum: int, frame: FrameType | None) -> None:
@@ -102,20 +121,24 @@ def run(args: argparse.Namespace) -> int:
             device = Device(args.eds, args.node_id, bus, store_dir=args.store,
                             sdo_timeout_ms=args.sdo_timeout, domain_size=args.domain_size,
                             string_size=args.string_size)
+        except EdsError as exc:  # its problems name the file: the first, and how many more
+            more = len(exc.problems) - 1
+            raise CliError(f"{exc.problems[0]}" + (f" (and {more} more: canola eds check "
+                                                   f"{args.eds})" if more else "")) from None
         except Error as exc:
             raise CliError(f"{args.eds}: {exc}") from None
 
         def on_state(state: str) -> None:
-            print(f"node {args.node_id}: {state}", flush=True)
+            print(f"node {device.node_id}: {state}", flush=True)
 
         def on_store_rejected(event: StoreRejectedEvent) -> None:
             where = os.path.join(args.store, event.file)
-            print(f"canola device: node {args.node_id}: {where}: {event.reason}; ignored, "
+            print(f"canola device: node {device.node_id}: {where}: {event.reason}; ignored, "
                   f"{event.group} parameters start with their defaults "
                   f"(EMCY 0x{event.code:04X})", file=sys.stderr, flush=True)
 
         def on_emcy(event: EmcyEvent) -> None:  # another node's, when 0x1028 watches it
-            print(f"node {args.node_id}: EMCY from node {event.node} "
+            print(f"node {device.node_id}: EMCY from node {event.node} "
                   f"{emcy_line(event.code, event.register, event.manufacturer)}", flush=True)
 
         device.on_state(on_state)
@@ -123,14 +146,14 @@ def run(args: argparse.Namespace) -> int:
         device.on_emcy(on_emcy)
         _report_own_emcys(device)
         device.start()
-        print(f"canola device: node {args.node_id} from {args.eds} running", flush=True)
+        print(f"canola device: node {device.node_id} from {args.eds} running", flush=True)
         try:
             while not stop.wait(0.2):
                 if connection_lost(bus):
                     raise CliError("the bus connection was closed by the server")
         finally:
             device.stop()
-        print(f"canola device: node {args.node_id} stopped", flush=True)
+        print(f"canola device: node {device.node_id} stopped", flush=True)
     finally:
         bus.shutdown()
         for s, handler in old.items():

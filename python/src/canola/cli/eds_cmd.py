@@ -11,8 +11,6 @@ behind it: :mod:`canola.formats.edstools`).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import os
 import sys
 from pathlib import Path
 
@@ -28,6 +26,7 @@ from canola.cli.common import (
     node_id,
 )
 from canola.errors import SdoAbort
+from canola.files import FileError, write_file
 from canola.formats import eds
 from canola.formats.edstools.check import check_file
 from canola.formats.edstools.dcf import DcfValueError, make_dcf, parse_setting
@@ -70,7 +69,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     c = eds_subs.add_parser(
         "check", help="list every deviation from CiA 306 (a linter)",
         description="Print each problem of each file as FILE:LINE: [SECTION] KEY: "
-                    "error|warning: MESSAGE. An error is a file the parser refuses; a "
+                    "error|warning: MESSAGE. An error is what the parser, canola odgen or "
+                    "canola device refuses; a "
                     "warning a deviation it reads past; then a count on stderr. A clean "
                     "file prints nothing. Exit code 0 without errors, 1 with errors.")
     c.add_argument("files", nargs="+", metavar="FILE")
@@ -167,15 +167,10 @@ def run_dcf(args: argparse.Namespace) -> int:
     if args.output == "-":
         sys.stdout.write(text)
         return 0
-    tmp = f"{args.output}.part"
     try:
-        with open(tmp, "w", encoding="utf-8", newline="") as out:
-            out.write(text)
-        os.replace(tmp, args.output)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise CliError(f"cannot write {args.output}: {exc.strerror or exc}") from None
+        write_file(args.output, text)
+    except FileError as exc:
+        raise CliError(str(exc)) from None
     return 0
 
 

@@ -73,12 +73,16 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     set_id = lss_subs.add_parser("set-id", help="give a device a node-ID",
                                  description="Select the device with this LSS address and give "
                                              "it NODE-ID; a device without one boots with it "
-                                             "at once.")
+                                             "at once, another takes it at its next reset "
+                                             "communication (CiA 305). Without --store an NMT "
+                                             "reset node or a power cycle brings back the "
+                                             "node-ID the device had stored.")
     set_id.add_argument("address", type=_address, metavar="VENDOR:PRODUCT:REVISION:SERIAL",
                         help="the device's identity (0x1018 sub1..4) in hex")
     set_id.add_argument("node_id", type=node_id, metavar="NODE-ID", help="1..127")
     set_id.add_argument("--store", action="store_true",
-                        help="make the device store the node-ID")
+                        help="make the device store the node-ID (store configuration): "
+                             "kept through reset node and power cycles")
     common(set_id)
     set_id.set_defaults(func=run_set_id)
 

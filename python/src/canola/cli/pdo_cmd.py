@@ -31,6 +31,7 @@ from canola.cli.sdo_cmd import sdo_errors
 from canola.errors import Error
 from canola.pdomap import (
     Pdo,
+    PdoConfigError,
     PdoError,
     configure_pdo,
     describe,
@@ -116,6 +117,8 @@ def run_map(args: argparse.Namespace) -> int:
             configure_pdo(master.sdo(args.node), args.pdo, entries,
                           transmission_type=args.type, event_timer_ms=args.event_timer,
                           inhibit_100us=args.inhibit)
+        except PdoConfigError as exc:  # half-way: what failed, and the state it left
+            raise CliError(f"node {args.node} {exc}") from None
         except PdoError as exc:
             raise UsageError(f"canola pdo map: error: {exc}") from None
         pdos = read_pdos(master.sdo(args.node), od, [args.pdo])

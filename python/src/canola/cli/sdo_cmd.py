@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
 import sys
 from collections.abc import Iterator
 
@@ -35,6 +34,7 @@ from canola.cli.common import (
 )
 from canola.cli.progress import SdoProgress
 from canola.errors import SdoAbort
+from canola.files import FileError, write_file
 from canola.formats import values
 from canola.formats.eds import Variable
 from canola.master import SdoTimeout
@@ -147,12 +147,17 @@ def sdo_errors(node: int, timeout_ms: int, where: str | None = None) -> Iterator
     abort says ``where`` (default: the node)."""
     try:
         yield
-    except SdoTimeout:
-        raise CliError(f"no response from node {node} (SDO time-out {timeout_ms} ms)"
+    except SdoTimeout as exc:
+        took = f", after {exc.after_s:.2f} s" if exc.after_s is not None else ""
+        raise CliError(f"no response from node {node} (SDO time-out {timeout_ms} ms{took})"
                        ) from None
     except SdoAbort as exc:
         at = where or f"node {node}"
-        raise CliError(f"{at}: SDO abort 0x{exc.code:08X}: {exc.text}") from None
+        who = ""
+        if exc.by_server is not None and exc.after_s is not None:
+            sender = f"node {exc.node}" if exc.by_server else "the master"
+            who = f" (sent by {sender} after {exc.after_s:.2f} s)"
+        raise CliError(f"{at}: SDO abort 0x{exc.code:08X}: {exc.text}{who}") from None
 
 
 def _sdo_errors(args: argparse.Namespace,
@@ -231,15 +236,10 @@ def run_upload(args: argparse.Namespace) -> int:
         data = master.sdo(args.node).upload(index, sub, block=not args.no_block,
                                             max_size=args.max_size)
     progress.finish()
-    tmp = f"{args.file}.part"
     try:
-        with open(tmp, "wb") as out:
-            out.write(data)
-        os.replace(tmp, args.file)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise CliError(f"cannot write {args.file}: {exc.strerror or exc}") from None
+        write_file(args.file, data)
+    except FileError as exc:
+        raise CliError(str(exc)) from None
     if args.json:
         emit_json({**target.json(), "bytes": len(data)})
     return 0

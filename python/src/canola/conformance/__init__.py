@@ -29,18 +29,20 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from canola.conformance.options import Options
     from canola.conformance.registry import CHECKS, GROUPS, Check, select
-    from canola.conformance.reporters import LiveProgress, check_list, junit, markdown
-    from canola.conformance.results import Finding, Report, Result, Status
+    from canola.conformance.reporters import LiveProgress, check_list, junit, markdown, verdict
+    from canola.conformance.results import Finding, Interrupted, Report, Result, Status
     from canola.conformance.runner import run
 
-__all__ = ["CHECKS", "GROUPS", "Check", "Finding", "LiveProgress", "Options", "Report",
-           "Result", "Status", "check_list", "junit", "markdown", "run", "select"]
+__all__ = ["CHECKS", "GROUPS", "Check", "Finding", "Interrupted", "LiveProgress", "Options",
+           "Report", "Result", "Status", "check_list", "junit", "markdown", "run", "select",
+           "verdict"]
 
 _MODULES = {
     "Options": "options", "CHECKS": "registry", "GROUPS": "registry", "Check": "registry",
     "select": "registry", "LiveProgress": "reporters", "check_list": "reporters",
-    "junit": "reporters", "markdown": "reporters", "Finding": "results", "Report": "results",
-    "Result": "results", "Status": "results", "run": "runner",
+    "junit": "reporters", "markdown": "reporters", "verdict": "reporters",
+    "Finding": "results", "Interrupted": "results", "Report": "results", "Result": "results",
+    "Status": "results", "run": "runner",
 }
 
 

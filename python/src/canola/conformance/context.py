@@ -4,7 +4,9 @@ run's options, and the bookkeeping of the check (findings, notes, what to restor
 
 A check passes when it ends without a finding. :meth:`Context.finding` records one (with
 the frames around it) and goes on; :meth:`Context.fail` records one and ends the check;
-:meth:`Context.skip` ends it as SKIPPED (the EDS says the node cannot support it). Every
+:meth:`Context.skip` ends it as SKIPPED (the EDS says the node cannot support it), and
+:meth:`Context.not_applicable` too, when the node's application refuses a probe value its
+EDS does not guarantee (:data:`APPLICATION_REFUSALS`): that is no deviation. Every
 value a check changes is put back by :meth:`Context.write_temp`'s undo, which the runner
 runs after the check, in reverse order, with the node in PRE-OPERATIONAL.
 """
@@ -16,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import NoReturn
 
 from canola import SdoAbort
-from canola.conformance.entries import describe
+from canola.conformance.entries import describe, writable
 from canola.conformance.link import Link
 from canola.conformance.options import Options
 from canola.conformance.rawsdo import NoAnswerError, RawSdo, SdoProtocolError
@@ -24,14 +26,26 @@ from canola.conformance.results import Finding
 from canola.errors import ABORT_TEXT, Error
 from canola.formats import eds
 
-__all__ = ["NMT_CS", "STATES", "CheckEnded", "Context", "Options", "Skipped", "abort_text",
-           "outcome"]
+__all__ = ["APPLICATION_REFUSALS", "NMT_CS", "STATES", "CheckEnded", "Context", "Options",
+           "Skipped", "abort_text", "outcome"]
 
 #: NMT command specifiers.
 NMT_CS = {"start": 0x01, "stop": 0x02, "preop": 0x80, "reset-node": 0x81,
           "reset-comm": 0x82}
 #: NMT states as error control frames carry them.
 STATES = {0x00: "BOOT-UP", 0x04: "STOPPED", 0x05: "OPERATIONAL", 0x7F: "PRE-OPERATIONAL"}
+#: The state each NMT command leads to.
+ENTERS = {"start": 0x05, "stop": 0x04, "preop": 0x7F}
+#: Abort codes by which an application refuses a value or a length it does not take
+#: (CiA 301 §7.2.4.3.17): for a probe value the EDS does not guarantee, the check does not
+#: apply; they are no deviation from the protocol.
+APPLICATION_REFUSALS = frozenset({
+    0x06070010, 0x06070012, 0x06070013,  # the length
+    0x06090030, 0x06090031, 0x06090032, 0x06090036,  # the value
+    0x08000020, 0x08000021, 0x08000022,  # the application, its local control, its state
+})
+#: The heartbeat period a check switches on to see the node's state (ms).
+_STATE_HEARTBEAT_MS = 100
 
 _TRACE_PER_FINDING = 20
 
@@ -70,22 +84,31 @@ class Context:
     undo: list[tuple[str, Callable[[], None]]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.sdo = RawSdo(self.link, self.node_id, self.options.timeout)
+        self.sdo = RawSdo(self.link, self.node_id, self.options.timeout,
+                          self.options.transfer_timeout)
+        self._heartbeat_ms: int | None = None  # how the node shows its state (enter)
 
     # ---- outcomes
 
-    def finding(self, what: str, expected: str, got: str) -> None:
-        """Record a deviation (with the latest frames) and go on."""
+    def finding(self, what: str, expected: str, got: str, *, clause: str = "") -> None:
+        """Record a deviation (with the latest frames) and go on; ``clause``: the one it
+        deviates from, when narrower than the check's."""
         self.findings.append(Finding(what, expected, got,
-                                     tuple(self.link.trace(_TRACE_PER_FINDING))))
+                                     tuple(self.link.trace(_TRACE_PER_FINDING)), clause))
 
-    def fail(self, what: str, expected: str, got: str) -> NoReturn:
+    def fail(self, what: str, expected: str, got: str, *, clause: str = "") -> NoReturn:
         """Record a deviation and end the check."""
-        self.finding(what, expected, got)
+        self.finding(what, expected, got, clause=clause)
         raise CheckEnded(what)
 
     def skip(self, reason: str) -> NoReturn:
         raise Skipped(reason)
+
+    def not_applicable(self, what: str, exc: SdoAbort) -> NoReturn:
+        """End the check as SKIPPED: the application refused ``what`` (a value or length
+        the EDS does not guarantee) with one of :data:`APPLICATION_REFUSALS`."""
+        raise Skipped(f"not applicable: {what} refused with {abort_text(exc.code)}, the "
+                      "application's choice (the EDS does not guarantee that value)")
 
     def note(self, text: str) -> None:
         """Something the report says about a passing check (what was covered, measured)."""
@@ -194,6 +217,37 @@ class Context:
     def nmt(self, command: str) -> None:
         """Send an NMT command to the node (never to all nodes)."""
         self.link.send(0x000, bytes([NMT_CS[command], self.node_id]))
+
+    def enter(self, command: str) -> None:
+        """Send NMT ``command`` (start, stop, preop) and wait until the node reports the
+        state in its heartbeat (at 100 ms for the check where 0x1017 is writable): a node
+        may take the command in a while (CANopenLinux in its next pass, RPDOs before it),
+        and a check acts on the state. Without a heartbeat it waits ``quiet`` seconds. A
+        node that does not report the state fails the check."""
+        period = self._state_heartbeat()
+        mark = self.link.mark()
+        self.nmt(command)
+        if not period:
+            self.link.wait(self.options.quiet)
+            return
+        state = ENTERS[command]
+        wait = 2 * period / 1000 + self.options.timeout
+        if self.wait_error_control(mark, wait, (state,)) is None:
+            self.fail(f"NMT {command}", f"a heartbeat {STATES[state]} within {wait:g} s",
+                      "none", clause="CiA 301 §7.2.8.3.2.2, §7.3.2")
+
+    def _state_heartbeat(self) -> int:
+        """The node's heartbeat period (ms) for the check: 100 ms where 0x1017 is writable,
+        else its own; 0 without heartbeat. Read once per check (before it stops the node)."""
+        if self._heartbeat_ms is None:
+            var = self.var(0x1017, 0)
+            period = self.read_uint(0x1017) if var is not None else 0
+            if period != _STATE_HEARTBEAT_MS and var is not None and writable(var):
+                self.keep(0x1017, 0)
+                if self.try_write(0x1017, 0, _STATE_HEARTBEAT_MS.to_bytes(2, "little")) is None:
+                    period = _STATE_HEARTBEAT_MS
+            self._heartbeat_ms = period
+        return self._heartbeat_ms
 
     def heartbeat_cob(self) -> int:
         return 0x700 + self.node_id

@@ -19,6 +19,8 @@ class Options:
     its own time-out aborts it. ``quiet``: how long "no frame comes" is watched.
     ``tolerance``: the share a measured period may differ from the configured one.
     ``destructive``: run the checks that save or restore stored parameters.
+    ``transfer_timeout``: how long one SDO transfer of the tester may take in all (a
+    server that keeps it going longer is stopped).
     """
 
     timeout: float = 2.0
@@ -27,3 +29,4 @@ class Options:
     quiet: float = 0.5
     tolerance: float = 0.25
     destructive: bool = False
+    transfer_timeout: float = 60.0

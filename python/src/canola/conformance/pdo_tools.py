@@ -243,6 +243,7 @@ def configure(ctx: Context, pdo: Pdo, *, entries: Sequence[int] | None = None,
         cfg.count = len(entries)
         cfg.entries.update(dict(enumerate(entries, start=1)))
     write_config(ctx, pdo, cfg, touch_mapping=remap)
+    ctx.link.cobs.add(cfg.cob & 0x7FF)  # its frames are the node's
     return cfg
 
 
@@ -344,12 +345,15 @@ def rpdo_payload(ctx: Context, entries: Sequence[int]
 
 @dataclass
 class SyncSource:
-    """Sends SYNC on ``cob``: without data, or with the counter 1..``overflow`` (0x1019)."""
+    """Sends SYNC on ``cob``: without data, or with the counter 1..``overflow`` (0x1019).
+    The node takes every SYNC on ``cob``: :meth:`alone` tells whether another node sent
+    one since ``since`` (a mark)."""
 
     ctx: Context
     cob: int
     overflow: int = 0
     counter: int = 0
+    since: int = 0
 
     def send(self, counter: int | None = None) -> None:
         """The next SYNC (with ``counter``, when given, as its counter)."""
@@ -358,6 +362,16 @@ class SyncSource:
             return
         self.counter = counter if counter is not None else self.counter % self.overflow + 1
         self.ctx.link.send(self.cob, bytes([self.counter]))
+
+    def alone(self) -> None:
+        """SKIPPED as inconclusive when another node sent SYNC on the COB-ID since the
+        source began: the node under test takes every SYNC, so what it did after the
+        tester's cannot be told from what it did after the other's."""
+        others = self.ctx.link.frames_since(self.since, lambda f: f.can_id == self.cob)
+        if others:
+            self.ctx.skip(f"inconclusive: another node sends SYNC on 0x{self.cob:03X} "
+                          f"({len(others)} frames during the check); the node takes them "
+                          "too: run with the node alone with the tester")
 
 
 def sync_source(ctx: Context) -> SyncSource:
@@ -378,7 +392,8 @@ def sync_source(ctx: Context) -> SyncSource:
     if window is not None and writable(window) and ctx.read_uint(0x1007, 0):
         ctx.write_temp(0x1007, 0, bytes(fixed_size(window) or 4))
     overflow = ctx.read_uint(0x1019, 0) if ctx.var(0x1019, 0) is not None else 0
-    return SyncSource(ctx, cob & 0x7FF, overflow)
+    ctx.link.cobs.add(cob & 0x7FF)
+    return SyncSource(ctx, cob & 0x7FF, overflow, since=ctx.link.mark())
 
 
 def tpdos_per_sync(ctx: Context, cob: int, sync: SyncSource, counters: Sequence[int | None],
@@ -401,6 +416,7 @@ def tpdos_per_sync(ctx: Context, cob: int, sync: SyncSource, counters: Sequence[
             ctx.link.wait_frame(lambda f: f.can_id == cob and not f.rtr, ctx.options.timeout,
                                 marks[-1])
         ctx.link.wait(ctx.options.quiet)
+    sync.alone()
     ends = [*marks[1:], ctx.link.mark()]
     return [len(tpdo_frames(ctx, cob, a)) - len(tpdo_frames(ctx, cob, b))
             for a, b in zip(marks, ends, strict=True)]
@@ -412,11 +428,14 @@ def tpdo_frames(ctx: Context, cob: int, mark: int) -> list[float]:
 
 
 def check_values(ctx: Context, expected: list[tuple[eds.Variable, bytes]], *, applied: bool,
-                 when: str) -> None:
-    """Read each entry back: a finding where it is (not) what the RPDO carried."""
+                 when: str, judge: Callable[[], None] | None = None) -> None:
+    """Read each entry back: a finding where it is (not) what the RPDO carried. ``judge``
+    runs before a finding (it may end the check: SYNC from another node, say)."""
     for var, data in expected:
         got = ctx.read(var.index, var.subindex)
         if (got == data) != applied:
+            if judge is not None:
+                judge()
             ctx.finding(f"{describe(var)} {when}",
                         f"[{data.hex(' ').upper()}]" if applied else "its value before",
                         f"[{got.hex(' ').upper()}]")

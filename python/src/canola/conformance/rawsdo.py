@@ -11,6 +11,11 @@ against CiA 301 §7.2.4.3 as it arrives.
 A server abort raises :class:`canola.SdoAbort`; no answer :class:`NoAnswerError`; an answer
 that breaks the protocol :class:`SdoProtocolError`. After a failure in the middle of a
 transfer the client aborts it (0x05040000 or 0x08000000), so the server is idle again.
+
+Every transfer is bounded, so that a hostile server cannot keep the tester busy or make it
+grow: at most :data:`MAX_VALUE_BYTES` bytes (announced or sent; abort 0x05040005), as many
+segments as they fill, :data:`MAX_STALLED_ACKS` block acknowledgements in a row without
+progress, and ``transfer_timeout`` seconds in all; past a bound :class:`TransferLimitError`.
 """
 
 from __future__ import annotations
@@ -19,10 +24,19 @@ from canola import SdoAbort
 from canola.conformance.link import Link
 from canola.errors import Error
 
-__all__ = ["NoAnswerError", "RawSdo", "SdoProtocolError", "abort_frame", "crc16"]
+__all__ = ["MAX_STALLED_ACKS", "MAX_VALUE_BYTES", "NoAnswerError", "RawSdo",
+           "SdoProtocolError", "TransferLimitError", "ValueTooLargeError", "abort_frame",
+           "crc16"]
 
 ABORT_TIMEOUT = 0x05040000
+ABORT_NO_MEMORY = 0x05040005
 ABORT_GENERAL = 0x08000000
+#: The most bytes one transfer moves (the tester's probes are 890 bytes at most).
+MAX_VALUE_BYTES = 16 * 1024
+#: Segments of an upload: as many as MAX_VALUE_BYTES fill, and a last one.
+_MAX_SEGMENTS = MAX_VALUE_BYTES // 7 + 2
+#: Block download acknowledgements in a row that take no segment (ackseq 0).
+MAX_STALLED_ACKS = 4
 
 
 class NoAnswerError(Error):
@@ -35,6 +49,15 @@ class NoAnswerError(Error):
 
 class SdoProtocolError(Error):
     """An answer that breaks the SDO protocol (the message says how)."""
+
+
+class TransferLimitError(SdoProtocolError):
+    """A transfer the tester stopped at one of its bounds (the message says which)."""
+
+
+class ValueTooLargeError(TransferLimitError):
+    """An upload of more than :data:`MAX_VALUE_BYTES` (announced or sent) the tester
+    stopped: a large DOMAIN, or a server that does not stop."""
 
 
 def crc16(data: bytes, crc: int = 0) -> int:
@@ -79,10 +102,13 @@ class RawSdo:
     abort of a request that reached the server after its own time-out) and is passed over.
     If no other answer comes within the time-out, the stray one is the answer, and wrong."""
 
-    def __init__(self, link: Link, node_id: int, timeout: float) -> None:
+    def __init__(self, link: Link, node_id: int, timeout: float,
+                 transfer_timeout: float = 60.0) -> None:
         self.link = link
         self.node_id = node_id
         self.timeout = timeout
+        self.transfer_timeout = transfer_timeout
+        self._began = 0.0  # when the transfer in progress began (link time)
         self.rx = 0x600 + node_id  # the server's receive COB-ID
         self.tx = 0x580 + node_id  # the server's transmit COB-ID
         self._mux: bytes | None = None  # the transfer in progress's, once a request named it
@@ -95,6 +121,7 @@ class RawSdo:
         frame = bytes(data).ljust(8, b"\0")
         if _opens_transfer(frame):
             self._mux = frame[1:4]
+            self._began = self.link.now()
         elif not _continues_transfer(frame):
             self._mux = None  # no transfer (an unknown command): any answer is its answer
         self._initiating = _opens_transfer(frame)
@@ -111,6 +138,12 @@ class RawSdo:
         """The next answer after ``since`` that can belong to the transfer in progress, and
         the mark just after it. Raises NoAnswerError."""
         limit = self.timeout if timeout is None else timeout
+        if self._mux is not None and not self._initiating:
+            left = self._began + self.transfer_timeout - self.link.now()
+            if left <= 0:
+                raise TransferLimitError(f"{what}: the transfer has taken more than "
+                                    f"{self.transfer_timeout:g} s")
+            limit = min(limit, left)
         end = self.link.now() + limit
         stray: tuple[bytes, int] | None = None
         found: tuple[bytes, int] | None = None
@@ -178,16 +211,27 @@ class RawSdo:
             return first[4:8 - ((cmd >> 2) & 3)] if sized else first[4:8]
         size = int.from_bytes(first[4:8], "little") if sized else None
         try:
+            self._bound(size, where)
             return self._upload_segments(index, sub, size, where)
+        except TransferLimitError:
+            self.abort(index, sub, ABORT_NO_MEMORY)
+            raise
         except (NoAnswerError, SdoProtocolError):
             self.abort(index, sub, ABORT_GENERAL)
             raise
 
+    @staticmethod
+    def _bound(size: int | None, where: str) -> None:
+        """TransferLimitError when a value of ``size`` bytes is more than the tester takes."""
+        if size is not None and size > MAX_VALUE_BYTES:
+            raise ValueTooLargeError(f"{where}: {size} bytes, more than the {MAX_VALUE_BYTES} "
+                                "the tester takes")
+
     def _upload_segments(self, index: int, sub: int, size: int | None, where: str) -> bytes:
         data = bytearray()
         toggle = 0
-        while True:
-            what = f"{where}, segment {len(data) // 7 + 1}"
+        for segment in range(1, _MAX_SEGMENTS + 1):
+            what = f"{where}, segment {segment}"
             seg = self._expect(self.request(bytes([0x60 | toggle << 4]), what), None, sub,
                                what, 0)
             if (seg[0] >> 4) & 1 != toggle:
@@ -199,7 +243,10 @@ class RawSdo:
             if size is not None and len(data) >= size:
                 raise SdoProtocolError(f"{what}: {len(data)} of {size} bytes sent and "
                                         "still no last segment")
+            self._bound(len(data), where)
             toggle ^= 1
+        else:
+            raise TransferLimitError(f"{where}: {_MAX_SEGMENTS} segments and no last one")
         if size is not None and len(data) != size:
             raise SdoProtocolError(f"{where}: {len(data)} bytes in the segments, "
                                     f"{size} announced")
@@ -249,6 +296,7 @@ class RawSdo:
         try:
             seq_data = [data[i:i + 7] for i in range(0, len(data), 7)] or [b""]
             sent = 0
+            stalled = 0
             while sent < len(seq_data):
                 if not 1 <= blksize <= 127:
                     raise SdoProtocolError(f"{where}: block size {blksize} (1..127)")
@@ -265,6 +313,10 @@ class RawSdo:
                 if ack[1] > len(chunk):
                     raise SdoProtocolError(f"{what}: ackseq {ack[1]} of {len(chunk)} sent")
                 sent += ack[1]  # the server asks again for what it did not take
+                stalled = 0 if ack[1] else stalled + 1
+                if stalled >= MAX_STALLED_ACKS:
+                    raise TransferLimitError(f"{what}: {stalled} sub-blocks in a row acknowledged "
+                                        "with ackseq 0 (no progress)")
                 blksize = ack[2]
             n = (7 - len(data) % 7) % 7 if data else 7
             crc = crc16(data) ^ (0xFFFF if bad_crc else 0) if crc_on else 0
@@ -294,6 +346,7 @@ class RawSdo:
         data = bytearray()
         blocks: list[int] = []
         try:
+            self._bound(size, where)
             mark = self.send(bytes([0xA3]))
             asked = blksize
             while True:
@@ -301,6 +354,7 @@ class RawSdo:
                 blocks.append(len(frames))
                 for piece in frames:
                     data += piece
+                self._bound(len(data) - 7, where)  # the last segment may hold less
                 asked = next_blksize or blksize
                 mark = self.send(bytes([0xA2, len(frames), asked]))
                 if last:
@@ -319,6 +373,9 @@ class RawSdo:
                 raise SdoProtocolError(f"{where}: CRC 0x{int.from_bytes(end[1:3], 'little'):04X}"
                                         f", computed 0x{crc16(bytes(data)):04X}")
             self.send(bytes([0xA1]))
+        except TransferLimitError:
+            self.abort(index, sub, ABORT_NO_MEMORY)
+            raise
         except (NoAnswerError, SdoProtocolError):
             self.abort(index, sub, ABORT_GENERAL)
             raise

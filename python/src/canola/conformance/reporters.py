@@ -11,7 +11,7 @@ from typing import TextIO
 from canola.conformance.registry import GROUPS, Check
 from canola.conformance.results import Report, Result, Status
 
-__all__ = ["LiveProgress", "check_list", "junit", "markdown"]
+__all__ = ["LiveProgress", "check_list", "junit", "markdown", "verdict"]
 
 _SHOWN_FINDINGS = 10
 
@@ -47,11 +47,20 @@ class LiveProgress:
                 self.stream.flush()
             return
         line = f"{count} {result.status.value:<7} {check.name}"
+        if result.status is Status.FAILED:
+            line += f" [{check.clause}]"
         summary = result.summary
         if summary:
             line += f"  {summary}"
         self.stream.write(("\r\x1b[K" if self.tty else "") + line + "\n")
         self.stream.flush()
+
+
+def verdict(report: Report) -> str:
+    """PASSED, FAILED, or INTERRUPTED (Ctrl-C: the checks that ran are in the report)."""
+    if report.interrupted:
+        return "INTERRUPTED"
+    return "PASSED" if report.passed else "FAILED"
 
 
 def _cell(text: str) -> str:
@@ -62,7 +71,7 @@ def markdown(report: Report) -> str:
     """The report in Markdown: a summary, a table per group, then the failures in detail."""
     out = [f"# CANopen conformance: node {report.node_id}", "",
            f"- EDS: `{report.eds}`", f"- bus: {report.bus}", f"- timing: {report.timing}",
-           f"- result: **{'PASSED' if report.passed else 'FAILED'}** ({report.totals})"]
+           f"- result: **{verdict(report)}** ({report.totals})"]
     out += [f"- {note}" for note in report.notes]
     groups = list(dict.fromkeys(r.check.group for r in report.results))
     for group in groups:
@@ -80,6 +89,8 @@ def markdown(report: Report) -> str:
             out += ["", r.reason]
         for f in r.findings[:_SHOWN_FINDINGS]:
             out += ["", f"- **{f.what}**", f"  - expected: {f.expected}", f"  - got: {f.got}"]
+            if f.clause:
+                out.append(f"  - clause: {f.clause}")
             if f.frames:
                 out += ["", "  ```", *(f"  {line}" for line in f.frames), "  ```"]
         if len(r.findings) > _SHOWN_FINDINGS:
@@ -111,7 +122,8 @@ def junit(report: Report) -> str:
             elif r.status is Status.FAILED:
                 failure = ET.SubElement(case, "failure", message=r.summary)
                 failure.text = "\n\n".join(
-                    f"{f.what}\nexpected: {f.expected}\ngot: {f.got}\n" + "\n".join(f.frames)
+                    f"{f.what}\nexpected: {f.expected}\ngot: {f.got}\n"
+                    + (f"clause: {f.clause}\n" if f.clause else "") + "\n".join(f.frames)
                     for f in r.findings) or r.reason
             elif r.notes:
                 ET.SubElement(case, "system-out").text = "\n".join(r.notes)

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 from canola.conformance.registry import Check
 
-__all__ = ["Finding", "Report", "Result", "Status"]
+__all__ = ["Finding", "Interrupted", "Report", "Result", "Status"]
 
 
 class Status(enum.Enum):
@@ -20,12 +20,20 @@ class Status(enum.Enum):
 @dataclass(frozen=True)
 class Finding:
     """One deviation: ``what`` was tested, what was ``expected``, what the node did
-    (``got``), and the frames around it (trace lines, oldest first)."""
+    (``got``), the frames around it (trace lines, oldest first), and the ``clause`` it
+    deviates from when it is narrower than the check's."""
 
     what: str
     expected: str
     got: str
     frames: tuple[str, ...] = ()
+    clause: str = ""
+
+    @property
+    def text(self) -> str:
+        """``what: expected X, got Y [clause]``."""
+        rule = f" [{self.clause}]" if self.clause else ""
+        return f"{self.what}: expected {self.expected}, got {self.got}{rule}"
 
 
 @dataclass
@@ -47,9 +55,8 @@ class Result:
             return self.reason
         if self.status is Status.FAILED:
             if self.findings:
-                first = self.findings[0]
                 more = f" (+{len(self.findings) - 1} more)" if len(self.findings) > 1 else ""
-                return f"{first.what}: expected {first.expected}, got {first.got}{more}"
+                return self.findings[0].text + more
             return self.reason
         return "; ".join(self.notes)
 
@@ -64,6 +71,8 @@ class Report:
     timing: str
     results: list[Result] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: The check a Ctrl-C interrupted ("" when the run ended by itself).
+    interrupted: str = ""
 
     def count(self, status: Status) -> int:
         return sum(1 for r in self.results if r.status is status)
@@ -88,3 +97,11 @@ class Report:
     def totals(self) -> str:
         """``40 passed, 2 failed, 3 skipped``."""
         return ", ".join(f"{self.count(s)} {s.value.lower()}" for s in Status)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run ended by Ctrl-C: :attr:`report` holds the checks that ran before."""
+
+    def __init__(self, report: Report) -> None:
+        super().__init__(f"interrupted during {report.interrupted}")
+        self.report = report

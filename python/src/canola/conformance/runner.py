@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Running the checks against one node: a tester (a :class:`canola.Master`) on the bus, the
 node's NMT state learnt first and restored at the end, each check started in
-PRE-OPERATIONAL and followed by its undo actions."""
+PRE-OPERATIONAL and followed by its undo actions. Ctrl-C ends the run with
+:class:`~canola.conformance.results.Interrupted`, which carries the report of what ran."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from canola.conformance.link import Link
 from canola.conformance.options import Options
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import Check, select
-from canola.conformance.results import Report, Result, Status
+from canola.conformance.results import Interrupted, Report, Result, Status
 from canola.core import SimBus
 from canola.errors import Error
 from canola.formats import eds
@@ -39,7 +40,9 @@ def run(bus: Any, node_id: int, eds_file: str | os.PathLike[str] | eds.ObjectDic
     """Run the checks (all, or the groups/checks in ``only``) against node ``node_id`` of
     ``bus`` (a :class:`canola.core.SimBus` or a python-can bus), described by ``eds_file``.
     The tester is a :class:`canola.Master` at ``master_id`` (default 127, or 126 when the
-    node is 127). Raises :class:`canola.Error` for a bad argument or EDS."""
+    node is 127). Raises :class:`canola.Error` for a bad argument or EDS, and on Ctrl-C
+    :class:`~canola.conformance.Interrupted` (a KeyboardInterrupt) with the report of the
+    checks that ran (the interrupted one's changes put back, the NMT state restored)."""
     if not isinstance(node_id, int) or not 1 <= node_id <= 127:
         raise Error(f"node-ID {node_id!r} is outside 1..127")
     opts = options or Options()
@@ -60,8 +63,14 @@ def run(bus: Any, node_id: int, eds_file: str | os.PathLike[str] | eds.ObjectDic
     # the heartbeats of its node-ID that the EMCY checks make the node consume
     master = Master(bus, tester_id, sdo_timeout_ms=round(opts.timeout * 1000), announce=True)
     master.start()
+    runner = _Run(master, node_id, od, opts, report)
     try:
-        _Run(master, node_id, od, opts, report).go(checks, progress)
+        runner.go(checks, progress)
+    except KeyboardInterrupt:
+        report.interrupted = runner.current or "the start"
+        report.notes.append(f"interrupted (Ctrl-C) during {report.interrupted}: "
+                            f"{len(report.results)} of {len(checks)} checks ran")
+        raise Interrupted(report) from None
     finally:
         master.stop()
     return report
@@ -76,11 +85,12 @@ def _bus_name(bus: Any) -> str:
 class _Run:
     def __init__(self, master: Master, node_id: int, od: eds.ObjectDictionary, options: Options,
                  report: Report) -> None:
-        self.link = Link(master)
+        self.link = Link(master, node_id)
         self.node_id = node_id
         self.od = od
         self.options = options
         self.report = report
+        self.current = ""  # the check running
 
     def context(self) -> Context:
         return Context(self.link, self.node_id, self.od, self.options)
@@ -89,12 +99,14 @@ class _Run:
         initial = self.start()
         try:
             for n, chk in enumerate(checks):
+                self.current = chk.name
                 if progress is not None:
                     progress(n, len(checks), chk, None)
                 result = self.one(chk)
                 self.report.results.append(result)
                 if progress is not None:
                     progress(n + 1, len(checks), chk, result)
+            self.current = "the restoring of the NMT state"
         finally:  # an interrupted run restores the state too
             self.finish(initial)
 

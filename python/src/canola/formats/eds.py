@@ -27,8 +27,18 @@ Accepted forms: section and key names in any case (``[1a00]``, ``[1018SUB1]``,
 ``parametername``), spaces around ``=`` and at line ends, CRLF/LF/CR, UTF-8 or Latin-1 text,
 numbers in decimal, ``0x`` hex or leading-``0`` octal with an optional sign, ``$NODEID``
 (any case) added to or subtracted from constants on either side. A ``;`` or ``#`` starts a
-comment only at the start of a line; a ``;`` after a *numeric* value
-(``DefaultValue=0x180 ; note``) is dropped with a warning, while in strings it is kept as text.
+comment at the start of a line; after a *numeric* value or a keyword
+(``DefaultValue=0x180 ; note``, ``DataType=0x0007 # UNSIGNED32``, ``AccessType=rw # read``)
+and after a section header (``[1003sub1] # repeat``) it is dropped with a warning, while in
+strings it is kept as text. A section that comes again is merged into the first (later
+values win) with a warning, as tolerant INI readers (Python's configparser with
+``strict=False``) do; ``strict=True`` refuses all of these like every other deviation.
+
+Input is bounded: a path must name a regular file (a FIFO, a device such as ``/dev/zero``,
+a folder is refused before a byte is read) of at most
+:data:`~canola.files.EDS_MAX_BYTES` (64 MiB), and bytes or text given directly are held
+to the same size; memory stays a small multiple of the file's size (duplicate keys are
+counted, not kept, beyond a few per section).
 """
 
 from __future__ import annotations
@@ -41,6 +51,7 @@ from enum import IntEnum
 from pathlib import Path
 
 from canola.errors import Diagnostic, EdsError
+from canola.files import EDS_MAX_BYTES, FileError, read_file
 from canola.formats._eds_pdo import mapping_problems
 from canola.formats._ini import Entry, Section, decode, read_sections
 from canola.formats.datatypes import (
@@ -166,6 +177,8 @@ _OBJECT_LIKE = re.compile(r"([0-9a-f]+)(?:sub([0-9a-f]*)|name|value|denotation)?
 _REQUIRED = {0x1000: "Device type", 0x1001: "Error register", 0x1018: "Identity object"}
 _LISTS = {"mandatoryobjects": "mandatory", "optionalobjects": "optional",
           "manufacturerobjects": "manufacturer"}
+#: A comment after a number or keyword: from the first ``;`` or ``#`` on.
+_TRAILING_COMMENT = re.compile(r"[;#].*", re.DOTALL)
 _VAR_KEYS = ("parametername", "objecttype", "datatype", "accesstype", "defaultvalue",
              "lowlimit", "highlimit", "pdomapping", "objflags", "parametervalue", "denotation")
 _COMPOUND_KEYS = ("parametername", "objecttype", "subnumber", "objflags", "compactsubobj")
@@ -200,10 +213,12 @@ class _Builder:
         return value
 
     def _strip_comment(self, sec: Section, ent: Entry) -> str:
-        text, sep, _ = ent.value.partition(";")
-        if sep:
-            self.warn("';' comment after a value", sec, ent)
-        return text.strip()
+        """A number's or keyword's text without a ``;`` or ``#`` comment after it."""
+        match = _TRAILING_COMMENT.search(ent.value)
+        if match is None:
+            return ent.value
+        self.warn(f"'{match.group(0)[0]}' comment after a value", sec, ent)
+        return ent.value[:match.start()].strip()
 
     def evaluate(self, sec: Section, ent: Entry | None, data_type: int | None,
                  node_id: int | None) -> Value | None:
@@ -264,7 +279,7 @@ class _Builder:
         if access_ent is None:
             self.warn("missing AccessType", src, key="AccessType")
         else:
-            access = access_ent.value.lower()
+            access = self._strip_comment(src, access_ent).lower()
             if access not in ACCESS_TYPES:
                 self.warn(f"unknown AccessType {access_ent.value!r}", src, access_ent)
         pdo = self.number(src, "pdomapping")
@@ -309,6 +324,9 @@ def _hex(text: str) -> int:
 
 
 def _source(source: str | bytes | os.PathLike[str], name: str | None) -> tuple[str, str]:
+    if isinstance(source, bytes | str) and len(source) > EDS_MAX_BYTES:
+        raise EdsError(f"larger than {EDS_MAX_BYTES // (1024 * 1024)} MiB, the most canola "
+                       "reads", file=name or f"<{type(source).__name__}>")
     if isinstance(source, bytes):
         return decode(source), name or "<bytes>"
     if isinstance(source, str) and (not source or "\n" in source or "=" in source
@@ -316,9 +334,9 @@ def _source(source: str | bytes | os.PathLike[str], name: str | None) -> tuple[s
         return source, name or "<string>"
     path = Path(source)
     try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise EdsError(f"cannot read file: {exc.strerror}", file=str(path)) from None
+        data = read_file(path, EDS_MAX_BYTES)
+    except FileError as exc:
+        raise EdsError(exc.why, file=str(path)) from None
     return decode(data), name or str(path)
 
 
@@ -347,9 +365,13 @@ def _build(sections: list[Section], file: str, strict: bool,
     compact: dict[tuple[int, str], Section] = {}
     lists: dict[str, Section] = {}
     for sec in sections:
+        for line, note in sec.notes:
+            b.diags.append(Diagnostic(note, file, line, sec.name))
         for dup in sec.duplicates:
             b.warn(f"duplicate key (line {dup.line} overridden)", sec,
                    sec.entries[dup.key.lower()])
+        if sec.more_duplicates:
+            b.warn(f"{sec.more_duplicates} more duplicate keys (later values win)", sec)
         low = sec.name.lower()
         if m := _OBJECT.fullmatch(sec.name):
             if _hex(m.group(1)) in objects:

@@ -81,7 +81,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from canola.errors import EdsError
+from canola.errors import Diagnostic, EdsError
+from canola.files import write_file
 from canola.formats import eds
 from canola.formats.datatypes import DATA_TYPES, NumberError, fit_signed, parse_value
 
@@ -90,7 +91,7 @@ OD_FORMAT = 7  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFI
 # 5: its 8-byte entries (value offsets, co_od_tables_t); 6: numbers in its image as their
 # storage's bytes; 7: its 6-byte entries (co_od_t.rows)
 
-__all__ = ["GenerateOptions", "generate", "generate_files", "main"]
+__all__ = ["GenerateOptions", "check_usable", "generate", "generate_files", "main", "refusals"]
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _NODEID = re.compile(r"\$nodeid", re.IGNORECASE)
@@ -399,6 +400,41 @@ class _Gen:
 
 
 # ---------------------------------------------------------------------------------------
+# what is refused
+
+
+def refusals(od: eds.ObjectDictionary,
+             options: GenerateOptions | None = None) -> list[Diagnostic]:
+    """Every reason why canola cannot build a dictionary of ``od``: the one decision behind
+    :func:`generate` (odgen), :meth:`canola.core.Od.from_eds` (``canola.Device``,
+    ``canola device``) and the errors of ``canola eds check``. Empty: it can."""
+    gen = _Gen(od, options or GenerateOptions())
+    found: list[Diagnostic] = []
+    entries = 0
+    for index in sorted(od.objects):
+        obj = od.objects[index]
+        if obj.object_type not in _TABLE_OBJECTS:
+            continue
+        for var in obj.subs.values():
+            entries += 1
+            try:
+                gen.entry(var, "member")
+            except EdsError as exc:
+                found.extend(exc.problems)
+    if not entries:
+        found.append(Diagnostic("no objects: a device needs at least its mandatory entries "
+                                "(0x1000, 0x1001, 0x1018)", od.file))
+    return found
+
+
+def check_usable(od: eds.ObjectDictionary, options: GenerateOptions | None = None) -> None:
+    """Raise :class:`~canola.errors.EdsError` listing :func:`refusals`, if there are any."""
+    found = refusals(od, options)
+    if found:
+        raise EdsError(problems=found)
+
+
+# ---------------------------------------------------------------------------------------
 # output
 
 
@@ -408,6 +444,7 @@ def generate(od: eds.ObjectDictionary, name: str,
     if not _NAME.fullmatch(name):
         raise ValueError(f"{name!r} is not a C identifier")
     opts = options or GenerateOptions()
+    check_usable(od, opts)
     gen = _Gen(od, opts)
     source = Path(od.file).name
     entries: list[_Entry] = []
@@ -838,7 +875,7 @@ def generate_files(source: str | Path, name: str, out_dir: str | Path,
     out.mkdir(parents=True, exist_ok=True)
     paths = (out / f"{name}.h", out / f"{name}.c")
     for path, text in zip(paths, (header, code), strict=True):
-        path.write_bytes(text.encode("ascii"))
+        write_file(path, text.encode("ascii"))
     return paths
 
 
@@ -894,13 +931,14 @@ def main(argv: Sequence[str] | None = None, prog: str = "canola-odgen") -> int:
     opts = GenerateOptions(domain_size=args.domain_size, min_string_size=args.min_string_size,
                            node_id=args.node_id)
     try:
-        generate_files(args.input, name, args.out_dir, opts)
+        header, code = generate_files(args.input, name, args.out_dir, opts)
     except EdsError as exc:
         print(exc, file=sys.stderr)
         return 1
     except OSError as exc:
         print(f"{p.prog}: {exc}", file=sys.stderr)
         return 1
+    print(f"{p.prog}: wrote {header} and {code} from {args.input}")
     return 0
 
 

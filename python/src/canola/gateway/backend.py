@@ -92,6 +92,18 @@ class Backend(Protocol):
         ...
 
     @property
+    def nmt_state(self) -> str:
+        """The master's own NMT state: INITIALISING, PRE-OPERATIONAL, OPERATIONAL or
+        STOPPED (:mod:`canola.gateway.ownnode` says what it gates)."""
+        ...
+
+    @property
+    def sdo_closings(self) -> int:
+        """How often the master's node entered a state without SDO (STOPPED, or
+        INITIALISING in a reset): a transfer during which it grew was cut off by that."""
+        ...
+
+    @property
     def has_lss(self) -> bool:
         """Whether :meth:`lss` works (without, every lss_* command answers ERROR:100)."""
         ...
@@ -117,7 +129,7 @@ class Backend(Protocol):
 
     async def nmt(self, node: int, command: NmtCommand) -> None:
         """Send an NMT command to ``node`` (0: all nodes) on the bus; the master itself
-        does not follow it (see :meth:`local_nmt`)."""
+        does not follow it here (the executor applies it with :meth:`local_nmt`)."""
         ...
 
     async def local_nmt(self, command: NmtCommand) -> None:

@@ -3,11 +3,14 @@
 
     canola gateway [--iface IFACE | --bus URL | --simulate EDS] [--listen WHERE]
                    [--node-id N] [--sdo-timeout MS] [--eds FILE] [--max-clients N]
-                   [--max-line BYTES] [--idle-timeout S]
+                   [--max-line BYTES] [--max-queued BYTES] [--max-queued-total BYTES]
+                   [--idle-timeout S]
 
 ``--listen`` is ``tcp:HOST:PORT`` (default tcp:127.0.0.1:6000, loopback only),
-``unix:PATH`` or ``stdio``. ``--simulate EDS`` runs the gateway's master and the devices
-named by ``--sim-node`` on a simulated bus (no hardware; for trying the protocol out).
+``unix:PATH`` or ``stdio``. A TCP address that is not loopback needs a token (``--token``
+or ``CANOLA_TOKEN``: :mod:`canola.access`), which every client then sends first.
+``--simulate EDS`` runs the gateway's master and the devices named by ``--sim-node`` on a
+simulated bus (no hardware; for trying the protocol out).
 Without a bus option the gateway runs on the default bus (:func:`canola.bus.open.default_bus`).
 The same options work as ``python -m canola.gateway``. SIGINT and SIGTERM stop it at once,
 whatever its clients are doing (their transfers are aborted).
@@ -19,11 +22,11 @@ import argparse
 import asyncio
 import contextlib
 import importlib
-import ipaddress
 import signal
 import sys
 from collections.abc import Sequence
 
+from canola import access
 from canola.errors import Error
 from canola.gateway.backend import Backend
 from canola.gateway.events import EventHub
@@ -33,6 +36,8 @@ from canola.gateway.server import (
     IDLE_TIMEOUT,
     MAX_CLIENTS,
     MAX_LINE,
+    MAX_QUEUED,
+    MAX_QUEUED_TOTAL,
     GatewayServer,
 )
 from canola.gateway.server import parse_listen as _parse_listen
@@ -101,6 +106,15 @@ def add_arguments(parser: argparse.ArgumentParser, *, bus_options: bool = True) 
                         help=f"clients at once (default {MAX_CLIENTS})")
     parser.add_argument("--max-line", type=_positive, default=MAX_LINE, metavar="BYTES",
                         help=f"longest request line (default {MAX_LINE})")
+    parser.add_argument("--max-queued", type=_positive, default=MAX_QUEUED, metavar="BYTES",
+                        help="request lines and replies held per client (default "
+                             f"{MAX_QUEUED}; a line beyond: ERROR:600)")
+    parser.add_argument("--max-queued-total", type=_positive, default=MAX_QUEUED_TOTAL,
+                        metavar="BYTES", help="the same over all clients (default "
+                                              f"{MAX_QUEUED_TOTAL})")
+    parser.add_argument("--token", metavar="TOKEN",
+                        help="a secret every client sends first ([seq] auth TOKEN); default "
+                             f"${access.TOKEN_ENV}; needed to listen beyond loopback")
     parser.add_argument("--idle-timeout", type=_seconds, default=IDLE_TIMEOUT, metavar="S",
                         help=f"drop a client silent for S seconds (default {IDLE_TIMEOUT:g}; "
                              "0: never; clients that asked for events stay)")
@@ -143,7 +157,11 @@ async def _serve(args: argparse.Namespace) -> int:
     hub = EventHub(backend)
     server = GatewayServer(Executor(backend, hub), hub, max_clients=args.max_clients,
                            max_line=args.max_line,
-                           idle_timeout=getattr(args, "idle_timeout", IDLE_TIMEOUT))
+                           idle_timeout=getattr(args, "idle_timeout", IDLE_TIMEOUT),
+                           max_queued=getattr(args, "max_queued", MAX_QUEUED),
+                           max_queued_total=getattr(args, "max_queued_total",
+                                                    MAX_QUEUED_TOTAL),
+                           token=getattr(args, "token_value", None))
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -159,10 +177,9 @@ async def _serve(args: argparse.Namespace) -> int:
                 served.result()  # its error, if it ended with one
             return 0
         srv = await server.start(where)
-        if where.kind == "tcp" and not ipaddress.ip_address(
-                where.host if where.host != "localhost" else "127.0.0.1").is_loopback:
-            print(f"canola gateway: {where} is not a loopback address: whoever reaches it "
-                  "controls the CAN network", file=sys.stderr)
+        if where.kind == "tcp" and access.exposed_addresses(where.host):
+            print(f"canola gateway: {where} is not loopback: clients must send the token; "
+                  "the traffic is not encrypted (docs/security.md)", file=sys.stderr)
         print(f"canola gateway: listening on {GatewayServer.address(srv)}", file=sys.stderr,
               flush=True)
         await stop.wait()
@@ -184,6 +201,22 @@ async def _serve(args: argparse.Namespace) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Run the gateway until SIGINT / SIGTERM (or the end of stdin with ``stdio``)."""
+    queued = getattr(args, "max_queued", MAX_QUEUED)
+    if not args.max_line <= queued <= getattr(args, "max_queued_total", MAX_QUEUED_TOTAL):
+        print("canola gateway: --max-queued must hold a line (--max-line) and "
+              "--max-queued-total must hold --max-queued", file=sys.stderr)
+        return 2
+    try:
+        args.token_value = access.token_from(getattr(args, "token", None))
+        where = _parse_listen(args.listen)
+        refused = where.kind == "tcp" and access.unguarded(where.host, args.token_value,
+                                                             "--listen")
+    except ValueError as exc:
+        print(f"canola gateway: {exc}", file=sys.stderr)
+        return 2
+    if refused:
+        print(f"canola gateway: {refused}", file=sys.stderr)
+        return 2
     try:
         return asyncio.run(_serve(args))
     except ValueError as exc:  # e.g. a host name that is not an address

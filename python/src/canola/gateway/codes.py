@@ -41,10 +41,13 @@ class GatewayError(IntEnum):
 
 
 class GatewayFailure(Exception):  # noqa: N818 -- a reply, not a programming error
-    """A request that ends in ``ERROR:<code>``; ``detail`` says why (for logs only)."""
+    """A request that ends in ``ERROR:<code>``; ``detail`` says why (for logs only);
+    ``note``, when given, goes into the reply too, as a comment (``ERROR:204 #...``, as
+    CANopenNode's gateway describes its errors)."""
 
-    def __init__(self, code: GatewayError, detail: str = "") -> None:
+    def __init__(self, code: GatewayError, detail: str = "", *, note: str = "") -> None:
         self.code = code
         self.detail = detail
+        self.note = note
         super().__init__(f"gateway error {int(code)} ({code.name.lower()}){': ' if detail else ''}"
                          f"{detail}")

@@ -13,16 +13,19 @@ requests to any other node. SDO requests to the gateway's own node-ID are served
 its own dictionary without a frame on the bus, as the network would see it, except that
 a SYNC period (0x1006) shorter than :data:`SYNC_PERIOD_MIN_US` is refused (abort
 0x06090030): a SYNC every microsecond would flood the bus and starve the gateway's own
-SDO traffic. NMT commands to its own node-ID are sent on the bus and applied to itself
-(as CANopenNode's gateway does). Network 0 is the gateway's own network.
+SDO traffic. NMT commands to its own node-ID or to all nodes (0) are sent on the bus and
+applied to itself (as CANopenNode's gateway does); while its node is not in a state that
+allows SDO (STOPPED), SDO requests to other nodes are answered ``ERROR:204`` naming the
+state (:mod:`canola.gateway.ownnode`). Network 0 is the gateway's own network.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 from canola import __version__
 from canola.errors import Error, SdoAbort
@@ -32,6 +35,7 @@ from canola.gateway.events import EVENT_KINDS, EventHub
 from canola.gateway.formats import TYPES, format_value
 from canola.gateway.helptext import TOPICS
 from canola.gateway.lsscommands import LssCommands
+from canola.gateway.ownnode import SDO_STATES
 from canola.gateway.parser import ParseError
 from canola.gateway.pdo import mapped_entries, mapped_values
 from canola.gateway.requests import (
@@ -62,6 +66,8 @@ __all__ = ["GATEWAY_CLASS", "PROTOCOL_VERSION", "SYNC_PERIOD_MIN_US", "Executor"
 GATEWAY_CLASS = 2
 PROTOCOL_VERSION = (3, 0)
 ABORT_TIMEOUT = 0x05040000
+#: What the SDO client ends a transfer with when its own node leaves the SDO states.
+ABORT_DEVICE_STATE = 0x08000022
 ABORT_VALUE_RANGE = 0x06090030
 #: The shortest SYNC period (us) the gateway's own 0x1006 takes from a client (0: off).
 #: A SYNC frame lasts up to ~55 us at 1 Mbit/s and ~440 us at 125 kbit/s: at 1 ms the bus
@@ -69,11 +75,14 @@ ABORT_VALUE_RANGE = 0x06090030
 SYNC_PERIOD_MIN_US = 1000
 
 log = logging.getLogger("canola.gateway")
+T = TypeVar("T")
 
-def error_reply(seq: int, code: int, *, abort: bool = False) -> str:
-    """``[seq] ERROR:<code>`` (``abort``: ``ERROR:0x<abort code>``)."""
+
+def error_reply(seq: int, code: int, *, abort: bool = False, note: str = "") -> str:
+    """``[seq] ERROR:<code>`` (``abort``: ``ERROR:0x<abort code>``), ``note`` after it as
+    a comment (`` #note``)."""
     text = f"ERROR:0x{code:08X}" if abort else f"ERROR:{code}"
-    return f"[{seq}] {text}"
+    return f"[{seq}] {text}" + (f" #{note}" if note else "")
 
 
 @dataclass
@@ -119,7 +128,7 @@ class Executor:
         except SdoAbort as exc:
             return error_reply(seq, exc.code, abort=True)
         except GatewayFailure as exc:
-            return error_reply(seq, exc.code)
+            return error_reply(seq, exc.code, note=exc.note)
         except ParseError as exc:
             return error_reply(seq, exc.code)
         except TimeoutError:
@@ -159,12 +168,8 @@ class Executor:
     async def _upload(self, session: Session, node: int, index: int, sub: int) -> bytes:
         if node == self.backend.node_id:
             return self.backend.local_read(index, sub)
-        async with self._lock(node):
-            try:
-                return await self.backend.sdo_upload(node, index, sub, block=session.sdo_block,
-                                                     timeout_ms=session.sdo_timeout_ms)
-            except TimeoutError:
-                raise SdoAbort(ABORT_TIMEOUT) from None
+        return await self._remote(node, lambda: self.backend.sdo_upload(
+            node, index, sub, block=session.sdo_block, timeout_ms=session.sdo_timeout_ms))
 
     async def _download(self, session: Session, node: int, index: int, sub: int,
                         data: bytes) -> None:
@@ -172,12 +177,38 @@ class Executor:
             self._check_local(index, sub, data)
             self.backend.local_write(index, sub, data)
             return
+        await self._remote(node, lambda: self.backend.sdo_download(
+            node, index, sub, data, block=session.sdo_block,
+            timeout_ms=session.sdo_timeout_ms))
+
+    async def _remote(self, node: int, transfer: Callable[[], Awaitable[T]]) -> T:
+        """One SDO transfer to another node, in turn with the others to ``node``, while the
+        gateway's own node allows SDO (else ERROR:204)."""
         async with self._lock(node):
+            closings = self.backend.sdo_closings
+            self._check_own_state()
             try:
-                await self.backend.sdo_download(node, index, sub, data, block=session.sdo_block,
-                                                timeout_ms=session.sdo_timeout_ms)
+                return await transfer()
             except TimeoutError:
                 raise SdoAbort(ABORT_TIMEOUT) from None
+            except Error as exc:  # the device's abort, or the gateway's own stop?
+                ours = not isinstance(exc, SdoAbort) or exc.code == ABORT_DEVICE_STATE
+                if ours and self.backend.sdo_closings != closings:
+                    raise self._wrong_state("was stopped or reset during the transfer, "
+                                            "now") from None
+                if ours:
+                    self._check_own_state()
+                raise
+
+    def _check_own_state(self) -> None:
+        if self.backend.nmt_state not in SDO_STATES:
+            raise self._wrong_state("is")
+
+    def _wrong_state(self, what: str) -> GatewayFailure:
+        state = self.backend.nmt_state
+        note = (f"the gateway's node {self.backend.node_id} {what} {state}: no SDO "
+                "until it is started (CiA 301)")
+        return GatewayFailure(GatewayError.WRONG_NMT_STATE, note, note=note)
 
     @staticmethod
     def _check_local(index: int, sub: int, data: bytes) -> None:
@@ -213,7 +244,7 @@ class Executor:
         if isinstance(request, Nmt):
             node = self._node(session, request, allow_all=True)
             await self.backend.nmt(node, request.command)
-            if node == self.backend.node_id:
+            if node in (0, self.backend.node_id):  # it is a node of the network too
                 await self.backend.local_nmt(request.command)
             return ok
         if isinstance(request, Set):

@@ -15,8 +15,9 @@ canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
 [<seq>] OK | <value> | ERROR:0x<SDO abort code> | ERROR:<gateway error code>.
   r[ead] <index> <sub> [<type>]           SDO upload (no type: hex bytes)
   w[rite] <index> <sub> <type> <value>    SDO download
-  start | stop | preop[erational]         NMT (to the gateway's own node-ID: sent on
-  reset node | reset comm[unication]      the bus and applied to the gateway too)
+  start | stop | preop[erational]         NMT (to the gateway's own node-ID or to all:
+  reset node | reset comm[unication]      sent on the bus and applied to it too; while
+                                          it is stopped, SDO answers ERROR:204)
   enable heartbeat <ms> | disable heartbeat   watch a node's heartbeat
   [<net>] set network|node <n>            defaults of this connection (net 0: this one)
   [<net>] set sdo_timeout <ms>            SDO time-out per answer (default: --sdo-timeout)
@@ -26,6 +27,7 @@ canola CiA 309-3 gateway. Requests: [<seq>] [[<net>] <node>] <command>; replies
   [<net>] boot_up_indication Enable|Disable
   [<net>] set rpdo|tpdo[x] ... | r[ead] p[do] <n> | w[rite] p[do] <n> <count> <values>
   info version | help [datatype|lss]
+  auth <token>                            the first line, where the gateway asks for one
 Events (without sequence number): <net> <node> BOOT_UP | <net> <node> ERROR 203
   (heartbeat lost) | <net> <node> ERROR 202 | <net> <node> EMCY <code> <reg> <5 bytes>
   | <net> pdo <num> <count> <values> (the gateway's RPDO received)

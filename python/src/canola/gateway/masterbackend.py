@@ -15,6 +15,7 @@ or simulated bus).
   worker thread).
 - Events: boot-ups, heartbeats (from the frames), EMCY (the master's EMCY consumer),
   the master's own heartbeat-consumer losses and its RPDOs (their mapped values).
+- Its own node's NMT state (self-start, what it gates): :mod:`canola.gateway.ownnode`.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from canola.gateway.backend import (
     Rpdo,
 )
 from canola.gateway.codes import GatewayError, GatewayFailure
+from canola.gateway.ownnode import OwnNode
 from canola.gateway.pdo import mapped_values
 from canola.gateway.requests import NmtCommand
 from canola.master import Frame, Master
@@ -90,10 +92,19 @@ class MasterBackend:
         master.on_emcy(self._emcy)
         master.on_heartbeat(self._heartbeat)
         master.on_rpdo(self._rpdo)
+        self.own = OwnNode(master, lambda: self._apply("start"))
 
     @property
     def node_id(self) -> int:
         return self.master.node_id
+
+    @property
+    def nmt_state(self) -> str:
+        return self.own.state
+
+    @property
+    def sdo_closings(self) -> int:
+        return self.own.sdo_closings
 
     @property
     def has_lss(self) -> bool:
@@ -115,21 +126,21 @@ class MasterBackend:
     def local_read(self, index: int, sub: int) -> bytes:
         buf = ffi.new("uint8_t[]", self.upload_cap)
         n = ffi.new("uint32_t *")
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             code = int(lib.co_node_read_net(node, index, sub, buf, self.upload_cap, n))
         if code:
             raise SdoAbort(code)
         return bytes(ffi.buffer(buf, int(n[0])))
 
     def local_write(self, index: int, sub: int, data: bytes) -> None:
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             code = int(lib.co_node_write_net(node, index, sub, bytes(data), len(data)))
         if code:
             raise SdoAbort(code)
 
     async def pdo_send(self, num: int) -> None:
         """Send the gateway's TPDO ``num`` (1-based) now, if it is event-driven."""
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             lib.co_tpdo_request(node, num - 1)
 
     # ---- NMT
@@ -138,8 +149,11 @@ class MasterBackend:
         self.master.nmt(node, _NMT_NAMES[command])
 
     async def local_nmt(self, command: NmtCommand) -> None:
+        self._apply(command)
+
+    def _apply(self, command: NmtCommand) -> None:
         spec = nmt_command(_NMT_NAMES[command])
-        with self.master._engine.locked() as node:
+        with self.master.locked() as node:
             lib.co_nmt_apply(node, spec)
 
     # ---- LSS

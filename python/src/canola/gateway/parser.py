@@ -22,6 +22,7 @@ Syntax (words are case-insensitive, numbers decimal, ``0x`` hexadecimal or ``0``
     [<seq>] [<net>] init <bit timing> | boot_up_indication Enable|Disable
     [<seq>] [<net>] lss_<command> <args>...
     [<seq>] info version | help [datatype|lss]
+    [<seq>] auth <token>                                  (canola: docs/security.md)
 
 A ``#`` outside double quotes, at the start or after a blank, starts a comment.
 """
@@ -33,6 +34,7 @@ import re
 from canola.gateway.codes import GatewayError
 from canola.gateway.formats import TYPES, parse_int, parse_value
 from canola.gateway.requests import (
+    Auth,
     BootUpIndication,
     DisableGuarding,
     DisableHeartbeat,
@@ -78,7 +80,7 @@ LSS_COMMANDS = frozenset({
 _NODE_LEVEL = frozenset({"r", "read", "w", "write", "start", "stop", "preop",
                          "preoperational", "reset", "enable", "disable"})
 _NET_LEVEL = frozenset({"set", "init", "boot_up_indication"}) | LSS_COMMANDS
-_GLOBAL = frozenset({"info", "help"})
+_GLOBAL = frozenset({"info", "help", "auth"})
 _NOT_SUPPORTED = frozenset({"led", "log"})
 
 _SEQ_RE = re.compile(r"\s*\[\s*([0-9]{1,10})\s*\]")
@@ -305,6 +307,10 @@ def _command(cur: _Cursor, command: str, net: int | None, node: int | None) -> R
         if what != "version":
             raise cur.fail("expected 'version' after 'info'")
         return InfoVersion(seq)
+    if command == "auth":
+        token = cur.word("a token")
+        cur.end()
+        return Auth(seq, token=token)
     if command == "help":
         topic = (cur.peek() or "").lower()
         if topic:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 __all__ = [
+    "Auth",
     "BootUpIndication",
     "DisableGuarding",
     "DisableHeartbeat",
@@ -152,6 +153,14 @@ class BootUpIndication(Request):
     """``boot_up_indication Enable|Disable``: boot-up events to this client."""
 
     enable: bool = True
+
+
+@dataclass(frozen=True)
+class Auth(Request):
+    """``auth <token>``: the client proves it may use the gateway (canola's, not CiA
+    309-3: docs/security.md); answered by the connection, never executed."""
+
+    token: str = field(default="", repr=False)
 
 
 @dataclass(frozen=True)

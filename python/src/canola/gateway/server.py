@@ -9,11 +9,15 @@ stdio, the end of input lets pending requests finish first (``canola gateway --l
 stdio < script`` answers every line).
 
 Bounds (docs/security.md): at most ``max_clients`` socket clients at once; one more takes
-the slot of the client idle longest (that one is dropped and the log says so), or, when
-every client has a request running, is answered ``[0] ERROR:102`` and closed. A socket
-client idle for ``idle_timeout`` seconds is dropped (logged), unless it asked for events
-(it then stays until its slot is needed). :meth:`GatewayServer.close` drops every client
-at once, whatever it is doing.
+the slot of a silent, stuck or quiet client (:mod:`canola.gateway.slots`: that one is
+dropped and the log says so), or, when every client has a request running or traffic
+within ``quiet_s``, is answered ``[0] ERROR:102`` and closed. A socket client idle for
+``idle_timeout`` seconds is dropped (logged), unless it asked for events (it then stays
+until its slot is needed). Request lines and replies held: at most ``max_queued`` bytes
+per client and ``max_queued_total`` over all (:mod:`canola.gateway.budget`; a line beyond
+is answered ``ERROR:600``). With a ``token``, every socket client proves it first
+(:mod:`canola.gateway.connection`). :meth:`GatewayServer.close` drops every client at once,
+whatever it is doing.
 """
 
 from __future__ import annotations
@@ -26,14 +30,17 @@ import socket
 import stat
 import sys
 
+from canola.gateway.budget import MAX_QUEUED, MAX_QUEUED_TOTAL, Budget, Share
 from canola.gateway.codes import GatewayError
 from canola.gateway.connection import Connection, LineSplitter, Read, Write, off_loop
 from canola.gateway.events import EventHub
 from canola.gateway.executor import Executor, error_reply
 from canola.gateway.listen import DEFAULT_LISTEN, Listen, parse_listen
+from canola.gateway.slots import QUIET_S, victim
 
-__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "GatewayServer",
-           "LineSplitter", "Listen", "parse_listen"]
+__all__ = ["DEFAULT_LISTEN", "IDLE_TIMEOUT", "MAX_CLIENTS", "MAX_LINE", "MAX_QUEUED",
+           "MAX_QUEUED_TOTAL", "QUIET_S", "GatewayServer", "LineSplitter", "Listen",
+           "parse_listen"]
 
 MAX_LINE = 4 * 1024 * 1024  # a 1 MiB domain in base64 fits three times over
 MAX_CLIENTS = 16
@@ -47,12 +54,21 @@ class GatewayServer:
 
     def __init__(self, executor: Executor, hub: EventHub | None = None, *,
                  max_clients: int = MAX_CLIENTS, max_line: int = MAX_LINE,
-                 idle_timeout: float = IDLE_TIMEOUT) -> None:
+                 idle_timeout: float = IDLE_TIMEOUT, quiet_s: float = QUIET_S,
+                 max_queued: int = MAX_QUEUED, max_queued_total: int = MAX_QUEUED_TOTAL,
+                 token: str | None = None) -> None:
+        if max_queued < max_line or max_queued_total < max_queued:
+            raise ValueError(f"queued bytes: {max_queued} per client and {max_queued_total} "
+                             f"in total must hold a {max_line}-byte line")
         self.executor = executor
         self.hub = hub
         self.max_clients = max_clients
         self.max_line = max_line
+        self.max_queued = max_queued  # bytes held per client (requests, replies)
+        self.token = token  # what every socket client sends first (None: nothing)
+        self.budget = Budget(max_queued_total)  # the same over all clients
         self.idle_timeout = idle_timeout  # 0: never
+        self.quiet_s = quiet_s  # traffic this recent keeps a client's slot
         self._servers: list[asyncio.Server] = []
         self._connections: set[Connection] = set()
         self._sockets: set[Connection] = set()
@@ -114,10 +130,9 @@ class GatewayServer:
     async def serve_stream(self, read: Read, write: Write, *, eof_cancels: bool,
                            name: str = "stream") -> None:
         """Serve one client reading with ``read`` (b"" at the end) and writing with
-        ``write`` (no idle time-out). ``eof_cancels``: the end of input drops pending
-        requests (sockets)."""
-        await self._serve(Connection(name, self.executor, self.hub, self.max_line), read,
-                          write, eof_cancels=eof_cancels)
+        ``write`` (no idle time-out, no token: the process's own stdin, say).
+        ``eof_cancels``: the end of input drops pending requests (sockets)."""
+        await self._serve(self._connection(name, None), read, write, eof_cancels=eof_cancels)
 
     async def close(self) -> None:
         """Stop listening and drop every client at once (their transfers are aborted)."""
@@ -140,6 +155,10 @@ class GatewayServer:
 
     # ---- clients
 
+    def _connection(self, name: str, token: str | None) -> Connection:
+        return Connection(name, self.executor, self.hub, self.max_line,
+                          Share(self.budget, self.max_queued), token=token)
+
     async def _serve(self, conn: Connection, read: Read, write: Write, *,
                      eof_cancels: bool) -> None:
         conn.task = asyncio.current_task()
@@ -149,13 +168,6 @@ class GatewayServer:
         finally:
             self._connections.discard(conn)
             self._sockets.discard(conn)
-
-    def _idlest(self) -> tuple[Connection, float] | None:
-        """The socket client idle longest (none with a request running), and for how long."""
-        now = asyncio.get_running_loop().time()
-        idle = [(conn, t) for conn in self._sockets
-                if conn.dropped is None and (t := conn.idle_for(now)) is not None]
-        return max(idle, key=lambda pair: pair[1], default=None)
 
     def _peer(self, writer: asyncio.StreamWriter) -> str:
         self._count += 1
@@ -173,17 +185,18 @@ class GatewayServer:
         name = self._peer(writer)
         conn: Connection | None = None
         try:
-            if sum(conn.dropped is None for conn in self._sockets) >= self.max_clients:
-                idlest = self._idlest()
-                if idlest is None:
-                    log.warning("%s refused: all %d client slots have a request running",
-                                name, self.max_clients)
+            live = [conn for conn in self._sockets if conn.dropped is None]
+            if len(live) >= self.max_clients:
+                chosen = victim(live, asyncio.get_running_loop().time(), self.quiet_s)
+                if chosen is None:
+                    log.warning("%s refused: all %d clients have a request running or "
+                                "traffic within %g s", name, self.max_clients, self.quiet_s)
                     writer.write(f"{error_reply(0, GatewayError.INTERNAL_STATE)}\r\n".encode())
                     with contextlib.suppress(ConnectionError):
                         await writer.drain()
                     return
-                victim, idle = idlest
-                victim.drop(f"idle for {idle:.1f} s, its slot goes to {name}")
+                loser, why = chosen
+                loser.drop(f"{why}, its slot goes to {name}")
 
             async def read() -> bytes:
                 try:
@@ -195,7 +208,7 @@ class GatewayServer:
                 writer.write(data)
                 await writer.drain()
 
-            conn = Connection(name, self.executor, self.hub, self.max_line)
+            conn = self._connection(name, self.token)
             self._sockets.add(conn)
             await self._serve(conn, read, write, eof_cancels=True)
         except asyncio.CancelledError:

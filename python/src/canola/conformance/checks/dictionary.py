@@ -9,8 +9,9 @@ from functools import partial
 from itertools import chain
 
 from canola import SdoAbort
-from canola.conformance.context import Context, outcome
+from canola.conformance.context import Context, abort_text, outcome
 from canola.conformance.entries import (
+    VARIABLE_TYPES,
     describe,
     fixed_size,
     integer_range,
@@ -18,7 +19,7 @@ from canola.conformance.entries import (
     value_text,
     variables,
 )
-from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
+from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError, ValueTooLargeError
 from canola.conformance.registry import check
 from canola.formats import eds, values
 
@@ -45,12 +46,53 @@ def mandatory(ctx: Context) -> None:
             ctx.finding(f"read 0x{index:04X}:{sub}", "its value", outcome(exc))
 
 
-@check("dictionary.entries", clause="CiA 306 §4.5.2 (object descriptions)",
-       title="every entry of the EDS exists; readable ones read with their type's length")
+#: CiA 301 §7.5.2.4: a read of 0x1003 above the number of errors is answered with an abort.
+_NO_DATA = (0x08000024, 0x08000000)
+_HISTORY_CLAUSE = "CiA 301 §7.5.2.4 (no error recorded there: no data)"
+
+
+def _errors_recorded(ctx: Context) -> int:
+    """0x1003:0, the number of errors the history holds (0 when it cannot be read)."""
+    if ctx.var(0x1003, 0) is None:
+        return 0
+    try:
+        return int.from_bytes(ctx.sdo.upload(0x1003, 0), "little")
+    except (SdoAbort, NoAnswerError, SdoProtocolError):
+        return 0  # this check reports the read of 0x1003:0
+
+
+def _history_above_count(ctx: Context, var: eds.Variable, recorded: int) -> bool:
+    """For a sub-index of 0x1003 above the ``recorded`` errors: expect the abort CiA 301
+    prescribes (0x08000024, or 0x08000000), a finding otherwise; True when it was one."""
+    if var.index != 0x1003 or not recorded < var.subindex:
+        return False
+    what = f"read {describe(var)} (0x1003:0 = {recorded})"
+    expected = " or ".join(abort_text(c) for c in _NO_DATA)
+    try:
+        data = ctx.sdo.upload(var.index, var.subindex)
+    except SdoAbort as exc:
+        if exc.code not in _NO_DATA:
+            ctx.finding(what, expected, outcome(exc), clause=_HISTORY_CLAUSE)
+        return True
+    except (NoAnswerError, SdoProtocolError) as exc:
+        ctx.finding(what, expected, outcome(exc), clause=_HISTORY_CLAUSE)
+        return True
+    if var.subindex > _errors_recorded(ctx):  # not an error recorded meanwhile
+        ctx.finding(what, expected, f"the value {value_text(var, data)}",
+                    clause=_HISTORY_CLAUSE)
+    return True
+
+
+@check("dictionary.entries", clause="CiA 306 §4.5.2 (object descriptions), CiA 301 §7.5.2.4",
+       title="every entry of the EDS exists; readable ones read with their type's length "
+             "(0x1003 above its number of errors: no data, abort 0x08000024)")
 def entries(ctx: Context) -> None:
     count = 0
+    recorded = _errors_recorded(ctx)
     for var in variables(ctx.od):
         count += 1
+        if _history_above_count(ctx, var, recorded):
+            continue
         what = f"read {describe(var)}"
         try:
             data = ctx.sdo.upload(var.index, var.subindex)
@@ -60,6 +102,12 @@ def entries(ctx: Context) -> None:
                 continue
             expected = "abort 0x06010001 (write only)" if var.access_type == "wo" else "a value"
             ctx.finding(what, expected, outcome(exc))
+            continue
+        except ValueTooLargeError as exc:
+            if var.data_type not in VARIABLE_TYPES:
+                ctx.finding(what, "a value", outcome(exc))
+            else:  # a value of its length may be that long: not read whole, not judged
+                ctx.note(f"{describe(var)} not read whole: {exc}")
             continue
         except (NoAnswerError, SdoProtocolError) as exc:
             ctx.finding(what, "a value", outcome(exc))

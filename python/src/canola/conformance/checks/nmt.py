@@ -13,7 +13,13 @@ from itertools import pairwise
 
 from canola import SdoAbort
 from canola.conformance import pdo_tools as pt
-from canola.conformance.context import STATES, Context, abort_text
+from canola.conformance.context import (
+    APPLICATION_REFUSALS,
+    STATES,
+    Context,
+    abort_text,
+    outcome,
+)
 from canola.conformance.entries import (
     ACTING,
     another_number,
@@ -22,7 +28,6 @@ from canola.conformance.entries import (
     variables,
     writable,
 )
-from canola.conformance.link import Seen
 from canola.conformance.rawsdo import NoAnswerError, SdoProtocolError
 from canola.conformance.registry import check
 from canola.formats import eds, values
@@ -31,10 +36,14 @@ __all__ = ["heartbeat", "reset"]
 
 _HEARTBEAT_MS = 100
 _INTERVALS = 10
+#: Measurements of the heartbeat period while the tester itself was starved, at most.
+_ATTEMPTS = 3
 _TRANSITIONS = (("start", 0x05), ("stop", 0x04), ("preop", 0x7F), ("stop", 0x04),
                 ("start", 0x05), ("preop", 0x7F))
 #: Communication entries a reset check may change (their change has no side effect).
 _COMM_CANDIDATES = (0x1017, 0x100C, 0x1015, 0x1007)
+#: Between two guarding requests while the node takes an NMT command.
+_GUARD_RETRY_S = 0.02
 _SAVE = int.from_bytes(b"save", "little")
 _LOAD = int.from_bytes(b"load", "little")
 
@@ -125,16 +134,16 @@ def states(ctx: Context) -> None:
 @check("nmt.sdo_gating", clause="CiA 301 §7.3.2 (services per state)",
        title="no SDO answer in STOPPED; SDO in PRE-OPERATIONAL and OPERATIONAL")
 def sdo_gating(ctx: Context) -> None:
-    ctx.nmt("stop")
+    ctx.enter("stop")
     mark = ctx.sdo.send(bytes([0x40, 0x00, 0x10, 0x00]))
     ctx.link.wait(ctx.options.quiet)
     answers = ctx.link.frames_since(mark, lambda f: f.can_id == ctx.sdo.tx)
     if answers:
         ctx.finding("SDO upload 0x1000:0 in STOPPED", f"no answer within "
                     f"{ctx.options.quiet:g} s", f"[{answers[0].frame.data.hex(' ').upper()}]")
-    ctx.nmt("start")
+    ctx.enter("start")
     ctx.served("in OPERATIONAL")
-    ctx.nmt("preop")
+    ctx.enter("preop")
     ctx.served("in PRE-OPERATIONAL")
 
 
@@ -144,37 +153,30 @@ def sdo_gating(ctx: Context) -> None:
 def heartbeat_period(ctx: Context) -> None:
     period = heartbeat(ctx)
     p = period / 1000
-    tol = ctx.options.tolerance
-    cob = ctx.heartbeat_cob()
     ctx.link.wait(p)  # the period set takes effect
-    mark = ctx.link.mark()
-
-    def beats() -> list[Seen]:
-        return ctx.link.frames_since(
-            mark, lambda f: f.can_id == cob and len(f.data) == 1 and not f.rtr)
-
-    ctx.link.wait_until(lambda: len(beats()) > _INTERVALS,
-                        (_INTERVALS + 1) * p * (1 + 2 * tol) + ctx.options.timeout)
-    seen = beats()[:_INTERVALS + 1]
-    if len(seen) <= _INTERVALS:
-        ctx.fail(f"heartbeats at {period} ms", f"{_INTERVALS + 1} heartbeats",
-                 f"{len(seen)}")
-    # Judged by the bus's timestamps: a device late shows in them, the tester's own stall
-    # (the frames reach it late, in a burst) does not; how late it saw them is told apart.
-    gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
-    lags = [s.t - s.frame.timestamp for s in seen]
-    tester_behind = max(lags) - min(lags)
-    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
-    if abs(middle - p) > tol * p:
-        ctx.finding(f"median heartbeat interval (0x1017 = {period} ms)",
-                    f"{period} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms")
-    if max(gaps) > p * (1 + 2 * tol):
-        ctx.finding(f"longest heartbeat interval (0x1017 = {period} ms)",
-                    f"at most {period * (1 + 2 * tol):g} ms", f"{max(gaps) * 1000:.1f} ms")
+    for attempt in range(1, _ATTEMPTS + 1):
+        began = ctx.link.now()
+        gaps, problems, behind = _heartbeats(ctx, period)
+        # a tester starved meanwhile shares a starved host with the node, most likely:
+        # then a late heartbeat may be the host's; measured again, judged when it ran
+        starved = max(ctx.link.stalled(began), behind)
+        if not problems or starved <= ctx.options.tolerance * p:
+            break
+        ctx.note(f"attempt {attempt}: {problems[0][0]} {problems[0][2]}, while the tester "
+                 f"itself was starved for {starved * 1000:.0f} ms: measured again")
+    else:
+        ctx.skip(f"inconclusive: the tester itself was starved (up to {starved * 1000:.0f} ms)"
+                 f" in each of {_ATTEMPTS} measurements, and heartbeats came late (the "
+                 f"last: {problems[0][0]} {problems[0][2]}): a late node cannot be told "
+                 "from a starved host; measure on a quieter host")
+    for what, expected, got in problems:
+        ctx.finding(what, expected, got, clause="CiA 301 §7.2.8.3.2.2 (heartbeat producer "
+                    "time, 0x1017)")
+    middle = statistics.median(gaps)
     ctx.note(f"{period} ms: {len(gaps)} intervals, median {middle * 1000:.1f} ms, "
              f"{min(gaps) * 1000:.1f}..{max(gaps) * 1000:.1f} ms")
-    if tester_behind > p:
-        ctx.note(f"the tester saw heartbeats up to {tester_behind:.2f} s late (its own "
+    if behind > p:
+        ctx.note(f"the tester saw heartbeats up to {behind:.2f} s late (its own "
                  "stall, not the node's: the bus's timestamps are judged)")
     var = ctx.var(0x1017, 0)
     if var is not None and writable(var):
@@ -182,9 +184,41 @@ def heartbeat_period(ctx: Context) -> None:
         ctx.link.wait(p)
         mark = ctx.link.mark()
         ctx.link.wait(3 * p)
-        if beats():
+        cob = ctx.heartbeat_cob()
+        beats = ctx.link.frames_since(
+            mark, lambda f: f.can_id == cob and len(f.data) == 1 and not f.rtr)
+        if beats:
             ctx.finding("heartbeats after 0x1017 = 0", f"none in {3 * period} ms",
-                        f"{len(beats())}")
+                        f"{len(beats)}", clause="CiA 301 §7.5.2.20 (0: not used)")
+
+
+def _heartbeats(ctx: Context, period: int) -> tuple[list[float], list[tuple[str, str, str]],
+                                                  float]:
+    """Measure the next heartbeat intervals by the bus's timestamps (a node late shows in
+    them, the tester's own stall does not: the frames reach it late, in a burst): the
+    intervals, what is wrong with them (what, expected, got), and how much later than
+    the bus the tester saw them at most (its own lag). No heartbeats end the check."""
+    p = period / 1000
+    tol = ctx.options.tolerance
+    cob = ctx.heartbeat_cob()
+    seen = ctx.link.wait_count(lambda f: f.can_id == cob and len(f.data) == 1 and not f.rtr,
+                               _INTERVALS + 1,
+                               (_INTERVALS + 1) * p * (1 + 2 * tol) + ctx.options.timeout,
+                               ctx.link.mark())[:_INTERVALS + 1]
+    if len(seen) <= _INTERVALS:
+        ctx.fail(f"heartbeats at {period} ms", f"{_INTERVALS + 1} heartbeats", f"{len(seen)}",
+                 clause="CiA 301 §7.2.8.3.2.2")
+    gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
+    lags = [s.t - s.frame.timestamp for s in seen]
+    problems = []
+    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
+    if abs(middle - p) > tol * p:
+        problems.append((f"median heartbeat interval (0x1017 = {period} ms)",
+                         f"{period} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms"))
+    if max(gaps) > p * (1 + 2 * tol):
+        problems.append((f"longest heartbeat interval (0x1017 = {period} ms)",
+                         f"at most {period * (1 + 2 * tol):g} ms", f"{max(gaps) * 1000:.1f} ms"))
+    return gaps, problems, max(lags) - min(lags)
 
 
 def _comm_entry(ctx: Context) -> eds.Variable:
@@ -216,10 +250,22 @@ def _put(ctx: Context, var: eds.Variable, value: int) -> None:
     ctx.write(var.index, var.subindex, values.encode(var.data_type, value))
 
 
-def _expect_value(ctx: Context, var: eds.Variable, expected: int, after: str) -> None:
+def _put_probe(ctx: Context, var: eds.Variable, value: int) -> None:
+    """Write ``value`` to an application entry: its application may refuse it (the check
+    does not apply then); any other failure ends the check."""
+    assert var.data_type is not None
+    error = ctx.try_write(var.index, var.subindex, values.encode(var.data_type, value))
+    if isinstance(error, SdoAbort) and error.code in APPLICATION_REFUSALS:
+        ctx.not_applicable(f"the value {value} for {describe(var)}", error)
+    if error is not None:
+        ctx.fail(f"write {value} to {describe(var)}", "success", outcome(error))
+
+
+def _expect_value(ctx: Context, var: eds.Variable, expected: int, after: str,
+                  clause: str) -> None:
     got = _number(ctx, var)
     if got != expected:
-        ctx.finding(f"{describe(var)} after {after}", f"{expected}", f"{got}")
+        ctx.finding(f"{describe(var)} after {after}", f"{expected}", f"{got}", clause=clause)
 
 
 def _reset_values(ctx: Context, command: str, app_restored: bool) -> None:
@@ -233,12 +279,17 @@ def _reset_values(ctx: Context, command: str, app_restored: bool) -> None:
     app0 = _number(ctx, app) if app is not None else 0
     _put(ctx, comm, another_number(comm, comm0))
     if app is not None:
-        _put(ctx, app, another_number(app, app0))
+        _put_probe(ctx, app, another_number(app, app0))
     reset(ctx, command)
-    _expect_value(ctx, comm, comm0, f"NMT {command}")
+    area = "communication and application" if app_restored else "communication"
+    power_on = (f"CiA 301 §7.3.2.2.1: NMT {command} sets the {area} parameters to their "
+                "power-on values (defaults, or stored ones)")
+    _expect_value(ctx, comm, comm0, f"NMT {command}", power_on)
     if app is not None:
         _expect_value(ctx, app, app0 if app_restored else another_number(app, app0),
-                      f"NMT {command}")
+                      f"NMT {command}", power_on if app_restored else
+                      "CiA 301 §7.3.2.2.1: reset communication leaves the application "
+                      "parameters")
     ctx.note(f"{describe(comm)}" + (f", {describe(app)}" if app is not None else
                                     " (the EDS has no plain writable application integer)"))
 
@@ -271,27 +322,45 @@ def node_guarding(ctx: Context) -> None:
         if not writable(hb):
             ctx.skip("the heartbeat producer is on (0x1017 read-only): no guarding")
         ctx.write_temp(0x1017, 0, b"\0\0")
-    cob = ctx.heartbeat_cob()
     toggles: list[int] = []
+    before = 0x7F
     for command, state in ((None, 0x7F), (None, 0x7F), (None, 0x7F), ("stop", 0x04),
                            ("preop", 0x7F)):
         if command is not None:
             ctx.nmt(command)
-        mark = ctx.link.mark()
-        ctx.link.send(cob, rtr=True)
-        seen = ctx.link.wait_frame(lambda f: f.can_id == cob and not f.rtr, ctx.options.timeout,
-                                   mark)
-        if seen is None:
-            ctx.fail(f"guarding request in {STATES[state]}", "an answer", "none")
-        data = seen.frame.data
-        if len(data) != 1 or data[0] & 0x7F != state:
-            ctx.fail(f"guarding answer in {STATES[state]}",
-                     f"1 byte, state 0x{state:02X}", f"[{data.hex(' ').upper()}]")
-        toggles.append(data[0] >> 7)
+        until = ctx.link.now() + (ctx.options.timeout if command is not None else 0.0)
+        answer = _guard(ctx, state)
+        toggles.append(answer >> 7)
+        # a node may take the command in a while: meanwhile it answers with the state before
+        while answer & 0x7F == before != state and ctx.link.now() < until:
+            ctx.link.wait(_GUARD_RETRY_S)
+            answer = _guard(ctx, state)
+            toggles.append(answer >> 7)
+        if answer & 0x7F != state:
+            ctx.fail(f"guarding answer in {STATES[state]}", f"1 byte, state 0x{state:02X}",
+                     f"[{answer:02X}]")
+        before = state
     if any(a == b for a, b in pairwise(toggles)):
         ctx.finding("toggle bits of consecutive guarding answers", "alternating",
                     " ".join(map(str, toggles)))
     ctx.note(f"toggles {' '.join(map(str, toggles))}")
+
+
+def _guard(ctx: Context, state: int) -> int:
+    """Send a guarding request (RTR) and return the answer's byte; no answer, or one not
+    of 1 byte, ends the check (``state``: the one expected, for the message)."""
+    cob = ctx.heartbeat_cob()
+    mark = ctx.link.mark()
+    ctx.link.send(cob, rtr=True)
+    seen = ctx.link.wait_frame(lambda f: f.can_id == cob and not f.rtr, ctx.options.timeout,
+                               mark)
+    if seen is None:
+        ctx.fail(f"guarding request in {STATES[state]}", "an answer", "none")
+    data = seen.frame.data
+    if len(data) != 1:
+        ctx.fail(f"guarding answer in {STATES[state]}", f"1 byte, state 0x{state:02X}",
+                 f"[{data.hex(' ').upper()}]")
+    return data[0]
 
 
 @check("nmt.store_restore", clause="CiA 301 §7.5.2.13, §7.5.2.14", destructive=True,
@@ -315,10 +384,14 @@ def store_restore(ctx: Context) -> None:
     ctx.write_uint(0x1010, sub, _SAVE, 4)
     _put(ctx, comm, another_number(comm, saved))
     reset(ctx, "reset-comm")
-    _expect_value(ctx, comm, saved, "save and reset communication")
+    _expect_value(ctx, comm, saved, "save and reset communication",
+                  "CiA 301 §7.5.2.13: the values saved are the power-on values of the next "
+                  "reset communication")
     ctx.write_uint(0x1011, sub, _LOAD, 4)
     reset(ctx, "reset-comm")
-    _expect_value(ctx, comm, comm.default, "load and reset communication")
+    _expect_value(ctx, comm, comm.default, "load and reset communication",
+                  "CiA 301 §7.5.2.14: after 'load' the next reset communication brings the "
+                  "defaults")
     ctx.note(f"{describe(comm)}; wrong signatures: {abort_text(0x08000020)}")
 
 
@@ -347,7 +420,7 @@ def pdo_gating(ctx: Context) -> None:
     for command, state in ((None, "PRE-OPERATIONAL"), ("stop", "STOPPED"),
                            ("start", "OPERATIONAL")):
         if command is not None:
-            ctx.nmt(command)
+            ctx.enter(command)  # the node takes the RPDO in the state it reports
         mark = ctx.link.mark()
         if rpdo is not None:
             ctx.link.send(rcob, frame)
@@ -364,7 +437,7 @@ def pdo_gating(ctx: Context) -> None:
                             f"{len(sent)} frames")
         if rpdo is not None:
             if command == "stop":
-                ctx.nmt("preop")  # SDO reads back what the RPDO in STOPPED did
+                ctx.enter("preop")  # SDO reads back what the RPDO in STOPPED did
             pt.check_values(ctx, expected, applied=state == "OPERATIONAL",
                             when=f"after {rpdo[0].name} in {state}")
     ctx.note(", ".join(tested))

@@ -182,7 +182,7 @@ def tpdo_sync_cyclic(ctx: Context) -> None:
     cfg = pt.configure(ctx, pdo, entries=entries, type=2)
     cob = cfg.cob & 0x7FF
     sync = pt.sync_source(ctx)
-    ctx.nmt("start")
+    ctx.enter("start")
     mark = ctx.link.mark()
     counts = pt.tpdos_per_sync(ctx, cob, sync, [None] * _SYNCS, _every_second)
     if counts not in ([0, 1] * 3, [1, 0] * 3):
@@ -206,7 +206,7 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     var = pt.mapped(ctx, entries)[0].var
     assert var is not None
     original = ctx.keep(var.index, var.subindex)
-    ctx.nmt("start")
+    ctx.enter("start")
     sync.send()
     ctx.link.wait(ctx.options.quiet)
     changed = another_value(var, original)
@@ -215,12 +215,14 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     mark = ctx.link.mark()
     ctx.link.wait(ctx.options.quiet)
     early = pt.tpdo_frames(ctx, cob, mark)
+    sync.alone()
     if early:
         ctx.finding(f"{pdo.name} (type 0) after a change of {describe(var)}, before a SYNC",
                     "no frame until the SYNC", f"{len(early)} frames")
     mark = ctx.link.mark()
     sync.send()
     seen = ctx.link.wait_frame(lambda f: f.can_id == cob, ctx.options.timeout, mark)
+    sync.alone()
     if seen is None and not early:
         ctx.skip(f"{pdo.name} of type 0 was not sent after {describe(var)} changed by SDO: "
                  "the node may need an application event the tester cannot cause")
@@ -229,12 +231,11 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
 
 def _measure(ctx: Context, cob: int, count: int, period: float) -> list[float]:
     """The intervals between the next ``count`` + 1 frames on ``cob``."""
-    mark = ctx.link.mark()
     tol = ctx.options.tolerance
-    ctx.link.wait_until(lambda: len(pt.tpdo_frames(ctx, cob, mark)) > count,
-                        (count + 1) * period * (1 + 2 * tol) + ctx.options.timeout)
-    times = [s.frame.timestamp for s in ctx.link.frames_since(mark, lambda f: f.can_id == cob)]
-    return [b - a for a, b in pairwise(times)][:count]
+    seen = ctx.link.wait_count(lambda f: f.can_id == cob and not f.rtr, count + 1,
+                               (count + 1) * period * (1 + 2 * tol) + ctx.options.timeout,
+                               ctx.link.mark())
+    return [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)][:count]
 
 
 def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) -> int:
@@ -248,7 +249,7 @@ def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) 
 def tpdo_event_timer(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True)
     cob = _event_driven(ctx, pdo, entries, event=_EVENT_MS, **_no_inhibit(ctx, pdo))
-    ctx.nmt("start")
+    ctx.enter("start")
     p = _EVENT_MS / 1000
     gaps = _measure(ctx, cob, _FRAMES, p)
     if len(gaps) < _FRAMES:
@@ -271,7 +272,7 @@ def _no_inhibit(ctx: Context, pdo: pt.Pdo) -> dict[str, int]:
 def tpdo_inhibit(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True)
     cob = _event_driven(ctx, pdo, entries, event=_EVENT_MS // 2, inhibit=_INHIBIT_MS * 10)
-    ctx.nmt("start")
+    ctx.enter("start")
     gaps = _measure(ctx, cob, 4, _INHIBIT_MS / 1000)
     if len(gaps) < 4:
         ctx.fail(f"{pdo.name} with event timer {_EVENT_MS // 2} ms, inhibit {_INHIBIT_MS} ms",
@@ -299,7 +300,7 @@ def _rpdo(ctx: Context, **params: int) -> tuple[pt.Pdo, int, list[int]]:
        title="an event-driven RPDO's data is applied at once (read back by SDO)")
 def rpdo_applied(ctx: Context) -> None:
     pdo, cob, entries = _rpdo(ctx, type=255)
-    ctx.nmt("start")
+    ctx.enter("start")
     frame, expected = pt.rpdo_payload(ctx, entries)
     ctx.link.send(cob, frame)
     pt.check_values(ctx, expected, applied=True, when=f"after {pdo.name} [{frame.hex(' ')}]")
@@ -311,12 +312,14 @@ def rpdo_applied(ctx: Context) -> None:
 def rpdo_sync(ctx: Context) -> None:
     pdo, cob, entries = _rpdo(ctx, type=1)
     sync = pt.sync_source(ctx)
-    ctx.nmt("start")
+    ctx.enter("start")
     frame, expected = pt.rpdo_payload(ctx, entries)
     ctx.link.send(cob, frame)
-    pt.check_values(ctx, expected, applied=False, when=f"after {pdo.name} (type 1), before SYNC")
+    pt.check_values(ctx, expected, applied=False, when=f"after {pdo.name} (type 1), before SYNC",
+                    judge=sync.alone)
     sync.send()
-    pt.check_values(ctx, expected, applied=True, when=f"after {pdo.name} (type 1) and a SYNC")
+    pt.check_values(ctx, expected, applied=True, when=f"after {pdo.name} (type 1) and a SYNC",
+                    judge=sync.alone)
     ctx.note(f"{pdo.name} on 0x{cob:03X}")
 
 
@@ -325,7 +328,7 @@ def rpdo_sync(ctx: Context) -> None:
              "EMCY, reported with EMCY 0x8210")
 def rpdo_length(ctx: Context) -> None:
     pdo, cob, entries = _rpdo(ctx, type=255)
-    ctx.nmt("start")
+    ctx.enter("start")
     frame, expected = pt.rpdo_payload(ctx, entries)
     emcy = ctx.read_uint(0x1014, 0) if ctx.var(0x1014, 0) is not None else None
     mark = ctx.link.mark()

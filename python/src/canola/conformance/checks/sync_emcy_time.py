@@ -86,7 +86,16 @@ def producer(ctx: Context) -> None:
         ctx.keep(0x1006, 0)
     cob = ctx.keep(0x1005, 0)  # written back first: the producer stops
     sync = int.from_bytes(cob, "little") & 0x7FF
+    ctx.link.cobs.add(sync)
+    ctx.write_uint(0x1005, 0, sync, 4)  # the node's own producer off for a moment
     ctx.write_uint(0x1006, 0, period_us, 4)
+    mark = ctx.link.mark()
+    ctx.link.wait(ctx.options.quiet)  # SYNC while the node's producer is off: another's
+    others = ctx.link.frames_since(mark, lambda f: f.can_id == sync)
+    if others:
+        ctx.skip(f"inconclusive: another node sends SYNC on 0x{sync:03X} ({len(others)} "
+                 "frames before the node's producer was on): the node's SYNC frames cannot "
+                 "be told from the other's; run with the node alone with the tester")
     mark = ctx.link.mark()
     error = ctx.try_write(0x1005, 0, (sync | pt.PRODUCER).to_bytes(4, "little"))
     if error is not None:
@@ -130,7 +139,7 @@ def start_value(ctx: Context) -> None:
     ctx.write(0x1019, 0, bytes([5]))
     cob = pt.configure(ctx, pdo, entries=entries, type=1, sync_start=3).cob & 0x7FF
     sync = pt.sync_source(ctx)
-    ctx.nmt("start")
+    ctx.enter("start")
     counts = pt.tpdos_per_sync(ctx, cob, sync, (1, 2, 3, 4, 5, 1), lambda i, _: i >= 2)
     if counts != [0, 0, 1, 1, 1, 1]:
         ctx.finding(f"{pdo.name} after SYNCs with counters 1 2 3 4 5 1",
@@ -149,6 +158,7 @@ def heartbeat_loss(ctx: Context) -> tuple[int, Seen | None]:
     if emcy & pt.INVALID:
         ctx.skip(f"the EMCY producer is off (0x1014 = 0x{emcy:08X})")
     cob = emcy & 0x7FF
+    ctx.link.cobs.add(cob)
     tester = ctx.link.master.node_id
     ctx.write_temp(0x1016, 1, (tester << 16 | _CONSUMER_MS).to_bytes(4, "little"))
     mark = ctx.link.mark()
@@ -173,7 +183,8 @@ def heartbeat_loss_emcy(ctx: Context) -> None:
         ctx.finding("EMCY frame", "8 bytes", f"{len(data)} bytes")
     elif data[2] != register or not register & 1:
         ctx.finding("EMCY error register byte", f"0x1001 (now 0x{register:02X}), generic bit "
-                    "set", f"0x{data[2]:02X}")
+                    "set", f"0x{data[2]:02X}", clause="CiA 301 §7.5.2.2: bit 0 (generic "
+                    "error) is set with any error; the EMCY carries 0x1001 (§7.2.7)")
     ctx.note(f"EMCY on 0x{cob:03X}, register 0x{data[2]:02X}")
 
 
