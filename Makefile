@@ -5,6 +5,7 @@
 #   make test    every test stage (tests/run-stages), then one summary table
 #   make check   the fast inner loop: plain build + ctest, the fast Python tests
 #   make bench   instruction counts (valgrind) as a Markdown table (BENCH_QUICK=1: quick)
+#   make run-firmware  the Cortex-M4 example image in QEMU on the software bus (Ctrl-C stops)
 #   make format  rewrite the sources with clang-format
 
 BUILD      ?= build
@@ -20,7 +21,7 @@ FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find in
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
         test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
         fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
-        test-clang analyse clean fuzz-conformance
+        test-clang analyse clean fuzz-conformance firmware run-firmware test-firmware
 
 all: $(BUILD)/build.stamp
 
@@ -221,6 +222,11 @@ lint:
 # The core for a Cortex-M4 (arm-none-eabi-gcc): the strictest warnings, no host headers.
 ARM_FLAGS = -std=c11 -mcpu=cortex-m4 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion \
             -Wshadow -Wcast-align -Werror -pedantic -Iinclude -Isrc
+# port/cortex-m (CAN side, main loop, time base, flash storage) and the STM32 drivers, for a
+# Cortex-M0 and a Cortex-M4.
+ARM_PORT_FLAGS = -std=c11 -mthumb -Os -ffreestanding -Wall -Wextra -Wconversion -Wshadow \
+                 -Wcast-align -Werror -pedantic -Iinclude -Iport/cortex-m -Iport/stm32
+ARM_PORT_SRC = $(wildcard port/cortex-m/*.c port/stm32/*.c)
 cortex-m:
 	@if command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
 	  mkdir -p build-arm && for f in src/*.c; do \
@@ -229,8 +235,34 @@ cortex-m:
 	    -c src/node.c -o build-arm/node-minimal.o && for f in src/od*.c; do \
 	    arm-none-eabi-gcc $(ARM_FLAGS) -DCO_CONFIG_OD_COMPACT=1 -c $$f \
 	      -o build-arm/$$(basename $$f .c)-compact.o || exit 1; \
-	  done && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)"; \
+	  done && for cpu in cortex-m0 cortex-m4; do for f in $(ARM_PORT_SRC); do \
+	    arm-none-eabi-gcc $(ARM_PORT_FLAGS) -mcpu=$$cpu -c $$f -o build-arm/$$cpu-$$(basename $$f .c).o \
+	      || exit 1; \
+	  done; done && echo "cortex-m: core builds (-Werror -pedantic -Wconversion)" && \
+	  echo "cortex-m: port/cortex-m CAN side and port/stm32 drivers build for M0 and M4"; \
 	else echo "cortex-m: SKIPPED (arm-none-eabi-gcc not installed; .ci/run installs it as root)"; fi
+
+# The QEMU example firmware (examples/firmware, docs/firmware.md): a Cortex-M4 image
+# (mps2-an386) and a Cortex-M0 one (microbit) into build-fw/BOARD/. make run-firmware boots
+# the M4 one on the software bus and prints its URL; make test-firmware boots both and runs
+# tests/firmware (conformance with every check, the manager from a DCF, stored parameters
+# across a reset, python-canopen): NOT RUN without arm-none-eabi-gcc or qemu-system-arm.
+FW_BOARDS = mps2-an386 microbit
+FW_MAKE = $(MAKE) -s -C examples/firmware OUT=$(CURDIR)/build-fw PYTHON=$(CURDIR)/$(PY_VENV)/bin/python
+firmware: py-env
+	@for b in $(FW_BOARDS); do $(FW_MAKE) BOARD=$$b || exit 1; done
+
+run-firmware: py-env
+	@$(FW_MAKE) BOARD=mps2-an386 >/dev/null
+	@$(PY_VENV)/bin/python examples/firmware/qemu_rig.py build-fw/mps2-an386/firmware.elf
+
+test-firmware: py-env
+	@if ! command -v arm-none-eabi-gcc >/dev/null 2>&1; then \
+	  echo "firmware: NOT RUN (arm-none-eabi-gcc not installed; .ci/run installs it)"; \
+	elif ! command -v qemu-system-arm >/dev/null 2>&1; then \
+	  echo "firmware: NOT RUN (qemu-system-arm not installed; .ci/run installs it)"; \
+	else $(MAKE) -s firmware && $(PY_VENV)/bin/python -m pytest -q -p no:cacheprovider \
+	  --rootdir tests/firmware -n 2 --dist loadscope tests/firmware; fi
 
 # A 32-bit host build of the core and the tests (gcc -m32, from gcc-multilib), tests run.
 test-m32:
@@ -273,6 +305,6 @@ bench:
 	BENCH_QUICK=$(BENCH_QUICK) ./bench/run
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-logs build-load build-bench build-config-* build-py build-cov build-fuzz build-vcan build-arm build-m32 build-clang
+	rm -rf $(BUILD) $(BUILD_SAN) build-logs build-load build-bench build-config-* build-py build-cov build-fuzz build-vcan build-arm build-m32 build-clang build-fw
 
 FORCE:

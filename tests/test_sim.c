@@ -358,6 +358,36 @@ static void test_mailboxes(void)
     CHECK_EQ(co_sim_send(&a, &f), CO_ERR_BUSY);
 }
 
+/* A raw port hears of its own frames leaving the wire (`sent`), at the instant the others
+ * receive them, and not of frames it never got onto the wire. */
+static void test_raw_port_sent(void)
+{
+    co_sim_bus_t *bus = new_bus(125000);
+    static rec_t ra, rb;
+    memset(&ra, 0, sizeof ra);
+    memset(&rb, 0, sizeof rb);
+    co_sim_port_t a, b;
+    co_sim_port_attach_raw(bus, &a, rec_rx, &ra);
+    co_sim_port_attach_raw(bus, &b, rec_rx, &rb);
+    a.sent = rec_rx; /* into ra: a receives nothing else here */
+    co_frame_t f = frm(0x181, "01 02");
+    co_frame_t g = frm(0x182, "03");
+    CHECK_EQ(co_sim_send(&a, &f), CO_OK);
+    CHECK_EQ(co_sim_send(&a, &g), CO_OK);
+    CHECK_EQ(co_sim_run_until(bus, 5000), CO_OK);
+    CHECK_EQ(ra.n, 2);
+    CHECK_EQ(rb.n, 2);
+    CHECK_EQ(ra.f[0].id, 0x181);
+    CHECK_EQ(ra.f[1].id, 0x182);
+    CHECK_EQ(ra.t[0], rb.t[0]);
+    CHECK_EQ(ra.t[1], rb.t[1]);
+    /* a frame discarded by a bus-off port never leaves */
+    co_sim_set_bus_off(&a, true);
+    CHECK_EQ(co_sim_send(&a, &f), CO_OK);
+    CHECK_EQ(co_sim_run_until(bus, 10000), CO_OK);
+    CHECK_EQ(ra.n, 2);
+}
+
 static void test_pending_overflow(void)
 {
     co_sim_bus_t *bus = new_bus(10000);
@@ -1012,6 +1042,7 @@ int main(void)
     RUN(test_instant_order);
     RUN(test_instant_reply_same_instant);
     RUN(test_mailboxes);
+    RUN(test_raw_port_sent);
     RUN(test_pending_overflow);
     RUN(test_storm_guard);
     RUN(test_arbitration_125k);

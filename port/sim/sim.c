@@ -554,6 +554,8 @@ static void complete(co_sim_bus_t *bus, uint64_t t, const co_sim_pending_t *p)
     sender->in_flight--;
     if (sender->node) {
         set_due(sender, co_node_poll(sender->node, t));
+    } else if (sender->sent) {
+        sender->sent(sender->rx_ctx, t, &p->frame);
     }
 }
 

@@ -2,8 +2,14 @@
 """Two CANopenNode devices as scripted nodes on the simulated bus, for the tests of
 canola.conformance: ``canopend`` (CANopenNode/CANopenLinux) and CANopenDemo's ``demoDevice``.
 
-MODELLED, NOT RECORDED. These are not traces of the real programs: building them here would
-have meant carrying their sources through this session, so they were not run. Each model
+MODELLED, NOT RECORDED: for live interaction (the tester's waits and requests as they come).
+canopend's real frames are in data/traces/canopend.log (canopennode_traces.py,
+test_conformance_traces.py); where the real device differs from this model: its dictionary is
+CANopenNode's DS301 profile (no manufacturer objects, so no string and no entry longer than 4
+bytes: the segmented checks are skipped there), NMT reset node ends canopend's process (a
+supervisor restarts it; no boot-up without one), and with its storage files missing it
+reports EMCY 0x5000 (generic error) at start and, as CO_NMT_ERR_ON_ERR_REG asks, stays
+PRE-OPERATIONAL whatever NMT says. Each model
 reproduces what issue 34 observed when ``canola conformance`` ran against the two devices on
 vcan0 (frames and timings quoted there), and what the devices' public descriptions say
 (CANopenDemo's demo/demoDevice.md and demo/domainDemo.c): a :class:`canola.Device` (a

@@ -79,6 +79,7 @@ typedef struct co_sim_port {
     co_node_t *node; /**< node behind this port, or NULL for a raw port */
     co_sim_rx_fn rx; /**< raw port receive callback */
     void *rx_ctx;
+    co_sim_rx_fn sent;    /**< raw port: one of its frames left the wire (rx_ctx; NULL: none) */
     uint64_t node_due_us; /**< next co_node_poll deadline of the node */
     uint8_t mailboxes;    /**< transmit slots (1..255; attach sets 3: change it after) */
     uint8_t in_flight;    /**< own frames pending on the bus */
@@ -168,7 +169,8 @@ void co_sim_port_bind(co_sim_port_t *port, co_node_t *node);
  *  index (see Delivery cost above). */
 void co_sim_port_routes_changed(co_sim_port_t *port);
 
-/** Attach a raw port: `rx` receives every frame others send. */
+/** Attach a raw port: `rx` receives every frame others send. Set `port->sent` after it to
+ *  hear when the port's own frames complete (a CAN controller's transmit-complete). */
 co_err_t co_sim_port_attach_raw(co_sim_bus_t *bus, co_sim_port_t *port, co_sim_rx_fn rx, void *ctx);
 
 /** Send a frame from a port at the bus's current time (raw ports; nodes send through

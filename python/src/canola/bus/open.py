@@ -8,6 +8,10 @@ URLs:
   daemon); PORT defaults to 29536; the CHANNEL must be given.
 - ``socketcan://IFACE``: SocketCAN, the same as ``--iface IFACE``.
 - ``virtual://CHANNEL``: python-can's in-process virtual bus (tests).
+- ``slcan://HOST:PORT``: an SLCAN (Lawicel) adapter behind a TCP port: canola's firmware
+  images in QEMU (``-serial tcp:``), a serial server; ``slcan:///dev/ttyACM0``: one on a
+  serial device. python-can's ``slcan`` interface (pyserial). One client at a time: join it
+  to the hub with ``canola bus bridge`` to share it.
 
 Without ``--iface``/``--bus`` the bus is the default one (:func:`default_bus`): the URL in
 the environment variable ``CANOLA_BUS``, else python-can's own configuration (its
@@ -70,13 +74,27 @@ def parse_bus_url(url: str) -> dict[str, object]:
         if "/" in channel or len(channel) > 16:
             raise BusError(f"bad channel {channel!r} in {url!r}")
         return {"interface": "socketcand", "host": host, "port": port, "channel": channel}
+    if scheme == "slcan":
+        if parts.netloc:
+            try:
+                tcp_port = parts.port
+            except ValueError as exc:
+                raise BusError(f"bad port in {url!r}") from exc
+            if tcp_port is None or not parts.hostname:
+                raise BusError(f"no host and port in {url!r}: slcan://HOST:PORT")
+            channel = f"socket://{parts.hostname}:{tcp_port}"
+        elif parts.path:
+            channel = parts.path
+        else:
+            raise BusError(f"no device in {url!r}: slcan://HOST:PORT or slcan:///dev/DEVICE")
+        return {"interface": "slcan", "channel": channel, "sleep_after_open": 0}
     if scheme in ("socketcan", "virtual"):
         channel = (parts.netloc + parts.path).strip("/")
         if not channel:
             raise BusError(f"no channel in {url!r}")
         return {"interface": scheme, "channel": channel}
     raise BusError(f"unknown bus URL {url!r}: use socketcand://HOST:PORT/CHANNEL, "
-                   "socketcan://IFACE or virtual://CHANNEL")
+                   "socketcan://IFACE, slcan://HOST:PORT or virtual://CHANNEL")
 
 
 def default_bus() -> tuple[dict[str, object], str]:

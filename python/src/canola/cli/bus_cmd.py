@@ -1,14 +1,19 @@
 # SPDX-License-Identifier: Apache-2.0
-"""``canola bus serve``: the software CAN bus (a socketcand hub, :mod:`canola.bus.hub`)."""
+"""``canola bus serve``: the software CAN bus (a socketcand hub, :mod:`canola.bus.hub`);
+``canola bus bridge``: another bus joined to it (:mod:`canola.bus.bridge`)."""
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 from canola import access
 from canola.bus import hub
-from canola.cli.common import CliError, Parser
+from canola.bus.bridge import Bridge, BridgeSide, shutdown
+from canola.bus.open import BusError, open_bus
+from canola.cli.common import CliError, Parser, add_bus_options, bus_from_args
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
@@ -37,6 +42,20 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                        help="a secret every client sends first (< auth TOKEN >); default "
                             f"${access.TOKEN_ENV}; needed to listen beyond loopback")
     serve.set_defaults(func=run_serve)
+    bridge = bus_subs.add_parser(
+        "bridge", help="join another bus to this one",
+        description="Join a bus (an SLCAN adapter, the UART of a canola firmware image in "
+                    "QEMU: slcan://HOST:PORT) to the bus of --iface/--bus (or the default "
+                    "bus): every frame received on one is sent on the other. Stops on "
+                    "Ctrl-C or SIGTERM (exit 0), or when either side fails or closes "
+                    "(exit 1, saying which).",
+        epilog="e.g. canola bus bridge slcan://127.0.0.1:4000 "
+               "--bus socketcand://127.0.0.1:29536/can0")
+    bridge.add_argument("far", metavar="URL",
+                        help="the bus to join: slcan://HOST:PORT, slcan:///dev/DEVICE, "
+                             "socketcand://HOST:PORT/CHANNEL or socketcan://IFACE")
+    add_bus_options(bridge)
+    bridge.set_defaults(func=run_bridge)
 
 
 def run_serve(args: argparse.Namespace) -> int:
@@ -66,4 +85,34 @@ def run_serve(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise CliError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}"
                        ) from None
+    return 0
+
+
+def run_bridge(args: argparse.Namespace) -> int:
+    near = bus_from_args(args)
+    try:
+        far = open_bus(url=args.far)
+    except BusError as exc:
+        shutdown(near)
+        raise CliError(str(exc)) from None
+    ended = threading.Event()
+    previous = {sig: signal.signal(sig, lambda *_: ended.set())
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    near_name = args.bus or args.iface or "the default bus"
+    bridge = Bridge(BridgeSide(far, args.far), BridgeSide(near, near_name))
+    try:
+        with bridge:
+            print(f"canola bus: {args.far} joined to {bridge.sides[1].name} (Ctrl-C stops)",
+                  flush=True)
+            while not ended.is_set() and not bridge.wait(0.2):
+                pass
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        shutdown(far)
+        shutdown(near)
+    a, b = bridge.sides
+    print(f"canola bus: {a.frames} frames from {a.name}, {b.frames} from {b.name}", flush=True)
+    if bridge.error is not None:
+        raise CliError(f"bus bridge: {bridge.error}")
     return 0

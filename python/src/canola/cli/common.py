@@ -113,8 +113,9 @@ def add_bus_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--iface", metavar="IFACE", help="SocketCAN interface, e.g. can0")
     group.add_argument("--bus", metavar="URL",
-                       help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE or "
-                            f"virtual://CHANNEL (default: ${BUS_ENV}, else python-can's "
+                       help="socketcand://HOST:PORT/CHANNEL, socketcan://IFACE, "
+                            "slcan://HOST:PORT or virtual://CHANNEL (default: "
+                            f"${BUS_ENV}, else python-can's "
                             "configuration: CAN_INTERFACE, CAN_CHANNEL, ~/.canrc, ...)")
 
 
