@@ -492,37 +492,25 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
 }
 
 /* Position of the first entry whose key is >= key (count when there is none): a bisection
- * without a data-dependent branch (each halving a load, a compare and a conditional move).
- * Over the general form's dense keys when given; else over the entries' indices alone (a
- * 16-bit load and compare a step, no key to compose), then forward over the sub-indices of
- * the index found, which are few. */
+ * over the general form's dense keys when given, else over the entries themselves. */
 static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 {
-    uint32_t n = od->count;
-    if (n == 0) {
-        return 0;
-    }
+    uint32_t lo = 0;
+    uint32_t hi = od->count;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2u;
 #if !CO_CONFIG_OD_COMPACT
-    if (od->keys != NULL) {
-        const uint32_t *k = od->keys;
-        uint32_t lo = 0;
-        for (; n > 1u; n -= n / 2u) {
-            lo = k[lo + n / 2u] < key ? lo + n / 2u : lo;
-        }
-        return lo + (k[lo] < key ? 1u : 0u);
-    }
+        uint32_t at = od->keys != NULL ? od->keys[mid] : entry_key(&od->entries[mid]);
+#else
+        uint32_t at = entry_key(&od->entries[mid]);
 #endif
-    uint16_t index = (uint16_t)(key >> 8);
-    const co_od_entry_t *e = od->entries;
-    for (; n > 1u; n -= n / 2u) {
-        e = e[n / 2u].index < index ? &e[n / 2u] : e;
+        if (at < key) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
     }
-    e += e->index < index ? 1 : 0; /* the first entry of `index`, or the one after */
-    const co_od_entry_t *end = od->entries + od->count;
-    while (e != end && entry_key(e) < key) {
-        e++;
-    }
-    return (uint32_t)(e - od->entries);
+    return lo;
 }
 
 /* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
@@ -574,34 +562,23 @@ static uint32_t string_len(const uint8_t *s, uint32_t cap, uint32_t unit)
     return n;
 }
 
-/* co_od_size with the entry's type information at hand. */
-static uint32_t size_of(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
-{
-#if CO_CONFIG_OD_COMPACT
-    return t->wire == 0 && co_od_side(od, e) != 0 ? od->tables->sizes[co_od_side(od, e) - 1u]
-                                                  : t->wire;
-#else
-    (void)od;
-    (void)t;
-    return e->size;
-#endif
-}
-
 #if CO_CONFIG_OD_COMPACT
 uint32_t co_od_size(const co_od_t *od, const co_od_entry_t *entry)
 {
-    return size_of(od, entry, entry_info(od, entry));
+    uint32_t wire = entry_info(od, entry)->wire;
+    return wire == 0 && co_od_side(od, entry) != 0 ? od->tables->sizes[co_od_side(od, entry) - 1u]
+                                                   : wire;
 }
 #endif
 
-/* co_od_value_len with the entry's type information at hand. */
-static uint32_t value_len(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
+uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
 {
-    const uint8_t *value = co_od_value(od, e);
-    uint32_t size = size_of(od, e, t);
+    const uint8_t *value = co_od_value(od, entry);
+    uint32_t size = co_od_size(od, entry);
     if (value == NULL) {
         return size;
     }
+    const type_info_t *t = entry_info(od, entry);
     if (t->kind == K_VSTRING || is_ustring(t)) {
         return string_len(value, size, is_ustring(t) ? 2u : 1u);
     }
@@ -609,11 +586,6 @@ static uint32_t value_len(const co_od_t *od, const co_od_entry_t *e, const type_
         return min_u32(((const co_od_domain_t *)(const void *)value)->len, size);
     }
     return size;
-}
-
-uint32_t co_od_value_len(const co_od_t *od, const co_od_entry_t *entry)
-{
-    return value_len(od, entry, entry_info(od, entry));
 }
 
 co_abort_t co_od_access(const co_od_t *od, const co_od_entry_t *entry, bool write)
@@ -629,11 +601,12 @@ co_abort_t co_od_access(const co_od_t *od, const co_od_entry_t *entry, bool writ
  * they are: on a little-endian host the wire bytes of every number are the first bytes of
  * its storage (an INTEGER24 is the low three bytes of its int32_t). A big-endian host
  * encodes numbers into tmp (when given; NULL without). */
-static const uint8_t *stored_wire(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t,
-                                  uint8_t *tmp, uint32_t *len)
+static const uint8_t *stored_wire(const co_od_t *od, const co_od_entry_t *e, uint8_t *tmp,
+                                  uint32_t *len)
 {
+    const type_info_t *t = entry_info(od, e);
     const void *value = co_od_value(od, e);
-    *len = value_len(od, e, t);
+    *len = co_od_value_len(od, e);
 #if !LITTLE_ENDIAN_HOST
     if (is_number(t)) {
         if (tmp != NULL) {
@@ -655,7 +628,7 @@ const uint8_t *co_od_wire_data(const co_od_t *od, const co_od_entry_t *entry, ui
     if (has_read_hook(entry) || co_od_value(od, entry) == NULL) {
         return NULL;
     }
-    return stored_wire(od, entry, entry_info(od, entry), NULL, len);
+    return stored_wire(od, entry, NULL, len);
 }
 
 co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
@@ -686,7 +659,7 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
         return CO_ABORT_NONE;
     }
     uint8_t tmp[8];
-    const uint8_t *wire = stored_wire(od, entry, entry_info(od, entry), tmp, &whole);
+    const uint8_t *wire = stored_wire(od, entry, tmp, &whole);
     if (total != NULL) {
         *total = whole;
     }
@@ -710,7 +683,7 @@ static co_abort_t check_len(const co_od_t *od, const co_od_entry_t *e, const typ
     if (want != 0) {
         return len > want ? CO_ABORT_LEN_HIGH : len < want ? CO_ABORT_LEN_LOW : CO_ABORT_NONE;
     }
-    if (len > size_of(od, e, t)) {
+    if (len > co_od_size(od, e)) {
         return CO_ABORT_LEN_HIGH;
     }
     return (is_ustring(t) && (len & 1u) != 0) ? CO_ABORT_TYPE_MISMATCH : CO_ABORT_NONE;
@@ -816,7 +789,7 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
         if (value != data) {
             co_copy(value, data, len);
         }
-        co_zero(value + len, size_of(od, entry, t) - len); /* (a fixed type's: its wire size) */
+        co_zero(value + len, co_od_size(od, entry) - len); /* (a fixed type's: its wire size) */
     }
     return CO_ABORT_NONE;
 }
@@ -899,7 +872,7 @@ void co_od_reset(const co_od_t *od, uint16_t first, uint16_t last, uint8_t node_
  * holds its little-endian bytes), the capacity of the others. */
 static uint32_t default_cap(const co_od_t *od, const co_od_entry_t *e, const type_info_t *t)
 {
-    return t->width != 0 ? t->width : size_of(od, e, t);
+    return t->width != 0 ? t->width : co_od_size(od, e);
 }
 
 /* One record of the image (co_od_tables_t.defaults): its entry's position (END_OF_IMAGE

@@ -195,8 +195,11 @@ static co_abort_t store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data
     }
     uint32_t id = r->id; /* the channel's address from now on */
     uint8_t flags = r->flags;
-    r->id = served_id;
-    r->flags = served_flags;
+    /* (the default channel's COB-IDs never change: a node with one server skips this) */
+    if (co_sdo_servers_max() > 1) {
+        r->id = served_id;
+        r->flags = served_flags;
+    }
     co_put_u32(&r->data[0], ok);
     co_put_u32(&r->data[4], 0);
     (void)co_node_send_as(node, r, CO_SVC_SDO);
@@ -457,8 +460,9 @@ static co_abort_t initiate_upload(co_node_t *node, co_sdo_server_t *s)
     }
     begin(s); /* segments follow */
 #if CO_CONFIG_SDO_SEGMENTED
-    uint32_t stored = 0;
-    s->wire = co_od_wire_data(&node->cfg.od, s->entry, &stored);
+    /* a string or DOMAIN in storage, with no read hook: its bytes are the wire's */
+    const co_od_hooks_t *hooks = co_od_hooks_of(s->entry);
+    s->wire = hooks == NULL || hooks->read == NULL ? own_storage(&node->cfg.od, s) : NULL;
 #endif
     s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
