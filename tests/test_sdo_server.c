@@ -1663,6 +1663,15 @@ static void test_timeout_restarts_with_each_frame(void)
     CHECK_STR(t.od.app_string, "hello");
 }
 
+/* Nothing just before `ms`, the abort `frame` at `ms`: the time-out's edge. */
+static void expect_timeout_at(srv_t *s, uint32_t ms, const char *frame)
+{
+    co_node_poll(s->node, ms * MS - 1);
+    EXPECT(s, "");
+    co_node_poll(s->node, ms * MS);
+    EXPECT(s, frame);
+}
+
 /* Issue 34: a segment that moves nothing (no data, more to come) is answered but does not
  * restart the time-out: a client sending only those holds the channel for one time-out,
  * then hears 0x05040000 (timed out: the transfer made no progress for the time-out). */
@@ -1685,10 +1694,8 @@ static void test_timeout_not_restarted_by_empty_segments(void)
         co_node_poll(s.node, s.now);
         EXPECT(&s, "");
     }
-    co_node_poll(s.node, 1300 * MS - 1);
-    EXPECT(&s, "");
-    co_node_poll(s.node, 1300 * MS); /* one time-out after the last segment with data */
-    EXPECT(&s, "585#8002200000000405");
+    /* one time-out after the last segment with data */
+    expect_timeout_at(&s, 1300, "585#8002200000000405");
 }
 
 /* The same in block transfers: a segment repeated, out of order, or an acknowledgement of
@@ -1705,10 +1712,7 @@ static void test_timeout_not_restarted_without_block_progress(void)
         XFER(&s, "01 00 00 00 00 00 00 00", ""); /* the same again */
         XFER(&s, "05 00 00 00 00 00 00 00", ""); /* out of order */
     }
-    co_node_poll(s.node, 1100 * MS - 1);
-    EXPECT(&s, "");
-    co_node_poll(s.node, 1100 * MS);
-    EXPECT(&s, "585#8004210000000405");
+    expect_timeout_at(&s, 1100, "585#8004210000000405");
     /* block upload: acknowledgements of nothing resend the sub-block, without progress */
     r.up_len = 10;
     s.now = 2000 * MS;
@@ -1723,10 +1727,7 @@ static void test_timeout_not_restarted_without_block_progress(void)
         CHECK_EQ(s.bus->count, 2); /* sent again */
     }
     fake_clear(s.bus);
-    co_node_poll(s.node, 3100 * MS - 1);
-    EXPECT(&s, "");
-    co_node_poll(s.node, 3100 * MS);
-    EXPECT(&s, "585#8004210000000405");
+    expect_timeout_at(&s, 3100, "585#8004210000000405");
 }
 
 static void test_timeout_configured(void)
