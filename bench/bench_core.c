@@ -28,9 +28,9 @@
 #include "ds301.h"
 
 #define NODE_ID 1u
-#define BIG 889u            /* one full block: 127 segments of 7 bytes */
-#define VENDOR 0x12345678u  /* 0x1018 sub 1, uploaded */
-#define OTHER_NODE 3u       /* the node of the frame before each measured one (route miss) */
+#define BIG 889u           /* one full block: 127 segments of 7 bytes */
+#define VENDOR 0x12345678u /* 0x1018 sub 1, uploaded */
+#define OTHER_NODE 3u      /* the node of the frame before each measured one (route miss) */
 #define SDO_RX (0x600u + NODE_ID)
 #define SDO_TX (0x580u + NODE_ID)
 #define UPLOAD_HEAD (0x43u | 0x1018u << 8 | 0x01u << 24) /* 4 bytes of 0x1018 sub 1 */
@@ -86,10 +86,17 @@ static co_err_t tx_log(void *ctx, const co_frame_t *frame)
 static void expect_configured(void)
 {
     static const uint32_t k_values[][3] = {
-        {0x1018, 1, VENDOR},      {0x1017, 0, 1000},        {0x1400, 1, 0x200u + NODE_ID},
-        {0x1600, 0, 2},           {0x1600, 1, 0x12800120u}, {0x1600, 2, 0x12800220u},
-        {0x1800, 2, 1},           {0x1A00, 0, 2},           {0x1A00, 1, 0x12000120u},
-        {0x1A00, 2, 0x12000220u}, {0x1016, 1, (OTHER_NODE << 16) | 1000u},
+        {0x1018, 1, VENDOR},
+        {0x1017, 0, 1000},
+        {0x1400, 1, 0x200u + NODE_ID},
+        {0x1600, 0, 2},
+        {0x1600, 1, 0x12800120u},
+        {0x1600, 2, 0x12800220u},
+        {0x1800, 2, 1},
+        {0x1A00, 0, 2},
+        {0x1A00, 1, 0x12000120u},
+        {0x1A00, 2, 0x12000220u},
+        {0x1016, 1, (OTHER_NODE << 16) | 1000u},
     };
     for (unsigned i = 0; i < sizeof k_values / sizeof k_values[0]; i++) {
         uint64_t v = 0;
@@ -298,7 +305,8 @@ static void script_segmented_download(void)
     uint8_t toggle = 0;
     while (off < BIG) {
         uint32_t n = BIG - off < 7 ? BIG - off : 7;
-        uint8_t d[8] = {(uint8_t)((toggle << 4) | ((7 - n) << 1) | (off + n >= BIG ? 1 : 0))};
+        uint8_t d[8] = {
+            (uint8_t)((uint32_t)toggle << 4 | (7u - n) << 1 | (off + n >= BIG ? 1u : 0u))};
         memcpy(&d[1], &b.big[off], n);
         b.frames[b.frame_count++] = sdo_req(d);
         off += n;
@@ -338,7 +346,8 @@ static void script_block_download(void)
         b.frames[b.frame_count++] = sdo_req(d);
     }
     uint16_t crc = crc16(b.big, BIG);
-    b.frames[b.frame_count++] = sdo_req((const uint8_t[8]){0xC1, (uint8_t)crc, (uint8_t)(crc >> 8)});
+    b.frames[b.frame_count++] =
+        sdo_req((const uint8_t[8]){0xC1, (uint8_t)crc, (uint8_t)(crc >> 8)});
 }
 
 static void script_block_upload(void)

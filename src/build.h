@@ -68,7 +68,7 @@ void co_zero_bytes(void *dst, size_t n);
 /* Copies and fills of a size known at compile time between places of any alignment: a few
  * moves where the target loads and stores words at any address; the byte loops elsewhere
  * (Cortex-M0 would call the C library's memcpy and memset for them). */
-#if defined(__x86_64__) || defined(__i386__) || defined(__aarch64__) ||                           \
+#if defined(__x86_64__) || defined(__i386__) || defined(__aarch64__) ||                            \
     defined(__ARM_FEATURE_UNALIGNED)
 #define co_copy_fixed(dst, src, n) memcpy((dst), (src), (n))
 #define co_zero_fixed(dst, n) memset((dst), 0, (n))

@@ -79,10 +79,10 @@ void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 #endif
 #define CO_EMCY_OBJECT_ROWS                                                                        \
     CO_EMCY_HISTORY_ROWS                                                                           \
-    CO_OBJECT_ROW(0x1014, 0x1014, CO_COB_SUB0, co_emcy_cob_check_write,                           \
+    CO_OBJECT_ROW(0x1014, 0x1014, CO_COB_SUB0, co_emcy_cob_check_write,                            \
                   CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL)                                  \
     CO_EMCY_QUEUE_ROWS                                                                             \
-    CO_OBJECT_ROW(0x1028, 0x1028, CO_COB_SUB1_UP, NULL,                                           \
+    CO_OBJECT_ROW(0x1028, 0x1028, CO_COB_SUB1_UP, NULL,                                            \
                   CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL)
 
 #endif /* CANOLA_EMCY_INTERNAL_H */

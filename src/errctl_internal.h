@@ -93,7 +93,7 @@ static inline bool co_guard_life_lost(const co_node_t *node) { return node->life
 #define CO_GUARD_ROWS
 #endif
 #define CO_ERRCTL_OBJECT_ROWS                                                                      \
-    CO_OBJECT_ROW(0x1017, 0x1017, CO_COB_NONE, NULL, co_hb_written)                               \
+    CO_OBJECT_ROW(0x1017, 0x1017, CO_COB_NONE, NULL, co_hb_written)                                \
     CO_HB_CONSUMER_ROWS                                                                            \
     CO_GUARD_ROWS
 

@@ -95,7 +95,7 @@ typedef co_abort_t (*co_object_check_fn)(co_node_t *node, const co_od_entry_t *e
                                          const uint8_t *data, uint32_t len);
 typedef void (*co_object_written_fn)(co_node_t *node, const co_od_entry_t *entry);
 typedef struct co_object_row {
-    unsigned first : 12;          /* the objects 0x1000 + first .. + span */
+    unsigned first : 12; /* the objects 0x1000 + first .. + span */
     unsigned span : 12;
     unsigned cob : 8;             /* CO_COB_SUB*: the sub-indices holding a COB-ID */
     co_object_check_fn check;     /* refuse a value the service cannot take (NULL: none) */
@@ -104,7 +104,7 @@ typedef struct co_object_row {
 /* A bit per sub-index 0..6, bit 7 for 7 and above: a new COB-ID must name an identifier of
  * its own format (co_cob_valid). */
 enum { CO_COB_NONE = 0x00, CO_COB_SUB0 = 0x01, CO_COB_SUB1_2 = 0x06, CO_COB_SUB1_UP = 0xFE };
-#define CO_OBJECT_ROW(first, last, cob, check, written)                                           \
+#define CO_OBJECT_ROW(first, last, cob, check, written)                                            \
     {(first)-0x1000u, (last) - (first), (cob), (check), (written)},
 
 /* Whether the network may read `entry` now: CO_ABORT_NO_DATA for a sub-index of 0x1003 above

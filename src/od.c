@@ -126,7 +126,6 @@ static bool wire_is_native(const type_info_t *t)
 }
 #endif
 
-
 static bool has_read_hook(const co_od_entry_t *e)
 {
     const co_od_hooks_t *h = co_od_hooks_of(e);

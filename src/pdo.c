@@ -221,8 +221,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     } else {
         uint8_t flags = p->flags;
         load_comm(node, p, r.tpdo, r.num);
-        p->flags =
-            (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
+        p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
     take_effect(node, p, r.tpdo, r.num);
     count_listeners(node);

@@ -118,7 +118,8 @@ static inline uint8_t pdo_item(const co_od_t *od, const co_pdo_t *p, unsigned i,
 {
     const co_od_entry_t *e = pdo_entry(od, p, i);
     uint32_t n = e != NULL && co_od_hooks_of(e) == NULL ? co_native_size(co_od_type(od, e)) : 0u;
-    uint8_t bits = CO_CONFIG_PDO_BIT_MAPPING || n == 0 ? pdo_item_bits(od, p, i) : (uint8_t)(8u * n);
+    uint8_t bits =
+        CO_CONFIG_PDO_BIT_MAPPING || n == 0 ? pdo_item_bits(od, p, i) : (uint8_t)(8u * n);
     *entry = e;
     *whole = bits == 8u * n ? n : 0u;
     return bits;
@@ -162,7 +163,7 @@ static inline uint16_t pdo_map_index(bool tpdo, uint16_t num)
 /* pdo_tx.c */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
-void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
+void tpdo_send_event(co_node_t *node, co_pdo_t *p); /* an event-driven transmission */
 
 /* pdo.c: another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);

@@ -4,8 +4,8 @@
  * and event timer (sub5) as a TPDO sends, and RPDO deadline monitoring (0x1400+n sub5): a
  * deadline restarted, a missed one reported. It sends nothing (pdo_tx.c's poll sends what
  * is due) and calls only the family's base, pdo.c (which loads the timers' parameters and
- * starts the event timer). Left out with CO_CONFIG_PDO_TIMERS 0 (pdo_timers.h): those sub-indices are then
- * plain entries.
+ * starts the event timer). Left out with CO_CONFIG_PDO_TIMERS 0 (pdo_timers.h): those sub-indices
+ * are then plain entries.
  */
 #include "pdo_internal.h"
 

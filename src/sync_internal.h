@@ -70,7 +70,7 @@ static inline uint32_t co_sync_producer_period(const co_node_t *node)
 #define CO_SYNC_PRODUCER_ROWS
 #endif
 #define CO_SYNC_OBJECT_ROWS                                                                        \
-    CO_OBJECT_ROW(0x1005, 0x1005, CO_COB_SUB0, NULL, co_sync_written)                             \
+    CO_OBJECT_ROW(0x1005, 0x1005, CO_COB_SUB0, NULL, co_sync_written)                              \
     CO_SYNC_PRODUCER_ROWS                                                                          \
     CO_OBJECT_ROW(0x1019, 0x1019, CO_COB_NONE, co_sync_check_write, co_sync_written)
 

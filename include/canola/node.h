@@ -139,8 +139,8 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint8_t nmt_state;
     bool started;
     uint8_t txq_count;
-    uint16_t services;    /**< co_service_t bits the current NMT state allows */
-    uint16_t route_count; /**< receive routes, sorted by key (routes[] below) */
+    uint16_t services;       /**< co_service_t bits the current NMT state allows */
+    uint16_t route_count;    /**< receive routes, sorted by key (routes[] below) */
     uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
     uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
     uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */

@@ -87,12 +87,12 @@ typedef const co_od_entry_t *co_pdo_item_t;
  *  entry's size says it) a bit count per slot. The byte fields come first: Cortex-M
  *  reaches the first 32 bytes of a struct with the short byte loads and stores. */
 typedef struct co_pdo {
-    uint8_t sync_start; /**< TPDO sub6: SYNC start value */
-    uint8_t count;      /**< mapped entries */
-    uint8_t bits;       /**< mapped bits in all */
-    uint8_t type;       /**< transmission type */
-    uint8_t sync_count; /**< SYNCs counted towards the next transmission */
-    uint8_t flags;      /**< internal state bits (src/pdo_internal.h) */
+    uint8_t sync_start;              /**< TPDO sub6: SYNC start value */
+    uint8_t count;                   /**< mapped entries */
+    uint8_t bits;                    /**< mapped bits in all */
+    uint8_t type;                    /**< transmission type */
+    uint8_t sync_count;              /**< SYNCs counted towards the next transmission */
+    uint8_t flags;                   /**< internal state bits (src/pdo_internal.h) */
     uint8_t data[CO_FRAME_DATA_MAX]; /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t map_bits[CO_PDO_MAP_MAX]; /**< bits mapped per slot */

@@ -107,10 +107,10 @@ typedef struct co_sdo_server {
 #if CO_CONFIG_SDO_SEGMENTED
     const uint8_t *wire; /**< segmented upload: the value's wire bytes in storage, or NULL */
 #endif
-    uint32_t cob_rx;  /**< client -> server; bit 31 = off */
-    uint32_t cob_tx;  /**< server -> client */
-    uint32_t size;    /**< indicated or known total size */
-    uint32_t done;    /**< bytes transferred so far */
+    uint32_t cob_rx; /**< client -> server; bit 31 = off */
+    uint32_t cob_tx; /**< server -> client */
+    uint32_t size;   /**< indicated or known total size */
+    uint32_t done;   /**< bytes transferred so far */
     uint32_t buf_len;
     /** Segmented and block transfers' data (+ room for a block's last segment padding);
      *  an expedited-only server needs none. */
