@@ -648,17 +648,10 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
     if (value == NULL) {
         return CO_ABORT_WRITE_ONLY;
     }
-    uint32_t native = co_native_size(co_od_type(od, entry));
-    if (native != 0 && offset == 0 && cap >= native) {
-        co_copy_number(buf, value, native); /* a whole number, as stored */
-        *n = native;
-        if (total != NULL) {
-            *total = native;
-        }
-        return CO_ABORT_NONE;
-    }
+    /* a whole number's storage is its wire form (co_native_size: 0 where it is not) */
+    whole = co_native_size(co_od_type(od, entry));
     uint8_t tmp[8];
-    const uint8_t *wire = stored_wire(od, entry, tmp, &whole);
+    const uint8_t *wire = whole != 0 ? value : stored_wire(od, entry, tmp, &whole);
     if (total != NULL) {
         *total = whole;
     }
