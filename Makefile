@@ -19,7 +19,7 @@ PY_WORKERS ?= $(shell echo $$((2 * $(JOBS))))
 FORMAT_SRC  = $(shell git ls-files '*.c' '*.h' ':!python' 2>/dev/null || find include src port tests examples bench -name '*.[ch]')
 
 .PHONY: all demo demo-c test check test-plain test-san test-configs test-python test-pytest \
-        test-pytest-fast test-python-lint test-vcan format format-check bench fuzz fuzz-c \
+        test-pytest-fast test-python-lint test-view test-vcan format format-check bench fuzz fuzz-c \
         fuzz-long fuzz-eds fuzz-gateway fuzz-socketcand coverage py-env lint cortex-m test-m32 \
         test-clang analyse clean fuzz-conformance firmware run-firmware test-firmware
 
@@ -95,6 +95,14 @@ test-pytest: py-env
 # make check's share: the tests not marked slow.
 test-pytest-fast: py-env
 	cd python && ../$(PY_VENV)/bin/python -m pytest -q -n $(PY_WORKERS) -m 'not slow' tests
+
+# canola view in a real browser (python/tests/test_view_browser.py): Debian's chromium,
+# headless; the demo's page saved as build-logs/view.png. NOT RUN without chromium.
+test-view: py-env
+	@if command -v chromium >/dev/null 2>&1 || [ -n "$$CANOLA_CHROMIUM" ]; then \
+	  cd python && CANOLA_BROWSER_TESTS=1 ../$(PY_VENV)/bin/python -m pytest -q \
+	    tests/test_view_browser.py; \
+	else echo "canola view in a browser: NOT RUN (chromium not installed; .ci/run installs it)"; fi
 
 test-python-lint: py-env
 	cd python && ../$(PY_VENV)/bin/ruff check . && ../$(PY_VENV)/bin/mypy --strict src

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * canola/canola.h -- the whole public API of the canola core in one include.
- * See each header for its manual; README.md for the picture.
+ * See each header for its manual; docs/architecture.md for the picture.
  */
 #ifndef CANOLA_CANOLA_H
 #define CANOLA_CANOLA_H

@@ -9,7 +9,14 @@ CANopenNode's DS301 profile (no manufacturer objects, so no string and no entry 
 bytes: the segmented checks are skipped there), NMT reset node ends canopend's process (a
 supervisor restarts it; no boot-up without one), and with its storage files missing it
 reports EMCY 0x5000 (generic error) at start and, as CO_NMT_ERR_ON_ERR_REG asks, stays
-PRE-OPERATIONAL whatever NMT says. Each model
+PRE-OPERATIONAL whatever NMT says. demoDevice's real frames are in data/traces/demodevice.log;
+where it differs from this model: its dictionary is demoDevice.eds's (canopennode_dictionaries.py:
+the CiA 401 I/O objects, 0x2100..0x2120, RPDO1 mapped to 0x6200:1..2), its "String long"
+0x2121:2 has room for 1000 bytes (here 64, so that a length refusal gets exercised), it
+goes OPERATIONAL by itself at start, its 0x100A is empty when built outside a tagged
+checkout (a read is aborted with 0x06040047), and NMT reset node ends its process as
+canopend's; its 3-byte string and its DOMAIN answer the probes as modelled here
+(demodevice_short_string.log, demodevice_domain.log). Each model
 reproduces what issue 34 observed when ``canola conformance`` ran against the two devices on
 vcan0 (frames and timings quoted there), and what the devices' public descriptions say
 (CANopenDemo's demo/demoDevice.md and demo/domainDemo.c): a :class:`canola.Device` (a

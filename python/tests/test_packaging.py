@@ -118,7 +118,8 @@ def test_wheel_installs_and_runs_the_demo(tmp_path: Path) -> None:
     with zipfile.ZipFile(wheel) as whl:
         names = set(whl.namelist())
     assert any(re.fullmatch(r"canola/_core\..*\.so", n) for n in names), "no extension"
-    assert {"canola/data/demo/drive.eds", "canola/py.typed", "canola/_core.pyi"} <= names
+    assert {"canola/data/demo/drive.eds", "canola/py.typed", "canola/_core.pyi",
+            "canola/view/static/index.html", "canola/view/static/uPlot.iife.min.js"} <= names
 
     # The newest versions the ranges allow (or pip's cache has).
     newest = fresh_venv(tmp_path / "newest", wheel)
@@ -137,6 +138,26 @@ def test_wheel_installs_and_runs_the_demo(tmp_path: Path) -> None:
                   "net = load_yaml('nodes:\\n  - {id: 5, heartbeat_ms: 100}\\n')\n"
                   "assert [(s.node_id, s.heartbeat_ms) for s in net.slaves] == [(5, 100)]\n")
     run([str(oldest / "python"), "-c", yaml_check], cwd=tmp_path, what="load_yaml (pyyaml)")
+    run([str(oldest / "python"), "-c", VIEW_CHECK], cwd=tmp_path, what="canola view (aiohttp)")
+
+
+#: canola view serves its page and files from the installed package.
+VIEW_CHECK = """
+import io, urllib.request
+from canola.master import Master
+from canola.nodedicts import NodeDictionaries
+from canola.bus.open import open_bus
+from canola.view.launch import start_view
+bus = lambda: open_bus(url="virtual://packaging-view")
+view = start_view(open_bus=bus, open_master=lambda: Master(bus(), announce=False),
+                  dictionaries=NodeDictionaries(), listen="127.0.0.1:0", out=io.StringIO())
+try:
+    for path in ("/", "/static/view.js", "/static/uPlot.iife.min.js"):
+        with urllib.request.urlopen(f"http://127.0.0.1:{view.port}{path}", timeout=60) as r:
+            assert r.status == 200 and r.read(), path
+finally:
+    view.stop()
+"""
 
 
 def test_the_layout_is_the_one_the_architecture_page_draws() -> None:

@@ -93,7 +93,7 @@ class Decoder:
                  pdos: dict[int, list[Pdo]] | None = None) -> None:
         self._sdo: dict[int, _Sdo] = {}
         self._dicts = dictionaries or NodeDictionaries()
-        self._given = pdos or {}
+        self._given = dict(pdos or {})
         self._by_cob: dict[int, tuple[int, Pdo] | None] = {}
         self._file_pdos: dict[int, list[Pdo]] = {}
 
@@ -128,6 +128,16 @@ class Decoder:
                         found = (node, pdo)
             self._by_cob[can_id] = found
         return self._by_cob[can_id]
+
+    def pdo_of(self, can_id: int) -> tuple[int, Pdo] | None:
+        """The (node, PDO) whose mapping decodes the frames of ``can_id``, or None."""
+        return self._mapped_pdo(can_id) if (self._dicts or self._given) else None
+
+    def use_pdos(self, node: int, pdos: list[Pdo]) -> None:
+        """Decode ``node``'s PDOs by ``pdos`` from now on (e.g. read from the device),
+        before what its file says."""
+        self._given[node] = pdos
+        self._by_cob.clear()
 
     def _pdos_of(self, node: int) -> list[Pdo]:
         if node not in self._file_pdos:

@@ -12,6 +12,7 @@
     canola scan                               which node-IDs answer
     canola dump [FILE]                        traffic decoded into CANopen meaning
     canola monitor                            live view of every node
+    canola view                               live picture of the network in the browser
     canola device --eds FILE --node-id N      run a canola device
     canola demo                               the demo network (a master, three devices)
     canola gateway --iface IFACE [--listen W] CiA 309-3 ASCII gateway
@@ -52,6 +53,7 @@ from canola.cli import (
     scan_cmd,
     sdo_cmd,
     sync_cmd,
+    view_cmd,
 )
 from canola.cli.common import CliError, Parser
 from canola.errors import Error
@@ -64,6 +66,7 @@ _GROUPS: tuple[Callable[[argparse._SubParsersAction[Parser]], None], ...] = (
     dump_cmd.register, monitor_cmd.register, device_cmd.register, gateway_cmd.register,
     demo_cmd.register, boot_cmd.register, flash_cmd.register, lss_cmd.register,
     pdo_cmd.register, sync_cmd.register, eds_cmd.register, conformance_cmd.register,
+    view_cmd.register,
 )
 
 

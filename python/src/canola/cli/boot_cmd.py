@@ -37,7 +37,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "master runs the network: it "
                     "announces itself as node --master-id (boot-up, heartbeat if its 0x1017 "
                     "says so).")
-    p.add_argument("files", nargs="+", metavar="NETWORK.yaml|DCF")
+    p.add_argument("files", nargs="+", metavar="NETWORK.yaml|DCF",
+                   help="a network description, or the DCF of each slave")
     add_bus_options(p)
     add_master_options(p, announce=False)  # the network's master announces itself
     p.add_argument("--timeout", type=float, default=None, metavar="S",

@@ -5,14 +5,17 @@ from __future__ import annotations
 
 import argparse
 import sys
+import threading
 from typing import TextIO
 
+from canola.cli import view_cmd
 from canola.cli.common import CliError, Parser, bus_from_args, emit_json
 from canola.demo.devices import DEVICES
 from canola.demo.network import CanNetwork, Network, SimNetwork
 from canola.demo.report import failure_line, summary_json, summary_table
 from canola.demo.scenario import FAULTS, Faults, Scenario
 from canola.demo.trace import Trace
+from canola.errors import Error
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
@@ -42,6 +45,12 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                         "emulated machines on a real bus (default 1: SYNC every 10 ms)")
     p.add_argument("--fault", choices=sorted(FAULTS),
                    help="break one step on purpose, to see the checks catch it")
+    p.add_argument("--view", action="store_true",
+                   help="show the network in the browser (canola view) while it runs, in real "
+                        "time, and keep it running after the story until Ctrl-C")
+    p.add_argument("--listen", default="127.0.0.1:8080", metavar="HOST:PORT",
+                   help="with --view: " + view_cmd.LISTEN_HELP)
+    p.add_argument("--allow-write", action="store_true", help="with --view: " + view_cmd.WRITE_HELP)
     p.set_defaults(func=run)
 
 
@@ -64,6 +73,10 @@ def _network(args: argparse.Namespace) -> Network:
 def run(args: argparse.Namespace) -> int:
     if not 1 <= args.time_scale <= 100:
         raise CliError(f"canola demo: error: bad --time-scale {args.time_scale}: 1..100", 2)
+    if not args.view and (args.allow_write or args.listen != "127.0.0.1:8080"):
+        raise CliError("canola demo: error: --listen and --allow-write go with --view", 2)
+    if args.view:
+        return _run_viewed(args)
     out: TextIO | None = None if args.quiet or args.json else sys.stdout
     net = _network(args)
     try:
@@ -102,3 +115,52 @@ def _unicode_ok() -> bool:
     except (UnicodeEncodeError, LookupError):
         return False
     return True
+
+
+def _run_viewed(args: argparse.Namespace) -> int:
+    """``--view``: the demo in real time on its bus with ``canola view`` on it, then the
+    network kept running until Ctrl-C (:mod:`canola.demo.viewing`). Exits as the demo does
+    (1 when a step failed), or 130 when Ctrl-C came before the story ended."""
+    from canola.demo.viewing import (  # noqa: PLC0415 (aiohttp: only for --view)
+        keep_running,
+        start_demo_view,
+        view_bus_url,
+    )
+    from canola.view.launch import parse_listen  # noqa: PLC0415
+
+    if args.realtime or args.json:
+        raise CliError("canola demo: error: --view runs in real time and prints the trace: "
+                       "no --realtime, --json", 2)
+    try:
+        parse_listen(args.listen)
+    except Error as exc:
+        raise CliError(f"canola demo: error: {exc}", 2) from None
+    if args.iface is None and args.bus is None:
+        args.bus = view_bus_url()
+    out: TextIO | None = None if args.quiet else sys.stdout
+    net = _network(args)
+    view = None
+    scenario = None
+    code = 130  # Ctrl-C before the story ended
+    try:
+        view = start_demo_view(args.bus, args.iface, listen=args.listen,
+                               allow_write=args.allow_write)
+        trace = Trace(out, every_frame=args.every_frame)
+        faults = FAULTS[args.fault] if args.fault else Faults()
+        scenario = Scenario(net, trace, faults, time_scale=args.time_scale)
+        steps = scenario.run(keep_running=True)
+        print(summary_table(steps, unicode=_unicode_ok()), flush=True)
+        failed = failure_line(steps)
+        if failed is not None:
+            print(failed, file=sys.stderr, flush=True)
+        code = 0 if failed is None else 1
+        keep_running(scenario, net, threading.Event(), lambda text: print(text, flush=True))
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if scenario is not None:
+            scenario.close()
+        if view is not None:
+            view.stop()
+        net.close()
+    return code

@@ -73,7 +73,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "canola device refuses; a "
                     "warning a deviation it reads past; then a count on stderr. A clean "
                     "file prints nothing. Exit code 0 without errors, 1 with errors.")
-    c.add_argument("files", nargs="+", metavar="FILE")
+    c.add_argument("files", nargs="+", metavar="FILE", help="EDS or DCF files")
     c.add_argument("--strict", action="store_true", help="every warning is an error")
     c.set_defaults(func=run_check)
 
@@ -81,7 +81,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                             description="One row per object, and per sub-object: index, "
                                         "sub-index, name, data type, access, default, "
                                         "value (DCF) and PDO-mappable.")
-    s.add_argument("file", metavar="FILE")
+    s.add_argument("file", metavar="FILE", help="EDS or DCF file")
     s.add_argument("indices", nargs="?", type=_index_range, metavar="INDEX[-LAST]",
                    help="only this object, or the objects FIRST-LAST (hex)")
     s.add_argument("--name", metavar="TEXT",
@@ -94,8 +94,9 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                                         "[DeviceComissioning], each --set value as the "
                                         "entry's ParameterValue (checked against its data "
                                         "type, access and limits).")
-    d.add_argument("file", metavar="EDS")
-    d.add_argument("--node-id", type=node_id, required=True, metavar="N")
+    d.add_argument("file", metavar="EDS", help="the device's EDS")
+    d.add_argument("--node-id", type=node_id, required=True, metavar="N",
+                   help="the node-ID of the DCF (1..127)")
     d.add_argument("--set", dest="settings", type=_setting, action="append", default=[],
                    metavar="INDEX:SUB=VALUE", help="a value of the configuration "
                    "(repeatable), e.g. 0x1017:0=1000")

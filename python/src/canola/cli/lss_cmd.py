@@ -89,7 +89,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
     inquire = lss_subs.add_parser("inquire", help="read a device's LSS values",
                                   description="Select the device with this LSS address and "
                                               "read its identity and active node-ID.")
-    inquire.add_argument("address", type=_address, metavar="VENDOR:PRODUCT:REVISION:SERIAL")
+    inquire.add_argument("address", type=_address, metavar="VENDOR:PRODUCT:REVISION:SERIAL",
+                         help="the device's identity (0x1018 sub1..4) in hex")
     common(inquire)
     inquire.set_defaults(func=run_inquire)
 

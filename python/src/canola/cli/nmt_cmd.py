@@ -20,7 +20,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "the heartbeats with canola dump or canola monitor).")
     p.add_argument("cmd", choices=sorted(COMMANDS), metavar="CMD",
                    help="one of: " + ", ".join(sorted(COMMANDS)))
-    p.add_argument("node", type=node_or_all, metavar="NODE|all")
+    p.add_argument("node", type=node_or_all, metavar="NODE|all",
+                   help="node-ID 1..127, or all (0)")
     add_bus_options(p)
     p.add_argument("--json", action="store_true", help="print what was sent as JSON")
     p.set_defaults(func=run)

@@ -81,7 +81,8 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                                         "the EDS gives it) and VALUE (integers decimal or "
                                         "0x-hex, os/d as hex digits).")
     common(w)
-    w.add_argument("type_value", nargs="+", metavar="[TYPE] VALUE")
+    w.add_argument("type_value", nargs="+", metavar="[TYPE] VALUE",
+                   help="the value, after its CiA 309-3 type unless the EDS gives it")
     w.add_argument("--json", action="store_true", help="print a JSON object")
     w.set_defaults(func=run_write)
 
@@ -91,7 +92,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                                 description=f"{what[0].upper()}{what[1:]} (block transfer; "
                                             "--no-block for segmented).")
         common(f)
-        f.add_argument("file", metavar="FILE")
+        f.add_argument("file", metavar="FILE", help="the file read from or written to")
         f.add_argument("--no-block", action="store_true", help="segmented transfer")
         f.add_argument("--progress", action="store_true",
                        help="draw the progress bar even when stderr is not a terminal")

@@ -164,7 +164,9 @@ class Scenario:
 
     # ---- the flow
 
-    def run(self) -> list[Step]:
+    def run(self, *, keep_running: bool = False) -> list[Step]:
+        r"""Every step, then the nodes stopped (unless ``keep_running``: the caller
+        :meth:`close`\ s them)."""
         steps = [Step(key, title) for key, title in STEPS]
         actions: dict[str, Callable[[], tuple[bool, str]]] = {
             "master-online": self.online, "boot-up": self.boot, "pre-operational": self.preop,
@@ -183,7 +185,8 @@ class Scenario:
             self.master.stop_sync()
             self.wait(0.02)
         finally:
-            self.close()
+            if not keep_running:
+                self.close()
         return steps
 
     def close(self) -> None:

@@ -91,7 +91,8 @@ OD_FORMAT = 7  # 2: co_od_t.keys; 3: co_od_t.hash; 4: the compact form (CO_CONFI
 # 5: its 8-byte entries (value offsets, co_od_tables_t); 6: numbers in its image as their
 # storage's bytes; 7: its 6-byte entries (co_od_t.rows)
 
-__all__ = ["GenerateOptions", "check_usable", "generate", "generate_files", "main", "refusals"]
+__all__ = ["GenerateOptions", "build_parser", "check_usable", "generate", "generate_files", "main",
+           "refusals"]
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _NODEID = re.compile(r"\$nodeid", re.IGNORECASE)
@@ -909,8 +910,8 @@ def _name_from_path(path: str) -> str:
     return name if name and not name[0].isdigit() else "od_" + name
 
 
-def main(argv: Sequence[str] | None = None, prog: str = "canola-odgen") -> int:
-    """Command line: ``canola odgen INPUT -o DIR [--name NAME] [--node-id N]``."""
+def build_parser(prog: str = "canola-odgen") -> argparse.ArgumentParser:
+    """The command line's parser (docs/cli.md lists its options from it)."""
     p = _Parser(prog=prog,
                 description="Generate a canola object dictionary (C) from an EDS/DCF.")
     p.add_argument("input", help="EDS or DCF file")
@@ -924,6 +925,12 @@ def main(argv: Sequence[str] | None = None, prog: str = "canola-odgen") -> int:
                    help="RAM buffer per DOMAIN entry in bytes (0: leave DOMAINs out)")
     p.add_argument("--min-string-size", type=_int_range(0, 0xFFFF), default=0,
                    help="minimum capacity of string entries in bytes")
+    return p
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "canola-odgen") -> int:
+    """Command line: ``canola odgen INPUT -o DIR [--name NAME] [--node-id N]``."""
+    p = build_parser(prog)
     args = p.parse_args(argv)
     name: str = args.name if args.name is not None else _name_from_path(args.input)
     if _NAME.fullmatch(name) is None:

@@ -98,10 +98,12 @@ def entries(ctx: Context) -> None:
             data = ctx.sdo.upload(var.index, var.subindex)
         except SdoAbort as exc:
             domain_empty = var.data_type == _DOMAIN and exc.code not in _NOT_THERE
-            if (var.access_type == "wo" and exc.code == 0x06010001) or domain_empty:
+            # an empty string has no data to give: CiA 301's abort for that is 0x08000024
+            string_empty = var.data_type in VARIABLE_TYPES and exc.code == _NO_DATA[0]
+            if (var.access_type == "wo" and exc.code == 0x06010001) or domain_empty \
+                    or string_empty:
                 continue
-            expected = "abort 0x06010001 (write only)" if var.access_type == "wo" else "a value"
-            ctx.finding(what, expected, outcome(exc))
+            ctx.finding(what, _expected_read(var), outcome(exc))
             continue
         except ValueTooLargeError as exc:
             if var.data_type not in VARIABLE_TYPES:
@@ -118,6 +120,14 @@ def entries(ctx: Context) -> None:
         elif size is not None and len(data) != size:
             ctx.finding(what, f"{size} bytes", f"{len(data)} bytes [{data.hex(' ').upper()}]")
     ctx.note(f"{count} entries")
+
+
+def _expected_read(var: eds.Variable) -> str:
+    if var.access_type == "wo":
+        return "abort 0x06010001 (write only)"
+    if var.data_type in VARIABLE_TYPES:
+        return f"a value (0 bytes, or {abort_text(_NO_DATA[0])}, when empty)"
+    return "a value"
 
 
 @check("dictionary.read_write_only", clause="CiA 301 §7.2.4.3.17, CiA 306 §4.5.2",

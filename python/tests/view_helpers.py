@@ -1,0 +1,55 @@
+# SPDX-License-Identifier: Apache-2.0
+"""A ``canola`` command run as a process for the ``canola view`` tests: its output read line
+by line with bounded waits, Ctrl-C to end it."""
+
+from __future__ import annotations
+
+import os
+import queue
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+
+class CanolaProcess:
+    def __init__(self, *args: str) -> None:
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen([sys.executable, "-m", "canola.cli", *args],
+                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                     text=True, env=env)
+        self.lines: queue.Queue[str] = queue.Queue()
+        self.seen: list[str] = []
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.put(line.rstrip("\n"))
+
+    def wait_line(self, start: str, timeout: float) -> str:
+        """The first line (from now) that starts with ``start``."""
+        end = time.monotonic() + timeout
+        while (left := end - time.monotonic()) > 0:
+            try:
+                line = self.lines.get(timeout=left)
+            except queue.Empty:
+                break
+            self.seen.append(line)
+            if line.startswith(start):
+                return line
+        raise AssertionError(f"no line {start!r} within {timeout:.0f} s; output so far:\n"
+                             + "\n".join(self.seen))
+
+    def stop(self) -> int:
+        """Ctrl-C, as a user ends it: the exit code (it must end within 60 s)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        try:
+            return self.proc.wait(60)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait(10)
+            raise AssertionError(f"canola {self.proc.args[3:]} did not end on Ctrl-C within "
+                                 "60 s") from None
