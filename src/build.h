@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
- * src/build.h -- what the build's goal changes in the core: hints for the compiler, the
- * short paths a build for size (-Os) leaves out, and the copies of a size known only at
- * run time. Not installed; every module includes it (through kernel.h, or directly).
+ * src/build.h -- what the build's goal changes in the core: hints for the compiler, and the
+ * copies of a size known only at run time. Not installed; every module includes it
+ * (through kernel.h, or directly).
  */
 #ifndef CANOLA_BUILD_H
 #define CANOLA_BUILD_H
@@ -11,7 +11,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "canola/config.h" /* CO_SHORT_PATHS */
+#include "canola/config.h"
 
 /* Keeps a rare path out of line, so the common path of its caller stays small (a hint:
  * compilers without the attribute just decide for themselves). */
@@ -38,13 +38,13 @@
 #define CO_SIZE_NOINLINE
 #endif
 
-/* And the reverse: a function of one or two callers that -Os keeps out of line, where
- * the copies are smaller (constant arguments fold, a large frame merges; the functions
- * marked so were found by measuring). Other builds let the compiler decide. */
+/* And the reverse: a small function (or one of one or two callers) that -Os keeps out of
+ * line, where the copies are smaller (constant arguments fold, a large frame merges; the
+ * functions marked so were found by measuring). Other builds let the compiler decide. */
 #if (defined(__GNUC__) || defined(__clang__)) && defined(__OPTIMIZE_SIZE__)
 #define CO_SIZE_INLINE inline __attribute__((always_inline))
 #else
-#define CO_SIZE_INLINE
+#define CO_SIZE_INLINE inline
 #endif
 
 /* The opposite hint: a small hot helper that the compiler's size heuristics would keep
@@ -55,34 +55,28 @@
 #define CO_INLINE inline
 #endif
 
-/* Short paths (CO_SHORT_PATHS, canola/config.h: 0 in a build for size): tests/CMakeLists.txt
- * runs the SDO, PDO and dictionary tests without them too. */
-
-/* Copies and fills of a size known only at run time. Without the short paths (a build for
- * size) they are the byte loops of copy.c, a few instructions each, instead of the C
- * library's memcpy and memset, which no other call needs (about 470 bytes on Cortex-M4 with
- * newlib-nano, 310 on Cortex-M0). Otherwise the library's, faster on long runs. Both take
- * NULL pointers when `n` is 0. Copies of a size known at compile time stay memcpy: the
- * compiler turns those into moves. */
+/* Copies and fills of a size known only at run time: the byte loops of copy.c, a few
+ * instructions each, instead of the C library's memcpy and memset, which no other call needs
+ * (about 470 bytes on Cortex-M4 with newlib-nano, 310 on Cortex-M0): the core's copies are
+ * short (a segment, a value, a frame). Both take NULL pointers when `n` is 0. Copies of a
+ * size known at compile time stay memcpy: the compiler turns those into moves. */
 void co_copy_bytes(void *dst, const void *src, size_t n);
 void co_zero_bytes(void *dst, size_t n);
+#define co_copy co_copy_bytes
+#define co_zero co_zero_bytes
 
-static inline void co_copy(void *dst, const void *src, size_t n)
-{
-    if (!CO_SHORT_PATHS) {
-        co_copy_bytes(dst, src, n);
-    } else if (n > 0) {
-        memcpy(dst, src, n);
-    }
-}
-
-static inline void co_zero(void *dst, size_t n)
-{
-    if (!CO_SHORT_PATHS) {
-        co_zero_bytes(dst, n);
-    } else if (n > 0) {
-        memset(dst, 0, n);
-    }
-}
+/* Copies and fills of a size known at compile time between places of any alignment: a few
+ * moves where the target loads and stores words at any address; the byte loops elsewhere
+ * (Cortex-M0 would call the C library's memcpy and memset for them). */
+#if defined(__x86_64__) || defined(__i386__) || defined(__aarch64__) ||                            \
+    defined(__ARM_FEATURE_UNALIGNED)
+#define co_copy_fixed(dst, src, n) memcpy((dst), (src), (n))
+#define co_zero_fixed(dst, n) memset((dst), 0, (n))
+#define CO_UNALIGNED_ACCESS 1
+#else
+#define co_copy_fixed co_copy_bytes
+#define co_zero_fixed co_zero_bytes
+#define CO_UNALIGNED_ACCESS 0
+#endif
 
 #endif /* CANOLA_BUILD_H */

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
- * copy.c -- the byte loops behind co_copy and co_zero (build.h) in a build for size.
+ * copy.c -- the byte loops behind co_copy and co_zero (build.h).
  */
 #include "build.h"
 

@@ -64,4 +64,25 @@ void co_emcy_ingest(co_node_t *node, uint8_t slot, const co_frame_t *frame);
 #define co_emcy_ingest co_none_slot_frame
 #endif
 
+/* EMCY's objects (node_od.c): 0x1014 its COB-ID, 0x1015 the inhibit time (with the queue),
+ * 0x1003 the history, 0x1028 the consumer's COB-IDs. */
+#if CO_CONFIG_EMCY_HISTORY
+#define CO_EMCY_HISTORY_ROWS                                                                       \
+    CO_OBJECT_ROW(0x1003, 0x1003, CO_COB_NONE, co_emcy_check_write, co_emcy_written)
+#else
+#define CO_EMCY_HISTORY_ROWS
+#endif
+#if CO_EMCY_QUEUE_LEN > 0
+#define CO_EMCY_QUEUE_ROWS CO_OBJECT_ROW(0x1015, 0x1015, CO_COB_NONE, NULL, co_emcy_written)
+#else
+#define CO_EMCY_QUEUE_ROWS
+#endif
+#define CO_EMCY_OBJECT_ROWS                                                                        \
+    CO_EMCY_HISTORY_ROWS                                                                           \
+    CO_OBJECT_ROW(0x1014, 0x1014, CO_COB_SUB0, co_emcy_cob_check_write,                            \
+                  CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL)                                  \
+    CO_EMCY_QUEUE_ROWS                                                                             \
+    CO_OBJECT_ROW(0x1028, 0x1028, CO_COB_SUB1_UP, NULL,                                            \
+                  CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL)
+
 #endif /* CANOLA_EMCY_INTERNAL_H */

@@ -79,4 +79,22 @@ static inline bool co_guard_life_lost(const co_node_t *node) { return node->life
 #define co_guard_life_lost co_none_state
 #endif
 
+/* Error control's objects (node_od.c): 0x1017 the heartbeat, 0x1016 its consumer's entries
+ * and 0x100C/0x100D guarding, each where it is built. */
+#if CO_HB_CONSUMERS_MAX > 0
+#define CO_HB_CONSUMER_ROWS                                                                        \
+    CO_OBJECT_ROW(0x1016, 0x1016, CO_COB_NONE, co_hb_check_write, co_hb_written)
+#else
+#define CO_HB_CONSUMER_ROWS
+#endif
+#if CO_CONFIG_GUARDING
+#define CO_GUARD_ROWS CO_OBJECT_ROW(0x100C, 0x100D, CO_COB_NONE, NULL, co_guard_written)
+#else
+#define CO_GUARD_ROWS
+#endif
+#define CO_ERRCTL_OBJECT_ROWS                                                                      \
+    CO_OBJECT_ROW(0x1017, 0x1017, CO_COB_NONE, NULL, co_hb_written)                                \
+    CO_HB_CONSUMER_ROWS                                                                            \
+    CO_GUARD_ROWS
+
 #endif /* CANOLA_ERRCTL_INTERNAL_H */

@@ -66,34 +66,6 @@ co_err_t co_txq_refused(co_node_t *node, const co_frame_t *frame, uint16_t servi
 /* Nothing waits to be sent: a sender of many frames (block transfer) sends only then. */
 static inline bool co_txq_idle(const co_node_t *node) { return node->txq_count == 0; }
 
-/* co_node_send_as for a sender that knows the queue is empty (co_txq_idle): the driver is
- * called from here, without a call into txq.c. */
-static inline co_err_t co_node_send_idle(co_node_t *node, const co_frame_t *frame, uint16_t service)
-{
-#if !CO_SHORT_PATHS
-    return co_node_send_as(node, frame, service); /* a build for size: one send path */
-#else
-    if (!(node->services & service)) {
-        return co_node_send_as(node, frame, service);
-    }
-    co_err_t err = node->cfg.driver.tx(node->cfg.driver.ctx, frame);
-    if (err != CO_OK) {
-        return co_txq_refused(node, frame, service, err);
-    }
-    CO_COUNT(node, tx_frames);
-    return CO_OK;
-#endif
-}
-
-/* co_node_send_as for the per-frame paths (PDO, SDO). `service` is not 0. */
-static inline co_err_t co_node_send_hot(co_node_t *node, const co_frame_t *frame, uint16_t service)
-{
-    if (node->txq_count != 0) {
-        return co_node_send_as(node, frame, service);
-    }
-    return co_node_send_idle(node, frame, service);
-}
-
 /* ---- time and the schedule (kernel.c) */
 
 /* Run co_node_poll again by `due_us` at the latest (a service's new deadline). O(1). */
@@ -115,6 +87,25 @@ static inline uint64_t co_long_ms_to_us(uint32_t ms) { return (uint64_t)ms * 100
 /* The value of an optional integer entry, `absent` when the dictionary lacks it (or it is
  * no integer): the services' parameters, 32 bits at most. */
 uint32_t co_od_u32(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t absent);
+
+/* ---- the services' objects: each service's internal header lists the rows of the objects
+ * it owns in the communication area (a macro of CO_OBJECT_ROWs), node_od.c puts the lists
+ * together and, on every write there, runs the owner's check and effect. */
+typedef co_abort_t (*co_object_check_fn)(co_node_t *node, const co_od_entry_t *entry,
+                                         const uint8_t *data, uint32_t len);
+typedef void (*co_object_written_fn)(co_node_t *node, const co_od_entry_t *entry);
+typedef struct co_object_row {
+    unsigned first : 12; /* the objects 0x1000 + first .. + span */
+    unsigned span : 12;
+    unsigned cob : 8;             /* CO_COB_SUB*: the sub-indices holding a COB-ID */
+    co_object_check_fn check;     /* refuse a value the service cannot take (NULL: none) */
+    co_object_written_fn written; /* the new value takes effect (NULL: nothing to do) */
+} co_object_row_t;
+/* A bit per sub-index 0..6, bit 7 for 7 and above: a new COB-ID must name an identifier of
+ * its own format (co_cob_valid). */
+enum { CO_COB_NONE = 0x00, CO_COB_SUB0 = 0x01, CO_COB_SUB1_2 = 0x06, CO_COB_SUB1_UP = 0xFE };
+#define CO_OBJECT_ROW(first, last, cob, check, written)                                            \
+    {(first)-0x1000u, (last) - (first), (cob), (check), (written)},
 
 /* Whether the network may read `entry` now: CO_ABORT_NO_DATA for a sub-index of 0x1003 above
  * the number of errors recorded (CiA 301 §7.5.2.4: no data), else CO_ABORT_NONE. O(1). */

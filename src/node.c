@@ -46,8 +46,7 @@ co_err_t co_node_init(co_node_t *node, const co_node_config_t *config)
     node->hb_next_us = CO_TIME_NEVER;
     co_guard_bind(node);
     node->error_behaviour = co_od_find(&config->od, 0x1029, 1, NULL);
-    co_err_t err = co_hb_bind(node);
-    return err == CO_OK ? co_pdo_bind(node) : err;
+    return co_hb_bind(node);
 }
 
 co_err_t co_node_start(co_node_t *node, uint64_t now_us)
@@ -76,57 +75,45 @@ const co_node_stats_t *co_node_stats(const co_node_t *node)
 
 /* ---- dispatch */
 
-/* The service that takes the frames of each route kind, with the route's slot (a table:
- * less code than a switch). Left-out services are stand-ins that ignore the frame; the last
- * kinds (LSS, the manager) have no entry when left out: no route of theirs is ever set, and
- * both tables end before them. */
-typedef void (*ingest_fn)(co_node_t *node, uint8_t slot, const co_frame_t *frame);
-static const ingest_fn k_ingest[] = {
-    [CO_ROUTE_NMT] = co_nmt_ingest,
-    [CO_ROUTE_GUARD_RTR] = co_guard_rtr,
-    [CO_ROUTE_GUARD_REPLY] = co_guard_reply,
-    [CO_ROUTE_HB_CONSUMER] = co_hb_ingest,
-    [CO_ROUTE_SDO_SERVER] = co_sdo_server_ingest,
-    [CO_ROUTE_SDO_CLIENT] = co_sdo_client_ingest,
-    [CO_ROUTE_SYNC] = co_sync_ingest,
-    [CO_ROUTE_TIME] = co_time_ingest,
-    [CO_ROUTE_EMCY] = co_emcy_ingest,
-    [CO_ROUTE_RPDO] = co_pdo_rx,
-    [CO_ROUTE_TPDO_RTR] = co_pdo_rtr,
+/* Each route kind: the service that takes its frames (with the route's slot) and the
+ * co_service_t bit the NMT state must allow for them. One list, two tables (less code than a
+ * switch, and a table of pointers packs no service bits between them). Left-out services
+ * are stand-ins that ignore the frame; the last kinds (LSS, the manager) have no entry when
+ * left out: no route of theirs is ever set, and both tables end before them. */
 #if CO_CONFIG_LSS_SLAVE
-    [CO_ROUTE_LSS_SLAVE] = co_lss_slave_ingest,
+#define LSS_SLAVE_ROUTE(X) X(CO_ROUTE_LSS_SLAVE, co_lss_slave_ingest, CO_SVC_LSS)
+#else
+#define LSS_SLAVE_ROUTE(X)
 #endif
 #if CO_CONFIG_LSS_MASTER
-    [CO_ROUTE_LSS_MASTER] = co_lss_master_ingest,
+#define LSS_MASTER_ROUTE(X) X(CO_ROUTE_LSS_MASTER, co_lss_master_ingest, CO_SVC_LSS)
+#else
+#define LSS_MASTER_ROUTE(X)
 #endif
 #if CO_CONFIG_MANAGER
-    [CO_ROUTE_MGR_BOOTUP] = co_manager_bootup,
+#define MANAGER_ROUTE(X) X(CO_ROUTE_MGR_BOOTUP, co_manager_bootup, CO_SVC_ERROR_CONTROL)
+#else
+#define MANAGER_ROUTE(X)
 #endif
-};
+#define ROUTE_KINDS(X)                                                                             \
+    X(CO_ROUTE_NMT, co_nmt_ingest, CO_SVC_NMT)                                                     \
+    X(CO_ROUTE_GUARD_RTR, co_guard_rtr, CO_SVC_ERROR_CONTROL)                                      \
+    X(CO_ROUTE_GUARD_REPLY, co_guard_reply, CO_SVC_ERROR_CONTROL)                                  \
+    X(CO_ROUTE_HB_CONSUMER, co_hb_ingest, CO_SVC_ERROR_CONTROL)                                    \
+    X(CO_ROUTE_SDO_SERVER, co_sdo_server_ingest, CO_SVC_SDO)                                       \
+    X(CO_ROUTE_SDO_CLIENT, co_sdo_client_ingest, CO_SVC_SDO)                                       \
+    X(CO_ROUTE_SYNC, co_sync_ingest, CO_SVC_SYNC)                                                  \
+    X(CO_ROUTE_TIME, co_time_ingest, CO_SVC_TIME)                                                  \
+    X(CO_ROUTE_EMCY, co_emcy_ingest, CO_SVC_EMCY)                                                  \
+    X(CO_ROUTE_RPDO, co_pdo_rx, CO_SVC_PDO)                                                        \
+    X(CO_ROUTE_TPDO_RTR, co_pdo_rtr, CO_SVC_PDO)                                                   \
+    LSS_SLAVE_ROUTE(X) LSS_MASTER_ROUTE(X) MANAGER_ROUTE(X)
 
-/* The co_service_t bit the NMT state must allow for the frames of each route kind. */
-static const uint16_t k_service[] = {
-    [CO_ROUTE_NMT] = CO_SVC_NMT,
-    [CO_ROUTE_GUARD_RTR] = CO_SVC_ERROR_CONTROL,
-    [CO_ROUTE_GUARD_REPLY] = CO_SVC_ERROR_CONTROL,
-    [CO_ROUTE_HB_CONSUMER] = CO_SVC_ERROR_CONTROL,
-    [CO_ROUTE_SDO_SERVER] = CO_SVC_SDO,
-    [CO_ROUTE_SDO_CLIENT] = CO_SVC_SDO,
-    [CO_ROUTE_SYNC] = CO_SVC_SYNC,
-    [CO_ROUTE_TIME] = CO_SVC_TIME,
-    [CO_ROUTE_EMCY] = CO_SVC_EMCY,
-    [CO_ROUTE_RPDO] = CO_SVC_PDO,
-    [CO_ROUTE_TPDO_RTR] = CO_SVC_PDO,
-#if CO_CONFIG_LSS_SLAVE
-    [CO_ROUTE_LSS_SLAVE] = CO_SVC_LSS,
-#endif
-#if CO_CONFIG_LSS_MASTER
-    [CO_ROUTE_LSS_MASTER] = CO_SVC_LSS,
-#endif
-#if CO_CONFIG_MANAGER
-    [CO_ROUTE_MGR_BOOTUP] = CO_SVC_ERROR_CONTROL,
-#endif
-};
+typedef void (*ingest_fn)(co_node_t *node, uint8_t slot, const co_frame_t *frame);
+#define INGEST_OF(kind, ingest, service) [kind] = ingest,
+#define SERVICE_OF(kind, ingest, service) [kind] = service,
+static const ingest_fn k_ingest[] = {ROUTE_KINDS(INGEST_OF)};
+static const uint16_t k_service[] = {ROUTE_KINDS(SERVICE_OF)};
 
 /* Hand a frame to the service its route names (routes hold the kinds above only). */
 static CO_INLINE void dispatch(co_node_t *node, uint16_t route, const co_frame_t *frame)
@@ -155,24 +142,6 @@ static CO_INLINE void deliver(co_node_t *node, uint16_t route, const co_frame_t 
     dispatch(node, route, frame);
 }
 
-/* A frame on another COB-ID than the last one routed: the search, then delivered. */
-static CO_FAST_NOINLINE void ingest_searched(co_node_t *node, const co_frame_t *frame, uint32_t key)
-{
-    uint16_t found = co_routes_find(node, key);
-    if (found == node->route_count) {
-        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
-            CO_COUNT(node, rx_malformed);
-        } else {
-            CO_COUNT(node, rx_unrouted);
-        }
-        return;
-    }
-    if (CO_SHORT_PATHS) {
-        node->route_hint = found; /* (a build for size keeps no hint) */
-    }
-    deliver(node, found, frame);
-}
-
 void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
 {
     node->now_us = now_us;
@@ -184,16 +153,16 @@ void co_node_ingest(co_node_t *node, uint64_t now_us, const co_frame_t *frame)
         CO_COUNT(node, rx_malformed); /* no controller delivers this: never let it match */
         return;
     }
-    /* A stream of frames on one COB-ID (an SDO transfer, a busy PDO) finds its route in
-     * the one the last frame took; this path makes no call but the service's (a short
-     * path: without it every frame takes the search). */
-    uint32_t key = co_route_key(frame);
-    uint16_t hint = node->route_hint;
-    if (!CO_SHORT_PATHS || hint >= node->route_count || node->route_keys[hint] != key) {
-        ingest_searched(node, frame, key);
+    uint16_t found = co_routes_find(node, co_route_key(frame));
+    if (found == node->route_count) {
+        if (!(frame->flags & CO_FRAME_EXT) && frame->id > CO_ID_STD_MAX) {
+            CO_COUNT(node, rx_malformed);
+        } else {
+            CO_COUNT(node, rx_unrouted);
+        }
         return;
     }
-    deliver(node, hint, frame);
+    deliver(node, found, frame);
 }
 
 /* ---- time */

@@ -5,88 +5,30 @@
  * co_node_write_entry is the node's wiring for every service's co_node_write (kernel.h).
  */
 #include "node_internal.h"
-#include "od_plain.h"
 
-/* ---- The services' objects: which service checks a write to which communication object,
- * and takes the new value into effect. A table, searched on each write to 0x1000..0x1FFF,
- * instead of a switch per step: less code. */
+/* ---- The services' objects: which service checks a write to which communication object
+ * and takes the new value into effect. Each service lists its own (its internal header's
+ * CO_*_OBJECT_ROWS, kernel.h's co_object_row_t); the table is their lists put together, in
+ * no particular order, and searched on each write to 0x1000..0x1FFF: less code than a
+ * switch per step. A new service adds its list here. */
+static const co_object_row_t k_objects[] = {
+    CO_ERRCTL_OBJECT_ROWS CO_EMCY_OBJECT_ROWS CO_SYNC_OBJECT_ROWS CO_TIME_OBJECT_ROWS
+        CO_STORAGE_OBJECT_ROWS CO_SDO_OBJECT_ROWS CO_PDO_OBJECT_ROWS};
 
-typedef co_abort_t (*write_check_fn)(co_node_t *node, const co_od_entry_t *entry,
-                                     const uint8_t *data, uint32_t len);
-typedef void (*written_fn)(co_node_t *node, const co_od_entry_t *entry);
-
-/* Which sub-indices of an object hold a COB-ID (bit 31 valid, bit 29 frame format, the
- * identifier): a new one must name an identifier of its own format. */
-/* A bit per sub-index 0..6, bit 7 for 7 and above (a mask: one test). */
-enum { COB_NONE = 0x00, COB_SUB0 = 0x01, COB_SUB1_2 = 0x06, COB_SUB1_UP = 0xFE };
-
-/* The indices first..last as offsets into the communication profile area (12 bits each, one
- * word with `cob`: 12 bytes an object, not 16). */
-#define AREA 0x1000u
-#define OBJECTS(first, last) ((first)-AREA), ((last)-AREA)
-
-typedef struct service_object {
-    unsigned first : 12; /* indices AREA + first..last */
-    unsigned last : 12;
-    unsigned cob : 8;     /* COB_*: the sub-indices holding a COB-ID */
-    write_check_fn check; /* refuse a value the service cannot take (NULL: none) */
-    written_fn written;   /* the new value takes effect (NULL: nothing to do) */
-} service_object_t;
-
-/* Objects of left-out features stay (for their COB-ID check) or go (with no effect). */
-static const service_object_t k_service_objects[] = {
-#if CO_CONFIG_EMCY_HISTORY
-    {OBJECTS(0x1003, 0x1003), COB_NONE, co_emcy_check_write, co_emcy_written},
-#endif
-    {OBJECTS(0x1005, 0x1005), COB_SUB0, NULL, co_sync_written},
-#if CO_CONFIG_SYNC_PRODUCER
-    {OBJECTS(0x1006, 0x1007), COB_NONE, NULL, co_sync_written},
-#endif
-#if CO_CONFIG_GUARDING
-    {OBJECTS(0x100C, 0x100D), COB_NONE, NULL, co_guard_written},
-#endif
-#if CO_CONFIG_STORAGE
-    {OBJECTS(0x1010, 0x1011), COB_NONE, co_storage_check_write, co_storage_show_capability},
-#else
-    {OBJECTS(0x1010, 0x1011), COB_NONE, co_storage_check_write, NULL}, /* every command refused */
-#endif
-    {OBJECTS(0x1012, 0x1012), COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL},
-    {OBJECTS(0x1014, 0x1014), COB_SUB0, co_emcy_cob_check_write,
-     CO_EMCY_QUEUE_LEN > 0 ? co_emcy_written : NULL},
-#if CO_EMCY_QUEUE_LEN > 0
-    {OBJECTS(0x1015, 0x1015), COB_NONE, NULL, co_emcy_written},
-#endif
-#if CO_HB_CONSUMERS_MAX > 0
-    {OBJECTS(0x1016, 0x1016), COB_NONE, co_hb_check_write, co_hb_written},
-#endif
-    {OBJECTS(0x1017, 0x1017), COB_NONE, NULL, co_hb_written},
-    {OBJECTS(0x1019, 0x1019), COB_NONE, co_sync_check_write, co_sync_written},
-    {OBJECTS(0x1028, 0x1028), COB_SUB1_UP, NULL,
-     CO_EMCY_CONSUMERS_MAX > 0 ? co_emcy_written : NULL},
-#if CO_SDO_CLIENTS_MAX > 0
-    {OBJECTS(0x1200, 0x127F), COB_SUB1_2, co_sdo_server_check_write, co_sdo_server_written},
-    {OBJECTS(0x1280, 0x12FF), COB_SUB1_2, NULL, co_sdo_client_written},
-#else /* without clients 0x1280.. have no effect: no server channel is 0x1200 + 0x80 or more */
-    {OBJECTS(0x1200, 0x12FF), COB_SUB1_2, co_sdo_server_check_write, co_sdo_server_written},
-#endif
-    {OBJECTS(0x1400, 0x1BFF), COB_NONE, co_pdo_check_write, co_pdo_written},
-};
-
-/* The service object of an entry of 0x1000..0x1FFF, or NULL. */
-static const service_object_t *service_object(const co_od_entry_t *entry)
+/* The row of an entry of 0x1000..0x1FFF, or NULL. */
+static const co_object_row_t *object_row(const co_od_entry_t *entry)
 {
-    for (size_t i = 0; i < sizeof k_service_objects / sizeof k_service_objects[0]; i++) {
-        const service_object_t *o = &k_service_objects[i];
-        unsigned at = entry->index - AREA; /* (wraps below the area: above every last) */
-        if (at >= o->first && at <= o->last) {
-            return o;
+    unsigned at = entry->index - 0x1000u; /* (wraps below the area: past every row) */
+    for (size_t i = 0; i < sizeof k_objects / sizeof k_objects[0]; i++) {
+        if (at - k_objects[i].first <= k_objects[i].span) {
+            return &k_objects[i];
         }
     }
     return NULL;
 }
 
 /* Service side of a write: refuse values a service cannot take. */
-static co_abort_t service_check(co_node_t *node, const service_object_t *o,
+static co_abort_t service_check(co_node_t *node, const co_object_row_t *o,
                                 const co_od_entry_t *entry, const uint8_t *data, uint32_t len)
 {
     uint8_t sub = entry->sub;
@@ -97,13 +39,12 @@ static co_abort_t service_check(co_node_t *node, const service_object_t *o,
     return o->check != NULL ? o->check(node, entry, data, len) : CO_ABORT_NONE;
 }
 
-/* co_node_write_entry of anything but a plain application number. */
-static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_entry_t *entry,
-                                                  const uint8_t *data, uint32_t len)
+co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                               uint32_t len)
 {
     /* The services own objects of the communication profile area only (0x1000..0x1FFF):
      * an application object needs neither their checks nor their effects. */
-    const service_object_t *o = entry->index < 0x2000u ? service_object(entry) : NULL;
+    const co_object_row_t *o = entry->index < 0x2000u ? object_row(entry) : NULL;
     const co_od_t *od = &node->cfg.od;
     co_abort_t abort = co_od_check(od, entry, data, len);
     if (abort == CO_ABORT_NONE && o != NULL) {
@@ -124,19 +65,6 @@ static CO_NOINLINE co_abort_t write_entry_general(co_node_t *node, const co_od_e
         hooks->written(od->hook_ctx, entry);
     }
     return CO_ABORT_NONE;
-}
-
-co_abort_t co_node_write_entry(co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
-                               uint32_t len)
-{
-    const co_od_t *od = &node->cfg.od;
-    if (CO_SHORT_PATHS && entry->index >= 0x2000u && co_od_writes_plain(od, entry) &&
-        len == co_od_size(od, entry)) {
-        co_copy_number(co_od_value(od, entry), data, len); /* what check + store would come to */
-        co_pdo_changed(node, entry);                       /* change of state, as below */
-        return CO_ABORT_NONE;
-    }
-    return write_entry_general(node, entry, data, len);
 }
 
 /* ---- the public access (canola/node.h) */

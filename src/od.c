@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "build.h"
+#include "od_plain.h" /* co_copy_number */
 
 /* REAL32/REAL64 are copied bit for bit through uint32_t/uint64_t. */
 _Static_assert(sizeof(float) == 4, "REAL32 needs a 4-byte float");
@@ -382,8 +383,8 @@ static bool entry_fits(const co_od_t *od, uint32_t i)
     const co_od_entry_t *entries = od->entries;
     bool sorted = i == 0 || entry_key(&entries[i]) > entry_key(&entries[i - 1u]);
 #if !CO_CONFIG_OD_COMPACT
-    if (CO_SHORT_PATHS && od->keys != NULL && od->keys[i] != entry_key(&entries[i])) {
-        return false; /* (a build for size does not use the keys: see co_od_t) */
+    if (od->keys != NULL && od->keys[i] != entry_key(&entries[i])) {
+        return false;
     }
 #endif
     return sorted && entry_ok(od, &entries[i]);
@@ -471,9 +472,8 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     while (od->entries != NULL && i < od->count && entry_fits(od, i)) {
         i++;
     }
-    /* A build for size reads neither keys nor hash (look-ups search the entries): it does
-     * not check them either. */
-    if (i == od->count && (!CO_SHORT_PATHS || hash_fits(od))) {
+    /* A core without CO_CONFIG_OD_HASH does not read the hash: it does not check it either. */
+    if (i == od->count && (!CO_CONFIG_OD_HASH || hash_fits(od))) {
 #if CO_CONFIG_OD_COMPACT
         if (!image_fits(od, &i)) { /* the power-on values (i: the entry they do not fit) */
             if (bad != NULL) {
@@ -490,71 +490,26 @@ co_err_t co_od_validate(const co_od_t *od, uint32_t *bad)
     return CO_ERR_CONFIG;
 }
 
-#if CO_SHORT_PATHS && !CO_CONFIG_OD_COMPACT
-/* The largest power of two <= n (n >= 1). */
-static inline uint32_t pow2_floor(uint32_t n)
-{
-#if defined(__GNUC__) || defined(__clang__)
-    return 1u << (31 - __builtin_clz(n));
-#else
-    uint32_t p = 1;
-    while (p <= n / 2u) {
-        p *= 2u;
-    }
-    return p;
-#endif
-}
-
-/* lower_bound over the dense key array (co_od_t.keys), count >= 1: the first probe leaves
- * a power-of-two range, then each halving is a load, a compare and a conditional add
- * (the answer stays in [lb, lb + step]). */
-static uint32_t lower_bound_keys(const uint32_t *keys, uint32_t count, uint32_t key)
-{
-    uint32_t step = pow2_floor(count);
-    uint32_t lb = keys[step - 1u] < key ? count - step : 0;
-    for (step /= 2u; step > 0; step /= 2u) {
-        lb = keys[lb + step - 1u] < key ? lb + step : lb;
-    }
-    return lb + (keys[lb] < key ? 1u : 0u);
-}
-#endif
-
-/* Position of the first entry whose key is >= key (count when there is none). The halving
- * has no data-dependent branch, so it costs the same few instructions per step. A build
- * for size searches the entries only (the keys, when given, are theirs: validated), with
- * the plain bisection, shorter code. */
+/* Position of the first entry whose key is >= key (count when there is none): a bisection
+ * over the general form's dense keys when given, else over the entries themselves. */
 static uint32_t lower_bound(const co_od_t *od, uint32_t key)
 {
-#if !CO_SHORT_PATHS
     uint32_t lo = 0;
     uint32_t hi = od->count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
-        if (entry_key(&od->entries[mid]) < key) {
+#if !CO_CONFIG_OD_COMPACT
+        uint32_t at = od->keys != NULL ? od->keys[mid] : entry_key(&od->entries[mid]);
+#else
+        uint32_t at = entry_key(&od->entries[mid]);
+#endif
+        if (at < key) {
             lo = mid + 1u;
         } else {
             hi = mid;
         }
     }
     return lo;
-#else
-    if (od->count == 0) {
-        return 0;
-    }
-#if !CO_CONFIG_OD_COMPACT
-    if (od->keys != NULL) {
-        return lower_bound_keys(od->keys, od->count, key);
-    }
-#endif
-    const co_od_entry_t *base = od->entries;
-    uint32_t n = od->count;
-    while (n > 1u) {
-        uint32_t half = n / 2u;
-        base = entry_key(&base[half]) < key ? &base[half] : base;
-        n -= half;
-    }
-    return (uint32_t)(base - od->entries) + (entry_key(base) < key ? 1u : 0u);
-#endif
 }
 
 /* co_od_find by binary search (out of line: the hashed look-up stays a leaf). */
@@ -579,7 +534,7 @@ static CO_FAST_NOINLINE const co_od_entry_t *find_sorted(const co_od_t *od, uint
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_abort_t *abort)
 {
     uint32_t key = key_of(index, sub);
-    if (CO_SHORT_PATHS && od->hash != NULL) { /* a build for size: the search finds it too */
+    if (CO_CONFIG_OD_HASH && od->hash != NULL) {
         uint32_t at = od->hash[hash_probe(od, key)];
         if (at != 0) {
             return &od->entries[at - 1u];
@@ -693,17 +648,10 @@ co_abort_t co_od_read(const co_od_t *od, const co_od_entry_t *entry, uint32_t of
     if (value == NULL) {
         return CO_ABORT_WRITE_ONLY;
     }
-    const type_info_t *t = entry_info(od, entry);
-    if (CO_SHORT_PATHS && wire_is_native(t) && offset == 0 && cap >= t->wire) {
-        memcpy(buf, value, t->wire); /* a whole number, as stored */
-        *n = t->wire;
-        if (total != NULL) {
-            *total = t->wire;
-        }
-        return CO_ABORT_NONE;
-    }
+    /* a whole number's storage is its wire form (co_native_size: 0 where it is not) */
+    whole = co_native_size(co_od_type(od, entry));
     uint8_t tmp[8];
-    const uint8_t *wire = stored_wire(od, entry, tmp, &whole);
+    const uint8_t *wire = whole != 0 ? value : stored_wire(od, entry, tmp, &whole);
     if (total != NULL) {
         *total = whole;
     }
@@ -808,6 +756,11 @@ co_abort_t co_od_store(const co_od_t *od, const co_od_entry_t *entry, const uint
             return co_od_hooks_of(entry)->write(od->hook_ctx, entry, 0, data, len, len, true);
         }
         return CO_ABORT_UNSUPPORTED;
+    }
+    uint32_t native = co_native_size(co_od_type(od, entry));
+    if (native != 0 && len == native) { /* a whole number, stored as it travels */
+        co_copy_number(value, data, len);
+        return CO_ABORT_NONE;
     }
     const type_info_t *t = entry_info(od, entry);
     co_abort_t abort = check_len(od, entry, t, len); /* never overrun the storage */

@@ -1,9 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * src/od_plain.h -- values read and written in place: the parameters the services read on
- * every SYNC or poll, and entries whose storage is their wire form, which the short paths
- * (the SDO server's answers, the node's writes, the PDOs' copies) move without the
- * dictionary's general read and write. Not installed.
+ * every SYNC or poll, and whole numbers copied as they are stored (the dictionary's and the
+ * PDOs' common reads and writes). Not installed.
  */
 #ifndef CANOLA_OD_PLAIN_H
 #define CANOLA_OD_PLAIN_H
@@ -11,63 +10,44 @@
 #include "build.h"
 #include "canola/od.h"
 
-/* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place (a short path). */
-static inline uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry)
-{
-    if (entry == NULL) {
-        return 0;
-    }
-    const void *value = co_od_value(od, entry);
-    if (CO_SHORT_PATHS && value != NULL) {
-        switch (co_od_type(od, entry)) {
-        case CO_TYPE_UNSIGNED8:
-            return *(const uint8_t *)value;
-        case CO_TYPE_UNSIGNED16:
-            return *(const uint16_t *)value;
-        case CO_TYPE_UNSIGNED32:
-            return *(const uint32_t *)value;
-        default:
-            break;
-        }
-    }
-    return co_od_entry_uint(od, entry);
-}
+/* Integer value of an entry found once (0 for NULL); u8/u16/u32 read in place (kernel.c). */
+uint64_t co_entry_uint(const co_od_t *od, const co_od_entry_t *entry);
 
-/* The types whose native storage is their wire form (as in od.c: numbers as wide as their
- * wire form, on a little-endian host; BOOLEAN is left to the general paths, which check
- * that a written value is 0 or 1), as bits of a mask indexed by type code. */
+/* The wire size of a type whose storage is its wire form (on a little-endian host: the
+ * numbers as wide as their wire form), 1, 2, 4 or 8 bytes; 0 for the others. By type code,
+ * without a table (the common reads and writes of a whole number copy it as it is): the
+ * size's log2 + 1 in bit planes, one mask per bit. */
+#define CO_NATIVE_BIT(t) (1u << (t))
+#define CO_NATIVE_PLANE0                                                                           \
+    (CO_NATIVE_BIT(CO_TYPE_INTEGER8) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED8) |                          \
+     CO_NATIVE_BIT(CO_TYPE_INTEGER32) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED32) |                        \
+     CO_NATIVE_BIT(CO_TYPE_REAL32)) /* 1 and 3: 1 and 4 bytes */
+#define CO_NATIVE_PLANE1                                                                           \
+    (CO_NATIVE_BIT(CO_TYPE_INTEGER16) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED16) |                        \
+     CO_NATIVE_BIT(CO_TYPE_INTEGER32) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED32) |                        \
+     CO_NATIVE_BIT(CO_TYPE_REAL32)) /* 2 and 3: 2 and 4 bytes */
+#define CO_NATIVE_PLANE2                                                                           \
+    (CO_NATIVE_BIT(CO_TYPE_INTEGER64) | CO_NATIVE_BIT(CO_TYPE_UNSIGNED64) |                        \
+     CO_NATIVE_BIT(CO_TYPE_REAL64)) /* 4: 8 bytes */
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-#define CO_WIRE_NATIVE_TYPES                                                                       \
-    ((1u << CO_TYPE_INTEGER8) | (1u << CO_TYPE_INTEGER16) | (1u << CO_TYPE_INTEGER32) |            \
-     (1u << CO_TYPE_UNSIGNED8) | (1u << CO_TYPE_UNSIGNED16) | (1u << CO_TYPE_UNSIGNED32) |         \
-     (1u << CO_TYPE_REAL32) | (1u << CO_TYPE_REAL64) | (1u << CO_TYPE_INTEGER64) |                 \
-     (1u << CO_TYPE_UNSIGNED64))
+#define CO_NATIVE_HOST 1u
 #else
-#define CO_WIRE_NATIVE_TYPES 0u
+#define CO_NATIVE_HOST 0u
 #endif
-
-/* A readable entry of a validated table whose storage is its wire value (`size` bytes at
- * `value`): the SDO server answers from it without co_od_read. */
-static inline bool co_od_reads_plain(const co_od_t *od, const co_od_entry_t *e)
+static inline uint32_t co_native_size(unsigned type)
 {
-    const co_od_hooks_t *hooks = co_od_hooks_of(e);
-    return ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u) &&
-           (hooks == NULL || hooks->read == NULL);
-}
-
-/* A writable entry whose new value is just its `size` wire bytes copied into storage: no
- * hook, no limits (co_od_check would accept any value of the right length, co_od_store
- * would copy it). */
-static inline bool co_od_writes_plain(const co_od_t *od, const co_od_entry_t *e)
-{
-    return ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u) &&
-           co_od_hooks_of(e) == NULL && !co_od_has_limits(od, e) && co_od_value(od, e) != NULL;
+    uint32_t t = type & 31u;
+    uint32_t code = ((CO_NATIVE_PLANE0 >> t) & 1u) | (((CO_NATIVE_PLANE1 >> t) & 1u) << 1) |
+                    (CO_CONFIG_OD_64BIT ? ((CO_NATIVE_PLANE2 >> t) & 1u) << 2 : 0u);
+    return CO_NATIVE_HOST && type < 32u ? (1u << code) >> 1 : 0u;
 }
 
 /* Copy a number of 1, 2, 4 or 8 bytes (anything else copies 8): fixed-size moves, no
- * library call, so a loop around it needs no saved registers (the short paths' copies). */
+ * library call, so a loop around it needs no saved registers; the byte
+ * loop where words need their alignment (co_copy_fixed). */
 static inline void co_copy_number(void *dst, const void *src, uint32_t bytes)
 {
+#if CO_UNALIGNED_ACCESS
     switch (bytes) {
     case 1:
         memcpy(dst, src, 1);
@@ -82,6 +62,9 @@ static inline void co_copy_number(void *dst, const void *src, uint32_t bytes)
         memcpy(dst, src, 8);
         break;
     }
+#else
+    co_copy_bytes(dst, src, bytes == 1 || bytes == 2 || bytes == 4 ? bytes : 8u);
+#endif
 }
 
 #endif /* CANOLA_OD_PLAIN_H */

@@ -1,20 +1,18 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
- * pdo.c -- what RPDOs and TPDOs share (see canola/pdo.h): binding the dictionary's PDOs,
- * loading their communication parameters, the rules of writes to 0x1400..0x1BFF, routes,
- * and handing NMT states and SYNCs to pdo_rx.c / pdo_tx.c. Mappings are pdo_map.c, the
- * timers pdo_timers.c.
+ * pdo.c -- the base of the PDO family (see canola/pdo.h): what RPDOs and TPDOs share. The
+ * dictionary's PDOs, loading their communication parameters and restarting their state
+ * (the event timer's start included), the rules of writes to 0x1400..0x1BFF, routes, and
+ * the counts a SYNC and a changed value look at. It calls nothing above it: pdo_timers.c
+ * (the timers' decisions), pdo_tx.c (TPDOs) and pdo_rx.c (RPDOs, the SYNC's and the
+ * poll's PDO work) call down to it, in that order; mappings are pdo_map.c, below it.
  *
- * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n); rpdo_count / tpdo_count
- * reach up to the highest such PDO below CO_RPDO_MAX / CO_TPDO_MAX that the dictionary
- * has (a build for size takes all of them), and slots in gaps stay not present. Parameters are
+ * Node slot n is PDO number n + 1 (0x1400 + n, 0x1800 + n), CO_RPDO_MAX / CO_TPDO_MAX of
+ * them; the slots of PDOs the dictionary lacks stay not present. Parameters are
  * loaded at reset communication and when written through the node; values set natively
  * (co_od_set_uint) count from the next reset communication.
  */
 #include "pdo_internal.h"
-
-static inline uint16_t rpdo_max(void) { return CO_RPDO_MAX; }
-static inline uint16_t tpdo_max(void) { return CO_TPDO_MAX; }
 
 /* Which PDO an index of 0x1400..0x1BFF belongs to. */
 typedef struct pdo_ref {
@@ -54,7 +52,10 @@ static void load_comm(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
     p->flags = cob ? PDO_F_PRESENT : 0;
     p->cob_id = cob ? (uint32_t)co_od_entry_uint(&node->cfg.od, cob) : CO_COB_INVALID;
     p->type = (uint8_t)co_od_u32(node, idx, 2, 255);
-    pdo_timers_load(node, p, tpdo, idx);
+#if CO_CONFIG_PDO_TIMERS
+    p->event_ms = (uint16_t)co_od_u32(node, idx, 5, 0);
+    p->inhibit = tpdo ? (uint16_t)co_od_u32(node, idx, 3, 0) : 0;
+#endif
     p->sync_start = tpdo ? (uint8_t)co_od_u32(node, idx, 6, 0) : 0;
 }
 
@@ -71,64 +72,30 @@ static CO_SIZE_NOINLINE void restart(co_node_t *node, co_pdo_t *p, bool tpdo)
     }
 }
 
+#if CO_CONFIG_PDO_TIMERS
+void tpdo_start(co_node_t *node, co_pdo_t *p)
+{
+    p->next_us = CO_TIME_NEVER;
+    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
+        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
+        co_node_schedule(node, p->next_us);
+    }
+}
+#endif
+
+/* Another RPDO than `self` has `flag` set. */
+bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
+{
+    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
+        const co_pdo_t *p = &node->rpdo[n];
+        if (p != self && pdo_has(p, flag)) {
+            return true;
+        }
+    }
+    return false;
+}
+
 /* ---- node hooks */
-
-/* 1 + the highest PDO number below `max` whose communication object exists. */
-static CO_SIZE_NOINLINE uint16_t count_present(const co_od_t *od, uint16_t base, uint16_t max)
-{
-    uint16_t count = 0;
-    for (unsigned n = 0; n < max; n++) {
-        if (co_od_find(od, (uint16_t)(base + n), 1, NULL) != NULL) {
-            count = (uint16_t)(n + 1u);
-        }
-    }
-    return count;
-}
-
-co_err_t co_pdo_bind(co_node_t *node)
-{
-    /* The counts bound the loops over PDOs (a short path): a build for size takes every
-     * slot, the ones the dictionary lacks staying not present. */
-    node->rpdo_count =
-        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1400u, rpdo_max()) : rpdo_max();
-    node->tpdo_count =
-        CO_SHORT_PATHS ? count_present(&node->cfg.od, 0x1800u, tpdo_max()) : tpdo_max();
-    return CO_OK;
-}
-
-#if CO_SHORT_PATHS
-/* After parameters or mapping loaded (NMT states do not change it): may a frame of this
- * RPDO take the short path (co_pdo_rx), may this TPDO be sent by co_pdo_sync's? */
-static bool fast_widths(const co_od_t *od, const co_pdo_t *p)
-{
-    for (unsigned i = 0; i < p->count; i++) {
-        uint8_t b = pdo_item_bits(od, p, i);
-        if (b != 8 && b != 16 && b != 32 && b != 64) {
-            return false; /* co_copy_number copies 1, 2, 4 or 8 bytes */
-        }
-    }
-    return true;
-}
-#endif
-
-static void decide_fast(const co_od_t *od, co_pdo_t *p, bool tpdo)
-{
-#if CO_SHORT_PATHS
-    bool plain = pdo_has(p, PDO_F_PLAIN) && fast_widths(od, p);
-    if (tpdo) {
-        bool cyclic = p->type >= 1 && p->type <= 240 && p->sync_start == 0;
-        bool std_id = !(p->cob_id & CO_COB_EXT); /* its frame: the COB-ID's low 11 bits */
-        p->fast = pdo_active(p) && plain && cyclic && std_id ? pdo_bytes(p) : 0;
-        return;
-    }
-    bool fast = pdo_active(p) && plain && p->type > 240 && !rpdo_monitored(p);
-    p->fast = fast ? pdo_bytes(p) : 0; /* a plain mapping fills at least one byte */
-#else
-    (void)od;
-    (void)tpdo;
-    p->fast = 0; /* -Os: no short paths */
-#endif
-}
 
 /* Every active RPDO listens to its COB-ID; a TPDO, for its remote requests, when it is sent on
  * request only (types 252 and 253) and its COB-ID allows them. */
@@ -140,11 +107,9 @@ static void route(co_node_t *node, const co_pdo_t *p, bool tpdo, uint16_t num)
                  listens ? co_cob_key(p->cob_id) : CO_ROUTE_OFF);
 }
 
-/* New parameters or a new mapping take effect: the short path's choice, the runtime state,
- * the route. */
+/* New parameters or a new mapping take effect: the runtime state, the route. */
 static CO_SIZE_NOINLINE void take_effect(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
 {
-    decide_fast(&node->cfg.od, p, tpdo);
     restart(node, p, tpdo);
     route(node, p, tpdo, num);
 }
@@ -161,29 +126,25 @@ static void load_pdo(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t num)
  * RPDOs. Counted again whenever a PDO changes. */
 static void count_listeners(co_node_t *node)
 {
-    if (!CO_SHORT_PATHS) {
-        return; /* a build for size looks at every PDO (co_pdo_sync, co_pdo_changed) */
-    }
     uint16_t listeners = 0;
-    uint16_t sync_end = 0;
-    for (unsigned n = 0; n < pdo_tx_count(node); n++) {
-        const co_pdo_t *p = &node->tpdo[n];
-        if (pdo_active(p) && (p->type == 0 || p->type >= 254)) {
-            listeners++;
-        }
-        if (pdo_active(p) && (p->type <= 240 || p->type == 252)) {
-            sync_end = (uint16_t)(n + 1u);
+    uint16_t sync_end[2] = {0, 0}; /* RPDOs, TPDOs: 1 + the last one a SYNC drives */
+    for (int tpdo = 0; tpdo <= 1; tpdo++) {
+        unsigned count;
+        const co_pdo_t *table = pdo_table(node, tpdo, &count);
+        for (unsigned n = 0; n < count; n++) {
+            uint8_t type = table[n].type;
+            if (!pdo_active(&table[n])) {
+                continue;
+            }
+            if (type <= 240 || (tpdo && type == 252)) {
+                sync_end[tpdo] = (uint16_t)(n + 1u);
+            }
+            listeners = (uint16_t)(listeners + (tpdo && (type == 0 || type >= 254)));
         }
     }
     node->tpdo_listeners = listeners;
-    node->tpdo_sync_end = sync_end; /* a SYNC looks at no TPDO past this one */
-    uint16_t rx_end = 0;
-    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
-        if (pdo_active(&node->rpdo[n]) && node->rpdo[n].type <= 240) {
-            rx_end = (uint16_t)(n + 1u);
-        }
-    }
-    node->rpdo_sync_end = rx_end; /* nor at an RPDO past this one */
+    node->rpdo_sync_end = sync_end[0]; /* a SYNC looks at no RPDO past this one */
+    node->tpdo_sync_end = sync_end[1]; /* nor at a TPDO past this one */
 }
 
 void co_pdo_reset_comm(co_node_t *node)
@@ -206,78 +167,6 @@ void co_pdo_state_entered(co_node_t *node)
     for (unsigned n = 0; n < pdo_tx_count(node); n++) {
         restart(node, &node->tpdo[n], true);
     }
-}
-
-/* How far a SYNC looks among RPDOs and TPDOs (read again at each step: an application
- * callback may change the PDOs); a build for size keeps no counts and looks at all. */
-static inline unsigned rpdo_sync_end(const co_node_t *node)
-{
-    return CO_SHORT_PATHS ? node->rpdo_sync_end : pdo_rx_count(node);
-}
-static inline unsigned tpdo_sync_end(const co_node_t *node)
-{
-    return CO_SHORT_PATHS ? node->tpdo_sync_end : pdo_tx_count(node);
-}
-
-void co_pdo_sync(co_node_t *node, uint8_t counter)
-{
-    /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
-     * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
-     * Both loops test the NMT state first (an application callback may change it). */
-    for (unsigned n = 0; n < rpdo_sync_end(node) && pdo_running(node); n++) {
-        if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
-            rpdo_sync(node, (uint8_t)n);
-        }
-    }
-    for (unsigned n = 0; n < tpdo_sync_end(node) && pdo_running(node); n++) {
-        co_pdo_t *p = &node->tpdo[n];
-        if (!CO_SHORT_PATHS || !p->fast) {
-            tpdo_sync(node, p, counter);
-        } else if (++p->sync_count >= p->type) { /* the usual one: cyclic, whole values */
-            p->sync_count = 0;
-            tpdo_send_plain(node, p);
-        }
-    }
-}
-
-/* ---- events */
-
-static bool maps_entry(const co_od_t *od, const co_pdo_t *p, const co_od_entry_t *entry)
-{
-    for (unsigned i = 0; i < p->count; i++) {
-        if (pdo_entry(od, p, i) == entry) {
-            return true;
-        }
-    }
-    return false;
-}
-
-static uint32_t mark_tpdos(co_node_t *node, const co_od_entry_t *entry)
-{
-    uint32_t marked = 0;
-    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
-        co_pdo_t *p = &node->tpdo[n];
-        if (maps_entry(&node->cfg.od, p, entry) && tpdo_event(node, p)) {
-            marked++;
-        }
-    }
-    return marked;
-}
-
-void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry)
-{
-    if (CO_SHORT_PATHS && node->tpdo_listeners == 0) {
-        return; /* no TPDO listens (see count_listeners) */
-    }
-    if ((co_od_attr(&node->cfg.od, entry) & CO_OD_TPDO) && pdo_running(node)) {
-        (void)mark_tpdos(node, entry);
-    }
-}
-
-uint32_t co_pdo_event(co_node_t *node, uint16_t index, uint8_t sub)
-{
-    const co_od_entry_t *entry = co_od_find(&node->cfg.od, index, sub, NULL);
-    return entry != NULL ? mark_tpdos(node, entry) : 0;
 }
 
 /* ---- writes to 0x1400..0x1BFF */
@@ -332,8 +221,7 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry)
     } else {
         uint8_t flags = p->flags;
         load_comm(node, p, r.tpdo, r.num);
-        p->flags =
-            (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR | PDO_F_PLAIN)));
+        p->flags = (uint8_t)(p->flags | (flags & (PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)));
     }
     take_effect(node, p, r.tpdo, r.num);
     count_listeners(node);

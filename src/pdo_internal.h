@@ -13,7 +13,6 @@
 #include "standin.h"
 
 /* ---- what the node and SYNC call */
-co_err_t co_pdo_bind(co_node_t *node); /* at init: count the PDOs the dictionary has */
 void co_pdo_reset_comm(co_node_t *node);
 void co_pdo_state_entered(co_node_t *node);
 void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame);
@@ -25,6 +24,10 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1400..0x1
 void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value written */
 /* co_pdo_poll: pdo_timers.h */
 
+/* The PDOs' objects (node_od.c): communication and mapping parameters, 0x1400..0x1BFF. */
+#define CO_PDO_OBJECT_ROWS                                                                         \
+    CO_OBJECT_ROW(0x1400, 0x1BFF, CO_COB_NONE, co_pdo_check_write, co_pdo_written)
+
 /* ---- inside the family */
 
 /* co_pdo_t.flags */
@@ -35,7 +38,6 @@ void co_pdo_changed(co_node_t *node, const co_od_entry_t *entry); /* any value w
 #define PDO_F_WAITING 0x10u   /* RPDO 0..240: data[] waits for the next SYNC */
 #define PDO_F_TIMED_OUT 0x20u /* RPDO: deadline missed and reported, until the next RPDO */
 #define PDO_F_LEN_ERROR 0x40u /* RPDO: raised 0x8210/0x8220, until a frame of the right length */
-#define PDO_F_PLAIN 0x80u     /* every item a whole value copied as stored (short paths only) */
 #define PDO_RTR_NOT_ALLOWED 0x40000000u /* TPDO COB-ID bit 30 */
 #define PDO_VALUE_MAX 8u                /* bytes of the widest mappable value (64 bits) */
 
@@ -45,38 +47,28 @@ static inline bool pdo_has(const co_pdo_t *p, unsigned f) { return (p->flags & f
 
 /* A PDO that runs: present, valid (COB-ID bit 31 clear) and mapping something. A PDO
  * mapping nothing (also one whose mapping failed to resolve) does nothing. */
-static inline bool pdo_active(const co_pdo_t *p)
+static CO_SIZE_INLINE bool pdo_active(const co_pdo_t *p)
 {
     return pdo_has(p, PDO_F_PRESENT) && !(p->cob_id & CO_COB_INVALID) && p->count > 0;
 }
 
-/* How many RPDOs / TPDOs the node has (co_pdo_bind): in a build for size all CO_RPDO_MAX /
- * CO_TPDO_MAX, a constant the loops and bounds need not load. */
+/* The node's RPDO and TPDO slots (slot n: PDO n + 1; the ones the dictionary lacks stay
+ * not present): constants the loops and bounds need not load. */
 static inline unsigned pdo_rx_count(const co_node_t *node)
 {
-    return CO_SHORT_PATHS ? node->rpdo_count : CO_RPDO_MAX;
+    (void)node;
+    return CO_RPDO_MAX;
 }
 static inline unsigned pdo_tx_count(const co_node_t *node)
 {
-    return CO_SHORT_PATHS ? node->tpdo_count : CO_TPDO_MAX;
+    (void)node;
+    return CO_TPDO_MAX;
 }
 
 /* PDOs run in operational only. */
 static inline bool pdo_running(const co_node_t *node)
 {
     return node->nmt_state == CO_NMT_OPERATIONAL;
-}
-
-/* Copy a whole mapped value: the usual widths as fixed-size copies (co_copy_number: not
- * a library call), anything else with co_copy; without the short paths (a build for size)
- * all of them with co_copy. */
-static inline void pdo_copy_value(void *dst, const void *src, uint32_t bytes)
-{
-    if (CO_SHORT_PATHS && (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8)) {
-        co_copy_number(dst, src, bytes);
-    } else {
-        co_copy(dst, src, bytes);
-    }
 }
 
 /* Slot i's entry, for a slot that is no dummy entry (a plain or direct one, or any slot
@@ -118,31 +110,23 @@ static inline uint8_t pdo_item_bits(const co_od_t *od, const co_pdo_t *p, unsign
 #endif
 }
 
+/* Slot i of a frame: its entry, and the bytes of a whole number it maps that is stored as it
+ * travels (copied between the frame and the storage, as co_od_read and co_od_store would do,
+ * without their type table), else 0. Returns the slot's bits. */
+static inline uint8_t pdo_item(const co_od_t *od, const co_pdo_t *p, unsigned i,
+                               const co_od_entry_t **entry, uint32_t *whole)
+{
+    const co_od_entry_t *e = pdo_entry(od, p, i);
+    uint32_t n = e != NULL && co_od_hooks_of(e) == NULL ? co_native_size(co_od_type(od, e)) : 0u;
+    uint8_t bits =
+        CO_CONFIG_PDO_BIT_MAPPING || n == 0 ? pdo_item_bits(od, p, i) : (uint8_t)(8u * n);
+    *entry = e;
+    *whole = bits == 8u * n ? n : 0u;
+    return bits;
+}
+
 /* Bytes the mapping fills. */
 static inline uint8_t pdo_bytes(const co_pdo_t *p) { return (uint8_t)((p->bits + 7u) / 8u); }
-
-/* Slot i of the mapping is copied straight between frame and storage. */
-static inline bool pdo_direct(const co_pdo_t *p, unsigned i)
-{
-    return ((unsigned)p->map_direct[i / 8u] >> (i % 8u)) & 1u;
-}
-
-/* The common mapping: whole values stored as they travel, one copy each; TPDOs are only
- * told when some TPDO listens to changes. */
-static inline void pdo_apply_plain(co_node_t *node, const co_pdo_t *p, const uint8_t *data)
-{
-    const co_od_t *od = &node->cfg.od;
-    for (uint8_t i = 0; i < p->count; i++) {
-        uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-        pdo_copy_value(pdo_value(od, p, i), data, bytes);
-        data += bytes;
-    }
-    if (node->tpdo_listeners != 0) {
-        for (uint8_t i = 0; i < p->count; i++) {
-            co_pdo_changed(node, pdo_mapped(od, p, i));
-        }
-    }
-}
 
 /* pdo_map.c: resolving mappings into co_pdo_t, checking a new one; copying `n` bits from bit
  * `spos` of src to bit `dpos` of dst (LSB first). */
@@ -179,11 +163,9 @@ static inline uint16_t pdo_map_index(bool tpdo, uint16_t num)
 /* pdo_tx.c */
 bool tpdo_event(co_node_t *node, co_pdo_t *p); /* true when the event marked it */
 void tpdo_sync(co_node_t *node, co_pdo_t *p, uint8_t counter);
-void tpdo_send_plain(co_node_t *node, const co_pdo_t *p); /* `fast` set: pack, send */
-void tpdo_send_event(co_node_t *node, co_pdo_t *p);       /* an event-driven transmission */
+void tpdo_send_event(co_node_t *node, co_pdo_t *p); /* an event-driven transmission */
 
-/* pdo_rx.c */
-void rpdo_sync(co_node_t *node, uint8_t n); /* RPDO n's held data (PDO_F_WAITING) at a SYNC */
+/* pdo.c: another RPDO than `self` has `flag` set. */
 bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag);
 
 /* pdo_timers.c (its header uses the helpers above) */

@@ -79,36 +79,16 @@ static co_abort_t resolve_item(const co_od_t *od, uint32_t value, bool tpdo, co_
 #else
     out->map_entry[k] = e;
 #endif
-    /* A whole number stored as it travels (and no hook to run): the short paths copy it
-     * straight to and from the frame. */
-    if (CO_SHORT_PATHS && bits == 8u * size && co_od_hooks_of(e) == NULL &&
-        co_od_value(od, e) != NULL && ((CO_WIRE_NATIVE_TYPES >> (co_od_type(od, e) & 31u)) & 1u)) {
-        out->map_direct[k / 8u] = (uint8_t)(out->map_direct[k / 8u] | (1u << (k % 8u)));
-    }
     return CO_ABORT_NONE;
 }
 
-/* Every item is copied straight between the frame and storage (no dummy entry, no bit
- * offset): the frame then packs and unpacks with plain copies (pdo_rx.c, pdo_tx.c). */
-static bool all_direct(const co_pdo_t *p)
-{
-    for (unsigned i = 0; i < p->count; i++) {
-        if (!pdo_direct(p, i)) {
-            return false; /* a direct item is whole bytes: the next one stays aligned */
-        }
-    }
-    return true;
-}
-
 /* Resolve entries 1..n of mapping object `index` into out's slots, count and bits; on a
- * failure count, bits and plain stay 0. */
+ * failure count and bits stay 0. */
 static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, bool tpdo,
                                   co_pdo_t *out)
 {
     out->count = 0;
     out->bits = 0;
-    pdo_clear(out, PDO_F_PLAIN);
-    memset(out->map_direct, 0, sizeof out->map_direct);
     if (n == 0) {
         return CO_ABORT_NONE;
     }
@@ -136,9 +116,6 @@ static co_abort_t resolve_mapping(const co_od_t *od, uint16_t index, uint8_t n, 
     }
     out->count = n;
     out->bits = (uint8_t)total;
-    if (CO_SHORT_PATHS && all_direct(out)) {
-        pdo_set(out, PDO_F_PLAIN);
-    }
     return CO_ABORT_NONE;
 }
 

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_rx.c -- RPDOs: length checks, applying the data to the mapped objects (at once or
- * at the next SYNC) and deadline monitoring (see canola/pdo.h).
+ * at the next SYNC) and deadline monitoring (see canola/pdo.h); the top of the PDO family,
+ * it hands a SYNC and the node's poll to the TPDOs too (pdo_tx.c).
  *
  * Received values are stored with co_od_store, as a PDO is no SDO: no limits, no check
  * hook, no service effects; the entry's written hook runs, and TPDOs mapping the entry
@@ -15,17 +16,14 @@
 #define EMCY_PDO_LENGTH 0x8210u   /* not processed: shorter than the mapping */
 #define EMCY_PDO_EXCEEDED 0x8220u /* longer than the mapping */
 
-/* Slot i's value (entry e, `bits` of it) from the frame at bit `pos`; false when the
- * object's write hook refused it (then nothing changed). A whole value is stored as it
- * comes; a value mapped with fewer bits keeps the bits the frame does not carry. */
-static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_od_entry_t *e,
-                       uint8_t bits, const uint8_t *data, uint32_t pos)
+/* A slot's value (entry e, `bits` of it) from the frame at bit `pos`, other than a whole
+ * number stored as it travels (apply copies those); false when the object's write hook
+ * refused it (then nothing changed). A whole value is stored as it comes; a value mapped
+ * with fewer bits keeps the bits the frame does not carry. */
+static CO_FAST_NOINLINE bool store_item(co_node_t *node, const co_od_entry_t *e, uint8_t bits,
+                                        const uint8_t *data, uint32_t pos)
 {
     const co_od_t *od = &node->cfg.od;
-    if (CO_SHORT_PATHS && pdo_direct(p, i) && pos % 8u == 0) { /* what co_od_store does */
-        pdo_copy_value(co_od_value(od, e), data + pos / 8u, bits / 8u);
-        return true;
-    }
     /* without bit mapping always a whole value: `bits` are its size */
     uint32_t size =
         CO_CONFIG_PDO_BIT_MAPPING ? co_type_size((co_type_t)co_od_type(od, e)) : bits / 8u;
@@ -49,45 +47,34 @@ static bool store_item(co_node_t *node, const co_pdo_t *p, unsigned i, const co_
     return true;
 }
 
-/* Every value of the frame is stored first, then TPDOs hear of the changes: an event-driven
- * TPDO the first one triggers carries the new values of the others too. */
+/* Every value of the frame is stored first, then TPDOs hear of the changes (when some TPDO
+ * listens): an event-driven TPDO the first one triggers carries the new values of the
+ * others too. */
 static void apply(co_node_t *node, uint8_t n, const uint8_t *data)
 {
     const co_pdo_t *p = &node->rpdo[n];
-    if (CO_SHORT_PATHS && pdo_has(p, PDO_F_PLAIN)) {
-        pdo_apply_plain(node, p, data);
-    } else {
-        const co_od_t *od = &node->cfg.od;
-        const co_od_entry_t *stored[CO_PDO_MAP_MAX];
-        uint8_t count = 0;
-        uint32_t pos = 0;
-        for (unsigned i = 0; i < p->count; i++) {
-            const co_od_entry_t *e = pdo_entry(od, p, i); /* NULL: a dummy entry, skipped */
-            uint8_t bits = pdo_item_bits(od, p, i);
-            if (e != NULL && store_item(node, p, i, e, bits, data, pos)) {
-                stored[count++] = e;
-            }
-            pos += bits;
+    const co_od_t *od = &node->cfg.od;
+    const co_od_entry_t *stored[CO_PDO_MAP_MAX];
+    uint8_t count = 0;
+    uint32_t pos = 0;
+    for (unsigned i = 0; i < p->count; i++) {
+        const co_od_entry_t *e;
+        uint32_t whole;
+        uint8_t bits = pdo_item(od, p, i, &e, &whole);
+        if (whole != 0 && pos % 8u == 0) {
+            co_copy_number(co_od_value(od, e), data + pos / 8u, whole);
+            stored[count++] = e;
+        } else if (e != NULL && store_item(node, e, bits, data, pos)) { /* NULL: a dummy */
+            stored[count++] = e;
         }
-        for (unsigned i = 0; i < count; i++) {
-            co_pdo_changed(node, stored[i]);
-        }
+        pos += bits;
+    }
+    for (unsigned i = 0; i < count && node->tpdo_listeners != 0; i++) {
+        co_pdo_changed(node, stored[i]);
     }
     if (node->cfg.on_rpdo) {
         node->cfg.on_rpdo(node->cfg.user, n);
     }
-}
-
-/* Another RPDO than `self` has `flag` set. */
-bool rpdo_other_has(const co_node_t *node, const co_pdo_t *self, unsigned flag)
-{
-    for (unsigned n = 0; n < pdo_rx_count(node); n++) {
-        const co_pdo_t *p = &node->rpdo[n];
-        if (p != self && pdo_has(p, flag)) {
-            return true;
-        }
-    }
-    return false;
 }
 
 static void length_error(co_node_t *node, co_pdo_t *p, uint16_t code)
@@ -118,15 +105,21 @@ static CO_SIZE_NOINLINE void hold_for_sync(co_node_t *node, co_pdo_t *p, const c
     if (synced && !co_sync_window_open(node, node->now_us)) {
         return;
     }
-    co_copy(p->data, frame->data, frame->len); /* at least the mapped bits (rx_general) */
+    co_copy(p->data, frame->data, frame->len); /* at least the mapped bits (co_pdo_rx) */
     pdo_set(p, PDO_F_WAITING);
 }
 
-/* Every frame of an active RPDO that is not the usual one (see co_pdo_rx). Kept out of
- * line so that the usual frame does not pay for this path's registers. */
-static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
+void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
 {
-    co_pdo_t *p = &node->rpdo[rpdo];
+    if (frame->flags & CO_FRAME_RTR) {
+        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
+        return;
+    }
+    /* `rpdo` comes from a route; the bound is checked all the same before the array is read */
+    co_pdo_t *p = rpdo < pdo_rx_count(node) ? &node->rpdo[rpdo] : NULL;
+    if (p == NULL || !pdo_active(p)) {
+        return;
+    }
     if (8u * frame->len < p->bits) {
         length_error(node, p, EMCY_PDO_LENGTH);
         return;
@@ -144,60 +137,8 @@ static CO_NOINLINE void rx_general(co_node_t *node, uint8_t rpdo, const co_frame
     }
 }
 
-/* After the short path's copies: the TPDOs that listen, the application. Out of line so
- * that the copies need no saved registers. */
-static CO_NOINLINE void rx_fast_tell(co_node_t *node, uint8_t rpdo)
-{
-    const co_pdo_t *p = &node->rpdo[rpdo];
-    if (node->tpdo_listeners != 0) {
-        for (unsigned i = 0; i < p->count; i++) {
-            co_pdo_changed(node, pdo_mapped(&node->cfg.od, p, i));
-        }
-    }
-    if (node->cfg.on_rpdo) {
-        node->cfg.on_rpdo(node->cfg.user, rpdo);
-    }
-}
-
-/* Every frame the short path does not take. */
-static CO_FAST_NOINLINE void rx_other(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
-{
-    if (frame->flags & CO_FRAME_RTR) {
-        CO_COUNT(node, rx_malformed); /* RPDOs are not requested */
-        return;
-    }
-    if (rpdo >= pdo_rx_count(node)) {
-        return;
-    }
-    if (pdo_active(&node->rpdo[rpdo])) {
-        rx_general(node, rpdo, frame);
-    }
-}
-
-void co_pdo_rx(co_node_t *node, uint8_t rpdo, const co_frame_t *frame)
-{
-    /* The usual frame: asynchronous, exactly the mapped length (`fast`), data, nothing
-     * reported that it could clear. Applied at once, as rx_general would. `rpdo` comes from
-     * a route; the bound is checked all the same before the array is read. */
-    const co_pdo_t *p = rpdo < pdo_rx_count(node) ? &node->rpdo[rpdo] : NULL;
-    if (CO_SHORT_PATHS && p != NULL && p->fast != 0 && p->fast == frame->len &&
-        !(frame->flags & CO_FRAME_RTR) && !pdo_has(p, PDO_F_TIMED_OUT | PDO_F_LEN_ERROR)) {
-        const co_od_t *od = &node->cfg.od;
-        const uint8_t *data = frame->data;
-        for (uint8_t i = 0; i < p->count; i++) { /* (uint8_t: measured fewer instructions) */
-            uint32_t bytes = pdo_item_bits(od, p, i) / 8u;
-            co_copy_number(pdo_value(od, p, i), data, bytes);
-            data += bytes;
-        }
-        if (node->tpdo_listeners != 0 || node->cfg.on_rpdo) {
-            rx_fast_tell(node, rpdo);
-        }
-        return;
-    }
-    rx_other(node, rpdo, frame);
-}
-
-void rpdo_sync(co_node_t *node, uint8_t n)
+/* RPDO n's held data (PDO_F_WAITING) at a SYNC. */
+static void rpdo_sync(co_node_t *node, uint8_t n)
 {
     co_pdo_t *p = &node->rpdo[n];
     pdo_clear(p, PDO_F_WAITING);
@@ -205,3 +146,34 @@ void rpdo_sync(co_node_t *node, uint8_t n)
         apply(node, n, p->data);
     }
 }
+
+/* ---- a SYNC, the poll: RPDOs here, TPDOs in pdo_tx.c */
+
+void co_pdo_sync(co_node_t *node, uint8_t counter)
+{
+    /* Called as the SYNC is taken (sync.c sets last_us = now_us first): its window is
+     * open whatever 0x1007 says, so synchronous PDOs are sent and applied without asking.
+     * Both loops test the NMT state first (an application callback may change it). */
+    /* The loops end at the last PDO a SYNC drives (count_listeners; read again at each step:
+     * an application callback may change the PDOs). */
+    for (unsigned n = 0; n < node->rpdo_sync_end && pdo_running(node); n++) {
+        if (pdo_has(&node->rpdo[n], PDO_F_WAITING)) { /* only held data has work at a SYNC */
+            rpdo_sync(node, (uint8_t)n);
+        }
+    }
+    for (unsigned n = 0; n < node->tpdo_sync_end && pdo_running(node); n++) {
+        tpdo_sync(node, &node->tpdo[n], counter);
+    }
+}
+
+#if CO_CONFIG_PDO_TIMERS
+void co_pdo_poll(co_node_t *node, uint64_t now_us)
+{
+    for (unsigned n = 0; n < pdo_rx_count(node) && pdo_running(node); n++) {
+        rpdo_deadline(node, &node->rpdo[n], now_us);
+    }
+    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
+        tpdo_poll(node, &node->tpdo[n], now_us);
+    }
+}
+#endif

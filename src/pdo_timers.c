@@ -1,29 +1,17 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pdo_timers.c -- the PDO timers (see canola/pdo.h): the TPDO inhibit time (0x1800+n sub3)
- * and event timer (sub5), and RPDO deadline monitoring (0x1400+n sub5). Left out with
- * CO_CONFIG_PDO_TIMERS 0 (pdo_internal.h): those sub-indices are then plain entries.
+ * and event timer (sub5) as a TPDO sends, and RPDO deadline monitoring (0x1400+n sub5): a
+ * deadline restarted, a missed one reported. It sends nothing (pdo_tx.c's poll sends what
+ * is due) and calls only the family's base, pdo.c (which loads the timers' parameters and
+ * starts the event timer). Left out with CO_CONFIG_PDO_TIMERS 0 (pdo_timers.h): those sub-indices
+ * are then plain entries.
  */
 #include "pdo_internal.h"
 
 #if CO_CONFIG_PDO_TIMERS
 
 #define EMCY_RPDO_TIMEOUT 0x8250u
-
-static uint16_t od_u16(const co_node_t *node, uint16_t index, uint8_t sub)
-{
-    return (uint16_t)co_od_u32(node, index, sub, 0);
-}
-
-void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
-{
-    p->event_ms = od_u16(node, comm_index, 5);
-    p->inhibit = tpdo ? od_u16(node, comm_index, 3) : 0;
-}
-
-#if !CO_SHORT_PATHS
-void tpdo_start(co_node_t *node, co_pdo_t *p) { tpdo_start_inline(node, p); }
-#endif
 
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p)
 {
@@ -58,7 +46,7 @@ void rpdo_received(co_node_t *node, co_pdo_t *p)
 
 /* Each PDO's next deadline goes to co_node_schedule (the node's poll takes the earliest):
  * one call each instead of a 64-bit minimum carried through the loops. */
-static void rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
+void rpdo_deadline(co_node_t *node, co_pdo_t *p, uint64_t now_us)
 {
     if (now_us < p->next_us) {
         co_node_schedule(node, p->next_us);
@@ -68,34 +56,6 @@ static void rpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
     pdo_set(p, PDO_F_TIMED_OUT);
     (void)co_emcy_raise(node, EMCY_RPDO_TIMEOUT, NULL);
     node->wiring->error_behaviour(node); /* the error behaviour of 0x1029 (kernel.h) */
-}
-
-static CO_SIZE_NOINLINE void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us)
-{
-    if (!pdo_active(p) || p->type < 254) {
-        return;
-    }
-    if (now_us >= p->next_us) { /* the event timer is an event */
-        p->next_us = CO_TIME_NEVER;
-        pdo_set(p, PDO_F_PENDING);
-    }
-    if (pdo_has(p, PDO_F_PENDING) && now_us >= p->inhibit_until_us) {
-        tpdo_send_event(node, p);
-    }
-    if (pdo_has(p, PDO_F_PENDING)) {
-        co_node_schedule(node, p->inhibit_until_us);
-    }
-    co_node_schedule(node, p->next_us);
-}
-
-void co_pdo_poll(co_node_t *node, uint64_t now_us)
-{
-    for (unsigned n = 0; n < pdo_rx_count(node) && pdo_running(node); n++) {
-        rpdo_poll(node, &node->rpdo[n], now_us);
-    }
-    for (unsigned n = 0; n < pdo_tx_count(node) && pdo_running(node); n++) {
-        tpdo_poll(node, &node->tpdo[n], now_us);
-    }
 }
 
 #endif

@@ -7,49 +7,31 @@
 #ifndef CANOLA_PDO_TIMERS_H
 #define CANOLA_PDO_TIMERS_H
 
-/* The timers' due work at `now_us` (the node's poll); their next deadlines go to
- * co_node_schedule. Without timers PDOs have nothing to wait for. */
+/* The timers' due work at `now_us` (the node's poll: pdo_rx.c, which hands the TPDOs' to
+ * pdo_tx.c); their next deadlines go to co_node_schedule. Without timers PDOs have nothing
+ * to wait for. */
 #if CO_CONFIG_PDO_TIMERS
 void co_pdo_poll(co_node_t *node, uint64_t now_us);
-void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index);
 static inline void pdo_timers_restart(co_pdo_t *p)
 {
     p->next_us = CO_TIME_NEVER;
     p->inhibit_until_us = 0;
 }
-/* Entering operational / new parameters: an event-driven TPDO's event timer starts. Inline
- * on the state changes' path; one copy in a build for size (pdo_timers.c), which both
- * callers call. */
-static inline void tpdo_start_inline(co_node_t *node, co_pdo_t *p)
-{
-    p->next_us = CO_TIME_NEVER;
-    if (pdo_active(p) && pdo_running(node) && p->type >= 254 && p->event_ms != 0) {
-        p->next_us = node->now_us + co_ms_to_us(p->event_ms);
-        co_node_schedule(node, p->next_us);
-    }
-}
-#if CO_SHORT_PATHS
-#define tpdo_start tpdo_start_inline
-#else
+/* pdo.c: entering operational / new parameters, an event-driven TPDO's event timer starts. */
 void tpdo_start(co_node_t *node, co_pdo_t *p);
-#endif
 /* Inside the inhibit time: true, and a poll is scheduled for its end. */
 bool tpdo_inhibited(co_node_t *node, const co_pdo_t *p);
 void tpdo_event_sent(co_node_t *node, co_pdo_t *p); /* inhibit time and event timer restart */
 void rpdo_received(co_node_t *node, co_pdo_t *p);   /* deadline restarts, a missed one ends */
-static inline bool rpdo_monitored(const co_pdo_t *p) { return p->event_ms != 0; }
+/* At the poll: an RPDO's deadline missed is reported (EMCY 0x8250, the error behaviour);
+ * pdo_tx.c: an event-driven TPDO's event timer and pending event. */
+void rpdo_deadline(co_node_t *node, co_pdo_t *p, uint64_t now_us);
+void tpdo_poll(co_node_t *node, co_pdo_t *p, uint64_t now_us);
 #else
 static inline void co_pdo_poll(co_node_t *node, uint64_t now_us)
 {
     (void)node;
     (void)now_us;
-}
-static inline void pdo_timers_load(co_node_t *node, co_pdo_t *p, bool tpdo, uint16_t comm_index)
-{
-    (void)node;
-    (void)p;
-    (void)tpdo;
-    (void)comm_index;
 }
 static inline void pdo_timers_restart(co_pdo_t *p) { (void)p; }
 static inline void tpdo_start(co_node_t *node, co_pdo_t *p)
@@ -72,11 +54,6 @@ static inline void rpdo_received(co_node_t *node, co_pdo_t *p)
 {
     (void)node;
     (void)p;
-}
-static inline bool rpdo_monitored(const co_pdo_t *p)
-{
-    (void)p;
-    return false;
 }
 #endif
 

@@ -83,23 +83,33 @@ void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key)
         /* (a route that goes leaves its bit: still a quick "no" for the other groups) */
         node->route_groups |= co_route_group(key);
     }
-    /* The hint starts over at the first route (the first of its key, as a hint must be),
-     * and the driver hears of the change. */
-    if (CO_SHORT_PATHS) {
-        node->route_hint = 0; /* (a build for size keeps no hint) */
-    }
+    /* The driver hears of the change. */
     if (node->cfg.driver.on_routes_changed) {
         node->cfg.driver.on_routes_changed(node->cfg.driver.ctx);
     }
 }
 
-#if !CO_SHORT_PATHS
-/* (out of line: co_node_accepts calls it too, and the look-up is inlined here once) */
-CO_SIZE_NOINLINE uint16_t co_routes_find(const co_node_t *node, uint32_t key)
+uint16_t co_routes_find(const co_node_t *node, uint32_t key)
 {
-    return co_routes_find_inline(node, key);
+    uint32_t lo = 0;
+    uint32_t hi = node->route_count;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        uint32_t k = node->route_keys[mid];
+        if (k == key) {
+            while (mid > 0 && node->route_keys[mid - 1] == key) {
+                mid--; /* the first owner of the key takes its frames */
+            }
+            return (uint16_t)mid;
+        }
+        if (k < key) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    return node->route_count;
 }
-#endif
 
 bool co_node_accepts(const co_node_t *node, const co_frame_t *frame)
 {

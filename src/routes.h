@@ -34,35 +34,8 @@ enum co_route_kind {
  * route. O(routes). */
 void co_route_set(co_node_t *node, uint8_t kind, uint8_t slot, uint32_t key);
 /* The position of the route that takes the frames of `key`: the first of its owners (the
- * routes are sorted by key, then owner), or route_count when none does. Inline on the
- * receive path with the short paths (the call and the registers it saves cost more than
- * the search); one copy (routes.c) in a build for size. */
-static inline uint16_t co_routes_find_inline(const co_node_t *node, uint32_t key)
-{
-    uint32_t lo = 0;
-    uint32_t hi = node->route_count;
-    while (lo < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        uint32_t k = node->route_keys[mid];
-        if (k == key) {
-            while (mid > 0 && node->route_keys[mid - 1] == key) {
-                mid--; /* the first owner of the key takes its frames */
-            }
-            return (uint16_t)mid;
-        }
-        if (k < key) {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
-    }
-    return node->route_count;
-}
-#if CO_SHORT_PATHS
-#define co_routes_find co_routes_find_inline
-#else
+ * routes are sorted by key, then owner), or route_count when none does. O(log routes). */
 uint16_t co_routes_find(const co_node_t *node, uint32_t key);
-#endif
 /* The route key of a received frame. */
 static inline uint32_t co_route_key(const co_frame_t *frame)
 {

@@ -50,4 +50,15 @@ uint64_t co_sdo_client_poll(co_node_t *node, uint64_t now_us);
 #define co_sdo_client_poll co_none_poll
 #endif
 
+/* SDO's objects (node_od.c): the server parameters 0x1200.., the client parameters 0x1280..
+ * (without clients they have no effect: no server channel is 0x1200 + 0x80 or more). */
+#if CO_SDO_CLIENTS_MAX > 0
+#define CO_SDO_OBJECT_ROWS                                                                         \
+    CO_OBJECT_ROW(0x1200, 0x127F, CO_COB_SUB1_2, co_sdo_server_check_write, co_sdo_server_written) \
+    CO_OBJECT_ROW(0x1280, 0x12FF, CO_COB_SUB1_2, NULL, co_sdo_client_written)
+#else
+#define CO_SDO_OBJECT_ROWS                                                                         \
+    CO_OBJECT_ROW(0x1200, 0x12FF, CO_COB_SUB1_2, co_sdo_server_check_write, co_sdo_server_written)
+#endif
+
 #endif /* CANOLA_SDO_INTERNAL_H */

@@ -3,23 +3,27 @@
  * sdo_server.c -- the SDO server: expedited, segmented and block transfer in
  * both directions (see canola/sdo.h for the behaviour).
  *
- * One state machine per channel. Downloads collect into the channel buffer and
- * are stored whole at the end, unless the entry streams through a write hook or
- * is a DOMAIN/string in RAM larger than the buffer (received into its storage);
- * uploads read the dictionary piece by piece at an offset, so a retransmission
- * in block upload simply reads the same offset again.
+ * One state machine per channel, in the SDO client's shape: co_sdo_server_ingest switches
+ * once on the state, each step is a handler that answers and returns CO_ABORT_NONE or the
+ * abort code, and one failure path (fail) sends the abort and ends the transfer. A request
+ * that fits no step of the state (an initiate, the client's abort, anything else) goes to
+ * on_request.
  *
- * The frames that make up nearly all traffic take short paths: an expedited
- * request, a segment of an open segmented transfer and a segment of a block
- * download are told apart by one test of the state and one of the command byte
- * (co_sdo_server_ingest); everything else goes through serve_other. The time-out
- * of a transfer is the time of its last frame (last_us) plus the SDO time-out:
- * a frame only stores the time, and poll works out the deadline.
+ * Downloads collect into the channel buffer and are stored whole at the end, unless the
+ * entry streams through a write hook or is a DOMAIN/string in RAM larger than the buffer
+ * (received into its storage); uploads read the dictionary piece by piece at an offset, so
+ * a retransmission in block upload simply reads the same offset again.
+ *
+ * The time-out counts from the transfer's last progress (last_us): a frame that moves it
+ * on (data received or requested, a sub-block acknowledged) restarts it, one that moves
+ * nothing does not: a client that sends empty download segments, or repeats block
+ * segments, holds the channel for one time-out, not for ever, and then hears 0x05040000
+ * (SDO protocol timed out), the code of a transfer that made no progress for the time-out.
+ * A frame only stores the time; poll works out the deadline.
  */
 #include <string.h>
 
 #include "crc16.h"
-#include "od_plain.h"
 #include "sdo_internal.h"
 #include "sdo_protocol.h"
 
@@ -118,35 +122,38 @@ void co_sdo_server_written(co_node_t *node, const co_od_entry_t *entry)
     }
 }
 
-/* ---- sending */
+/* ---- time and sending */
+
+/* The transfer moved on: its time-out counts from now. */
+static void progress(const co_node_t *node, co_sdo_server_t *s) { s->last_us = node->now_us; }
 
 /* A transfer opens (or goes on in a new state): poll must look at it by the time-out. */
 static CO_SIZE_NOINLINE void enter(co_node_t *node, co_sdo_server_t *s, uint8_t state)
 {
     s->state = state;
+    progress(node, s);
     co_node_schedule(node, s->last_us + co_sdo_timeout_us(node));
 }
 
 /* The response in s->reply to the client (its data filled by the caller). */
-static CO_INLINE void send_reply(co_node_t *node, co_sdo_server_t *s)
+static void send_reply(co_node_t *node, co_sdo_server_t *s)
 {
     if (s->cob_tx & CO_COB_INVALID) {
         return; /* never on a COB-ID marked not valid */
     }
-    (void)co_node_send_hot(node, &s->reply, CO_SVC_SDO);
+    (void)co_node_send_as(node, &s->reply, CO_SVC_SDO);
 }
 
 /* A whole frame to the client. */
-static CO_INLINE void send(co_node_t *node, co_sdo_server_t *s,
-                           const uint8_t data[CO_SDO_FRAME_LEN])
+static void send(co_node_t *node, co_sdo_server_t *s, const uint8_t data[CO_SDO_FRAME_LEN])
 {
-    co_copy(s->reply.data, data, CO_SDO_FRAME_LEN);
+    co_copy_fixed(s->reply.data, data, CO_SDO_FRAME_LEN);
     send_reply(node, s);
 }
 
-/* A frame of two little-endian words: bytes 0..3 and 4..7 (built in the frame itself:
- * the expedited answers are the hot ones). */
-static CO_INLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t head, uint32_t tail)
+/* A frame of two little-endian words: bytes 0..3 and 4..7, built in the frame itself. */
+static CO_SIZE_NOINLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t head,
+                                        uint32_t tail)
 {
     co_put_u32(&s->reply.data[0], head);
     co_put_u32(&s->reply.data[4], tail);
@@ -154,57 +161,51 @@ static CO_INLINE void send_words(co_node_t *node, co_sdo_server_t *s, uint32_t h
 }
 
 /* The first word of a response naming the transfer's object: cmd, index, sub-index. */
-static CO_INLINE uint32_t head(const co_sdo_server_t *s, uint8_t cmd)
+static uint32_t head(const co_sdo_server_t *s, uint8_t cmd)
 {
     return cmd | ((uint32_t)s->index << 8) | ((uint32_t)s->sub << 24);
 }
 
 /* A response naming the transfer's object, then `tail`. */
-static CO_INLINE void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
+static void respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint32_t tail)
 {
     send_words(node, s, head(s, cmd), tail);
 }
 
-static CO_NOINLINE void abort_transfer(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
+/* The one failure path: the abort to the client, and the transfer is over. */
+static CO_NOINLINE void fail(co_node_t *node, co_sdo_server_t *s, co_abort_t code)
 {
     respond(node, s, CO_SDO_CS_ABORT, code);
     s->state = IDLE;
 }
 
-/* store() of a server parameter (0x1200..0x127F), which may move this very channel (sub1 or
- * sub2 written through it): the write takes effect at once, and its confirmation still leaves
- * where the client waits for it, on the COB-ID the request was served on. (A build for size
- * stores every value so, and inlines it where it has one caller, as an expedited-only server.) */
-static CO_FAST_NOINLINE void store_parameter(co_node_t *node, co_sdo_server_t *s,
-                                             const uint8_t *data, uint32_t len, uint32_t ok)
-{
-    co_frame_t served = s->reply; /* valid: else the request had not come */
-    co_abort_t abort = co_node_write(node, s->entry, data, len);
-    if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
-    }
-    co_put_u32(&served.data[0], ok);
-    co_put_u32(&served.data[4], 0);
-    (void)co_node_send_hot(node, &served, CO_SVC_SDO);
-}
-
 /* A whole value from the network into the dictionary with the services' effects, then the
- * answer: the confirmation (`ok`, its first word; the second is 0) or the abort. */
-static CO_INLINE void store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
-                            uint32_t ok)
+ * confirmation (`ok`, its first word; the second is 0). The write may move this very channel
+ * (0x1200 sub 1 or 2 written through it): it takes effect at once, and the confirmation
+ * still leaves where the client waits for it, on the COB-ID the request was served on. */
+static co_abort_t store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t len,
+                        uint32_t ok)
 {
-    /* (a build for size sends every confirmation so: one copy of the path, not two) */
-    if (!CO_SHORT_PATHS || (s->entry->index >> 7) == (0x1200u >> 7)) {
-        store_parameter(node, s, data, len, ok);
-        return;
-    }
+    co_frame_t *r = &s->reply;
+    uint32_t served_id = r->id; /* (valid: else the request had not come) */
+    uint8_t served_flags = r->flags;
     co_abort_t abort = co_node_write(node, s->entry, data, len);
     if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-    } else {
-        send_words(node, s, ok, 0);
+        return abort;
     }
+    uint32_t id = r->id; /* the channel's address from now on */
+    uint8_t flags = r->flags;
+    /* (the default channel's COB-IDs never change: a node with one server skips this) */
+    if (co_sdo_servers_max() > 1) {
+        r->id = served_id;
+        r->flags = served_flags;
+    }
+    co_put_u32(&r->data[0], ok);
+    co_put_u32(&r->data[4], 0);
+    (void)co_node_send_as(node, r, CO_SVC_SDO);
+    r->id = id;
+    r->flags = flags;
+    return CO_ABORT_NONE;
 }
 
 /* The first bytes of a new transfer's bookkeeping (expedited requests need none). */
@@ -214,7 +215,6 @@ static void begin(co_sdo_server_t *s)
     s->buf_len = 0;
     s->toggle = 0;
     s->crc = 0;
-    s->wire = NULL;
 }
 
 /* ---- download */
@@ -288,11 +288,14 @@ static co_abort_t flush(co_node_t *node, co_sdo_server_t *s, bool last)
     return abort;
 }
 
-/* Append received bytes; when the buffer is full, stream it on or fail. */
-static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data,
-                                           uint32_t n)
+/* Append a segment's bytes (`n` of the 7 at `data`; the buffer has room for 7 past its size:
+ * a block's last segment may carry up to 6 bytes of padding past the value). A full buffer
+ * is streamed on first, or the transfer fails. */
+static co_abort_t collect(co_node_t *node, co_sdo_server_t *s, const uint8_t *data, uint32_t n)
 {
-    /* a block's last segment may carry up to 6 bytes of padding past the value */
+    if (n == 0) {
+        return CO_ABORT_NONE; /* (the copy below writes 7 bytes: none past the buffer) */
+    }
     uint32_t room = CO_CONFIG_SDO_BLOCK && s->state == BLOCK_DOWN ? sizeof s->buf : CO_SDO_BUF_SIZE;
     if (s->buf_len + n > room) {
         if (!streams(&node->cfg.od, s) && own_storage(&node->cfg.od, s) == NULL) {
@@ -306,7 +309,7 @@ static CO_FAST_NOINLINE co_abort_t collect(co_node_t *node, co_sdo_server_t *s, 
             return abort;
         }
     }
-    co_copy(&s->buf[s->buf_len], data, n);
+    co_copy_fixed(&s->buf[s->buf_len], data, CO_SDO_SEG_BYTES); /* (a fixed size: no loop) */
     s->buf_len += n;
     return CO_ABORT_NONE;
 }
@@ -318,18 +321,16 @@ static uint32_t unsized_length(const co_od_t *od, const co_od_entry_t *e)
     return fixed && fixed < CO_SDO_EXPEDITED_MAX ? fixed : CO_SDO_EXPEDITED_MAX;
 }
 
-static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static co_abort_t initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
     if (cmd & CO_SDO_INI_EXPEDITED) {
         uint32_t len = (cmd & CO_SDO_INI_SIZE) ? CO_SDO_EXPEDITED_MAX - CO_SDO_INI_N(cmd)
                                                : unsized_length(&node->cfg.od, s->entry);
-        store(node, s, &d[4], len, head(s, CO_SDO_SCS_DN_INI));
-        return;
+        return store(node, s, &d[4], len, head(s, CO_SDO_SCS_DN_INI));
     }
     if (!CO_CONFIG_SDO_SEGMENTED) {
-        abort_transfer(node, s, CO_ABORT_COMMAND); /* segmented transfer is left out */
-        return;
+        return CO_ABORT_COMMAND; /* segmented transfer is left out */
     }
     begin(s);
     s->size_known = cmd & CO_SDO_INI_SIZE;
@@ -337,94 +338,70 @@ static void initiate_download(co_node_t *node, co_sdo_server_t *s, const uint8_t
     s->crc_on = false;
     co_abort_t abort = check_download_size(&node->cfg.od, s);
     if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+        return abort;
     }
     enter(node, s, DOWN_SEGMENTED);
     respond(node, s, CO_SDO_SCS_DN_INI, 0);
+    return CO_ABORT_NONE;
 }
 
 /* The end of a download (the transfer is over): sizes agree, then the value goes to the
  * dictionary, and the client hears `ok` (the confirmation's first word) or the abort. The
  * value is stored whole: from the buffer, or from the entry's own storage when earlier parts
  * went there (spill). */
-static CO_SIZE_INLINE void finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
+static co_abort_t finish_download(co_node_t *node, co_sdo_server_t *s, uint32_t ok)
 {
-    co_abort_t abort;
+    s->state = IDLE;
     uint32_t len = received(s);
     if (s->size_known && len != s->size) {
-        abort = len > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
-    } else if (streams(&node->cfg.od, s)) {
-        abort = flush(node, s, true);
-    } else if (CO_CONFIG_SDO_BLOCK && s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE &&
-               own_storage(&node->cfg.od, s) == NULL) { /* (only a block fills past the size) */
-        abort = CO_ABORT_OUT_OF_MEMORY;
-    } else if (s->done == 0) {
-        store(node, s, s->buf, s->buf_len, ok);
-        return;
-    } else if (spill(&node->cfg.od, s)) {
-        store(node, s, own_storage(&node->cfg.od, s), len, ok);
-        return;
-    } else {
-        abort = CO_ABORT_LEN_HIGH;
+        return len > s->size ? CO_ABORT_LEN_HIGH : CO_ABORT_LEN_LOW;
     }
-    if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-    } else {
-        send_words(node, s, ok, 0);
+    if (streams(&node->cfg.od, s)) {
+        co_abort_t abort = flush(node, s, true);
+        if (abort == CO_ABORT_NONE) {
+            send_words(node, s, ok, 0);
+        }
+        return abort;
     }
+    if (CO_CONFIG_SDO_BLOCK && s->done == 0 && s->buf_len > CO_SDO_BUF_SIZE &&
+        own_storage(&node->cfg.od, s) == NULL) { /* (only a block fills past the size) */
+        return CO_ABORT_OUT_OF_MEMORY;
+    }
+    if (s->done == 0) {
+        return store(node, s, s->buf, s->buf_len, ok);
+    }
+    if (!spill(&node->cfg.od, s)) {
+        return CO_ABORT_LEN_HIGH;
+    }
+    return store(node, s, own_storage(&node->cfg.od, s), len, ok);
 }
 
-/* A download segment (command 000t nnnc) of an open segmented download: any case. */
-static CO_NOINLINE void download_segment_general(co_node_t *node, co_sdo_server_t *s,
-                                                 const uint8_t *d)
+/* A download segment (command 000t nnnc) of an open segmented download. One with no data
+ * and more to come moves nothing: it is answered, but the time-out goes on. */
+static co_abort_t on_download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
     uint8_t toggle = cmd & CO_SDO_SEG_TOGGLE;
     if (toggle != s->toggle) {
-        abort_transfer(node, s, CO_ABORT_TOGGLE);
-        return;
+        return CO_ABORT_TOGGLE;
     }
     uint32_t n = CO_SDO_SEG_BYTES - CO_SDO_SEG_N(cmd);
-    co_abort_t abort = CO_ABORT_NONE;
     if (s->size_known && received(s) + n > s->size) {
-        abort = CO_ABORT_LEN_HIGH;
-    } else if (CO_SHORT_PATHS && s->buf_len + CO_SDO_SEG_BYTES <= CO_SDO_BUF_SIZE) {
-        co_copy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES); /* the usual case: room for 7 */
-        s->buf_len += n;
-    } else {
-        abort = collect(node, s, &d[1], n);
+        return CO_ABORT_LEN_HIGH;
     }
+    co_abort_t abort = collect(node, s, &d[1], n);
     if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+        return abort;
     }
     s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
     if (cmd & CO_SDO_SEG_LAST) {
-        s->state = IDLE;
-        finish_download(node, s, CO_SDO_SCS_DN_SEG | toggle);
-        return;
+        return finish_download(node, s, CO_SDO_SCS_DN_SEG | toggle);
+    }
+    if (n != 0) {
+        progress(node, s);
     }
     send_words(node, s, CO_SDO_SCS_DN_SEG | toggle, 0);
-}
-
-/* A download segment: the usual one (more to come, the right toggle, room for 7 bytes in
- * the buffer and in the indicated size) here, the others in download_segment_general. */
-static CO_FAST_NOINLINE void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
-{
-    uint8_t cmd = d[0];
-    if (!CO_SHORT_PATHS || (cmd & (CO_SDO_SEG_TOGGLE | CO_SDO_SEG_LAST)) != s->toggle ||
-        s->buf_len + CO_SDO_SEG_BYTES > CO_SDO_BUF_SIZE ||
-        (s->size_known && received(s) + CO_SDO_SEG_BYTES > s->size)) {
-        download_segment_general(node, s, d);
-        return;
-    }
-    memcpy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES);
-    s->buf_len += CO_SDO_SEG_BYTES - CO_SDO_SEG_N(cmd);
-    s->toggle ^= CO_SDO_SEG_TOGGLE;
-    co_put_u32(&s->reply.data[0], CO_SDO_SCS_DN_SEG | (cmd & CO_SDO_SEG_TOGGLE));
-    co_put_u32(&s->reply.data[4], 0);
-    send_reply(node, s);
+    return CO_ABORT_NONE;
 }
 
 /* ---- upload */
@@ -458,116 +435,70 @@ static co_abort_t read_at(co_node_t *node, co_sdo_server_t *s, uint32_t offset, 
     return CO_ABORT_NONE;
 }
 
-/* The expedited answer: 1..4 bytes of value, little-endian in the frame's last word. */
-static CO_INLINE void answer_expedited(co_node_t *node, co_sdo_server_t *s, uint32_t value,
-                                       uint32_t len)
-{
-    uint32_t n = CO_SDO_EXPEDITED_MAX - len; /* bytes that hold no data */
-    uint32_t cmd = CO_SDO_SCS_UP_INI | CO_SDO_INI_EXPEDITED | CO_SDO_INI_SIZE;
-    respond(node, s, (uint8_t)(cmd | (n << CO_SDO_INI_N_SHIFT)), value);
-}
-
-/* The first `len` (1..4) bytes of `wire` as a little-endian word: any bytes after them
- * (a read hook may have left some) are not part of the value. */
-static uint32_t small_value(const uint8_t wire[CO_SDO_EXPEDITED_MAX], uint32_t len)
-{
-    return co_get_u32(wire) & (0xFFFFFFFFu >> (8u * (CO_SDO_EXPEDITED_MAX - len)));
-}
-
-/* A plain number of 1, 2 or 4 bytes, read in place. */
-static CO_INLINE uint32_t plain_value(const co_od_t *od, const co_od_entry_t *e)
-{
-    const void *value = co_od_value(od, e);
-    if (co_od_size(od, e) == 4) {
-        uint32_t v;
-        memcpy(&v, value, 4);
-        return v;
-    }
-    if (co_od_size(od, e) == 2) {
-        uint16_t v;
-        memcpy(&v, value, 2);
-        return v;
-    }
-    return *(const uint8_t *)value;
-}
-
-/* Any other upload: through the dictionary's wire view or its read hook. */
-static CO_FAST_NOINLINE void initiate_upload_general(co_node_t *node, co_sdo_server_t *s)
+/* An initiate upload request: the value in the answer when it has 1..4 bytes (expedited),
+ * else its size, and segments follow. */
+static co_abort_t initiate_upload(co_node_t *node, co_sdo_server_t *s)
 {
     uint8_t first[CO_SDO_EXPEDITED_MAX] = {0};
     uint32_t n = 0;
     uint32_t total = 0;
-    /* The segments of a long value copy from the wire view (a short path: without it,
-     * every piece is read through co_od_read) */
-    const uint8_t *wire = NULL;
-    if (CO_SHORT_PATHS && CO_CONFIG_SDO_SEGMENTED) {
-        wire = co_od_wire_data(&node->cfg.od, s->entry, &total);
+    co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
+    if (abort != CO_ABORT_NONE) {
+        return abort;
     }
-    /* always true in a build for size (no short paths): the compiler drops the else */
-    // cppcheck-suppress knownConditionTrueFalse
-    if (wire == NULL) {
-        co_abort_t abort = read_at(node, s, 0, first, sizeof first, &n, &total);
-        if (abort != CO_ABORT_NONE) {
-            abort_transfer(node, s, abort);
-            return;
-        }
-    } else {
-        n = total < sizeof first ? total : sizeof first;
-        co_copy(first, wire, n);
-    }
-    if (total != CO_OD_SIZE_UNKNOWN && total >= 1 && total <= CO_SDO_EXPEDITED_MAX) {
-        answer_expedited(node, s, small_value(first, total), total);
-        return;
+    if (size_told(total) && total >= 1 && total <= CO_SDO_EXPEDITED_MAX) {
+        /* 1..4 bytes, little-endian in the last word (a read hook may have left bytes after
+         * the value: they are not part of it) */
+        uint32_t unused = CO_SDO_EXPEDITED_MAX - total;
+        uint32_t cmd = CO_SDO_SCS_UP_INI | CO_SDO_INI_EXPEDITED | CO_SDO_INI_SIZE;
+        respond(node, s, (uint8_t)(cmd | (unused << CO_SDO_INI_N_SHIFT)),
+                co_get_u32(first) & (0xFFFFFFFFu >> (8u * unused)));
+        return CO_ABORT_NONE;
     }
     if (!CO_CONFIG_SDO_SEGMENTED) {
-        abort_transfer(node, s, CO_ABORT_UNSUPPORTED); /* too long without segments */
-        return;
+        return CO_ABORT_UNSUPPORTED; /* too long without segments */
     }
     begin(s); /* segments follow */
-    s->wire = wire;
+#if CO_CONFIG_SDO_SEGMENTED
+    /* a string or DOMAIN in storage, with no read hook: its bytes are the wire's */
+    const co_od_hooks_t *hooks = co_od_hooks_of(s->entry);
+    s->wire = hooks == NULL || hooks->read == NULL ? own_storage(&node->cfg.od, s) : NULL;
+#endif
     s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, UP_SEGMENTED);
     respond(node, s, CO_SDO_SCS_UP_INI | (s->size_known ? CO_SDO_INI_SIZE : 0u), s->size);
+    return CO_ABORT_NONE;
 }
 
-static void initiate_upload(co_node_t *node, co_sdo_server_t *s)
-{
-    const co_od_entry_t *e = s->entry;
-    const co_od_t *od = &node->cfg.od;
-    if (CO_SHORT_PATHS && co_od_reads_plain(od, e) && co_od_size(od, e) <= CO_SDO_EXPEDITED_MAX) {
-        answer_expedited(node, s, plain_value(od, e), co_od_size(od, e)); /* as stored */
-        return;
-    }
-    initiate_upload_general(node, s);
-}
-
-/* An upload segment request (command 011t 0000) of an open segmented upload: any case. */
-static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t *s,
-                                               const uint8_t *d)
+/* An upload segment request (command 011t 0000) of an open segmented upload: the next 7
+ * bytes at most, read into the reply. */
+static co_abort_t on_upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t toggle = d[0] & CO_SDO_SEG_TOGGLE;
     if (toggle != s->toggle) {
-        abort_transfer(node, s, CO_ABORT_TOGGLE);
-        return;
+        return CO_ABORT_TOGGLE;
     }
-    uint8_t *r = s->reply.data; /* the segment is read into the reply (an abort rewrites it) */
+    uint8_t *r = s->reply.data; /* (an abort rewrites it) */
     co_put_u32(&r[0], 0);
     co_put_u32(&r[4], 0);
     uint32_t n = 0;
     uint32_t total = s->size;
-    if (CO_SHORT_PATHS && s->wire != NULL) { /* stored in wire form: copy the piece */
+#if CO_CONFIG_SDO_SEGMENTED
+    if (s->wire != NULL) { /* in storage: copied from there (the segmented upload row: 54 -> 38
+                            * Ir a byte in the default set, -Os) */
         n = total - s->done < CO_SDO_SEG_BYTES ? total - s->done : CO_SDO_SEG_BYTES;
-        if (CO_SHORT_PATHS && n == CO_SDO_SEG_BYTES) {
-            memcpy(&r[1], s->wire + s->done, CO_SDO_SEG_BYTES); /* the usual case, copied inline */
+        if (n == CO_SDO_SEG_BYTES) {
+            co_copy_fixed(&r[1], s->wire + s->done, CO_SDO_SEG_BYTES);
         } else {
-            co_copy(&r[1], s->wire + s->done, n);
+            co_copy(&r[1], s->wire + s->done, n); /* the last: none past the value */
         }
-    } else {
+    } else
+#endif
+    {
         co_abort_t abort = read_at(node, s, s->done, &r[1], CO_SDO_SEG_BYTES, &n, &total);
         if (abort != CO_ABORT_NONE) {
-            abort_transfer(node, s, abort);
-            return;
+            return abort;
         }
     }
     s->done += n;
@@ -575,32 +506,17 @@ static CO_NOINLINE void upload_segment_general(co_node_t *node, co_sdo_server_t 
     r[0] = (uint8_t)(CO_SDO_SCS_UP_SEG | toggle | ((CO_SDO_SEG_BYTES - n) << CO_SDO_SEG_N_SHIFT) |
                      (last ? CO_SDO_SEG_LAST : 0u));
     s->toggle = (uint8_t)(toggle ^ CO_SDO_SEG_TOGGLE);
+    progress(node, s);
     send_reply(node, s);
     if (last) {
         s->state = IDLE;
     }
-}
-
-/* An upload segment request: the usual one (the right toggle, a value in storage with
- * more than 7 bytes to go) here, the others in upload_segment_general. */
-static CO_FAST_NOINLINE void upload_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
-{
-    uint8_t toggle = d[0] & CO_SDO_SEG_TOGGLE;
-    if (!CO_SHORT_PATHS || toggle != s->toggle || s->wire == NULL ||
-        s->size - s->done <= CO_SDO_SEG_BYTES) {
-        upload_segment_general(node, s, d);
-        return;
-    }
-    s->reply.data[0] = CO_SDO_SCS_UP_SEG | toggle; /* 7 bytes, more to come */
-    memcpy(&s->reply.data[1], s->wire + s->done, CO_SDO_SEG_BYTES);
-    s->done += CO_SDO_SEG_BYTES;
-    s->toggle ^= CO_SDO_SEG_TOGGLE;
-    send_reply(node, s);
+    return CO_ABORT_NONE;
 }
 
 /* ---- block download */
 
-static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static co_abort_t initiate_block_download(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     begin(s);
     s->crc_on = d[0] & CO_SDO_BLK_CRC;
@@ -608,43 +524,37 @@ static void initiate_block_download(co_node_t *node, co_sdo_server_t *s, const u
     s->size = co_get_u32(&d[4]);
     co_abort_t abort = check_download_size(&node->cfg.od, s);
     if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+        return abort;
     }
     s->blksize = BLOCK_SIZE_MAX;
     s->seq = 0;
     enter(node, s, BLOCK_DOWN);
     /* sc = 1: this server checks CRCs */
     respond(node, s, CO_SDO_SCS_BLK_DN | CO_SDO_BLK_INI | CO_SDO_BLK_CRC, s->blksize);
+    return CO_ABORT_NONE;
 }
 
-/* One segment of a sub-block. Only the next in-order sequence number is taken; the
- * acknowledgement names the last one taken, so the client repeats what was lost. */
-static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+/* One segment of a sub-block. Only the next in-order sequence number is taken (progress);
+ * the acknowledgement, at the sub-block's end, names the last one taken, so the client
+ * repeats what was lost. */
+static co_abort_t on_block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t seqno = d[0] & CO_SDO_BLK_SEQ_MASK;
     bool last = d[0] & CO_SDO_BLK_LAST;
     if (seqno == 0 || seqno > s->blksize) {
-        abort_transfer(node, s, CO_ABORT_SEQUENCE);
-        return;
+        return CO_ABORT_SEQUENCE;
     }
     bool in_order = seqno == s->seq + 1u;
     if (in_order) {
-        if (s->buf_len + CO_SDO_SEG_BYTES <=
-            sizeof s->buf) { /* the usual case: room in the buffer */
-            memcpy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES);
-            s->buf_len += CO_SDO_SEG_BYTES;
-        } else {
-            co_abort_t abort = collect(node, s, &d[1], CO_SDO_SEG_BYTES);
-            if (abort != CO_ABORT_NONE) {
-                abort_transfer(node, s, abort);
-                return;
-            }
+        co_abort_t abort = collect(node, s, &d[1], CO_SDO_SEG_BYTES);
+        if (abort != CO_ABORT_NONE) {
+            return abort;
         }
         s->seq = seqno;
+        progress(node, s);
     }
     if (!(last || seqno >= s->blksize)) {
-        return;
+        return CO_ABORT_NONE;
     }
     uint8_t ack[CO_SDO_FRAME_LEN] = {CO_SDO_SCS_BLK_DN | CO_SDO_BLK_ACK, s->seq, s->blksize};
     send(node, s, ack);
@@ -652,41 +562,20 @@ static CO_NOINLINE void block_segment_general(co_node_t *node, co_sdo_server_t *
     if (last && in_order) {
         s->state = BLOCK_DOWN_END;
     }
+    return CO_ABORT_NONE;
 }
 
-/* A segment of a sub-block: the usual one (the next in order, neither the sub-block's
- * last nor the transfer's, room in the buffer) here, the others in block_segment_general. */
-static CO_INLINE void block_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static co_abort_t on_block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
-    uint8_t cmd = d[0]; /* below blksize (<= 127): CO_SDO_BLK_LAST is clear */
-    if (!CO_SHORT_PATHS || cmd != s->seq + 1u || cmd >= s->blksize ||
-        s->buf_len + CO_SDO_SEG_BYTES > sizeof s->buf) {
-        block_segment_general(node, s, d);
-        return;
-    }
-    memcpy(&s->buf[s->buf_len], &d[1], CO_SDO_SEG_BYTES);
-    s->buf_len += CO_SDO_SEG_BYTES;
-    s->seq = cmd;
-}
-
-static void block_download_end(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
-{
-    if ((d[0] & (CO_SDO_CS_MASK | CO_SDO_BLK_SUB_MASK)) != (CO_SDO_CCS_BLK_DN | CO_SDO_BLK_END)) {
-        abort_transfer(node, s, CO_ABORT_COMMAND);
-        return;
-    }
     uint32_t unused = CO_SDO_BLK_END_N(d[0]);
     if (unused > s->buf_len) { /* n = 7: an empty value's only segment */
-        abort_transfer(node, s, CO_ABORT_COMMAND);
-        return;
+        return CO_ABORT_COMMAND;
     }
     s->buf_len -= unused; /* the last segment's padding */
     if (s->crc_on && co_crc16(s->crc, s->buf, s->buf_len) != co_get_u16(&d[1])) {
-        abort_transfer(node, s, CO_ABORT_CRC);
-        return;
+        return CO_ABORT_CRC;
     }
-    s->state = IDLE;
-    finish_download(node, s, CO_SDO_SCS_BLK_DN | CO_SDO_BLK_END);
+    return finish_download(node, s, CO_SDO_SCS_BLK_DN | CO_SDO_BLK_END);
 }
 
 /* ---- block upload */
@@ -722,7 +611,9 @@ static uint8_t sub_block_segments(const co_sdo_server_t *s)
 }
 
 /* Send the sub-block's segments while the transmit queue is idle; poll resumes. The
- * full segments before the final one go out from a short loop. */
+ * full segments before the final one go out from a short loop. Sending a sub-block that
+ * an acknowledgement moved on is progress (on a slow bus it may take longer than the
+ * time-out); sending one again that the client acknowledged nothing of is not. */
 static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
 {
     uint8_t segments = sub_block_segments(s);
@@ -734,9 +625,9 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
     const uint8_t *next = &s->buf[(size_t)seq * CO_SDO_SEG_BYTES];
     while (seq < plain && co_txq_idle(node)) {
         s->reply.data[0] = ++seq;
-        memcpy(&s->reply.data[1], next, CO_SDO_SEG_BYTES);
+        co_copy_fixed(&s->reply.data[1], next, CO_SDO_SEG_BYTES);
         next += CO_SDO_SEG_BYTES;
-        (void)co_node_send_idle(node, &s->reply, CO_SVC_SDO);
+        (void)co_node_send_as(node, &s->reply, CO_SVC_SDO);
     }
     if (seq == plain && seq < segments && co_txq_idle(node)) { /* the final segment */
         uint32_t offset = (uint32_t)seq * CO_SDO_SEG_BYTES;
@@ -746,49 +637,56 @@ static void pump_sub_block(co_node_t *node, co_sdo_server_t *s)
         s->last_len = (uint8_t)n;
         send(node, s, d);
     }
+    if (seq != s->seq && !s->resent) {
+        progress(node, s);
+    }
     s->seq = seq;
-    s->last_us = node->now_us; /* the time-out counts from the last frame sent too */
 }
 
-static void initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static co_abort_t initiate_block_upload(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t blksize = d[4];
     uint8_t pst = d[5];
     if (blksize < 1 || blksize > CO_SDO_BLKSIZE_MAX) {
-        abort_transfer(node, s, CO_ABORT_BLOCK_SIZE);
-        return;
+        return CO_ABORT_BLOCK_SIZE;
     }
     begin(s);
     s->crc_on = d[0] & CO_SDO_BLK_CRC;
+    s->resent = false;
     s->blksize = blksize <= BLOCK_SIZE_MAX ? blksize : (uint8_t)BLOCK_SIZE_MAX;
     uint32_t total = 0;
     co_abort_t abort = load_sub_block(node, s, &total);
     if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+        return abort;
     }
     if (pst != 0 && size_told(total) && total <= pst) {
-        initiate_upload(node, s); /* protocol switch: a normal upload serves it better */
-        return;
+        return initiate_upload(node, s); /* protocol switch: a normal upload serves it better */
     }
     s->size_known = size_told(total);
     s->size = s->size_known ? total : 0;
     enter(node, s, BLOCK_UP_START);
     uint8_t size = s->size_known ? CO_SDO_BLK_SIZE : 0u; /* sc = 1: a CRC is offered */
     respond(node, s, CO_SDO_SCS_BLK_UP | CO_SDO_BLK_INI | CO_SDO_BLK_CRC | size, s->size);
+    return CO_ABORT_NONE;
 }
 
-static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+static co_abort_t on_block_upload_start(co_node_t *node, co_sdo_server_t *s)
+{
+    s->state = BLOCK_UP;
+    progress(node, s);
+    pump_sub_block(node, s);
+    return CO_ABORT_NONE;
+}
+
+static co_abort_t on_block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t ackseq = d[1];
     uint8_t blksize = d[2];
     if (ackseq > s->seq) {
-        abort_transfer(node, s, CO_ABORT_SEQUENCE);
-        return;
+        return CO_ABORT_SEQUENCE;
     }
     if (blksize < 1 || blksize > CO_SDO_BLKSIZE_MAX) {
-        abort_transfer(node, s, CO_ABORT_BLOCK_SIZE);
-        return;
+        return CO_ABORT_BLOCK_SIZE;
     }
     uint32_t acked = (uint32_t)ackseq * CO_SDO_SEG_BYTES;
     if (acked > s->buf_len) {
@@ -799,6 +697,10 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         s->crc = co_crc16(s->crc, s->buf, acked);
     }
     s->done += acked;
+    s->resent = ackseq == 0; /* the same data again: no progress */
+    if (!s->resent) {
+        progress(node, s);
+    }
     if (all_acked && s->last_sent) {
         uint8_t unused = (uint8_t)(CO_SDO_SEG_BYTES - s->last_len);
         uint8_t cmd = CO_SDO_SCS_BLK_UP | CO_SDO_BLK_END;
@@ -806,65 +708,35 @@ static void block_upload_ack(co_node_t *node, co_sdo_server_t *s, const uint8_t 
                                          (uint8_t)s->crc, (uint8_t)(s->crc >> 8)};
         send(node, s, end);
         s->state = BLOCK_UP_END;
-        return;
+        return CO_ABORT_NONE;
     }
     s->blksize = blksize <= BLOCK_SIZE_MAX ? blksize : (uint8_t)BLOCK_SIZE_MAX;
     uint32_t total = 0;
     co_abort_t abort = load_sub_block(node, s, &total);
     if (abort != CO_ABORT_NONE) {
-        abort_transfer(node, s, abort);
-        return;
+        return abort;
     }
     pump_sub_block(node, s);
+    return CO_ABORT_NONE;
 }
 
-/* ---- dispatch */
+/* ---- requests */
 
-/* co_od_access's rule, as a test (which co_od_access then turns into the abort code). */
-static CO_INLINE bool may_access(const co_od_t *od, const co_od_entry_t *e, bool write)
+/* A new transfer's object: found and accessible in that direction, else the abort code.
+ * A transfer still open ends here. */
+static co_abort_t open_entry(co_node_t *node, co_sdo_server_t *s, const uint8_t *d, bool write)
 {
-    return write ? (co_od_attr(od, e) & (CO_OD_WRITE | CO_OD_CONST)) == CO_OD_WRITE
-                 : (co_od_attr(od, e) & CO_OD_READ);
-}
-
-/* A new transfer's object: found and accessible in that direction, or the request is
- * answered with the abort code (NULL). */
-static CO_INLINE const co_od_entry_t *open_entry(co_node_t *node, co_sdo_server_t *s,
-                                                 const uint8_t *d, bool write)
-{
-    s->state = IDLE; /* a transfer still open ends here */
+    s->state = IDLE;
     s->index = co_get_u16(&d[1]);
     s->sub = d[3];
     co_abort_t abort = CO_ABORT_NO_OBJECT;
-    const co_od_entry_t *e = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
-    /* The inline test is a short path; without it co_od_access tells for every entry. */
-    if (e != NULL && !(CO_SHORT_PATHS && may_access(&node->cfg.od, e, write))) {
-        abort = co_od_access(&node->cfg.od, e, write);
-        e = CO_SHORT_PATHS || abort != CO_ABORT_NONE ? NULL : e; /* refused: no entry */
+    s->entry = co_od_find(&node->cfg.od, s->index, s->sub, &abort);
+    if (s->entry == NULL) {
+        return abort;
     }
-    if (e != NULL && !write) { /* readable, but has it data now (0x1003)? */
-        abort = co_od_read_check(node, e);
-        e = abort != CO_ABORT_NONE ? NULL : e;
-    }
-    if (e == NULL) { /* no entry is never served */
-        abort_transfer(node, s, abort);
-        return NULL;
-    }
-    s->entry = e;
-    return e;
-}
-
-/* An initiate download or upload request (expedited or segmented). */
-static CO_NOINLINE void initiate(co_node_t *node, co_sdo_server_t *s, const uint8_t *d, bool write)
-{
-    if (open_entry(node, s, d, write) == NULL) {
-        return;
-    }
-    if (write) {
-        initiate_download(node, s, d);
-    } else {
-        initiate_upload(node, s);
-    }
+    abort = co_od_access(&node->cfg.od, s->entry, write);
+    /* readable, but has it data now (0x1003)? */
+    return abort != CO_ABORT_NONE || write ? abort : co_od_read_check(node, s->entry);
 }
 
 /* Block initiate requests: 110x x0x0 download, 101x x000 upload. */
@@ -875,75 +747,85 @@ static bool is_block_initiate(uint8_t cmd)
            (cs == CO_SDO_CCS_BLK_UP && (cmd & CO_SDO_BLK_SUB_MASK) == CO_SDO_BLK_INI);
 }
 
-/* A frame inside an open block transfer, or one that does not fit the state. */
-static void continue_transfer(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
-{
-    if (!CO_CONFIG_SDO_BLOCK) {
-        abort_transfer(node, s, CO_ABORT_COMMAND); /* only block states come here */
-        return;
-    }
-    switch (s->state) {
-    case BLOCK_DOWN_END:
-        block_download_end(node, s, d);
-        break;
-    case BLOCK_UP_START:
-        if (d[0] != (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_START)) {
-            abort_transfer(node, s, CO_ABORT_COMMAND);
-            break;
-        }
-        s->state = BLOCK_UP;
-        pump_sub_block(node, s);
-        break;
-    case BLOCK_UP:
-        if (d[0] != (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK)) {
-            abort_transfer(node, s, CO_ABORT_COMMAND);
-            break;
-        }
-        block_upload_ack(node, s, d);
-        break;
-    case BLOCK_UP_END:
-        if (d[0] != (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_END)) {
-            abort_transfer(node, s, CO_ABORT_COMMAND);
-            break;
-        }
-        s->state = IDLE;
-        break;
-    default: /* a segmented transfer's request of another kind */
-        abort_transfer(node, s, CO_ABORT_COMMAND);
-        break;
-    }
-}
-
-/* Whatever the short paths of co_sdo_server_ingest do not take. */
-static CO_NOINLINE void serve_other(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+/* A request that is no step of the open transfer: an initiate (a transfer still open ends
+ * there), the client's abort (ends it silently), or one that fits no state. */
+static co_abort_t on_request(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
 {
     uint8_t cmd = d[0];
-    if (cmd == CO_SDO_CS_ABORT) { /* from the client: end silently */
+    uint8_t cs = cmd & CO_SDO_CS_MASK;
+    if (cs == CO_SDO_CCS_DN_INI || cs == CO_SDO_CCS_UP_INI) {
+        bool write = cs == CO_SDO_CCS_DN_INI;
+        co_abort_t abort = open_entry(node, s, d, write);
+        if (abort != CO_ABORT_NONE) {
+            return abort;
+        }
+        return write ? initiate_download(node, s, d) : initiate_upload(node, s);
+    }
+    if (cmd == CO_SDO_CS_ABORT) {
         s->state = IDLE;
-        return;
+        return CO_ABORT_NONE;
     }
     if (is_block_initiate(cmd)) {
-        bool write = (cmd & CO_SDO_CS_MASK) == CO_SDO_CCS_BLK_DN;
-        if (open_entry(node, s, d, write) == NULL) {
-            return;
+        bool write = cs == CO_SDO_CCS_BLK_DN;
+        co_abort_t abort = open_entry(node, s, d, write);
+        if (abort != CO_ABORT_NONE || !CO_CONFIG_SDO_BLOCK) {
+            return abort != CO_ABORT_NONE ? abort : CO_ABORT_COMMAND; /* block is left out */
         }
-        if (!CO_CONFIG_SDO_BLOCK) {
-            abort_transfer(node, s, CO_ABORT_COMMAND); /* block transfer is left out */
-        } else if (write) {
-            initiate_block_download(node, s, d);
-        } else {
-            initiate_block_upload(node, s, d);
-        }
-        return;
+        return write ? initiate_block_download(node, s, d) : initiate_block_upload(node, s, d);
     }
-    /* (with expedited transfers alone nothing stays open: the state is always IDLE) */
-    if (s->state == IDLE || !(CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK)) {
+    if (s->state == IDLE) { /* no transfer to name */
         s->index = 0;
         s->sub = 0;
-        abort_transfer(node, s, CO_ABORT_COMMAND);
-        return;
     }
-    continue_transfer(node, s, d);
+    return CO_ABORT_COMMAND;
+}
+
+/* The frame's step in the channel's state, or on_request for a frame that is not one. */
+static co_abort_t step(co_node_t *node, co_sdo_server_t *s, const uint8_t *d)
+{
+    uint8_t cmd = d[0];
+    switch (s->state) {
+    case DOWN_SEGMENTED:
+        if (CO_CONFIG_SDO_SEGMENTED && (cmd & CO_SDO_CS_MASK) == CO_SDO_CCS_DN_SEG) {
+            return on_download_segment(node, s, d);
+        }
+        break;
+    case UP_SEGMENTED:
+        if (CO_CONFIG_SDO_SEGMENTED && (cmd & ~CO_SDO_SEG_TOGGLE) == CO_SDO_CCS_UP_SEG) {
+            return on_upload_segment(node, s, d);
+        }
+        break;
+    case BLOCK_DOWN:
+        if (CO_CONFIG_SDO_BLOCK && cmd != CO_SDO_CS_ABORT) { /* in a sub-block: a segment */
+            return on_block_segment(node, s, d);
+        }
+        break;
+    case BLOCK_DOWN_END:
+        if (CO_CONFIG_SDO_BLOCK && (cmd & (CO_SDO_CS_MASK | CO_SDO_BLK_SUB_MASK)) ==
+                                       (CO_SDO_CCS_BLK_DN | CO_SDO_BLK_END)) {
+            return on_block_download_end(node, s, d);
+        }
+        break;
+    case BLOCK_UP_START:
+        if (CO_CONFIG_SDO_BLOCK && cmd == (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_START)) {
+            return on_block_upload_start(node, s);
+        }
+        break;
+    case BLOCK_UP:
+        if (CO_CONFIG_SDO_BLOCK && cmd == (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_ACK)) {
+            return on_block_upload_ack(node, s, d);
+        }
+        break;
+    case BLOCK_UP_END:
+        if (CO_CONFIG_SDO_BLOCK && cmd == (CO_SDO_CCS_BLK_UP | CO_SDO_BLK_END)) {
+            s->state = IDLE;
+            return CO_ABORT_NONE;
+        }
+        break;
+    default:
+        break;
+    }
+    return on_request(node, s, d);
 }
 
 void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *frame)
@@ -956,41 +838,10 @@ void co_sdo_server_ingest(co_node_t *node, uint8_t channel, const co_frame_t *fr
      * condition is constant in every build, which is the point) */
     // cppcheck-suppress knownConditionTrueFalse
     co_sdo_server_t *s = &node->sdo_servers[co_sdo_servers_max() > 1 ? channel : 0];
-    const uint8_t *d = frame->data;
-    uint8_t cmd = d[0];
-    if (CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK) { /* (expedited ones never time out) */
-        s->last_us = node->now_us; /* the time-out counts from the last frame */
+    co_abort_t abort = step(node, s, frame->data);
+    if (abort != CO_ABORT_NONE) {
+        fail(node, s, abort);
     }
-    switch (s->state) {
-    case IDLE:
-        break;
-    case DOWN_SEGMENTED:
-        if (CO_CONFIG_SDO_SEGMENTED && (cmd & CO_SDO_CS_MASK) == CO_SDO_CCS_DN_SEG) {
-            download_segment(node, s, d);
-            return;
-        }
-        break;
-    case UP_SEGMENTED:
-        if (CO_CONFIG_SDO_SEGMENTED && (cmd & ~CO_SDO_SEG_TOGGLE) == CO_SDO_CCS_UP_SEG) {
-            upload_segment(node, s, d);
-            return;
-        }
-        break;
-    case BLOCK_DOWN:
-        if (CO_CONFIG_SDO_BLOCK && cmd != CO_SDO_CS_ABORT) { /* in a sub-block: a segment */
-            block_segment(node, s, d);
-            return;
-        }
-        break;
-    default:
-        break;
-    }
-    uint8_t cs = cmd & CO_SDO_CS_MASK;
-    if (cs == CO_SDO_CCS_DN_INI || cs == CO_SDO_CCS_UP_INI) {
-        initiate(node, s, d, cs == CO_SDO_CCS_DN_INI);
-        return;
-    }
-    serve_other(node, s, d);
 }
 
 #if CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK
@@ -1003,7 +854,7 @@ uint64_t co_sdo_server_poll(co_node_t *node, uint64_t now_us)
             continue;
         }
         if (now_us >= s->last_us + co_sdo_timeout_us(node)) {
-            abort_transfer(node, s, CO_ABORT_TIMEOUT);
+            fail(node, s, CO_ABORT_TIMEOUT);
             continue;
         }
         if (CO_CONFIG_SDO_BLOCK && s->state == BLOCK_UP) {

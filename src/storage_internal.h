@@ -51,4 +51,14 @@ static inline void co_storage_report(co_node_t *node, co_param_group_t group,
 #define co_storage_reset_comm co_none_node
 #endif
 
+/* The stored parameters' objects (node_od.c): 0x1010 and 0x1011 (without storage every
+ * command is refused). */
+#if CO_CONFIG_STORAGE
+#define CO_STORAGE_OBJECT_ROWS                                                                     \
+    CO_OBJECT_ROW(0x1010, 0x1011, CO_COB_NONE, co_storage_check_write, co_storage_show_capability)
+#else
+#define CO_STORAGE_OBJECT_ROWS                                                                     \
+    CO_OBJECT_ROW(0x1010, 0x1011, CO_COB_NONE, co_storage_check_write, NULL)
+#endif
+
 #endif /* CANOLA_STORAGE_INTERNAL_H */

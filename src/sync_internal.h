@@ -62,4 +62,16 @@ static inline uint32_t co_sync_producer_period(const co_node_t *node)
 }
 #endif
 
+/* The SYNC's objects (node_od.c): 0x1005 its COB-ID, 0x1019 the counter overflow; 0x1006
+ * and 0x1007, the producer's period and window, where the producer is built. */
+#if CO_CONFIG_SYNC_PRODUCER
+#define CO_SYNC_PRODUCER_ROWS CO_OBJECT_ROW(0x1006, 0x1007, CO_COB_NONE, NULL, co_sync_written)
+#else
+#define CO_SYNC_PRODUCER_ROWS
+#endif
+#define CO_SYNC_OBJECT_ROWS                                                                        \
+    CO_OBJECT_ROW(0x1005, 0x1005, CO_COB_SUB0, NULL, co_sync_written)                              \
+    CO_SYNC_PRODUCER_ROWS                                                                          \
+    CO_OBJECT_ROW(0x1019, 0x1019, CO_COB_NONE, co_sync_check_write, co_sync_written)
+
 #endif /* CANOLA_SYNC_INTERNAL_H */

@@ -19,4 +19,8 @@ void co_time_written(co_node_t *node, const co_od_entry_t *entry); /* 0x1012 */
 #define co_time_written co_none_entry
 #endif
 
+/* TIME's object (node_od.c): 0x1012, its COB-ID (checked even when TIME is left out). */
+#define CO_TIME_OBJECT_ROWS                                                                        \
+    CO_OBJECT_ROW(0x1012, 0x1012, CO_COB_SUB0, NULL, CO_CONFIG_TIME ? co_time_written : NULL)
+
 #endif /* CANOLA_TIME_INTERNAL_H */

@@ -5,11 +5,9 @@
 
 #include "canola/od.h"
 
-#include "build.h" /* CO_SHORT_PATHS: whether look-ups use the hash */
-
-/* A core without the short paths (a build for size) neither uses keys and hash nor checks
- * them: co_od_validate's answer for a table whose keys or hash alone are bad. */
-#define BAD_KEYS_OR_HASH (CO_SHORT_PATHS ? CO_ERR_CONFIG : CO_OK)
+/* A core without CO_CONFIG_OD_HASH neither uses the hash nor checks it: co_od_validate's
+ * answer for a table whose hash alone is bad. */
+#define BAD_HASH (CO_CONFIG_OD_HASH ? CO_ERR_CONFIG : CO_OK)
 
 /* ---- Helpers. */
 
@@ -1260,7 +1258,7 @@ static void test_key_array_lookups(void)
     /* A key that is not its entry's: the table is refused, at that entry. */
     keys[5] ^= 1u;
     bad = 5;
-    CHECK_EQ(co_od_validate(&keyed, &bad), BAD_KEYS_OR_HASH);
+    CHECK_EQ(co_od_validate(&keyed, &bad), CO_ERR_CONFIG);
     CHECK_EQ(bad, 5);
     keys[5] ^= 1u;
     CHECK_EQ(co_od_validate(&keyed, NULL), CO_OK);
@@ -1353,13 +1351,13 @@ static void test_hash_refused(void)
     h.hash = od.hash;
     h.hash_mask = od.hash_mask;
     bad = od.count;
-    CHECK_EQ(co_od_validate(&h, &bad), BAD_KEYS_OR_HASH);
+    CHECK_EQ(co_od_validate(&h, &bad), BAD_HASH);
     CHECK_EQ(bad, od.count);
     h = od;
     h.hash_mask = 0; /* one slot */
-    CHECK_EQ(co_od_validate(&h, NULL), BAD_KEYS_OR_HASH);
+    CHECK_EQ(co_od_validate(&h, NULL), BAD_HASH);
     h.hash_mask = 500;
-    CHECK_EQ(co_od_validate(&h, NULL), BAD_KEYS_OR_HASH);
+    CHECK_EQ(co_od_validate(&h, NULL), BAD_HASH);
     h = od;
     CHECK_EQ(co_od_hash_build(&h, slots, 9), CO_OK);
     uint32_t empty = 0;
@@ -1367,22 +1365,22 @@ static void test_hash_refused(void)
         empty++;
     }
     slots[empty] = (uint16_t)(od.count + 1u); /* past the last entry */
-    CHECK_EQ(co_od_validate(&h, NULL), BAD_KEYS_OR_HASH);
+    CHECK_EQ(co_od_validate(&h, NULL), BAD_HASH);
     for (uint32_t i = 0; i < 512; i++) {
         slots[i] = slots[i] ? slots[i] : 1; /* every slot taken */
     }
-    CHECK_EQ(co_od_validate(&h, NULL), BAD_KEYS_OR_HASH);
+    CHECK_EQ(co_od_validate(&h, NULL), BAD_HASH);
     CHECK_EQ(co_od_hash_build(&h, slots, 9), CO_OK);
     uint32_t at = CO_OD_HASH_HOME(od.keys[0], 511u);
     while (slots[at] != 1) {
         at = (at + 1u) & 511u;
     }
     slots[at] = 0; /* entry 0 lost: found by nothing */
-    CHECK_EQ(co_od_validate(&h, NULL), BAD_KEYS_OR_HASH);
-    /* A look-up through the (refused) hash misses it; a build without the short paths
+    CHECK_EQ(co_od_validate(&h, NULL), BAD_HASH);
+    /* A look-up through the (refused) hash misses it; a core without CO_CONFIG_OD_HASH
      * searches the entries, and finds it. */
     const co_od_entry_t *lost = co_od_find(&h, od.entries[0].index, od.entries[0].sub, NULL);
-    CHECK(lost == (CO_SHORT_PATHS ? NULL : &od.entries[0]));
+    CHECK(lost == (CO_CONFIG_OD_HASH ? NULL : &od.entries[0]));
     CHECK_EQ(co_od_hash_build(&h, slots, 9), CO_OK);
     CHECK_EQ(co_od_validate(&h, NULL), CO_OK);
 }

@@ -340,7 +340,7 @@ static void test_hash_compares_entries(void)
     CHECK_EQ(abort, CO_ABORT_NO_SUB);
     CHECK(co_od_find(&od, 0x3000, 0, &abort) == NULL);
     CHECK_EQ(abort, CO_ABORT_NO_OBJECT);
-#if CO_SHORT_PATHS
+#if CO_CONFIG_OD_HASH
     slots[CO_OD_HASH_HOME(CO_OD_KEY(0x2003, 0), od.hash_mask)] = 0; /* 0x2003 lost */
     CHECK_EQ(co_od_validate(&od, NULL), CO_ERR_CONFIG);
 #endif

@@ -1663,6 +1663,73 @@ static void test_timeout_restarts_with_each_frame(void)
     CHECK_STR(t.od.app_string, "hello");
 }
 
+/* Nothing just before `ms`, the abort `frame` at `ms`: the time-out's edge. */
+static void expect_timeout_at(srv_t *s, uint32_t ms, const char *frame)
+{
+    co_node_poll(s->node, ms * MS - 1);
+    EXPECT(s, "");
+    co_node_poll(s->node, ms * MS);
+    EXPECT(s, frame);
+}
+
+/* Issue 34: a segment that moves nothing (no data, more to come) is answered but does not
+ * restart the time-out: a client sending only those holds the channel for one time-out,
+ * then hears 0x05040000 (timed out: the transfer made no progress for the time-out). */
+static void test_timeout_not_restarted_by_empty_segments(void)
+{
+    test_node_t t;
+    srv_t s = example_srv(&t);
+    XFER(&s, "21 02 20 00 0A 00 00 00", "585#6002200000000000");
+    s.now = 300 * MS;
+    XFER(&s, "00 41 42 43 44 45 46 47", "585#2000000000000000"); /* 7 bytes: progress */
+    uint8_t toggle = 0x10;
+    for (uint32_t ms = 400; ms < 1300; ms += 100) { /* empty segments (n = 7), answered */
+        s.now = ms * MS;
+        char hex[32];
+        snprintf(hex, sizeof hex, "%02X 00 00 00 00 00 00 00", (unsigned)(toggle | 0x0E));
+        char want[32];
+        snprintf(want, sizeof want, "585#%02X00000000000000", (unsigned)(0x20 | toggle));
+        XFER(&s, hex, want);
+        toggle ^= 0x10;
+        co_node_poll(s.node, s.now);
+        EXPECT(&s, "");
+    }
+    /* one time-out after the last segment with data */
+    expect_timeout_at(&s, 1300, "585#8002200000000405");
+}
+
+/* The same in block transfers: a segment repeated, out of order, or an acknowledgement of
+ * nothing (the sub-block sent again) moves nothing. */
+static void test_timeout_not_restarted_without_block_progress(void)
+{
+    rig_t r;
+    srv_t s = rig_srv(&r, 0);
+    XFER(&s, "C6 04 21 00 46 00 00 00", "585#A40421007F000000");
+    s.now = 100 * MS;
+    XFER(&s, "01 00 00 00 00 00 00 00", ""); /* in order: progress */
+    for (uint32_t ms = 200; ms < 1100; ms += 100) {
+        s.now = ms * MS;
+        XFER(&s, "01 00 00 00 00 00 00 00", ""); /* the same again */
+        XFER(&s, "05 00 00 00 00 00 00 00", ""); /* out of order */
+    }
+    expect_timeout_at(&s, 1100, "585#8004210000000405");
+    /* block upload: acknowledgements of nothing resend the sub-block, without progress */
+    r.up_len = 10;
+    s.now = 2000 * MS;
+    XFER(&s, "A4 04 21 00 7F 00 00 00", "585#C60421000A000000");
+    s.now = 2100 * MS;
+    req(&s, "A3 00 00 00 00 00 00 00");
+    CHECK_EQ(s.bus->count, 2);
+    for (uint32_t ms = 2200; ms < 3100; ms += 100) {
+        fake_clear(s.bus);
+        s.now = ms * MS;
+        req(&s, "A2 00 7F 00 00 00 00 00");
+        CHECK_EQ(s.bus->count, 2); /* sent again */
+    }
+    fake_clear(s.bus);
+    expect_timeout_at(&s, 3100, "585#8004210000000405");
+}
+
 static void test_timeout_configured(void)
 {
     rig_t r;
@@ -2129,6 +2196,8 @@ int main(void)
     /* time-out */
     RUN(test_timeout_exactly_after_last_frame);
     RUN(test_timeout_restarts_with_each_frame);
+    RUN(test_timeout_not_restarted_by_empty_segments);
+    RUN(test_timeout_not_restarted_without_block_progress);
     RUN(test_timeout_configured);
     RUN(test_timeout_in_block_transfers);
     RUN(test_no_timeout_when_idle);

@@ -127,26 +127,13 @@
 #define CO_CONFIG_SDO_SEGMENTED 1
 #endif
 
-/** The short paths: code that does for the common case (a middle SDO segment, a plain
- *  number, a look-up through co_od_t.keys and .hash) what a general path beside it does
- *  for every case, only faster. 0 when compiling for size (-Os, where flash counts more
- *  than cycles): the general paths then serve every case, and generated dictionaries
- *  (canola.odgen) leave out the look-up tables such a core does not read. Override with
- *  -DCO_SHORT_PATHS=0/1 for the library and the dictionary alike. */
-#ifndef CO_SHORT_PATHS
-#if defined(__OPTIMIZE_SIZE__)
-#define CO_SHORT_PATHS 0
-#else
-#define CO_SHORT_PATHS 1
-#endif
-#endif
-
 /** The CRC-16 of SDO block transfers and stored images eight bytes a step (4 KiB of const
  *  tables, about 3 instructions a byte) instead of a nibble a step (32 bytes of table,
- *  about 18). By default as CO_SHORT_PATHS: off in a build for size, where the 4 KiB
- *  count more than the cycles. */
+ *  about 18). By default where SDO block transfer is built, whose per-byte cost it is (the
+ *  bench's block rows); a build without it checks only stored images with the CRC, where
+ *  the kilobytes count more than the cycles. */
 #ifndef CO_CONFIG_CRC16_FAST
-#define CO_CONFIG_CRC16_FAST CO_SHORT_PATHS
+#define CO_CONFIG_CRC16_FAST CO_CONFIG_SDO_BLOCK
 #endif
 
 /** Node guarding and life guarding (0x100C, 0x100D, co_guard_watch). Without it the node
@@ -230,12 +217,21 @@
  *  value at an offset into one values struct; type, attributes and side table position a
  *  row shared by the entries alike; the size from the type or a side table),
  *  power-on values as one image without zeros (co_od_tables_t.defaults), limits in a
- *  table of their own, no hooks, and a look-up hash that
- *  compares the entries themselves (no key array). The form canola.odgen's dictionaries
+ *  table of their own, no hooks, and no key array (a look-up
+ *  compares the entries themselves). The form canola.odgen's dictionaries
  *  are smallest in (they compile in both); hand-written tables with hooks need the
  *  general form (0). */
 #ifndef CO_CONFIG_OD_COMPACT
 #define CO_CONFIG_OD_COMPACT 0
+#endif
+
+/** Look-ups through the dictionary's hash (co_od_t.hash, when a dictionary has one: about
+ *  25 instructions a look-up instead of the bisection's 70, for 2 bytes a slot of the
+ *  dictionary's and about 100 bytes of code). By default in the general form (hand-written
+ *  tables, the Python package's run-time dictionaries); not in the compact form, the
+ *  firmware's, whose bisection needs neither (canola.odgen leaves the hash out too). */
+#ifndef CO_CONFIG_OD_HASH
+#define CO_CONFIG_OD_HASH (!CO_CONFIG_OD_COMPACT)
 #endif
 
 /** Run-time validation of the dictionary (co_od_validate, which co_node_init calls: order,
@@ -288,6 +284,7 @@
     (CO_CONFIG_OD_DOMAIN != 0 && CO_CONFIG_OD_DOMAIN != 1) ||                                      \
     (CO_CONFIG_OD_UNICODE != 0 && CO_CONFIG_OD_UNICODE != 1) ||                                    \
     (CO_CONFIG_OD_COMPACT != 0 && CO_CONFIG_OD_COMPACT != 1) ||                                    \
+    (CO_CONFIG_OD_HASH != 0 && CO_CONFIG_OD_HASH != 1) ||                                          \
     (CO_CONFIG_OD_VALIDATE != 0 && CO_CONFIG_OD_VALIDATE != 1)
 #error "CO_CONFIG_* feature switches are 0 or 1"
 #endif

@@ -139,14 +139,8 @@ struct co_node { // NOLINT(clang-analyzer-optin.performance.Padding)
     uint8_t nmt_state;
     bool started;
     uint8_t txq_count;
-    uint16_t services;    /**< co_service_t bits the current NMT state allows */
-    uint16_t route_count; /**< receive routes, sorted by key (routes[] below) */
-    uint16_t route_hint;  /**< the route found last (short paths only) */
-    /* PDOs: the first rpdo_count / tpdo_count of the dictionary's 0x1400.. / 0x1800.. (all
-     * CO_RPDO_MAX / CO_TPDO_MAX in a build for size) */
-    uint16_t rpdo_count;
-    uint16_t tpdo_count;
-    /* The three below are kept by the short paths only (a size build looks at every PDO). */
+    uint16_t services;       /**< co_service_t bits the current NMT state allows */
+    uint16_t route_count;    /**< receive routes, sorted by key (routes[] below) */
     uint16_t tpdo_listeners; /**< active TPDOs a changed value can trigger */
     uint16_t tpdo_sync_end;  /**< 1 + the last active TPDO a SYNC drives (0: none) */
     uint16_t rpdo_sync_end;  /**< 1 + the last active synchronous RPDO (0: none) */

@@ -41,7 +41,7 @@
 #ifndef CANOLA_OD_H
 #define CANOLA_OD_H
 
-#include "canola/config.h" /* CO_SHORT_PATHS */
+#include "canola/config.h" /* CO_CONFIG_OD_COMPACT, CO_CONFIG_OD_HASH */
 #include "canola/types.h"
 
 #ifdef __cplusplus
@@ -219,10 +219,9 @@ static inline const co_od_hooks_t *co_od_hooks_of(const co_od_entry_t *entry)
 #define CO_OD_HASH_HOME(key, mask) ((((uint32_t)(key)*0x9E3779B1u) >> 16) & (uint32_t)(mask))
 
 /** An object dictionary: the entry table and the context its hooks receive. `keys` and
- *  `hash` make look-ups faster; a core without the short paths (CO_SHORT_PATHS 0, a build
- *  for size) leaves them out altogether (the binary search over the entries finds the
- *  same entries with less code): it reads neither, and co_od_validate does not check
- *  them. */
+ *  `hash` make look-ups faster: the bisection walks the keys when given, and a core with
+ *  CO_CONFIG_OD_HASH (canola/config.h: by default in the general form) looks up through
+ *  the hash; a core without it neither reads nor checks the hash. */
 typedef struct co_od {
     const co_od_entry_t *entries;
     uint32_t count;

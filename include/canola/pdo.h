@@ -84,20 +84,15 @@ typedef const co_od_entry_t *co_pdo_item_t;
 
 /** One PDO's resolved mapping and state (embedded in the node; fields are internal). The
  *  mapping is kept in parallel arrays: an entry and (with bit-granular mapping; else the
- *  entry's size says it) a bit count per slot, and a bit per slot for "the value travels as
- *  it is stored" (copied to/from entry->value). The byte fields come first: Cortex-M
+ *  entry's size says it) a bit count per slot. The byte fields come first: Cortex-M
  *  reaches the first 32 bytes of a struct with the short byte loads and stores. */
 typedef struct co_pdo {
-    uint8_t sync_start; /**< TPDO sub6: SYNC start value */
-    uint8_t count;      /**< mapped entries */
-    uint8_t bits;       /**< mapped bits in all */
-    uint8_t type;       /**< transmission type */
-    uint8_t sync_count; /**< SYNCs counted towards the next transmission */
-    uint8_t flags;      /**< internal state bits (src/pdo_internal.h) */
-    uint8_t fast;       /**< the short path's frame length, else 0. RPDO: active, plain,
-                           asynchronous, no deadline; TPDO: active, plain, type 1..240,
-                           no SYNC start value, an 11-bit COB-ID */
-    uint8_t map_direct[(CO_PDO_MAP_MAX + 7) / 8]; /**< bit i: slot i copied as stored */
+    uint8_t sync_start;              /**< TPDO sub6: SYNC start value */
+    uint8_t count;                   /**< mapped entries */
+    uint8_t bits;                    /**< mapped bits in all */
+    uint8_t type;                    /**< transmission type */
+    uint8_t sync_count;              /**< SYNCs counted towards the next transmission */
+    uint8_t flags;                   /**< internal state bits (src/pdo_internal.h) */
     uint8_t data[CO_FRAME_DATA_MAX]; /**< RPDO: data waiting for SYNC; TPDO: sampled for RTR */
 #if CO_CONFIG_PDO_BIT_MAPPING
     uint8_t map_bits[CO_PDO_MAP_MAX]; /**< bits mapped per slot */

@@ -103,15 +103,20 @@ typedef struct co_sdo_server {
     uint16_t crc;
     co_frame_t reply; /**< the next response, its header (cob_tx, 8 bytes) set at load */
     const co_od_entry_t *entry;
-    uint64_t last_us;    /**< time of the transfer's last frame: the time-out counts from it */
-    const uint8_t *wire; /**< upload: the value's wire bytes in storage, or NULL (read) */
-    uint32_t cob_rx;     /**< client -> server; bit 31 = off */
-    uint32_t cob_tx;     /**< server -> client */
-    uint32_t size;       /**< indicated or known total size */
-    uint32_t done;       /**< bytes transferred so far */
+    uint64_t last_us; /**< time of the transfer's last progress: the time-out counts from it */
+#if CO_CONFIG_SDO_SEGMENTED
+    const uint8_t *wire; /**< segmented upload: the value's wire bytes in storage, or NULL */
+#endif
+    uint32_t cob_rx; /**< client -> server; bit 31 = off */
+    uint32_t cob_tx; /**< server -> client */
+    uint32_t size;   /**< indicated or known total size */
+    uint32_t done;   /**< bytes transferred so far */
     uint32_t buf_len;
-    uint8_t buf[CO_SDO_BUF_SIZE + 6]; /**< + room for a block's last segment padding */
-    uint8_t last_len;                 /**< block upload: bytes in the final segment sent */
+    /** Segmented and block transfers' data (+ room for a block's last segment padding);
+     *  an expedited-only server needs none. */
+    uint8_t buf[CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK ? CO_SDO_BUF_SIZE + 6 : 1];
+    uint8_t last_len; /**< block upload: bytes in the final segment sent */
+    bool resent;      /**< block upload: the client acknowledged nothing of the sub-block sent */
 } co_sdo_server_t;
 
 /** One SDO client channel (embedded in the node; fields are internal). */

@@ -123,8 +123,9 @@ def test_image_records_skip_entries_and_name_far_ones() -> None:
 # --- C: compile, link, run ---------------------------------------------------------------
 
 
-# The generated code compiles in both forms of the dictionary (canola/od.h).
-FORMS = [(), ("-DCO_CONFIG_OD_COMPACT=1",)]
+# The generated code compiles in both forms of the dictionary (canola/od.h), the compact one
+# also with the look-up hash (CO_CONFIG_OD_HASH, by default the general form's alone).
+FORMS = [(), ("-DCO_CONFIG_OD_COMPACT=1",), ("-DCO_CONFIG_OD_COMPACT=1", "-DCO_CONFIG_OD_HASH=1")]
 
 
 @pytest.mark.parametrize("form", FORMS)
@@ -202,7 +203,7 @@ int main(void)
         sample_values.log_data.len != 4) {
         return 17;
     }
-#if CO_SHORT_PATHS
+#if CO_CONFIG_OD_HASH
     /* The generated hash is the one the core builds (same function, same order). */
     static uint16_t slots[1u << 16];
     co_od_t rebuilt = sample_od;
@@ -212,14 +213,15 @@ int main(void)
         memcmp(slots, sample_od.hash, sizeof slots[0] * (sample_od.hash_mask + 1u)) != 0) {
         return 18;
     }
-#elif !CO_CONFIG_OD_COMPACT
-    /* A build for size reads no look-up tables: the dictionary has none. */
-    if (sample_od.keys != NULL || sample_od.hash != NULL) {
-        return 19;
-    }
 #else
+    /* A core that reads no hash: the dictionary has none. */
     if (sample_od.hash != NULL) {
         return 19;
+    }
+#endif
+#if !CO_CONFIG_OD_COMPACT
+    if (sample_od.keys == NULL) {
+        return 19; /* the general form's dense keys */
     }
 #endif
 #if CO_CONFIG_OD_COMPACT
@@ -247,8 +249,8 @@ int main(void)
 """
 
 
-# -O0: the short paths and the look-up tables; -Os: a build for size, neither; each in the
-# general and the compact form of the dictionary (canola/od.h).
+# -O0 and -Os (a build for size: the inlining choices of build.h), each in every form of
+# the dictionary (canola/od.h).
 @pytest.mark.parametrize("form", FORMS)
 @pytest.mark.parametrize("optimise", ["-O0", "-Os"])
 @pytest.mark.slow
@@ -309,6 +311,26 @@ def test_unvalidated_core_refuses_unicode_strings_when_compiling(tmp_path: Path)
     assert compile_c(cc, code, tmp_path, flags).returncode == 0
     result = compile_c(cc, code, tmp_path, (*flags, "-DCO_CONFIG_OD_UNICODE=0"))
     assert "(CO_CONFIG_OD_UNICODE 0)" in result.stderr, result.stderr
+
+
+# A configuration whose node would refuse the dictionary at start (co_node_init:
+# CO_ERR_CONFIG) is refused when compiling it: here more heartbeat consumer entries (0x1016)
+# than CO_HB_CONSUMERS_MAX (issue 30: the default set's 4 against its profile's 8).
+def test_too_few_heartbeat_consumers_refused_when_compiling(tmp_path: Path) -> None:
+    subs = "".join(f"[1016sub{i}]\nParameterName=C{i}\nObjectType=0x7\nDataType=0x0007\n"
+                   f"AccessType=rw\nDefaultValue=0\n\n" for i in range(1, 4))
+    text = HEADER + ("[1016]\nParameterName=Consumers\nObjectType=0x8\nSubNumber=4\n\n"
+                     "[1016sub0]\nParameterName=N\nObjectType=0x7\nDataType=0x0005\n"
+                     "AccessType=ro\nDefaultValue=3\n\n" + subs)
+    source = tmp_path / "hb.eds"
+    source.write_text(text)
+    _, code = odgen.generate_files(source, "hb", tmp_path)
+    cc = compiler()
+    for allowed, ok in (("3", True), ("127", True), ("0", True), ("2", False)):
+        result = compile_c(cc, code, tmp_path, (f"-DCO_HB_CONSUMERS_MAX={allowed}",))
+        assert (result.returncode == 0) == ok, (allowed, result.stderr)
+        if not ok:
+            assert "0x1016 has 3 heartbeat consumer entries" in result.stderr, result.stderr
 
 
 # --- errors -------------------------------------------------------------------------------
@@ -455,8 +477,8 @@ def test_corpus_generates_and_compiles_or_fails_with_place(tmp_path: Path) -> No
         out.mkdir()
         (out / "od.h").write_text(header)
         (out / "od.c").write_text(code)
-        for form in FORMS:
-            result = compile_c(cc, out / "od.c", out, form)
+        for form in FORMS:  # (a master's 0x1016 has up to 127 entries: a node that takes them)
+            result = compile_c(cc, out / "od.c", out, (*form, "-DCO_HB_CONSUMERS_MAX=127"))
             assert result.returncode == 0, f"{path.name} {form}:\n{result.stderr[:2000]}"
         compiled.append(path.name)
     print(f"\nodgen corpus: {len(compiled)} generated and compiled, {len(refused)} refused")
@@ -502,7 +524,8 @@ def test_every_generated_dictionary_passes_co_od_validate(tmp_path: Path) -> Non
     main_c.write_text(_validating_main(names))
     for form in FORMS:
         for optimise in ("-O0", "-Os"):
-            flags = (optimise, *form)
+            # (a master's 0x1016 has up to 127 entries: a node that takes them)
+            flags = (optimise, *form, "-DCO_HB_CONSUMERS_MAX=127")
             build = tmp_path / ("build" + "".join(flags))
             build.mkdir()
             objects = []

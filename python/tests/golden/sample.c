@@ -278,7 +278,6 @@ static const co_od_entry_t k_entries[] = {
     {.index = 0x6000, .sub = 0, .type = CO_TYPE_INTEGER8, .attr = CO_OD_RW, .size = 1, .value = &sample_values.mode, .dflt = &k_defaults.mode, .limits = NULL, .hooks = NULL},
 };
 
-#if CO_SHORT_PATHS
 static const uint32_t k_keys[] = {
     0x100000u, 0x100100u, 0x100800u, 0x101400u, 0x101700u, 0x101800u, 0x101801u, 0x101802u,
     0x101803u, 0x101804u, 0x180000u, 0x180001u, 0x180002u, 0x200000u, 0x200100u, 0x200200u,
@@ -288,9 +287,8 @@ static const uint32_t k_keys[] = {
     0x230001u, 0x230002u, 0x600000u,
 };
 #endif
-#endif
 
-#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which does not read it */
+#if CO_CONFIG_OD_HASH /* canola/config.h: 0 where the core does not read it */
 static const uint16_t k_hash[128] = {
     19, 0, 0, 0, 0, 0, 13, 18, 37, 2, 0, 0, 0, 17, 0, 0,
     1, 4, 0, 16, 0, 0, 0, 0, 11, 15, 0, 35, 0, 0, 0, 9,
@@ -307,10 +305,10 @@ const co_od_t sample_od = {.entries = k_entries, .count = 43u, .hook_ctx = NULL,
 #if CO_CONFIG_OD_COMPACT
     .values = &sample_values, .rows = k_rows, .rows_count = 33u, .tables = &k_tables,
 #endif
-#if CO_SHORT_PATHS
 #if !CO_CONFIG_OD_COMPACT
     .keys = k_keys,
 #endif
+#if CO_CONFIG_OD_HASH
     .hash = k_hash, .hash_mask = 127u
 #endif
 };

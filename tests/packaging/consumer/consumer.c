@@ -9,7 +9,7 @@
  * reads its vendor-ID (expedited SDO) and its device name (segmented SDO). It prints
  * sizeof(co_node_t), which must be the same however the program was built.
  *
- * Built with -DCANOLA_EXPECTED_SDO_BUF_SIZE=N / -DCANOLA_EXPECTED_SHORT_PATHS=N, it checks
+ * Built with -DCANOLA_EXPECTED_SDO_BUF_SIZE=N, it checks
  * at compile time that it sees the library's configuration (tests/packaging/config.h, a
  * MinSizeRel build), not the defaults.
  *
@@ -25,10 +25,6 @@
 #ifdef CANOLA_EXPECTED_SDO_BUF_SIZE
 _Static_assert(CO_SDO_BUF_SIZE == CANOLA_EXPECTED_SDO_BUF_SIZE,
                "CO_SDO_BUF_SIZE is not the library's value");
-#endif
-#ifdef CANOLA_EXPECTED_SHORT_PATHS
-_Static_assert(CO_SHORT_PATHS == CANOLA_EXPECTED_SHORT_PATHS,
-               "CO_SHORT_PATHS is not the library's value");
 #endif
 
 #define DEVICE_ID 5

@@ -33,7 +33,8 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   (``co_od_tables_t``). The general form (0): 28-byte entries with pointers to
   the value, its power-on value in a const ``<name>_values_t``, its limits and hooks
   (NULL), and the dense key array ``k_keys``. Both share the look-up hash ``k_hash``, left
-  out where the core does not read it (``CO_SHORT_PATHS`` 0, a build for size).
+  out where the core does not read it (``CO_CONFIG_OD_HASH`` 0: by default the compact
+  form).
 - Power-on values come from ``ParameterValue`` when present (DCF), else ``DefaultValue``,
   else zero / empty. A value using ``$NODEID`` is stored without the node-ID and the entry
   gets ``CO_OD_NODEID``: ``co_od_reset`` adds the node-ID (``$NODEID+0x180`` -> 0x180).
@@ -55,6 +56,9 @@ Layout of the generated code (chosen for firmware: the table lives in flash):
   adds CO_OD_TPDO when readable (ro, const, rwr, rw) and CO_OD_RPDO when writable (wo, rww,
   rw).
 - DEFTYPE/DEFSTRUCT/NULL objects (data type definitions) are not part of the table.
+- The ``.c`` file refuses with ``#error`` a configuration whose node would refuse the
+  dictionary at start (``co_node_init``: CO_ERR_CONFIG): more heartbeat consumer entries
+  (0x1016) than ``CO_HB_CONSUMERS_MAX``, where the consumer is built.
 - For a core that does not validate its dictionary (``CO_CONFIG_OD_VALIDATE`` 0), the
   ``.c`` file refuses with ``#error`` the features it uses that the core leaves out
   (limits, REAL limits, DOMAIN values in RAM, UNICODE_STRING, types wider than 32 bits),
@@ -608,18 +612,19 @@ def _source_text(name: str, source: str, entries: list[_Entry],
         out.append("")
         return "\n".join(out)
     out += _feature_guards(entries)
+    out += _start_guards(entries)
     out.append("#if CO_CONFIG_OD_COMPACT /* canola/config.h: the compact form (canola/od.h) */")
     out += _compact_tables(name, entries)
     out.append("#else /* the general form */")
     out += _general_tables(name, entries)
     out.append("#endif")
     out.append("")
-    # The look-up's hash, left out where the core does not read it (CO_SHORT_PATHS 0, a
-    # build for size): entry position + 1 per slot, 0 = empty; the same in both forms.
+    # The look-up's hash, left out where the core does not read it (CO_CONFIG_OD_HASH 0: by
+    # default the compact form): entry position + 1 per slot, 0 = empty; the same in both
+    # forms.
     slots = _hash_table([(e.var.index << 8) | e.var.subindex for e in entries])
     if slots:
-        out.append("#if CO_SHORT_PATHS /* canola/config.h: 0 in a build for size, which does not "
-                   "read it */")
+        out.append("#if CO_CONFIG_OD_HASH /* canola/config.h: 0 where the core does not read it */")
         out.append(f"static const uint16_t k_hash[{len(slots)}] = {{")
         for i in range(0, len(slots), 16):
             out.append("    " + ", ".join(str(v) for v in slots[i:i + 16]) + ",")
@@ -633,10 +638,10 @@ def _source_text(name: str, source: str, entries: list[_Entry],
     out.append(f"    .values = &{name}_values, .rows = k_rows, .rows_count = {rows}u, "
                ".tables = &k_tables,")
     out.append("#endif")
-    out.append("#if CO_SHORT_PATHS")
     out.append("#if !CO_CONFIG_OD_COMPACT")
     out.append("    .keys = k_keys,")
     out.append("#endif")
+    out.append("#if CO_CONFIG_OD_HASH")
     if slots:
         out.append(f"    .hash = k_hash, .hash_mask = {len(slots) - 1}u")
     out.append("#endif")
@@ -666,6 +671,23 @@ def _feature_guards(entries: list[_Entry]) -> list[str]:
                     f'#error "this dictionary has {what}: the core leaves them out ({switch} 0)"',
                     "#endif"]
     return [*out, "#endif", ""] if len(out) > 1 else []
+
+
+def _start_guards(entries: list[_Entry]) -> list[str]:
+    """Compile-time refusal of a configuration that co_node_init would refuse with this
+    dictionary (CO_ERR_CONFIG): more heartbeat consumer entries (0x1016 sub 1, 2, ... in a
+    row, as the node binds them) than CO_HB_CONSUMERS_MAX holds, where the consumer is built
+    (CO_HB_CONSUMERS_MAX > 0; without it 0x1016 is a plain entry)."""
+    subs = {e.var.subindex for e in entries if e.var.index == 0x1016}
+    consumers = 0
+    while consumers + 1 in subs:
+        consumers += 1
+    if consumers == 0:
+        return []
+    return [f"#if CO_HB_CONSUMERS_MAX > 0 && CO_HB_CONSUMERS_MAX < {consumers}",
+            f'#error "0x1016 has {consumers} heartbeat consumer entries: CO_HB_CONSUMERS_MAX '
+            f'is smaller, so co_node_init would refuse this dictionary (CO_ERR_CONFIG)"',
+            "#endif", ""]
 
 
 def _distinct_limits(entries: list[_Entry]) -> list[str]:
@@ -808,15 +830,12 @@ def _general_tables(name: str, entries: list[_Entry]) -> list[str]:
             f".limits = {lim}, .hooks = NULL}},")
     out.append("};")
     out.append("")
-    # The dense key array the look-up searches (co_od_t.keys), 4 bytes per entry, left out
-    # where the core does not read it (CO_SHORT_PATHS 0, a build for size).
-    out.append("#if CO_SHORT_PATHS")
+    # The dense key array the look-up searches (co_od_t.keys), 4 bytes per entry.
     out.append("static const uint32_t k_keys[] = {")
     keys = [f"0x{(e.var.index << 8) | e.var.subindex:06X}u" for e in entries]
     for i in range(0, len(keys), 8):
         out.append("    " + ", ".join(keys[i:i + 8]) + ",")
     out.append("};")
-    out.append("#endif")
     return out
 
 
