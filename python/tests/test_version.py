@@ -48,3 +48,15 @@ def test_no_other_file_writes_the_version() -> None:
     pyproject = (ROOT / "python" / "pyproject.toml").read_text(encoding="utf-8")
     assert 'dynamic = ["version"]' in pyproject
     assert not re.search(r'^version\s*=', pyproject, re.M)
+
+
+def test_a_checkout_run_without_installing_has_the_header_version(tmp_path: Path) -> None:
+    """The C build runs odgen from the source tree with the system's Python, where no
+    package metadata exists (a fresh clone's plain build failed on it): the package seen
+    through a folder without its egg-info, by an interpreter without site-packages."""
+    (tmp_path / "canola").symlink_to(ROOT / "python" / "src" / "canola")
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import canola; "
+            "print(canola.__version__)")
+    out = subprocess.run([sys.executable, "-S", "-c", code, str(tmp_path)],
+                         capture_output=True, text=True, timeout=120, check=True)
+    assert out.stdout.strip() == header_version()
