@@ -110,8 +110,8 @@ const co_node_stats_t *co_node_stats(const co_node_t *node)
     LSS_SLAVE_ROUTE(X) LSS_MASTER_ROUTE(X) MANAGER_ROUTE(X)
 
 typedef void (*ingest_fn)(co_node_t *node, uint8_t slot, const co_frame_t *frame);
-#define INGEST_OF(kind, ingest, service) [kind] = ingest,
-#define SERVICE_OF(kind, ingest, service) [kind] = service,
+#define INGEST_OF(kind, ingest, service) [(kind)] = (ingest),
+#define SERVICE_OF(kind, ingest, service) [(kind)] = (service),
 static const ingest_fn k_ingest[] = {ROUTE_KINDS(INGEST_OF)};
 static const uint16_t k_service[] = {ROUTE_KINDS(SERVICE_OF)};
 

@@ -196,6 +196,7 @@ static co_abort_t store(co_node_t *node, co_sdo_server_t *s, const uint8_t *data
     uint32_t id = r->id; /* the channel's address from now on */
     uint8_t flags = r->flags;
     /* (the default channel's COB-IDs never change: a node with one server skips this) */
+    // cppcheck-suppress knownConditionTrueFalse
     if (co_sdo_servers_max() > 1) {
         r->id = served_id;
         r->flags = served_flags;
