@@ -113,8 +113,9 @@ test-python-lint: py-env
 # The profile tests build src/ a second and third time in other configurations, where a
 # left-out feature's stand-in of a function sits on another line: functions are merged
 # separately (--merge-mode-functions=separate), lines and branches as usual. The profiles'
-# -Os copies (test_profile_*_os: size builds, where inlining multiplies a line's branches
-# per call site) are left out (--exclude-directories): coverage is of the -O0 builds.
+# -Os copies (test_profile_*_os, and the firmware builds canola_fw_* the size rows measure:
+# size builds, where inlining multiplies a line's branches per call site) are left out
+# (--exclude-directories): coverage is of the -O0 builds.
 COV_BRANCH_MIN ?= 95
 coverage: py-env
 	cmake -S . -B build-cov $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS="--coverage -O0" \
@@ -124,6 +125,7 @@ coverage: py-env
 	cd build-cov && ctest >/dev/null
 	@$(PY_VENV)/bin/gcovr -r . --filter 'src/' --print-summary --merge-mode-functions=separate \
 	  --exclude-directories 'build-cov/tests/CMakeFiles/[a-z_]+_os[a-z_]*\.dir' \
+	  --exclude-directories 'build-cov/tests/CMakeFiles/(canola|test)_fw_[a-z_]+\.dir' \
 	  --fail-under-branch $(COV_BRANCH_MIN) build-cov > build-cov/coverage.txt; rc=$$?; \
 	  tail -n 3 build-cov/coverage.txt; \
 	  if [ $$rc -ne 0 ]; then echo "coverage: branches below $(COV_BRANCH_MIN) % (gcovr exit $$rc)"; fi; \
