@@ -9,6 +9,7 @@ see it. Not public."""
 
 from __future__ import annotations
 
+import abc
 import logging
 import threading
 import weakref
@@ -60,10 +61,11 @@ def deliver_frames(listeners: list[Callable[[Frame], None]], frames: list[Frame]
                 log.exception("canola: a frame callback raised")
 
 
-class LinkBase:
+class LinkBase(abc.ABC):
     """The canola nodes of one python-can bus object: the C link ``c``, the lock, the
     engines that run (``engines``, in attach order) and those with Python timers
-    (``timers``), the callbacks of all of them in order (``events``)."""
+    (``timers``), the callbacks of all of them in order (``events``). A kind that leaves
+    out one of the abstract methods fails when it is made, not on its first frame."""
 
     def __init__(self, bus: can.BusABC, c: CData) -> None:
         self.bus = bus
@@ -80,23 +82,28 @@ class LinkBase:
 
     lock: Any  #: the nodes' lock (a context manager with acquire/release)
 
+    @abc.abstractmethod
     def now_us(self) -> int:
         raise NotImplementedError
 
+    @abc.abstractmethod
     def in_thread(self) -> bool:
         """True in the link's own thread (a blocking call there would wait for itself)."""
         raise NotImplementedError
 
+    @abc.abstractmethod
     def enter_app(self, node: CData) -> int:
         """An application's call on ``node``: takes the lock and returns the nodes' clock
         (now, but short of their next deadline, which the receiving thread judges once the
         frames received before it count), ``node`` polled at it."""
         raise NotImplementedError
 
+    @abc.abstractmethod
     def leave_app(self, now_us: int) -> None:
         """The call's end: what the nodes sent delivered and sent, the lock released."""
         raise NotImplementedError
 
+    @abc.abstractmethod
     def wait(self, engine: Engine, done: Callable[[], bool], end: float | None,
              xfer: CData | None = None) -> bool:
         """Until ``done()`` (or transfer ``xfer`` ended) or time.monotonic() passes ``end``:
@@ -104,17 +111,19 @@ class LinkBase:
         Error when ``engine`` is stopped or the bus fails meanwhile."""
         raise NotImplementedError
 
+    @abc.abstractmethod
     def _start_thread(self) -> None:
         raise NotImplementedError
 
+    @abc.abstractmethod
     def _stop_thread(self, engine: Engine, timeout: float) -> None:
         """The thread stops once no engine is left (a name says who is left else)."""
         raise NotImplementedError
 
-    def listen(self, cob_id: int | None) -> None:
+    def listen(self, cob_id: int | None) -> None:  # noqa: B027 (a default: nothing to do)
         """Frames on ``cob_id`` (None: every frame) are wanted by a frame listener."""
 
-    def timers_changed(self) -> None:
+    def timers_changed(self) -> None:  # noqa: B027 (a default: nothing to do)
         """A Python timer was added: the receiving thread runs it in time."""
 
     # ---- nodes
