@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import socket
 import time
 import urllib.error
 import urllib.request
@@ -277,9 +278,11 @@ def test_cli_serves_until_ctrl_c_and_warns_off_loopback() -> None:
     try:
         warning = view.wait_line("canola view: warning: listening on 0.0.0.0:", 120)
         assert "not on a loopback address" in warning
-        url = view.wait_line("canola view: http://0.0.0.0:", 60)
+        # 0.0.0.0 is no address to open: the page on loopback, and by the machine's name
+        url = view.wait_line("canola view: http://127.0.0.1:", 60)
         view.wait_line("canola view: writes and NMT commands are off", 60)
-        port = int(url.split("http://0.0.0.0:")[1].split("/")[0])
+        port = int(url.split("http://127.0.0.1:")[1].split("/")[0])
+        assert f"(on every address: http://{socket.gethostname()}:{port}/," in url
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=WAIT_S) as r:
             assert r.status == 200
     finally:

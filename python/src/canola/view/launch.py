@@ -6,6 +6,7 @@ the page is and what it may do."""
 from __future__ import annotations
 
 import secrets
+import socket
 import sys
 from collections.abc import Callable
 from typing import TextIO
@@ -24,6 +25,15 @@ from canola.view.server import is_loopback
 __all__ = ["DEFAULT_LISTEN", "parse_listen", "start_view"]
 
 DEFAULT_LISTEN = "127.0.0.1:8080"
+
+
+#: Hosts that mean "every address of this machine": no URL can name them.
+WILDCARDS = ("0.0.0.0", "::")
+
+
+def page_url(host: str, port: int) -> str:
+    """The page's URL on ``host`` (an IPv6 address in brackets)."""
+    return f"http://[{host}]:{port}/" if ":" in host else f"http://{host}:{port}/"
 
 
 def parse_listen(text: str) -> tuple[str, int]:
@@ -49,12 +59,18 @@ def start_view(*, open_bus: Callable[[], can.BusABC], open_master: Callable[[], 
     view = View(model, BusActions(open_master, dictionaries), open_bus, host=host, port=port,
                 allow_write=allow_write, token=token, loopback_only=local)
     port = view.start()
-    shown = f"[{host}]" if ":" in host else host
-    url = f"http://{shown}:{port}/"
+    url = page_url(host, port)
+    if host in WILDCARDS:
+        # every address: this machine reaches the page on loopback, others by its name
+        url = page_url(socket.gethostname(), port)
+        where = ", ".join(filter(None, [f"on every address: {url}", where]))
+        host_url = page_url("::1" if ":" in host else "127.0.0.1", port)
+    else:
+        host_url = url
     if not local:
         print(f"canola view: warning: listening on {host}:{port}, not on a loopback address: "
               "every machine that reaches it sees the bus", file=sys.stderr)
-    print(f"canola view: {url}" + (f" ({where})" if where else ""), file=out)
+    print(f"canola view: {host_url}" + (f" ({where})" if where else ""), file=out)
     if not allow_write:
         print("canola view: writes and NMT commands are off (--allow-write turns them on)",
               file=out)
