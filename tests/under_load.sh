@@ -98,7 +98,10 @@ report() {
 next=1 reported=1
 while ((reported <= runs)); do
     while ((${#run_pids[@]} < at_once && next <= runs)); do
-        setsid bash -c "$(declare -f one_run loadavg); $(declare -p root clones logs fresh command); one_run $next" \
+        # In a subshell, not a plain `cmd &`: bash starts a background command with Ctrl-C
+        # (SIGINT) ignored, and the run's processes would inherit that (a test's Ctrl-C to
+        # the program it runs would do nothing); the subshell takes back the default.
+        (exec setsid bash -c "$(declare -f one_run loadavg); $(declare -p root clones logs fresh command); one_run $next") \
             </dev/null &
         run_pids+=($!)
         next=$((next + 1))

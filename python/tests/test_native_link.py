@@ -113,7 +113,8 @@ def _lost_while_waiting(bus: NativeBus, cut: Callable[[], object]) -> BaseExcept
     with Master(bus, node_id=1) as master:
         def run() -> None:
             try:
-                master.sdo(SILENT).upload(0x1018, 1, timeout=120)
+                # only cut() ends it: neither the answer's time-out nor the whole one first
+                master.sdo(SILENT).upload(0x1018, 1, timeout=120, answer_timeout=60)
             except BaseException as exc:  # what the call raised is the point
                 raised.append(exc)
 
@@ -152,7 +153,8 @@ def test_ctrl_c_while_a_transfer_waits(native: tuple[Callable[[], NativeBus], No
         timer.start()
         began = time.monotonic()
         with pytest.raises(KeyboardInterrupt):
-            master.sdo(SILENT).upload(0x1018, 1, timeout=120)
+            # only Ctrl-C ends it: neither the answer's time-out nor the whole one comes first
+            master.sdo(SILENT).upload(0x1018, 1, timeout=120, answer_timeout=60)
         assert time.monotonic() - began < 60
         timer.join(10)
         # the channel was freed: the next transfer to the same server starts

@@ -111,6 +111,8 @@ def test_sdo_answer_timeout(net: tuple[SimBus, Master, Device]) -> None:
     assert 50_000 <= bus.now_us - began < 52_000  # virtual time: the core's own time-out
     trace = [f for f in _frames(bus) if f.startswith("609#")]
     assert trace[-1] == "609#8000100000000405"  # the abort went out to the node
+    with pytest.raises(SdoTimeout, match=r"SDO time-out 50 ms"):  # not the whole 10 s
+        master.sdo(9).upload(0x1000, 0, timeout=10, answer_timeout=0.05)
     began = bus.now_us
     with pytest.raises(SdoTimeout, match=r"SDO time-out 1000 ms"):  # the next: the master's
         master.sdo(9).download(0x2000, 0, b"\x01")

@@ -15,7 +15,8 @@ import time
 
 class CanolaProcess:
     def __init__(self, *args: str) -> None:
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        # faulthandler: SIGABRT to a process that hangs prints every thread's stack
+        env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONFAULTHANDLER="1")
         self.proc = subprocess.Popen([sys.executable, "-m", "canola.cli", *args],
                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                      text=True, env=env)
@@ -49,7 +50,15 @@ class CanolaProcess:
         try:
             return self.proc.wait(60)
         except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait(10)
+            self.proc.send_signal(signal.SIGABRT)  # where it hangs, on its output
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+            time.sleep(1)  # the reader takes the rest of the output
+            rest = []
+            while not self.lines.empty():
+                rest.append(self.lines.get())
             raise AssertionError(f"canola {self.proc.args[3:]} did not end on Ctrl-C within "
-                                 "60 s") from None
+                                 "60 s; its threads:\n" + "\n".join(rest)) from None

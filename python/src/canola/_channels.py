@@ -290,10 +290,12 @@ class SdoChannels:
         try:
             t = self._start(server_id, how, answer_ms)
             bus = engine.bus
+            limit_ms = answer_ms or default_ms  # the time-out that ends it: one answer's
             if isinstance(bus, SimBus):
                 begin = bus.now_us
                 while not t.done:
                     if timeout is not None and bus.now_us - begin >= timeout * 1e6:
+                        limit_ms = _whole_ms(timeout)
                         self.abort(server_id)
                         break
                     bus.run_until(bus.now_us + 1000)
@@ -303,6 +305,7 @@ class SdoChannels:
                 end = None if timeout is None else time.monotonic() + timeout
                 try:
                     if not link.wait(engine, lambda: t.done, end, t.x):
+                        limit_ms = _whole_ms(timeout)
                         self.abort(server_id)  # completes the transfer with 0x05040000
                 except (BusLostError, KeyboardInterrupt):
                     self.abort(server_id)  # the channel is free again, the bus or not
@@ -310,8 +313,7 @@ class SdoChannels:
                 except Error:
                     self.abort(server_id)
                     raise Error("the master was stopped during an SDO transfer") from None
-            return self._finish(t, server_id, timeout, answer_ms or default_ms,
-                                (engine.now_us() - t.started_us) / 1e6)
+            return self._finish(t, server_id, limit_ms, (engine.now_us() - t.started_us) / 1e6)
         finally:
             del self._holders[server_id]
             busy.release()
@@ -339,6 +341,7 @@ class SdoChannels:
                     loop.call_soon_threadsafe(resolve)
 
             t = self._start(server_id, how, answer_ms, wake)
+            limit_ms = answer_ms or default_ms
             try:
                 end = None if timeout is None else loop.time() + timeout
                 while not t.done:
@@ -346,6 +349,7 @@ class SdoChannels:
                         await asyncio.wait_for(asyncio.shield(fut), 0.05)
                     except TimeoutError:
                         if end is not None and loop.time() >= end:
+                            limit_ms = _whole_ms(timeout)
                             self.abort(server_id)  # completes it with 0x05040000
                             end = None
                         elif not engine.running:
@@ -355,24 +359,28 @@ class SdoChannels:
             except asyncio.CancelledError:
                 self.abort(server_id)  # ends the transfer before the channel is reused
                 raise
-            return self._finish(t, server_id, timeout, answer_ms or default_ms,
-                                (engine.now_us() - t.started_us) / 1e6)
+            return self._finish(t, server_id, limit_ms, (engine.now_us() - t.started_us) / 1e6)
         finally:
             busy.release()
 
     @staticmethod
-    def _finish(t: Transfer, server_id: int, timeout: float | None, answer_ms: int,
-                after: float) -> Transfer:
+    def _finish(t: Transfer, server_id: int, limit_ms: int, after: float) -> Transfer:
         """``t`` done after ``after`` seconds: its abort raised, telling the server's abort
-        from the master's."""
+        from the master's (``limit_ms``: the time-out that fired, the whole transfer's or
+        one answer's)."""
         if not t.done:  # pragma: no cover -- the core always completes on abort
-            raise SdoTimeout(server_id, answer_ms)
+            raise SdoTimeout(server_id, limit_ms)
         if not t.abort:
             return t
         if t.abort == _TIMED_OUT and not t.by_server:
-            raise SdoTimeout(server_id, answer_ms if timeout is None else round(timeout * 1000),
-                             after)
+            raise SdoTimeout(server_id, limit_ms, after)
         raise SdoAbort(t.abort, node=server_id, by_server=t.by_server, after_s=after)
+
+
+def _whole_ms(timeout: float | None) -> int:
+    """A transfer's whole ``timeout`` (s), in ms."""
+    assert timeout is not None
+    return round(timeout * 1000)
 
 
 def _check_address(index: int, sub: int) -> None:

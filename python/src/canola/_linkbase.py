@@ -155,12 +155,14 @@ class LinkBase(abc.ABC):
 
     def deactivate(self, engine: Engine, timeout: float) -> None:
         """``engine`` is left alone; the link's thread stops with the last one (waits up to
-        ``timeout`` s unless called from it)."""
+        ``timeout`` s unless called from it). The callbacks queued before run before it
+        returns: what a node did before it stopped (an EMCY it sent) is still told."""
         with self.lock:
             if engine in self.engines:
                 self.engines.remove(engine)
                 lib.canola_py_dev_set_active(engine.dev, False)
         self._stop_thread(engine, timeout)
+        self.dispatch()
 
     def thread_name(self) -> str:
         return "canola-" + "+".join(e.name.removeprefix("canola-") for e in self.engines)
