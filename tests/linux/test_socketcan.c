@@ -220,7 +220,8 @@ static int beats_since(int from)
 static void test_heartbeat_period(void)
 {
     /* Heartbeats keep coming, and never faster than every 100 ms (how much slower depends
-     * on the machine's load: not checked). */
+     * on the machine's load: not checked). One more than the time allows: the one the
+     * node sent before t0 that a starved pump read only after it (failed at load 25). */
     int from = seen_count;
     uint64_t t0 = co_linux_now_us();
     uint64_t end = t0 + WAIT_MS * 1000ull;
@@ -230,7 +231,7 @@ static void test_heartbeat_period(void)
     int beats = beats_since(from);
     uint64_t took = co_linux_now_us() - t0;
     CHECK(beats >= 3);
-    CHECK((uint64_t)beats <= took / 100000u + 1);
+    CHECK((uint64_t)beats <= took / 100000u + 2);
 }
 
 static void test_error_frames(void)
