@@ -4,6 +4,7 @@ by line with bounded waits, Ctrl-C to end it."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import queue
 import signal
@@ -22,7 +23,8 @@ class CanolaProcess:
                                      text=True, env=env)
         self.lines: queue.Queue[str] = queue.Queue()
         self.seen: list[str] = []
-        threading.Thread(target=self._read, daemon=True).start()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
 
     def _read(self) -> None:
         assert self.proc.stdout is not None
@@ -56,9 +58,10 @@ class CanolaProcess:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait(10)
-            time.sleep(1)  # the reader takes the rest of the output
+            self._reader.join(10)  # the process is gone: its output ends
             rest = []
-            while not self.lines.empty():
-                rest.append(self.lines.get())
+            with contextlib.suppress(queue.Empty):
+                while True:
+                    rest.append(self.lines.get_nowait())
             raise AssertionError(f"canola {self.proc.args[3:]} did not end on Ctrl-C within "
                                  "60 s; its threads:\n" + "\n".join(rest)) from None

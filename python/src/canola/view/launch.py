@@ -59,18 +59,16 @@ def start_view(*, open_bus: Callable[[], can.BusABC], open_master: Callable[[], 
     view = View(model, BusActions(open_master, dictionaries), open_bus, host=host, port=port,
                 allow_write=allow_write, token=token, loopback_only=local)
     port = view.start()
-    url = page_url(host, port)
-    if host in WILDCARDS:
-        # every address: this machine reaches the page on loopback, others by its name
+    # url: the page for other machines (and the token); local_url: the one printed first
+    local_url = url = page_url(host, port)
+    if host in WILDCARDS:  # no URL names it: loopback here, the machine's name elsewhere
+        local_url = page_url("::1" if ":" in host else "127.0.0.1", port)
         url = page_url(socket.gethostname(), port)
-        where = ", ".join(filter(None, [f"on every address: {url}", where]))
-        host_url = page_url("::1" if ":" in host else "127.0.0.1", port)
-    else:
-        host_url = url
+        where = f"on every address: {url}" + (f", {where}" if where else "")
     if not local:
         print(f"canola view: warning: listening on {host}:{port}, not on a loopback address: "
               "every machine that reaches it sees the bus", file=sys.stderr)
-    print(f"canola view: {host_url}" + (f" ({where})" if where else ""), file=out)
+    print(f"canola view: {local_url}" + (f" ({where})" if where else ""), file=out)
     if not allow_write:
         print("canola view: writes and NMT commands are off (--allow-write turns them on)",
               file=out)
