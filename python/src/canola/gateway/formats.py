@@ -200,10 +200,10 @@ def parse_value(type_name: str, text: str) -> bytes:
 
 
 def _format_real(data: bytes, size: int) -> str:
-    if size == 8:
-        return repr(struct.unpack("<d", data)[0])
-    value = struct.unpack("<f", data)[0]
-    if not math.isfinite(value):
+    value = struct.unpack("<d" if size == 8 else "<f", data)[0]
+    if math.isnan(value):  # repr drops a NaN's sign; "-nan" reads back with it
+        return "-nan" if data[-1] & 0x80 else "nan"
+    if size == 8 or not math.isfinite(value):
         return repr(value)
     for digits in range(1, 10):  # the shortest text that reads back as the same r32
         text = f"{value:.{digits}g}"
