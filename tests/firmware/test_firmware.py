@@ -65,8 +65,8 @@ class Firmware:
         assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-2000:]
         assert f"node {NODE}: PASSED" in r.stdout
         assert " 0 failed" in r.stdout
-        # every check ran; the one a starved host cannot judge says so rather than guess
-        # (a late heartbeat on a loaded machine is not told from a late tester)
+        # every check ran; a timing check a starved host cannot judge says so rather than
+        # guess (a late frame of QEMU on a loaded machine is not told from a late node)
         skipped = [line for line in r.stdout.splitlines() if "] SKIPPED " in line]
         assert all("inconclusive: the tester itself was starved" in line
                    for line in skipped), skipped

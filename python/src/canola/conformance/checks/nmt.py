@@ -13,6 +13,7 @@ from itertools import pairwise
 
 from canola import SdoAbort
 from canola.conformance import pdo_tools as pt
+from canola.conformance import timing
 from canola.conformance.context import (
     APPLICATION_REFUSALS,
     STATES,
@@ -36,8 +37,6 @@ __all__ = ["heartbeat", "reset"]
 
 _HEARTBEAT_MS = 100
 _INTERVALS = 10
-#: Measurements of the heartbeat period while the tester itself was starved, at most.
-_ATTEMPTS = 3
 _TRANSITIONS = (("start", 0x05), ("stop", 0x04), ("preop", 0x7F), ("stop", 0x04),
                 ("start", 0x05), ("preop", 0x7F))
 #: Communication entries a reset check may change (their change has no side effect).
@@ -154,29 +153,13 @@ def heartbeat_period(ctx: Context) -> None:
     period = heartbeat(ctx)
     p = period / 1000
     ctx.link.wait(p)  # the period set takes effect
-    for attempt in range(1, _ATTEMPTS + 1):
-        began = ctx.link.now()
-        gaps, problems, behind = _heartbeats(ctx, period)
-        # a tester starved meanwhile shares a starved host with the node, most likely:
-        # then a late heartbeat may be the host's; measured again, judged when it ran
-        starved = max(ctx.link.stalled(began), behind)
-        if not problems or starved <= ctx.options.tolerance * p:
-            break
-        ctx.note(f"attempt {attempt}: {problems[0][0]} {problems[0][2]}, while the tester "
-                 f"itself was starved for {starved * 1000:.0f} ms: measured again")
-    else:
-        ctx.skip(f"inconclusive: the tester itself was starved (up to {starved * 1000:.0f} ms)"
-                 f" in each of {_ATTEMPTS} measurements, and heartbeats came late (the "
-                 f"last: {problems[0][0]} {problems[0][2]}): a late node cannot be told "
-                 "from a starved host; measure on a quieter host")
-    for what, expected, got in problems:
-        ctx.finding(what, expected, got, clause="CiA 301 §7.2.8.3.2.2 (heartbeat producer "
-                    "time, 0x1017)")
-    middle = statistics.median(gaps)
-    ctx.note(f"{period} ms: {len(gaps)} intervals, median {middle * 1000:.1f} ms, "
-             f"{min(gaps) * 1000:.1f}..{max(gaps) * 1000:.1f} ms")
-    if behind > p:
-        ctx.note(f"the tester saw heartbeats up to {behind:.2f} s late (its own "
+    measured = timing.judged(ctx, p, "heartbeats came late", partial(_heartbeats, ctx, period),
+                             clause="CiA 301 §7.2.8.3.2.2 (heartbeat producer time, 0x1017)")
+    gaps = measured.gaps
+    ctx.note(f"{period} ms: {len(gaps)} intervals, median {statistics.median(gaps) * 1000:.1f}"
+             f" ms, {min(gaps) * 1000:.1f}..{max(gaps) * 1000:.1f} ms")
+    if measured.behind > p:
+        ctx.note(f"the tester saw heartbeats up to {measured.behind:.2f} s late (its own "
                  "stall, not the node's: the bus's timestamps are judged)")
     var = ctx.var(0x1017, 0)
     if var is not None and writable(var):
@@ -192,12 +175,10 @@ def heartbeat_period(ctx: Context) -> None:
                         f"{len(beats)}", clause="CiA 301 §7.5.2.20 (0: not used)")
 
 
-def _heartbeats(ctx: Context, period: int) -> tuple[list[float], list[tuple[str, str, str]],
-                                                  float]:
+def _heartbeats(ctx: Context, period: int) -> timing.Measured:
     """Measure the next heartbeat intervals by the bus's timestamps (a node late shows in
-    them, the tester's own stall does not: the frames reach it late, in a burst): the
-    intervals, what is wrong with them (what, expected, got), and how much later than
-    the bus the tester saw them at most (its own lag). No heartbeats end the check."""
+    them, the tester's own stall does not: the frames reach it late, in a burst). No
+    heartbeats end the check."""
     p = period / 1000
     tol = ctx.options.tolerance
     cob = ctx.heartbeat_cob()
@@ -208,17 +189,17 @@ def _heartbeats(ctx: Context, period: int) -> tuple[list[float], list[tuple[str,
     if len(seen) <= _INTERVALS:
         ctx.fail(f"heartbeats at {period} ms", f"{_INTERVALS + 1} heartbeats", f"{len(seen)}",
                  clause="CiA 301 §7.2.8.3.2.2")
-    gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
-    lags = [s.t - s.frame.timestamp for s in seen]
-    problems = []
+    measured = timing.Measured(seen)
+    gaps = measured.gaps
     middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
     if abs(middle - p) > tol * p:
-        problems.append((f"median heartbeat interval (0x1017 = {period} ms)",
-                         f"{period} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms"))
+        measured.problems.append((f"median heartbeat interval (0x1017 = {period} ms)",
+                                  f"{period} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms"))
     if max(gaps) > p * (1 + 2 * tol):
-        problems.append((f"longest heartbeat interval (0x1017 = {period} ms)",
-                         f"at most {period * (1 + 2 * tol):g} ms", f"{max(gaps) * 1000:.1f} ms"))
-    return gaps, problems, max(lags) - min(lags)
+        measured.problems.append((f"longest heartbeat interval (0x1017 = {period} ms)",
+                                  f"at most {period * (1 + 2 * tol):g} ms",
+                                  f"{max(gaps) * 1000:.1f} ms"))
+    return measured
 
 
 def _comm_entry(ctx: Context) -> eds.Variable:

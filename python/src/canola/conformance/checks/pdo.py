@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import statistics
 from functools import partial
-from itertools import pairwise
 
 from canola import SdoAbort
 from canola.conformance import pdo_tools as pt
+from canola.conformance import timing
 from canola.conformance.context import Context, abort_text, outcome
 from canola.conformance.entries import (
     another_value,
@@ -21,6 +21,7 @@ from canola.conformance.entries import (
     readable,
     variables,
 )
+from canola.conformance.link import Seen
 from canola.conformance.registry import check
 
 _EVENT_MS = 100
@@ -229,13 +230,12 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
     ctx.note(f"{pdo.name} on 0x{cob:03X} after the SYNC")
 
 
-def _measure(ctx: Context, cob: int, count: int, period: float) -> list[float]:
-    """The intervals between the next ``count`` + 1 frames on ``cob``."""
+def _measure(ctx: Context, cob: int, count: int, period: float) -> list[Seen]:
+    """The next ``count`` + 1 frames on ``cob`` (fewer when they did not come)."""
     tol = ctx.options.tolerance
-    seen = ctx.link.wait_count(lambda f: f.can_id == cob and not f.rtr, count + 1,
+    return ctx.link.wait_count(lambda f: f.can_id == cob and not f.rtr, count + 1,
                                (count + 1) * period * (1 + 2 * tol) + ctx.options.timeout,
-                               ctx.link.mark())
-    return [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)][:count]
+                               ctx.link.mark())[:count + 1]
 
 
 def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) -> int:
@@ -251,16 +251,24 @@ def tpdo_event_timer(ctx: Context) -> None:
     cob = _event_driven(ctx, pdo, entries, event=_EVENT_MS, **_no_inhibit(ctx, pdo))
     ctx.enter("start")
     p = _EVENT_MS / 1000
-    gaps = _measure(ctx, cob, _FRAMES, p)
-    if len(gaps) < _FRAMES:
-        ctx.fail(f"{pdo.name} with event timer {_EVENT_MS} ms", f"{_FRAMES + 1} frames",
-                 f"{len(gaps) + 1 if gaps else 'at most 1'}")
-    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
     tol = ctx.options.tolerance
-    if abs(middle - p) > tol * p:
-        ctx.finding(f"median interval of {pdo.name} (event timer {_EVENT_MS} ms)",
-                    f"{_EVENT_MS} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms")
-    ctx.note(f"{pdo.name}: median {middle * 1000:.1f} ms over {len(gaps)} intervals")
+
+    def measure() -> timing.Measured:
+        seen = _measure(ctx, cob, _FRAMES, p)
+        if len(seen) <= _FRAMES:
+            ctx.fail(f"{pdo.name} with event timer {_EVENT_MS} ms", f"{_FRAMES + 1} frames",
+                     f"{len(seen)}")
+        measured = timing.Measured(seen)
+        middle = statistics.median(measured.gaps)  # a stall of the node or tester moves it least
+        if abs(middle - p) > tol * p:
+            measured.problems.append((f"median interval of {pdo.name} (event timer "
+                                      f"{_EVENT_MS} ms)", f"{_EVENT_MS} ms ± {tol * 100:g} %",
+                                      f"{middle * 1000:.1f} ms"))
+        return measured
+
+    gaps = timing.judged(ctx, p, f"{pdo.name} came off its event timer", measure).gaps
+    ctx.note(f"{pdo.name}: median {statistics.median(gaps) * 1000:.1f} ms over {len(gaps)} "
+             "intervals")
 
 
 def _no_inhibit(ctx: Context, pdo: pt.Pdo) -> dict[str, int]:
@@ -273,17 +281,25 @@ def tpdo_inhibit(ctx: Context) -> None:
     pdo, entries = _usable(ctx, tpdo=True)
     cob = _event_driven(ctx, pdo, entries, event=_EVENT_MS // 2, inhibit=_INHIBIT_MS * 10)
     ctx.enter("start")
-    gaps = _measure(ctx, cob, 4, _INHIBIT_MS / 1000)
-    if len(gaps) < 4:
-        ctx.fail(f"{pdo.name} with event timer {_EVENT_MS // 2} ms, inhibit {_INHIBIT_MS} ms",
-                 "5 frames", f"{len(gaps) + 1 if gaps else 'at most 1'}")
-    floor = _INHIBIT_MS / 1000 * (1 - ctx.options.tolerance)
-    # the median: two frames a stalled tester read at once look close, a node that
-    # ignores its inhibit time sends every 50 ms
-    if statistics.median(gaps) < floor:
-        ctx.finding(f"median interval of {pdo.name} (inhibit {_INHIBIT_MS} ms)",
-                    f"at least {floor * 1000:.0f} ms",
-                    f"{statistics.median(gaps) * 1000:.1f} ms")
+    p = _INHIBIT_MS / 1000
+    floor = p * (1 - ctx.options.tolerance)
+
+    def measure() -> timing.Measured:
+        seen = _measure(ctx, cob, 4, p)
+        if len(seen) <= 4:
+            ctx.fail(f"{pdo.name} with event timer {_EVENT_MS // 2} ms, inhibit {_INHIBIT_MS}"
+                     " ms", "5 frames", f"{len(seen)}")
+        measured = timing.Measured(seen)
+        # the median: two frames a stalled tester read at once look close, a node that
+        # ignores its inhibit time sends every 50 ms
+        middle = statistics.median(measured.gaps)
+        if middle < floor:
+            measured.problems.append((f"median interval of {pdo.name} (inhibit {_INHIBIT_MS}"
+                                      " ms)", f"at least {floor * 1000:.0f} ms",
+                                      f"{middle * 1000:.1f} ms"))
+        return measured
+
+    gaps = timing.judged(ctx, p, f"{pdo.name} came sooner than its inhibit time", measure).gaps
     ctx.note(f"{pdo.name}: {min(gaps) * 1000:.1f}..{max(gaps) * 1000:.1f} ms")
 
 

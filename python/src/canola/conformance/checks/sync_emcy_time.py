@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import statistics
 from functools import partial
-from itertools import pairwise
 
 from canola.conformance import pdo_tools as pt
+from canola.conformance import timing
 from canola.conformance.context import Context, outcome
 from canola.conformance.entries import writable
 from canola.conformance.link import Seen
@@ -102,29 +102,33 @@ def producer(ctx: Context) -> None:
         ctx.skip(f"0x1005 refuses the producer bit ({outcome(error)}): not a SYNC producer")
     p = period_us / 1e6
     tol = ctx.options.tolerance
+    marks = [mark]  # the first measurement from the producer's start, the others from now
 
-    def frames() -> list[Seen]:
-        return ctx.link.frames_since(mark, lambda f: f.can_id == sync)
+    def measure() -> timing.Measured:
+        since = marks.pop() if marks else ctx.link.mark()
+        seen = ctx.link.wait_count(lambda f: f.can_id == sync, _SYNC_FRAMES,
+                                   _SYNC_FRAMES * p * (1 + 2 * tol) + ctx.options.timeout,
+                                   since)[:_SYNC_FRAMES]
+        if len(seen) < _SYNC_FRAMES:
+            ctx.fail(f"SYNC frames on 0x{sync:03X} (period {p * 1000:g} ms)",
+                     f"{_SYNC_FRAMES}", f"{len(seen)}")
+        measured = timing.Measured(seen)
+        middle = statistics.median(measured.gaps)  # a stall of the node or tester moves it least
+        if abs(middle - p) > tol * p:
+            measured.problems.append(("median SYNC interval", f"{p * 1000:g} ms ± "
+                                      f"{tol * 100:g} %", f"{middle * 1000:.1f} ms"))
+        return measured
 
-    ctx.link.wait_until(lambda: len(frames()) >= _SYNC_FRAMES,
-                        _SYNC_FRAMES * p * (1 + 2 * tol) + ctx.options.timeout)
-    seen = frames()
-    if len(seen) < _SYNC_FRAMES:
-        ctx.fail(f"SYNC frames on 0x{sync:03X} (period {p * 1000:g} ms)",
-                 f"{_SYNC_FRAMES}", f"{len(seen)}")
-    gaps = [b.frame.timestamp - a.frame.timestamp for a, b in pairwise(seen)]
-    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
-    if abs(middle - p) > tol * p:
-        ctx.finding("median SYNC interval", f"{p * 1000:g} ms ± {tol * 100:g} %",
-                    f"{middle * 1000:.1f} ms")
+    measured = timing.judged(ctx, p, "SYNC came off its period", measure)
     if counter:
-        counters = [s.frame.data[0] if len(s.frame.data) == 1 else -1 for s in seen]
+        counters = [s.frame.data[0] if len(s.frame.data) == 1 else -1 for s in measured.seen]
         start = counters[0]
         wanted = [(start - 1 + i) % 3 + 1 for i in range(len(counters))]
         if counters != wanted or start not in (1, 2, 3):
             ctx.finding("SYNC counters (0x1019 = 3)", "1 2 3 1 2 3 ...",
                         " ".join(map(str, counters)))
-    ctx.note(f"median {middle * 1000:.1f} ms over {len(gaps)} intervals")
+    gaps = measured.gaps
+    ctx.note(f"median {statistics.median(gaps) * 1000:.1f} ms over {len(gaps)} intervals")
 
 
 @check("sync.start_value", clause="CiA 301 §7.2.5, §7.5.2.37 (SYNC start value)",
