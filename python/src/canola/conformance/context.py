@@ -85,7 +85,7 @@ class Context:
 
     def __post_init__(self) -> None:
         self.sdo = RawSdo(self.link, self.node_id, self.options.timeout,
-                          self.options.transfer_timeout)
+                          self.options.transfer_timeout, note=self.note)
         self._heartbeat_ms: int | None = None  # how the node shows its state (enter)
 
     # ---- outcomes

@@ -25,11 +25,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from canola import Master
+from canola.conformance.starvation import Starvation, host_cpu_wait
 from canola.core import SimBus
 from canola.decode import Decoder
 from canola.master import Frame
 
-__all__ = ["FRAMES_KEPT", "TRACE_FRAMES", "Link", "Seen", "Watch"]
+__all__ = ["FRAMES_KEPT", "TRACE_FRAMES", "Link", "Seen", "Since", "Watch"]
 
 #: Frames a trace keeps (both directions).
 TRACE_FRAMES = 40
@@ -45,6 +46,15 @@ _WAIT_SLICE_S = 0.05
 #: frame as data).
 _NO_REMOTE_FRAMES = ("SocketCanDaemonBus",)
 Match = Callable[[Frame], bool]
+
+
+@dataclass(frozen=True, slots=True)
+class Since:
+    """A point to measure starvation from (:meth:`Link.since`, :meth:`Link.starved`): link
+    time and the host's CPU wait then (None: not counted)."""
+
+    t: float
+    cpu_wait: float | None
 
 
 @dataclass(frozen=True, slots=True)
@@ -157,6 +167,18 @@ class Link:
         """The longest stall of the tester's own process since ``since`` (link time), in
         seconds; 0 when it ran on time."""
         return max((s for t, s in self._stalls if t >= since), default=0.0)
+
+    def since(self) -> Since:
+        """Now, to measure starvation from: the host's counts only on a real bus."""
+        return Since(self.now(), None if self.sim is not None else host_cpu_wait())
+
+    def starved(self, since: Since) -> Starvation:
+        """How starved the tester and its host were since ``since``."""
+        cpu_wait = 0.0
+        if since.cpu_wait is not None:
+            now = host_cpu_wait()
+            cpu_wait = max(0.0, now - since.cpu_wait) if now is not None else 0.0
+        return Starvation(self.stalled(since.t), cpu_wait)
 
     # ---- frames
 

@@ -1,12 +1,13 @@
 # SPDX-License-Identifier: Apache-2.0
 """Timing checks on a shared host: a period measured from the bus's timestamps, judged only
-when the tester itself ran on time.
+when the host ran the tester (and whatever shares the host with it) on time.
 
 A node that is late and a host too busy to run the node (or the bridge to it, or the tester)
-on time look the same in the frames. So a measurement that shows a problem while the
-tester's own process was starved for more than the tolerance of a period is measured again;
-when every one of :data:`ATTEMPTS` was starved, the check is SKIPPED as inconclusive, with
-the reason. A tester that ran on time judges: a late node fails on a quiet host."""
+on time look the same in the frames. So a measurement that shows a problem while the host
+was starved (starvation.py: the tester's own stalls, the host's tasks waiting for a CPU)
+for more than the tolerance of a period is measured again; when every one of
+:data:`ATTEMPTS` was starved, the check is SKIPPED as inconclusive, with the reason. On a
+quiet host the measurement judges: a late node fails."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from itertools import pairwise
 
 from canola.conformance.context import Context
 from canola.conformance.link import Seen
+from canola.conformance.starvation import Starvation
 
 __all__ = ["ATTEMPTS", "Measured", "judged"]
 
@@ -46,22 +48,22 @@ class Measured:
 
 def judged(ctx: Context, period_s: float, late: str, measure: Callable[[], Measured], *,
            clause: str = "") -> Measured:
-    """The first measurement that shows no problem or ran while the tester was starved for
-    at most the tolerance of ``period_s``; each problem is then a finding (of ``clause``
-    when narrower than the check's). ``late`` says what the problems mean in the
-    inconclusive verdict ("heartbeats came late")."""
+    """The first measurement that shows no problem or ran while the host was starved for at
+    most the tolerance of ``period_s``; each problem is then a finding (of ``clause`` when
+    narrower than the check's). ``late`` says what the problems mean in the inconclusive
+    verdict ("heartbeats came late")."""
     for attempt in range(1, ATTEMPTS + 1):
-        began = ctx.link.now()
+        since = ctx.link.since()
         measured = measure()
-        starved = max(ctx.link.stalled(began), measured.behind)
+        host = ctx.link.starved(since)
+        starved = Starvation(max(host.stall, measured.behind), host.cpu_wait)
         problems = measured.problems
-        if not problems or starved <= ctx.options.tolerance * period_s:
+        if not problems or starved.worst <= ctx.options.tolerance * period_s:
             for what, expected, got in problems:
                 ctx.finding(what, expected, got, clause=clause)
             return measured
-        ctx.note(f"attempt {attempt}: {problems[0][0]} {problems[0][2]}, while the tester "
-                 f"itself was starved for {starved * 1000:.0f} ms: measured again")
-    ctx.skip(f"inconclusive: the tester itself was starved (up to {starved * 1000:.0f} ms) "
-             f"in each of {ATTEMPTS} measurements, and {late} (the last: {problems[0][0]} "
-             f"{problems[0][2]}): a late node cannot be told from a starved host; measure on "
-             "a quieter host")
+        ctx.note(f"attempt {attempt}: {problems[0][0]} {problems[0][2]}, while the host was "
+                 f"starved ({starved}): measured again")
+    ctx.skip(f"inconclusive: the host was starved in each of {ATTEMPTS} measurements (the "
+             f"last: {starved}), and {late} (the last: {problems[0][0]} {problems[0][2]}): a "
+             "late node cannot be told from a starved host; measure on a quieter host")
