@@ -89,10 +89,10 @@ def _result(b: Browser, element: str) -> tuple[str, str]:
 
 
 def test_demo_network_in_the_browser(browser: Browser) -> None:
-    # real time on a shared machine: periods and time-outs three times longer, as
+    # real time on a shared machine: periods and time-outs ten times longer, as
     # test_demo's SLACK, so a busy moment is not a failed step
     demo = CanolaProcess("demo", "--view", "--listen", "127.0.0.1:0", "--quiet",
-                         "--time-scale", "3")
+                         "--time-scale", "10")
     try:
         url = demo.wait_line("canola view: http://", 120).split()[2]
         demo.wait_line("canola demo: the network keeps running", STORY_S)
