@@ -48,9 +48,9 @@ class Starvation:
         return max(self.stall, self.cpu_wait)
 
     def __str__(self) -> str:
-        parts = []
-        if self.stall > 0:
+        parts = []  # what rounds to 0 ms is left out
+        if round(self.stall * 1000):
             parts.append(f"the tester itself for {self.stall * 1000:.0f} ms")
-        if self.cpu_wait > 0:
+        if round(self.cpu_wait * 1000):
             parts.append(f"its tasks waited for a CPU {self.cpu_wait * 1000:.0f} ms")
         return ", ".join(parts) or "not starved"
