@@ -11,6 +11,7 @@ quiet host the measurement judges: a late node fails."""
 
 from __future__ import annotations
 
+import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from itertools import pairwise
@@ -44,6 +45,14 @@ class Measured:
         its own lag, which the bus's timestamps leave out."""
         lags = [s.t - s.frame.timestamp for s in self.seen]
         return max(lags) - min(lags) if lags else 0.0
+
+    def median_near(self, what: str, period_s: float, tolerance: float) -> None:
+        """A problem ``what`` when the median interval is off ``period_s`` by more than
+        ``tolerance`` (a fraction): a stall of the node or the tester moves it least."""
+        middle = statistics.median(self.gaps)
+        if abs(middle - period_s) > tolerance * period_s:
+            self.problems.append((what, f"{period_s * 1000:g} ms ± {tolerance * 100:g} %",
+                                  f"{middle * 1000:.1f} ms"))
 
 
 def judged(ctx: Context, period_s: float, late: str, measure: Callable[[], Measured], *,

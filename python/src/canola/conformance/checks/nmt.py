@@ -191,10 +191,7 @@ def _heartbeats(ctx: Context, period: int) -> timing.Measured:
                  clause="CiA 301 §7.2.8.3.2.2")
     measured = timing.Measured(seen)
     gaps = measured.gaps
-    middle = statistics.median(gaps)  # a stall of the node or the tester moves it least
-    if abs(middle - p) > tol * p:
-        measured.problems.append((f"median heartbeat interval (0x1017 = {period} ms)",
-                                  f"{period} ms ± {tol * 100:g} %", f"{middle * 1000:.1f} ms"))
+    measured.median_near(f"median heartbeat interval (0x1017 = {period} ms)", p, tol)
     if max(gaps) > p * (1 + 2 * tol):
         measured.problems.append((f"longest heartbeat interval (0x1017 = {period} ms)",
                                   f"at most {period * (1 + 2 * tol):g} ms",

@@ -259,11 +259,8 @@ def tpdo_event_timer(ctx: Context) -> None:
             ctx.fail(f"{pdo.name} with event timer {_EVENT_MS} ms", f"{_FRAMES + 1} frames",
                      f"{len(seen)}")
         measured = timing.Measured(seen)
-        middle = statistics.median(measured.gaps)  # a stall of the node or tester moves it least
-        if abs(middle - p) > tol * p:
-            measured.problems.append((f"median interval of {pdo.name} (event timer "
-                                      f"{_EVENT_MS} ms)", f"{_EVENT_MS} ms ± {tol * 100:g} %",
-                                      f"{middle * 1000:.1f} ms"))
+        measured.median_near(f"median interval of {pdo.name} (event timer {_EVENT_MS} ms)", p,
+                             tol)
         return measured
 
     gaps = timing.judged(ctx, p, f"{pdo.name} came off its event timer", measure).gaps
