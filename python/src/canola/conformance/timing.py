@@ -17,13 +17,23 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 
 from canola.conformance.context import Context
-from canola.conformance.link import Seen
+from canola.conformance.link import Match, Seen
 from canola.conformance.starvation import Starvation
 
-__all__ = ["ATTEMPTS", "Measured", "judged"]
+__all__ = ["ATTEMPTS", "Measured", "judged", "periodic"]
 
 #: Measurements of a period while the tester itself was starved, at most.
 ATTEMPTS = 3
+
+
+def periodic(ctx: Context, match: Match, frames: int, period_s: float,
+             since: int | None = None) -> list[Seen]:
+    """The next ``frames`` frames ``match`` takes after ``since`` (default: now), fewer when
+    they did not come while ``frames`` periods, the tolerance twice over and the answer
+    time-out went by."""
+    limit = frames * period_s * (1 + 2 * ctx.options.tolerance) + ctx.options.timeout
+    start = ctx.link.mark() if since is None else since
+    return ctx.link.wait_count(match, frames, limit, start)[:frames]
 
 
 @dataclass

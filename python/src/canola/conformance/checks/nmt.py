@@ -182,10 +182,8 @@ def _heartbeats(ctx: Context, period: int) -> timing.Measured:
     p = period / 1000
     tol = ctx.options.tolerance
     cob = ctx.heartbeat_cob()
-    seen = ctx.link.wait_count(lambda f: f.can_id == cob and len(f.data) == 1 and not f.rtr,
-                               _INTERVALS + 1,
-                               (_INTERVALS + 1) * p * (1 + 2 * tol) + ctx.options.timeout,
-                               ctx.link.mark())[:_INTERVALS + 1]
+    seen = timing.periodic(ctx, lambda f: f.can_id == cob and len(f.data) == 1 and not f.rtr,
+                           _INTERVALS + 1, p)
     if len(seen) <= _INTERVALS:
         ctx.fail(f"heartbeats at {period} ms", f"{_INTERVALS + 1} heartbeats", f"{len(seen)}",
                  clause="CiA 301 §7.2.8.3.2.2")

@@ -232,10 +232,7 @@ def tpdo_sync_acyclic(ctx: Context) -> None:
 
 def _measure(ctx: Context, cob: int, count: int, period: float) -> list[Seen]:
     """The next ``count`` + 1 frames on ``cob`` (fewer when they did not come)."""
-    tol = ctx.options.tolerance
-    return ctx.link.wait_count(lambda f: f.can_id == cob and not f.rtr, count + 1,
-                               (count + 1) * period * (1 + 2 * tol) + ctx.options.timeout,
-                               ctx.link.mark())[:count + 1]
+    return timing.periodic(ctx, lambda f: f.can_id == cob and not f.rtr, count + 1, period)
 
 
 def _event_driven(ctx: Context, pdo: pt.Pdo, entries: list[int], **params: int) -> int:

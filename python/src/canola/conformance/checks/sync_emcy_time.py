@@ -106,9 +106,7 @@ def producer(ctx: Context) -> None:
 
     def measure() -> timing.Measured:
         since = marks.pop() if marks else ctx.link.mark()
-        seen = ctx.link.wait_count(lambda f: f.can_id == sync, _SYNC_FRAMES,
-                                   _SYNC_FRAMES * p * (1 + 2 * tol) + ctx.options.timeout,
-                                   since)[:_SYNC_FRAMES]
+        seen = timing.periodic(ctx, lambda f: f.can_id == sync, _SYNC_FRAMES, p, since)
         if len(seen) < _SYNC_FRAMES:
             ctx.fail(f"SYNC frames on 0x{sync:03X} (period {p * 1000:g} ms)",
                      f"{_SYNC_FRAMES}", f"{len(seen)}")
