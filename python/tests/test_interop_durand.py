@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterator
 import can
 import durand
 import pytest
+from conftest import SDO_TIMEOUT_MS
 from durand.scheduler import SyncScheduler, get_scheduler, set_scheduler
 from durand_peer import SimBusNetwork, device, virtual_time
 
@@ -193,7 +194,7 @@ def test_over_python_can(can_bus: Callable[[], can.BusABC]) -> None:
     set_scheduler(scheduler)
     runner = threading.Thread(target=scheduler.run, daemon=True)
     runner.start()
-    master = Master(can_bus(), node_id=1)
+    master = Master(can_bus(), node_id=1, sdo_timeout_ms=SDO_TIMEOUT_MS)
     master.start()
     network = durand.CANBusNetwork(can_bus())
     try:

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import can
 import pytest
-from conftest import wait_until
+from conftest import SDO_TIMEOUT_MS, wait_until
 from lss_models import ChattyLssSlave
 from managed import PRODUCT, REVISION, VENDOR, model
 
@@ -138,7 +138,7 @@ def test_lss_on_python_can(can_bus: Callable[[], can.BusABC]) -> None:
     Requests that end on an answer wait for it (the time-out only bounds them); a fastscan
     reads a missing answer as a bit, so it runs in virtual time only (above, and the CLI's
     in test_cli_302)."""
-    master = Master(can_bus(), node_id=1)
+    master = Master(can_bus(), node_id=1, sdo_timeout_ms=SDO_TIMEOUT_MS)
     device = Device(model(serial=0x100), UNCONFIGURED, can_bus())
     with master, device:
         master.lss.timeout_ms = 2000  # answers of starved threads come late, not never

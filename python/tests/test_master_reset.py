@@ -13,7 +13,7 @@ from pathlib import Path
 
 import can
 import pytest
-from conftest import wait_until
+from conftest import SDO_TIMEOUT_MS, wait_until
 from gateway_helpers import Client, run
 from managed import VENDOR, model
 from test_gateway_master import serve
@@ -35,7 +35,8 @@ RESETS = {"reset-comm-all": b"\x82\x00", "reset-node-all": b"\x81\x00",
 def _network(bus: SimBus | Callable[[], can.BusABC]) -> tuple[Master, Master, list[Device]]:
     """The master (node 1), another participant (node 9) and devices 2..4."""
     new = (lambda: bus) if isinstance(bus, SimBus) else bus
-    master = Master(new(), node_id=MASTER, sdo_timeout_ms=500)
+    master = Master(new(), node_id=MASTER,
+                    sdo_timeout_ms=500 if isinstance(bus, SimBus) else SDO_TIMEOUT_MS)
     other = Master(new(), node_id=9)
     devices = [Device(model(serial=n), n, new()) for n in (2, 3, 4)]
     for node in (master, other, *devices):
@@ -222,7 +223,7 @@ def test_set_up_before_start_holds_after_it() -> None:
 def test_python_can_restart_keeps_sync_and_monitor(
         can_bus: Callable[[], can.BusABC]) -> None:
     """stop() then start() of the master object: SYNC and heartbeat watches go on."""
-    master = Master(can_bus(), node_id=MASTER)
+    master = Master(can_bus(), node_id=MASTER, sdo_timeout_ms=SDO_TIMEOUT_MS)
     device = Device(model(serial=2), 2, can_bus())
     raw = can_bus()
     events: list[HeartbeatEvent] = []

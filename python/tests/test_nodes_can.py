@@ -10,7 +10,7 @@ from pathlib import Path
 
 import can
 import pytest
-from conftest import wait_until
+from conftest import SDO_TIMEOUT_MS, wait_until
 
 from canola import Device, Error, Master
 
@@ -24,7 +24,8 @@ def _threads() -> set[str]:
 
 
 def test_threads_start_and_stop(can_bus: Callable[[], can.BusABC]) -> None:
-    with Device(INTEROP, 5, can_bus()) as device, Master(can_bus(), node_id=1) as master:
+    with (Device(INTEROP, 5, can_bus()) as device,
+          Master(can_bus(), node_id=1, sdo_timeout_ms=SDO_TIMEOUT_MS) as master):
         assert {"canola-device-5", "canola-master-1"} <= _threads()
         assert master.sdo(5).read(0x1018, 4, "u32") == 0x12345678
         device.stop()
@@ -38,7 +39,7 @@ def test_threads_start_and_stop(can_bus: Callable[[], can.BusABC]) -> None:
 
 def test_callbacks_run_outside_the_lock(can_bus: Callable[[], can.BusABC]) -> None:
     device = Device(INTEROP, 5, can_bus())
-    master = Master(can_bus(), node_id=1)
+    master = Master(can_bus(), node_id=1, sdo_timeout_ms=SDO_TIMEOUT_MS)
     seen: list[object] = []
 
     def on_write(index: int, sub: int, value: object) -> None:
