@@ -28,7 +28,7 @@ from canola.bus.open import BusError, open_bus
 from canola.errors import Error
 from canola.master import Master
 from canola.nodedicts import NodeDictionaries
-from canola.view.actions import BusActions
+from canola.view.actions import ActionError, BusActions
 from canola.view.launch import parse_listen, start_view
 from canola.view.model import BusModel
 from canola.view.runner import View
@@ -251,6 +251,22 @@ def test_a_bus_that_does_not_open_is_shown_not_fatal(tmp_path: Path) -> None:
         assert status == 400 and body["error"].startswith("cannot reach the bus")
     finally:
         view.stop()
+
+
+def test_a_request_after_close_opens_no_master() -> None:
+    """Ctrl-C while --read-pdos still waits for its worker: the worker must not open a new
+    master after the view closed its own (the process then waited for its reads to end)."""
+    opened: list[int] = []
+
+    def open_master() -> Master:
+        opened.append(1)
+        raise AssertionError("a master opened after close")
+
+    actions = BusActions(open_master, NodeDictionaries())
+    actions.close()
+    with pytest.raises(ActionError, match="the view is stopping"):
+        asyncio.run(actions.pdos(5))
+    assert opened == []
 
 
 def test_listen_addresses() -> None:

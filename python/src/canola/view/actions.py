@@ -66,9 +66,12 @@ class BusActions:
         self._dicts = dictionaries
         self._master: Master | None = None
         self._lock = threading.Lock()
+        self._closed = False
 
     def master(self) -> Master:
         with self._lock:
+            if self._closed:  # a request still running at Ctrl-C opens no master after it
+                raise ActionError("the view is stopping")
             if self._master is None:
                 try:
                     master = self._open()
@@ -79,7 +82,9 @@ class BusActions:
             return self._master
 
     def close(self) -> None:
+        """Stop the master, and refuse requests from now on (they would open another)."""
         with self._lock:
+            self._closed = True
             if self._master is not None:
                 self._master.stop()
                 bus = self._master.bus
