@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import struct
 import threading
-import time
 from collections.abc import Callable, Iterator
 
 import can
 import durand
 import pytest
-from conftest import SDO_TIMEOUT_MS
+from conftest import SDO_TIMEOUT_MS, wait_until
 from durand.scheduler import SyncScheduler, get_scheduler, set_scheduler
 from durand_peer import SimBusNetwork, device, virtual_time
 
@@ -208,10 +207,8 @@ def test_over_python_can(can_bus: Callable[[], can.BusABC]) -> None:
         sdo.write(0x1017, 0, "u16", 50)
         master.monitor(PEER, 1000)
         master.nmt(PEER, "start")
-        deadline = time.monotonic() + 10
-        while master.heartbeat_state(PEER) != "OPERATIONAL" and time.monotonic() < deadline:
-            time.sleep(0.02)
-        assert master.heartbeat_state(PEER) == "OPERATIONAL"
+        assert wait_until(lambda: master.heartbeat_state(PEER) == "OPERATIONAL"), \
+            master.heartbeat_state(PEER)
         sdo.write(0x1017, 0, "u16", 0)
     finally:
         master.stop()
