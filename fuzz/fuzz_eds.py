@@ -7,8 +7,8 @@ back parses again, to the same objects. Any other exception, or a round trip tha
 is a finding (atheris reports the exception and saves the input).
 
 Without atheris (no wheel for this Python) the script replays its arguments' files, so
-the seed corpus still runs. For hours:
-    build-py/venv/bin/python fuzz/fuzz_eds.py -max_total_time=3600 build-fuzz/corpus-eds fuzz/corpus/eds
+the seed corpus still runs. For hours, with build-py/venv/bin/python as python:
+    python fuzz/fuzz_eds.py -max_total_time=3600 build-fuzz/corpus-eds fuzz/corpus/eds
 """
 
 from __future__ import annotations

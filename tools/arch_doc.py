@@ -63,7 +63,7 @@ def the_map(text):
 def repository_files():
     """The base names of the repository's files (tests, tools, ports as well as the core)."""
     names = set()
-    for top, dirs, files in os.walk(ROOT):
+    for _top, dirs, files in os.walk(ROOT):
         dirs[:] = [d for d in dirs if not d.startswith((".", "build"))]
         names.update(files)
     return names
