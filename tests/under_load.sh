@@ -62,7 +62,9 @@ sample_load() {
     done
 }
 # load_over FILE: the samples' mean and peak, as the run's line shows them
-load_over() { awk '{ s += $1; if ($1 > m) m = $1 } END { if (NR) printf "mean %.1f, peak %.1f", s / NR, m; else printf "not sampled" }' "$1"; }
+load_over() {
+    awk '{ s += $1; if ($1 > m) m = $1 } END { printf "mean %.1f, peak %.1f", s / NR, m }' "$1"
+}
 stop_all() {
     # runs still going (Ctrl-C): each whole session
     local pid
