@@ -106,11 +106,11 @@ test-view: py-env
 	else echo "canola view in a browser: NOT RUN (chromium not installed; .ci/run installs it)"; fi
 
 # ruff over every Python file of the repository (the benches, fuzzers, firmware tests and
-# tools as well as the package), with the package's settings; mypy --strict over the package.
-PY_OUTSIDE = bench fuzz tests/firmware tools examples/firmware
+# tools as well as the package; build folders are git-ignored), with the package's settings;
+# mypy --strict over the package.
 test-python-lint: py-env
-	cd python && ../$(PY_VENV)/bin/ruff check --config pyproject.toml . \
-	  $(addprefix ../,$(PY_OUTSIDE)) && ../$(PY_VENV)/bin/mypy --strict src
+	cd python && ../$(PY_VENV)/bin/ruff check --config pyproject.toml .. && \
+	  ../$(PY_VENV)/bin/mypy --strict src
 
 # Coverage of the core by the C tests (gcovr from the Python environment's pinned tools).
 # Prints the summary lines; fails when branch coverage of src/ is below COV_BRANCH_MIN %.
