@@ -141,8 +141,14 @@ class Proc:
         try:
             code = self.popen.wait(60)
         except subprocess.TimeoutExpired:
-            self.popen.kill()
-            code = self.popen.wait(10)
+            # faulthandler (PYTHONFAULTHANDLER, set for the session): every thread's stack on
+            # the output, which the failure shows: where it hangs
+            self.popen.send_signal(signal.SIGABRT)
+            try:
+                code = self.popen.wait(10)
+            except subprocess.TimeoutExpired:
+                self.popen.kill()
+                code = self.popen.wait(10)
         self._reader.join(10)
         return code
 
@@ -193,6 +199,7 @@ class Session:
     def __init__(self, folder: Path) -> None:
         self.folder = folder
         self.env = {k: v for k, v in os.environ.items() if k not in _BUS_ENV}
+        self.env["PYTHONFAULTHANDLER"] = "1"  # a hung command, stopped, says where
         self.background: list[Proc] = []
         self.hub: Proc | None = None
         self.hub_port: str | None = None

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import signal
 import socket
 import time
 import urllib.error
@@ -287,6 +288,20 @@ def test_cli_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
     assert code == 2 and "go with --view" in err
     code, _, err = cli(capsys, "view", "--bus", "nothing://x")
     assert code == 1 and "unknown bus URL" in err
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_cli_stops_on_a_signal_whichever_thread_it_lands_on(sig: int) -> None:
+    # A fresh-clone run hung here: Ctrl-C landed on the web server's thread while the main
+    # thread sat in an untimed wait, which Python then never left to run the handler.
+    view = CanolaProcess("view", "--bus", "virtual://view-signal", "--listen", "127.0.0.1:0")
+    try:
+        view.wait_line("canola view: writes and NMT commands are off", 120)
+        view.signal_another_thread(sig)
+        code = view.proc.wait(60)  # a bound, not a wait: it ends within a second here
+    finally:
+        view.stop()
+    assert code == 0
 
 
 def test_cli_serves_until_ctrl_c_and_warns_off_loopback() -> None:

@@ -5,6 +5,7 @@ by line with bounded waits, Ctrl-C to end it."""
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import os
 import queue
 import signal
@@ -44,6 +45,16 @@ class CanolaProcess:
                 return line
         raise AssertionError(f"no line {start!r} within {timeout:.0f} s; output so far:\n"
                              + "\n".join(self.seen))
+
+    def signal_another_thread(self, sig: int) -> None:
+        """``sig`` to one of the process's threads that is not its main thread (a signal
+        to a process lands on whichever thread the kernel picks)."""
+        pid = self.proc.pid
+        tids = sorted(int(t) for t in os.listdir(f"/proc/{pid}/task") if int(t) != pid)
+        assert tids, "the process has no other thread"
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.tgkill(pid, tids[0], sig) != 0:
+            raise OSError(ctypes.get_errno(), f"tgkill {pid} {tids[0]}")
 
     def stop(self) -> int:
         """Ctrl-C, as a user ends it: the exit code (it must end within 60 s)."""

@@ -5,15 +5,13 @@
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 
 from canola import access
 from canola.bus import hub
 from canola.bus.bridge import Bridge, BridgeSide, shutdown
 from canola.bus.open import BusError, open_bus
-from canola.cli.common import CliError, Parser, add_bus_options, bus_from_args
+from canola.cli.common import CliError, Parser, add_bus_options, bus_from_args, stop_signals
 
 
 def register(subs: argparse._SubParsersAction[Parser]) -> None:
@@ -95,20 +93,15 @@ def run_bridge(args: argparse.Namespace) -> int:
     except BusError as exc:
         shutdown(near)
         raise CliError(str(exc)) from None
-    ended = threading.Event()
-    previous = {sig: signal.signal(sig, lambda *_: ended.set())
-                for sig in (signal.SIGINT, signal.SIGTERM)}
     near_name = args.bus or args.iface or "the default bus"
     bridge = Bridge(BridgeSide(far, args.far), BridgeSide(near, near_name))
     try:
-        with bridge:
+        with stop_signals() as ended, bridge:
             print(f"canola bus: {args.far} joined to {bridge.sides[1].name} (Ctrl-C stops)",
                   flush=True)
             while not ended.is_set() and not bridge.wait(0.2):
                 pass
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
         shutdown(far)
         shutdown(near)
     a, b = bridge.sides

@@ -7,7 +7,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import signal
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from typing import Any, Literal, NoReturn, overload
@@ -41,6 +43,7 @@ __all__ = [
     "node_id",
     "node_or_all",
     "positive_ms",
+    "stop_signals",
 ]
 
 
@@ -229,6 +232,21 @@ def emit_json(obj: Any) -> None:
     """One JSON document per line on stdout."""
     sys.stdout.write(json.dumps(obj, sort_keys=True) + "\n")
     sys.stdout.flush()
+
+
+@contextlib.contextmanager
+def stop_signals() -> Iterator[threading.Event]:
+    """For a command that runs until stopped: an Event that SIGINT (Ctrl-C) and SIGTERM set,
+    the previous handlers back at the end. Wait on it with a time-out (``while not
+    stop.wait(0.2)``): Python runs a handler in the main thread only when that thread runs
+    Python code, and an untimed wait is not woken when the signal lands on another thread."""
+    stop = threading.Event()
+    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
 
 
 @overload

@@ -7,10 +7,8 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import sys
 import threading
-from types import FrameType
 
 from canola._engine import Frame
 from canola._nodebase import EmcyEvent
@@ -23,6 +21,7 @@ from canola.cli.common import (
     int_in_range,
     node_id,
     positive_ms,
+    stop_signals,
 )
 from canola.device import Device, StoreRejectedEvent
 from canola.emcycodes import emcy_line
@@ -108,13 +107,12 @@ def run(args: argparse.Namespace) -> int:
                        2)
     if args.store is not None:
         _store_folder(args.store)
-    stop = threading.Event()
+    with stop_signals() as stop:
+        return _serve(args, stop)
 
-    def on_signal(signum: int, frame: FrameType | None) -> None:
-        del signum, frame
-        stop.set()
 
-    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+def _serve(args: argparse.Namespace, stop: threading.Event) -> int:
+    """The device on the bus until ``stop`` is set."""
     bus = bus_from_args(args)
     try:
         try:
@@ -156,6 +154,4 @@ def run(args: argparse.Namespace) -> int:
         print(f"canola device: node {device.node_id} stopped", flush=True)
     finally:
         bus.shutdown()
-        for s, handler in old.items():
-            signal.signal(s, handler)
     return 0

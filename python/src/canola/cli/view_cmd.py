@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import threading
 
 import can
 
@@ -18,6 +17,7 @@ from canola.cli.common import (
     bus_from_args,
     dictionaries_from_args,
     node_id,
+    stop_signals,
 )
 from canola.errors import Error
 from canola.master import Master
@@ -69,19 +69,19 @@ def run(args: argparse.Namespace) -> int:
         return Master(open_bus(), args.master_id, sdo_timeout_ms=args.sdo_timeout,
                       announce=False)
 
-    try:
-        view = start_view(open_bus=open_bus, open_master=open_master,
-                          dictionaries=dicts, listen=args.listen,
-                          allow_write=args.allow_write, bitrate=args.bitrate,
-                          where=f"bus {args.bus or args.iface or 'default'}")
-    except Error as exc:
-        raise CliError(str(exc)) from None
-    try:
-        for node in args.read_pdos:
-            view.read_pdos(node)
-        threading.Event().wait()  # until Ctrl-C
-    except KeyboardInterrupt:
-        pass
-    finally:
-        view.stop()
+    with stop_signals() as stop:  # Ctrl-C as early as the line with the URL
+        try:
+            view = start_view(open_bus=open_bus, open_master=open_master,
+                              dictionaries=dicts, listen=args.listen,
+                              allow_write=args.allow_write, bitrate=args.bitrate,
+                              where=f"bus {args.bus or args.iface or 'default'}")
+        except Error as exc:
+            raise CliError(str(exc)) from None
+        try:
+            for node in args.read_pdos:
+                view.read_pdos(node)
+            while not stop.wait(0.2):
+                pass
+        finally:
+            view.stop()
     return 0
