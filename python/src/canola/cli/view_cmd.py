@@ -36,7 +36,7 @@ def register(subs: argparse._SubParsersAction[Parser]) -> None:
                     "NMT, state changes, EMCY in words, heartbeat loss, SDO aborts), PDO "
                     "signals decoded by the EDS/DCF and plotted, bus load and frames per "
                     "second, the raw frames, and an SDO browser of each node's EDS. Runs "
-                    "until Ctrl-C.")
+                    "until Ctrl-C or SIGTERM.")
     add_bus_options(p)
     add_dictionary_options(p)
     p.add_argument("--read-pdos", type=node_id, action="append", default=[], metavar="NODE",
