@@ -74,6 +74,7 @@ from pathlib import Path
 
 import pytest
 from docblocks import ROOT, Block, Step, shows
+from leftovers import end_process
 
 from canola.cli import build_parser
 from canola.cli.common import UsageError
@@ -136,19 +137,7 @@ class Proc:
         raise AssertionError(f"{what}; it printed: {self.text()!r}")
 
     def stop(self, sig: int = signal.SIGTERM) -> int:
-        if self.popen.poll() is None:
-            self.popen.send_signal(sig)
-        try:
-            code = self.popen.wait(60)
-        except subprocess.TimeoutExpired:
-            # faulthandler (PYTHONFAULTHANDLER, set for the session): every thread's stack on
-            # the output, which the failure shows: where it hangs
-            self.popen.send_signal(signal.SIGABRT)
-            try:
-                code = self.popen.wait(10)
-            except subprocess.TimeoutExpired:
-                self.popen.kill()
-                code = self.popen.wait(10)
+        code, _ = end_process(self.popen, sig)  # a hung one's stacks in its output
         self._reader.join(10)
         return code
 

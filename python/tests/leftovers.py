@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import subprocess
 import time
 from pathlib import Path
 
@@ -50,6 +51,25 @@ def left_running(var: str, value: str, grace: float = 5.0) -> list[tuple[int, st
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGKILL)
     return found
+
+
+def end_process(popen: subprocess.Popen[str], sig: int, grace: float = 60.0) -> tuple[int, bool]:
+    """Send ``sig`` (unless it has ended) and wait up to ``grace`` seconds: (exit code, True).
+    A process that does not end gets SIGABRT, which with PYTHONFAULTHANDLER in its
+    environment prints every thread's stack on its output (where it hangs), then SIGKILL:
+    (exit code, False)."""
+    if popen.poll() is None:
+        popen.send_signal(sig)
+    try:
+        return popen.wait(grace), True
+    except subprocess.TimeoutExpired:
+        pass
+    popen.send_signal(signal.SIGABRT)
+    try:
+        return popen.wait(10), False
+    except subprocess.TimeoutExpired:
+        popen.kill()
+        return popen.wait(10), False
 
 
 def describe(found: list[tuple[int, str]]) -> str:

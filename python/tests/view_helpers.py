@@ -14,6 +14,8 @@ import sys
 import threading
 import time
 
+from leftovers import end_process
+
 
 class CanolaProcess:
     def __init__(self, *args: str) -> None:
@@ -58,21 +60,13 @@ class CanolaProcess:
 
     def stop(self) -> int:
         """Ctrl-C, as a user ends it: the exit code (it must end within 60 s)."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            return self.proc.wait(60)
-        except subprocess.TimeoutExpired:
-            self.proc.send_signal(signal.SIGABRT)  # where it hangs, on its output
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(10)
+        code, ended = end_process(self.proc, signal.SIGINT)
+        if not ended:
             self._reader.join(10)  # the process is gone: its output ends
             rest = []
             with contextlib.suppress(queue.Empty):
                 while True:
                     rest.append(self.lines.get_nowait())
             raise AssertionError(f"canola {self.proc.args[3:]} did not end on Ctrl-C within "
-                                 "60 s; its threads:\n" + "\n".join(rest)) from None
+                                 "60 s; its threads:\n" + "\n".join(rest))
+        return code
