@@ -13,6 +13,7 @@ from pathlib import Path
 
 import can
 import pytest
+from conftest import wait_until
 from gateway_helpers import Client, gateway_process, run
 
 from canola import Device
@@ -110,7 +111,8 @@ def test_real_bus_through_canola_master(tmp_path: Path) -> None:
 
     try:
         run(main())
-        assert device.nmt_state == "OPERATIONAL"
+        # "OK" says the frame was sent; the device's own bus thread applies it a moment later
+        assert wait_until(lambda: device.nmt_state == "OPERATIONAL"), device.nmt_state
     finally:
         device.stop()
         device.bus.shutdown()
